@@ -1,0 +1,191 @@
+#include "haptic/wire/datagram.hpp"
+
+#include <bit>
+
+#include "haptic/wire/siphash.hpp"
+
+namespace haptic::wire {
+namespace {
+
+// Little-endian writer and reader over a fixed buffer; callers check sizes before using them.
+class Writer {
+ public:
+  explicit Writer(std::uint8_t* out) : out_(out) {}
+  void u16(std::uint16_t v) { put(v, 2); }
+  void u32(std::uint32_t v) { put(v, 4); }
+  void u64(std::uint64_t v) { put(v, 8); }
+  void i64(std::int64_t v) { put(static_cast<std::uint64_t>(v), 8); }
+  void f64(double v) { put(std::bit_cast<std::uint64_t>(v), 8); }
+  void vec(const Vec3d& v) { f64(v.x); f64(v.y); f64(v.z); }
+  std::size_t written() const { return offset_; }
+
+ private:
+  void put(std::uint64_t v, int bytes) {
+    for (int i = 0; i < bytes; ++i) out_[offset_++] = static_cast<std::uint8_t>(v >> (8 * i));
+  }
+  std::uint8_t* out_;
+  std::size_t offset_ = 0;
+};
+
+class Reader {
+ public:
+  explicit Reader(const std::uint8_t* in) : in_(in) {}
+  std::uint16_t u16() { return static_cast<std::uint16_t>(get(2)); }
+  std::uint32_t u32() { return static_cast<std::uint32_t>(get(4)); }
+  std::uint64_t u64() { return get(8); }
+  std::int64_t i64() { return static_cast<std::int64_t>(get(8)); }
+  double f64() { return std::bit_cast<double>(get(8)); }
+  Vec3d vec() {
+    Vec3d v;
+    v.x = f64();
+    v.y = f64();
+    v.z = f64();
+    return v;
+  }
+
+ private:
+  std::uint64_t get(int bytes) {
+    std::uint64_t v = 0;
+    for (int i = 0; i < bytes; ++i) v |= static_cast<std::uint64_t>(in_[offset_++]) << (8 * i);
+    return v;
+  }
+  const std::uint8_t* in_;
+  std::size_t offset_ = 0;
+};
+
+std::size_t payload_size_of(std::uint16_t type) {
+  switch (static_cast<DatagramType>(type)) {
+    case DatagramType::kState: return kStatePayloadSize;
+    case DatagramType::kHeartbeat: return kHeartbeatPayloadSize;
+  }
+  return 0;
+}
+
+void write_header(Writer& w, const Header& header, std::size_t payload_size) {
+  w.u32(kMagic);
+  w.u16(kWireVersion);
+  w.u16(static_cast<std::uint16_t>(header.type));
+  w.u64(header.session_id);
+  w.u64(header.sequence);
+  w.i64(header.time_ns);
+  w.u32(static_cast<std::uint32_t>(payload_size));
+  w.u32(0);
+}
+
+void append_tag(std::span<std::uint8_t> out, std::size_t body_size, const Key& key) {
+  const std::uint64_t tag = siphash24(key, out.first(body_size));
+  Writer w(out.data() + body_size);
+  w.u64(tag);
+}
+
+// Compares the tag without an early exit, so timing does not reveal how many bytes matched.
+bool tag_matches(std::span<const std::uint8_t> datagram, const Key& key) {
+  const std::size_t body = datagram.size() - kTagSize;
+  const std::uint64_t expected = siphash24(key, datagram.first(body));
+  const std::uint64_t received = Reader(datagram.data() + body).u64();
+  return (expected ^ received) == 0;
+}
+
+DecodeError check_typed(std::span<const std::uint8_t> datagram, const Key& key, DatagramType type,
+                        Header& header) {
+  if (const DecodeError e = peek_header(datagram, header); e != DecodeError::kNone) return e;
+  if (header.type != type) return DecodeError::kUnknownType;
+  if (!tag_matches(datagram, key)) return DecodeError::kBadTag;
+  return DecodeError::kNone;
+}
+
+}  // namespace
+
+const char* to_string(DecodeError error) {
+  switch (error) {
+    case DecodeError::kNone: return "none";
+    case DecodeError::kTooShort: return "too short";
+    case DecodeError::kBadMagic: return "bad magic";
+    case DecodeError::kBadVersion: return "unsupported version";
+    case DecodeError::kUnknownType: return "unknown or unexpected type";
+    case DecodeError::kBadPayloadSize: return "bad payload size";
+    case DecodeError::kBadTag: return "authentication failed";
+  }
+  return "unknown error";
+}
+
+DecodeError peek_header(std::span<const std::uint8_t> datagram, Header& header) {
+  if (datagram.size() < kHeaderSize + kTagSize) return DecodeError::kTooShort;
+  Reader r(datagram.data());
+  if (r.u32() != kMagic) return DecodeError::kBadMagic;
+  if (r.u16() != kWireVersion) return DecodeError::kBadVersion;
+  const std::uint16_t type = r.u16();
+  const std::size_t expected_payload = payload_size_of(type);
+  if (expected_payload == 0) return DecodeError::kUnknownType;
+  header.type = static_cast<DatagramType>(type);
+  header.session_id = r.u64();
+  header.sequence = r.u64();
+  header.time_ns = r.i64();
+  const std::uint32_t payload_size = r.u32();
+  const std::uint32_t reserved = r.u32();
+  if (payload_size != expected_payload || reserved != 0 ||
+      datagram.size() != kHeaderSize + expected_payload + kTagSize) {
+    return DecodeError::kBadPayloadSize;
+  }
+  return DecodeError::kNone;
+}
+
+std::size_t encode_state(Header header, const StatePayload& state, const Key& key,
+                         std::span<std::uint8_t> out) {
+  if (out.size() < kStateDatagramSize) return 0;
+  header.type = DatagramType::kState;
+  Writer w(out.data());
+  write_header(w, header, kStatePayloadSize);
+  w.u64(state.tick);
+  w.vec(state.p_WT);
+  w.vec(state.v_WT);
+  w.vec(state.F_T_W);
+  w.vec(state.p_WP);
+  w.u32(state.contact_count);
+  w.u32(state.flags);
+  append_tag(out, w.written(), key);
+  return kStateDatagramSize;
+}
+
+std::size_t encode_heartbeat(Header header, const HeartbeatPayload& heartbeat, const Key& key,
+                             std::span<std::uint8_t> out) {
+  if (out.size() < kHeartbeatDatagramSize) return 0;
+  header.type = DatagramType::kHeartbeat;
+  Writer w(out.data());
+  write_header(w, header, kHeartbeatPayloadSize);
+  w.i64(heartbeat.client_time_ns);
+  w.u64(heartbeat.last_state_sequence);
+  append_tag(out, w.written(), key);
+  return kHeartbeatDatagramSize;
+}
+
+DecodeError decode_state(std::span<const std::uint8_t> datagram, const Key& key, Header& header,
+                         StatePayload& state) {
+  if (const DecodeError e = check_typed(datagram, key, DatagramType::kState, header);
+      e != DecodeError::kNone) {
+    return e;
+  }
+  Reader r(datagram.data() + kHeaderSize);
+  state.tick = r.u64();
+  state.p_WT = r.vec();
+  state.v_WT = r.vec();
+  state.F_T_W = r.vec();
+  state.p_WP = r.vec();
+  state.contact_count = r.u32();
+  state.flags = r.u32();
+  return DecodeError::kNone;
+}
+
+DecodeError decode_heartbeat(std::span<const std::uint8_t> datagram, const Key& key,
+                             Header& header, HeartbeatPayload& heartbeat) {
+  if (const DecodeError e = check_typed(datagram, key, DatagramType::kHeartbeat, header);
+      e != DecodeError::kNone) {
+    return e;
+  }
+  Reader r(datagram.data() + kHeaderSize);
+  heartbeat.client_time_ns = r.i64();
+  heartbeat.last_state_sequence = r.u64();
+  return DecodeError::kNone;
+}
+
+}  // namespace haptic::wire

@@ -1,0 +1,112 @@
+#pragma once
+// The UDP data plane: fixed-layout, little-endian datagrams (docs/protocol.md).
+//
+// Every datagram is   header (40 bytes) | payload (fixed size per type) | tag (8 bytes).
+// The tag is SipHash-2-4 over header and payload, keyed with the session's 16-byte key from
+// OpenSession. Fields are written byte by byte in little-endian order; no struct is ever cast onto
+// the buffer, so the layout is the same on every compiler and host.
+//
+// Header (offsets in bytes):
+//   0  u32 magic          kMagic ("HPTC" read as little-endian bytes 'H','P','T','C')
+//   4  u16 version        kWireVersion
+//   6  u16 type           DatagramType
+//   8  u64 session_id
+//  16  u64 sequence       per sender, per session, starts at 1, +1 per datagram
+//  24  i64 time_ns        sender's clock: server time for State, client time for Heartbeat
+//  32  u32 payload_size   must equal the type's fixed payload size
+//  36  u32 reserved       zero
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+
+namespace haptic::wire {
+
+inline constexpr std::uint32_t kMagic = 0x43545048u;  // bytes "HPTC"
+inline constexpr std::uint16_t kWireVersion = 1;
+inline constexpr std::size_t kHeaderSize = 40;
+inline constexpr std::size_t kTagSize = 8;
+
+enum class DatagramType : std::uint16_t {
+  kState = 1,      // server -> client, one tick's sample
+  kHeartbeat = 2,  // client -> server, keeps the lease and tells the server where to send state
+};
+
+/// A 128-bit SipHash key.
+using Key = std::array<std::uint8_t, 16>;
+
+struct Header {
+  DatagramType type = DatagramType::kState;
+  std::uint64_t session_id = 0;
+  std::uint64_t sequence = 0;
+  std::int64_t time_ns = 0;
+};
+
+struct Vec3d {
+  double x = 0.0, y = 0.0, z = 0.0;
+  friend bool operator==(const Vec3d&, const Vec3d&) = default;
+};
+
+/// One tick's sample of the device and the scene. Frames: W (world), T (tool point).
+struct StatePayload {
+  std::uint64_t tick = 0;      // Loop tick index.
+  Vec3d p_WT;                  // Tool position. Unit: m.
+  Vec3d v_WT;                  // Tool velocity. Unit: m/s.
+  Vec3d F_T_W;                 // Commanded force on the tool, after safety. Unit: N.
+  Vec3d p_WP;                  // Proxy (contact) point; equals p_WT when not in contact. Unit: m.
+  std::uint32_t contact_count = 0;  // Objects in contact this tick.
+  std::uint32_t flags = 0;          // StateFlags bits.
+  friend bool operator==(const StatePayload&, const StatePayload&) = default;
+};
+
+enum StateFlags : std::uint32_t {
+  kFlagForceSaturated = 1u << 0,
+  kFlagForceFault = 1u << 1,    // a non-finite force was replaced by zero
+  kFlagRampingOut = 1u << 2,    // some force is ramping to zero (removed objects, shutdown)
+};
+
+struct HeartbeatPayload {
+  std::int64_t client_time_ns = 0;     // Client clock when sent.
+  std::uint64_t last_state_sequence = 0;  // Highest state sequence received, 0 if none.
+  friend bool operator==(const HeartbeatPayload&, const HeartbeatPayload&) = default;
+};
+
+inline constexpr std::size_t kStatePayloadSize = 8 + 4 * 24 + 4 + 4;  // 112
+inline constexpr std::size_t kHeartbeatPayloadSize = 16;
+inline constexpr std::size_t kStateDatagramSize = kHeaderSize + kStatePayloadSize + kTagSize;
+inline constexpr std::size_t kHeartbeatDatagramSize = kHeaderSize + kHeartbeatPayloadSize + kTagSize;
+inline constexpr std::size_t kMaxDatagramSize = kStateDatagramSize;
+
+/// Why a datagram was rejected. Every rejection is counted by the receiver, never thrown.
+enum class DecodeError : std::uint8_t {
+  kNone = 0,
+  kTooShort,
+  kBadMagic,
+  kBadVersion,
+  kUnknownType,
+  kBadPayloadSize,   // payload_size does not match the type, the length disagrees, or reserved != 0
+  kBadTag,           // authentication failed
+};
+
+const char* to_string(DecodeError error);
+
+/// Reads the header without checking the tag (to find the session, and so the key).
+/// Fails on short, wrong-magic, wrong-version, unknown-type or wrong-length datagrams.
+DecodeError peek_header(std::span<const std::uint8_t> datagram, Header& header);
+
+/// Encoders write exactly kStateDatagramSize / kHeartbeatDatagramSize bytes into `out` and return
+/// that size, or 0 (writing nothing) when `out` is too small. header.type is set by the encoder.
+std::size_t encode_state(Header header, const StatePayload& state, const Key& key,
+                         std::span<std::uint8_t> out);
+std::size_t encode_heartbeat(Header header, const HeartbeatPayload& heartbeat, const Key& key,
+                             std::span<std::uint8_t> out);
+
+/// Decoders check everything peek_header checks, the type, and the tag.
+DecodeError decode_state(std::span<const std::uint8_t> datagram, const Key& key, Header& header,
+                         StatePayload& state);
+DecodeError decode_heartbeat(std::span<const std::uint8_t> datagram, const Key& key,
+                             Header& header, HeartbeatPayload& heartbeat);
+
+}  // namespace haptic::wire

@@ -1,0 +1,161 @@
+#include "app/config.hpp"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "net/validation.hpp"
+
+namespace haptic::app {
+namespace {
+
+void default_vec(v1::Vec3* v, double x, double y, double z) {
+  v->set_x(x);
+  v->set_y(y);
+  v->set_z(z);
+}
+
+std::string check_positive(double value, double max, const std::string& path) {
+  if (!std::isfinite(value) || value <= 0.0 || value > max) {
+    std::ostringstream out;
+    out << path << ": must be finite and in (0, " << max << "], got " << value;
+    return out.str();
+  }
+  return {};
+}
+
+}  // namespace
+
+void fill_defaults(v1::ServerConfig& config) {
+  if (config.grpc_address().empty()) config.set_grpc_address("0.0.0.0:50051");
+  if (config.udp_address().empty()) config.set_udp_address("0.0.0.0");
+  if (!config.has_udp_port()) config.set_udp_port(50052);
+  if (config.loop_rate_hz() == 0.0) config.set_loop_rate_hz(1000.0);
+  if (config.time_mode() == v1::TIME_MODE_UNSPECIFIED) config.set_time_mode(v1::REAL_TIME);
+  if (config.lease_timeout_ms() == 0) config.set_lease_timeout_ms(1000);
+  if (config.removal_ramp_ms() == 0) config.set_removal_ramp_ms(50);
+  if (!config.has_status_period_s()) config.set_status_period_s(5);
+  if (config.max_sessions() == 0) config.set_max_sessions(32);
+  if (config.max_objects_per_session() == 0) config.set_max_objects_per_session(256);
+
+  auto* device = config.mutable_simulated_point_mass();
+  if (device->mass() == 0.0) device->set_mass(0.01);           // Eom et al., experiment
+  if (device->damping() == 0.0) device->set_damping(0.022);    // Eom et al., experiment
+  if (device->substeps() == 0) device->set_substeps(10);
+  if (!device->has_workspace_min()) default_vec(device->mutable_workspace_min(), -0.1, -0.1, -0.1);
+  if (!device->has_workspace_max()) default_vec(device->mutable_workspace_max(), 0.1, 0.1, 0.1);
+  if (device->max_force() == 0.0) device->set_max_force(20.0);
+
+  auto* real_time = config.mutable_real_time();
+  if (!real_time->has_use_fifo()) real_time->set_use_fifo(true);
+  if (real_time->fifo_priority() == 0) real_time->set_fifo_priority(80);
+  if (real_time->spin_us() == 0) real_time->set_spin_us(100);
+
+  if (config.initial_operator().mode() == v1::OperatorInput::MODE_UNSPECIFIED) {
+    config.mutable_initial_operator()->set_mode(v1::OperatorInput::NONE);
+  }
+}
+
+v1::ServerConfig default_config() {
+  v1::ServerConfig config;
+  fill_defaults(config);
+  return config;
+}
+
+std::string validate(const v1::ServerConfig& config) {
+  if (config.loop_rate_hz() < 100.0 || config.loop_rate_hz() > 10000.0 ||
+      !std::isfinite(config.loop_rate_hz())) {
+    return "loop_rate_hz: must be in [100, 10000], got " + std::to_string(config.loop_rate_hz());
+  }
+  if (config.udp_port() > 65535) {
+    return "udp_port: must be 0 to 65535, got " + std::to_string(config.udp_port());
+  }
+  if (config.time_mode() != v1::REAL_TIME && config.time_mode() != v1::LOCKSTEP) {
+    return "time_mode: must be REAL_TIME or LOCKSTEP";
+  }
+  const auto& device = config.simulated_point_mass();
+  if (auto e = check_positive(device.mass(), 1e3, "simulated_point_mass.mass"); !e.empty()) return e;
+  if (!std::isfinite(device.damping()) || device.damping() < 0.0) {
+    return "simulated_point_mass.damping: must be finite and >= 0";
+  }
+  if (device.substeps() > 10000) return "simulated_point_mass.substeps: must be 1 to 10000";
+  if (auto e = check_positive(device.max_force(), 1e4, "simulated_point_mass.max_force"); !e.empty()) {
+    return e;
+  }
+  const auto& lo = device.workspace_min();
+  const auto& hi = device.workspace_max();
+  if (!(lo.x() < hi.x() && lo.y() < hi.y() && lo.z() < hi.z())) {
+    return "simulated_point_mass.workspace_min: must be below workspace_max on every axis";
+  }
+  const auto& p0 = device.initial_position();
+  if (p0.x() < lo.x() || p0.x() > hi.x() || p0.y() < lo.y() || p0.y() > hi.y() ||
+      p0.z() < lo.z() || p0.z() > hi.z()) {
+    return "simulated_point_mass.initial_position: must lie inside the workspace";
+  }
+  if (config.real_time().fifo_priority() < 1 || config.real_time().fifo_priority() > 99) {
+    return "real_time.fifo_priority: must be 1 to 99";
+  }
+  const double period_us = 1e6 / config.loop_rate_hz();
+  if (config.real_time().spin_us() >= period_us) {
+    return "real_time.spin_us: must be shorter than the loop period (" +
+           std::to_string(period_us) + " us)";
+  }
+  net::SceneLimits limits;
+  engine::HandInput hand;
+  if (auto e = net::to_hand_input(config.initial_operator(), "initial_operator", limits, hand);
+      !e.empty()) {
+    return e;
+  }
+  for (int i = 0; i < config.initial_scene().objects_size(); ++i) {
+    engine::ObjectSpec spec;
+    if (auto e = net::to_object_spec(config.initial_scene().objects(i),
+                                     "initial_scene.objects[" + std::to_string(i) + "]", limits, spec);
+        !e.empty()) {
+      return e;
+    }
+  }
+  for (int i = 0; i < config.initial_scene().fields_size(); ++i) {
+    engine::FieldSpec spec;
+    if (auto e = net::to_field_spec(config.initial_scene().fields(i),
+                                    "initial_scene.fields[" + std::to_string(i) + "]", limits, spec);
+        !e.empty()) {
+      return e;
+    }
+  }
+  return {};
+}
+
+v1::ServerConfig parse_config(const std::string& json, const std::string& source_name) {
+  v1::ServerConfig config;
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = false;
+  const auto status = google::protobuf::util::JsonStringToMessage(json, &config, options);
+  if (!status.ok()) {
+    throw ConfigError(source_name + ": not a valid ServerConfig: " + std::string(status.message()));
+  }
+  fill_defaults(config);
+  if (auto error = validate(config); !error.empty()) throw ConfigError(source_name + ": " + error);
+  return config;
+}
+
+v1::ServerConfig load_config_file(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) throw ConfigError(path + ": cannot open");
+  std::stringstream text;
+  text << file.rdbuf();
+  return parse_config(text.str(), path);
+}
+
+std::string to_json(const v1::ServerConfig& config) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.add_whitespace = true;
+  options.always_print_primitive_fields = true;
+  options.preserve_proto_field_names = true;
+  std::string out;
+  (void)google::protobuf::util::MessageToJsonString(config, &out, options);
+  return out;
+}
+
+}  // namespace haptic::app

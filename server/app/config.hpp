@@ -1,0 +1,36 @@
+#pragma once
+// hapticd's configuration: protobuf's JSON mapping of haptic.v1.ServerConfig, defaults filled in,
+// every value checked with an error that names the field.
+
+#include <stdexcept>
+#include <string>
+
+#include "haptic/v1/config.pb.h"
+
+namespace haptic::app {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The built-in configuration: real time at 1 kHz, the simulated point mass, gRPC on
+/// 0.0.0.0:50051, UDP on 50052.
+v1::ServerConfig default_config();
+
+/// Parses JSON text (unknown fields are errors), fills defaults, validates. Throws ConfigError.
+v1::ServerConfig parse_config(const std::string& json, const std::string& source_name);
+
+/// Reads and parses a file. Throws ConfigError naming the file.
+v1::ServerConfig load_config_file(const std::string& path);
+
+/// Sets every unset (zero) field to its default.
+void fill_defaults(v1::ServerConfig& config);
+
+/// Empty when valid, else "<field>: <what is wrong>".
+std::string validate(const v1::ServerConfig& config);
+
+/// The configuration as JSON, with defaults shown.
+std::string to_json(const v1::ServerConfig& config);
+
+}  // namespace haptic::app

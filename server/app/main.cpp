@@ -1,0 +1,88 @@
+// hapticd: the haptic server. With no arguments it runs the built-in configuration (the simulated
+// point-mass device at 1 kHz in real time); --config loads a JSON ServerConfig.
+
+#include <signal.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "app/config.hpp"
+#include "app/server.hpp"
+
+namespace {
+
+// Written once the ports are bound, so a script or test can find ephemeral ports without parsing
+// logs. Written to a temporary name and renamed, so a reader never sees half a file.
+void write_ready_file(const std::string& path, std::uint16_t grpc_port, std::uint16_t udp_port) {
+  const std::string temporary = path + ".tmp";
+  {
+    std::ofstream out(temporary);
+    out << "{\"grpc_port\": " << grpc_port << ", \"udp_port\": " << udp_port << "}\n";
+  }
+  std::filesystem::rename(temporary, path);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{"hapticd: networked haptic server (gRPC control plane, UDP data plane)"};
+  std::string config_path;
+  std::string ready_file;
+  std::string grpc_address;
+  int udp_port = -1;
+  bool lockstep = false;
+  bool print_config = false;
+  cli.add_option("--config", config_path, "JSON file with a haptic.v1.ServerConfig")
+      ->check(CLI::ExistingFile);
+  cli.add_option("--grpc-address", grpc_address, "override grpc_address (host:port; port 0 = any)");
+  cli.add_option("--udp-port", udp_port, "override udp_port (0 = any)")->check(CLI::Range(0, 65535));
+  cli.add_flag("--lockstep", lockstep, "run in LOCKSTEP time: ticks advance only by the Step RPC");
+  cli.add_option("--ready-file", ready_file,
+                 "write {\"grpc_port\":..,\"udp_port\":..} here once listening");
+  cli.add_flag("--print-config", print_config, "print the effective configuration and exit");
+  CLI11_PARSE(cli, argc, argv);
+
+  haptic::v1::ServerConfig config;
+  try {
+    config = config_path.empty() ? haptic::app::default_config()
+                                 : haptic::app::load_config_file(config_path);
+    if (!grpc_address.empty()) config.set_grpc_address(grpc_address);
+    if (udp_port >= 0) config.set_udp_port(static_cast<std::uint32_t>(udp_port));
+    if (lockstep) config.set_time_mode(haptic::v1::LOCKSTEP);
+    if (auto error = haptic::app::validate(config); !error.empty()) {
+      throw haptic::app::ConfigError("configuration: " + error);
+    }
+  } catch (const haptic::app::ConfigError& error) {
+    std::cerr << "hapticd: " << error.what() << "\n";
+    return 2;
+  }
+  if (print_config) {
+    std::cout << haptic::app::to_json(config);
+    return 0;
+  }
+
+  // Block the stop signals in every thread; this one waits for them with sigwait.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
+  try {
+    haptic::app::Server server(config);
+    server.start();
+    if (!ready_file.empty()) write_ready_file(ready_file, server.grpc_port(), server.udp_port());
+    int signal_number = 0;
+    sigwait(&stop_signals, &signal_number);
+    spdlog::info("hapticd: {} received, ramping forces to zero", strsignal(signal_number));
+    server.shutdown();
+  } catch (const std::exception& error) {
+    spdlog::error("hapticd: {}", error.what());
+    return 1;
+  }
+  return 0;
+}

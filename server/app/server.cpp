@@ -1,0 +1,225 @@
+#include "app/server.hpp"
+
+#include <grpcpp/server_builder.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "net/validation.hpp"
+#include "runtime/realtime.hpp"
+
+namespace haptic::app {
+namespace {
+
+engine::PointMassParams plant_params(const v1::SimulatedPointMassConfig& device) {
+  engine::PointMassParams params;
+  params.mass = device.mass();
+  params.damping = device.damping();
+  params.substeps = device.substeps();
+  params.workspace_min = net::to_engine(device.workspace_min());
+  params.workspace_max = net::to_engine(device.workspace_max());
+  return params;
+}
+
+std::int64_t ms_to_ticks(std::uint32_t ms, double rate_hz) {
+  return std::max<std::int64_t>(1, std::llround(static_cast<double>(ms) * 1e-3 * rate_hz));
+}
+
+}  // namespace
+
+Server::Server(const v1::ServerConfig& config)
+    : config_(config),
+      device_(std::make_unique<runtime::SimulatedPointMassDevice>(
+          plant_params(config.simulated_point_mass()),
+          engine::PointMassState{net::to_engine(config.simulated_point_mass().initial_position()), {}},
+          config.simulated_point_mass().max_force())),
+      scenes_(std::make_unique<const engine::CompiledScene>()),
+      sessions_(config.max_sessions(), std::chrono::milliseconds(config.lease_timeout_ms())),
+      udp_(sessions_, samples_) {
+  const double rate = config.loop_rate_hz();
+  runtime::TickConfig tick;
+  tick.period_s = 1.0 / rate;
+  tick.limits.max_force = config.simulated_point_mass().max_force();
+  tick.output_ramp_ticks = ms_to_ticks(config.removal_ramp_ms(), rate);
+  runner_ = std::make_unique<runtime::TickRunner>(*device_, scenes_, samples_, counters_, tick);
+
+  runtime::LoopConfig loop;
+  loop.rate_hz = rate;
+  loop.mode = config.time_mode() == v1::LOCKSTEP ? runtime::TimeMode::kLockstep
+                                                  : runtime::TimeMode::kRealTime;
+  loop.use_fifo = config.real_time().use_fifo();
+  loop.fifo_priority = config.real_time().fifo_priority();
+  loop.spin_ns = static_cast<std::int64_t>(config.real_time().spin_us()) * 1000;
+  loop_ = std::make_unique<runtime::LoopThread>(*runner_, counters_, lateness_, loop);
+
+  scene_ = std::make_unique<net::SceneStore>(
+      scenes_, [this] { return static_cast<std::int64_t>(loop_->completed_ticks() + 1); },
+      tick.output_ramp_ticks, config.max_objects_per_session());
+
+  // The initial scene belongs to the server itself (session 0) and never expires.
+  net::SceneLimits limits;
+  std::vector<engine::ObjectSpec> objects(static_cast<std::size_t>(config.initial_scene().objects_size()));
+  for (int i = 0; i < config.initial_scene().objects_size(); ++i) {
+    if (auto e = net::to_object_spec(config.initial_scene().objects(i), "initial_scene.objects",
+                                     limits, objects[static_cast<std::size_t>(i)]);
+        !e.empty()) {
+      throw std::runtime_error(e);
+    }
+  }
+  std::vector<engine::FieldSpec> fields(static_cast<std::size_t>(config.initial_scene().fields_size()));
+  for (int i = 0; i < config.initial_scene().fields_size(); ++i) {
+    if (auto e = net::to_field_spec(config.initial_scene().fields(i), "initial_scene.fields", limits,
+                                    fields[static_cast<std::size_t>(i)]);
+        !e.empty()) {
+      throw std::runtime_error(e);
+    }
+  }
+  std::vector<std::uint64_t> object_ids, field_ids;
+  (void)scene_->replace_session_scene(0, objects, fields, object_ids, field_ids);
+
+  engine::HandInput hand;
+  if (auto e = net::to_hand_input(config.initial_operator(), "initial_operator", limits, hand);
+      !e.empty()) {
+    throw std::runtime_error(e);
+  }
+  device_->set_hand(hand);
+
+  const std::uint32_t udp_port = config.udp_port();
+  if (udp_port > 65535) throw std::runtime_error("udp_port: out of range");
+  udp_.bind(config.udp_address(), static_cast<std::uint16_t>(udp_port));
+
+  service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
+      sessions_, *scene_, events_, *loop_, device_->description(), device_.get(), udp_.port(),
+      limits, [this] { return stats(); }});
+  grpc::ServerBuilder builder;
+  int selected_port = 0;
+  builder.AddListeningPort(config.grpc_address(), grpc::InsecureServerCredentials(), &selected_port);
+  builder.RegisterService(service_.get());
+  grpc_server_ = builder.BuildAndStart();
+  if (!grpc_server_ || selected_port == 0) {
+    throw std::runtime_error("cannot listen for gRPC on " + config.grpc_address());
+  }
+  grpc_port_ = static_cast<std::uint16_t>(selected_port);
+}
+
+Server::~Server() { shutdown(); }
+
+void Server::start() {
+  if (device_->start() != runtime::DeviceStatus::kOk) throw std::runtime_error("device failed to start");
+  const runtime::RealtimeSetup setup = loop_->start();
+  if (loop_->config().mode == runtime::TimeMode::kRealTime && loop_->config().use_fifo) {
+    if (!setup.fifo) {
+      spdlog::warn("loop: SCHED_FIFO refused ({}); running with normal scheduling, expect more jitter",
+                   setup.fifo_error);
+    }
+    if (!setup.memory_locked) {
+      spdlog::warn("loop: mlockall refused ({}); page faults may delay ticks", setup.mlock_error);
+    }
+  }
+  udp_.start();
+  status_last_ns_ = runtime::monotonic_now_ns();
+  housekeeping_ = std::thread([this] { housekeeping_loop(); });
+  started_ = true;
+  spdlog::info("hapticd: {} at {} Hz ({}), gRPC port {}, UDP port {}", device_->description().name,
+               config_.loop_rate_hz(), v1::TimeMode_Name(config_.time_mode()), grpc_port_,
+               udp_.port());
+}
+
+void Server::shutdown() {
+  if (shut_down_) return;
+  shut_down_ = true;
+  // Control plane first: watchers end, in-flight requests (a lockstep Step among them) finish
+  // against a running loop, and no new request can change the scene during the ramp.
+  events_.close();
+  if (grpc_server_) grpc_server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(1));
+  if (started_) {
+    loop_->ramp_out_and_stop();
+  } else {
+    loop_->stop();
+  }
+  // With the loop stopped, leave the device with zero force.
+  device_->write(runtime::DeviceCommand{}, 0.0);
+  device_->stop();
+  {
+    std::lock_guard lock(housekeeping_mutex_);
+    stopping_ = true;
+  }
+  housekeeping_wake_.notify_all();
+  if (housekeeping_.joinable()) housekeeping_.join();
+  udp_.stop();
+  spdlog::info("hapticd: stopped after {} ticks", counters_.ticks.load());
+}
+
+v1::Stats Server::stats() const {
+  v1::Stats stats;
+  stats.set_ticks(counters_.ticks.load(std::memory_order_relaxed));
+  const std::int64_t elapsed_ns = loop_->server_time_ns();
+  if (elapsed_ns > 0) {
+    stats.set_achieved_rate_hz(static_cast<double>(stats.ticks()) / (static_cast<double>(elapsed_ns) * 1e-9));
+  }
+  const runtime::LatenessSummary lateness = lateness_.summarize();
+  stats.set_lateness_p50_us(lateness.p50_us);
+  stats.set_lateness_p99_us(lateness.p99_us);
+  stats.set_lateness_max_us(lateness.max_us);
+  stats.set_overruns(counters_.overruns.load(std::memory_order_relaxed));
+  stats.set_sessions(static_cast<std::uint32_t>(sessions_.size()));
+  const net::SceneCounts scene = scene_->counts();
+  stats.set_objects(scene.objects);
+  stats.set_fields(scene.fields);
+  stats.set_datagrams_sent(udp_.counters().sent.load(std::memory_order_relaxed));
+  stats.set_datagrams_received(udp_.counters().received.load(std::memory_order_relaxed));
+  stats.set_datagrams_dropped(udp_.counters().dropped.load(std::memory_order_relaxed));
+  stats.set_force_faults(counters_.force_faults.load(std::memory_order_relaxed));
+  stats.set_force_saturations(counters_.force_saturations.load(std::memory_order_relaxed));
+  stats.set_leases_expired(leases_expired_.load(std::memory_order_relaxed));
+  return stats;
+}
+
+void Server::log_status() {
+  const std::int64_t now_ns = runtime::monotonic_now_ns();
+  const std::uint64_t ticks = counters_.ticks.load(std::memory_order_relaxed);
+  const double seconds = static_cast<double>(now_ns - status_last_ns_) * 1e-9;
+  const double rate = seconds > 0 ? static_cast<double>(ticks - status_last_ticks_) / seconds : 0.0;
+  status_last_ns_ = now_ns;
+  status_last_ticks_ = ticks;
+  const runtime::LatenessSummary lateness = lateness_.summarize();
+  spdlog::info(
+      "status: rate {:.1f} Hz, lateness p50 {:.0f} us p99 {:.0f} us max {:.0f} us, overruns {}, "
+      "clients {}, force faults {}",
+      rate, lateness.p50_us, lateness.p99_us, lateness.max_us,
+      counters_.overruns.load(std::memory_order_relaxed), sessions_.size(),
+      counters_.force_faults.load(std::memory_order_relaxed));
+}
+
+void Server::housekeeping_loop() {
+  using namespace std::chrono;
+  constexpr auto kPeriod = milliseconds(10);
+  const auto status_period = seconds(config_.status_period_s());
+  auto next_status = steady_clock::now() + status_period;
+  std::uint64_t faults_reported = 0;
+  std::unique_lock lock(housekeeping_mutex_);
+  while (!housekeeping_wake_.wait_for(lock, kPeriod, [this] { return stopping_; })) {
+    for (const std::uint64_t id : sessions_.expire(steady_clock::now())) {
+      leases_expired_.fetch_add(1, std::memory_order_relaxed);
+      service_->end_session(id, v1::Event::LEASE_EXPIRED);
+      spdlog::info("session {:016x}: lease expired, its objects ramp out", id);
+    }
+    scene_->compact();
+    if (const auto faults = counters_.force_faults.load(std::memory_order_relaxed);
+        faults != faults_reported) {
+      service_->publish_event(v1::Event::FORCE_FAULT, 0,
+                              std::to_string(faults - faults_reported) +
+                                  " non-finite forces replaced by zero");
+      spdlog::warn("loop: {} non-finite forces replaced by zero", faults - faults_reported);
+      faults_reported = faults;
+    }
+    if (status_period.count() > 0 && steady_clock::now() >= next_status) {
+      next_status += status_period;
+      log_status();
+    }
+  }
+}
+
+}  // namespace haptic::app

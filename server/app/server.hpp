@@ -1,0 +1,77 @@
+#pragma once
+// hapticd assembled: device, loop, scene store, sessions, UDP data plane, gRPC control plane and
+// the housekeeping thread (leases, scene compaction, status line, events). Used by main() and by
+// tests that want a whole server in-process.
+
+#include <grpcpp/server.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "haptic/v1/config.pb.h"
+#include "net/event_hub.hpp"
+#include "net/haptic_service.hpp"
+#include "net/scene_store.hpp"
+#include "net/session_registry.hpp"
+#include "net/udp_endpoint.hpp"
+#include "runtime/loop_thread.hpp"
+#include "runtime/simulated_device.hpp"
+#include "runtime/tick_runner.hpp"
+
+namespace haptic::app {
+
+class Server {
+ public:
+  /// Builds everything and binds the ports. Throws std::runtime_error naming what failed.
+  explicit Server(const v1::ServerConfig& config);
+  ~Server();
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  /// Starts the loop, the data plane, the control plane and housekeeping.
+  void start();
+  /// Ramps forces to zero, then stops everything. Idempotent.
+  void shutdown();
+
+  std::uint16_t grpc_port() const { return grpc_port_; }
+  std::uint16_t udp_port() const { return udp_.port(); }
+  v1::Stats stats() const;
+
+ private:
+  void housekeeping_loop();
+  void log_status();
+
+  v1::ServerConfig config_;
+  std::unique_ptr<runtime::SimulatedPointMassDevice> device_;
+  runtime::SceneExchange scenes_;
+  runtime::SampleRing samples_;
+  runtime::LoopCounters counters_;
+  runtime::LatenessHistogram lateness_;
+  std::unique_ptr<runtime::TickRunner> runner_;
+  std::unique_ptr<runtime::LoopThread> loop_;
+  net::SessionRegistry sessions_;
+  std::unique_ptr<net::SceneStore> scene_;
+  net::EventHub events_;
+  net::UdpEndpoint udp_;
+  std::unique_ptr<net::HapticService> service_;
+  std::unique_ptr<grpc::Server> grpc_server_;
+  std::uint16_t grpc_port_ = 0;
+
+  std::thread housekeeping_;
+  std::mutex housekeeping_mutex_;
+  std::condition_variable housekeeping_wake_;
+  bool stopping_ = false;  // guarded by housekeeping_mutex_
+  std::atomic<std::uint64_t> leases_expired_{0};
+  bool started_ = false;
+  bool shut_down_ = false;
+
+  // Status-line bookkeeping (housekeeping thread only).
+  std::uint64_t status_last_ticks_ = 0;
+  std::int64_t status_last_ns_ = 0;
+};
+
+}  // namespace haptic::app

@@ -1,0 +1,61 @@
+#pragma once
+// The default simulated device: a 3-DOF Cartesian mass-damper, m x'' + b x' = F on each axis
+// (Eom, Suh, Yi, eq. 5: the per-axis plant a disturbance observer leaves, P(s) = 1/(ms + b);
+// m = 0.01 kg, b = 0.022 N*s/m in their experiment).
+
+#include <cstdint>
+#include <functional>
+
+#include "engine/core/vec3.hpp"
+
+namespace haptic::engine {
+
+struct PointMassParams {
+  double mass = 0.01;        // Unit: kg. > 0.
+  double damping = 0.022;    // Unit: N*s/m. >= 0.
+  std::uint32_t substeps = 10;  // Sub-steps per tick, >= 1.
+  Vec3 workspace_min{-0.1, -0.1, -0.1};  // Unit: m. The plant stops at the box (inelastic).
+  Vec3 workspace_max{0.1, 0.1, 0.1};
+};
+
+struct PointMassState {
+  Vec3 p_WT;  // Tool position. Unit: m.
+  Vec3 v_WT;  // Tool velocity. Unit: m/s.
+};
+
+/// Integrates the plant over one tick of length dt under the device force F_device (held constant
+/// over the tick, as a zero-order hold does) plus an external force that may depend on the state
+/// (the operator's hand), re-evaluated at every sub-step.
+///
+/// Each sub-step of length h = dt / substeps holds the total force F constant and advances the
+/// mass-damper exactly: v' = v e^{-h b/m} + (F/b)(1 - e^{-h b/m}), and x' from the integral of v
+/// (with b = 0 handled as the limit). The scheme is therefore exact for a constant force and
+/// unconditionally stable in the plant's own dynamics; its only error comes from the operator
+/// force being sampled per sub-step.
+class PointMassPlant {
+ public:
+  explicit PointMassPlant(const PointMassParams& params, const PointMassState& initial = {});
+
+  /// external_force(p_WT, v_WT) -> force on the tool from outside the device (N).
+  /// Not allocating: takes a plain function reference.
+  template <typename ExternalForce>
+  void step(const Vec3& F_device, double dt, ExternalForce&& external_force) {
+    const double h = dt / static_cast<double>(params_.substeps);
+    for (std::uint32_t i = 0; i < params_.substeps; ++i) {
+      const Vec3 F_total = F_device + external_force(state_.p_WT, state_.v_WT);
+      advance_exact(F_total, h);
+    }
+  }
+
+  const PointMassState& state() const { return state_; }
+  void set_state(const PointMassState& state) { state_ = state; }
+  const PointMassParams& params() const { return params_; }
+
+ private:
+  void advance_exact(const Vec3& F, double h);
+
+  PointMassParams params_;
+  PointMassState state_;
+};
+
+}  // namespace haptic::engine

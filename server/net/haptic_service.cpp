@@ -1,0 +1,269 @@
+#include "net/haptic_service.hpp"
+
+#include <cctype>
+#include <chrono>
+
+namespace haptic::net {
+namespace {
+
+constexpr std::uint32_t kApiVersion = v1::API_VERSION_CURRENT;
+constexpr std::uint32_t kMaxDecimation = 1000;
+constexpr std::uint32_t kMaxStepTicks = 1'000'000;
+
+grpc::Status invalid(const std::string& message) {
+  return {grpc::StatusCode::INVALID_ARGUMENT, message};
+}
+
+std::string check_client_name(const std::string& name) {
+  if (name.empty() || name.size() > 64) {
+    return "client_name: must be 1 to 64 characters, got " + std::to_string(name.size());
+  }
+  for (const char c : name) {
+    if (!std::isprint(static_cast<unsigned char>(c))) {
+      return "client_name: must be printable ASCII";
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+grpc::Status HapticService::check_session(std::uint64_t session_id) const {
+  if (session_id == 0 || !deps_.sessions.touch(session_id)) {
+    return {grpc::StatusCode::NOT_FOUND,
+            "session_id: no open session " + std::to_string(session_id) +
+                " (never opened, closed, or its lease expired)"};
+  }
+  return grpc::Status::OK;
+}
+
+void HapticService::publish_event(v1::Event::Kind kind, std::uint64_t session_id,
+                                  const std::string& message) {
+  v1::Event event;
+  event.set_kind(kind);
+  event.set_session_id(session_id);
+  event.set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
+  event.set_message(message);
+  deps_.events.publish(event);
+}
+
+void HapticService::end_session(std::uint64_t session_id, v1::Event::Kind why) {
+  const std::size_t faded = deps_.scene.remove_session(session_id);
+  publish_event(why, session_id,
+                std::to_string(faded) + " objects and fields ramping out");
+}
+
+v1::DeviceInfo HapticService::device_info() const {
+  v1::DeviceInfo info;
+  info.set_name(deps_.device.name);
+  info.set_dof(deps_.device.dof);
+  *info.mutable_workspace_min() = to_proto(deps_.device.workspace_min);
+  *info.mutable_workspace_max() = to_proto(deps_.device.workspace_max);
+  info.set_max_force(deps_.device.max_force);
+  info.set_loop_rate_hz(deps_.loop.config().rate_hz);
+  info.set_simulated(deps_.device.simulated);
+  return info;
+}
+
+grpc::Status HapticService::OpenSession(grpc::ServerContext*, const v1::OpenSessionRequest* request,
+                                        v1::OpenSessionResponse* response) {
+  if (request->api_version() != kApiVersion) {
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            "api_version: client speaks " + std::to_string(request->api_version()) +
+                ", server speaks " + std::to_string(kApiVersion)};
+  }
+  if (auto error = check_client_name(request->client_name()); !error.empty()) return invalid(error);
+  const auto session = deps_.sessions.open(request->client_name());
+  if (!session) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED, "too many sessions open (max_sessions)"};
+  }
+  response->set_session_id(session->id);
+  response->set_udp_key(std::string(session->key.begin(), session->key.end()));
+  response->set_udp_port(deps_.udp_port);
+  response->set_api_version(kApiVersion);
+  *response->mutable_device() = device_info();
+  response->set_lease_timeout_ms(static_cast<std::uint32_t>(deps_.sessions.lease_timeout().count()));
+  response->set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
+  publish_event(v1::Event::SESSION_OPENED, session->id, "client '" + request->client_name() + "'");
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::CloseSession(grpc::ServerContext*, const v1::SessionRef* request,
+                                         v1::Empty*) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  deps_.sessions.close(request->session_id());
+  end_session(request->session_id(), v1::Event::SESSION_CLOSED);
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::CreateObject(grpc::ServerContext*, const v1::CreateObjectRequest* request,
+                                         v1::ItemRef* response) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  engine::ObjectSpec spec;
+  if (auto error = to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
+    return invalid(error);
+  }
+  std::uint64_t id = 0;
+  if (auto status = deps_.scene.create(request->session_id(), ItemKind::kObject, spec, id);
+      !status.ok()) {
+    return status;
+  }
+  response->set_id(id);
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::UpdateObject(grpc::ServerContext*, const v1::UpdateObjectRequest* request,
+                                         v1::Empty*) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  engine::ObjectSpec spec;
+  if (auto error = to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
+    return invalid(error);
+  }
+  return deps_.scene.update(request->session_id(), ItemKind::kObject, request->object_id(), spec);
+}
+
+grpc::Status HapticService::DeleteObject(grpc::ServerContext*, const v1::DeleteRequest* request,
+                                         v1::Empty*) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  return deps_.scene.remove(request->session_id(), ItemKind::kObject, request->id());
+}
+
+grpc::Status HapticService::CreateField(grpc::ServerContext*, const v1::CreateFieldRequest* request,
+                                        v1::ItemRef* response) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  engine::FieldSpec spec;
+  if (auto error = to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
+    return invalid(error);
+  }
+  std::uint64_t id = 0;
+  if (auto status = deps_.scene.create(request->session_id(), ItemKind::kField, spec, id);
+      !status.ok()) {
+    return status;
+  }
+  response->set_id(id);
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::UpdateField(grpc::ServerContext*, const v1::UpdateFieldRequest* request,
+                                        v1::Empty*) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  engine::FieldSpec spec;
+  if (auto error = to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
+    return invalid(error);
+  }
+  return deps_.scene.update(request->session_id(), ItemKind::kField, request->field_id(), spec);
+}
+
+grpc::Status HapticService::DeleteField(grpc::ServerContext*, const v1::DeleteRequest* request,
+                                        v1::Empty*) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  return deps_.scene.remove(request->session_id(), ItemKind::kField, request->id());
+}
+
+grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplySceneRequest* request,
+                                       v1::ApplySceneResponse* response) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  // Validate everything first: one bad item rejects the whole scene and changes nothing.
+  std::vector<engine::ObjectSpec> objects(static_cast<std::size_t>(request->scene().objects_size()));
+  for (int i = 0; i < request->scene().objects_size(); ++i) {
+    const std::string path = "scene.objects[" + std::to_string(i) + "]";
+    if (auto error = to_object_spec(request->scene().objects(i), path, deps_.limits,
+                                    objects[static_cast<std::size_t>(i)]);
+        !error.empty()) {
+      return invalid(error);
+    }
+  }
+  std::vector<engine::FieldSpec> fields(static_cast<std::size_t>(request->scene().fields_size()));
+  for (int i = 0; i < request->scene().fields_size(); ++i) {
+    const std::string path = "scene.fields[" + std::to_string(i) + "]";
+    if (auto error = to_field_spec(request->scene().fields(i), path, deps_.limits,
+                                   fields[static_cast<std::size_t>(i)]);
+        !error.empty()) {
+      return invalid(error);
+    }
+  }
+  std::vector<std::uint64_t> object_ids, field_ids;
+  if (auto status = deps_.scene.replace_session_scene(request->session_id(), objects, fields,
+                                                      object_ids, field_ids);
+      !status.ok()) {
+    return status;
+  }
+  for (auto id : object_ids) response->add_object_ids(id);
+  for (auto id : field_ids) response->add_field_ids(id);
+  publish_event(v1::Event::SCENE_CHANGED, request->session_id(),
+                std::to_string(object_ids.size()) + " objects, " +
+                    std::to_string(field_ids.size()) + " fields");
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::GetDeviceInfo(grpc::ServerContext*, const v1::SessionRef* request,
+                                          v1::DeviceInfo* response) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  *response = device_info();
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::GetStats(grpc::ServerContext*, const v1::SessionRef* request,
+                                     v1::Stats* response) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  *response = deps_.stats();
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
+                                        const v1::WatchEventsRequest* request,
+                                        grpc::ServerWriter<v1::Event>* writer) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  auto watcher = deps_.events.watch();
+  while (!context->IsCancelled() && !watcher->closed()) {
+    if (auto event = watcher->next(std::chrono::milliseconds(100))) {
+      if (!writer->Write(*event)) break;
+    }
+  }
+  deps_.events.unwatch(watcher);
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::SubscribeState(grpc::ServerContext*,
+                                           const v1::SubscribeStateRequest* request, v1::Empty*) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (request->decimation() > kMaxDecimation) {
+    return invalid("decimation: must be 0 (stop) to " + std::to_string(kMaxDecimation) + ", got " +
+                   std::to_string(request->decimation()));
+  }
+  deps_.sessions.subscribe(request->session_id(), request->decimation());
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::SetOperator(grpc::ServerContext*, const v1::SetOperatorRequest* request,
+                                        v1::Empty*) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (deps_.simulated_device == nullptr) {
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            "the device is real hardware: there is no simulated operator"};
+  }
+  engine::HandInput hand;
+  if (auto error = to_hand_input(request->input(), "input", deps_.limits, hand); !error.empty()) {
+    return invalid(error);
+  }
+  deps_.simulated_device->set_hand(hand);
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::Step(grpc::ServerContext*, const v1::StepRequest* request,
+                                 v1::StepResponse* response) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (deps_.loop.config().mode != runtime::TimeMode::kLockstep) {
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            "Step: the server runs in REAL_TIME; start it with time_mode LOCKSTEP"};
+  }
+  if (request->ticks() == 0 || request->ticks() > kMaxStepTicks) {
+    return invalid("ticks: must be 1 to " + std::to_string(kMaxStepTicks) + ", got " +
+                   std::to_string(request->ticks()));
+  }
+  response->set_tick(deps_.loop.step(request->ticks()));
+  response->set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
+  return grpc::Status::OK;
+}
+
+}  // namespace haptic::net

@@ -1,0 +1,76 @@
+#pragma once
+// The control plane: haptic.v1.Haptic over gRPC. Every request is validated in full before
+// anything changes (INVALID_ARGUMENT names the field); another session's item is
+// PERMISSION_DENIED; limits are RESOURCE_EXHAUSTED. Any request renews its session's lease.
+
+#include <cstdint>
+#include <functional>
+
+#include "haptic/v1/service.grpc.pb.h"
+#include "net/event_hub.hpp"
+#include "net/scene_store.hpp"
+#include "net/session_registry.hpp"
+#include "net/validation.hpp"
+#include "runtime/device.hpp"
+#include "runtime/loop_thread.hpp"
+#include "runtime/simulated_device.hpp"
+
+namespace haptic::net {
+
+struct ServiceDependencies {
+  SessionRegistry& sessions;
+  SceneStore& scene;
+  EventHub& events;
+  runtime::LoopThread& loop;
+  const runtime::DeviceDescription& device;
+  runtime::SimulatedPointMassDevice* simulated_device;  // null for real hardware
+  std::uint16_t udp_port;
+  SceneLimits limits;
+  std::function<v1::Stats()> stats;
+};
+
+class HapticService final : public v1::Haptic::Service {
+ public:
+  explicit HapticService(ServiceDependencies deps) : deps_(std::move(deps)) {}
+
+  /// Publishes an event stamped with server time.
+  void publish_event(v1::Event::Kind kind, std::uint64_t session_id, const std::string& message);
+
+  /// Ends the session: its items fade out. Used by CloseSession and by lease expiry.
+  void end_session(std::uint64_t session_id, v1::Event::Kind why);
+
+  grpc::Status OpenSession(grpc::ServerContext*, const v1::OpenSessionRequest*,
+                           v1::OpenSessionResponse*) override;
+  grpc::Status CloseSession(grpc::ServerContext*, const v1::SessionRef*, v1::Empty*) override;
+  grpc::Status CreateObject(grpc::ServerContext*, const v1::CreateObjectRequest*,
+                            v1::ItemRef*) override;
+  grpc::Status UpdateObject(grpc::ServerContext*, const v1::UpdateObjectRequest*,
+                            v1::Empty*) override;
+  grpc::Status DeleteObject(grpc::ServerContext*, const v1::DeleteRequest*, v1::Empty*) override;
+  grpc::Status CreateField(grpc::ServerContext*, const v1::CreateFieldRequest*,
+                           v1::ItemRef*) override;
+  grpc::Status UpdateField(grpc::ServerContext*, const v1::UpdateFieldRequest*,
+                           v1::Empty*) override;
+  grpc::Status DeleteField(grpc::ServerContext*, const v1::DeleteRequest*, v1::Empty*) override;
+  grpc::Status ApplyScene(grpc::ServerContext*, const v1::ApplySceneRequest*,
+                          v1::ApplySceneResponse*) override;
+  grpc::Status GetDeviceInfo(grpc::ServerContext*, const v1::SessionRef*,
+                             v1::DeviceInfo*) override;
+  grpc::Status GetStats(grpc::ServerContext*, const v1::SessionRef*, v1::Stats*) override;
+  grpc::Status WatchEvents(grpc::ServerContext*, const v1::WatchEventsRequest*,
+                           grpc::ServerWriter<v1::Event>*) override;
+  grpc::Status SubscribeState(grpc::ServerContext*, const v1::SubscribeStateRequest*,
+                              v1::Empty*) override;
+  grpc::Status SetOperator(grpc::ServerContext*, const v1::SetOperatorRequest*,
+                           v1::Empty*) override;
+  grpc::Status Step(grpc::ServerContext*, const v1::StepRequest*, v1::StepResponse*) override;
+
+  v1::DeviceInfo device_info() const;
+
+ private:
+  grpc::Status check_session(std::uint64_t session_id) const;
+
+  ServiceDependencies deps_;
+};
+
+}  // namespace haptic::net

@@ -1,0 +1,176 @@
+#include "net/scene_store.hpp"
+
+#include <string>
+
+namespace haptic::net {
+namespace {
+
+const char* kind_name(ItemKind kind) { return kind == ItemKind::kObject ? "object" : "field"; }
+
+bool is_live(const engine::ItemMeta& meta) { return meta.fade_begin_tick == engine::kNeverTick; }
+
+}  // namespace
+
+SceneStore::SceneStore(runtime::SceneExchange& exchange, std::function<std::int64_t()> next_tick,
+                       std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session)
+    : exchange_(exchange),
+      next_tick_(std::move(next_tick)),
+      removal_ramp_ticks_(removal_ramp_ticks < 1 ? 1 : removal_ramp_ticks),
+      max_items_per_session_(max_items_per_session) {}
+
+std::uint32_t SceneStore::live_items_of(std::uint64_t session_id) const {
+  std::uint32_t count = 0;
+  for (const auto& [id, item] : items_) {
+    if (item.meta.session_id == session_id && is_live(item.meta)) ++count;
+  }
+  return count;
+}
+
+grpc::Status SceneStore::find_owned(std::uint64_t session_id, ItemKind kind, std::uint64_t id,
+                                    Item*& item) {
+  auto it = items_.find(id);
+  if (it == items_.end() || it->second.kind != kind || !is_live(it->second.meta)) {
+    return {grpc::StatusCode::NOT_FOUND,
+            std::string("id: no ") + kind_name(kind) + " with id " + std::to_string(id)};
+  }
+  if (it->second.meta.session_id != session_id) {
+    return {grpc::StatusCode::PERMISSION_DENIED,
+            std::string("id: ") + kind_name(kind) + " " + std::to_string(id) +
+                " belongs to another session"};
+  }
+  item = &it->second;
+  return grpc::Status::OK;
+}
+
+grpc::Status SceneStore::create(std::uint64_t session_id, ItemKind kind,
+                                const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec,
+                                std::uint64_t& id_out) {
+  std::lock_guard lock(mutex_);
+  if (live_items_of(session_id) >= max_items_per_session_) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED,
+            "session already has " + std::to_string(max_items_per_session_) +
+                " objects and fields (max_objects_per_session)"};
+  }
+  id_out = next_id_++;
+  items_.emplace(id_out, Item{engine::ItemMeta{session_id, id_out, engine::kNeverTick}, kind, spec});
+  publish_locked();
+  return grpc::Status::OK;
+}
+
+grpc::Status SceneStore::update(std::uint64_t session_id, ItemKind kind, std::uint64_t id,
+                                const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec) {
+  std::lock_guard lock(mutex_);
+  Item* item = nullptr;
+  if (auto status = find_owned(session_id, kind, id, item); !status.ok()) return status;
+  item->spec = spec;
+  publish_locked();
+  return grpc::Status::OK;
+}
+
+grpc::Status SceneStore::remove(std::uint64_t session_id, ItemKind kind, std::uint64_t id) {
+  std::lock_guard lock(mutex_);
+  Item* item = nullptr;
+  if (auto status = find_owned(session_id, kind, id, item); !status.ok()) return status;
+  item->meta.fade_begin_tick = next_tick_();
+  publish_locked();
+  return grpc::Status::OK;
+}
+
+grpc::Status SceneStore::replace_session_scene(std::uint64_t session_id,
+                                               const std::vector<engine::ObjectSpec>& objects,
+                                               const std::vector<engine::FieldSpec>& fields,
+                                               std::vector<std::uint64_t>& object_ids,
+                                               std::vector<std::uint64_t>& field_ids) {
+  std::lock_guard lock(mutex_);
+  if (objects.size() + fields.size() > max_items_per_session_) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED,
+            "scene: " + std::to_string(objects.size() + fields.size()) +
+                " objects and fields exceed max_objects_per_session (" +
+                std::to_string(max_items_per_session_) + ")"};
+  }
+  const std::int64_t fade_begin = next_tick_();
+  for (auto& [id, item] : items_) {
+    if (item.meta.session_id == session_id && is_live(item.meta)) {
+      item.meta.fade_begin_tick = fade_begin;
+    }
+  }
+  object_ids.clear();
+  field_ids.clear();
+  for (const auto& object : objects) {
+    const std::uint64_t id = next_id_++;
+    items_.emplace(id, Item{engine::ItemMeta{session_id, id, engine::kNeverTick}, ItemKind::kObject,
+                            object});
+    object_ids.push_back(id);
+  }
+  for (const auto& field : fields) {
+    const std::uint64_t id = next_id_++;
+    items_.emplace(id, Item{engine::ItemMeta{session_id, id, engine::kNeverTick}, ItemKind::kField,
+                            field});
+    field_ids.push_back(id);
+  }
+  publish_locked();
+  return grpc::Status::OK;
+}
+
+std::size_t SceneStore::remove_session(std::uint64_t session_id) {
+  std::lock_guard lock(mutex_);
+  const std::int64_t fade_begin = next_tick_();
+  std::size_t count = 0;
+  for (auto& [id, item] : items_) {
+    if (item.meta.session_id == session_id && is_live(item.meta)) {
+      item.meta.fade_begin_tick = fade_begin;
+      ++count;
+    }
+  }
+  if (count > 0) publish_locked();
+  return count;
+}
+
+std::size_t SceneStore::compact() {
+  std::lock_guard lock(mutex_);
+  const std::int64_t now = next_tick_();
+  std::size_t removed = 0;
+  for (auto it = items_.begin(); it != items_.end();) {
+    const std::int64_t begin = it->second.meta.fade_begin_tick;
+    if (begin != engine::kNeverTick && now > begin + removal_ramp_ticks_) {
+      it = items_.erase(it);
+      ++removed;
+    } else {
+      ++it;
+    }
+  }
+  if (removed > 0) publish_locked();
+  exchange_.reclaim();
+  return removed;
+}
+
+SceneCounts SceneStore::counts() const {
+  std::lock_guard lock(mutex_);
+  SceneCounts counts;
+  for (const auto& [id, item] : items_) {
+    if (!is_live(item.meta)) {
+      ++counts.fading;
+    } else if (item.kind == ItemKind::kObject) {
+      ++counts.objects;
+    } else {
+      ++counts.fields;
+    }
+  }
+  return counts;
+}
+
+void SceneStore::publish_locked() {
+  engine::SceneDescription description;
+  for (const auto& [id, item] : items_) {
+    if (const auto* object = std::get_if<engine::ObjectSpec>(&item.spec)) {
+      description.objects.push_back(engine::ObjectEntry{item.meta, *object});
+    } else {
+      description.fields.push_back(
+          engine::FieldEntry{item.meta, std::get<engine::FieldSpec>(item.spec)});
+    }
+  }
+  exchange_.publish(std::make_unique<const engine::CompiledScene>(
+      engine::compile_scene(description, removal_ramp_ticks_, ++generation_)));
+}
+
+}  // namespace haptic::net

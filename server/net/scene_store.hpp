@@ -1,0 +1,84 @@
+#pragma once
+// The shared scene: every session's objects and fields, with ownership. Each change is validated
+// in full before anything moves, applied under one lock, compiled and published to the loop as a
+// new snapshot, so a request is applied whole or not at all.
+//
+// Removal never steps the force: a removed item stays in the compiled scene with its fade-out
+// start tick until its force has ramped to zero, then compact() drops it. Removed items are no
+// longer addressable.
+
+#include <grpcpp/support/status.h>
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <variant>
+#include <vector>
+
+#include "engine/scene/compiled_scene.hpp"
+#include "engine/scene/scene_spec.hpp"
+#include "runtime/tick_runner.hpp"
+
+namespace haptic::net {
+
+enum class ItemKind { kObject, kField };
+
+struct SceneCounts {
+  std::uint32_t objects = 0;  // live (not fading)
+  std::uint32_t fields = 0;
+  std::uint32_t fading = 0;
+};
+
+class SceneStore {
+ public:
+  /// next_tick() tells the index of the next tick the loop will run (fade-outs begin there).
+  SceneStore(runtime::SceneExchange& exchange, std::function<std::int64_t()> next_tick,
+             std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session);
+
+  grpc::Status create(std::uint64_t session_id, ItemKind kind,
+                      const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec,
+                      std::uint64_t& id_out);
+  grpc::Status update(std::uint64_t session_id, ItemKind kind, std::uint64_t id,
+                      const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec);
+  grpc::Status remove(std::uint64_t session_id, ItemKind kind, std::uint64_t id);
+
+  /// Replaces all of the session's items (the old ones fade out). Ids in request order.
+  grpc::Status replace_session_scene(std::uint64_t session_id,
+                                     const std::vector<engine::ObjectSpec>& objects,
+                                     const std::vector<engine::FieldSpec>& fields,
+                                     std::vector<std::uint64_t>& object_ids,
+                                     std::vector<std::uint64_t>& field_ids);
+
+  /// Starts the fade-out of everything the session owns (lease lost, session closed).
+  std::size_t remove_session(std::uint64_t session_id);
+
+  /// Drops items whose fade-out has finished; republishes if anything went. Returns how many.
+  std::size_t compact();
+
+  SceneCounts counts() const;
+
+ private:
+  struct Item {
+    engine::ItemMeta meta;
+    ItemKind kind;
+    std::variant<engine::ObjectSpec, engine::FieldSpec> spec;
+  };
+
+  grpc::Status find_owned(std::uint64_t session_id, ItemKind kind, std::uint64_t id,
+                          Item*& item);
+  std::uint32_t live_items_of(std::uint64_t session_id) const;
+  void publish_locked();
+
+  runtime::SceneExchange& exchange_;
+  std::function<std::int64_t()> next_tick_;
+  std::int64_t removal_ramp_ticks_;
+  std::uint32_t max_items_per_session_;
+
+  mutable std::mutex mutex_;
+  std::map<std::uint64_t, Item> items_;  // by id; ordered, so compilation is deterministic
+  std::uint64_t next_id_ = 1;
+  std::uint64_t generation_ = 0;
+};
+
+}  // namespace haptic::net

@@ -1,0 +1,122 @@
+#include "net/session_registry.hpp"
+
+#include <cstring>
+#include <random>
+
+namespace haptic::net {
+namespace {
+
+bool same_address(const UdpAddress& a, const UdpAddress& b) {
+  return a.length == b.length && std::memcmp(&a.storage, &b.storage, a.length) == 0;
+}
+
+}  // namespace
+
+SessionRegistry::SessionRegistry(std::uint32_t max_sessions, std::chrono::milliseconds lease_timeout)
+    : max_sessions_(max_sessions), lease_timeout_(lease_timeout) {}
+
+std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name) {
+  // Ids and keys come from the OS entropy source: a session id is also the capability that lets a
+  // client change its own objects, so it must not be guessable.
+  std::random_device entropy;
+  auto random64 = [&entropy] {
+    return (static_cast<std::uint64_t>(entropy()) << 32) ^ static_cast<std::uint64_t>(entropy());
+  };
+  std::lock_guard lock(mutex_);
+  if (sessions_.size() >= max_sessions_) return std::nullopt;
+  Session session;
+  do {
+    session.info.id = random64();
+  } while (session.info.id == 0 || sessions_.contains(session.info.id));
+  session.info.client_name = client_name;
+  for (auto& byte : session.info.key) byte = static_cast<std::uint8_t>(entropy());
+  session.last_seen = SteadyClock::now();
+  SessionInfo info = session.info;
+  sessions_.emplace(info.id, std::move(session));
+  return info;
+}
+
+bool SessionRegistry::close(std::uint64_t session_id) {
+  std::lock_guard lock(mutex_);
+  if (sessions_.erase(session_id) == 0) return false;
+  ++version_;
+  return true;
+}
+
+bool SessionRegistry::touch(std::uint64_t session_id) {
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(session_id);
+  if (it == sessions_.end()) return false;
+  it->second.last_seen = SteadyClock::now();
+  return true;
+}
+
+std::optional<wire::Key> SessionRegistry::key_of(std::uint64_t session_id) const {
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(session_id);
+  if (it == sessions_.end()) return std::nullopt;
+  return it->second.info.key;
+}
+
+bool SessionRegistry::on_heartbeat(std::uint64_t session_id, std::uint64_t sequence,
+                                   const UdpAddress& from) {
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(session_id);
+  if (it == sessions_.end()) return false;
+  Session& session = it->second;
+  if (sequence <= session.last_heartbeat_sequence) return false;
+  session.last_heartbeat_sequence = sequence;
+  session.last_seen = SteadyClock::now();
+  if (!session.address || !same_address(*session.address, from)) {
+    session.address = from;
+    ++version_;
+  }
+  return true;
+}
+
+bool SessionRegistry::subscribe(std::uint64_t session_id, std::uint32_t decimation) {
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(session_id);
+  if (it == sessions_.end()) return false;
+  it->second.decimation = decimation;
+  it->second.last_seen = SteadyClock::now();
+  ++version_;
+  return true;
+}
+
+std::vector<std::uint64_t> SessionRegistry::expire(SteadyClock::time_point now) {
+  std::vector<std::uint64_t> expired;
+  std::lock_guard lock(mutex_);
+  for (auto it = sessions_.begin(); it != sessions_.end();) {
+    if (now - it->second.last_seen > lease_timeout_) {
+      expired.push_back(it->first);
+      it = sessions_.erase(it);
+      ++version_;
+    } else {
+      ++it;
+    }
+  }
+  return expired;
+}
+
+std::uint64_t SessionRegistry::subscribers_version() const {
+  std::lock_guard lock(mutex_);
+  return version_;
+}
+
+std::vector<Subscriber> SessionRegistry::subscribers() const {
+  std::vector<Subscriber> out;
+  std::lock_guard lock(mutex_);
+  for (const auto& [id, session] : sessions_) {
+    if (session.decimation == 0 || !session.address) continue;
+    out.push_back(Subscriber{id, session.info.key, *session.address, session.decimation});
+  }
+  return out;
+}
+
+std::size_t SessionRegistry::size() const {
+  std::lock_guard lock(mutex_);
+  return sessions_.size();
+}
+
+}  // namespace haptic::net

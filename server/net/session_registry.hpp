@@ -1,0 +1,87 @@
+#pragma once
+// Client sessions: identity, the UDP key, where to send state, the subscription, and the lease.
+// Thread-safe; never used on the loop.
+
+#include <netinet/in.h>
+#include <sys/socket.h>
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "haptic/wire/datagram.hpp"
+
+namespace haptic::net {
+
+using SteadyClock = std::chrono::steady_clock;
+
+/// An IPv4 or IPv6 UDP endpoint as the kernel gives it.
+struct UdpAddress {
+  sockaddr_storage storage{};
+  socklen_t length = 0;
+};
+
+struct SessionInfo {
+  std::uint64_t id = 0;
+  std::string client_name;
+  wire::Key key{};
+};
+
+/// What the data-plane sender needs per subscribed session.
+struct Subscriber {
+  std::uint64_t session_id = 0;
+  wire::Key key{};
+  UdpAddress address;
+  std::uint32_t decimation = 1;
+};
+
+class SessionRegistry {
+ public:
+  SessionRegistry(std::uint32_t max_sessions, std::chrono::milliseconds lease_timeout);
+
+  /// Opens a session with a fresh random id and key; nullopt when max_sessions are open.
+  std::optional<SessionInfo> open(const std::string& client_name);
+  /// Removes the session; false if it did not exist.
+  bool close(std::uint64_t session_id);
+  /// Renews the lease; false if the session does not exist.
+  bool touch(std::uint64_t session_id);
+  std::optional<wire::Key> key_of(std::uint64_t session_id) const;
+
+  /// A heartbeat authenticated with the session's key: renews the lease and records the address
+  /// state goes to. Rejects (false) a sequence not above the last one (stale or replayed).
+  bool on_heartbeat(std::uint64_t session_id, std::uint64_t sequence, const UdpAddress& from);
+
+  /// Sets the state-stream decimation (0 stops it); false if the session does not exist.
+  bool subscribe(std::uint64_t session_id, std::uint32_t decimation);
+
+  /// Removes and returns the sessions whose lease ran out at `now`.
+  std::vector<std::uint64_t> expire(SteadyClock::time_point now);
+
+  /// Changes whenever the subscriber list would change; lets the sender copy it only then.
+  std::uint64_t subscribers_version() const;
+  std::vector<Subscriber> subscribers() const;
+
+  std::size_t size() const;
+  std::chrono::milliseconds lease_timeout() const { return lease_timeout_; }
+
+ private:
+  struct Session {
+    SessionInfo info;
+    SteadyClock::time_point last_seen;
+    std::optional<UdpAddress> address;
+    std::uint64_t last_heartbeat_sequence = 0;
+    std::uint32_t decimation = 0;
+  };
+
+  mutable std::mutex mutex_;
+  std::map<std::uint64_t, Session> sessions_;
+  std::uint32_t max_sessions_;
+  std::chrono::milliseconds lease_timeout_;
+  std::uint64_t version_ = 0;
+};
+
+}  // namespace haptic::net

@@ -1,0 +1,154 @@
+#include "net/udp_endpoint.hpp"
+
+#include <arpa/inet.h>
+#include <netdb.h>
+#include <poll.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <map>
+#include <stdexcept>
+#include <vector>
+
+#include "haptic/wire/datagram.hpp"
+
+namespace haptic::net {
+
+UdpEndpoint::UdpEndpoint(SessionRegistry& sessions, runtime::SampleRing& samples)
+    : sessions_(sessions), samples_(samples) {}
+
+UdpEndpoint::~UdpEndpoint() {
+  stop();
+  if (socket_ >= 0) ::close(socket_);
+}
+
+void UdpEndpoint::bind(const std::string& address, std::uint16_t port) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_DGRAM;
+  hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
+  addrinfo* found = nullptr;
+  const std::string service = std::to_string(port);
+  if (const int rc = ::getaddrinfo(address.empty() ? nullptr : address.c_str(), service.c_str(),
+                                   &hints, &found);
+      rc != 0) {
+    throw std::runtime_error("udp_address '" + address + "': " + ::gai_strerror(rc));
+  }
+  std::string last_error = "no address";
+  for (addrinfo* ai = found; ai != nullptr; ai = ai->ai_next) {
+    const int fd = ::socket(ai->ai_family, ai->ai_socktype | SOCK_CLOEXEC, ai->ai_protocol);
+    if (fd < 0) {
+      last_error = std::strerror(errno);
+      continue;
+    }
+    if (::bind(fd, ai->ai_addr, ai->ai_addrlen) != 0) {
+      last_error = std::strerror(errno);
+      ::close(fd);
+      continue;
+    }
+    socket_ = fd;
+    break;
+  }
+  ::freeaddrinfo(found);
+  if (socket_ < 0) {
+    throw std::runtime_error("cannot bind UDP " + address + ":" + service + ": " + last_error);
+  }
+  sockaddr_storage bound{};
+  socklen_t length = sizeof(bound);
+  ::getsockname(socket_, reinterpret_cast<sockaddr*>(&bound), &length);
+  port_ = ntohs(bound.ss_family == AF_INET6 ? reinterpret_cast<sockaddr_in6*>(&bound)->sin6_port
+                                            : reinterpret_cast<sockaddr_in*>(&bound)->sin_port);
+}
+
+void UdpEndpoint::start() {
+  stopping_.store(false);
+  receiver_ = std::thread([this] { receive_loop(); });
+  sender_ = std::thread([this] { send_loop(); });
+}
+
+void UdpEndpoint::stop() {
+  stopping_.store(true);
+  samples_.stop();  // wakes the sender
+  if (receiver_.joinable()) receiver_.join();
+  if (sender_.joinable()) sender_.join();
+}
+
+void UdpEndpoint::receive_loop() {
+  std::array<std::uint8_t, 2048> buffer{};
+  while (!stopping_.load(std::memory_order_acquire)) {
+    pollfd pfd{socket_, POLLIN, 0};
+    if (::poll(&pfd, 1, 50) <= 0) continue;  // 50 ms: how fast stop() is noticed
+    UdpAddress from;
+    from.length = sizeof(from.storage);
+    const ssize_t n = ::recvfrom(socket_, buffer.data(), buffer.size(), 0,
+                                 reinterpret_cast<sockaddr*>(&from.storage), &from.length);
+    if (n < 0) continue;
+    const std::span<const std::uint8_t> datagram(buffer.data(), static_cast<std::size_t>(n));
+    wire::Header header;
+    if (wire::peek_header(datagram, header) != wire::DecodeError::kNone ||
+        header.type != wire::DatagramType::kHeartbeat) {
+      counters_.dropped.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    const auto key = sessions_.key_of(header.session_id);
+    wire::HeartbeatPayload heartbeat;
+    if (!key || wire::decode_heartbeat(datagram, *key, header, heartbeat) != wire::DecodeError::kNone ||
+        !sessions_.on_heartbeat(header.session_id, header.sequence, from)) {
+      counters_.dropped.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    counters_.received.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+void UdpEndpoint::send_loop() {
+  std::vector<Subscriber> subscribers;
+  std::map<std::uint64_t, std::uint64_t> sequences;  // per session, last sequence sent
+  std::uint64_t subscribers_version = ~0ull;
+  std::uint64_t last_tick = samples_.newest();
+  std::array<std::uint8_t, wire::kMaxDatagramSize> buffer{};
+  while (!samples_.stopping()) {
+    samples_.wait_beyond(last_tick);
+    if (samples_.stopping()) break;
+    const std::uint64_t newest = samples_.newest();
+    if (const auto version = sessions_.subscribers_version(); version != subscribers_version) {
+      subscribers = sessions_.subscribers();
+      subscribers_version = version;
+    }
+    for (std::uint64_t tick = last_tick + 1; tick <= newest; ++tick) {
+      runtime::TickSample sample;
+      if (!samples_.read(tick, sample)) {
+        counters_.samples_missed.fetch_add(1, std::memory_order_relaxed);
+        continue;
+      }
+      for (const Subscriber& subscriber : subscribers) {
+        if (tick % subscriber.decimation != 0) continue;
+        wire::Header header;
+        header.session_id = subscriber.session_id;
+        header.sequence = ++sequences[subscriber.session_id];
+        header.time_ns = sample.time_ns;
+        wire::StatePayload state;
+        state.tick = sample.tick;
+        state.p_WT = {sample.p_WT.x, sample.p_WT.y, sample.p_WT.z};
+        state.v_WT = {sample.v_WT.x, sample.v_WT.y, sample.v_WT.z};
+        state.F_T_W = {sample.F_T_W.x, sample.F_T_W.y, sample.F_T_W.z};
+        state.p_WP = {sample.p_WP.x, sample.p_WP.y, sample.p_WP.z};
+        state.contact_count = sample.contact_count;
+        state.flags = sample.flags;
+        const std::size_t size = wire::encode_state(header, state, subscriber.key, buffer);
+        const auto& to = subscriber.address;
+        if (::sendto(socket_, buffer.data(), size, MSG_DONTWAIT,
+                     reinterpret_cast<const sockaddr*>(&to.storage), to.length) < 0) {
+          counters_.send_errors.fetch_add(1, std::memory_order_relaxed);
+        } else {
+          counters_.sent.fetch_add(1, std::memory_order_relaxed);
+        }
+      }
+    }
+    last_tick = newest;
+  }
+}
+
+}  // namespace haptic::net

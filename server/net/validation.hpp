@@ -1,0 +1,35 @@
+#pragma once
+// Validation at the boundary: protobuf messages from clients and config files become engine specs,
+// or an error that names the offending field ("object.impedance.stiffness: must be finite and
+// >= 0, got nan"). Engine code downstream assumes valid input.
+
+#include <string>
+
+#include "engine/operator/simulated_hand.hpp"
+#include "engine/scene/scene_spec.hpp"
+#include "haptic/v1/device.pb.h"
+#include "haptic/v1/scene.pb.h"
+
+namespace haptic::net {
+
+/// Ranges accepted for scene parameters. Generous, but they keep numbers physical.
+struct SceneLimits {
+  double max_abs_position = 10.0;   // Unit: m.
+  double max_stiffness = 1.0e6;     // Unit: N/m.
+  double max_damping = 1.0e4;       // Unit: N*s/m.
+  double max_radius = 10.0;         // Unit: m.
+  double max_force = 1.0e4;         // Unit: N.
+};
+
+/// Each returns an empty string on success, else "<path>: <what is wrong>".
+std::string to_object_spec(const v1::Object& object, const std::string& path,
+                           const SceneLimits& limits, engine::ObjectSpec& out);
+std::string to_field_spec(const v1::Field& field, const std::string& path,
+                          const SceneLimits& limits, engine::FieldSpec& out);
+std::string to_hand_input(const v1::OperatorInput& input, const std::string& path,
+                          const SceneLimits& limits, engine::HandInput& out);
+
+engine::Vec3 to_engine(const v1::Vec3& v);
+v1::Vec3 to_proto(const engine::Vec3& v);
+
+}  // namespace haptic::net

@@ -1,0 +1,52 @@
+#pragma once
+// The device seam: what the loop talks to, simulated plant or real hardware behind the same
+// interface (after ros2_control's hardware interface: a lifecycle, then real-time read/write that
+// return a status and never throw).
+
+#include <cstdint>
+#include <string>
+
+#include "engine/core/vec3.hpp"
+
+namespace haptic::runtime {
+
+enum class DeviceStatus : std::uint8_t { kOk, kError };
+
+/// What a device reports once per tick. Frames: W (device world), T (tool point).
+struct DeviceReading {
+  engine::Vec3 p_WT;  // Unit: m.
+  engine::Vec3 v_WT;  // Unit: m/s.
+};
+
+/// What the loop commands once per tick.
+struct DeviceCommand {
+  engine::Vec3 F_T_W;  // Force on the tool, in W. Unit: N.
+};
+
+struct DeviceDescription {
+  std::string name;
+  std::uint32_t dof = 3;
+  engine::Vec3 workspace_min;  // Unit: m.
+  engine::Vec3 workspace_max;  // Unit: m.
+  double max_force = 0.0;      // Unit: N.
+  bool simulated = false;
+};
+
+class Device {
+ public:
+  virtual ~Device() = default;
+
+  /// Off the loop: identity and limits.
+  virtual const DeviceDescription& description() const = 0;
+
+  /// Off the loop, before the first tick / after the last.
+  virtual DeviceStatus start() = 0;
+  virtual void stop() = 0;
+
+  /// On the loop. `dt` is the tick period (s): a simulated device advances its plant by dt in
+  /// write(), so the next read() sees the state one period later (a zero-order hold of the command).
+  virtual DeviceStatus read(DeviceReading& reading) = 0;
+  virtual DeviceStatus write(const DeviceCommand& command, double dt) = 0;
+};
+
+}  // namespace haptic::runtime

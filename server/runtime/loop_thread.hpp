@@ -1,0 +1,77 @@
+#pragma once
+// The loop thread: the only caller of TickRunner::run, and so the only writer of device commands.
+//
+// Real time: absolute CLOCK_MONOTONIC deadlines, sleep then spin, SCHED_FIFO + mlockall when
+// permitted; a tick that ends past the next deadline counts the missed periods as overruns and
+// skips them (never a burst of catch-up ticks). Lockstep: ticks run only when step() asks, as fast
+// as possible, and server time is tick × period, so every run is exactly reproducible.
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <thread>
+
+#include "runtime/loop_stats.hpp"
+#include "runtime/realtime.hpp"
+#include "runtime/tick_runner.hpp"
+
+namespace haptic::runtime {
+
+enum class TimeMode { kRealTime, kLockstep };
+
+struct LoopConfig {
+  double rate_hz = 1000.0;     // Unit: Hz. 100 ... 10000.
+  TimeMode mode = TimeMode::kRealTime;
+  bool use_fifo = true;
+  int fifo_priority = 80;
+  std::int64_t spin_ns = 100'000;  // Unit: ns.
+};
+
+class LoopThread {
+ public:
+  LoopThread(TickRunner& runner, LoopCounters& counters, LatenessHistogram& lateness,
+             const LoopConfig& config);
+  ~LoopThread();
+  LoopThread(const LoopThread&) = delete;
+  LoopThread& operator=(const LoopThread&) = delete;
+
+  /// Starts the thread; returns what real-time setup it got (real-time mode only).
+  RealtimeSetup start();
+
+  /// Lockstep only: runs `ticks` ticks and returns the index of the last one. Callers from several
+  /// threads are served one after another.
+  std::uint64_t step(std::uint32_t ticks);
+
+  /// Ramps the output force to zero over the runner's output_ramp_ticks and waits for it (in
+  /// lockstep the ramp is run as ticks), then stops the thread.
+  void ramp_out_and_stop();
+
+  /// Stops the thread at once (joins).
+  void stop();
+
+  /// Ticks completed so far.
+  std::uint64_t completed_ticks() const { return completed_.load(std::memory_order_acquire); }
+  /// Server time now. Unit: ns. Lockstep: completed ticks × period.
+  std::int64_t server_time_ns() const;
+  std::int64_t period_ns() const { return period_ns_; }
+  const LoopConfig& config() const { return config_; }
+
+ private:
+  void run_real_time();
+  void run_lockstep();
+
+  TickRunner& runner_;
+  LoopCounters& counters_;
+  LatenessHistogram& lateness_;
+  LoopConfig config_;
+  std::int64_t period_ns_;
+  std::int64_t start_ns_ = 0;
+
+  std::thread thread_;
+  std::atomic<bool> stop_requested_{false};
+  std::atomic<std::uint64_t> completed_{0};
+  std::atomic<std::uint64_t> target_{0};  // lockstep: run until this tick
+  std::mutex step_mutex_;                 // serialises step() callers (off the loop)
+};
+
+}  // namespace haptic::runtime

@@ -1,0 +1,31 @@
+#include "runtime/simulated_device.hpp"
+
+namespace haptic::runtime {
+
+SimulatedPointMassDevice::SimulatedPointMassDevice(const engine::PointMassParams& params,
+                                                   const engine::PointMassState& initial,
+                                                   double max_force)
+    : plant_(params, initial) {
+  description_.name = "simulated point mass (3-DOF mass-damper)";
+  description_.dof = 3;
+  description_.workspace_min = params.workspace_min;
+  description_.workspace_max = params.workspace_max;
+  description_.max_force = max_force;
+  description_.simulated = true;
+}
+
+DeviceStatus SimulatedPointMassDevice::read(DeviceReading& reading) {
+  reading.p_WT = plant_.state().p_WT;
+  reading.v_WT = plant_.state().v_WT;
+  return DeviceStatus::kOk;
+}
+
+DeviceStatus SimulatedPointMassDevice::write(const DeviceCommand& command, double dt) {
+  const engine::HandInput hand = hand_.load();
+  plant_.step(command.F_T_W, dt, [&hand](const engine::Vec3& p_WT, const engine::Vec3& v_WT) {
+    return engine::hand_force(hand, p_WT, v_WT);
+  });
+  return DeviceStatus::kOk;
+}
+
+}  // namespace haptic::runtime

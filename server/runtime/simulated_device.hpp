@@ -1,0 +1,34 @@
+#pragma once
+// The default device: the 3-DOF point-mass plant (engine/device) held by a simulated operator
+// (engine/operator). The operator's input is changed off the loop (SetOperator RPC) through a
+// lock-free mailbox.
+
+#include "engine/device/point_mass_plant.hpp"
+#include "engine/operator/simulated_hand.hpp"
+#include "runtime/device.hpp"
+#include "runtime/latest_value.hpp"
+
+namespace haptic::runtime {
+
+class SimulatedPointMassDevice final : public Device {
+ public:
+  SimulatedPointMassDevice(const engine::PointMassParams& params,
+                           const engine::PointMassState& initial, double max_force);
+
+  const DeviceDescription& description() const override { return description_; }
+  DeviceStatus start() override { return DeviceStatus::kOk; }
+  void stop() override {}
+  DeviceStatus read(DeviceReading& reading) override;
+  DeviceStatus write(const DeviceCommand& command, double dt) override;
+
+  /// Off the loop: what the simulated hand does from the next tick on.
+  void set_hand(const engine::HandInput& input) { hand_.store(input); }
+  engine::HandInput hand() const { return hand_.load(); }
+
+ private:
+  DeviceDescription description_;
+  engine::PointMassPlant plant_;
+  LatestValue<engine::HandInput> hand_;
+};
+
+}  // namespace haptic::runtime

@@ -1,0 +1,73 @@
+#include "runtime/tick_runner.hpp"
+
+#include <algorithm>
+
+#include "haptic/wire/datagram.hpp"
+
+namespace haptic::runtime {
+
+TickRunner::TickRunner(Device& device, SceneExchange& scenes, SampleRing& samples,
+                       LoopCounters& counters, const TickConfig& config)
+    : device_(device),
+      scenes_(scenes),
+      samples_(samples),
+      counters_(counters),
+      config_(config),
+      guard_(config.limits) {
+  config_.output_ramp_ticks = std::max<std::int64_t>(1, config_.output_ramp_ticks);
+}
+
+double TickRunner::output_gain(std::uint64_t tick) const {
+  const std::uint64_t first = ramp_first_tick_.load(std::memory_order_acquire);
+  if (tick < first) return 1.0;
+  const double elapsed = static_cast<double>(tick - first);
+  return std::max(0.0, 1.0 - elapsed / static_cast<double>(config_.output_ramp_ticks));
+}
+
+void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
+  const engine::CompiledScene& scene = scenes_.adopt();
+
+  TickSample sample;
+  sample.tick = tick;
+  sample.time_ns = time_ns;
+
+  DeviceReading reading;
+  const bool read_ok = device_.read(reading) == DeviceStatus::kOk;
+  engine::Vec3 F_requested;
+  if (read_ok) {
+    const engine::SceneForce scene_force =
+        engine::evaluate_scene(scene, reading.p_WT, reading.v_WT, static_cast<std::int64_t>(tick));
+    F_requested = scene_force.F_T_W;
+    sample.p_WP = scene_force.p_WP;
+    sample.contact_count = scene_force.contact_count;
+    if (scene_force.ramping) sample.flags |= wire::kFlagRampingOut;
+  } else {
+    // Without a reading no force can be justified: command zero.
+    counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
+    sample.p_WP = reading.p_WT;
+  }
+
+  const double gain = output_gain(tick);
+  if (gain < 1.0) sample.flags |= wire::kFlagRampingOut;
+  const engine::GuardedForce guarded = guard_.apply(F_requested, config_.period_s, gain);
+  if (guarded.fault) {
+    sample.flags |= wire::kFlagForceFault;
+    counters_.force_faults.fetch_add(1, std::memory_order_relaxed);
+  }
+  if (guarded.saturated) {
+    sample.flags |= wire::kFlagForceSaturated;
+    counters_.force_saturations.fetch_add(1, std::memory_order_relaxed);
+  }
+  if (device_.write(DeviceCommand{guarded.F_T_W}, config_.period_s) != DeviceStatus::kOk) {
+    counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
+  }
+  if (gain == 0.0) output_zero_.store(true, std::memory_order_release);
+
+  sample.p_WT = reading.p_WT;
+  sample.v_WT = reading.v_WT;
+  sample.F_T_W = guarded.F_T_W;
+  samples_.publish(sample);
+  counters_.ticks.fetch_add(1, std::memory_order_relaxed);
+}
+
+}  // namespace haptic::runtime

@@ -1,0 +1,74 @@
+// Per-tick compute cost (Google Benchmark): the whole TickRunner tick on the default scene (one
+// wall, one spring field) with the simulated device, the scene evaluation alone, and scenes of
+// growing size, so the ratios to the empty scene come from one run.
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include "runtime/simulated_device.hpp"
+#include "runtime/tick_runner.hpp"
+
+using namespace haptic;
+
+namespace {
+
+engine::CompiledScene scene_with(int walls, int spheres, int springs) {
+  engine::SceneDescription description;
+  std::uint64_t id = 1;
+  for (int i = 0; i < walls; ++i) {
+    engine::ObjectSpec wall;
+    wall.p_WO = {0.0, 0.0, -0.001 * i};
+    wall.stiffness = 1000.0;
+    wall.damping = 1.0;
+    wall.shape = engine::HalfSpaceSpec{{0.0, 0.0, 1.0}};
+    description.objects.push_back({{1, id++, engine::kNeverTick}, wall});
+  }
+  for (int i = 0; i < spheres; ++i) {
+    engine::ObjectSpec sphere;
+    sphere.p_WO = {0.001 * i, 0.0, 0.0};
+    sphere.stiffness = 1000.0;
+    sphere.shape = engine::SphereSpec{0.01};
+    description.objects.push_back({{1, id++, engine::kNeverTick}, sphere});
+  }
+  for (int i = 0; i < springs; ++i) {
+    description.fields.push_back({{1, id++, engine::kNeverTick},
+                                  engine::FieldSpec{engine::SpringToPointSpec{{0, 0, 0.02}, 20.0, 0.1, 0.0}}});
+  }
+  return engine::compile_scene(description, 50, 1);
+}
+
+void BM_TickDefaultScene(benchmark::State& state) {
+  runtime::SimulatedPointMassDevice device(engine::PointMassParams{}, {{0, 0, -0.001}, {}}, 20.0);
+  runtime::SceneExchange scenes(std::make_unique<const engine::CompiledScene>(scene_with(1, 0, 1)));
+  runtime::SampleRing samples;
+  runtime::LoopCounters counters;
+  runtime::TickRunner runner(device, scenes, samples, counters, runtime::TickConfig{});
+  engine::HandInput hand;
+  hand.mode = engine::HandInput::Mode::kApplyForce;
+  hand.force = {0.0, 0.0, -5.0};
+  device.set_hand(hand);
+  std::uint64_t tick = 0;
+  for (auto _ : state) {
+    ++tick;
+    runner.run(tick, static_cast<std::int64_t>(tick) * 1'000'000);
+  }
+}
+BENCHMARK(BM_TickDefaultScene);
+
+void BM_EvaluateScene(benchmark::State& state) {
+  const auto n = static_cast<int>(state.range(0));
+  const engine::CompiledScene scene = scene_with(n, n, n);
+  engine::Vec3 p{0.0, 0.0, -0.0005};
+  const engine::Vec3 v{0.0, 0.0, -0.01};
+  std::int64_t tick = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(engine::evaluate_scene(scene, p, v, ++tick));
+    benchmark::ClobberMemory();
+  }
+  state.counters["items"] = 3 * n;
+}
+BENCHMARK(BM_EvaluateScene)->Arg(0)->Arg(1)->Arg(3)->Arg(333);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,106 @@
+#pragma once
+// Runs the real hapticd binary for a test: ephemeral loopback ports, a JSON config written to a
+// temporary file, readiness from --ready-file (never a sleep), SIGTERM and a reaped child at the end.
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+namespace haptic::test {
+
+class ServerProcess {
+ public:
+  /// `config_json` is a haptic.v1.ServerConfig in JSON; ports are forced to ephemeral loopback.
+  explicit ServerProcess(const std::string& config_json, const std::string& extra_arg = {}) {
+    static int counter = 0;
+    dir_ = std::filesystem::temp_directory_path() /
+           ("hapticd-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+    std::filesystem::create_directories(dir_);
+    const auto config_path = dir_ / "config.json";
+    const auto ready_path = dir_ / "ready.json";
+    std::ofstream(config_path) << config_json;
+
+    pid_ = ::fork();
+    if (pid_ < 0) throw std::runtime_error("fork failed");
+    if (pid_ == 0) {
+      const std::string binary = HAPTICD_BINARY;
+      const std::string config = config_path.string();
+      const std::string ready = ready_path.string();
+      if (extra_arg.empty()) {
+        ::execl(binary.c_str(), binary.c_str(), "--config", config.c_str(), "--grpc-address",
+                "127.0.0.1:0", "--udp-port", "0", "--ready-file", ready.c_str(), nullptr);
+      } else {
+        ::execl(binary.c_str(), binary.c_str(), "--config", config.c_str(), "--grpc-address",
+                "127.0.0.1:0", "--udp-port", "0", "--ready-file", ready.c_str(), extra_arg.c_str(),
+                nullptr);
+      }
+      ::_exit(127);
+    }
+    // Readiness: the server writes the file only after both ports are bound.
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (!std::filesystem::exists(ready_path)) {
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        throw std::runtime_error("hapticd exited before it was ready");
+      }
+      if (std::chrono::steady_clock::now() > give_up) throw std::runtime_error("hapticd not ready");
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    std::ifstream ready(ready_path);
+    std::stringstream text;
+    text << ready.rdbuf();
+    grpc_port_ = read_port(text.str(), "\"grpc_port\":");
+    udp_port_ = read_port(text.str(), "\"udp_port\":");
+  }
+
+  ~ServerProcess() {
+    stop();
+    std::error_code ignored;
+    std::filesystem::remove_all(dir_, ignored);
+  }
+
+  /// SIGTERM, then wait for a clean exit. Returns the exit status (or -1 if not running).
+  int stop() {
+    if (pid_ <= 0) return -1;
+    ::kill(pid_, SIGTERM);
+    int status = 0;
+    ::waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+
+  std::string address() const { return "127.0.0.1:" + std::to_string(grpc_port_); }
+  std::uint16_t udp_port() const { return udp_port_; }
+
+ private:
+  static std::uint16_t read_port(const std::string& text, const std::string& key) {
+    const auto at = text.find(key);
+    if (at == std::string::npos) throw std::runtime_error("ready file lacks " + key);
+    return static_cast<std::uint16_t>(std::stoi(text.substr(at + key.size())));
+  }
+
+  std::filesystem::path dir_;
+  pid_t pid_ = -1;
+  std::uint16_t grpc_port_ = 0;
+  std::uint16_t udp_port_ = 0;
+};
+
+/// A lockstep configuration for tests; `extra` is spliced into the JSON object.
+inline std::string lockstep_config(const std::string& extra = {}) {
+  return std::string(R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
+    "real_time": {"use_fifo": false},
+    "simulated_point_mass": {"initial_position": {"z": 0.02}})") +
+         (extra.empty() ? "" : ", " + extra) + "}";
+}
+
+}  // namespace haptic::test

@@ -1,0 +1,116 @@
+// The shared scene store: ownership, limits, atomic replacement, fade-out and compaction.
+#include <gtest/gtest.h>
+
+#include "net/scene_store.hpp"
+
+namespace haptic::net {
+namespace {
+
+engine::ObjectSpec wall(double z) {
+  engine::ObjectSpec spec;
+  spec.p_WO = {0.0, 0.0, z};
+  spec.stiffness = 1000.0;
+  spec.shape = engine::HalfSpaceSpec{{0.0, 0.0, 1.0}};
+  return spec;
+}
+
+struct StoreRig {
+  runtime::SceneExchange exchange{std::make_unique<const engine::CompiledScene>()};
+  std::int64_t next_tick = 1;
+  SceneStore store{exchange, [this] { return next_tick; }, 50, 3};
+
+  const engine::CompiledScene& scene() { return exchange.adopt(); }
+};
+
+TEST(SceneStore, CreateUpdateDeleteAreSeenByTheLoop) {
+  StoreRig rig;
+  std::uint64_t id = 0;
+  ASSERT_TRUE(rig.store.create(7, ItemKind::kObject, wall(0.0), id).ok());
+  ASSERT_EQ(rig.scene().half_spaces.size(), 1u);
+  ASSERT_TRUE(rig.store.update(7, ItemKind::kObject, id, wall(0.01)).ok());
+  EXPECT_DOUBLE_EQ(rig.scene().half_spaces[0].point_W.z, 0.01);
+  rig.next_tick = 100;
+  ASSERT_TRUE(rig.store.remove(7, ItemKind::kObject, id).ok());
+  // Still in the compiled scene, fading from tick 100; no longer addressable.
+  ASSERT_EQ(rig.scene().half_spaces.size(), 1u);
+  EXPECT_EQ(rig.scene().half_spaces[0].fade_begin_tick, 100);
+  EXPECT_EQ(rig.store.remove(7, ItemKind::kObject, id).error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_EQ(rig.store.counts().fading, 1u);
+  rig.next_tick = 150;  // tick 150 is the ramp's last (gain 0): keep until it has run
+  EXPECT_EQ(rig.store.compact(), 0u);
+  rig.next_tick = 151;
+  EXPECT_EQ(rig.store.compact(), 1u);
+  EXPECT_TRUE(rig.scene().half_spaces.empty());
+}
+
+TEST(SceneStore, AnotherSessionsItemIsPermissionDenied) {
+  StoreRig rig;
+  std::uint64_t id = 0;
+  ASSERT_TRUE(rig.store.create(1, ItemKind::kObject, wall(0.0), id).ok());
+  EXPECT_EQ(rig.store.update(2, ItemKind::kObject, id, wall(0.1)).error_code(),
+            grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_EQ(rig.store.remove(2, ItemKind::kObject, id).error_code(),
+            grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_EQ(rig.store.remove(1, ItemKind::kField, id).error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_DOUBLE_EQ(rig.scene().half_spaces[0].point_W.z, 0.0);
+}
+
+TEST(SceneStore, LimitPerSessionIsResourceExhaustedAndChangesNothing) {
+  StoreRig rig;
+  std::uint64_t id = 0;
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(rig.store.create(1, ItemKind::kObject, wall(i), id).ok());
+  EXPECT_EQ(rig.store.create(1, ItemKind::kObject, wall(9), id).error_code(),
+            grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(rig.scene().half_spaces.size(), 3u);
+  // Other sessions have their own budget.
+  EXPECT_TRUE(rig.store.create(2, ItemKind::kObject, wall(9), id).ok());
+
+  std::vector<std::uint64_t> object_ids, field_ids;
+  const std::vector<engine::ObjectSpec> four(4, wall(0.5));
+  EXPECT_EQ(rig.store.replace_session_scene(1, four, {}, object_ids, field_ids).error_code(),
+            grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(rig.store.counts().objects, 4u);
+  EXPECT_EQ(rig.store.counts().fading, 0u);
+}
+
+TEST(SceneStore, ReplaceSessionSceneFadesTheOldAndAddsTheNewAtOnce) {
+  StoreRig rig;
+  std::uint64_t mine = 0, theirs = 0;
+  ASSERT_TRUE(rig.store.create(1, ItemKind::kObject, wall(0.0), mine).ok());
+  ASSERT_TRUE(rig.store.create(2, ItemKind::kObject, wall(0.0), theirs).ok());
+  const auto generation_before = rig.exchange.adopted_generation();
+  rig.scene();
+  std::vector<std::uint64_t> object_ids, field_ids;
+  const std::vector<engine::FieldSpec> fields{
+      engine::FieldSpec{engine::SpringToPointSpec{{}, 10.0, 0.0, 0.0}}};
+  ASSERT_TRUE(rig.store.replace_session_scene(1, {wall(0.02), wall(0.03)}, fields, object_ids,
+                                              field_ids).ok());
+  EXPECT_EQ(object_ids.size(), 2u);
+  EXPECT_EQ(field_ids.size(), 1u);
+  const auto& scene = rig.scene();
+  EXPECT_GT(rig.exchange.adopted_generation(), generation_before);
+  EXPECT_EQ(scene.half_spaces.size(), 4u);  // two new, the fading old one, the other session's
+  EXPECT_EQ(scene.springs.size(), 1u);
+  EXPECT_EQ(rig.store.counts().fading, 1u);
+  EXPECT_EQ(rig.store.update(1, ItemKind::kObject, mine, wall(0.0)).error_code(),
+            grpc::StatusCode::NOT_FOUND);
+  EXPECT_TRUE(rig.store.update(2, ItemKind::kObject, theirs, wall(0.1)).ok());
+}
+
+TEST(SceneStore, RemoveSessionFadesOnlyThatSession) {
+  StoreRig rig;
+  std::uint64_t id = 0;
+  ASSERT_TRUE(rig.store.create(1, ItemKind::kObject, wall(0.0), id).ok());
+  ASSERT_TRUE(rig.store.create(1, ItemKind::kField,
+                               engine::FieldSpec{engine::SpringToPointSpec{{}, 1.0, 0.0, 0.0}}, id)
+                  .ok());
+  ASSERT_TRUE(rig.store.create(2, ItemKind::kObject, wall(0.0), id).ok());
+  EXPECT_EQ(rig.store.remove_session(1), 2u);
+  const SceneCounts counts = rig.store.counts();
+  EXPECT_EQ(counts.objects, 1u);
+  EXPECT_EQ(counts.fields, 0u);
+  EXPECT_EQ(counts.fading, 2u);
+}
+
+}  // namespace
+}  // namespace haptic::net

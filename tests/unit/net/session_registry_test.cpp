@@ -1,0 +1,71 @@
+// Sessions: unguessable ids, heartbeat sequencing, subscriptions and lease expiry.
+#include <gtest/gtest.h>
+
+#include <arpa/inet.h>
+
+#include <set>
+
+#include "net/session_registry.hpp"
+
+namespace haptic::net {
+namespace {
+
+UdpAddress loopback(std::uint16_t port) {
+  UdpAddress address;
+  auto* in = reinterpret_cast<sockaddr_in*>(&address.storage);
+  in->sin_family = AF_INET;
+  in->sin_port = htons(port);
+  in->sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  address.length = sizeof(sockaddr_in);
+  return address;
+}
+
+TEST(SessionRegistry, OpensDistinctSessionsUpToTheLimit) {
+  SessionRegistry registry(3, std::chrono::milliseconds(1000));
+  std::set<std::uint64_t> ids;
+  for (int i = 0; i < 3; ++i) {
+    const auto session = registry.open("client");
+    ASSERT_TRUE(session);
+    EXPECT_NE(session->id, 0u);
+    ids.insert(session->id);
+  }
+  EXPECT_EQ(ids.size(), 3u);
+  EXPECT_FALSE(registry.open("one too many"));
+  EXPECT_TRUE(registry.close(*ids.begin()));
+  EXPECT_TRUE(registry.open("room again"));
+}
+
+TEST(SessionRegistry, HeartbeatsSetTheAddressAndStaleOnesAreRejected) {
+  SessionRegistry registry(4, std::chrono::milliseconds(1000));
+  const auto session = registry.open("c");
+  ASSERT_TRUE(session);
+  EXPECT_TRUE(registry.subscribe(session->id, 2));
+  EXPECT_TRUE(registry.subscribers().empty());  // no address yet
+  const auto version = registry.subscribers_version();
+  EXPECT_TRUE(registry.on_heartbeat(session->id, 1, loopback(4000)));
+  EXPECT_NE(registry.subscribers_version(), version);
+  ASSERT_EQ(registry.subscribers().size(), 1u);
+  EXPECT_EQ(registry.subscribers()[0].decimation, 2u);
+  EXPECT_FALSE(registry.on_heartbeat(session->id, 1, loopback(4000)));  // replayed
+  EXPECT_TRUE(registry.on_heartbeat(session->id, 5, loopback(4001)));   // client moved
+  EXPECT_EQ(ntohs(reinterpret_cast<const sockaddr_in*>(&registry.subscribers()[0].address.storage)
+                      ->sin_port),
+            4001);
+  EXPECT_FALSE(registry.on_heartbeat(12345, 9, loopback(4000)));  // unknown session
+}
+
+TEST(SessionRegistry, SilentSessionsExpire) {
+  SessionRegistry registry(4, std::chrono::milliseconds(100));
+  const auto quiet = registry.open("quiet");
+  const auto chatty = registry.open("chatty");
+  const auto later = SteadyClock::now() + std::chrono::milliseconds(150);
+  // Only the lease clock matters; no sleeping: expire() takes the time to judge by.
+  auto expired = registry.expire(later);
+  EXPECT_EQ(expired.size(), 2u);
+  EXPECT_EQ(registry.size(), 0u);
+  EXPECT_FALSE(registry.touch(quiet->id));
+  EXPECT_FALSE(registry.touch(chatty->id));
+}
+
+}  // namespace
+}  // namespace haptic::net

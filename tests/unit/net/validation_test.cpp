@@ -1,0 +1,80 @@
+// Bad input at the boundary gets an error that names the field.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "net/validation.hpp"
+
+namespace haptic::net {
+namespace {
+
+v1::Object good_wall() {
+  v1::Object object;
+  object.mutable_impedance()->set_stiffness(1000.0);
+  object.mutable_impedance()->set_damping(1.0);
+  object.mutable_half_space()->mutable_normal()->set_z(2.0);
+  return object;
+}
+
+std::string error_of(const v1::Object& object) {
+  engine::ObjectSpec spec;
+  return to_object_spec(object, "object", SceneLimits{}, spec);
+}
+
+TEST(Validation, AcceptsAWallAndKeepsItsValues) {
+  engine::ObjectSpec spec;
+  ASSERT_EQ(to_object_spec(good_wall(), "object", SceneLimits{}, spec), "");
+  EXPECT_EQ(spec.stiffness, 1000.0);
+  EXPECT_EQ(spec.damping, 1.0);
+  ASSERT_TRUE(std::holds_alternative<engine::HalfSpaceSpec>(spec.shape));
+  EXPECT_EQ(spec.R_WO.w, 1.0);  // unset orientation is identity
+}
+
+TEST(Validation, NamesTheFieldThatIsWrong) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto with = [](auto change) {
+    v1::Object object = good_wall();
+    change(object);
+    return error_of(object);
+  };
+  EXPECT_EQ(with([&](v1::Object& o) { o.mutable_impedance()->set_stiffness(nan); })
+                .rfind("object.impedance.stiffness:", 0), 0u);
+  EXPECT_EQ(with([](v1::Object& o) { o.mutable_impedance()->set_damping(-1.0); })
+                .rfind("object.impedance.damping:", 0), 0u);
+  EXPECT_EQ(with([](v1::Object& o) { o.mutable_impedance()->set_stiffness(1e12); })
+                .rfind("object.impedance.stiffness:", 0), 0u);
+  EXPECT_EQ(with([](v1::Object& o) { o.mutable_half_space()->mutable_normal()->set_z(0.0); })
+                .rfind("object.half_space.normal:", 0), 0u);
+  EXPECT_EQ(with([&](v1::Object& o) { o.mutable_pose()->mutable_position()->set_y(nan); })
+                .rfind("object.pose.position.y:", 0), 0u);
+  EXPECT_EQ(with([](v1::Object& o) { o.mutable_pose()->mutable_orientation()->set_w(0.5); })
+                .rfind("object.pose.orientation:", 0), 0u);
+  EXPECT_EQ(with([](v1::Object& o) { o.clear_impedance(); }).rfind("object.impedance:", 0), 0u);
+  EXPECT_EQ(with([](v1::Object& o) { o.clear_shape(); }).rfind("object.shape:", 0), 0u);
+  EXPECT_EQ(with([](v1::Object& o) { o.mutable_sphere()->set_radius(0.0); })
+                .rfind("object.sphere.radius:", 0), 0u);
+}
+
+TEST(Validation, FieldsAndOperatorInput) {
+  v1::Field field;
+  engine::FieldSpec spec;
+  EXPECT_EQ(to_field_spec(field, "field", SceneLimits{}, spec).rfind("field.kind:", 0), 0u);
+  field.mutable_spring_to_point()->set_stiffness(-3.0);
+  EXPECT_EQ(to_field_spec(field, "field", SceneLimits{}, spec)
+                .rfind("field.spring_to_point.stiffness:", 0), 0u);
+  field.mutable_spring_to_point()->set_stiffness(30.0);
+  EXPECT_EQ(to_field_spec(field, "field", SceneLimits{}, spec), "");
+
+  v1::OperatorInput input;
+  engine::HandInput hand;
+  EXPECT_EQ(to_hand_input(input, "input", SceneLimits{}, hand).rfind("input.mode:", 0), 0u);
+  input.set_mode(v1::OperatorInput::APPLY_FORCE);
+  input.mutable_force()->set_x(std::numeric_limits<double>::infinity());
+  EXPECT_EQ(to_hand_input(input, "input", SceneLimits{}, hand).rfind("input.force.x:", 0), 0u);
+  input.set_mode(static_cast<v1::OperatorInput::Mode>(42));
+  EXPECT_EQ(to_hand_input(input, "input", SceneLimits{}, hand).rfind("input.mode:", 0), 0u);
+}
+
+}  // namespace
+}  // namespace haptic::net

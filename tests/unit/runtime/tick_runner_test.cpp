@@ -1,0 +1,202 @@
+// One tick of the loop against the simulated device, in lockstep: wall contact, removal ramps,
+// shutdown ramp, the NaN guard, reproducibility, and no allocation inside a tick.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "haptic/wire/datagram.hpp"
+#include "runtime/loop_thread.hpp"
+#include "runtime/simulated_device.hpp"
+#include "runtime/tick_runner.hpp"
+#include "support/allocation_counter.hpp"
+
+namespace haptic::runtime {
+namespace {
+
+constexpr double kPeriod = 0.001;
+
+engine::CompiledScene wall_scene(double stiffness, double damping,
+                                 std::int64_t fade_begin = engine::kNeverTick,
+                                 std::uint64_t generation = 1) {
+  engine::SceneDescription description;
+  engine::ObjectSpec wall;
+  wall.stiffness = stiffness;
+  wall.damping = damping;
+  wall.shape = engine::HalfSpaceSpec{{0.0, 0.0, 1.0}};
+  description.objects.push_back(engine::ObjectEntry{{1, 1, fade_begin}, wall});
+  return engine::compile_scene(description, 50, generation);
+}
+
+/// A device, a scene exchange, a ring and a runner wired as the server wires them.
+struct Rig {
+  explicit Rig(engine::CompiledScene scene = {}, double z0 = 0.01)
+      : device(engine::PointMassParams{}, engine::PointMassState{{0.0, 0.0, z0}, {}}, 20.0),
+        scenes(std::make_unique<const engine::CompiledScene>(std::move(scene))),
+        runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50}) {}
+
+  TickSample run(std::uint64_t ticks) {
+    TickSample last;
+    for (std::uint64_t i = 0; i < ticks; ++i) {
+      ++tick;
+      runner.run(tick, static_cast<std::int64_t>(tick - 1) * 1'000'000);
+    }
+    samples.read(tick, last);
+    return last;
+  }
+
+  SimulatedPointMassDevice device;
+  SceneExchange scenes;
+  SampleRing samples;
+  LoopCounters counters;
+  TickRunner runner;
+  std::uint64_t tick = 0;
+};
+
+engine::HandInput push(double fz) {
+  engine::HandInput hand;
+  hand.mode = engine::HandInput::Mode::kApplyForce;
+  hand.force = {0.0, 0.0, fz};
+  return hand;
+}
+
+TEST(TickRunner, PushIntoWallSettlesWhereWallForceBalancesThePush) {
+  // A 5 N push (Eom et al.'s operator force) into a K = 1000 N/m wall: rest at 5 mm penetration.
+  Rig rig(wall_scene(1000.0, 1.0));
+  rig.device.set_hand(push(-5.0));
+  const TickSample s = rig.run(3000);
+  EXPECT_NEAR(s.p_WT.z, -0.005, 1e-6);
+  EXPECT_NEAR(s.F_T_W.z, 5.0, 1e-3);
+  EXPECT_EQ(s.contact_count, 1u);
+  // The force at each sample is exactly K × penetration − B v_n for that sample's state.
+  EXPECT_NEAR(s.F_T_W.z, -1000.0 * s.p_WT.z - 1.0 * s.v_WT.z, 1e-9);
+  EXPECT_DOUBLE_EQ(s.p_WP.z, 0.0);  // proxy on the surface
+}
+
+TEST(TickRunner, RemovedWallFadesOutLinearlyOverTheRamp) {
+  Rig rig(wall_scene(1000.0, 1.0));
+  rig.device.set_hand(push(-5.0));
+  ASSERT_NEAR(rig.run(3000).F_T_W.z, 5.0, 1e-3);
+  // The fade begins at the next tick (3001) and lasts 50 ticks.
+  rig.scenes.publish(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 1.0, 3001, 2)));
+  for (std::uint64_t k = 0; k <= 60; ++k) {
+    const TickSample s = rig.run(1);
+    const double gain = std::max(0.0, 1.0 - static_cast<double>(k) / 50.0);
+    const double unfaded = std::max(0.0, -1000.0 * s.p_WT.z - 1.0 * s.v_WT.z);
+    ASSERT_NEAR(s.F_T_W.z, gain * unfaded, 1e-9) << "tick " << s.tick;
+    ASSERT_TRUE(s.flags & wire::kFlagRampingOut);
+  }
+}
+
+TEST(TickRunner, ShutdownRampTakesTheForceToZeroAndKeepsItThere) {
+  Rig rig(wall_scene(1000.0, 1.0));
+  rig.device.set_hand(push(-5.0));
+  rig.run(3000);
+  rig.runner.begin_output_ramp(3001);
+  EXPECT_FALSE(rig.runner.output_ramp_done());
+  const TickSample mid = rig.run(25);
+  EXPECT_GT(mid.F_T_W.z, 0.0);
+  const TickSample end = rig.run(30);
+  EXPECT_EQ(end.F_T_W.z, 0.0);
+  EXPECT_TRUE(rig.runner.output_ramp_done());
+}
+
+TEST(TickRunner, NonFiniteSceneForceNeverReachesTheDevice) {
+  // An infinite-stiffness wall cannot come from the validated control plane; the guard must still
+  // stop the NaN/inf it produces.
+  Rig rig(wall_scene(std::numeric_limits<double>::infinity(), 0.0), -0.001);
+  const TickSample s = rig.run(1);
+  EXPECT_EQ(s.F_T_W.z, 0.0);
+  EXPECT_TRUE(s.flags & wire::kFlagForceFault);
+  EXPECT_EQ(rig.counters.force_faults.load(), 1u);
+  EXPECT_TRUE(std::isfinite(rig.device.description().max_force));
+}
+
+TEST(TickRunner, SameInputsGiveBitIdenticalSamples) {
+  auto run_once = [] {
+    Rig rig(wall_scene(1000.0, 1.0));
+    engine::HandInput hand;
+    hand.mode = engine::HandInput::Mode::kFollowTarget;
+    hand.target = {0.001, -0.002, -0.01};
+    hand.stiffness = 200.0;
+    hand.damping = 2.0;
+    rig.device.set_hand(hand);
+    std::vector<TickSample> out;
+    for (int i = 0; i < 500; ++i) out.push_back(rig.run(1));
+    return out;
+  };
+  const auto a = run_once();
+  const auto b = run_once();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].p_WT, b[i].p_WT);
+    ASSERT_EQ(a[i].F_T_W, b[i].F_T_W);
+  }
+}
+
+TEST(TickRunner, NoAllocationInsideTenThousandTicksWithSceneSwapsBetween) {
+  Rig rig(wall_scene(1000.0, 1.0));
+  rig.device.set_hand(push(-5.0));
+  // The counter must see an allocation when one happens, or a zero below proves nothing.
+  {
+    test::reset_allocations();
+    test::CountAllocations counting;
+    auto probe = std::make_unique<int>(7);
+    ASSERT_EQ(test::allocations(), 1u);
+  }
+  std::uint64_t inside = 0;
+  for (int block = 0; block < 100; ++block) {
+    // Off the loop: a new scene every 100 ticks (a wall that moves and a sphere and a spring).
+    engine::SceneDescription description;
+    engine::ObjectSpec wall;
+    wall.p_WO = {0.0, 0.0, -0.0001 * block};
+    wall.stiffness = 1000.0;
+    wall.damping = 1.0;
+    wall.shape = engine::HalfSpaceSpec{{0.0, 0.0, 1.0}};
+    description.objects.push_back({{1, 1, engine::kNeverTick}, wall});
+    engine::ObjectSpec sphere = wall;
+    sphere.p_WO = {0.05, 0.0, 0.0};
+    sphere.shape = engine::SphereSpec{0.01};
+    description.objects.push_back({{1, 2, block % 2 ? 1 : engine::kNeverTick}, sphere});
+    description.fields.push_back(
+        {{2, 3, engine::kNeverTick}, engine::FieldSpec{engine::SpringToPointSpec{{}, 10.0, 0.1, 2.0}}});
+    rig.scenes.publish(std::make_unique<const engine::CompiledScene>(
+        engine::compile_scene(description, 50, static_cast<std::uint64_t>(block) + 2)));
+    test::reset_allocations();
+    {
+      test::CountAllocations counting;
+      rig.run(100);
+    }
+    inside += test::allocations();
+    rig.scenes.reclaim();
+  }
+  EXPECT_EQ(rig.tick, 10000u);
+  EXPECT_EQ(inside, 0u);
+}
+
+TEST(LoopThread, LockstepStepRunsExactlyTheTicksAskedFor) {
+  SimulatedPointMassDevice device(engine::PointMassParams{}, {}, 20.0);
+  SceneExchange scenes(std::make_unique<const engine::CompiledScene>());
+  SampleRing samples;
+  LoopCounters counters;
+  LatenessHistogram lateness;
+  TickRunner runner(device, scenes, samples, counters, TickConfig{});
+  LoopConfig config;
+  config.mode = TimeMode::kLockstep;
+  LoopThread loop(runner, counters, lateness, config);
+  loop.start();
+  EXPECT_EQ(loop.step(10), 10u);
+  EXPECT_EQ(loop.step(5), 15u);
+  EXPECT_EQ(loop.server_time_ns(), 15 * 1'000'000);
+  TickSample s;
+  ASSERT_TRUE(samples.read(15, s));
+  EXPECT_EQ(s.time_ns, 14 * 1'000'000);  // tick k starts at (k - 1) periods
+  loop.ramp_out_and_stop();
+  EXPECT_TRUE(runner.output_ramp_done());
+  EXPECT_EQ(counters.ticks.load(), loop.completed_ticks());
+}
+
+}  // namespace
+}  // namespace haptic::runtime
