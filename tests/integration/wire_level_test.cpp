@@ -1,0 +1,208 @@
+// The server seen from the wire, without the SDK: raw gRPC calls and raw UDP datagrams. Bad input
+// gets a named error and is dropped and counted; the server keeps serving.
+#include <arpa/inet.h>
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <thread>
+#include <vector>
+
+#include "haptic/v1/service.grpc.pb.h"
+#include "haptic/wire/datagram.hpp"
+#include "integration/server_process.hpp"
+
+namespace haptic {
+namespace {
+
+class WireLevel : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    server_ = std::make_unique<test::ServerProcess>(test::lockstep_config());
+    stub_ = v1::Haptic::NewStub(
+        grpc::CreateChannel(server_->address(), grpc::InsecureChannelCredentials()));
+    v1::OpenSessionRequest request;
+    request.set_client_name("wire-test");
+    request.set_api_version(v1::API_VERSION_CURRENT);
+    ASSERT_TRUE(call(&v1::Haptic::Stub::OpenSession, request, session_).ok());
+    std::copy(session_.udp_key().begin(), session_.udp_key().end(), key_.begin());
+    socket_ = ::socket(AF_INET, SOCK_DGRAM, 0);
+    sockaddr_in local{};
+    local.sin_family = AF_INET;
+    local.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::bind(socket_, reinterpret_cast<sockaddr*>(&local), sizeof local), 0);
+    timeval timeout{2, 0};
+    ::setsockopt(socket_, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+    server_udp_.sin_family = AF_INET;
+    server_udp_.sin_port = htons(static_cast<std::uint16_t>(session_.udp_port()));
+    server_udp_.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  }
+  void TearDown() override {
+    if (socket_ >= 0) ::close(socket_);
+  }
+
+  template <typename Method, typename Request, typename Response>
+  grpc::Status call(Method method, const Request& request, Response& response) {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+    return ((*stub_).*method)(&context, request, &response);
+  }
+
+  void send(const std::vector<std::uint8_t>& bytes) {
+    ::sendto(socket_, bytes.data(), bytes.size(), 0, reinterpret_cast<sockaddr*>(&server_udp_),
+             sizeof server_udp_);
+  }
+
+  std::vector<std::uint8_t> heartbeat(std::uint64_t sequence, const wire::Key& key) {
+    std::vector<std::uint8_t> bytes(wire::kHeartbeatDatagramSize);
+    wire::Header header;
+    header.session_id = session_.session_id();
+    header.sequence = sequence;
+    wire::encode_heartbeat(header, wire::HeartbeatPayload{}, key, bytes);
+    return bytes;
+  }
+
+  v1::Stats stats() {
+    v1::SessionRef ref;
+    ref.set_session_id(session_.session_id());
+    v1::Stats out;
+    EXPECT_TRUE(call(&v1::Haptic::Stub::GetStats, ref, out).ok());
+    return out;
+  }
+
+  /// Waits (bounded) until the server has accounted for `received` heartbeats and `dropped` drops.
+  v1::Stats wait_for_counts(std::uint64_t received, std::uint64_t dropped) {
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    v1::Stats s = stats();
+    while ((s.datagrams_received() < received || s.datagrams_dropped() < dropped) &&
+           std::chrono::steady_clock::now() < give_up) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      s = stats();
+    }
+    return s;
+  }
+
+  std::unique_ptr<test::ServerProcess> server_;
+  std::unique_ptr<v1::Haptic::Stub> stub_;
+  v1::OpenSessionResponse session_;
+  wire::Key key_{};
+  int socket_ = -1;
+  sockaddr_in server_udp_{};
+};
+
+TEST_F(WireLevel, BadDatagramsAreDroppedAndCountedAndTheServerCarriesOn) {
+  send(heartbeat(1, key_));
+  ASSERT_EQ(wait_for_counts(1, 0).datagrams_received(), 1u);
+
+  auto good = heartbeat(2, key_);
+  std::vector<std::vector<std::uint8_t>> bad;
+  bad.push_back({});                                             // empty
+  bad.push_back(std::vector<std::uint8_t>(good.begin(), good.begin() + 30));  // truncated
+  auto wrong_version = good;
+  wrong_version[4] = 99;
+  bad.push_back(wrong_version);
+  auto flipped = good;
+  flipped[45] ^= 0x10;  // payload changed: the tag no longer matches
+  bad.push_back(flipped);
+  wire::Key wrong_key = key_;
+  wrong_key[3] ^= 0xff;
+  bad.push_back(heartbeat(3, wrong_key));
+  bad.push_back(heartbeat(1, key_));  // replayed sequence
+  std::vector<std::uint8_t> unknown_session(wire::kHeartbeatDatagramSize);
+  wire::Header header;
+  header.session_id = session_.session_id() ^ 1;
+  header.sequence = 10;
+  wire::encode_heartbeat(header, {}, key_, unknown_session);
+  bad.push_back(unknown_session);
+  for (const auto& bytes : bad) send(bytes);
+
+  const v1::Stats after = wait_for_counts(1, bad.size() - 1);  // the empty datagram may not count
+  EXPECT_GE(after.datagrams_dropped(), bad.size() - 1);
+  EXPECT_EQ(after.datagrams_received(), 1u);
+  // Still serving: a good heartbeat is accepted after all that.
+  send(heartbeat(4, key_));
+  EXPECT_EQ(wait_for_counts(2, 0).datagrams_received(), 2u);
+}
+
+TEST_F(WireLevel, StateArrivesAtTheHeartbeatAddressOnlyWhenSubscribed) {
+  send(heartbeat(1, key_));
+  ASSERT_EQ(wait_for_counts(1, 0).datagrams_received(), 1u);
+  v1::StepRequest step;
+  step.set_session_id(session_.session_id());
+  step.set_ticks(5);
+  v1::StepResponse stepped;
+  ASSERT_TRUE(call(&v1::Haptic::Stub::Step, step, stepped).ok());
+  EXPECT_EQ(stats().datagrams_sent(), 0u);  // nobody subscribed: nothing encoded or sent
+
+  v1::SubscribeStateRequest subscribe;
+  subscribe.set_session_id(session_.session_id());
+  subscribe.set_decimation(2);
+  v1::Empty empty;
+  ASSERT_TRUE(call(&v1::Haptic::Stub::SubscribeState, subscribe, empty).ok());
+  step.set_ticks(4);  // ticks 6..9: decimation 2 sends ticks 6 and 8
+  ASSERT_TRUE(call(&v1::Haptic::Stub::Step, step, stepped).ok());
+  EXPECT_EQ(stepped.tick(), 9u);
+
+  std::array<std::uint8_t, 512> buffer{};
+  std::vector<std::uint64_t> ticks;
+  for (int i = 0; i < 2; ++i) {
+    const ssize_t n = ::recv(socket_, buffer.data(), buffer.size(), 0);
+    ASSERT_GT(n, 0);
+    wire::Header h;
+    wire::StatePayload state;
+    ASSERT_EQ(wire::decode_state(std::span(buffer.data(), static_cast<std::size_t>(n)), key_, h, state),
+              wire::DecodeError::kNone);
+    EXPECT_EQ(h.session_id, session_.session_id());
+    EXPECT_EQ(h.time_ns, static_cast<std::int64_t>(state.tick - 1) * 1'000'000);  // lockstep time
+    ticks.push_back(state.tick);
+  }
+  EXPECT_EQ(ticks, (std::vector<std::uint64_t>{6, 8}));
+}
+
+TEST_F(WireLevel, InvalidRequestsNameTheFieldAndChangeNothing) {
+  v1::ApplySceneRequest request;
+  request.set_session_id(session_.session_id());
+  auto* wall = request.mutable_scene()->add_objects();
+  wall->mutable_impedance()->set_stiffness(1000.0);
+  wall->mutable_half_space()->mutable_normal()->set_z(1.0);
+  auto* broken = request.mutable_scene()->add_objects();
+  broken->mutable_impedance()->set_stiffness(std::numeric_limits<double>::quiet_NaN());
+  broken->mutable_sphere()->set_radius(0.01);
+  v1::ApplySceneResponse response;
+  const grpc::Status status = call(&v1::Haptic::Stub::ApplyScene, request, response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message().rfind("scene.objects[1].impedance.stiffness:", 0), 0u)
+      << status.error_message();
+  EXPECT_EQ(stats().objects(), 0u);  // the good wall was not applied either
+
+  v1::OpenSessionRequest old_client;
+  old_client.set_client_name("old");
+  old_client.set_api_version(7);
+  v1::OpenSessionResponse ignored;
+  const grpc::Status mismatch = call(&v1::Haptic::Stub::OpenSession, old_client, ignored);
+  EXPECT_EQ(mismatch.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(mismatch.error_message().find("7"), std::string::npos);
+  EXPECT_NE(mismatch.error_message().find("1"), std::string::npos);
+
+  v1::StepRequest step;
+  step.set_session_id(session_.session_id());
+  step.set_ticks(0);
+  v1::StepResponse stepped;
+  EXPECT_EQ(call(&v1::Haptic::Stub::Step, step, stepped).error_code(),
+            grpc::StatusCode::INVALID_ARGUMENT);
+  v1::SessionRef nobody;
+  nobody.set_session_id(12345);
+  v1::Stats s;
+  EXPECT_EQ(call(&v1::Haptic::Stub::GetStats, nobody, s).error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
+TEST_F(WireLevel, SigtermEndsTheServerCleanly) { EXPECT_EQ(server_->stop(), 0); }
+
+}  // namespace
+}  // namespace haptic
