@@ -44,6 +44,8 @@ void fill_defaults(v1::ServerConfig& config) {
   if (device->mass() == 0.0) device->set_mass(0.01);           // Eom et al., experiment
   if (device->damping() == 0.0) device->set_damping(0.022);    // Eom et al., experiment
   if (device->substeps() == 0) device->set_substeps(10);
+  // Start 20 mm above the origin, clear of a wall at z = 0 (touch_wall's).
+  if (!device->has_initial_position()) default_vec(device->mutable_initial_position(), 0.0, 0.0, 0.02);
   if (!device->has_workspace_min()) default_vec(device->mutable_workspace_min(), -0.1, -0.1, -0.1);
   if (!device->has_workspace_max()) default_vec(device->mutable_workspace_max(), 0.1, 0.1, 0.1);
   if (device->max_force() == 0.0) device->set_max_force(20.0);

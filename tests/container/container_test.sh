@@ -58,5 +58,5 @@ echo "running touch_wall against the container on port $grpc_port"
 output=$("$touch_wall" "127.0.0.1:$grpc_port")
 echo "$output"
 # The wall must push back: some printed force above 1 N.
-echo "$output" | awk '$3+0 > 1.0 {found=1} END {exit !found}' || { echo "FAIL: no force from the wall"; exit 1; }
+echo "$output" | awk '$4+0 > 1.0 {found=1} END {exit !found}' || { echo "FAIL: no force from the wall"; exit 1; }
 echo "PASS: container served touch_wall"

@@ -1,0 +1,143 @@
+#pragma once
+// haptic::Client: one session with a hapticd server. Objects and fields are registered through
+// RAII handles; state arrives by callback or by polling.
+//
+//   haptic::Client client(haptic::ClientConfig{.server_address = "host:50051"});
+//   haptic::ObjectHandle wall = client.add_wall({.normal = {0, 0, 1}, .impedance = {1000, 1}});
+//   haptic::State state;
+//   client.poll_state(state, std::chrono::milliseconds(100));
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "haptic/error.hpp"
+#include "haptic/types.hpp"
+
+namespace haptic {
+
+namespace detail {
+class ClientCore;
+}
+
+/// The API version this SDK speaks (haptic.v1.API_VERSION_CURRENT).
+inline constexpr std::uint32_t kApiVersion = 1;
+
+struct ClientConfig {
+  std::string server_address = "127.0.0.1:50051";  ///< gRPC host:port of hapticd.
+  std::string client_name = "haptic-client";       ///< 1..64 printable characters; shown in logs.
+  std::chrono::milliseconds rpc_timeout{2000};     ///< Deadline of every control-plane call.
+  std::chrono::milliseconds heartbeat_period{100}; ///< UDP heartbeat period; keep well under the lease.
+  std::uint32_t state_decimation = 1;              ///< State every n-th tick; 0: no state stream.
+};
+
+/// A registered object (wall or sphere). Move-only; removes the object when destroyed (errors are
+/// swallowed there: call remove() to see them). Harmless if it outlives its Client.
+class ObjectHandle {
+ public:
+  ObjectHandle() = default;
+  ObjectHandle(ObjectHandle&& other) noexcept;
+  ObjectHandle& operator=(ObjectHandle&& other) noexcept;
+  ObjectHandle(const ObjectHandle&) = delete;
+  ObjectHandle& operator=(const ObjectHandle&) = delete;
+  ~ObjectHandle();
+
+  std::uint64_t id() const noexcept { return id_; }
+  /// True while this handle will remove the object.
+  bool owned() const noexcept { return id_ != 0; }
+  /// Replaces the object (a wall stays a wall only if you pass a WallSpec). Throws haptic::Error.
+  void update(const WallSpec& wall);
+  void update(const SphereSpec& sphere);
+  /// Removes the object now; its force ramps out on the server. Throws haptic::Error.
+  void remove();
+  /// Stops owning the object (it stays until removed by id or the session ends); returns its id.
+  std::uint64_t release() noexcept;
+
+ private:
+  friend class Client;
+  ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id);
+  void drop() noexcept;  // removes the object if owned, swallowing errors
+  std::weak_ptr<detail::ClientCore> core_;
+  std::uint64_t id_ = 0;
+};
+
+/// A registered energy field. Same ownership rules as ObjectHandle.
+class FieldHandle {
+ public:
+  FieldHandle() = default;
+  FieldHandle(FieldHandle&& other) noexcept;
+  FieldHandle& operator=(FieldHandle&& other) noexcept;
+  FieldHandle(const FieldHandle&) = delete;
+  FieldHandle& operator=(const FieldHandle&) = delete;
+  ~FieldHandle();
+
+  std::uint64_t id() const noexcept { return id_; }
+  bool owned() const noexcept { return id_ != 0; }
+  void update(const SpringFieldSpec& spring);
+  void remove();
+  std::uint64_t release() noexcept;
+
+ private:
+  friend class Client;
+  FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id);
+  void drop() noexcept;
+  std::weak_ptr<detail::ClientCore> core_;
+  std::uint64_t id_ = 0;
+};
+
+class Client {
+ public:
+  /// Connects, opens a session, starts heartbeats and (if state_decimation > 0) the state stream.
+  /// Throws ConnectionError, VersionMismatchError, InvalidArgumentError, ResourceExhaustedError.
+  explicit Client(ClientConfig config);
+  /// Closes the session (never throws); objects still owned by handles go with it.
+  ~Client();
+  Client(Client&&) noexcept;
+  Client& operator=(Client&&) noexcept;
+  Client(const Client&) = delete;
+  Client& operator=(const Client&) = delete;
+
+  ObjectHandle add_wall(const WallSpec& wall);
+  ObjectHandle add_sphere(const SphereSpec& sphere);
+  FieldHandle add_spring_field(const SpringFieldSpec& spring);
+
+  /// Sets what the server's simulated operator does (FailedPreconditionError on real hardware).
+  void set_operator(const OperatorInput& input);
+  /// Lockstep servers only: runs `ticks` ticks; returns the index of the last one.
+  std::uint64_t step(std::uint32_t ticks);
+  /// Changes the state-stream decimation (every n-th tick; 0 stops it).
+  void subscribe(std::uint32_t decimation);
+
+  /// The device, as reported when the session opened.
+  const DeviceInfo& device_info() const;
+  Stats stats();
+  std::uint64_t session_id() const;
+
+  /// Called on the SDK's receive thread for every state sample; keep it short and do not call
+  /// back into the Client from it. Pass an empty function to stop.
+  void on_state(std::function<void(const State&)> callback);
+  /// Waits up to `timeout` for a sample newer than the last one this call returned.
+  bool poll_state(State& out, std::chrono::milliseconds timeout);
+  /// Waits up to `timeout` until a sample of tick >= `tick` has arrived; returns the newest.
+  bool wait_for_tick(std::uint64_t tick, State& out, std::chrono::milliseconds timeout);
+
+  /// Estimated server clock − local steady clock (so server_time ≈ local + offset), taken from
+  /// the least-delayed recent sample: max over samples of (server_time − receipt time). It is
+  /// biased low by the smallest one-way delay (tens of µs on a LAN). nullopt before any sample.
+  std::optional<std::chrono::nanoseconds> clock_offset() const;
+
+  /// Stops or resumes UDP heartbeats; stopping simulates a lost client (its lease runs out).
+  void set_heartbeats_enabled(bool enabled);
+  ReceiveCounters receive_counters() const;
+
+  /// Closes the session now; throws haptic::Error if the server refuses.
+  void close();
+
+ private:
+  std::shared_ptr<detail::ClientCore> core_;
+};
+
+}  // namespace haptic

@@ -1,0 +1,68 @@
+#pragma once
+// The SDK's exceptions: one small hierarchy, each carrying the server's message.
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace haptic {
+
+enum class ErrorCode {
+  kConnection,          ///< server unreachable or too slow (UNAVAILABLE, DEADLINE_EXCEEDED)
+  kInvalidArgument,     ///< a field was wrong; the message names it
+  kNotFound,            ///< no such session or item (a lost lease shows up here)
+  kPermissionDenied,    ///< the item belongs to another client
+  kResourceExhausted,   ///< a server limit (sessions, objects per session)
+  kFailedPrecondition,  ///< not possible in the server's state (e.g. Step in real time)
+  kVersionMismatch,     ///< client and server speak different API versions
+  kInternal,            ///< anything else
+};
+
+class Error : public std::runtime_error {
+ public:
+  Error(ErrorCode code, const std::string& message) : std::runtime_error(message), code_(code) {}
+  ErrorCode code() const noexcept { return code_; }
+
+ private:
+  ErrorCode code_;
+};
+
+class ConnectionError : public Error {
+ public:
+  explicit ConnectionError(const std::string& m) : Error(ErrorCode::kConnection, m) {}
+};
+class InvalidArgumentError : public Error {
+ public:
+  explicit InvalidArgumentError(const std::string& m) : Error(ErrorCode::kInvalidArgument, m) {}
+};
+class NotFoundError : public Error {
+ public:
+  explicit NotFoundError(const std::string& m) : Error(ErrorCode::kNotFound, m) {}
+};
+class PermissionDeniedError : public Error {
+ public:
+  explicit PermissionDeniedError(const std::string& m) : Error(ErrorCode::kPermissionDenied, m) {}
+};
+class ResourceExhaustedError : public Error {
+ public:
+  explicit ResourceExhaustedError(const std::string& m) : Error(ErrorCode::kResourceExhausted, m) {}
+};
+class FailedPreconditionError : public Error {
+ public:
+  explicit FailedPreconditionError(const std::string& m) : Error(ErrorCode::kFailedPrecondition, m) {}
+};
+class VersionMismatchError : public Error {
+ public:
+  VersionMismatchError(const std::string& m, std::uint32_t client_version, std::uint32_t server_version)
+      : Error(ErrorCode::kVersionMismatch, m),
+        client_version_(client_version),
+        server_version_(server_version) {}
+  std::uint32_t client_version() const noexcept { return client_version_; }
+  std::uint32_t server_version() const noexcept { return server_version_; }
+
+ private:
+  std::uint32_t client_version_;
+  std::uint32_t server_version_;
+};
+
+}  // namespace haptic

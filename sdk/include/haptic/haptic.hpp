@@ -1,0 +1,5 @@
+#pragma once
+// The hapticd client SDK.
+#include "haptic/client.hpp"
+#include "haptic/error.hpp"
+#include "haptic/types.hpp"

@@ -1,0 +1,144 @@
+#pragma once
+// Value types of the hapticd SDK. SI units throughout; positions, velocities and forces are in the
+// device's world frame W (see docs/architecture.md).
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+namespace haptic {
+
+struct Vec3 {
+  double x = 0.0;
+  double y = 0.0;
+  double z = 0.0;
+  friend bool operator==(const Vec3&, const Vec3&) = default;
+};
+
+/// Unit quaternion (w, x, y, z); the default is identity.
+struct Quaternion {
+  double w = 1.0;
+  double x = 0.0;
+  double y = 0.0;
+  double z = 0.0;
+  friend bool operator==(const Quaternion&, const Quaternion&) = default;
+};
+
+/// A virtual spring-damper.
+struct Impedance {
+  double stiffness = 0.0;  ///< Unit: N/m. Finite, >= 0.
+  double damping = 0.0;    ///< Unit: N·s/m. Finite, >= 0.
+  friend bool operator==(const Impedance&, const Impedance&) = default;
+};
+
+/// A half-space wall: the plane through `point` with outward `normal`; the solid lies behind it.
+struct WallSpec {
+  Vec3 point;               ///< Unit: m.
+  Vec3 normal{0, 0, 1};     ///< Non-zero; the server normalises it.
+  Impedance impedance;
+  friend bool operator==(const WallSpec&, const WallSpec&) = default;
+};
+
+/// A solid sphere the tool is pushed out of.
+struct SphereSpec {
+  Vec3 center;              ///< Unit: m.
+  double radius = 0.0;      ///< Unit: m. > 0.
+  Impedance impedance;
+  friend bool operator==(const SphereSpec&, const SphereSpec&) = default;
+};
+
+/// A spring pulling the tool to `anchor`: F = −k (p − anchor) − b v, clipped to max_force if > 0.
+struct SpringFieldSpec {
+  Vec3 anchor;              ///< Unit: m.
+  double stiffness = 0.0;   ///< Unit: N/m.
+  double damping = 0.0;     ///< Unit: N·s/m.
+  double max_force = 0.0;   ///< Unit: N. 0: no clip.
+  friend bool operator==(const SpringFieldSpec&, const SpringFieldSpec&) = default;
+};
+
+/// Bits of State::flags.
+enum StateFlag : std::uint32_t {
+  kForceSaturated = 1u << 0,  ///< the server's force limits cut the scene's force
+  kForceFault = 1u << 1,      ///< a non-finite force was replaced by zero
+  kRampingOut = 1u << 2,      ///< some force is ramping to zero (removed objects, shutdown)
+};
+
+/// One tick's sample as the server streamed it.
+struct State {
+  std::uint64_t tick = 0;        ///< Server loop tick.
+  std::uint64_t sequence = 0;    ///< Datagram sequence (gaps mean lost datagrams or decimation).
+  double server_time = 0.0;      ///< Server time of the tick. Unit: s.
+  Vec3 position;                 ///< Tool position p_WT. Unit: m.
+  Vec3 velocity;                 ///< Tool velocity v_WT. Unit: m/s.
+  Vec3 force;                    ///< Force commanded on the tool F_T_W. Unit: N.
+  Vec3 proxy;                    ///< Contact (proxy) point; equals position out of contact. Unit: m.
+  std::uint32_t contact_count = 0;
+  std::uint32_t flags = 0;       ///< StateFlag bits.
+  std::chrono::steady_clock::time_point received_at;  ///< Local receipt time.
+};
+
+struct DeviceInfo {
+  std::string name;
+  std::uint32_t dof = 0;
+  Vec3 workspace_min;        ///< Unit: m.
+  Vec3 workspace_max;        ///< Unit: m.
+  double max_force = 0.0;    ///< Unit: N.
+  double loop_rate_hz = 0.0; ///< Unit: Hz.
+  bool simulated = false;
+};
+
+/// The server's counters (GetStats).
+struct Stats {
+  std::uint64_t ticks = 0;
+  double achieved_rate_hz = 0.0;
+  double lateness_p50_us = 0.0;
+  double lateness_p99_us = 0.0;
+  double lateness_max_us = 0.0;
+  std::uint64_t overruns = 0;
+  std::uint32_t sessions = 0;
+  std::uint32_t objects = 0;
+  std::uint32_t fields = 0;
+  std::uint64_t datagrams_sent = 0;
+  std::uint64_t datagrams_received = 0;
+  std::uint64_t datagrams_dropped = 0;
+  std::uint64_t force_faults = 0;
+  std::uint64_t force_saturations = 0;
+  std::uint64_t leases_expired = 0;
+};
+
+/// What the server's simulated operator (a hand holding the tool) does.
+struct OperatorInput {
+  enum class Mode { kRelease, kFollow, kPush };
+  Mode mode = Mode::kRelease;
+  Vec3 target;             ///< kFollow: where the hand pulls the tool. Unit: m.
+  double stiffness = 0.0;  ///< kFollow: hand stiffness. Unit: N/m.
+  double damping = 0.0;    ///< kFollow: hand damping. Unit: N·s/m.
+  Vec3 force;              ///< kPush: constant force on the tool. Unit: N.
+
+  /// The hand pulls the tool towards `target` like a spring-damper.
+  static OperatorInput follow(Vec3 target, double stiffness, double damping) {
+    OperatorInput input;
+    input.mode = Mode::kFollow;
+    input.target = target;
+    input.stiffness = stiffness;
+    input.damping = damping;
+    return input;
+  }
+  /// The hand pushes with a constant force.
+  static OperatorInput push(Vec3 force) {
+    OperatorInput input;
+    input.mode = Mode::kPush;
+    input.force = force;
+    return input;
+  }
+  /// The hand lets go.
+  static OperatorInput release() { return OperatorInput{}; }
+};
+
+/// What the SDK's UDP receiver has seen.
+struct ReceiveCounters {
+  std::uint64_t accepted = 0;  ///< State datagrams decoded and authenticated.
+  std::uint64_t rejected = 0;  ///< Datagrams dropped: malformed, wrong session, bad tag.
+};
+
+}  // namespace haptic

@@ -1,0 +1,218 @@
+#include "haptic/client.hpp"
+
+#include <cmath>
+#include <utility>
+
+#include "client_core.hpp"
+#include "conversions.hpp"
+
+namespace haptic {
+namespace {
+
+// Client-side checks for obvious mistakes, so they fail fast with a clear message; the server
+// validates everything again and stays the authority.
+void check_finite(double value, const char* field) {
+  if (!std::isfinite(value)) throw InvalidArgumentError(std::string(field) + ": must be finite");
+}
+
+void check_impedance(const Impedance& impedance) {
+  check_finite(impedance.stiffness, "impedance.stiffness");
+  check_finite(impedance.damping, "impedance.damping");
+  if (impedance.stiffness < 0.0) throw InvalidArgumentError("impedance.stiffness: must be >= 0");
+  if (impedance.damping < 0.0) throw InvalidArgumentError("impedance.damping: must be >= 0");
+}
+
+void check(const WallSpec& wall) {
+  check_impedance(wall.impedance);
+  if (wall.normal == Vec3{}) throw InvalidArgumentError("wall.normal: must be non-zero");
+}
+
+void check(const SphereSpec& sphere) {
+  check_impedance(sphere.impedance);
+  if (!(sphere.radius > 0.0)) throw InvalidArgumentError("sphere.radius: must be > 0");
+}
+
+std::shared_ptr<detail::ClientCore> lock_or_null(const std::weak_ptr<detail::ClientCore>& core) {
+  return core.lock();
+}
+
+detail::ClientCore& require(const std::shared_ptr<detail::ClientCore>& core) {
+  if (!core) throw Error(ErrorCode::kInternal, "the Client was moved from or closed");
+  return *core;
+}
+
+}  // namespace
+
+// ---- Client ----
+
+Client::Client(ClientConfig config) : core_(std::make_shared<detail::ClientCore>(std::move(config))) {}
+Client::~Client() = default;
+Client::Client(Client&&) noexcept = default;
+Client& Client::operator=(Client&&) noexcept = default;
+
+ObjectHandle Client::add_wall(const WallSpec& wall) {
+  check(wall);
+  return ObjectHandle(core_, require(core_).create_object(detail::to_proto(wall)));
+}
+
+ObjectHandle Client::add_sphere(const SphereSpec& sphere) {
+  check(sphere);
+  return ObjectHandle(core_, require(core_).create_object(detail::to_proto(sphere)));
+}
+
+FieldHandle Client::add_spring_field(const SpringFieldSpec& spring) {
+  return FieldHandle(core_, require(core_).create_field(detail::to_proto(spring)));
+}
+
+void Client::set_operator(const OperatorInput& input) {
+  v1::SetOperatorRequest request;
+  request.set_session_id(session_id());
+  *request.mutable_input() = detail::to_proto(input);
+  require(core_).call<v1::SetOperatorRequest, v1::Empty>("SetOperator",
+                                                         &v1::Haptic::Stub::SetOperator, request);
+}
+
+std::uint64_t Client::step(std::uint32_t ticks) {
+  v1::StepRequest request;
+  request.set_session_id(session_id());
+  request.set_ticks(ticks);
+  return require(core_)
+      .call<v1::StepRequest, v1::StepResponse>("Step", &v1::Haptic::Stub::Step, request)
+      .tick();
+}
+
+void Client::subscribe(std::uint32_t decimation) {
+  v1::SubscribeStateRequest request;
+  request.set_session_id(session_id());
+  request.set_decimation(decimation);
+  require(core_).call<v1::SubscribeStateRequest, v1::Empty>(
+      "SubscribeState", &v1::Haptic::Stub::SubscribeState, request);
+}
+
+const DeviceInfo& Client::device_info() const { return require(core_).device_info(); }
+
+Stats Client::stats() {
+  v1::SessionRef ref;
+  ref.set_session_id(session_id());
+  return detail::from_proto(
+      require(core_).call<v1::SessionRef, v1::Stats>("GetStats", &v1::Haptic::Stub::GetStats, ref));
+}
+
+std::uint64_t Client::session_id() const { return require(core_).session_id(); }
+
+void Client::on_state(std::function<void(const State&)> callback) {
+  require(core_).udp().on_state(std::move(callback));
+}
+
+bool Client::poll_state(State& out, std::chrono::milliseconds timeout) {
+  return require(core_).udp().poll(out, timeout);
+}
+
+bool Client::wait_for_tick(std::uint64_t tick, State& out, std::chrono::milliseconds timeout) {
+  return require(core_).udp().wait_for_tick(tick, out, timeout);
+}
+
+std::optional<std::chrono::nanoseconds> Client::clock_offset() const {
+  return require(core_).udp().clock_offset();
+}
+
+void Client::set_heartbeats_enabled(bool enabled) {
+  require(core_).udp().set_heartbeats_enabled(enabled);
+}
+
+ReceiveCounters Client::receive_counters() const { return require(core_).udp().counters(); }
+
+void Client::close() {
+  if (core_) {
+    auto core = std::move(core_);
+    core->close_session();
+  }
+}
+
+// ---- ObjectHandle ----
+
+ObjectHandle::ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id)
+    : core_(std::move(core)), id_(id) {}
+
+ObjectHandle::ObjectHandle(ObjectHandle&& other) noexcept
+    : core_(std::move(other.core_)), id_(std::exchange(other.id_, 0)) {}
+
+ObjectHandle& ObjectHandle::operator=(ObjectHandle&& other) noexcept {
+  if (this != &other) {
+    drop();
+    core_ = std::move(other.core_);
+    id_ = std::exchange(other.id_, 0);
+  }
+  return *this;
+}
+
+ObjectHandle::~ObjectHandle() { drop(); }
+
+void ObjectHandle::drop() noexcept {
+  if (id_ == 0) return;
+  try {
+    remove();
+  } catch (...) {
+    // Swallowed by design: a destructor must not throw; the session's end removes it anyway.
+  }
+}
+
+void ObjectHandle::update(const WallSpec& wall) {
+  check(wall);
+  require(lock_or_null(core_)).update_object(id_, detail::to_proto(wall));
+}
+
+void ObjectHandle::update(const SphereSpec& sphere) {
+  check(sphere);
+  require(lock_or_null(core_)).update_object(id_, detail::to_proto(sphere));
+}
+
+void ObjectHandle::remove() {
+  const std::uint64_t id = std::exchange(id_, 0);
+  if (id == 0) return;
+  if (auto core = core_.lock()) core->delete_object(id);
+}
+
+std::uint64_t ObjectHandle::release() noexcept { return std::exchange(id_, 0); }
+
+// ---- FieldHandle ----
+
+FieldHandle::FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id)
+    : core_(std::move(core)), id_(id) {}
+
+FieldHandle::FieldHandle(FieldHandle&& other) noexcept
+    : core_(std::move(other.core_)), id_(std::exchange(other.id_, 0)) {}
+
+FieldHandle& FieldHandle::operator=(FieldHandle&& other) noexcept {
+  if (this != &other) {
+    drop();
+    core_ = std::move(other.core_);
+    id_ = std::exchange(other.id_, 0);
+  }
+  return *this;
+}
+
+FieldHandle::~FieldHandle() { drop(); }
+
+void FieldHandle::drop() noexcept {
+  if (id_ == 0) return;
+  try {
+    remove();
+  } catch (...) {
+    // As for ObjectHandle.
+  }
+}
+
+void FieldHandle::update(const SpringFieldSpec& spring) {
+  require(lock_or_null(core_)).update_field(id_, detail::to_proto(spring));
+}
+
+void FieldHandle::remove() {
+  const std::uint64_t id = std::exchange(id_, 0);
+  if (id == 0) return;
+  if (auto core = core_.lock()) core->delete_field(id);
+}
+
+std::uint64_t FieldHandle::release() noexcept { return std::exchange(id_, 0); }
+
+}  // namespace haptic

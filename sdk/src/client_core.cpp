@@ -1,0 +1,142 @@
+#include "client_core.hpp"
+
+#include <cctype>
+
+#include "conversions.hpp"
+#include "status_mapping.hpp"
+
+namespace haptic::detail {
+namespace {
+
+/// The host part of "host:port", "[v6]:port" or "dns:///host:port".
+std::string host_of(std::string address) {
+  if (address.rfind("dns:///", 0) == 0) address = address.substr(7);
+  if (!address.empty() && address.front() == '[') {
+    const auto end = address.find(']');
+    return end == std::string::npos ? address : address.substr(1, end - 1);
+  }
+  const auto colon = address.rfind(':');
+  return colon == std::string::npos ? address : address.substr(0, colon);
+}
+
+void check_config(const ClientConfig& config) {
+  if (config.server_address.empty()) throw InvalidArgumentError("server_address: must not be empty");
+  if (config.client_name.empty() || config.client_name.size() > 64) {
+    throw InvalidArgumentError("client_name: must be 1 to 64 characters");
+  }
+  if (config.rpc_timeout.count() <= 0) throw InvalidArgumentError("rpc_timeout: must be positive");
+  if (config.heartbeat_period.count() <= 0) {
+    throw InvalidArgumentError("heartbeat_period: must be positive");
+  }
+}
+
+}  // namespace
+
+void ClientCore::throw_status(const grpc::Status& status, const char* name) {
+  throw_if_failed(status, name);
+}
+
+ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
+  check_config(config_);
+  channel_ = grpc::CreateChannel(config_.server_address, grpc::InsecureChannelCredentials());
+  stub_ = v1::Haptic::NewStub(channel_);
+
+  v1::OpenSessionRequest open;
+  open.set_client_name(config_.client_name);
+  open.set_api_version(kApiVersion);
+  const auto opened = call<v1::OpenSessionRequest, v1::OpenSessionResponse>(
+      "OpenSession", &v1::Haptic::Stub::OpenSession, open);
+  session_id_ = opened.session_id();
+  device_info_ = from_proto(opened.device());
+  if (opened.udp_key().size() != 16) {
+    throw Error(ErrorCode::kInternal, "OpenSession: server sent a udp_key that is not 16 bytes");
+  }
+  wire::Key key{};
+  std::copy(opened.udp_key().begin(), opened.udp_key().end(), key.begin());
+  try {
+    udp_ = std::make_unique<UdpLink>(host_of(config_.server_address),
+                                     static_cast<std::uint16_t>(opened.udp_port()), session_id_, key,
+                                     config_.heartbeat_period);
+    if (config_.state_decimation > 0) {
+      v1::SubscribeStateRequest subscribe;
+      subscribe.set_session_id(session_id_);
+      subscribe.set_decimation(config_.state_decimation);
+      call<v1::SubscribeStateRequest, v1::Empty>("SubscribeState",
+                                                 &v1::Haptic::Stub::SubscribeState, subscribe);
+    }
+  } catch (...) {
+    // Do not leave a half-open session holding a lease; report the first failure, not this one.
+    try {
+      close_session();
+    } catch (...) {
+    }
+    throw;
+  }
+}
+
+ClientCore::~ClientCore() {
+  try {
+    close_session();
+  } catch (...) {
+    // Destructors never throw; the server's lease cleans up what a failed close leaves.
+  }
+}
+
+void ClientCore::close_session() {
+  if (closed_) return;
+  closed_ = true;
+  udp_.reset();
+  v1::SessionRef ref;
+  ref.set_session_id(session_id_);
+  call<v1::SessionRef, v1::Empty>("CloseSession", &v1::Haptic::Stub::CloseSession, ref);
+}
+
+std::uint64_t ClientCore::create_object(const v1::Object& object) {
+  v1::CreateObjectRequest request;
+  request.set_session_id(session_id_);
+  *request.mutable_object() = object;
+  return call<v1::CreateObjectRequest, v1::ItemRef>("CreateObject", &v1::Haptic::Stub::CreateObject,
+                                                    request)
+      .id();
+}
+
+void ClientCore::update_object(std::uint64_t id, const v1::Object& object) {
+  v1::UpdateObjectRequest request;
+  request.set_session_id(session_id_);
+  request.set_object_id(id);
+  *request.mutable_object() = object;
+  call<v1::UpdateObjectRequest, v1::Empty>("UpdateObject", &v1::Haptic::Stub::UpdateObject, request);
+}
+
+void ClientCore::delete_object(std::uint64_t id) {
+  v1::DeleteRequest request;
+  request.set_session_id(session_id_);
+  request.set_id(id);
+  call<v1::DeleteRequest, v1::Empty>("DeleteObject", &v1::Haptic::Stub::DeleteObject, request);
+}
+
+std::uint64_t ClientCore::create_field(const v1::Field& field) {
+  v1::CreateFieldRequest request;
+  request.set_session_id(session_id_);
+  *request.mutable_field() = field;
+  return call<v1::CreateFieldRequest, v1::ItemRef>("CreateField", &v1::Haptic::Stub::CreateField,
+                                                   request)
+      .id();
+}
+
+void ClientCore::update_field(std::uint64_t id, const v1::Field& field) {
+  v1::UpdateFieldRequest request;
+  request.set_session_id(session_id_);
+  request.set_field_id(id);
+  *request.mutable_field() = field;
+  call<v1::UpdateFieldRequest, v1::Empty>("UpdateField", &v1::Haptic::Stub::UpdateField, request);
+}
+
+void ClientCore::delete_field(std::uint64_t id) {
+  v1::DeleteRequest request;
+  request.set_session_id(session_id_);
+  request.set_id(id);
+  call<v1::DeleteRequest, v1::Empty>("DeleteField", &v1::Haptic::Stub::DeleteField, request);
+}
+
+}  // namespace haptic::detail

@@ -1,0 +1,56 @@
+#pragma once
+// What a Client and its handles share: the gRPC stub, the session, and the UDP link. Handles keep
+// a weak_ptr to it, so one that outlives its Client finds it gone and does nothing.
+
+#include <grpcpp/grpcpp.h>
+
+#include <memory>
+#include <string>
+
+#include "haptic/client.hpp"
+#include "haptic/v1/service.grpc.pb.h"
+#include "udp_link.hpp"
+
+namespace haptic::detail {
+
+class ClientCore {
+ public:
+  explicit ClientCore(ClientConfig config);
+  ~ClientCore();
+
+  /// Runs one unary RPC with the configured deadline; throws the mapped haptic::Error.
+  template <typename Request, typename Response, typename Method>
+  Response call(const char* name, Method method, Request request) {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + config_.rpc_timeout);
+    Response response;
+    throw_status(((*stub_).*method)(&context, request, &response), name);
+    return response;
+  }
+
+  std::uint64_t create_object(const v1::Object& object);
+  void update_object(std::uint64_t id, const v1::Object& object);
+  void delete_object(std::uint64_t id);
+  std::uint64_t create_field(const v1::Field& field);
+  void update_field(std::uint64_t id, const v1::Field& field);
+  void delete_field(std::uint64_t id);
+  void close_session();
+
+  std::uint64_t session_id() const { return session_id_; }
+  const DeviceInfo& device_info() const { return device_info_; }
+  const ClientConfig& config() const { return config_; }
+  UdpLink& udp() { return *udp_; }
+
+ private:
+  static void throw_status(const grpc::Status& status, const char* name);
+
+  ClientConfig config_;
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::Haptic::Stub> stub_;
+  std::uint64_t session_id_ = 0;
+  bool closed_ = false;
+  DeviceInfo device_info_;
+  std::unique_ptr<UdpLink> udp_;
+};
+
+}  // namespace haptic::detail

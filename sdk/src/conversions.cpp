@@ -1,0 +1,100 @@
+#include "conversions.hpp"
+
+namespace haptic::detail {
+
+v1::Vec3 to_proto(const Vec3& v) {
+  v1::Vec3 out;
+  out.set_x(v.x);
+  out.set_y(v.y);
+  out.set_z(v.z);
+  return out;
+}
+
+Vec3 from_proto(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+namespace {
+void set_impedance(v1::Object& object, const Impedance& impedance) {
+  object.mutable_impedance()->set_stiffness(impedance.stiffness);
+  object.mutable_impedance()->set_damping(impedance.damping);
+}
+}  // namespace
+
+v1::Object to_proto(const WallSpec& wall) {
+  v1::Object object;
+  *object.mutable_pose()->mutable_position() = to_proto(wall.point);
+  set_impedance(object, wall.impedance);
+  *object.mutable_half_space()->mutable_normal() = to_proto(wall.normal);
+  return object;
+}
+
+v1::Object to_proto(const SphereSpec& sphere) {
+  v1::Object object;
+  *object.mutable_pose()->mutable_position() = to_proto(sphere.center);
+  set_impedance(object, sphere.impedance);
+  object.mutable_sphere()->set_radius(sphere.radius);
+  return object;
+}
+
+v1::Field to_proto(const SpringFieldSpec& spring) {
+  v1::Field field;
+  auto* s = field.mutable_spring_to_point();
+  *s->mutable_anchor() = to_proto(spring.anchor);
+  s->set_stiffness(spring.stiffness);
+  s->set_damping(spring.damping);
+  s->set_max_force(spring.max_force);
+  return field;
+}
+
+v1::OperatorInput to_proto(const OperatorInput& input) {
+  v1::OperatorInput out;
+  switch (input.mode) {
+    case OperatorInput::Mode::kRelease:
+      out.set_mode(v1::OperatorInput::NONE);
+      break;
+    case OperatorInput::Mode::kFollow:
+      out.set_mode(v1::OperatorInput::FOLLOW_TARGET);
+      *out.mutable_target() = to_proto(input.target);
+      out.set_stiffness(input.stiffness);
+      out.set_damping(input.damping);
+      break;
+    case OperatorInput::Mode::kPush:
+      out.set_mode(v1::OperatorInput::APPLY_FORCE);
+      *out.mutable_force() = to_proto(input.force);
+      break;
+  }
+  return out;
+}
+
+DeviceInfo from_proto(const v1::DeviceInfo& info) {
+  DeviceInfo out;
+  out.name = info.name();
+  out.dof = info.dof();
+  out.workspace_min = from_proto(info.workspace_min());
+  out.workspace_max = from_proto(info.workspace_max());
+  out.max_force = info.max_force();
+  out.loop_rate_hz = info.loop_rate_hz();
+  out.simulated = info.simulated();
+  return out;
+}
+
+Stats from_proto(const v1::Stats& s) {
+  Stats out;
+  out.ticks = s.ticks();
+  out.achieved_rate_hz = s.achieved_rate_hz();
+  out.lateness_p50_us = s.lateness_p50_us();
+  out.lateness_p99_us = s.lateness_p99_us();
+  out.lateness_max_us = s.lateness_max_us();
+  out.overruns = s.overruns();
+  out.sessions = s.sessions();
+  out.objects = s.objects();
+  out.fields = s.fields();
+  out.datagrams_sent = s.datagrams_sent();
+  out.datagrams_received = s.datagrams_received();
+  out.datagrams_dropped = s.datagrams_dropped();
+  out.force_faults = s.force_faults();
+  out.force_saturations = s.force_saturations();
+  out.leases_expired = s.leases_expired();
+  return out;
+}
+
+}  // namespace haptic::detail

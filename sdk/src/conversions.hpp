@@ -1,0 +1,20 @@
+#pragma once
+// SDK value types <-> haptic.v1 messages.
+
+#include "haptic/types.hpp"
+#include "haptic/v1/device.pb.h"
+#include "haptic/v1/scene.pb.h"
+#include "haptic/v1/service.pb.h"
+
+namespace haptic::detail {
+
+v1::Vec3 to_proto(const Vec3& v);
+Vec3 from_proto(const v1::Vec3& v);
+v1::Object to_proto(const WallSpec& wall);
+v1::Object to_proto(const SphereSpec& sphere);
+v1::Field to_proto(const SpringFieldSpec& spring);
+v1::OperatorInput to_proto(const OperatorInput& input);
+DeviceInfo from_proto(const v1::DeviceInfo& info);
+Stats from_proto(const v1::Stats& stats);
+
+}  // namespace haptic::detail

@@ -1,0 +1,165 @@
+#include "udp_link.hpp"
+
+#include "haptic/error.hpp"
+
+namespace haptic::detail {
+namespace {
+
+std::int64_t steady_ns(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
+}
+
+Vec3 to_vec(const wire::Vec3d& v) { return {v.x, v.y, v.z}; }
+
+// The offset estimate restarts its window every this many samples, so it follows clock drift.
+constexpr std::uint32_t kOffsetWindow = 2000;
+
+}  // namespace
+
+UdpLink::UdpLink(const std::string& host, std::uint16_t port, std::uint64_t session_id,
+                 const wire::Key& key, std::chrono::milliseconds heartbeat_period)
+    : socket_(io_),
+      heartbeat_timer_(io_),
+      heartbeat_period_(heartbeat_period),
+      session_id_(session_id),
+      key_(key) {
+  asio::error_code error;
+  asio::ip::udp::resolver resolver(io_);
+  const auto results = resolver.resolve(host, std::to_string(port), error);
+  if (error || results.empty()) {
+    throw ConnectionError("UDP: cannot resolve " + host + ": " + error.message());
+  }
+  server_ = *results.begin();
+  socket_.open(server_.protocol(), error);
+  if (!error) socket_.bind(asio::ip::udp::endpoint(server_.protocol(), 0), error);
+  if (error) throw ConnectionError("UDP: cannot open a socket: " + error.message());
+
+  send_heartbeat();  // at once, so the server learns where to send state
+  schedule_heartbeat();
+  start_receive();
+  thread_ = std::thread([this] { io_.run(); });
+}
+
+UdpLink::~UdpLink() {
+  io_.stop();
+  if (thread_.joinable()) thread_.join();
+}
+
+void UdpLink::send_heartbeat() {
+  if (!heartbeats_enabled_.load()) return;
+  std::array<std::uint8_t, wire::kHeartbeatDatagramSize> bytes{};
+  wire::Header header;
+  header.session_id = session_id_;
+  header.sequence = ++heartbeat_sequence_;
+  header.time_ns = steady_ns(std::chrono::steady_clock::now());
+  wire::HeartbeatPayload payload;
+  payload.client_time_ns = header.time_ns;
+  {
+    std::lock_guard lock(mutex_);
+    payload.last_state_sequence = last_sequence_;
+  }
+  wire::encode_heartbeat(header, payload, key_, bytes);
+  asio::error_code ignored;  // a lost heartbeat is made good by the next one
+  socket_.send_to(asio::buffer(bytes), server_, 0, ignored);
+}
+
+void UdpLink::schedule_heartbeat() {
+  heartbeat_timer_.expires_after(heartbeat_period_);
+  heartbeat_timer_.async_wait([this](const asio::error_code& error) {
+    if (error) return;
+    send_heartbeat();
+    schedule_heartbeat();
+  });
+}
+
+void UdpLink::start_receive() {
+  socket_.async_receive_from(asio::buffer(receive_buffer_), sender_,
+                             [this](const asio::error_code& error, std::size_t size) {
+                               if (error == asio::error::operation_aborted) return;
+                               if (!error) handle_datagram(size);
+                               start_receive();
+                             });
+}
+
+void UdpLink::handle_datagram(std::size_t size) {
+  const auto received_at = std::chrono::steady_clock::now();
+  wire::Header header;
+  wire::StatePayload payload;
+  const bool ok = wire::decode_state(std::span(receive_buffer_.data(), size), key_, header,
+                                     payload) == wire::DecodeError::kNone &&
+                  header.session_id == session_id_;
+  State state;
+  {
+    std::lock_guard lock(mutex_);
+    if (!ok) {
+      ++counters_.rejected;
+      return;
+    }
+    ++counters_.accepted;
+    state.tick = payload.tick;
+    state.sequence = header.sequence;
+    state.server_time = static_cast<double>(header.time_ns) * 1e-9;
+    state.position = to_vec(payload.p_WT);
+    state.velocity = to_vec(payload.v_WT);
+    state.force = to_vec(payload.F_T_W);
+    state.proxy = to_vec(payload.p_WP);
+    state.contact_count = payload.contact_count;
+    state.flags = payload.flags;
+    state.received_at = received_at;
+    // Older than what we have (reordered on the way): count it, but keep the newest as latest.
+    if (!have_latest_ || state.tick >= latest_.tick) {
+      latest_ = state;
+      have_latest_ = true;
+    }
+    last_sequence_ = std::max(last_sequence_, header.sequence);
+    offset_window_max_ns_ = std::max(offset_window_max_ns_, header.time_ns - steady_ns(received_at));
+    offset_estimate_ns_ = std::max(offset_estimate_ns_, offset_window_max_ns_);
+    if (++offset_window_count_ == kOffsetWindow) {
+      offset_estimate_ns_ = offset_window_max_ns_;
+      offset_window_max_ns_ = INT64_MIN;
+      offset_window_count_ = 0;
+    }
+  }
+  arrived_.notify_all();
+  std::lock_guard lock(callback_mutex_);
+  if (callback_) callback_(state);
+}
+
+void UdpLink::on_state(std::function<void(const State&)> callback) {
+  std::lock_guard lock(callback_mutex_);
+  callback_ = std::move(callback);
+}
+
+bool UdpLink::poll(State& out, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  if (!arrived_.wait_for(lock, timeout,
+                         [this] { return have_latest_ && latest_.sequence != last_polled_sequence_; })) {
+    return false;
+  }
+  out = latest_;
+  last_polled_sequence_ = latest_.sequence;
+  return true;
+}
+
+bool UdpLink::wait_for_tick(std::uint64_t tick, State& out, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  if (!arrived_.wait_for(lock, timeout, [&] { return have_latest_ && latest_.tick >= tick; })) {
+    return false;
+  }
+  out = latest_;
+  last_polled_sequence_ = latest_.sequence;
+  return true;
+}
+
+std::optional<std::chrono::nanoseconds> UdpLink::clock_offset() const {
+  std::lock_guard lock(mutex_);
+  if (offset_estimate_ns_ == INT64_MIN) return std::nullopt;
+  return std::chrono::nanoseconds(offset_estimate_ns_);
+}
+
+ReceiveCounters UdpLink::counters() const {
+  std::lock_guard lock(mutex_);
+  return counters_;
+}
+
+}  // namespace haptic::detail

@@ -1,0 +1,73 @@
+#pragma once
+// The SDK's end of the UDP data plane: one socket on an ephemeral port, heartbeats to the server
+// (which answers the address they come from), authenticated State datagrams in. One asio thread.
+
+#include <asio.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "haptic/types.hpp"
+#include "haptic/wire/datagram.hpp"
+
+namespace haptic::detail {
+
+class UdpLink {
+ public:
+  /// Resolves host:port; throws ConnectionError if it cannot.
+  UdpLink(const std::string& host, std::uint16_t port, std::uint64_t session_id,
+          const wire::Key& key, std::chrono::milliseconds heartbeat_period);
+  ~UdpLink();
+  UdpLink(const UdpLink&) = delete;
+  UdpLink& operator=(const UdpLink&) = delete;
+
+  void set_heartbeats_enabled(bool enabled) { heartbeats_enabled_ = enabled; }
+  void on_state(std::function<void(const State&)> callback);
+  bool poll(State& out, std::chrono::milliseconds timeout);
+  bool wait_for_tick(std::uint64_t tick, State& out, std::chrono::milliseconds timeout);
+  std::optional<std::chrono::nanoseconds> clock_offset() const;
+  ReceiveCounters counters() const;
+
+ private:
+  void send_heartbeat();
+  void schedule_heartbeat();
+  void start_receive();
+  void handle_datagram(std::size_t size);
+
+  asio::io_context io_;
+  asio::ip::udp::socket socket_;
+  asio::ip::udp::endpoint server_;
+  asio::ip::udp::endpoint sender_;
+  asio::steady_timer heartbeat_timer_;
+  std::chrono::milliseconds heartbeat_period_;
+  std::uint64_t session_id_;
+  wire::Key key_;
+  std::uint64_t heartbeat_sequence_ = 0;  // io thread only
+  std::array<std::uint8_t, 2048> receive_buffer_{};
+  std::atomic<bool> heartbeats_enabled_{true};
+
+  mutable std::mutex mutex_;
+  std::condition_variable arrived_;
+  State latest_;                       // guarded by mutex_
+  bool have_latest_ = false;           // guarded by mutex_
+  std::uint64_t last_polled_sequence_ = 0;  // guarded by mutex_
+  std::uint64_t last_sequence_ = 0;    // guarded by mutex_
+  std::int64_t offset_window_max_ns_ = INT64_MIN;  // guarded by mutex_
+  std::int64_t offset_estimate_ns_ = INT64_MIN;    // guarded by mutex_
+  std::uint32_t offset_window_count_ = 0;          // guarded by mutex_
+  ReceiveCounters counters_;           // guarded by mutex_
+
+  std::mutex callback_mutex_;
+  std::function<void(const State&)> callback_;  // guarded by callback_mutex_
+
+  std::thread thread_;
+};
+
+}  // namespace haptic::detail

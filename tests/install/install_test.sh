@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Installs the build tree into a temporary prefix, then configures, builds and runs an outside
+# project (tests/install/consumer) that uses find_package(hapticd) and links haptic::sdk.
+# Usage: install_test.sh <build-dir> <source-dir>
+set -euo pipefail
+build_dir="$1"
+source_dir="$2"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cmake --install "$build_dir" --prefix "$work/prefix" >/dev/null
+test -f "$work/prefix/include/haptic/haptic.hpp" || { echo "FAIL: public headers not installed"; exit 1; }
+if ls "$work/prefix/include/haptic" | grep -q -E '\.pb\.h$'; then
+  echo "FAIL: generated protobuf headers leaked into the public include dir"; exit 1
+fi
+launcher=()
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+cmake -S "$source_dir/tests/install/consumer" -B "$work/consumer" -G Ninja \
+  -DCMAKE_PREFIX_PATH="$work/prefix" "${launcher[@]}" >/dev/null
+cmake --build "$work/consumer" -j2 >/dev/null
+"$work/consumer/consumer"
