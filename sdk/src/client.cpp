@@ -81,13 +81,7 @@ std::uint64_t Client::step(std::uint32_t ticks) {
       .tick();
 }
 
-void Client::subscribe(std::uint32_t decimation) {
-  v1::SubscribeStateRequest request;
-  request.set_session_id(session_id());
-  request.set_decimation(decimation);
-  require(core_).call<v1::SubscribeStateRequest, v1::Empty>(
-      "SubscribeState", &v1::Haptic::Stub::SubscribeState, request);
-}
+void Client::subscribe(std::uint32_t decimation) { require(core_).subscribe(decimation); }
 
 const DeviceInfo& Client::device_info() const { return require(core_).device_info(); }
 

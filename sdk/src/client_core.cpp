@@ -1,6 +1,7 @@
 #include "client_core.hpp"
 
 #include <cctype>
+#include <thread>
 
 #include "conversions.hpp"
 #include "status_mapping.hpp"
@@ -57,13 +58,7 @@ ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
     udp_ = std::make_unique<UdpLink>(host_of(config_.server_address),
                                      static_cast<std::uint16_t>(opened.udp_port()), session_id_, key,
                                      config_.heartbeat_period);
-    if (config_.state_decimation > 0) {
-      v1::SubscribeStateRequest subscribe;
-      subscribe.set_session_id(session_id_);
-      subscribe.set_decimation(config_.state_decimation);
-      call<v1::SubscribeStateRequest, v1::Empty>("SubscribeState",
-                                                 &v1::Haptic::Stub::SubscribeState, subscribe);
-    }
+    if (config_.state_decimation > 0) subscribe(config_.state_decimation);
   } catch (...) {
     // Do not leave a half-open session holding a lease; report the first failure, not this one.
     try {
@@ -79,6 +74,27 @@ ClientCore::~ClientCore() {
     close_session();
   } catch (...) {
     // Destructors never throw; the server's lease cleans up what a failed close leaves.
+  }
+}
+
+void ClientCore::subscribe(std::uint32_t decimation) {
+  v1::SubscribeStateRequest request;
+  request.set_session_id(session_id_);
+  request.set_decimation(decimation);
+  // The server sends state to where heartbeats come from. Until one has arrived it has no address,
+  // so resend and ask again for up to rpc_timeout: a firewall or NAT that eats our UDP becomes a
+  // clear error here instead of a silent stream.
+  const auto give_up = std::chrono::steady_clock::now() + config_.rpc_timeout;
+  for (;;) {
+    const auto reply = call<v1::SubscribeStateRequest, v1::SubscribeStateResponse>(
+        "SubscribeState", &v1::Haptic::Stub::SubscribeState, request);
+    if (decimation == 0 || reply.udp_endpoint_known()) return;
+    if (std::chrono::steady_clock::now() > give_up) {
+      throw ConnectionError("SubscribeState: UDP heartbeats from this client do not reach the "
+                            "server's data-plane port (a firewall or NAT dropping UDP?)");
+    }
+    udp_->send_heartbeat_soon();
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
 }
 

@@ -34,6 +34,8 @@ class ClientCore {
   std::uint64_t create_field(const v1::Field& field);
   void update_field(std::uint64_t id, const v1::Field& field);
   void delete_field(std::uint64_t id);
+  /// Sets the state decimation; for n > 0 waits until the server knows our UDP address.
+  void subscribe(std::uint32_t decimation);
   void close_session();
 
   std::uint64_t session_id() const { return session_id_; }

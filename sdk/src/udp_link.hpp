@@ -29,6 +29,10 @@ class UdpLink {
   UdpLink& operator=(const UdpLink&) = delete;
 
   void set_heartbeats_enabled(bool enabled) { heartbeats_enabled_ = enabled; }
+  /// Sends one extra heartbeat from the UDP thread (any thread may call this).
+  void send_heartbeat_soon() {
+    asio::post(io_, [this] { send_heartbeat(); });
+  }
   void on_state(std::function<void(const State&)> callback);
   bool poll(State& out, std::chrono::milliseconds timeout);
   bool wait_for_tick(std::uint64_t tick, State& out, std::chrono::milliseconds timeout);

@@ -225,13 +225,15 @@ grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
 }
 
 grpc::Status HapticService::SubscribeState(grpc::ServerContext*,
-                                           const v1::SubscribeStateRequest* request, v1::Empty*) {
+                                           const v1::SubscribeStateRequest* request,
+                                           v1::SubscribeStateResponse* response) {
   if (auto status = check_session(request->session_id()); !status.ok()) return status;
   if (request->decimation() > kMaxDecimation) {
     return invalid("decimation: must be 0 (stop) to " + std::to_string(kMaxDecimation) + ", got " +
                    std::to_string(request->decimation()));
   }
-  deps_.sessions.subscribe(request->session_id(), request->decimation());
+  const auto endpoint_known = deps_.sessions.subscribe(request->session_id(), request->decimation());
+  response->set_udp_endpoint_known(endpoint_known.value_or(false));
   return grpc::Status::OK;
 }
 

@@ -60,7 +60,7 @@ class HapticService final : public v1::Haptic::Service {
   grpc::Status WatchEvents(grpc::ServerContext*, const v1::WatchEventsRequest*,
                            grpc::ServerWriter<v1::Event>*) override;
   grpc::Status SubscribeState(grpc::ServerContext*, const v1::SubscribeStateRequest*,
-                              v1::Empty*) override;
+                              v1::SubscribeStateResponse*) override;
   grpc::Status SetOperator(grpc::ServerContext*, const v1::SetOperatorRequest*,
                            v1::Empty*) override;
   grpc::Status Step(grpc::ServerContext*, const v1::StepRequest*, v1::StepResponse*) override;

@@ -74,14 +74,14 @@ bool SessionRegistry::on_heartbeat(std::uint64_t session_id, std::uint64_t seque
   return true;
 }
 
-bool SessionRegistry::subscribe(std::uint64_t session_id, std::uint32_t decimation) {
+std::optional<bool> SessionRegistry::subscribe(std::uint64_t session_id, std::uint32_t decimation) {
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(session_id);
-  if (it == sessions_.end()) return false;
+  if (it == sessions_.end()) return std::nullopt;
   it->second.decimation = decimation;
   it->second.last_seen = SteadyClock::now();
   ++version_;
-  return true;
+  return it->second.address.has_value();
 }
 
 std::vector<std::uint64_t> SessionRegistry::expire(SteadyClock::time_point now) {

@@ -55,8 +55,9 @@ class SessionRegistry {
   /// state goes to. Rejects (false) a sequence not above the last one (stale or replayed).
   bool on_heartbeat(std::uint64_t session_id, std::uint64_t sequence, const UdpAddress& from);
 
-  /// Sets the state-stream decimation (0 stops it); false if the session does not exist.
-  bool subscribe(std::uint64_t session_id, std::uint32_t decimation);
+  /// Sets the state-stream decimation (0 stops it); nullopt if the session does not exist, else
+  /// whether its UDP address is known yet.
+  std::optional<bool> subscribe(std::uint64_t session_id, std::uint32_t decimation);
 
   /// Removes and returns the sessions whose lease ran out at `now`.
   std::vector<std::uint64_t> expire(SteadyClock::time_point now);

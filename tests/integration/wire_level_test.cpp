@@ -143,8 +143,9 @@ TEST_F(WireLevel, StateArrivesAtTheHeartbeatAddressOnlyWhenSubscribed) {
   v1::SubscribeStateRequest subscribe;
   subscribe.set_session_id(session_.session_id());
   subscribe.set_decimation(2);
-  v1::Empty empty;
-  ASSERT_TRUE(call(&v1::Haptic::Stub::SubscribeState, subscribe, empty).ok());
+  v1::SubscribeStateResponse subscribed;
+  ASSERT_TRUE(call(&v1::Haptic::Stub::SubscribeState, subscribe, subscribed).ok());
+  EXPECT_TRUE(subscribed.udp_endpoint_known());
   step.set_ticks(4);  // ticks 6..9: decimation 2 sends ticks 6 and 8
   ASSERT_TRUE(call(&v1::Haptic::Stub::Step, step, stepped).ok());
   EXPECT_EQ(stepped.tick(), 9u);

@@ -33,23 +33,23 @@ struct Impedance {
 
 /// A half-space wall: the plane through `point` with outward `normal`; the solid lies behind it.
 struct WallSpec {
-  Vec3 point;               ///< Unit: m.
+  Vec3 point{};             ///< Unit: m.
   Vec3 normal{0, 0, 1};     ///< Non-zero; the server normalises it.
-  Impedance impedance;
+  Impedance impedance{};
   friend bool operator==(const WallSpec&, const WallSpec&) = default;
 };
 
 /// A solid sphere the tool is pushed out of.
 struct SphereSpec {
-  Vec3 center;              ///< Unit: m.
+  Vec3 center{};            ///< Unit: m.
   double radius = 0.0;      ///< Unit: m. > 0.
-  Impedance impedance;
+  Impedance impedance{};
   friend bool operator==(const SphereSpec&, const SphereSpec&) = default;
 };
 
 /// A spring pulling the tool to `anchor`: F = −k (p − anchor) − b v, clipped to max_force if > 0.
 struct SpringFieldSpec {
-  Vec3 anchor;              ///< Unit: m.
+  Vec3 anchor{};            ///< Unit: m.
   double stiffness = 0.0;   ///< Unit: N/m.
   double damping = 0.0;     ///< Unit: N·s/m.
   double max_force = 0.0;   ///< Unit: N. 0: no clip.

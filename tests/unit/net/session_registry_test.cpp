@@ -39,11 +39,12 @@ TEST(SessionRegistry, HeartbeatsSetTheAddressAndStaleOnesAreRejected) {
   SessionRegistry registry(4, std::chrono::milliseconds(1000));
   const auto session = registry.open("c");
   ASSERT_TRUE(session);
-  EXPECT_TRUE(registry.subscribe(session->id, 2));
+  EXPECT_EQ(registry.subscribe(session->id, 2), std::optional<bool>(false));
   EXPECT_TRUE(registry.subscribers().empty());  // no address yet
   const auto version = registry.subscribers_version();
   EXPECT_TRUE(registry.on_heartbeat(session->id, 1, loopback(4000)));
   EXPECT_NE(registry.subscribers_version(), version);
+  EXPECT_EQ(registry.subscribe(session->id, 2), std::optional<bool>(true));
   ASSERT_EQ(registry.subscribers().size(), 1u);
   EXPECT_EQ(registry.subscribers()[0].decimation, 2u);
   EXPECT_FALSE(registry.on_heartbeat(session->id, 1, loopback(4000)));  // replayed

@@ -1,0 +1,200 @@
+// The real hapticd driven by the real SDK, in lockstep time: walls push back with K × penetration,
+// removed objects ramp out, clients only touch their own objects, and a silent client loses its
+// objects.
+#include <gtest/gtest.h>
+
+#include <haptic/haptic.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "integration/server_process.hpp"
+
+namespace haptic {
+namespace {
+
+using std::chrono::seconds;
+
+constexpr double kK = 1000.0;  // wall stiffness, N/m
+constexpr double kB = 1.0;     // wall damping, N·s/m
+constexpr std::int64_t kRampTicks = 50;  // default removal ramp: 50 ms at 1 kHz
+
+ClientConfig config_for(const test::ServerProcess& server, const char* name) {
+  ClientConfig config;
+  config.server_address = server.address();
+  config.client_name = name;
+  config.heartbeat_period = std::chrono::milliseconds(20);
+  return config;
+}
+
+/// Steps the server and returns the sample of the last tick (which must arrive).
+State step_and_get(Client& client, std::uint32_t ticks) {
+  const std::uint64_t tick = client.step(ticks);
+  State state;
+  EXPECT_TRUE(client.wait_for_tick(tick, state, seconds(5))) << "no state for tick " << tick;
+  EXPECT_EQ(state.tick, tick);
+  return state;
+}
+
+double dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+class SdkIntegration : public ::testing::Test {
+ protected:
+  test::ServerProcess server_{test::lockstep_config(R"("lease_timeout_ms": 300)")};
+};
+
+TEST_F(SdkIntegration, WallPushesBackWithStiffnessTimesPenetrationAlongItsNormal) {
+  Client client(config_for(server_, "wall"));
+  EXPECT_TRUE(client.device_info().simulated);
+  EXPECT_EQ(client.device_info().loop_rate_hz, 1000.0);
+  // A tilted wall through the origin; the hand pushes 5 N straight into it (Eom et al.'s −5 N).
+  const Vec3 n{0.0, 0.6, 0.8};
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = n, .impedance = {kK, kB}});
+  client.set_operator(OperatorInput::push({0.0, -5.0 * n.y, -5.0 * n.z}));
+  const State s = step_and_get(client, 3000);
+
+  const double penetration = -dot(s.position, n);
+  EXPECT_GT(penetration, 0.0);
+  EXPECT_EQ(s.contact_count, 1u);
+  // At each sample the force is exactly K × penetration − B × normal velocity, along n.
+  const double expected = kK * penetration - kB * dot(s.velocity, n);
+  EXPECT_NEAR(s.force.x, 0.0, 1e-12);
+  EXPECT_NEAR(s.force.y, expected * n.y, 1e-9);
+  EXPECT_NEAR(s.force.z, expected * n.z, 1e-9);
+  // At rest it balances the push: 5 N at 5 mm.
+  EXPECT_NEAR(penetration, 0.005, 1e-6);
+  EXPECT_NEAR(std::sqrt(dot(s.force, s.force)), 5.0, 1e-3);
+  // The proxy sits on the surface.
+  EXPECT_NEAR(dot(s.proxy, n), 0.0, 1e-12);
+
+  // Delete it: the force ramps out over 50 ticks and is exactly zero after.
+  wall.remove();
+  const State mid = step_and_get(client, kRampTicks / 2);
+  EXPECT_GT(mid.force.z, 0.0);
+  EXPECT_LT(mid.force.z, s.force.z);
+  EXPECT_TRUE(mid.flags & kRampingOut);
+  const State after = step_and_get(client, kRampTicks);
+  EXPECT_EQ(after.force.x, 0.0);
+  EXPECT_EQ(after.force.y, 0.0);
+  EXPECT_EQ(after.force.z, 0.0);
+  EXPECT_EQ(after.contact_count, 0u);
+}
+
+TEST_F(SdkIntegration, TwoClientsEachSeeAndChangeOnlyTheirOwnObjects) {
+  Client alice(config_for(server_, "alice"));
+  Client bob(config_for(server_, "bob"));
+  EXPECT_NE(alice.session_id(), bob.session_id());
+
+  auto floor = alice.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {kK, kB}});
+  auto ball = bob.add_sphere({.center = {0.05, 0, 0}, .radius = 0.01, .impedance = {kK, 0.0}});
+  EXPECT_NE(floor.id(), ball.id());
+  EXPECT_EQ(alice.stats().objects, 2u);  // one shared scene
+
+  alice.set_operator(OperatorInput::push({0, 0, -5.0}));
+  const State pressed = step_and_get(alice, 3000);
+  EXPECT_NEAR(pressed.force.z, 5.0, 1e-3);
+
+  // Bob changes and removes his own sphere: Alice's wall is untouched.
+  ball.update(SphereSpec{.center = {0.06, 0, 0}, .radius = 0.02, .impedance = {kK, 0.0}});
+  ball.remove();
+  const State still = step_and_get(bob, 200);
+  EXPECT_NEAR(still.force.z, 5.0, 1e-3);
+  // Both streams carry the same shared device state.
+  State seen_by_alice;
+  ASSERT_TRUE(alice.wait_for_tick(still.tick, seen_by_alice, seconds(5)));
+  EXPECT_EQ(seen_by_alice.force.z, still.force.z);
+
+  // Alice moves her wall up 1 mm: the equilibrium follows (5 mm below the new surface).
+  floor.update(WallSpec{.point = {0, 0, 0.001}, .normal = {0, 0, 1}, .impedance = {kK, kB}});
+  const State moved = step_and_get(alice, 3000);
+  EXPECT_NEAR(moved.position.z, 0.001 - 0.005, 1e-6);
+}
+
+TEST_F(SdkIntegration, ASilentClientLosesItsObjectsAndTheirForceRampsOut) {
+  Client watcher(config_for(server_, "watcher"));
+  auto lost = std::make_unique<Client>(config_for(server_, "lost"));
+  auto wall = lost->add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {kK, kB}});
+  watcher.set_operator(OperatorInput::push({0, 0, -5.0}));
+  const State pressed = step_and_get(watcher, 3000);
+  ASSERT_NEAR(pressed.force.z, 5.0, 1e-3);
+
+  lost->set_heartbeats_enabled(false);  // and it makes no more calls: its lease (300 ms) runs out
+  const auto give_up = std::chrono::steady_clock::now() + seconds(10);
+  while (watcher.stats().leases_expired == 0 && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(watcher.stats().leases_expired, 1u);
+  EXPECT_EQ(watcher.stats().sessions, 1u);
+
+  // The loop stood still while we waited (lockstep): the fade starts at the next tick and each
+  // sample's force is exactly the faded wall law.
+  for (std::int64_t k = 0; k <= kRampTicks + 5; ++k) {
+    const State s = step_and_get(watcher, 1);
+    const double gain = std::max(0.0, 1.0 - static_cast<double>(k) / kRampTicks);
+    const double unfaded = std::max(0.0, -kK * s.position.z - kB * s.velocity.z);
+    ASSERT_NEAR(s.force.z, gain * unfaded, 1e-9) << "k = " << k;
+  }
+  EXPECT_EQ(step_and_get(watcher, 1).force.z, 0.0);
+
+  // The lost client finds out on its next call.
+  EXPECT_THROW(lost->add_wall({.normal = {0, 0, 1}, .impedance = {kK, kB}}), NotFoundError);
+  wall.release();
+  lost.reset();  // closing a session that is gone does not throw
+}
+
+TEST_F(SdkIntegration, LockstepRunsAreExactlyReproducible) {
+  auto run = [this] {
+    Client client(config_for(server_, "repro"));
+    auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {kK, kB}});
+    client.set_operator(OperatorInput::follow({0.001, 0.0, -0.01}, 200.0, 2.0));
+    const State s = step_and_get(client, 1500);
+    wall.remove();
+    client.set_operator(OperatorInput::release());
+    step_and_get(client, 500);
+    return s;
+  };
+  // Two runs on one server start from different device states, so compare against a fresh server.
+  const State first = run();
+  test::ServerProcess other(test::lockstep_config());
+  ClientConfig config = config_for(other, "repro");
+  Client client(config);
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {kK, kB}});
+  client.set_operator(OperatorInput::follow({0.001, 0.0, -0.01}, 200.0, 2.0));
+  const State second = step_and_get(client, 1500);
+  EXPECT_EQ(first.position, second.position);
+  EXPECT_EQ(first.force, second.force);
+  EXPECT_EQ(first.server_time, second.server_time);
+}
+
+TEST_F(SdkIntegration, ErrorsAreTypedAndCarryTheServersMessage) {
+  Client client(config_for(server_, "errors"));
+  try {
+    client.add_sphere({.center = {0, 0, 100.0}, .radius = 0.01, .impedance = {kK, 0.0}});
+    FAIL() << "expected InvalidArgumentError";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("object.pose.position.z"), std::string::npos)
+        << error.what();
+  }
+  EXPECT_THROW(client.add_wall({.normal = {0, 0, 0}, .impedance = {kK, kB}}), InvalidArgumentError);
+  EXPECT_THROW(client.subscribe(5000), InvalidArgumentError);
+  EXPECT_THROW(client.step(0), InvalidArgumentError);
+  EXPECT_EQ(client.stats().objects, 0u);
+}
+
+TEST(SdkIntegrationRealTime, StepIsRefusedOutsideLockstepAndStateStreams) {
+  test::ServerProcess server(R"({"time_mode": "REAL_TIME", "udp_address": "127.0.0.1",
+      "status_period_s": 0, "real_time": {"use_fifo": false}})");
+  Client client(config_for(server, "realtime"));
+  EXPECT_THROW(client.step(1), FailedPreconditionError);
+  State state;
+  ASSERT_TRUE(client.poll_state(state, seconds(5)));
+  State next;
+  ASSERT_TRUE(client.poll_state(next, seconds(5)));
+  EXPECT_GT(next.sequence, state.sequence);
+  EXPECT_TRUE(client.clock_offset().has_value());
+  EXPECT_EQ(client.receive_counters().rejected, 0u);
+}
+
+}  // namespace
+}  // namespace haptic
