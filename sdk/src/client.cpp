@@ -76,9 +76,11 @@ std::uint64_t Client::step(std::uint32_t ticks) {
   v1::StepRequest request;
   request.set_session_id(session_id());
   request.set_ticks(ticks);
-  return require(core_)
-      .call<v1::StepRequest, v1::StepResponse>("Step", &v1::Haptic::Stub::Step, request)
-      .tick();
+  detail::ClientCore& core = require(core_);
+  const auto reply =
+      core.call<v1::StepRequest, v1::StepResponse>("Step", &v1::Haptic::Stub::Step, request);
+  if (reply.has_state()) core.udp().offer(detail::from_proto(reply.state()));
+  return reply.tick();
 }
 
 void Client::subscribe(std::uint32_t decimation) { require(core_).subscribe(decimation); }

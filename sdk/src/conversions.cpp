@@ -97,4 +97,18 @@ Stats from_proto(const v1::Stats& s) {
   return out;
 }
 
+State from_proto(const v1::ToolState& s) {
+  State out;
+  out.tick = s.tick();
+  out.server_time = s.server_time_s();
+  out.position = from_proto(s.position());
+  out.velocity = from_proto(s.velocity());
+  out.force = from_proto(s.force());
+  out.proxy = from_proto(s.proxy());
+  out.contact_count = s.contact_count();
+  out.flags = s.flags();
+  out.received_at = std::chrono::steady_clock::now();
+  return out;
+}
+
 }  // namespace haptic::detail

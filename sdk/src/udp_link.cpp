@@ -33,6 +33,8 @@ UdpLink::UdpLink(const std::string& host, std::uint16_t port, std::uint64_t sess
   socket_.open(server_.protocol(), error);
   if (!error) socket_.bind(asio::ip::udp::endpoint(server_.protocol(), 0), error);
   if (error) throw ConnectionError("UDP: cannot open a socket: " + error.message());
+  // Room for bursts (a lockstep Step of many ticks); the kernel may cap it at net.core.rmem_max.
+  socket_.set_option(asio::socket_base::receive_buffer_size(1 << 20), error);
 
   send_heartbeat();  // at once, so the server learns where to send state
   schedule_heartbeat();
@@ -130,14 +132,24 @@ void UdpLink::on_state(std::function<void(const State&)> callback) {
   callback_ = std::move(callback);
 }
 
+void UdpLink::offer(const State& state) {
+  {
+    std::lock_guard lock(mutex_);
+    if (have_latest_ && state.tick <= latest_.tick) return;
+    latest_ = state;
+    have_latest_ = true;
+  }
+  arrived_.notify_all();
+}
+
 bool UdpLink::poll(State& out, std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
   if (!arrived_.wait_for(lock, timeout,
-                         [this] { return have_latest_ && latest_.sequence != last_polled_sequence_; })) {
+                         [this] { return have_latest_ && latest_.tick > last_polled_tick_; })) {
     return false;
   }
   out = latest_;
-  last_polled_sequence_ = latest_.sequence;
+  last_polled_tick_ = latest_.tick;
   return true;
 }
 
@@ -147,7 +159,7 @@ bool UdpLink::wait_for_tick(std::uint64_t tick, State& out, std::chrono::millise
     return false;
   }
   out = latest_;
-  last_polled_sequence_ = latest_.sequence;
+  last_polled_tick_ = latest_.tick;
   return true;
 }
 

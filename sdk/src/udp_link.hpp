@@ -34,6 +34,8 @@ class UdpLink {
     asio::post(io_, [this] { send_heartbeat(); });
   }
   void on_state(std::function<void(const State&)> callback);
+  /// Offers a sample that came another way (the Step reply); kept if it is the newest.
+  void offer(const State& state);
   bool poll(State& out, std::chrono::milliseconds timeout);
   bool wait_for_tick(std::uint64_t tick, State& out, std::chrono::milliseconds timeout);
   std::optional<std::chrono::nanoseconds> clock_offset() const;
@@ -61,7 +63,7 @@ class UdpLink {
   std::condition_variable arrived_;
   State latest_;                       // guarded by mutex_
   bool have_latest_ = false;           // guarded by mutex_
-  std::uint64_t last_polled_sequence_ = 0;  // guarded by mutex_
+  std::uint64_t last_polled_tick_ = 0;  // guarded by mutex_
   std::uint64_t last_sequence_ = 0;    // guarded by mutex_
   std::int64_t offset_window_max_ns_ = INT64_MIN;  // guarded by mutex_
   std::int64_t offset_estimate_ns_ = INT64_MIN;    // guarded by mutex_

@@ -91,7 +91,7 @@ Server::Server(const v1::ServerConfig& config)
   udp_.bind(config.udp_address(), static_cast<std::uint16_t>(udp_port));
 
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
-      sessions_, *scene_, events_, *loop_, device_->description(), device_.get(), udp_.port(),
+      sessions_, *scene_, events_, *loop_, samples_, device_->description(), device_.get(), udp_.port(),
       limits, [this] { return stats(); }});
   grpc::ServerBuilder builder;
   int selected_port = 0;

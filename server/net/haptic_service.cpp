@@ -263,8 +263,21 @@ grpc::Status HapticService::Step(grpc::ServerContext*, const v1::StepRequest* re
     return invalid("ticks: must be 1 to " + std::to_string(kMaxStepTicks) + ", got " +
                    std::to_string(request->ticks()));
   }
-  response->set_tick(deps_.loop.step(request->ticks()));
+  const std::uint64_t tick = deps_.loop.step(request->ticks());
+  response->set_tick(tick);
   response->set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
+  runtime::TickSample sample;
+  if (deps_.samples.read(tick, sample)) {
+    v1::ToolState* state = response->mutable_state();
+    state->set_tick(sample.tick);
+    state->set_server_time_s(static_cast<double>(sample.time_ns) * 1e-9);
+    *state->mutable_position() = to_proto(sample.p_WT);
+    *state->mutable_velocity() = to_proto(sample.v_WT);
+    *state->mutable_force() = to_proto(sample.F_T_W);
+    *state->mutable_proxy() = to_proto(sample.p_WP);
+    state->set_contact_count(sample.contact_count);
+    state->set_flags(sample.flags);
+  }
   return grpc::Status::OK;
 }
 

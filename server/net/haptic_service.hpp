@@ -22,6 +22,7 @@ struct ServiceDependencies {
   SceneStore& scene;
   EventHub& events;
   runtime::LoopThread& loop;
+  const runtime::SampleRing& samples;
   const runtime::DeviceDescription& device;
   runtime::SimulatedPointMassDevice* simulated_device;  // null for real hardware
   std::uint16_t udp_port;

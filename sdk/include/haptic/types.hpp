@@ -66,7 +66,7 @@ enum StateFlag : std::uint32_t {
 /// One tick's sample as the server streamed it.
 struct State {
   std::uint64_t tick = 0;        ///< Server loop tick.
-  std::uint64_t sequence = 0;    ///< Datagram sequence (gaps mean lost datagrams or decimation).
+  std::uint64_t sequence = 0;    ///< Datagram sequence (gaps: loss or decimation); 0 from a Step reply.
   double server_time = 0.0;      ///< Server time of the tick. Unit: s.
   Vec3 position;                 ///< Tool position p_WT. Unit: m.
   Vec3 velocity;                 ///< Tool velocity v_WT. Unit: m/s.
