@@ -7,9 +7,11 @@
 //               output is the same on every run.
 #include <haptic/haptic.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -69,16 +71,26 @@ int main(int argc, char** argv) {
     const double duration = kDescent + kHold;
     haptic::State state;
     if (lockstep) {
-      // Advance the server in 10 ms steps, moving the hand's target between steps.
-      const auto ticks_per_step = static_cast<std::uint32_t>(rate / 100.0);
+      // Advance the server in 10 ms steps, moving the hand's target between steps. Rows are
+      // timed from our first step: the server's tick count may not start at zero.
+      const auto ticks_per_step = std::max<std::uint32_t>(1, static_cast<std::uint32_t>(rate / 100.0));
+      std::optional<std::uint64_t> first_tick;  // the tick our first Step ended on
+      std::uint64_t next_row_tick = 0;
       double t = 0.0;
       while (t < duration) {
-        client.set_operator(haptic::OperatorInput::follow({0, 0, target_at(t)}, kHandStiffness,
+        const double target = target_at(t);
+        client.set_operator(haptic::OperatorInput::follow({0, 0, target}, kHandStiffness,
                                                           kHandDamping));
         const std::uint64_t tick = client.step(ticks_per_step);
-        t = static_cast<double>(tick) / rate;
-        if (tick % ticks_per_row == 0 && client.wait_for_tick(tick, state, std::chrono::seconds(2))) {
-          print_row(state.server_time, target_at(state.server_time), state);
+        if (!first_tick) {
+          first_tick = tick;
+          next_row_tick = tick;
+        }
+        t = static_cast<double>(tick - *first_tick + ticks_per_step) / rate;
+        // The Step reply carries the tick's state, so this returns at once.
+        if (tick >= next_row_tick && client.wait_for_tick(tick, state, std::chrono::seconds(2))) {
+          print_row(t, target, state);
+          next_row_tick = tick + ticks_per_row;
         }
       }
     } else {

@@ -15,21 +15,50 @@ void check_finite(double value, const char* field) {
   if (!std::isfinite(value)) throw InvalidArgumentError(std::string(field) + ": must be finite");
 }
 
+void check_finite(const Vec3& v, const std::string& field) {
+  check_finite(v.x, (field + ".x").c_str());
+  check_finite(v.y, (field + ".y").c_str());
+  check_finite(v.z, (field + ".z").c_str());
+}
+
+void check_non_negative(double value, const char* field) {
+  check_finite(value, field);
+  if (value < 0.0) throw InvalidArgumentError(std::string(field) + ": must be >= 0");
+}
+
 void check_impedance(const Impedance& impedance) {
-  check_finite(impedance.stiffness, "impedance.stiffness");
-  check_finite(impedance.damping, "impedance.damping");
-  if (impedance.stiffness < 0.0) throw InvalidArgumentError("impedance.stiffness: must be >= 0");
-  if (impedance.damping < 0.0) throw InvalidArgumentError("impedance.damping: must be >= 0");
+  check_non_negative(impedance.stiffness, "impedance.stiffness");
+  check_non_negative(impedance.damping, "impedance.damping");
 }
 
 void check(const WallSpec& wall) {
   check_impedance(wall.impedance);
+  check_finite(wall.point, "wall.point");
+  check_finite(wall.normal, "wall.normal");
   if (wall.normal == Vec3{}) throw InvalidArgumentError("wall.normal: must be non-zero");
 }
 
 void check(const SphereSpec& sphere) {
   check_impedance(sphere.impedance);
+  check_finite(sphere.center, "sphere.center");
   if (!(sphere.radius > 0.0)) throw InvalidArgumentError("sphere.radius: must be > 0");
+}
+
+void check(const SpringFieldSpec& spring) {
+  check_finite(spring.anchor, "spring.anchor");
+  check_non_negative(spring.stiffness, "spring.stiffness");
+  check_non_negative(spring.damping, "spring.damping");
+  check_non_negative(spring.max_force, "spring.max_force");
+}
+
+void check(const OperatorInput& input) {
+  if (input.mode == OperatorInput::Mode::kFollow) {
+    check_finite(input.target, "input.target");
+    check_non_negative(input.stiffness, "input.stiffness");
+    check_non_negative(input.damping, "input.damping");
+  } else if (input.mode == OperatorInput::Mode::kPush) {
+    check_finite(input.force, "input.force");
+  }
 }
 
 std::shared_ptr<detail::ClientCore> lock_or_null(const std::weak_ptr<detail::ClientCore>& core) {
@@ -61,10 +90,12 @@ ObjectHandle Client::add_sphere(const SphereSpec& sphere) {
 }
 
 FieldHandle Client::add_spring_field(const SpringFieldSpec& spring) {
+  check(spring);
   return FieldHandle(core_, require(core_).create_field(detail::to_proto(spring)));
 }
 
 void Client::set_operator(const OperatorInput& input) {
+  check(input);
   v1::SetOperatorRequest request;
   request.set_session_id(session_id());
   *request.mutable_input() = detail::to_proto(input);
@@ -200,6 +231,7 @@ void FieldHandle::drop() noexcept {
 }
 
 void FieldHandle::update(const SpringFieldSpec& spring) {
+  check(spring);
   require(lock_or_null(core_)).update_field(id_, detail::to_proto(spring));
 }
 

@@ -9,9 +9,16 @@
 namespace haptic::detail {
 namespace {
 
-/// The host part of "host:port", "[v6]:port" or "dns:///host:port".
+/// The host part of "host:port", "[v6]:port" or a gRPC target such as "dns:///host:port" or
+/// "ipv4:host:port": the UDP data plane lives on the same host as the control plane.
 std::string host_of(std::string address) {
-  if (address.rfind("dns:///", 0) == 0) address = address.substr(7);
+  for (const char* scheme : {"dns:///", "dns:", "ipv4:", "ipv6:"}) {
+    const std::string prefix(scheme);
+    if (address.rfind(prefix, 0) == 0) {
+      address = address.substr(prefix.size());
+      break;
+    }
+  }
   if (!address.empty() && address.front() == '[') {
     const auto end = address.find(']');
     return end == std::string::npos ? address : address.substr(1, end - 1);

@@ -29,7 +29,15 @@ UdpLink::UdpLink(const std::string& host, std::uint16_t port, std::uint64_t sess
   if (error || results.empty()) {
     throw ConnectionError("UDP: cannot resolve " + host + ": " + error.message());
   }
+  // Prefer IPv4: hapticd binds its data plane to 0.0.0.0 by default, and "localhost" often
+  // resolves to ::1 first, where no one would answer our heartbeats.
   server_ = *results.begin();
+  for (const auto& entry : results) {
+    if (entry.endpoint().address().is_v4()) {
+      server_ = entry.endpoint();
+      break;
+    }
+  }
   socket_.open(server_.protocol(), error);
   if (!error) socket_.bind(asio::ip::udp::endpoint(server_.protocol(), 0), error);
   if (error) throw ConnectionError("UDP: cannot open a socket: " + error.message());

@@ -40,6 +40,8 @@ class Server {
   std::uint16_t grpc_port() const { return grpc_port_; }
   std::uint16_t udp_port() const { return udp_.port(); }
   v1::Stats stats() const;
+  /// Server time now (what samples are stamped with). Unit: ns.
+  std::int64_t server_time_ns() const { return loop_->server_time_ns(); }
 
  private:
   void housekeeping_loop();

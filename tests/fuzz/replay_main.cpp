@@ -1,59 +1,128 @@
-// Deterministic driver for a fuzz entry point: seeded random inputs and mutations of valid
-// datagrams (bit flips, truncation, extension, re-signed valid bodies). Usage: <binary> [count].
+// Deterministic driver for a fuzz entry point, so ctest runs it on every build without libFuzzer:
+// seeded random inputs and mutations of valid datagrams (bit flips, byte overwrites, truncation,
+// extension, valid datagrams with random field bits, re-signed random payloads).
+// Usage: <binary> [count]
+#include <bit>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
+#include <span>
 #include <vector>
 
 #include "haptic/wire/datagram.hpp"
+#include "haptic/wire/siphash.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size);
 
-int main(int argc, char** argv) {
-  using namespace haptic::wire;
-  const long count = argc > 1 ? std::strtol(argv[1], nullptr, 10) : 100000;
-  std::mt19937_64 random(0x5eed);
-  const Key key{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
+namespace {
 
-  std::vector<std::uint8_t> state(kStateDatagramSize), heartbeat(kHeartbeatDatagramSize);
-  Header header;
-  header.session_id = 99;
-  header.sequence = 1;
-  encode_state(header, StatePayload{}, key, state);
-  encode_heartbeat(header, HeartbeatPayload{}, key, heartbeat);
+using namespace haptic::wire;
+
+// The key the entry point decodes with.
+constexpr Key kKey{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
+
+class Generator {
+ public:
+  explicit Generator(std::uint64_t seed) : random_(seed) {}
+
+  std::uint64_t bits() { return random_(); }
+  std::size_t below(std::size_t n) { return static_cast<std::size_t>(random_() % n); }
+  // Any bit pattern, so NaN payloads, subnormals and infinities all occur.
+  double any_double() { return std::bit_cast<double>(random_()); }
+  Vec3d any_vec() { return {any_double(), any_double(), any_double()}; }
+
+  Header any_header() {
+    Header h;
+    h.session_id = bits();
+    h.sequence = bits();
+    h.time_ns = static_cast<std::int64_t>(bits());
+    return h;
+  }
+
+  std::vector<std::uint8_t> valid_state() {
+    StatePayload s;
+    s.tick = bits();
+    s.p_WT = any_vec();
+    s.v_WT = any_vec();
+    s.F_T_W = any_vec();
+    s.p_WP = any_vec();
+    s.contact_count = static_cast<std::uint32_t>(bits());
+    s.flags = static_cast<std::uint32_t>(bits());
+    std::vector<std::uint8_t> out(kStateDatagramSize);
+    encode_state(any_header(), s, kKey, out);
+    return out;
+  }
+
+  std::vector<std::uint8_t> valid_heartbeat() {
+    HeartbeatPayload hb{static_cast<std::int64_t>(bits()), bits()};
+    std::vector<std::uint8_t> out(kHeartbeatDatagramSize);
+    encode_heartbeat(any_header(), hb, kKey, out);
+    return out;
+  }
+
+  std::vector<std::uint8_t> valid_any() { return (bits() & 1) ? valid_state() : valid_heartbeat(); }
+
+ private:
+  std::mt19937_64 random_;
+};
+
+void resign(std::vector<std::uint8_t>& bytes) {
+  if (bytes.size() < kTagSize) return;
+  const std::size_t body = bytes.size() - kTagSize;
+  const std::uint64_t tag = siphash24(kKey, std::span(bytes).first(body));
+  for (std::size_t i = 0; i < kTagSize; ++i) bytes[body + i] = static_cast<std::uint8_t>(tag >> (8 * i));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const long count = argc > 1 ? std::strtol(argv[1], nullptr, 10) : 100000;
+  Generator g(0x5eed);
+  std::vector<std::uint8_t> input;
+  input.reserve(2 * kMaxDatagramSize + 64);
 
   for (long i = 0; i < count; ++i) {
-    std::vector<std::uint8_t> input;
-    switch (random() % 4) {
+    switch (g.below(7)) {
       case 0: {  // random bytes of random length
-        input.resize(random() % 256);
-        for (auto& b : input) b = static_cast<std::uint8_t>(random());
+        input.resize(g.below(2 * kMaxDatagramSize));
+        for (auto& b : input) b = static_cast<std::uint8_t>(g.bits());
         break;
       }
       case 1:  // bit flips of a valid datagram
-        input = (random() & 1) ? state : heartbeat;
-        for (int flips = 1 + static_cast<int>(random() % 4); flips > 0; --flips) {
-          input[random() % input.size()] ^= static_cast<std::uint8_t>(1u << (random() % 8));
+        input = g.valid_any();
+        for (std::size_t flips = 1 + g.below(4); flips > 0; --flips) {
+          input[g.below(input.size())] ^= static_cast<std::uint8_t>(1u << g.below(8));
         }
         break;
-      case 2:  // truncated or extended
-        input = (random() & 1) ? state : heartbeat;
-        input.resize(random() % (input.size() * 2));
+      case 2:  // random bytes overwritten in a valid datagram
+        input = g.valid_any();
+        for (std::size_t n = 1 + g.below(4); n > 0; --n) {
+          input[g.below(input.size())] = static_cast<std::uint8_t>(g.bits());
+        }
         break;
-      default: {  // valid datagrams with random contents (exercise the round trip)
-        StatePayload payload;
-        payload.tick = random();
-        payload.p_WT = {static_cast<double>(random()), -1.0, 0.5};
-        payload.flags = static_cast<std::uint32_t>(random());
-        Header h;
-        h.session_id = random();
-        h.sequence = random();
-        h.time_ns = static_cast<std::int64_t>(random());
-        input.resize(kStateDatagramSize);
-        encode_state(h, payload, key, input);
+      case 3:  // truncated
+        input = g.valid_any();
+        input.resize(g.below(input.size()));
+        break;
+      case 4: {  // extended with zero or random bytes
+        input = g.valid_any();
+        const bool zeros = g.bits() & 1;
+        for (std::size_t n = 1 + g.below(kMaxDatagramSize); n > 0; --n) {
+          input.push_back(zeros ? 0 : static_cast<std::uint8_t>(g.bits()));
+        }
         break;
       }
+      case 5:  // valid datagrams with random contents (exercise the round trip)
+        input = g.valid_any();
+        break;
+      default:  // random payload or header bytes, then a correct tag: only the fields can fail
+        input = g.valid_any();
+        for (std::size_t n = 1 + g.below(8); n > 0; --n) {
+          input[g.below(input.size() - kTagSize)] = static_cast<std::uint8_t>(g.bits());
+        }
+        resign(input);
+        break;
     }
     LLVMFuzzerTestOneInput(input.data(), input.size());
   }

@@ -7,7 +7,8 @@
 namespace haptic::wire {
 namespace {
 
-// Little-endian writer and reader over a fixed buffer; callers check sizes before using them.
+// Little-endian writer and reader over a fixed buffer, one byte at a time so the result does not
+// depend on the host's byte order or on struct padding. Callers check the size before using them.
 class Writer {
  public:
   explicit Writer(std::uint8_t* out) : out_(out) {}
@@ -15,8 +16,13 @@ class Writer {
   void u32(std::uint32_t v) { put(v, 4); }
   void u64(std::uint64_t v) { put(v, 8); }
   void i64(std::int64_t v) { put(static_cast<std::uint64_t>(v), 8); }
+  // The bit pattern, so NaN payloads, infinities and -0.0 cross unchanged.
   void f64(double v) { put(std::bit_cast<std::uint64_t>(v), 8); }
-  void vec(const Vec3d& v) { f64(v.x); f64(v.y); f64(v.z); }
+  void vec(const Vec3d& v) {
+    f64(v.x);
+    f64(v.y);
+    f64(v.z);
+  }
   std::size_t written() const { return offset_; }
 
  private:
@@ -53,6 +59,8 @@ class Reader {
   std::size_t offset_ = 0;
 };
 
+// 0 for a value that is not a DatagramType (the enum has a fixed underlying type, so the cast of
+// any u16 is defined).
 std::size_t payload_size_of(std::uint16_t type) {
   switch (static_cast<DatagramType>(type)) {
     case DatagramType::kState: return kStatePayloadSize;
@@ -69,7 +77,7 @@ void write_header(Writer& w, const Header& header, std::size_t payload_size) {
   w.u64(header.sequence);
   w.i64(header.time_ns);
   w.u32(static_cast<std::uint32_t>(payload_size));
-  w.u32(0);
+  w.u32(0);  // reserved
 }
 
 void append_tag(std::span<std::uint8_t> out, std::size_t body_size, const Key& key) {
@@ -78,7 +86,8 @@ void append_tag(std::span<std::uint8_t> out, std::size_t body_size, const Key& k
   w.u64(tag);
 }
 
-// Compares the tag without an early exit, so timing does not reveal how many bytes matched.
+// One XOR of the whole 64-bit tag and one test: no early exit, so the time taken does not tell a
+// forger how many leading bytes of a guess were right.
 bool tag_matches(std::span<const std::uint8_t> datagram, const Key& key) {
   const std::size_t body = datagram.size() - kTagSize;
   const std::uint64_t expected = siphash24(key, datagram.first(body));
@@ -101,15 +110,16 @@ const char* to_string(DecodeError error) {
     case DecodeError::kNone: return "none";
     case DecodeError::kTooShort: return "too short";
     case DecodeError::kBadMagic: return "bad magic";
-    case DecodeError::kBadVersion: return "unsupported version";
-    case DecodeError::kUnknownType: return "unknown or unexpected type";
+    case DecodeError::kBadVersion: return "bad version";
+    case DecodeError::kUnknownType: return "unknown type";
     case DecodeError::kBadPayloadSize: return "bad payload size";
-    case DecodeError::kBadTag: return "authentication failed";
+    case DecodeError::kBadTag: return "bad tag";
   }
-  return "unknown error";
+  return "invalid error";
 }
 
 DecodeError peek_header(std::span<const std::uint8_t> datagram, Header& header) {
+  // From here on the 40 header bytes exist; nothing below reads past them.
   if (datagram.size() < kHeaderSize + kTagSize) return DecodeError::kTooShort;
   Reader r(datagram.data());
   if (r.u32() != kMagic) return DecodeError::kBadMagic;
@@ -117,16 +127,20 @@ DecodeError peek_header(std::span<const std::uint8_t> datagram, Header& header) 
   const std::uint16_t type = r.u16();
   const std::size_t expected_payload = payload_size_of(type);
   if (expected_payload == 0) return DecodeError::kUnknownType;
-  header.type = static_cast<DatagramType>(type);
-  header.session_id = r.u64();
-  header.sequence = r.u64();
-  header.time_ns = r.i64();
+  Header parsed;
+  parsed.type = static_cast<DatagramType>(type);
+  parsed.session_id = r.u64();
+  parsed.sequence = r.u64();
+  parsed.time_ns = r.i64();
   const std::uint32_t payload_size = r.u32();
   const std::uint32_t reserved = r.u32();
+  // Exact length: trailing bytes would be unauthenticated if the tag were taken from the end, or
+  // ignored if it were not; either way the sender and receiver disagree, so drop the datagram.
   if (payload_size != expected_payload || reserved != 0 ||
       datagram.size() != kHeaderSize + expected_payload + kTagSize) {
     return DecodeError::kBadPayloadSize;
   }
+  header = parsed;
   return DecodeError::kNone;
 }
 
@@ -161,30 +175,40 @@ std::size_t encode_heartbeat(Header header, const HeartbeatPayload& heartbeat, c
 
 DecodeError decode_state(std::span<const std::uint8_t> datagram, const Key& key, Header& header,
                          StatePayload& state) {
-  if (const DecodeError e = check_typed(datagram, key, DatagramType::kState, header);
+  Header parsed;
+  if (const DecodeError e = check_typed(datagram, key, DatagramType::kState, parsed);
       e != DecodeError::kNone) {
     return e;
   }
+  // check_typed has proved datagram.size() == kStateDatagramSize.
   Reader r(datagram.data() + kHeaderSize);
-  state.tick = r.u64();
-  state.p_WT = r.vec();
-  state.v_WT = r.vec();
-  state.F_T_W = r.vec();
-  state.p_WP = r.vec();
-  state.contact_count = r.u32();
-  state.flags = r.u32();
+  StatePayload decoded;
+  decoded.tick = r.u64();
+  decoded.p_WT = r.vec();
+  decoded.v_WT = r.vec();
+  decoded.F_T_W = r.vec();
+  decoded.p_WP = r.vec();
+  decoded.contact_count = r.u32();
+  decoded.flags = r.u32();
+  header = parsed;
+  state = decoded;
   return DecodeError::kNone;
 }
 
 DecodeError decode_heartbeat(std::span<const std::uint8_t> datagram, const Key& key,
                              Header& header, HeartbeatPayload& heartbeat) {
-  if (const DecodeError e = check_typed(datagram, key, DatagramType::kHeartbeat, header);
+  Header parsed;
+  if (const DecodeError e = check_typed(datagram, key, DatagramType::kHeartbeat, parsed);
       e != DecodeError::kNone) {
     return e;
   }
+  // check_typed has proved datagram.size() == kHeartbeatDatagramSize.
   Reader r(datagram.data() + kHeaderSize);
-  heartbeat.client_time_ns = r.i64();
-  heartbeat.last_state_sequence = r.u64();
+  HeartbeatPayload decoded;
+  decoded.client_time_ns = r.i64();
+  decoded.last_state_sequence = r.u64();
+  header = parsed;
+  heartbeat = decoded;
   return DecodeError::kNone;
 }
 

@@ -80,20 +80,23 @@ inline constexpr std::size_t kHeartbeatDatagramSize = kHeaderSize + kHeartbeatPa
 inline constexpr std::size_t kMaxDatagramSize = kStateDatagramSize;
 
 /// Why a datagram was rejected. Every rejection is counted by the receiver, never thrown.
+/// Checks run in the order listed; the first that fails is reported.
 enum class DecodeError : std::uint8_t {
   kNone = 0,
-  kTooShort,
+  kTooShort,         // shorter than header + tag
   kBadMagic,
   kBadVersion,
-  kUnknownType,
+  kUnknownType,      // not a DatagramType, or not the type the decoder expects
   kBadPayloadSize,   // payload_size does not match the type, the length disagrees, or reserved != 0
   kBadTag,           // authentication failed
 };
 
+/// A short, static, human-readable name ("bad tag"); never null.
 const char* to_string(DecodeError error);
 
 /// Reads the header without checking the tag (to find the session, and so the key).
-/// Fails on short, wrong-magic, wrong-version, unknown-type or wrong-length datagrams.
+/// Fails on short, wrong-magic, wrong-version, unknown-type, wrong-length or nonzero-reserved
+/// datagrams. `header` is written only on success.
 DecodeError peek_header(std::span<const std::uint8_t> datagram, Header& header);
 
 /// Encoders write exactly kStateDatagramSize / kHeartbeatDatagramSize bytes into `out` and return
@@ -103,7 +106,9 @@ std::size_t encode_state(Header header, const StatePayload& state, const Key& ke
 std::size_t encode_heartbeat(Header header, const HeartbeatPayload& heartbeat, const Key& key,
                              std::span<std::uint8_t> out);
 
-/// Decoders check everything peek_header checks, the type, and the tag.
+/// Decoders check everything peek_header checks, the type, and the tag (compared in constant
+/// time). `header` and the payload are written only on success. Sequence numbers are not checked
+/// here: replay protection belongs to the receiver, which knows the last accepted sequence.
 DecodeError decode_state(std::span<const std::uint8_t> datagram, const Key& key, Header& header,
                          StatePayload& state);
 DecodeError decode_heartbeat(std::span<const std::uint8_t> datagram, const Key& key,

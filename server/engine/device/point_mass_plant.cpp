@@ -6,22 +6,48 @@
 namespace haptic::engine {
 namespace {
 
-/// One axis of m v' = F − b v over h with F constant (Eom et al. eq. 5, exact solution).
-void advance_axis(double& x, double& v, double F, double m, double b, double h) {
-  const double a = b / m;
-  if (a * h < 1e-12) {
-    // Undamped limit: the exact solution of m v' = F.
-    x += v * h + 0.5 * F / m * h * h;
-    v += F / m * h;
-    return;
+/// g(z) = (z − 1 + e^{−z}) / z², the weight of the force in the position update (→ 1/2 as z → 0).
+/// Below z = 0.1 the numerator cancels to z²/2, so the Taylor series is used instead:
+/// g(z) = Σ_{n≥0} (−z)^n / (n + 2)!; ten terms leave a remainder below 1e-18.
+double position_weight(double z) {
+  if (z < 0.1) {
+    double term = 0.5;  // (−z)^0 / 2!
+    double sum = term;
+    for (int n = 1; n < 10; ++n) {
+      term *= -z / static_cast<double>(n + 2);
+      sum += term;
+    }
+    return sum;
   }
-  const double decay = -std::expm1(-a * h);  // 1 − e^{−ah}, without cancellation for small ah
-  const double v_terminal = F / b;
-  x += v_terminal * h + (v - v_terminal) * decay / a;
-  v = v_terminal + (v - v_terminal) * (1.0 - decay);
+  // Relative error of the direct form is about 2 eps / z <= 5e-15 here.
+  return (z + std::expm1(-z)) / (z * z);
 }
 
-/// An inelastic stop at the workspace box.
+/// One axis of m v' = F − b v over h with F constant (Eom et al. eq. 5), solved exactly. With
+/// a = b/m and z = a h:
+///   v1 = v0 e^{−z} + (F/m) h φ(z),            φ(z) = (1 − e^{−z}) / z,
+///   x1 = x0 + v0 h φ(z) + (F/m) h² g(z),      g(z) = (z − 1 + e^{−z}) / z².
+/// This is the textbook form v0 e + (F/b)(1 − e), x0 + (F/b) h + (v0 − F/b)(1 − e)/a regrouped so
+/// that nothing divides by b and the large terms (F/b) h and (F/b)(1 − e)/a never cancel; b = 0
+/// is the limit φ = 1, g = 1/2.
+void advance_axis(double& x, double& v, double F, double m, double b, double h) {
+  const double z = b / m * h;
+  double decay = 1.0;
+  double phi = 1.0;
+  double g = 0.5;
+  if (z > 0.0) {
+    const double em1 = std::expm1(-z);  // e^{−z} − 1, exact to round-off even for tiny z
+    decay = 1.0 + em1;
+    phi = -em1 / z;
+    g = position_weight(z);
+  }
+  const double accel = F / m;
+  x += h * (v * phi + accel * h * g);
+  v = v * decay + accel * h * phi;
+}
+
+/// An inelastic stop at the workspace box: the position is held at the bound and only the outward
+/// velocity component is removed, so the tool can still slide along the face.
 void clamp_axis(double& x, double& v, double lo, double hi) {
   if (x < lo) {
     x = lo;
@@ -36,7 +62,12 @@ void clamp_axis(double& x, double& v, double lo, double hi) {
 
 PointMassPlant::PointMassPlant(const PointMassParams& params, const PointMassState& initial)
     : params_(params), state_(initial) {
-  assert(params.mass > 0.0 && params.damping >= 0.0 && params.substeps >= 1);
+  assert(params.mass > 0.0 && std::isfinite(params.mass));
+  assert(params.damping >= 0.0 && std::isfinite(params.damping));
+  assert(params.substeps >= 1);
+  assert(params.workspace_min.x <= params.workspace_max.x &&
+         params.workspace_min.y <= params.workspace_max.y &&
+         params.workspace_min.z <= params.workspace_max.z);
 }
 
 void PointMassPlant::advance_exact(const Vec3& F, double h) {

@@ -1,13 +1,16 @@
 #include "engine/scene/compiled_scene.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <variant>
 
 namespace haptic::engine {
 namespace {
 
-/// Shared contact law (half-space and sphere): a spring-damper along the normal that only pushes.
-/// d is the penetration (m, > 0 in contact), n the outward unit normal.
+/// Shared contact law (half-space and sphere): the virtual wall V(s) = (K + Bs)/s of Eom et al.
+/// (eq. 6-9) along the normal, clamped at zero so a surface only pushes; a damper that pulled
+/// would hold the tool inside while it leaves. d is the penetration (m, > 0 in contact), n the
+/// outward unit normal.
 double contact_magnitude(double stiffness, double damping, double d, const Vec3& n, const Vec3& v) {
   return std::max(0.0, stiffness * d - damping * dot(v, n));
 }
@@ -15,9 +18,11 @@ double contact_magnitude(double stiffness, double damping, double d, const Vec3&
 }  // namespace
 
 double fade_gain(std::int64_t fade_begin_tick, std::int64_t tick, std::int64_t ramp_ticks) {
+  assert(ramp_ticks >= 1);
   if (fade_begin_tick == kNeverTick || tick < fade_begin_tick) return 1.0;
   const double elapsed = static_cast<double>(tick - fade_begin_tick);
-  return std::max(0.0, 1.0 - elapsed / static_cast<double>(ramp_ticks));
+  const double ramp = static_cast<double>(std::max<std::int64_t>(1, ramp_ticks));
+  return std::max(0.0, 1.0 - elapsed / ramp);
 }
 
 CompiledScene compile_scene(const SceneDescription& description, std::int64_t removal_ramp_ticks,
@@ -25,10 +30,19 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
   CompiledScene scene;
   scene.removal_ramp_ticks = std::max<std::int64_t>(1, removal_ramp_ticks);
   scene.generation = generation;
+  // Exact sizes, so the arrays hold no slack and no push_back below reallocates.
+  const auto half_space_count = std::count_if(
+      description.objects.begin(), description.objects.end(),
+      [](const ObjectEntry& e) { return std::holds_alternative<HalfSpaceSpec>(e.spec.shape); });
+  scene.half_spaces.reserve(static_cast<std::size_t>(half_space_count));
+  scene.spheres.reserve(description.objects.size() - static_cast<std::size_t>(half_space_count));
+  scene.springs.reserve(description.fields.size());
   for (const ObjectEntry& entry : description.objects) {
     const ObjectSpec& object = entry.spec;
     if (const auto* half_space = std::get_if<HalfSpaceSpec>(&object.shape)) {
+      // Normalised after the rotation so a slightly non-unit quaternion cannot scale the force.
       const Vec3 n_W = rotate(object.R_WO, half_space->normal_O);
+      assert(norm(n_W) > 0.0);
       scene.half_spaces.push_back(CompiledHalfSpace{object.p_WO, n_W * (1.0 / norm(n_W)),
                                                     object.stiffness, object.damping,
                                                     entry.meta.fade_begin_tick});

@@ -1,4 +1,5 @@
-// The last stage before the device: NaN/inf never pass, magnitude and rate are limited.
+// The last stage before the device: NaN/inf never pass, magnitude and rate are limited
+// (libfranka's checkFinite/limitRate, in this engine's terms).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,50 +10,102 @@
 namespace haptic::engine {
 namespace {
 
-constexpr double kDt = 0.001;
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
-const double kInf = std::numeric_limits<double>::infinity();
+constexpr double kDt = 0.001;  // s
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
-TEST(ForceGuard, NonFiniteRequestsAreFaultsAndBecomeZero) {
-  for (const Vec3 bad : {Vec3{kNaN, 0, 0}, Vec3{0, kInf, 0}, Vec3{0, 0, -kInf}}) {
-    ForceGuard guard(ForceLimits{20.0, 0.0});
-    guard.apply({1, 1, 1}, kDt);
-    const GuardedForce out = guard.apply(bad, kDt);
-    EXPECT_TRUE(out.fault);
-    EXPECT_EQ(out.F_T_W, Vec3{});
-    EXPECT_EQ(guard.last(), Vec3{});
+TEST(ForceGuard, NonFiniteInAnyComponentIsAFaultAndBecomesZero) {
+  for (const double bad : {kNaN, kInf, -kInf}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      Vec3 request{1.0, 2.0, 3.0};
+      (axis == 0 ? request.x : axis == 1 ? request.y : request.z) = bad;
+      ForceGuard guard(ForceLimits{20.0, 0.0});
+      guard.apply({1, 1, 1}, kDt);
+      const GuardedForce out = guard.apply(request, kDt);
+      EXPECT_TRUE(out.fault) << bad << " on axis " << axis;
+      EXPECT_FALSE(out.saturated);
+      EXPECT_EQ(out.F_T_W, Vec3{});
+      EXPECT_EQ(guard.last(), Vec3{});
+    }
   }
-  // A huge but finite request times a zero gain is not a fault.
+}
+
+TEST(ForceGuard, FaultClearsOnTheNextFiniteRequestAndRampsFromZero) {
+  ForceGuard guard(ForceLimits{20.0, 1000.0});  // 1 N per 1 ms tick
+  for (int i = 0; i < 10; ++i) guard.apply({0, 0, 5.0}, kDt);
+  ASSERT_EQ(guard.last(), (Vec3{0, 0, 5.0}));
+  EXPECT_TRUE(guard.apply({0, 0, kNaN}, kDt).fault);
+  const GuardedForce next = guard.apply({0, 0, 5.0}, kDt);
+  EXPECT_FALSE(next.fault);
+  EXPECT_DOUBLE_EQ(next.F_T_W.z, 1.0);  // the limiter restarts from the zero it output
+}
+
+TEST(ForceGuard, GainDoesNotHideANonFiniteRequest) {
   ForceGuard guard(ForceLimits{});
+  EXPECT_TRUE(guard.apply({kInf, 0, 0}, kDt, 0.0).fault);  // inf × 0 is NaN
+  EXPECT_TRUE(guard.apply({1, 0, 0}, kDt, kNaN).fault);
+  // A huge but finite request times a zero gain is not a fault.
   EXPECT_FALSE(guard.apply({1e300, 0, 0}, kDt, 0.0).fault);
 }
 
-TEST(ForceGuard, SaturationKeepsTheDirection) {
+TEST(ForceGuard, SaturationScalesTheMagnitudeAndKeepsTheDirection) {
   ForceGuard guard(ForceLimits{10.0, 0.0});
-  const GuardedForce out = guard.apply({30.0, 40.0, 0.0}, kDt);
+  const GuardedForce out = guard.apply({30.0, -40.0, 0.0}, kDt);
   EXPECT_TRUE(out.saturated);
+  EXPECT_FALSE(out.fault);
   EXPECT_NEAR(out.F_T_W.x, 6.0, 1e-12);
-  EXPECT_NEAR(out.F_T_W.y, 8.0, 1e-12);
-  EXPECT_FALSE(guard.apply({3.0, 4.0, 0.0}, kDt).saturated);
+  EXPECT_NEAR(out.F_T_W.y, -8.0, 1e-12);
+  EXPECT_EQ(out.F_T_W.z, 0.0);
+  EXPECT_NEAR(norm(guard.last()), 10.0, 1e-12);
+  const GuardedForce within = guard.apply({3.0, 4.0, 0.0}, kDt);
+  EXPECT_FALSE(within.saturated);
+  EXPECT_EQ(within.F_T_W, (Vec3{3.0, 4.0, 0.0}));  // untouched, bit for bit
+  EXPECT_FALSE(guard.apply({0.0, 0.0, 10.0}, kDt).saturated);  // exactly at the limit
 }
 
-TEST(ForceGuard, RateLimitBoundsTheChangePerTick) {
-  ForceGuard guard(ForceLimits{100.0, 1000.0});  // 1 N per 1 ms tick
-  GuardedForce out = guard.apply({0, 0, 5.0}, kDt);
+TEST(ForceGuard, RateLimitBoundsEachComponentsChangePerTick) {
+  ForceGuard guard(ForceLimits{100.0, 1000.0});  // 1000 N/s × 1 ms = 1 N per tick
+  GuardedForce out = guard.apply({0.5, -3.0, 5.0}, kDt);
   EXPECT_TRUE(out.saturated);
+  EXPECT_DOUBLE_EQ(out.F_T_W.x, 0.5);  // within the step: untouched
+  EXPECT_DOUBLE_EQ(out.F_T_W.y, -1.0);
   EXPECT_DOUBLE_EQ(out.F_T_W.z, 1.0);
-  out = guard.apply({0, 0, 5.0}, kDt);
+  out = guard.apply({0.5, -3.0, 5.0}, kDt);
   EXPECT_DOUBLE_EQ(out.F_T_W.z, 2.0);
-  for (int i = 0; i < 3; ++i) out = guard.apply({0, 0, 5.0}, kDt);
-  EXPECT_DOUBLE_EQ(out.F_T_W.z, 5.0);
+  for (int i = 0; i < 3; ++i) out = guard.apply({0.5, -3.0, 5.0}, kDt);
+  EXPECT_EQ(out.F_T_W, (Vec3{0.5, -3.0, 5.0}));
   EXPECT_FALSE(out.saturated);
-  EXPECT_DOUBLE_EQ(guard.apply({0, 0, -5.0}, kDt).F_T_W.z, 4.0);
+  EXPECT_DOUBLE_EQ(guard.apply({0.5, -3.0, -5.0}, kDt).F_T_W.z, 4.0);  // down as well as up
+  // The step scales with dt: 2 ms allows 2 N.
+  guard.reset();
+  EXPECT_DOUBLE_EQ(guard.apply({0, 0, 5.0}, 2 * kDt).F_T_W.z, 2.0);
+}
+
+TEST(ForceGuard, ZeroRateMeansUnlimited) {
+  ForceGuard guard(ForceLimits{100.0, 0.0});
+  const GuardedForce out = guard.apply({0, 0, 90.0}, kDt);
+  EXPECT_FALSE(out.saturated);
+  EXPECT_EQ(out.F_T_W.z, 90.0);
+}
+
+TEST(ForceGuard, RateLimitThenSaturation) {
+  ForceGuard guard(ForceLimits{1.5, 2000.0});  // 2 N per tick, 1.5 N magnitude
+  const GuardedForce out = guard.apply({0, 3.0, 4.0}, kDt);
+  // Rate: (0, 2, 2); magnitude 2.83 → scaled to 1.5 along (0, 1, 1)/√2.
+  EXPECT_TRUE(out.saturated);
+  EXPECT_NEAR(out.F_T_W.y, 1.5 / std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(out.F_T_W.z, 1.5 / std::sqrt(2.0), 1e-12);
 }
 
 TEST(ForceGuard, OutputGainScalesBeforeTheLimits) {
   ForceGuard guard(ForceLimits{20.0, 0.0});
   EXPECT_DOUBLE_EQ(guard.apply({0, 0, 8.0}, kDt, 0.25).F_T_W.z, 2.0);
+  // 100 N × 0.1 = 10 N, under the 20 N limit: not saturated.
+  const GuardedForce scaled = guard.apply({0, 0, 100.0}, kDt, 0.1);
+  EXPECT_DOUBLE_EQ(scaled.F_T_W.z, 10.0);
+  EXPECT_FALSE(scaled.saturated);
   EXPECT_EQ(guard.apply({0, 0, 8.0}, kDt, 0.0).F_T_W, Vec3{});
+  EXPECT_EQ(guard.last(), Vec3{});
 }
 
 }  // namespace

@@ -1,0 +1,361 @@
+// The Client against an in-process fake of haptic.v1.Haptic on loopback: what it sends on the
+// control plane, how it surfaces the fake's answers, and (with a plain UDP socket standing in for
+// the server's data plane) its heartbeats and state reception.
+#include <arpa/inet.h>
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
+
+#include <array>
+#include <chrono>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "haptic/haptic.hpp"
+#include "haptic/v1/service.grpc.pb.h"
+#include "haptic/wire/datagram.hpp"
+
+namespace haptic {
+namespace {
+
+using std::chrono::milliseconds;
+using std::chrono::seconds;
+
+constexpr std::uint64_t kSessionId = 7;
+constexpr wire::Key kKey = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
+constexpr double kMaxStiffness = 1e5;  // the fake's limit. Unit: N/m.
+
+// The fake's UDP data plane: a socket on 127.0.0.1 that learns the client's address from its
+// heartbeats, as hapticd does.
+class FakeDataPlane {
+ public:
+  FakeDataPlane() {
+    fd_ = ::socket(AF_INET, SOCK_DGRAM, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t length = sizeof(address);
+    if (fd_ < 0 || ::bind(fd_, reinterpret_cast<sockaddr*>(&address), sizeof(address)) != 0 ||
+        ::getsockname(fd_, reinterpret_cast<sockaddr*>(&address), &length) != 0) {
+      ADD_FAILURE() << "cannot open the fake's UDP socket";
+      return;
+    }
+    port_ = ntohs(address.sin_port);
+    timeval timeout{1, 0};  // bounds a wait for a heartbeat that never comes
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof(timeout));
+  }
+  ~FakeDataPlane() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  FakeDataPlane(const FakeDataPlane&) = delete;
+  FakeDataPlane& operator=(const FakeDataPlane&) = delete;
+
+  std::uint16_t port() const { return port_; }
+
+  /// Waits up to 1 s for an authenticated heartbeat; records it and where it came from.
+  bool receive_heartbeat() {
+    std::array<std::uint8_t, 2048> bytes{};
+    sockaddr_in from{};
+    socklen_t length = sizeof(from);
+    const auto size = ::recvfrom(fd_, bytes.data(), bytes.size(), 0,
+                                 reinterpret_cast<sockaddr*>(&from), &length);
+    if (size <= 0) return false;
+    wire::Header header;
+    wire::HeartbeatPayload payload;
+    if (wire::decode_heartbeat(std::span(bytes.data(), static_cast<std::size_t>(size)), kKey, header,
+                               payload) != wire::DecodeError::kNone) {
+      return false;
+    }
+    std::lock_guard lock(mutex_);
+    client_ = from;
+    heartbeats_.push_back(header);
+    return true;
+  }
+
+  std::vector<wire::Header> heartbeats() const {
+    std::lock_guard lock(mutex_);
+    return heartbeats_;
+  }
+
+  void send_to_client(std::span<const std::uint8_t> bytes) {
+    std::optional<sockaddr_in> to;
+    {
+      std::lock_guard lock(mutex_);
+      to = client_;
+    }
+    ASSERT_TRUE(to) << "no heartbeat yet: the fake does not know where the client is";
+    ASSERT_EQ(::sendto(fd_, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&*to),
+                       sizeof(*to)),
+              static_cast<ssize_t>(bytes.size()));
+  }
+
+  /// A State datagram for `tick` with tool height `z` (m), tagged with `key`.
+  void send_state(std::uint64_t tick, double z, std::uint64_t session_id = kSessionId,
+                  const wire::Key& key = kKey) {
+    wire::Header header;
+    header.session_id = session_id;
+    header.sequence = ++sequence_;
+    header.time_ns = static_cast<std::int64_t>(tick) * 1'000'000;  // a 1 kHz loop
+    wire::StatePayload state;
+    state.tick = tick;
+    state.p_WT = {0.0, 0.0, z};
+    state.p_WP = state.p_WT;
+    state.F_T_W = {0.0, 0.0, 1.5};
+    state.contact_count = 1;
+    std::array<std::uint8_t, wire::kStateDatagramSize> bytes{};
+    ASSERT_EQ(wire::encode_state(header, state, key, bytes), bytes.size());
+    send_to_client(bytes);
+  }
+
+ private:
+  int fd_ = -1;
+  std::uint16_t port_ = 0;
+  std::uint64_t sequence_ = 0;
+  mutable std::mutex mutex_;
+  std::optional<sockaddr_in> client_;   // guarded by mutex_
+  std::vector<wire::Header> heartbeats_;  // guarded by mutex_
+};
+
+// Answers what the tests need and records what it was asked.
+class FakeHaptic final : public v1::Haptic::Service {
+ public:
+  explicit FakeHaptic(FakeDataPlane& data_plane) : data_plane_(data_plane) {}
+
+  struct Record {
+    std::string client_name;
+    std::uint32_t api_version = 0;
+    std::vector<v1::CreateObjectRequest> creates;
+    std::vector<std::uint64_t> deleted;
+    std::vector<std::uint32_t> decimations;
+    bool closed = false;
+  };
+  Record record() const {
+    std::lock_guard lock(mutex_);
+    return record_;
+  }
+  void refuse_open_with(grpc::Status status) {
+    std::lock_guard lock(mutex_);
+    open_status_ = std::move(status);
+  }
+
+  grpc::Status OpenSession(grpc::ServerContext*, const v1::OpenSessionRequest* request,
+                           v1::OpenSessionResponse* response) override {
+    std::lock_guard lock(mutex_);
+    record_.client_name = request->client_name();
+    record_.api_version = request->api_version();
+    if (!open_status_.ok()) return open_status_;
+    response->set_session_id(kSessionId);
+    response->set_udp_key(std::string(kKey.begin(), kKey.end()));
+    response->set_udp_port(data_plane_.port());
+    response->set_api_version(1);
+    response->mutable_device()->set_name("fake");
+    response->mutable_device()->set_dof(3);
+    response->mutable_device()->set_loop_rate_hz(1000.0);
+    response->mutable_device()->set_simulated(true);
+    response->set_lease_timeout_ms(1000);
+    return grpc::Status::OK;
+  }
+
+  grpc::Status CloseSession(grpc::ServerContext*, const v1::SessionRef* request,
+                            v1::Empty*) override {
+    std::lock_guard lock(mutex_);
+    if (request->session_id() != kSessionId) return {grpc::StatusCode::NOT_FOUND, "session_id"};
+    record_.closed = true;
+    return grpc::Status::OK;
+  }
+
+  grpc::Status CreateObject(grpc::ServerContext*, const v1::CreateObjectRequest* request,
+                            v1::ItemRef* response) override {
+    std::lock_guard lock(mutex_);
+    record_.creates.push_back(*request);
+    if (request->object().impedance().stiffness() > kMaxStiffness) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              "object.impedance.stiffness: must be <= 100000, got " +
+                  std::to_string(request->object().impedance().stiffness())};
+    }
+    response->set_id(static_cast<std::uint64_t>(record_.creates.size()));
+    return grpc::Status::OK;
+  }
+
+  grpc::Status DeleteObject(grpc::ServerContext*, const v1::DeleteRequest* request,
+                            v1::Empty*) override {
+    std::lock_guard lock(mutex_);
+    record_.deleted.push_back(request->id());
+    return grpc::Status::OK;
+  }
+
+  grpc::Status SubscribeState(grpc::ServerContext*, const v1::SubscribeStateRequest* request,
+                              v1::SubscribeStateResponse* response) override {
+    {
+      std::lock_guard lock(mutex_);
+      record_.decimations.push_back(request->decimation());
+    }
+    response->set_udp_endpoint_known(data_plane_.receive_heartbeat());
+    return grpc::Status::OK;
+  }
+
+ private:
+  FakeDataPlane& data_plane_;
+  mutable std::mutex mutex_;
+  grpc::Status open_status_;  // guarded by mutex_
+  Record record_;             // guarded by mutex_
+};
+
+class FakeServerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    grpc::ServerBuilder builder;
+    int port = 0;
+    builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port);
+    builder.RegisterService(&service_);
+    server_ = builder.BuildAndStart();
+    ASSERT_TRUE(server_ != nullptr);
+    ASSERT_GT(port, 0);
+    config_.server_address = "127.0.0.1:" + std::to_string(port);
+    config_.client_name = "fake-server-test";
+    config_.state_decimation = 0;  // the tests that want state turn it on
+  }
+  void TearDown() override {
+    if (server_) server_->Shutdown(std::chrono::system_clock::now() + seconds(1));
+  }
+
+  static WallSpec floor_wall(double stiffness) {
+    return {.point = {0.0, 0.0, 0.01}, .normal = {0.0, 0.0, 1.0},
+            .impedance = {.stiffness = stiffness, .damping = 1.0}};
+  }
+
+  FakeDataPlane data_plane_;
+  FakeHaptic service_{data_plane_};
+  std::unique_ptr<grpc::Server> server_;
+  ClientConfig config_;
+};
+
+TEST_F(FakeServerTest, ConstructorOpensASessionAndDestructorClosesIt) {
+  {
+    Client client(config_);
+    EXPECT_EQ(client.session_id(), kSessionId);
+    EXPECT_EQ(client.device_info().name, "fake");
+    EXPECT_EQ(client.device_info().loop_rate_hz, 1000.0);
+    EXPECT_TRUE(client.device_info().simulated);
+    EXPECT_FALSE(service_.record().closed);
+  }
+  const auto record = service_.record();
+  EXPECT_EQ(record.client_name, "fake-server-test");
+  EXPECT_EQ(record.api_version, kApiVersion);
+  EXPECT_TRUE(record.decimations.empty()) << "state_decimation 0 must not subscribe";
+  EXPECT_TRUE(record.closed);
+}
+
+TEST_F(FakeServerTest, AddWallSendsAHalfSpaceAndTheHandleRemovesIt) {
+  Client client(config_);
+  {
+    ObjectHandle wall = client.add_wall(floor_wall(1000.0));
+    EXPECT_EQ(wall.id(), 1u);
+    EXPECT_TRUE(wall.owned());
+    const auto record = service_.record();
+    ASSERT_EQ(record.creates.size(), 1u);
+    const v1::CreateObjectRequest& sent = record.creates.front();
+    EXPECT_EQ(sent.session_id(), kSessionId);
+    ASSERT_TRUE(sent.object().has_half_space());
+    EXPECT_EQ(sent.object().pose().position().z(), 0.01);
+    EXPECT_EQ(sent.object().half_space().normal().z(), 1.0);
+    EXPECT_EQ(sent.object().impedance().stiffness(), 1000.0);
+    EXPECT_EQ(sent.object().impedance().damping(), 1.0);
+    EXPECT_TRUE(record.deleted.empty());
+  }
+  EXPECT_EQ(service_.record().deleted, std::vector<std::uint64_t>{1u});
+
+  ObjectHandle kept = client.add_wall(floor_wall(1000.0));
+  EXPECT_EQ(kept.release(), 2u);
+  EXPECT_FALSE(kept.owned());
+  EXPECT_EQ(service_.record().deleted, std::vector<std::uint64_t>{1u}) << "release() detaches";
+}
+
+TEST_F(FakeServerTest, ServersInvalidArgumentBecomesInvalidArgumentErrorWithItsMessage) {
+  Client client(config_);
+  try {
+    client.add_wall(floor_wall(1e6));
+    FAIL() << "no exception";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_EQ(error.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(error.what()).find("object.impedance.stiffness: must be <= 100000"),
+              std::string::npos)
+        << error.what();
+  }
+}
+
+TEST_F(FakeServerTest, ObviousMistakesAreCaughtBeforeTheServerIsAsked) {
+  Client client(config_);
+  EXPECT_THROW(client.add_wall(floor_wall(-1.0)), InvalidArgumentError);
+  EXPECT_THROW(client.add_wall({.normal = {0.0, 0.0, 0.0}}), InvalidArgumentError);
+  EXPECT_THROW(client.add_sphere({.radius = 0.0}), InvalidArgumentError);
+  EXPECT_TRUE(service_.record().creates.empty());
+}
+
+TEST_F(FakeServerTest, AnotherApiVersionIsAVersionMismatchCarryingBoth) {
+  service_.refuse_open_with({grpc::StatusCode::FAILED_PRECONDITION,
+                             "api_version: client speaks 1, server speaks 2"});
+  try {
+    Client client(config_);
+    FAIL() << "no exception";
+  } catch (const VersionMismatchError& error) {
+    EXPECT_EQ(error.client_version(), 1u);
+    EXPECT_EQ(error.server_version(), 2u);
+  }
+}
+
+TEST_F(FakeServerTest, AHandleThatOutlivesItsClientIsHarmless) {
+  ObjectHandle wall;
+  {
+    Client client(config_);
+    wall = client.add_wall(floor_wall(1000.0));
+  }
+  EXPECT_TRUE(service_.record().closed);
+  EXPECT_NO_THROW(wall.remove());
+  EXPECT_TRUE(service_.record().deleted.empty()) << "the session, and the wall with it, is gone";
+}
+
+TEST_F(FakeServerTest, HeartbeatsTellTheServerWhereToSendStateAndBadDatagramsAreCounted) {
+  config_.state_decimation = 1;
+  Client client(config_);  // subscribes: returns once a heartbeat has reached the fake
+  const auto heartbeats = data_plane_.heartbeats();
+  ASSERT_FALSE(heartbeats.empty());
+  EXPECT_EQ(heartbeats.front().session_id, kSessionId);
+  EXPECT_EQ(heartbeats.front().sequence, 1u);
+  EXPECT_EQ(service_.record().decimations.back(), 1u);
+
+  // One socket, one receive thread: the datagrams are handled in the order sent.
+  const std::array<std::uint8_t, wire::kStateDatagramSize> garbage{};
+  data_plane_.send_to_client(garbage);
+  data_plane_.send_state(5, 0.004);
+  State state;
+  ASSERT_TRUE(client.wait_for_tick(5, state, seconds(2)));
+  EXPECT_EQ(state.tick, 5u);
+  EXPECT_EQ(state.sequence, 1u);
+  EXPECT_DOUBLE_EQ(state.server_time, 0.005);
+  EXPECT_EQ(state.position.z, 0.004);
+  EXPECT_EQ(state.force.z, 1.5);
+  EXPECT_EQ(state.contact_count, 1u);
+  EXPECT_FALSE(client.poll_state(state, milliseconds(0))) << "nothing newer than tick 5";
+
+  wire::Key wrong_key = kKey;
+  wrong_key[0] ^= 1;
+  data_plane_.send_state(6, 0.0, kSessionId, wrong_key);
+  data_plane_.send_state(7, 0.0, kSessionId + 1);
+  data_plane_.send_state(8, 0.003);
+  ASSERT_TRUE(client.poll_state(state, seconds(2)));
+  EXPECT_EQ(state.tick, 8u);
+  const ReceiveCounters counters = client.receive_counters();
+  EXPECT_EQ(counters.accepted, 2u);
+  EXPECT_EQ(counters.rejected, 3u);
+  EXPECT_TRUE(client.clock_offset().has_value());
+}
+
+}  // namespace
+}  // namespace haptic
