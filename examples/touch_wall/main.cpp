@@ -112,9 +112,15 @@ int main(int argc, char** argv) {
     }
     client.set_operator(haptic::OperatorInput::release());
     const haptic::Stats stats = client.stats();
-    std::printf("touch_wall: done; server loop %.1f Hz, lateness p99 %.0f us, %llu datagrams received\n",
-                stats.achieved_rate_hz, stats.lateness_p99_us,
-                static_cast<unsigned long long>(client.receive_counters().accepted));
+    if (lockstep) {
+      std::printf("touch_wall: done; server at tick %llu, %llu datagrams received\n",
+                  static_cast<unsigned long long>(stats.ticks),
+                  static_cast<unsigned long long>(client.receive_counters().accepted));
+    } else {
+      std::printf("touch_wall: done; server loop %.1f Hz, lateness p99 %.0f us, %llu datagrams received\n",
+                  stats.achieved_rate_hz, stats.lateness_p99_us,
+                  static_cast<unsigned long long>(client.receive_counters().accepted));
+    }
   } catch (const haptic::ConnectionError& error) {
     std::fprintf(stderr, "touch_wall: cannot reach hapticd at %s (%s). Is it running? "
                          "Start it with ./scripts/run\n", address.c_str(), error.what());
