@@ -23,25 +23,9 @@ double position_weight(double z) {
   return (z + std::expm1(-z)) / (z * z);
 }
 
-/// One axis of m v' = F − b v over h with F constant (Eom et al. eq. 5), solved exactly. With
-/// a = b/m and z = a h:
-///   v1 = v0 e^{−z} + (F/m) h φ(z),            φ(z) = (1 − e^{−z}) / z,
-///   x1 = x0 + v0 h φ(z) + (F/m) h² g(z),      g(z) = (z − 1 + e^{−z}) / z².
-/// This is the textbook form v0 e + (F/b)(1 − e), x0 + (F/b) h + (v0 − F/b)(1 − e)/a regrouped so
-/// that nothing divides by b and the large terms (F/b) h and (F/b)(1 − e)/a never cancel; b = 0
-/// is the limit φ = 1, g = 1/2.
-void advance_axis(double& x, double& v, double F, double m, double b, double h) {
-  const double z = b / m * h;
-  double decay = 1.0;
-  double phi = 1.0;
-  double g = 0.5;
-  if (z > 0.0) {
-    const double em1 = std::expm1(-z);  // e^{−z} − 1, exact to round-off even for tiny z
-    decay = 1.0 + em1;
-    phi = -em1 / z;
-    g = position_weight(z);
-  }
-  const double accel = F / m;
+/// One axis of m v' = F − b v over one sub-step with F constant (Eom et al. eq. 5), solved
+/// exactly with the weights of PointMassPlant::coefficients_for.
+void advance_axis(double& x, double& v, double accel, double h, double decay, double phi, double g) {
   x += h * (v * phi + accel * h * g);
   v = v * decay + accel * h * phi;
 }
@@ -70,12 +54,32 @@ PointMassPlant::PointMassPlant(const PointMassParams& params, const PointMassSta
          params.workspace_min.z <= params.workspace_max.z);
 }
 
-void PointMassPlant::advance_exact(const Vec3& F, double h) {
+/// One axis of m v' = F − b v over h with F constant (Eom et al. eq. 5), solved exactly. With
+/// a = b/m and z = a h:
+///   v1 = v0 e^{−z} + (F/m) h φ(z),            φ(z) = (1 − e^{−z}) / z,
+///   x1 = x0 + v0 h φ(z) + (F/m) h² g(z),      g(z) = (z − 1 + e^{−z}) / z².
+/// This is the textbook form v0 e + (F/b)(1 − e), x0 + (F/b) h + (v0 − F/b)(1 − e)/a regrouped so
+/// that nothing divides by b and the large terms (F/b) h and (F/b)(1 − e)/a never cancel; b = 0
+/// is the limit φ = 1, g = 1/2.
+PointMassPlant::StepCoefficients PointMassPlant::coefficients_for(double h) const {
+  StepCoefficients c;
+  c.h = h;
+  const double z = params_.damping / params_.mass * h;
+  if (z > 0.0) {
+    const double em1 = std::expm1(-z);  // e^{−z} − 1, exact to round-off even for tiny z
+    c.decay = 1.0 + em1;
+    c.phi = -em1 / z;
+    c.g = position_weight(z);
+  }
+  return c;
+}
+
+void PointMassPlant::advance_exact(const Vec3& F) {
+  const StepCoefficients& c = coefficients_;
   const double m = params_.mass;
-  const double b = params_.damping;
-  advance_axis(state_.p_WT.x, state_.v_WT.x, F.x, m, b, h);
-  advance_axis(state_.p_WT.y, state_.v_WT.y, F.y, m, b, h);
-  advance_axis(state_.p_WT.z, state_.v_WT.z, F.z, m, b, h);
+  advance_axis(state_.p_WT.x, state_.v_WT.x, F.x / m, c.h, c.decay, c.phi, c.g);
+  advance_axis(state_.p_WT.y, state_.v_WT.y, F.y / m, c.h, c.decay, c.phi, c.g);
+  advance_axis(state_.p_WT.z, state_.v_WT.z, F.z / m, c.h, c.decay, c.phi, c.g);
   clamp_axis(state_.p_WT.x, state_.v_WT.x, params_.workspace_min.x, params_.workspace_max.x);
   clamp_axis(state_.p_WT.y, state_.v_WT.y, params_.workspace_min.y, params_.workspace_max.y);
   clamp_axis(state_.p_WT.z, state_.v_WT.z, params_.workspace_min.z, params_.workspace_max.z);
