@@ -2,7 +2,7 @@
 // real-time server at 1 kHz (in-process, so server time is read directly: latency = server time at
 // the callback − the tick's time stamp). Prints p50/p99/p99.9 and each client's received rate, next
 // to VRPN's figures measured on a machine like this one (../shared/research/peers.md).
-// Usage: latency_bench [seconds-per-case=5]
+// Usage: latency_bench [seconds-per-case=5] [spin_us=100] [fifo=1]
 #include <haptic/haptic.hpp>
 
 #include <algorithm>
@@ -41,6 +41,8 @@ int main(int argc, char** argv) {
   config.set_udp_address("127.0.0.1");
   config.set_udp_port(0);
   config.set_status_period_s(0);
+  if (argc > 2) config.mutable_real_time()->set_spin_us(static_cast<std::uint32_t>(std::atoi(argv[2])));
+  if (argc > 3) config.mutable_real_time()->set_use_fifo(std::atoi(argv[3]) != 0);
   haptic::app::Server server(config);
   server.start();
   const std::string address = "127.0.0.1:" + std::to_string(server.grpc_port());
