@@ -215,6 +215,12 @@ grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
                                         grpc::ServerWriter<v1::Event>* writer) {
   if (auto status = check_session(request->session_id()); !status.ok()) return status;
   auto watcher = deps_.events.watch();
+  // Tell the client the watch is live, so it can act knowing it will miss nothing from here on.
+  v1::Event started;
+  started.set_kind(v1::Event::WATCH_STARTED);
+  started.set_session_id(request->session_id());
+  started.set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
+  writer->Write(started);
   while (!context->IsCancelled() && !watcher->closed()) {
     if (auto event = watcher->next(std::chrono::milliseconds(100))) {
       if (!writer->Write(*event)) break;

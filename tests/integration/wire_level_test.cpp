@@ -203,6 +203,58 @@ TEST_F(WireLevel, InvalidRequestsNameTheFieldAndChangeNothing) {
   EXPECT_EQ(call(&v1::Haptic::Stub::GetStats, nobody, s).error_code(), grpc::StatusCode::NOT_FOUND);
 }
 
+TEST_F(WireLevel, EventsStreamReportsOtherSessionsOpeningAndClosing) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  v1::WatchEventsRequest watch;
+  watch.set_session_id(session_.session_id());
+  auto reader = stub_->WatchEvents(&context, watch);
+  v1::Event event;
+  ASSERT_TRUE(reader->Read(&event));
+  ASSERT_EQ(event.kind(), v1::Event::WATCH_STARTED);  // from here on nothing is missed
+
+  v1::OpenSessionRequest open;
+  open.set_client_name("second");
+  open.set_api_version(v1::API_VERSION_CURRENT);
+  v1::OpenSessionResponse second;
+  ASSERT_TRUE(call(&v1::Haptic::Stub::OpenSession, open, second).ok());
+  v1::SessionRef close;
+  close.set_session_id(second.session_id());
+  v1::Empty empty;
+  ASSERT_TRUE(call(&v1::Haptic::Stub::CloseSession, close, empty).ok());
+
+  ASSERT_TRUE(reader->Read(&event));
+  EXPECT_EQ(event.kind(), v1::Event::SESSION_OPENED);
+  EXPECT_EQ(event.session_id(), second.session_id());
+  EXPECT_NE(event.message().find("second"), std::string::npos);
+  ASSERT_TRUE(reader->Read(&event));
+  EXPECT_EQ(event.kind(), v1::Event::SESSION_CLOSED);
+  EXPECT_EQ(event.session_id(), second.session_id());
+  context.TryCancel();
+}
+
+TEST_F(WireLevel, AnotherSessionsObjectIsPermissionDenied) {
+  v1::CreateObjectRequest create;
+  create.set_session_id(session_.session_id());
+  create.mutable_object()->mutable_impedance()->set_stiffness(100.0);
+  create.mutable_object()->mutable_sphere()->set_radius(0.01);
+  v1::ItemRef item;
+  ASSERT_TRUE(call(&v1::Haptic::Stub::CreateObject, create, item).ok());
+
+  v1::OpenSessionRequest open;
+  open.set_client_name("intruder");
+  open.set_api_version(v1::API_VERSION_CURRENT);
+  v1::OpenSessionResponse intruder;
+  ASSERT_TRUE(call(&v1::Haptic::Stub::OpenSession, open, intruder).ok());
+  v1::DeleteRequest remove;
+  remove.set_session_id(intruder.session_id());
+  remove.set_id(item.id());
+  v1::Empty empty;
+  const grpc::Status status = call(&v1::Haptic::Stub::DeleteObject, remove, empty);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_EQ(stats().objects(), 1u);
+}
+
 TEST_F(WireLevel, SigtermEndsTheServerCleanly) { EXPECT_EQ(server_->stop(), 0); }
 
 }  // namespace
