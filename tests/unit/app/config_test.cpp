@@ -1,0 +1,70 @@
+// hapticd's configuration: protobuf JSON, defaults, and errors that name the field.
+#include <gtest/gtest.h>
+
+#include "app/config.hpp"
+
+namespace haptic::app {
+namespace {
+
+std::string error_of(const std::string& json) {
+  try {
+    parse_config(json, "test.json");
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  return {};
+}
+
+TEST(Config, DefaultsAreTheDocumentedOnes) {
+  const v1::ServerConfig config = default_config();
+  EXPECT_EQ(config.grpc_address(), "0.0.0.0:50051");
+  EXPECT_EQ(config.udp_port(), 50052u);
+  EXPECT_EQ(config.loop_rate_hz(), 1000.0);
+  EXPECT_EQ(config.time_mode(), v1::REAL_TIME);
+  EXPECT_EQ(config.lease_timeout_ms(), 1000u);
+  EXPECT_EQ(config.removal_ramp_ms(), 50u);
+  EXPECT_EQ(config.simulated_point_mass().mass(), 0.01);      // Eom et al.
+  EXPECT_EQ(config.simulated_point_mass().damping(), 0.022);  // Eom et al.
+  EXPECT_TRUE(config.real_time().use_fifo());
+  EXPECT_EQ(validate(config), "");
+}
+
+TEST(Config, ExplicitZeroIsKeptWhereZeroMeansSomething) {
+  const v1::ServerConfig config =
+      parse_config(R"({"udp_port": 0, "status_period_s": 0, "real_time": {"use_fifo": false}})", "x");
+  EXPECT_EQ(config.udp_port(), 0u);        // pick a free port
+  EXPECT_EQ(config.status_period_s(), 0u); // no status line
+  EXPECT_FALSE(config.real_time().use_fifo());
+}
+
+TEST(Config, TheShippedConfigurationFileParses) {
+  EXPECT_NO_THROW(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/hapticd.json"));
+  EXPECT_NO_THROW(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/docker/hapticd-container.json"));
+}
+
+TEST(Config, BadValuesAreRejectedNamingTheField) {
+  EXPECT_NE(error_of(R"({"loop_rate_hz": 20000})").find("loop_rate_hz"), std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_point_mass": {"mass": -1}})").find("simulated_point_mass.mass"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_point_mass": {"initial_position": {"z": 5}}})")
+                .find("simulated_point_mass.initial_position"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"real_time": {"spin_us": 5000}})").find("real_time.spin_us"), std::string::npos);
+  EXPECT_NE(error_of(R"({"initial_scene": {"objects": [{"sphere": {"radius": 0.01}}]}})")
+                .find("initial_scene.objects[0].impedance"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"initial_operator": {"mode": "APPLY_FORCE", "force": {"x": "NaN"}}})")
+                .find("initial_operator.force.x"),
+            std::string::npos);
+}
+
+TEST(Config, MalformedJsonAndUnknownFieldsAreErrorsNamingTheSource) {
+  EXPECT_NE(error_of("{").find("test.json"), std::string::npos);
+  const std::string unknown = error_of(R"({"loop_rate": 1000})");
+  EXPECT_NE(unknown.find("test.json"), std::string::npos);
+  EXPECT_NE(unknown.find("loop_rate"), std::string::npos);
+  EXPECT_THROW(load_config_file("/nonexistent/hapticd.json"), ConfigError);
+}
+
+}  // namespace
+}  // namespace haptic::app
