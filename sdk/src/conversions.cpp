@@ -51,16 +51,43 @@ v1::OperatorInput to_proto(const OperatorInput& input) {
     case OperatorInput::Mode::kRelease:
       out.set_mode(v1::OperatorInput::NONE);
       break;
-    case OperatorInput::Mode::kFollow:
+    case OperatorInput::Mode::kFollow: {
       out.set_mode(v1::OperatorInput::FOLLOW_TARGET);
       *out.mutable_target() = to_proto(input.target);
       out.set_stiffness(input.stiffness);
       out.set_damping(input.damping);
+      out.set_mass(input.mass);
+      out.set_grip(input.grip == OperatorInput::Grip::kLoose   ? v1::OperatorInput::LOOSE
+                   : input.grip == OperatorInput::Grip::kTight ? v1::OperatorInput::TIGHT
+                                                               : v1::OperatorInput::CUSTOM);
+      auto* path = out.mutable_trajectory();
+      switch (input.path.shape) {
+        case OperatorInput::Path::Shape::kFixed: path->set_shape(v1::TargetTrajectory::FIXED); break;
+        case OperatorInput::Path::Shape::kLine: path->set_shape(v1::TargetTrajectory::LINE); break;
+        case OperatorInput::Path::Shape::kSine: path->set_shape(v1::TargetTrajectory::SINE); break;
+      }
+      *path->mutable_end() = to_proto(input.path.end);
+      path->set_duration_s(input.path.duration_s);
+      *path->mutable_amplitude() = to_proto(input.path.amplitude);
+      path->set_frequency_hz(input.path.frequency_hz);
       break;
-    case OperatorInput::Mode::kPush:
+    }
+    case OperatorInput::Mode::kPush: {
       out.set_mode(v1::OperatorInput::APPLY_FORCE);
       *out.mutable_force() = to_proto(input.force);
+      auto* profile = out.mutable_profile();
+      switch (input.profile.shape) {
+        case OperatorInput::Profile::Shape::kConstant: profile->set_shape(v1::ForceProfile::CONSTANT); break;
+        case OperatorInput::Profile::Shape::kStep: profile->set_shape(v1::ForceProfile::STEP); break;
+        case OperatorInput::Profile::Shape::kRamp: profile->set_shape(v1::ForceProfile::RAMP); break;
+        case OperatorInput::Profile::Shape::kSine: profile->set_shape(v1::ForceProfile::SINE); break;
+      }
+      profile->set_start_s(input.profile.start_s);
+      profile->set_rise_s(input.profile.rise_s);
+      profile->set_frequency_hz(input.profile.frequency_hz);
+      *profile->mutable_offset() = to_proto(input.profile.offset);
       break;
+    }
   }
   return out;
 }

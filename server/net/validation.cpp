@@ -147,28 +147,102 @@ std::string to_hand_input(const v1::OperatorInput& input, const std::string& pat
     case v1::OperatorInput::NONE:
       out.mode = engine::HandInput::Mode::kNone;
       return {};
-    case v1::OperatorInput::FOLLOW_TARGET:
+    case v1::OperatorInput::FOLLOW_TARGET: {
       if (auto e = check_vec(input.target(), limits.max_abs_position, path + ".target"); !e.empty()) {
-        return e;
-      }
-      if (auto e = check_range(input.stiffness(), 0.0, limits.max_stiffness, path + ".stiffness");
-          !e.empty()) {
-        return e;
-      }
-      if (auto e = check_range(input.damping(), 0.0, limits.max_damping, path + ".damping");
-          !e.empty()) {
         return e;
       }
       out.mode = engine::HandInput::Mode::kFollowTarget;
       out.target = to_engine(input.target());
-      out.stiffness = input.stiffness();
-      out.damping = input.damping();
+      switch (input.grip()) {
+        case v1::OperatorInput::LOOSE:
+        case v1::OperatorInput::TIGHT: {
+          const engine::Grip grip =
+              input.grip() == v1::OperatorInput::LOOSE ? engine::kLooseGrip : engine::kTightGrip;
+          out.mass = grip.mass;
+          out.stiffness = grip.stiffness;
+          out.damping = grip.damping;
+          break;
+        }
+        case v1::OperatorInput::CUSTOM:
+          if (auto e = check_range(input.stiffness(), 0.0, limits.max_stiffness, path + ".stiffness");
+              !e.empty()) {
+            return e;
+          }
+          if (auto e = check_range(input.damping(), 0.0, limits.max_damping, path + ".damping");
+              !e.empty()) {
+            return e;
+          }
+          if (auto e = check_range(input.mass(), 0.0, 10.0, path + ".mass"); !e.empty()) return e;
+          out.stiffness = input.stiffness();
+          out.damping = input.damping();
+          out.mass = input.mass();
+          break;
+        default:
+          return path + ".grip: must be CUSTOM, LOOSE or TIGHT, got " +
+                 std::to_string(static_cast<int>(input.grip()));
+      }
+      const auto& trajectory = input.trajectory();
+      const std::string tpath = path + ".trajectory";
+      switch (trajectory.shape()) {
+        case v1::TargetTrajectory::FIXED:
+          break;
+        case v1::TargetTrajectory::LINE:
+          if (auto e = check_vec(trajectory.end(), limits.max_abs_position, tpath + ".end"); !e.empty()) {
+            return e;
+          }
+          if (!std::isfinite(trajectory.duration_s()) || trajectory.duration_s() <= 0.0 ||
+              trajectory.duration_s() > 3600.0) {
+            return tpath + ".duration_s: must be finite and in (0, 3600], got " +
+                   describe(trajectory.duration_s());
+          }
+          out.trajectory.shape = engine::TargetTrajectory::Shape::kLine;
+          out.trajectory.end = to_engine(trajectory.end());
+          out.trajectory.duration_s = trajectory.duration_s();
+          break;
+        case v1::TargetTrajectory::SINE:
+          if (auto e = check_vec(trajectory.amplitude(), limits.max_abs_position, tpath + ".amplitude");
+              !e.empty()) {
+            return e;
+          }
+          if (auto e = check_range(trajectory.frequency_hz(), 0.0, 100.0, tpath + ".frequency_hz");
+              !e.empty()) {
+            return e;
+          }
+          out.trajectory.shape = engine::TargetTrajectory::Shape::kSine;
+          out.trajectory.amplitude = to_engine(trajectory.amplitude());
+          out.trajectory.frequency_hz = trajectory.frequency_hz();
+          break;
+        default:
+          return tpath + ".shape: must be FIXED, LINE or SINE";
+      }
       return {};
-    case v1::OperatorInput::APPLY_FORCE:
+    }
+    case v1::OperatorInput::APPLY_FORCE: {
       if (auto e = check_vec(input.force(), limits.max_force, path + ".force"); !e.empty()) return e;
       out.mode = engine::HandInput::Mode::kApplyForce;
       out.force = to_engine(input.force());
+      const auto& profile = input.profile();
+      const std::string ppath = path + ".profile";
+      if (auto e = check_range(profile.start_s(), 0.0, 3600.0, ppath + ".start_s"); !e.empty()) return e;
+      if (auto e = check_range(profile.rise_s(), 0.0, 3600.0, ppath + ".rise_s"); !e.empty()) return e;
+      if (auto e = check_range(profile.frequency_hz(), 0.0, 100.0, ppath + ".frequency_hz"); !e.empty()) {
+        return e;
+      }
+      if (auto e = check_vec(profile.offset(), limits.max_force, ppath + ".offset"); !e.empty()) return e;
+      out.profile.start_s = profile.start_s();
+      out.profile.rise_s = profile.rise_s();
+      out.profile.frequency_hz = profile.frequency_hz();
+      out.profile.offset = to_engine(profile.offset());
+      switch (profile.shape()) {
+        case v1::ForceProfile::CONSTANT: out.profile.shape = engine::ForceProfile::Shape::kConstant; break;
+        case v1::ForceProfile::STEP: out.profile.shape = engine::ForceProfile::Shape::kStep; break;
+        case v1::ForceProfile::RAMP: out.profile.shape = engine::ForceProfile::Shape::kRamp; break;
+        case v1::ForceProfile::SINE: out.profile.shape = engine::ForceProfile::Shape::kSine; break;
+        default:
+          return ppath + ".shape: must be CONSTANT, STEP, RAMP or SINE";
+      }
       return {};
+    }
     default:
       break;
   }

@@ -1,12 +1,15 @@
 #pragma once
 // The default device: the 3-DOF point-mass plant (engine/device) held by a simulated operator
 // (engine/operator). The operator's input is changed off the loop (SetOperator RPC) through a
-// lock-free mailbox.
+// lock-free mailbox; its profiles and trajectories run on the device's own (simulated) clock from
+// the tick the input arrives, so lockstep runs stay exactly reproducible.
 
 #include "engine/device/point_mass_plant.hpp"
 #include "engine/operator/simulated_hand.hpp"
 #include "runtime/device.hpp"
 #include "runtime/latest_value.hpp"
+
+#include <cstdint>
 
 namespace haptic::runtime {
 
@@ -29,6 +32,8 @@ class SimulatedPointMassDevice final : public Device {
   DeviceDescription description_;
   engine::PointMassPlant plant_;
   LatestValue<engine::HandInput> hand_;
+  std::uint64_t hand_version_ = 0;  // loop only: the input the hand time counts from
+  double hand_time_s_ = 0.0;        // loop only: time since that input was set. Unit: s.
 };
 
 }  // namespace haptic::runtime

@@ -167,6 +167,30 @@ TEST_F(SdkIntegration, LockstepRunsAreExactlyReproducible) {
   EXPECT_EQ(first.server_time, second.server_time);
 }
 
+TEST_F(SdkIntegration, OperatorProfilesAndGripsRunOnTheServersClock) {
+  Client client(config_for(server_, "profiles"));
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {kK, kB}});
+  // Settle on the wall with a light push, then ramp the push from 0 to 5 N over 1 s.
+  client.set_operator(OperatorInput::push({0, 0, -0.1}));
+  step_and_get(client, 2000);
+  OperatorInput::Profile ramp;
+  ramp.shape = OperatorInput::Profile::Shape::kRamp;
+  ramp.rise_s = 1.0;
+  client.set_operator(OperatorInput::push({0, 0, -5.0}, ramp));
+  // The tool is light (10 g) and the ramp slow: the wall's force follows the push quasi-statically.
+  EXPECT_NEAR(step_and_get(client, 500).force.z, 2.5, 0.05);
+  EXPECT_NEAR(step_and_get(client, 1500).force.z, 5.0, 1e-3);
+
+  // A tight grip takes the tool off the wall along a line to 10 mm above it.
+  client.set_operator(OperatorInput::follow_line({0, 0, -0.005}, {0, 0, 0.01}, 0.5,
+                                                 OperatorInput::Grip::kTight));
+  const State lifted = step_and_get(client, 3000);
+  EXPECT_NEAR(lifted.position.z, 0.01, 1e-4);
+  EXPECT_EQ(lifted.contact_count, 0u);
+  EXPECT_THROW(client.set_operator(OperatorInput::follow_line({}, {}, -1.0, OperatorInput::Grip::kLoose)),
+               InvalidArgumentError);
+}
+
 TEST_F(SdkIntegration, ErrorsAreTypedAndCarryTheServersMessage) {
   Client client(config_for(server_, "errors"));
   try {

@@ -106,14 +106,44 @@ struct Stats {
   std::uint64_t leases_expired = 0;
 };
 
-/// What the server's simulated operator (a hand holding the tool) does.
+/// What the server's simulated operator (a hand holding the tool) does. Profiles and trajectories
+/// run from the moment the input reaches the server's loop.
 struct OperatorInput {
   enum class Mode { kRelease, kFollow, kPush };
+  /// Grip presets for kFollow: the ends of a human grip's range.
+  enum class Grip {
+    kCustom,  ///< mass, stiffness and damping as given
+    kLoose,   ///< 0.2 kg, 2 N/m, 3 N·s/m
+    kTight,   ///< 2 kg, 800 N/m, 15 N·s/m
+  };
+  /// How the target moves from `target` (kFollow).
+  struct Path {
+    enum class Shape { kFixed, kLine, kSine };
+    Shape shape = Shape::kFixed;
+    Vec3 end{};                 ///< kLine: to here over duration_s, then holds. Unit: m.
+    double duration_s = 0.0;    ///< Unit: s.
+    Vec3 amplitude{};           ///< kSine: target + amplitude sin(2π f t). Unit: m.
+    double frequency_hz = 0.0;  ///< Unit: Hz.
+  };
+  /// How the pushing force changes over time (kPush); `force` is its amplitude.
+  struct Profile {
+    enum class Shape { kConstant, kStep, kRamp, kSine };
+    Shape shape = Shape::kConstant;
+    double start_s = 0.0;       ///< kStep, kRamp: when it begins. Unit: s.
+    double rise_s = 0.0;        ///< kRamp: rise time. Unit: s.
+    double frequency_hz = 0.0;  ///< kSine: offset + force sin(2π f t). Unit: Hz.
+    Vec3 offset{};              ///< kSine. Unit: N.
+  };
+
   Mode mode = Mode::kRelease;
-  Vec3 target;             ///< kFollow: where the hand pulls the tool. Unit: m.
-  double stiffness = 0.0;  ///< kFollow: hand stiffness. Unit: N/m.
-  double damping = 0.0;    ///< kFollow: hand damping. Unit: N·s/m.
-  Vec3 force;              ///< kPush: constant force on the tool. Unit: N.
+  Vec3 target{};           ///< kFollow: where the hand pulls the tool (the path's start). Unit: m.
+  double stiffness = 0.0;  ///< kFollow, kCustom grip: hand stiffness. Unit: N/m.
+  double damping = 0.0;    ///< kFollow, kCustom grip: hand damping. Unit: N·s/m.
+  double mass = 0.0;       ///< kFollow, kCustom grip: hand mass moving with the tool. Unit: kg.
+  Grip grip = Grip::kCustom;
+  Path path{};
+  Vec3 force{};            ///< kPush: the force (the profile's amplitude). Unit: N.
+  Profile profile{};
 
   /// The hand pulls the tool towards `target` like a spring-damper.
   static OperatorInput follow(Vec3 target, double stiffness, double damping) {
@@ -124,11 +154,28 @@ struct OperatorInput {
     input.damping = damping;
     return input;
   }
+  /// A loose or tight grip whose target moves from `from` to `to` in `duration_s`.
+  static OperatorInput follow_line(Vec3 from, Vec3 to, double duration_s, Grip grip) {
+    OperatorInput input;
+    input.mode = Mode::kFollow;
+    input.target = from;
+    input.grip = grip;
+    input.path.shape = Path::Shape::kLine;
+    input.path.end = to;
+    input.path.duration_s = duration_s;
+    return input;
+  }
   /// The hand pushes with a constant force.
   static OperatorInput push(Vec3 force) {
     OperatorInput input;
     input.mode = Mode::kPush;
     input.force = force;
+    return input;
+  }
+  /// The hand pushes with a force that follows `profile`.
+  static OperatorInput push(Vec3 force, Profile profile) {
+    OperatorInput input = push(force);
+    input.profile = profile;
     return input;
   }
   /// The hand lets go.

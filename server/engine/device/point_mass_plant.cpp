@@ -64,7 +64,7 @@ PointMassPlant::PointMassPlant(const PointMassParams& params, const PointMassSta
 PointMassPlant::StepCoefficients PointMassPlant::coefficients_for(double h) const {
   StepCoefficients c;
   c.h = h;
-  const double z = params_.damping / params_.mass * h;
+  const double z = params_.damping / (params_.mass + added_mass_) * h;
   if (z > 0.0) {
     const double em1 = std::expm1(-z);  // e^{−z} − 1, exact to round-off even for tiny z
     c.decay = 1.0 + em1;
@@ -76,7 +76,7 @@ PointMassPlant::StepCoefficients PointMassPlant::coefficients_for(double h) cons
 
 void PointMassPlant::advance_exact(const Vec3& F) {
   const StepCoefficients& c = coefficients_;
-  const double m = params_.mass;
+  const double m = params_.mass + added_mass_;
   advance_axis(state_.p_WT.x, state_.v_WT.x, F.x / m, c.h, c.decay, c.phi, c.g);
   advance_axis(state_.p_WT.y, state_.v_WT.y, F.y / m, c.h, c.decay, c.phi, c.g);
   advance_axis(state_.p_WT.z, state_.v_WT.z, F.z / m, c.h, c.decay, c.phi, c.g);

@@ -48,6 +48,14 @@ class PointMassPlant {
     }
   }
 
+  /// Mass moving with the tool besides the device's own (a hand's grasp). Unit: kg, >= 0.
+  void set_added_mass(double added_mass) {
+    if (added_mass == added_mass_) return;
+    added_mass_ = added_mass;
+    coefficients_.h = -1.0;  // the step weights depend on the mass
+  }
+  double added_mass() const { return added_mass_; }
+
   const PointMassState& state() const { return state_; }
   void set_state(const PointMassState& state) { state_ = state; }
   const PointMassParams& params() const { return params_; }
@@ -67,6 +75,7 @@ class PointMassPlant {
   PointMassParams params_;
   PointMassState state_;
   StepCoefficients coefficients_;
+  double added_mass_ = 0.0;
 };
 
 }  // namespace haptic::engine

@@ -76,5 +76,43 @@ TEST(Validation, FieldsAndOperatorInput) {
   EXPECT_EQ(to_hand_input(input, "input", SceneLimits{}, hand).rfind("input.mode:", 0), 0u);
 }
 
+TEST(Validation, GripPresetsTrajectoriesAndProfiles) {
+  v1::OperatorInput input;
+  engine::HandInput hand;
+  input.set_mode(v1::OperatorInput::FOLLOW_TARGET);
+  input.set_grip(v1::OperatorInput::TIGHT);
+  input.set_stiffness(-1.0);  // ignored: the preset sets the impedance
+  ASSERT_EQ(to_hand_input(input, "input", SceneLimits{}, hand), "");
+  EXPECT_EQ(hand.mass, engine::kTightGrip.mass);
+  EXPECT_EQ(hand.stiffness, 800.0);
+  EXPECT_EQ(hand.damping, 15.0);
+
+  input.set_grip(v1::OperatorInput::CUSTOM);
+  input.set_stiffness(100.0);
+  input.set_mass(50.0);
+  EXPECT_EQ(to_hand_input(input, "input", SceneLimits{}, hand).rfind("input.mass:", 0), 0u);
+  input.set_mass(1.0);
+  input.mutable_trajectory()->set_shape(v1::TargetTrajectory::LINE);
+  EXPECT_EQ(to_hand_input(input, "input", SceneLimits{}, hand)
+                .rfind("input.trajectory.duration_s:", 0), 0u);
+  input.mutable_trajectory()->set_duration_s(2.0);
+  input.mutable_trajectory()->mutable_end()->set_z(-0.01);
+  ASSERT_EQ(to_hand_input(input, "input", SceneLimits{}, hand), "");
+  EXPECT_EQ(hand.trajectory.shape, engine::TargetTrajectory::Shape::kLine);
+  EXPECT_EQ(hand.trajectory.end.z, -0.01);
+
+  v1::OperatorInput push;
+  push.set_mode(v1::OperatorInput::APPLY_FORCE);
+  push.mutable_force()->set_z(-5.0);
+  push.mutable_profile()->set_shape(v1::ForceProfile::RAMP);
+  push.mutable_profile()->set_rise_s(-0.5);
+  EXPECT_EQ(to_hand_input(push, "input", SceneLimits{}, hand).rfind("input.profile.rise_s:", 0), 0u);
+  push.mutable_profile()->set_rise_s(0.5);
+  ASSERT_EQ(to_hand_input(push, "input", SceneLimits{}, hand), "");
+  EXPECT_EQ(hand.profile.shape, engine::ForceProfile::Shape::kRamp);
+  push.mutable_profile()->set_shape(static_cast<v1::ForceProfile::Shape>(9));
+  EXPECT_EQ(to_hand_input(push, "input", SceneLimits{}, hand).rfind("input.profile.shape:", 0), 0u);
+}
+
 }  // namespace
 }  // namespace haptic::net
