@@ -1,6 +1,7 @@
 #include "haptic/client.hpp"
 
 #include <cmath>
+#include <string>
 #include <utility>
 
 #include "client_core.hpp"
@@ -61,13 +62,41 @@ void check(const OperatorInput& input) {
   }
 }
 
-std::shared_ptr<detail::ClientCore> lock_or_null(const std::weak_ptr<detail::ClientCore>& core) {
-  return core.lock();
-}
-
 detail::ClientCore& require(const std::shared_ptr<detail::ClientCore>& core) {
   if (!core) throw Error(ErrorCode::kInternal, "the Client was moved from or closed");
   return *core;
+}
+
+// The core if it still exists and `generation` is current; null if apply_scene replaced the item.
+std::shared_ptr<detail::ClientCore> current_core(const std::weak_ptr<detail::ClientCore>& core,
+                                                 std::uint64_t generation) {
+  auto locked = core.lock();
+  if (locked && locked->scene_generation() != generation) return nullptr;
+  return locked;
+}
+
+// Handles of items a later apply_scene replaced: the server has already removed the item.
+detail::ClientCore& require_current(const std::weak_ptr<detail::ClientCore>& core,
+                                    std::uint64_t generation, const char* call, std::uint64_t id) {
+  auto locked = core.lock();
+  if (!locked) throw Error(ErrorCode::kInternal, "the Client was moved from or closed");
+  if (locked->scene_generation() != generation) {
+    throw NotFoundError(std::string(call) + ": item " + std::to_string(id) +
+                        " was replaced by apply_scene");
+  }
+  return *locked;
+}
+
+// Runs check() on each spec, naming the offending one ("walls[2].impedance...").
+template <typename Spec>
+void check_each(const std::vector<Spec>& specs, const char* list) {
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    try {
+      check(specs[i]);
+    } catch (const InvalidArgumentError& error) {
+      throw InvalidArgumentError(std::string(list) + "[" + std::to_string(i) + "]: " + error.what());
+    }
+  }
 }
 
 }  // namespace
@@ -81,17 +110,50 @@ Client& Client::operator=(Client&&) noexcept = default;
 
 ObjectHandle Client::add_wall(const WallSpec& wall) {
   check(wall);
-  return ObjectHandle(core_, require(core_).create_object(detail::to_proto(wall)));
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_object(detail::to_proto(wall));
+  return ObjectHandle(core_, id, core.scene_generation());
 }
 
 ObjectHandle Client::add_sphere(const SphereSpec& sphere) {
   check(sphere);
-  return ObjectHandle(core_, require(core_).create_object(detail::to_proto(sphere)));
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_object(detail::to_proto(sphere));
+  return ObjectHandle(core_, id, core.scene_generation());
 }
 
 FieldHandle Client::add_spring_field(const SpringFieldSpec& spring) {
   check(spring);
-  return FieldHandle(core_, require(core_).create_field(detail::to_proto(spring)));
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_field(detail::to_proto(spring));
+  return FieldHandle(core_, id, core.scene_generation());
+}
+
+SceneHandles Client::apply_scene(const std::vector<WallSpec>& walls,
+                                 const std::vector<SphereSpec>& spheres,
+                                 const std::vector<SpringFieldSpec>& springs) {
+  check_each(walls, "walls");
+  check_each(spheres, "spheres");
+  check_each(springs, "springs");
+  v1::Scene scene;
+  for (const auto& wall : walls) *scene.add_objects() = detail::to_proto(wall);
+  for (const auto& sphere : spheres) *scene.add_objects() = detail::to_proto(sphere);
+  for (const auto& spring : springs) *scene.add_fields() = detail::to_proto(spring);
+  detail::ClientCore& core = require(core_);
+  const v1::ApplySceneResponse reply = core.apply_scene(scene);
+  const std::uint64_t generation = core.scene_generation();
+  SceneHandles handles;
+  int next_object = 0;
+  for (std::size_t i = 0; i < walls.size(); ++i) {
+    handles.walls.push_back(ObjectHandle(core_, reply.object_ids(next_object++), generation));
+  }
+  for (std::size_t i = 0; i < spheres.size(); ++i) {
+    handles.spheres.push_back(ObjectHandle(core_, reply.object_ids(next_object++), generation));
+  }
+  for (int i = 0; i < reply.field_ids_size(); ++i) {
+    handles.springs.push_back(FieldHandle(core_, reply.field_ids(i), generation));
+  }
+  return handles;
 }
 
 void Client::set_operator(const OperatorInput& input) {
@@ -127,6 +189,8 @@ Stats Client::stats() {
 
 std::uint64_t Client::session_id() const { return require(core_).session_id(); }
 
+std::chrono::milliseconds Client::lease_timeout() const { return require(core_).lease_timeout(); }
+
 void Client::on_state(std::function<void(const State&)> callback) {
   require(core_).udp().on_state(std::move(callback));
 }
@@ -158,17 +222,21 @@ void Client::close() {
 
 // ---- ObjectHandle ----
 
-ObjectHandle::ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id)
-    : core_(std::move(core)), id_(id) {}
+ObjectHandle::ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id,
+                           std::uint64_t generation)
+    : core_(std::move(core)), id_(id), generation_(generation) {}
 
 ObjectHandle::ObjectHandle(ObjectHandle&& other) noexcept
-    : core_(std::move(other.core_)), id_(std::exchange(other.id_, 0)) {}
+    : core_(std::move(other.core_)),
+      id_(std::exchange(other.id_, 0)),
+      generation_(other.generation_) {}
 
 ObjectHandle& ObjectHandle::operator=(ObjectHandle&& other) noexcept {
   if (this != &other) {
     drop();
     core_ = std::move(other.core_);
     id_ = std::exchange(other.id_, 0);
+    generation_ = other.generation_;
   }
   return *this;
 }
@@ -186,35 +254,40 @@ void ObjectHandle::drop() noexcept {
 
 void ObjectHandle::update(const WallSpec& wall) {
   check(wall);
-  require(lock_or_null(core_)).update_object(id_, detail::to_proto(wall));
+  require_current(core_, generation_, "UpdateObject", id_).update_object(id_, detail::to_proto(wall));
 }
 
 void ObjectHandle::update(const SphereSpec& sphere) {
   check(sphere);
-  require(lock_or_null(core_)).update_object(id_, detail::to_proto(sphere));
+  require_current(core_, generation_, "UpdateObject", id_)
+      .update_object(id_, detail::to_proto(sphere));
 }
 
 void ObjectHandle::remove() {
   const std::uint64_t id = std::exchange(id_, 0);
   if (id == 0) return;
-  if (auto core = core_.lock()) core->delete_object(id);
+  if (auto core = current_core(core_, generation_)) core->delete_object(id);
 }
 
 std::uint64_t ObjectHandle::release() noexcept { return std::exchange(id_, 0); }
 
 // ---- FieldHandle ----
 
-FieldHandle::FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id)
-    : core_(std::move(core)), id_(id) {}
+FieldHandle::FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id,
+                           std::uint64_t generation)
+    : core_(std::move(core)), id_(id), generation_(generation) {}
 
 FieldHandle::FieldHandle(FieldHandle&& other) noexcept
-    : core_(std::move(other.core_)), id_(std::exchange(other.id_, 0)) {}
+    : core_(std::move(other.core_)),
+      id_(std::exchange(other.id_, 0)),
+      generation_(other.generation_) {}
 
 FieldHandle& FieldHandle::operator=(FieldHandle&& other) noexcept {
   if (this != &other) {
     drop();
     core_ = std::move(other.core_);
     id_ = std::exchange(other.id_, 0);
+    generation_ = other.generation_;
   }
   return *this;
 }
@@ -232,13 +305,13 @@ void FieldHandle::drop() noexcept {
 
 void FieldHandle::update(const SpringFieldSpec& spring) {
   check(spring);
-  require(lock_or_null(core_)).update_field(id_, detail::to_proto(spring));
+  require_current(core_, generation_, "UpdateField", id_).update_field(id_, detail::to_proto(spring));
 }
 
 void FieldHandle::remove() {
   const std::uint64_t id = std::exchange(id_, 0);
   if (id == 0) return;
-  if (auto core = core_.lock()) core->delete_field(id);
+  if (auto core = current_core(core_, generation_)) core->delete_field(id);
 }
 
 std::uint64_t FieldHandle::release() noexcept { return std::exchange(id_, 0); }

@@ -1,6 +1,6 @@
 #include "client_core.hpp"
 
-#include <cctype>
+#include <algorithm>
 #include <thread>
 
 #include "conversions.hpp"
@@ -56,6 +56,7 @@ ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
       "OpenSession", &v1::Haptic::Stub::OpenSession, open);
   session_id_ = opened.session_id();
   device_info_ = from_proto(opened.device());
+  lease_timeout_ = std::chrono::milliseconds(opened.lease_timeout_ms());
   if (opened.udp_key().size() != 16) {
     throw Error(ErrorCode::kInternal, "OpenSession: server sent a udp_key that is not 16 bytes");
   }
@@ -160,6 +161,25 @@ void ClientCore::delete_field(std::uint64_t id) {
   request.set_session_id(session_id_);
   request.set_id(id);
   call<v1::DeleteRequest, v1::Empty>("DeleteField", &v1::Haptic::Stub::DeleteField, request);
+}
+
+v1::ApplySceneResponse ClientCore::apply_scene(const v1::Scene& scene) {
+  v1::ApplySceneRequest request;
+  request.set_session_id(session_id_);
+  *request.mutable_scene() = scene;
+  auto reply = call<v1::ApplySceneRequest, v1::ApplySceneResponse>(
+      "ApplyScene", &v1::Haptic::Stub::ApplyScene, request);
+  if (reply.object_ids_size() != scene.objects_size() ||
+      reply.field_ids_size() != scene.fields_size()) {
+    throw Error(ErrorCode::kInternal, "ApplyScene: the server returned " +
+                                          std::to_string(reply.object_ids_size()) + " object and " +
+                                          std::to_string(reply.field_ids_size()) +
+                                          " field ids for " + std::to_string(scene.objects_size()) +
+                                          " objects and " + std::to_string(scene.fields_size()) +
+                                          " fields");
+  }
+  ++scene_generation_;
+  return reply;
 }
 
 }  // namespace haptic::detail

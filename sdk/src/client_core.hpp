@@ -4,8 +4,10 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include <atomic>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "haptic/client.hpp"
 #include "haptic/v1/service.grpc.pb.h"
@@ -34,12 +36,16 @@ class ClientCore {
   std::uint64_t create_field(const v1::Field& field);
   void update_field(std::uint64_t id, const v1::Field& field);
   void delete_field(std::uint64_t id);
+  /// Replaces the session's scene; on success bumps the scene generation, staling older handles.
+  v1::ApplySceneResponse apply_scene(const v1::Scene& scene);
+  std::uint64_t scene_generation() const { return scene_generation_.load(); }
   /// Sets the state decimation; for n > 0 waits until the server knows our UDP address.
   void subscribe(std::uint32_t decimation);
   void close_session();
 
   std::uint64_t session_id() const { return session_id_; }
   const DeviceInfo& device_info() const { return device_info_; }
+  std::chrono::milliseconds lease_timeout() const { return lease_timeout_; }
   const ClientConfig& config() const { return config_; }
   UdpLink& udp() { return *udp_; }
 
@@ -52,6 +58,8 @@ class ClientCore {
   std::uint64_t session_id_ = 0;
   bool closed_ = false;
   DeviceInfo device_info_;
+  std::chrono::milliseconds lease_timeout_{0};
+  std::atomic<std::uint64_t> scene_generation_{0};
   std::unique_ptr<UdpLink> udp_;
 };
 

@@ -1,5 +1,7 @@
 #include "udp_link.hpp"
 
+#include <algorithm>
+
 #include "haptic/error.hpp"
 
 namespace haptic::detail {
@@ -153,7 +155,10 @@ void UdpLink::offer(const State& state) {
 bool UdpLink::poll(State& out, std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
   if (!arrived_.wait_for(lock, timeout,
-                         [this] { return have_latest_ && latest_.tick > last_polled_tick_; })) {
+                         [this] {
+                           return have_latest_ &&
+                                  (!last_polled_tick_ || latest_.tick > *last_polled_tick_);
+                         })) {
     return false;
   }
   out = latest_;

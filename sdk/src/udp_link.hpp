@@ -63,7 +63,7 @@ class UdpLink {
   std::condition_variable arrived_;
   State latest_;                       // guarded by mutex_
   bool have_latest_ = false;           // guarded by mutex_
-  std::uint64_t last_polled_tick_ = 0;  // guarded by mutex_
+  std::optional<std::uint64_t> last_polled_tick_;  // guarded by mutex_; none before the first
   std::uint64_t last_sequence_ = 0;    // guarded by mutex_
   std::int64_t offset_window_max_ns_ = INT64_MIN;  // guarded by mutex_
   std::int64_t offset_estimate_ns_ = INT64_MIN;    // guarded by mutex_

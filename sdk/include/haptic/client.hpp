@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "haptic/error.hpp"
 #include "haptic/types.hpp"
@@ -51,17 +52,19 @@ class ObjectHandle {
   /// Replaces the object (a wall stays a wall only if you pass a WallSpec). Throws haptic::Error.
   void update(const WallSpec& wall);
   void update(const SphereSpec& sphere);
-  /// Removes the object now; its force ramps out on the server. Throws haptic::Error.
+  /// Removes the object now; its force ramps out on the server. Throws haptic::Error. Does
+  /// nothing if the handle owns nothing, its Client is gone, or Client::apply_scene replaced it.
   void remove();
   /// Stops owning the object (it stays until removed by id or the session ends); returns its id.
   std::uint64_t release() noexcept;
 
  private:
   friend class Client;
-  ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id);
+  ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation);
   void drop() noexcept;  // removes the object if owned, swallowing errors
   std::weak_ptr<detail::ClientCore> core_;
   std::uint64_t id_ = 0;
+  std::uint64_t generation_ = 0;  // the client's scene generation when the item was made
 };
 
 /// A registered energy field. Same ownership rules as ObjectHandle.
@@ -76,18 +79,31 @@ class FieldHandle {
 
   std::uint64_t id() const noexcept { return id_; }
   bool owned() const noexcept { return id_ != 0; }
+  /// Replaces the field. Throws haptic::Error.
   void update(const SpringFieldSpec& spring);
+  /// As ObjectHandle::remove.
   void remove();
+  /// As ObjectHandle::release.
   std::uint64_t release() noexcept;
 
  private:
   friend class Client;
-  FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id);
+  FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation);
   void drop() noexcept;
   std::weak_ptr<detail::ClientCore> core_;
   std::uint64_t id_ = 0;
+  std::uint64_t generation_ = 0;  // the client's scene generation when the item was made
 };
 
+/// The handles of a scene applied by Client::apply_scene, each list in the order given.
+struct SceneHandles {
+  std::vector<ObjectHandle> walls;
+  std::vector<ObjectHandle> spheres;
+  std::vector<FieldHandle> springs;
+};
+
+/// One session with a hapticd server. Methods may be called from any thread, except that moving,
+/// close() and destruction must not race other calls on the same Client.
 class Client {
  public:
   /// Connects, opens a session, starts heartbeats and (if state_decimation > 0) the state stream.
@@ -103,6 +119,13 @@ class Client {
   ObjectHandle add_wall(const WallSpec& wall);
   ObjectHandle add_sphere(const SphereSpec& sphere);
   FieldHandle add_spring_field(const SpringFieldSpec& spring);
+  /// Replaces all of this session's objects and fields at once; if anything is refused, nothing
+  /// changes. The server numbers the objects walls first, then spheres ("scene.objects[i]" in its
+  /// messages). Handles from earlier calls go stale: their remove() and destructor do nothing and
+  /// their update() throws NotFoundError.
+  SceneHandles apply_scene(const std::vector<WallSpec>& walls,
+                           const std::vector<SphereSpec>& spheres,
+                           const std::vector<SpringFieldSpec>& springs);
 
   /// Sets what the server's simulated operator does (FailedPreconditionError on real hardware).
   void set_operator(const OperatorInput& input);
@@ -113,15 +136,22 @@ class Client {
 
   /// The device, as reported when the session opened.
   const DeviceInfo& device_info() const;
+  /// The server's counters (GetStats).
   Stats stats();
   std::uint64_t session_id() const;
+  /// How long the server keeps a silent session (no heartbeat, no RPC) before dropping it.
+  std::chrono::milliseconds lease_timeout() const;
 
-  /// Called on the SDK's receive thread for every state sample; keep it short and do not call
-  /// back into the Client from it. Pass an empty function to stop.
+  /// Called on the SDK's receive thread for every accepted State datagram (not for the sample a
+  /// Step reply carries); keep it short and do not call back into the Client from it. Pass an
+  /// empty function to stop.
   void on_state(std::function<void(const State&)> callback);
-  /// Waits up to `timeout` for a sample newer than the last one this call returned.
+  /// Waits up to `timeout` for a sample newer (by tick) than the last one poll_state or
+  /// wait_for_tick returned, and copies the newest into `out`. False on timeout. Samples are
+  /// State datagrams and the state a Step reply carries.
   bool poll_state(State& out, std::chrono::milliseconds timeout);
-  /// Waits up to `timeout` until a sample of tick >= `tick` has arrived; returns the newest.
+  /// Waits up to `timeout` until a sample of tick >= `tick` has arrived and copies the newest into
+  /// `out`. False on timeout. After step() it returns at once: the reply carries that tick's state.
   bool wait_for_tick(std::uint64_t tick, State& out, std::chrono::milliseconds timeout);
 
   /// Estimated server clock − local steady clock (so server_time ≈ local + offset), taken from

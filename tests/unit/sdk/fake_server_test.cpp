@@ -30,6 +30,8 @@ using std::chrono::seconds;
 constexpr std::uint64_t kSessionId = 7;
 constexpr wire::Key kKey = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
 constexpr double kMaxStiffness = 1e5;  // the fake's limit. Unit: N/m.
+constexpr std::uint32_t kLeaseTimeoutMs = 1000;
+constexpr std::uint64_t kFirstSceneId = 100;  // ApplyScene numbers its items from here
 
 // The fake's UDP data plane: a socket on 127.0.0.1 that learns the client's address from its
 // heartbeats, as hapticd does.
@@ -132,6 +134,8 @@ class FakeHaptic final : public v1::Haptic::Service {
     std::uint32_t api_version = 0;
     std::vector<v1::CreateObjectRequest> creates;
     std::vector<std::uint64_t> deleted;
+    std::vector<std::uint64_t> fields_deleted;
+    std::vector<v1::ApplySceneRequest> scenes;
     std::vector<std::uint32_t> decimations;
     bool closed = false;
   };
@@ -158,7 +162,7 @@ class FakeHaptic final : public v1::Haptic::Service {
     response->mutable_device()->set_dof(3);
     response->mutable_device()->set_loop_rate_hz(1000.0);
     response->mutable_device()->set_simulated(true);
-    response->set_lease_timeout_ms(1000);
+    response->set_lease_timeout_ms(kLeaseTimeoutMs);
     return grpc::Status::OK;
   }
 
@@ -187,6 +191,24 @@ class FakeHaptic final : public v1::Haptic::Service {
                             v1::Empty*) override {
     std::lock_guard lock(mutex_);
     record_.deleted.push_back(request->id());
+    return grpc::Status::OK;
+  }
+
+  grpc::Status DeleteField(grpc::ServerContext*, const v1::DeleteRequest* request,
+                           v1::Empty*) override {
+    std::lock_guard lock(mutex_);
+    record_.fields_deleted.push_back(request->id());
+    return grpc::Status::OK;
+  }
+
+  // Numbers objects then fields from kFirstSceneId, as hapticd numbers them in request order.
+  grpc::Status ApplyScene(grpc::ServerContext*, const v1::ApplySceneRequest* request,
+                          v1::ApplySceneResponse* response) override {
+    std::lock_guard lock(mutex_);
+    record_.scenes.push_back(*request);
+    std::uint64_t id = kFirstSceneId;
+    for (int i = 0; i < request->scene().objects_size(); ++i) response->add_object_ids(id++);
+    for (int i = 0; i < request->scene().fields_size(); ++i) response->add_field_ids(id++);
     return grpc::Status::OK;
   }
 
@@ -243,6 +265,7 @@ TEST_F(FakeServerTest, ConstructorOpensASessionAndDestructorClosesIt) {
     EXPECT_EQ(client.device_info().name, "fake");
     EXPECT_EQ(client.device_info().loop_rate_hz, 1000.0);
     EXPECT_TRUE(client.device_info().simulated);
+    EXPECT_EQ(client.lease_timeout(), milliseconds(kLeaseTimeoutMs));
     EXPECT_FALSE(service_.record().closed);
   }
   const auto record = service_.record();
@@ -296,6 +319,53 @@ TEST_F(FakeServerTest, ObviousMistakesAreCaughtBeforeTheServerIsAsked) {
   EXPECT_THROW(client.add_wall({.normal = {0.0, 0.0, 0.0}}), InvalidArgumentError);
   EXPECT_THROW(client.add_sphere({.radius = 0.0}), InvalidArgumentError);
   EXPECT_TRUE(service_.record().creates.empty());
+}
+
+TEST_F(FakeServerTest, ApplySceneSendsWallsThenSpheresAndStalesEarlierHandles) {
+  Client client(config_);
+  ObjectHandle before = client.add_wall(floor_wall(1000.0));
+  SceneHandles scene = client.apply_scene(
+      {floor_wall(500.0)}, {{.center = {0.0, 0.0, 0.05}, .radius = 0.02, .impedance = {300.0, 0.5}}},
+      {{.anchor = {0.0, 0.0, 0.02}, .stiffness = 20.0, .max_force = 2.0}});
+
+  const auto record = service_.record();
+  ASSERT_EQ(record.scenes.size(), 1u);
+  const v1::Scene& sent = record.scenes.front().scene();
+  EXPECT_EQ(record.scenes.front().session_id(), kSessionId);
+  ASSERT_EQ(sent.objects_size(), 2);
+  EXPECT_TRUE(sent.objects(0).has_half_space());
+  EXPECT_EQ(sent.objects(0).impedance().stiffness(), 500.0);
+  EXPECT_EQ(sent.objects(1).sphere().radius(), 0.02);
+  ASSERT_EQ(sent.fields_size(), 1);
+  EXPECT_EQ(sent.fields(0).spring_to_point().max_force(), 2.0);
+
+  ASSERT_EQ(scene.walls.size(), 1u);
+  ASSERT_EQ(scene.spheres.size(), 1u);
+  ASSERT_EQ(scene.springs.size(), 1u);
+  EXPECT_EQ(scene.walls[0].id(), kFirstSceneId);
+  EXPECT_EQ(scene.spheres[0].id(), kFirstSceneId + 1);
+  EXPECT_EQ(scene.springs[0].id(), kFirstSceneId + 2);
+
+  // The scene replaced the earlier wall on the server: its handle neither updates nor removes.
+  EXPECT_THROW(before.update(floor_wall(10.0)), NotFoundError);
+  EXPECT_NO_THROW(before.remove());
+  EXPECT_TRUE(service_.record().deleted.empty());
+
+  scene.walls[0].remove();
+  scene.springs.clear();
+  EXPECT_EQ(service_.record().deleted, std::vector<std::uint64_t>{kFirstSceneId});
+  EXPECT_EQ(service_.record().fields_deleted, std::vector<std::uint64_t>{kFirstSceneId + 2});
+}
+
+TEST_F(FakeServerTest, ApplySceneNamesTheBadSpecAndSendsNothing) {
+  Client client(config_);
+  try {
+    client.apply_scene({floor_wall(1000.0), floor_wall(-5.0)}, {}, {});
+    FAIL() << "no exception";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_EQ(std::string(error.what()), "walls[1]: impedance.stiffness: must be >= 0");
+  }
+  EXPECT_TRUE(service_.record().scenes.empty());
 }
 
 TEST_F(FakeServerTest, AnotherApiVersionIsAVersionMismatchCarryingBoth) {
@@ -355,6 +425,16 @@ TEST_F(FakeServerTest, HeartbeatsTellTheServerWhereToSendStateAndBadDatagramsAre
   EXPECT_EQ(counters.accepted, 2u);
   EXPECT_EQ(counters.rejected, 3u);
   EXPECT_TRUE(client.clock_offset().has_value());
+}
+
+TEST_F(FakeServerTest, PollReturnsTheFirstSampleEvenAtTickZero) {
+  config_.state_decimation = 1;
+  Client client(config_);
+  data_plane_.send_state(0, 0.01);
+  State state;
+  ASSERT_TRUE(client.poll_state(state, seconds(2)));
+  EXPECT_EQ(state.tick, 0u);
+  EXPECT_FALSE(client.poll_state(state, milliseconds(0)));
 }
 
 }  // namespace
