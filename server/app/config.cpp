@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "net/validation.hpp"
 
@@ -54,6 +55,10 @@ void fill_defaults(v1::ServerConfig& config) {
   if (!real_time->has_use_fifo()) real_time->set_use_fifo(true);
   if (real_time->fifo_priority() == 0) real_time->set_fifo_priority(80);
   if (real_time->spin_us() == 0) real_time->set_spin_us(100);
+  if (!real_time->has_cpu()) {
+    const int cpus = static_cast<int>(std::thread::hardware_concurrency());
+    real_time->set_cpu(real_time->use_fifo() && cpus > 1 ? cpus - 1 : -1);
+  }
 
   if (config.initial_operator().mode() == v1::OperatorInput::MODE_UNSPECIFIED) {
     config.mutable_initial_operator()->set_mode(v1::OperatorInput::NONE);
@@ -98,6 +103,11 @@ std::string validate(const v1::ServerConfig& config) {
   }
   if (config.real_time().fifo_priority() < 1 || config.real_time().fifo_priority() > 99) {
     return "real_time.fifo_priority: must be 1 to 99";
+  }
+  const int cpus = static_cast<int>(std::thread::hardware_concurrency());
+  if (config.real_time().cpu() < -1 || (cpus > 0 && config.real_time().cpu() >= cpus)) {
+    return "real_time.cpu: must be -1 (no pinning) or 0 to " + std::to_string(cpus - 1) + ", got " +
+           std::to_string(config.real_time().cpu());
   }
   const double period_us = 1e6 / config.loop_rate_hz();
   if (config.real_time().spin_us() >= period_us) {

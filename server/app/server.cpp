@@ -52,6 +52,7 @@ Server::Server(const v1::ServerConfig& config)
   loop.use_fifo = config.real_time().use_fifo();
   loop.fifo_priority = config.real_time().fifo_priority();
   loop.spin_ns = static_cast<std::int64_t>(config.real_time().spin_us()) * 1000;
+  loop.cpu = loop.mode == runtime::TimeMode::kRealTime ? config.real_time().cpu() : -1;
   loop_ = std::make_unique<runtime::LoopThread>(*runner_, counters_, lateness_, loop);
 
   scene_ = std::make_unique<net::SceneStore>(
@@ -114,11 +115,18 @@ void Server::start() {
       spdlog::warn("loop: SCHED_FIFO refused ({}); running with normal scheduling, expect more jitter",
                    setup.fifo_error);
     }
+    if (!setup.cpu_error.empty()) {
+      spdlog::warn("loop: cannot pin to CPU {} ({}); running unpinned", loop_->config().cpu,
+                   setup.cpu_error);
+    }
     if (!setup.memory_locked) {
       spdlog::warn("loop: mlockall refused ({}); page faults may delay ticks", setup.mlock_error);
     }
   }
-  udp_.start();
+  udp_.start(loop_->config().mode == runtime::TimeMode::kRealTime
+                 ? std::optional<std::int64_t>(loop_->start_ns())
+                 : std::nullopt,
+             setup.cpu);
   status_last_ns_ = runtime::monotonic_now_ns();
   housekeeping_ = std::thread([this] { housekeeping_loop(); });
   started_ = true;
@@ -174,6 +182,9 @@ v1::Stats Server::stats() const {
   stats.set_force_faults(counters_.force_faults.load(std::memory_order_relaxed));
   stats.set_force_saturations(counters_.force_saturations.load(std::memory_order_relaxed));
   stats.set_leases_expired(leases_expired_.load(std::memory_order_relaxed));
+  const runtime::LatenessSummary send_delay = udp_.counters().send_delay.summarize();
+  stats.set_send_delay_p50_us(send_delay.p50_us);
+  stats.set_send_delay_p99_us(send_delay.p99_us);
   return stats;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "haptic/wire/datagram.hpp"
+#include "runtime/realtime.hpp"
 
 namespace haptic::net {
 
@@ -62,10 +63,10 @@ void UdpEndpoint::bind(const std::string& address, std::uint16_t port) {
                                             : reinterpret_cast<sockaddr_in*>(&bound)->sin_port);
 }
 
-void UdpEndpoint::start() {
+void UdpEndpoint::start(std::optional<std::int64_t> time_origin_ns, int sender_cpu) {
   stopping_.store(false);
   receiver_ = std::thread([this] { receive_loop(); });
-  sender_ = std::thread([this] { send_loop(); });
+  sender_ = std::thread([this, time_origin_ns, sender_cpu] { send_loop(time_origin_ns, sender_cpu); });
 }
 
 void UdpEndpoint::stop() {
@@ -103,7 +104,8 @@ void UdpEndpoint::receive_loop() {
   }
 }
 
-void UdpEndpoint::send_loop() {
+void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu) {
+  if (cpu >= 0) (void)runtime::pin_to_cpu(cpu);  // best effort; the loop reports pinning problems
   std::vector<Subscriber> subscribers;
   std::map<std::uint64_t, std::uint64_t> sequences;  // per session, last sequence sent
   std::uint64_t subscribers_version = ~0ull;
@@ -123,6 +125,7 @@ void UdpEndpoint::send_loop() {
         counters_.samples_missed.fetch_add(1, std::memory_order_relaxed);
         continue;
       }
+      bool first_send = true;
       for (const Subscriber& subscriber : subscribers) {
         if (tick % subscriber.decimation != 0) continue;
         wire::Header header;
@@ -144,6 +147,10 @@ void UdpEndpoint::send_loop() {
           counters_.send_errors.fetch_add(1, std::memory_order_relaxed);
         } else {
           counters_.sent.fetch_add(1, std::memory_order_relaxed);
+          if (first_send && time_origin_ns) {
+            counters_.send_delay.record(runtime::monotonic_now_ns() - (*time_origin_ns + sample.time_ns));
+          }
+          first_send = false;
         }
       }
     }

@@ -26,8 +26,12 @@ RealtimeSetup LoopThread::start() {
       run_lockstep();
       return;
     }
-    setup_promise.set_value(config_.use_fifo ? apply_realtime(config_.fifo_priority)
-                                             : RealtimeSetup{});
+    RealtimeSetup setup = config_.use_fifo ? apply_realtime(config_.fifo_priority) : RealtimeSetup{};
+    if (config_.cpu >= 0) {
+      setup.cpu_error = pin_to_cpu(config_.cpu);
+      if (setup.cpu_error.empty()) setup.cpu = config_.cpu;
+    }
+    setup_promise.set_value(setup);
     run_real_time();
   });
   return setup_future.get();

@@ -25,6 +25,7 @@ struct LoopConfig {
   bool use_fifo = true;
   int fifo_priority = 80;
   std::int64_t spin_ns = 100'000;  // Unit: ns.
+  int cpu = -1;                    // Pin the loop to this CPU; -1: no pinning.
 };
 
 class LoopThread {
@@ -54,6 +55,8 @@ class LoopThread {
   /// Server time now. Unit: ns. Lockstep: completed ticks × period.
   std::int64_t server_time_ns() const;
   std::int64_t period_ns() const { return period_ns_; }
+  /// CLOCK_MONOTONIC time of server time 0 (real time only; set by start()). Unit: ns.
+  std::int64_t start_ns() const { return start_ns_; }
   const LoopConfig& config() const { return config_; }
 
  private:

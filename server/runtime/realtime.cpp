@@ -27,6 +27,16 @@ RealtimeSetup apply_realtime(int priority) {
   return setup;
 }
 
+std::string pin_to_cpu(int cpu) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  CPU_SET(cpu, &set);
+  if (const int rc = pthread_setaffinity_np(pthread_self(), sizeof(set), &set); rc != 0) {
+    return std::strerror(rc);
+  }
+  return {};
+}
+
 std::int64_t monotonic_now_ns() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);

@@ -11,11 +11,16 @@ struct RealtimeSetup {
   bool memory_locked = false;   // mlockall(MCL_CURRENT | MCL_FUTURE) succeeded
   std::string fifo_error;       // why not, when not
   std::string mlock_error;
+  int cpu = -1;                 // the CPU the loop is pinned to, -1 if none
+  std::string cpu_error;
 };
 
 /// Asks for SCHED_FIFO at `priority` for the calling thread and locks memory. Never fails hard:
 /// what was refused is reported so the caller can log it (off the loop) and carry on.
 RealtimeSetup apply_realtime(int priority);
+
+/// Pins the calling thread to one CPU. Empty on success, else why not.
+std::string pin_to_cpu(int cpu);
 
 /// CLOCK_MONOTONIC now. Unit: ns.
 std::int64_t monotonic_now_ns();

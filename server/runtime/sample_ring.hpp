@@ -21,22 +21,31 @@ class SampleRing {
   void publish(const TickSample& sample) {
     slots_[sample.tick % kCapacity].store(sample);
     published_.store(sample.tick, std::memory_order_release);
-    // Wakes a sender blocked in wait_beyond(); a futex call only when someone waits.
-    published_.notify_all();
+    // Wakes a sender blocked in wait_beyond(). A 32-bit counter, because libstdc++ waits on those
+    // with a futex on the word itself; wider atomics go through a shared waiter table.
+    signal_.fetch_add(1, std::memory_order_release);
+    signal_.notify_all();
   }
 
   /// Tick index of the newest published sample, 0 before the first.
   std::uint64_t newest() const { return published_.load(std::memory_order_acquire); }
 
   /// Blocks until a sample newer than `tick` is published or stop() is called.
-  void wait_beyond(std::uint64_t tick) const { published_.wait(tick, std::memory_order_acquire); }
+  void wait_beyond(std::uint64_t tick) const {
+    for (;;) {
+      const std::uint32_t seen = signal_.load(std::memory_order_acquire);
+      if (published_.load(std::memory_order_acquire) > tick || stopping()) return;
+      signal_.wait(seen, std::memory_order_acquire);
+    }
+  }
 
   /// Wakes waiters for good (shutdown): stopping() turns true and newest() moves past the last
   /// real sample, whose slot then reads as missing.
   void stop() {
     stopping_.store(true, std::memory_order_release);
     published_.fetch_add(1, std::memory_order_acq_rel);
-    published_.notify_all();
+    signal_.fetch_add(1, std::memory_order_release);
+    signal_.notify_all();
   }
   bool stopping() const { return stopping_.load(std::memory_order_acquire); }
 
@@ -50,6 +59,7 @@ class SampleRing {
   std::array<LatestValue<TickSample>, kCapacity> slots_;
   std::atomic<std::uint64_t> published_{0};
   std::atomic<bool> stopping_{false};
+  std::atomic<std::uint32_t> signal_{0};  // bumped with every publish; what waiters sleep on
 };
 
 }  // namespace haptic::runtime
