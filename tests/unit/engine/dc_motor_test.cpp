@@ -1,0 +1,332 @@
+// The 1-DOF DC-motor device and its controllers (Monasterio-Huelin, Gutiérrez, Larraga,
+// "Introduction to Haptic Systems"): the spring-damper discretizations of section 8, gravity
+// compensation (eq. 6.7), the inductance-free model (eq. 3.9) against the full one
+// (eqs. 2.1–2.4, 3.8), the haptic loop (eqs. 9.6–9.7) and parameter validation.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "engine/control/dc_motor_control.hpp"
+#include "engine/device/dc_motor_plant.hpp"
+
+namespace haptic::engine {
+namespace {
+
+constexpr double kT = 1e-3;  // s, the 1 kHz haptic period (section 7)
+constexpr double kPi = std::numbers::pi;
+
+constexpr auto kNoHand = [](double, double) { return ExternalWrench{}; };
+constexpr auto kNoObserver = [](std::uint64_t, const DcMotorState&, double) {};
+
+// ---------------------------------------------------------------------------------------------
+// Section 8: discretizations of τ_V = k_V θ_V + B_V θ̇_V (eq. 8.1).
+
+TEST(SpringDamperDiscretization, ExactWeightsSumToTheStiffness_Eq8_12) {
+  for (const double k_V : {0.01, 1.0, 50.0, 1000.0}) {
+    for (const double B_V : {1e-3, 0.02, 0.5}) {
+      for (const double T : {1e-5, 1e-4, 1e-3, 1e-2}) {
+        const SpringDamperCoefficients a = exact_delayed_coefficients(k_V, B_V, T);
+        ASSERT_TRUE(std::isfinite(a.c1) && std::isfinite(a.c2));
+        // Round-off scales with the weights themselves (≈ B_V / T when k_V T / B_V is small).
+        const double tolerance = 1e-12 * (std::abs(a.c1) + k_V);
+        EXPECT_NEAR(a.c1 + a.c2, k_V, tolerance) << "k_V " << k_V << " B_V " << B_V << " T " << T;
+        // Eq. 8.12 as printed, where it does not overflow.
+        const double x = k_V * T / B_V;
+        if (x < 50.0) {
+          EXPECT_NEAR(a.c1, k_V * std::exp(x) / (std::exp(x) - 1.0), 1e-9 * std::abs(a.c1));
+          EXPECT_NEAR(a.c2, -k_V / (std::exp(x) - 1.0), 1e-9 * std::abs(a.c1));
+        }
+      }
+    }
+  }
+}
+
+// b_i → a_i as T → 0 (eqs. 8.16, 8.17). The relative difference vanishes; the absolute one does
+// not: with x = k_V T / B_V, a1 − b1 = k_V (1/(eˣ − 1) − 1/x) → −k_V / 2, and a2 − b2 → +k_V / 2,
+// while both weights grow like B_V / T. So the relative difference is ≈ x / 2: first order in T.
+TEST(SpringDamperDiscretization, EulerWeightsApproachTheExactOnesAtFirstOrder_Eq8_16) {
+  const double k_V = 1.0;
+  const double B_V = 0.02;
+  std::vector<double> log_T;
+  std::vector<double> log_error;
+  std::printf("  T [s]     a1          b1          a2          b2          max rel. diff\n");
+  for (const double T : {1e-2, 1e-3, 1e-4, 1e-5}) {
+    const SpringDamperCoefficients a = exact_delayed_coefficients(k_V, B_V, T);
+    const SpringDamperCoefficients b = euler_backward_coefficients(k_V, B_V, T);
+    const double error =
+        std::max(std::abs(b.c1 - a.c1) / std::abs(a.c1), std::abs(b.c2 - a.c2) / std::abs(a.c2));
+    std::printf("  %.0e  %-10.6g  %-10.6g  %-10.6g  %-10.6g  %.4g\n", T, a.c1, b.c1, a.c2, b.c2,
+                error);
+    log_T.push_back(std::log(T));
+    log_error.push_back(std::log(error));
+    EXPECT_NEAR(a.c1 - b.c1, -k_V / 2.0, 0.1 * k_V);  // the absolute gap stays ≈ k_V / 2
+  }
+  // Least-squares slope of log(error) against log(T): the observed order.
+  const double n = static_cast<double>(log_T.size());
+  double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0;
+  for (std::size_t k = 0; k < log_T.size(); ++k) {
+    sx += log_T[k];
+    sy += log_error[k];
+    sxx += log_T[k] * log_T[k];
+    sxy += log_T[k] * log_error[k];
+  }
+  const double order = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  std::printf("  observed order %.4f\n", order);
+  RecordProperty("observed_order", std::to_string(order));
+  EXPECT_NEAR(order, 1.0, 0.05);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parameters.
+
+TEST(DcMotorParams, DefaultsAreValidAndTheTimeConstantsMatchTheDataSheet_Eq2_5) {
+  const DcMotorParams p;
+  EXPECT_EQ(p.validate(), "");
+  EXPECT_NEAR(p.t_e(), 0.329e-3 / 1.16, 1e-12);
+  EXPECT_NEAR(p.t_m(), 4.28e-3, 0.03e-3);  // the data sheet's mechanical time constant
+  EXPECT_LT(p.t_e(), 0.1 * p.t_m());       // t_e ≪ t_m (section 2)
+}
+
+TEST(DcMotorParams, ValidateNamesTheBadParameter) {
+  const auto message = [](auto change) {
+    DcMotorParams p;
+    change(p);
+    return p.validate();
+  };
+  EXPECT_EQ(message([](DcMotorParams& p) { p.r = 0.0; }).rfind("r: ", 0), 0u);
+  EXPECT_EQ(message([](DcMotorParams& p) { p.r = 1.5; }).rfind("r: ", 0), 0u);
+  EXPECT_EQ(message([](DcMotorParams& p) { p.eta = 0.0; }).rfind("eta: ", 0), 0u);
+  EXPECT_EQ(message([](DcMotorParams& p) { p.m = std::numeric_limits<double>::quiet_NaN(); })
+                .rfind("m: ", 0),
+            0u);
+  EXPECT_EQ(message([](DcMotorParams& p) { p.m = -1.0; }).rfind("m: ", 0), 0u);
+  EXPECT_EQ(message([](DcMotorParams& p) { p.R_m = 0.0; }).rfind("R_m: ", 0), 0u);
+  EXPECT_EQ(message([](DcMotorParams& p) { p.r = 1.0; }), "");  // a direct drive is allowed
+  std::printf("  e.g. \"%s\"\n", message([](DcMotorParams& p) { p.r = 1.5; }).c_str());
+}
+
+// Eqs. 4.3–4.5: a force tangential to the link (counter-clockwise) of size f gives τ_e = l f.
+TEST(DcMotorPlant, TangentialForceGivesLTimesForce_Eq4_5) {
+  DcMotorParams p;
+  p.alpha_c = 0.3;
+  for (const double theta_L : {-1.0, 0.0, 0.7, 2.5}) {
+    const double a = theta_L + p.alpha_c;
+    const ExternalWrench F{{-2.0 * std::sin(a), 2.0 * std::cos(a), 7.0}, {1.0, 1.0, 0.1}};
+    EXPECT_NEAR(external_joint_torque(p, theta_L, F), p.l * 2.0 + 0.1, 1e-12);
+    const ExternalWrench normal{{std::cos(a), std::sin(a), 0.0}, {}};  // along the link: no work
+    EXPECT_NEAR(external_joint_torque(p, theta_L, normal), 0.0, 1e-12);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Section 6: gravity compensation u = −K_D θ̇_m + (r/η) τ_g(θ_m) (eq. 6.7), sampled at 1 kHz.
+
+constexpr double kGravityK_D = 5e-3;  // N·m·s/rad
+
+/// Runs eq. 6.7 for `ticks` periods; returns the state.
+DcMotorState run_gravity_compensation(DcMotorPlant& plant, int ticks) {
+  const DcMotorParams& p = plant.params();
+  for (int k = 0; k < ticks; ++k) {
+    const DcMotorState& s = plant.state();
+    plant.step(voltage_from_torque_command(
+                   p, gravity_compensation(p, kGravityK_D, s.theta_m, s.omega_m)),
+               kT);
+  }
+  return plant.state();
+}
+
+/// The device let go at theta_L with load velocity omega_L, with the current the controller was
+/// driving at that moment (the hand held or moved it with the controller running).
+DcMotorState released_at(const DcMotorParams& p, double theta_L, double omega_L) {
+  DcMotorState s{theta_L / p.r, omega_L / p.r, 0.0};
+  const double u_m = voltage_from_torque_command(
+      p, gravity_compensation(p, kGravityK_D, s.theta_m, s.omega_m));
+  s.i = (u_m - p.k_b * s.omega_m) / p.R_m;
+  return s;
+}
+
+class GravityCompensation : public ::testing::TestWithParam<DcMotorModel> {};
+
+TEST_P(GravityCompensation, ReleasedAtRestTheLoadHoldsItsAngle_Eq6_7) {
+  const DcMotorParams p;
+  for (const double deg : {-60.0, 0.0, 30.0, 80.0}) {
+    const double theta_L = deg * kPi / 180.0;
+    DcMotorPlant plant(p, GetParam(), released_at(p, theta_L, 0.0));
+    const DcMotorState end = run_gravity_compensation(plant, 3000);
+    // Perfect cancellation makes the release point an equilibrium of the sampled loop too; what
+    // is left is round-off.
+    EXPECT_NEAR(p.r * end.theta_m, theta_L, 1e-9) << deg << " deg";
+    EXPECT_NEAR(end.omega_m, 0.0, 1e-9) << deg << " deg";
+  }
+}
+
+// Let go while moving: with perfect cancellation eq. 6.5/6.6 leave J_eff θ̈_m = −(B + K_D) θ̇_m,
+// so the motor coasts ω0 J_eff / (B + K_D) and stops. The bound on the observed coast: the sampled
+// −K_D θ̇_m holds the velocity of the start of the tick, larger than its mean over the tick by
+// ≈ λT/2 with λ = (B + K_D) / J_eff ≈ 1 / 5.3 ms, so it brakes ≈ 9 % harder; it carries
+// K_D / (B + K_D) ≈ 61 % of the damping, so the coast shortens by ≈ 5.5 % (measured: 5.9 % without
+// inductance; 11 % with it, where the current also lags by t_e = 0.28 ms). The gravity term, held
+// over a tick while the link turns by at most r ω0 T = 0.5 mrad, adds far less. Allowed: 20 %.
+// Holding: over the last second the angle moves less than 1e-9 rad.
+TEST_P(GravityCompensation, ReleasedMovingTheLoadComesToRestAndHolds_Eq6_7) {
+  const DcMotorParams p;
+  const double omega_L0 = 0.5;  // rad/s at the load
+  const double coast_m = omega_L0 / p.r * p.J_eff() / (p.B() + kGravityK_D);
+  for (const double deg : {-60.0, 0.0, 30.0, 80.0}) {
+    const double theta_L = deg * kPi / 180.0;
+    DcMotorPlant plant(p, GetParam(), released_at(p, theta_L, omega_L0));
+    const DcMotorState at_2s = run_gravity_compensation(plant, 2000);
+    const DcMotorState at_3s = run_gravity_compensation(plant, 1000);
+    const double coast = at_3s.theta_m - theta_L / p.r;
+    std::printf("  %5.1f deg: coast %.6f rad (motor), continuous-time %.6f, ratio %.4f\n", deg,
+                coast, coast_m, coast / coast_m);
+    EXPECT_NEAR(coast, coast_m, 0.2 * coast_m) << deg << " deg";
+    EXPECT_NEAR(at_3s.omega_m, 0.0, 1e-9) << deg << " deg";
+    EXPECT_NEAR(at_3s.theta_m, at_2s.theta_m, 1e-9) << deg << " deg";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, GravityCompensation,
+                         ::testing::Values(DcMotorModel::kWithInductance,
+                                           DcMotorModel::kWithoutInductance));
+
+// Without compensation the link falls: the compensation is doing the holding.
+TEST(GravityCompensation, WithoutTheGravityTermTheLinkFalls) {
+  const DcMotorParams p;
+  DcMotorPlant plant(p, DcMotorModel::kWithoutInductance, {0.0, 0.0, 0.0});
+  for (int k = 0; k < 200; ++k) plant.step(0.0, kT);
+  EXPECT_LT(p.r * plant.state().theta_m, -0.01);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Section 2: dropping the inductance (eq. 2.6 → 2.8/3.9) is right as t_e / t_m → 0.
+
+struct OpenLoopRun {
+  std::vector<double> theta_m;
+  double seconds = 0.0;
+};
+
+OpenLoopRun open_loop_step(const DcMotorParams& p, DcMotorModel model, double u_m, int ticks) {
+  OpenLoopRun run;
+  run.theta_m.reserve(static_cast<std::size_t>(ticks));
+  DcMotorPlant plant(p, model, {});
+  const auto start = std::chrono::steady_clock::now();
+  for (int k = 0; k < ticks; ++k) {
+    plant.step(u_m, kT);
+    run.theta_m.push_back(plant.state().theta_m);
+  }
+  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
+
+TEST(DcMotorPlant, WithoutInductanceMatchesTheFullModelAsTeOverTmVanishes_Eq2_8) {
+  // A 3 V step from rest, link horizontal, for 0.2 s: the link swings up against gravity.
+  constexpr int kTicks = 200;
+  const double u_m = 3.0;
+  const DcMotorParams nominal;
+  const OpenLoopRun simplified =
+      open_loop_step(nominal, DcMotorModel::kWithoutInductance, u_m, kTicks);
+  std::printf(
+      "  t_e/t_m    L_m [H]     sub-steps/tick  max|Δθ_m| [rad]  full [ms]  simplified [ms]\n");
+  double previous_error = std::numeric_limits<double>::infinity();
+  double first_error = 0.0;
+  for (const double scale : {1.0, 0.1, 0.01, 0.001}) {
+    DcMotorParams p = nominal;
+    p.L_m = nominal.L_m * scale;
+    const OpenLoopRun full = open_loop_step(p, DcMotorModel::kWithInductance, u_m, kTicks);
+    double error = 0.0;
+    for (std::size_t k = 0; k < full.theta_m.size(); ++k) {
+      error = std::max(error, std::abs(full.theta_m[k] - simplified.theta_m[k]));
+    }
+    const DcMotorPlant probe(p, DcMotorModel::kWithInductance);
+    std::printf("  %-9.3g  %-10.3g  %-14u  %-15.4g  %-9.3f  %.3f\n", p.t_e() / p.t_m(), p.L_m,
+                probe.substeps_for(kT), error, 1e3 * full.seconds, 1e3 * simplified.seconds);
+    EXPECT_LT(error, previous_error) << "t_e/t_m " << p.t_e() / p.t_m();
+    if (scale == 1.0) first_error = error;
+    previous_error = error;
+  }
+  // The gap is the current's first-order lag, so it scales with t_e: three decades of t_e should
+  // take off well over two decades of error.
+  EXPECT_LT(previous_error, 1e-2 * first_error);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Section 5: direct torque control (eq. 5.2) with the PD law (eq. 5.5).
+
+TEST(DirectTorqueControl, PdOnTheLinearizedDeviceReachesTheTarget_Eq5_2) {
+  const DcMotorParams p;
+  DcMotorPlant plant(p, DcMotorModel::kWithoutInductance, {});
+  const double theta_md = 5.0;  // rad at the motor: 0.5 rad at the load
+  for (int k = 0; k < 1000; ++k) {
+    const DcMotorState& s = plant.state();
+    // K_P = 400 1/s², K_D = 40 1/s: ω_n = 20 rad/s, ζ = 1.
+    const double v = pd_acceleration(400.0, 40.0, theta_md, s.theta_m, s.omega_m);
+    const double u = direct_torque_control(p, v, s.theta_m, s.omega_m);
+    plant.step(voltage_from_torque_command(p, u), kT);
+  }
+  EXPECT_NEAR(plant.state().theta_m, theta_md, 1e-4);
+  EXPECT_NEAR(plant.state().omega_m, 0.0, 1e-3);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Section 9: gravity compensation with a virtual torsion spring (eqs. 9.6–9.7).
+
+struct LoopCase {
+  DcMotorModel model;
+  SpringDiscretization discretization;
+};
+
+class HapticLoop : public ::testing::TestWithParam<LoopCase> {};
+
+TEST_P(HapticLoop, SettlesAtTheSpringRestAngle_Eq9_7) {
+  const DcMotorParams p;
+  HapticLoopConfig config;
+  config.theta_m0 = 3.0;  // θ_L0 = 0.3 rad
+  config.discretization = GetParam().discretization;
+  // Let go 0.2 rad (load) away from the rest angle. Eq. 9.7 with τ_e = 0 is an overdamped
+  // oscillator whose slow pole is ≈ r k_V / (B + K_D + r B_V) ≈ 9.8 rad/s: 3 s is 29 time
+  // constants.
+  DcMotorPlant plant(p, GetParam().model, {config.theta_m0 + 2.0, 0.0, 0.0});
+  double max_overshoot = 0.0;
+  run_haptic_loop(plant, config, 3000, kNoHand,
+                  [&](std::uint64_t, const DcMotorState& s, double) {
+                    max_overshoot = std::max(max_overshoot, config.theta_m0 - s.theta_m);
+                  });
+  EXPECT_NEAR(plant.state().theta_m, config.theta_m0, 1e-6);
+  EXPECT_NEAR(plant.state().omega_m, 0.0, 1e-6);
+  EXPECT_LT(max_overshoot, 1e-3);  // overdamped: no swing through the rest angle
+}
+
+// Eq. 9.7 at rest with a constant operator torque n_ez: r k_V (θ_m − θ_m0) = (r/η) τ_e.
+TEST_P(HapticLoop, AConstantOperatorTorqueDeflectsTheSpringByTauOverEtaK_Eq9_7) {
+  const DcMotorParams p;
+  HapticLoopConfig config;
+  config.theta_m0 = -2.0;
+  config.discretization = GetParam().discretization;
+  const double n_ez = 0.05;  // N·m at the load
+  DcMotorPlant plant(p, GetParam().model, {config.theta_m0, 0.0, 0.0});
+  run_haptic_loop(plant, config, 4000,
+                  [&](double, double) { return ExternalWrench{{}, {0.0, 0.0, n_ez}}; },
+                  kNoObserver);
+  EXPECT_NEAR(plant.state().theta_m - config.theta_m0, n_ez / (p.eta * config.k_V), 1e-6);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    ModelsAndDiscretizations, HapticLoop,
+    ::testing::Values(LoopCase{DcMotorModel::kWithInductance, SpringDiscretization::kExactDelayed},
+                      LoopCase{DcMotorModel::kWithInductance, SpringDiscretization::kEulerBackward},
+                      LoopCase{DcMotorModel::kWithoutInductance,
+                               SpringDiscretization::kExactDelayed},
+                      LoopCase{DcMotorModel::kWithoutInductance,
+                               SpringDiscretization::kEulerBackward}));
+
+}  // namespace
+}  // namespace haptic::engine

@@ -1,0 +1,153 @@
+// The frequency-domain design of the wall controller's velocity gain B_c (Eom, Suh, Yi, eqs. 6–17,
+// Fig. 8) with their experiment's values: m = 0.01 kg, b = 0.022 N·s/m, K = 1000 N/m,
+// B = 1 N·s/m, T = 1 ms, α = β = 0.5.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "engine/analysis/wall_design.hpp"
+
+namespace haptic::engine {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+WallDesignParams document_params(double weight_cutoff = 100.0) {
+  WallDesignParams p;  // the defaults are Eom et al.'s values
+  p.weight_cutoff = weight_cutoff;
+  return p;
+}
+
+Complex jw(double omega) { return {0.0, omega}; }
+
+TEST(WallDesign, ZohApproximationHasUnityGainAndNinetyDegreesLagAtNyquist) {
+  const WallDesignParams p = document_params();
+  const double nyquist = kPi / p.sample_period;  // rad/s
+  EXPECT_NEAR(std::abs(zoh_approximation(p, jw(1e-6))), 1.0, 1e-12);
+  EXPECT_NEAR(std::arg(zoh_approximation(p, jw(nyquist))), -kPi / 2.0, 1e-12);
+  // Same gain at Nyquist as the exact hold, |(1 − e^{−jπ}) / (jπ)| = 2/π.
+  EXPECT_NEAR(std::abs(zoh_approximation(p, jw(nyquist))), 2.0 / kPi, 1e-12);
+  // Same low-frequency phase as the exact hold, −ωT/2 (here 1 % of Nyquist).
+  const double omega = 0.01 * nyquist;
+  EXPECT_NEAR(std::arg(zoh_approximation(p, jw(omega))), -omega * p.sample_period / 2.0, 1e-5);
+}
+
+// Eq. 9: where |ZOH P C| << 1 the loop is open and the operator feels the bare device, Y_t = P.
+TEST(WallDesign, Eq9TransmittedAdmittanceIsThePlantWhereTheControllerIsNegligible) {
+  WallDesignParams p = document_params();
+  // Far above Nyquist the hold has rolled the controller off (|ZOH P C| ~ 1e-5 at 1e6 rad/s).
+  for (const double omega : {1e6, 1e7}) {
+    const Complex P = device_admittance(p, jw(omega));
+    EXPECT_LT(std::abs(transmitted_admittance(p, 15.0, jw(omega)) / P - 1.0), 1e-4) << omega;
+  }
+  // A vanishing controller (B_c = 0, K_c = K -> 0) leaves P at every frequency.
+  p.wall_stiffness = 1e-12;
+  for (const double omega : {0.1, 10.0, 1000.0}) {
+    const Complex P = device_admittance(p, jw(omega));
+    EXPECT_LT(std::abs(transmitted_admittance(p, 0.0, jw(omega)) / P - 1.0), 1e-9) << omega;
+  }
+}
+
+// Eqs. 9 and 12: with K_c = K the loop renders the wall's admittance at low frequency, Y_t -> Y_v
+// (the document's zero steady-state position error), whatever B_c.
+TEST(WallDesign, Eq12TransmittedAdmittanceMatchesTheWallAtLowFrequency) {
+  const WallDesignParams p = document_params();
+  for (const double bc : {1.0, 15.0, 40.0}) {
+    const Complex ratio = transmitted_admittance(p, bc, jw(1e-3)) / wall_admittance(p, jw(1e-3));
+    EXPECT_LT(std::abs(ratio - 1.0), 1e-4) << bc;
+  }
+  // Y_v = 1/V (eqs. 8, 11): a high-pass reaching 1/B.
+  EXPECT_NEAR(std::abs(wall_admittance(p, jw(1e9)) - 1.0 / p.wall_damping), 0.0, 1e-5);
+  EXPECT_NEAR(std::abs(wall_admittance(p, jw(1.0)) * virtual_wall(p, jw(1.0)) - 1.0), 0.0, 1e-15);
+}
+
+// Eq. 16: L = −W P S with S = 1/(1 + ZOH P C). S -> 0 at DC (the integral gain K/s) and S -> 1
+// far above Nyquist, where W P -> α m s / (m s) = α.
+TEST(WallDesign, Eq16UncertaintyLoopLimits) {
+  const WallDesignParams p = document_params();
+  EXPECT_LT(std::abs(uncertainty_loop(p, 15.0, jw(1e-3))), 1e-6);
+  EXPECT_NEAR(std::abs(uncertainty_loop(p, 15.0, jw(1e8))), p.mass_uncertainty, 1e-4);
+}
+
+// Routh–Hurwitz on 1 + ZOH P C: the lower limit is Colgate's b + B_c > K T / 2 (0.478 N·s/m here;
+// the hold's lag at the wall's resonance is a negative damping K T / 2), the upper one the loop
+// B_c / (m s) through the hold reaching −180° with gain 1 at Nyquist, B_c = π² m / (2T) = 49.3.
+TEST(WallDesign, NominalLoopStabilityLimits) {
+  const WallDesignParams p = document_params();
+  EXPECT_FALSE(nominal_loop_stable(p, 0.1));
+  EXPECT_FALSE(nominal_loop_stable(p, 0.45));
+  EXPECT_TRUE(nominal_loop_stable(p, 0.5));
+  EXPECT_TRUE(nominal_loop_stable(p, 1.0));
+  EXPECT_TRUE(nominal_loop_stable(p, 15.0));
+  EXPECT_TRUE(nominal_loop_stable(p, 48.0));
+  EXPECT_FALSE(nominal_loop_stable(p, 50.0));
+}
+
+// Eq. 11's quadrature against an independent, ten times finer one reaching ten times further.
+TEST(WallDesign, Eq11QuadratureHasConverged) {
+  const WallDesignParams p = document_params();
+  for (const double bc : {1.0, 15.0}) {
+    const double omega_max = 1e4 * kPi / p.sample_period;
+    const double du = std::log(10.0) / 4000.0;
+    double sum = 0.0;
+    for (double u = std::log(1e-3); u < std::log(omega_max); u += du) {
+      const double omega = std::exp(u + du / 2.0);  // midpoint rule
+      const Complex s = jw(omega);
+      sum += std::norm(transparency_weight(p, s) *
+                       (wall_admittance(p, s) - transmitted_admittance(p, bc, s))) *
+             omega * du;
+    }
+    const double tail = p.weight_cutoff * p.weight_cutoff / omega_max;  // B = 1
+    EXPECT_NEAR(transparency_index(p, bc), (sum + tail) / kPi, 1e-4 * (sum + tail) / kPi) << bc;
+  }
+}
+
+// Fig. 8: J(B_c) has a minimum inside [0.1, 100] N·s/m (document: B_c = 15 N·s/m; here
+// 15.46 N·s/m with ω_1 = 100 rad/s).
+TEST(WallDesign, Fig8TransparencyIndexHasAnInteriorMinimum) {
+  const WallDesignParams p = document_params();
+  const OptimalWallDesign opt = optimise_controller_damping(p, 0.1, 100.0);
+  EXPECT_GT(opt.controller_damping, 0.2);
+  EXPECT_LT(opt.controller_damping, 50.0);
+  EXPECT_LT(opt.transparency_index, transparency_index(p, 0.1));
+  EXPECT_LT(opt.transparency_index, transparency_index(p, 100.0));
+  EXPECT_LT(opt.transparency_index, transparency_index(p, 0.9 * opt.controller_damping));
+  EXPECT_LT(opt.transparency_index, transparency_index(p, 1.1 * opt.controller_damping));
+  EXPECT_NEAR(opt.controller_damping, 15.46, 0.05);
+  EXPECT_TRUE(opt.nominal_loop_stable);
+}
+
+// Eq. 17, Fig. 8: B_c = 1 N·s/m is not robustly stable for α = β = 0.5 (document: 4.5 dB; here
+// 10.0 dB, the hold's lag at the 316 rad/s resonance halving the loop's damping; with ZOH = 1 it
+// would be 3.9 dB), the transparency optimum is.
+TEST(WallDesign, Eq17Fig8RobustStabilityAtOneAndAtTheOptimum) {
+  const WallDesignParams p = document_params();
+  const double at_one = robust_stability_norm(p, 1.0);
+  EXPECT_GT(at_one, 1.0);
+  EXPECT_NEAR(to_db(at_one), 10.03, 0.05);
+  const OptimalWallDesign opt = optimise_controller_damping(p);
+  EXPECT_LE(opt.robust_stability_norm, 1.0);
+  EXPECT_NEAR(to_db(opt.robust_stability_norm), -0.33, 0.05);
+  EXPECT_TRUE(opt.robustly_stable);
+}
+
+// Eq. 11: the optimum rises with w1's cut-off. Above ω_1 the weight is ω_1/ω, so a higher cut-off
+// shifts J's weight towards the wall's resonance √(K/m) = 316 rad/s and beyond, where the mismatch
+// is the under-damped peak of Y_t that a larger B_c suppresses; below ω_1 ≈ 10 rad/s the
+// integrand's shape no longer changes and the optimum settles near 12.1 N·s/m.
+TEST(WallDesign, Eq11OptimumRisesWithTheWeightCutoff) {
+  std::vector<double> optimum;
+  for (const double cutoff : {10.0, 50.0, 100.0, 200.0}) {
+    optimum.push_back(optimise_controller_damping(document_params(cutoff)).controller_damping);
+  }
+  for (std::size_t i = 1; i < optimum.size(); ++i) EXPECT_GT(optimum[i], optimum[i - 1]) << i;
+  EXPECT_NEAR(optimum.front(), 12.15, 0.05);
+  EXPECT_NEAR(optimum.back(), 18.64, 0.05);
+  // At ω_1 = 200 rad/s the optimum (18.6 N·s/m) lies past eq. 17's upper limit, about 16.3 N·s/m.
+  EXPECT_FALSE(optimise_controller_damping(document_params(200.0)).robustly_stable);
+}
+
+}  // namespace
+}  // namespace haptic::engine
