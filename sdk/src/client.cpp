@@ -220,20 +220,24 @@ void Client::close() {
   }
 }
 
-// ---- ObjectHandle ----
+// ---- handles ----
 
-ObjectHandle::ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id,
-                           std::uint64_t generation)
-    : core_(std::move(core)), id_(id), generation_(generation) {}
+namespace detail {
 
-ObjectHandle::ObjectHandle(ObjectHandle&& other) noexcept
-    : core_(std::move(other.core_)),
+ItemHandle::ItemHandle(Kind kind, std::weak_ptr<ClientCore> core, std::uint64_t id,
+                       std::uint64_t generation)
+    : kind_(kind), core_(std::move(core)), id_(id), generation_(generation) {}
+
+ItemHandle::ItemHandle(ItemHandle&& other) noexcept
+    : kind_(other.kind_),
+      core_(std::move(other.core_)),
       id_(std::exchange(other.id_, 0)),
       generation_(other.generation_) {}
 
-ObjectHandle& ObjectHandle::operator=(ObjectHandle&& other) noexcept {
+ItemHandle& ItemHandle::operator=(ItemHandle&& other) noexcept {
   if (this != &other) {
     drop();
+    kind_ = other.kind_;
     core_ = std::move(other.core_);
     id_ = std::exchange(other.id_, 0);
     generation_ = other.generation_;
@@ -241,9 +245,9 @@ ObjectHandle& ObjectHandle::operator=(ObjectHandle&& other) noexcept {
   return *this;
 }
 
-ObjectHandle::~ObjectHandle() { drop(); }
+ItemHandle::~ItemHandle() { drop(); }
 
-void ObjectHandle::drop() noexcept {
+void ItemHandle::drop() noexcept {
   if (id_ == 0) return;
   try {
     remove();
@@ -252,68 +256,39 @@ void ObjectHandle::drop() noexcept {
   }
 }
 
+ClientCore& ItemHandle::current(const char* call) const {
+  return require_current(core_, generation_, call, id_);
+}
+
+void ItemHandle::remove() {
+  const std::uint64_t id = std::exchange(id_, 0);
+  if (id == 0) return;
+  if (auto core = current_core(core_, generation_)) {
+    if (kind_ == Kind::kObject) {
+      core->delete_object(id);
+    } else {
+      core->delete_field(id);
+    }
+  }
+}
+
+std::uint64_t ItemHandle::release() noexcept { return std::exchange(id_, 0); }
+
+}  // namespace detail
+
 void ObjectHandle::update(const WallSpec& wall) {
   check(wall);
-  require_current(core_, generation_, "UpdateObject", id_).update_object(id_, detail::to_proto(wall));
+  current("UpdateObject").update_object(id(), detail::to_proto(wall));
 }
 
 void ObjectHandle::update(const SphereSpec& sphere) {
   check(sphere);
-  require_current(core_, generation_, "UpdateObject", id_)
-      .update_object(id_, detail::to_proto(sphere));
-}
-
-void ObjectHandle::remove() {
-  const std::uint64_t id = std::exchange(id_, 0);
-  if (id == 0) return;
-  if (auto core = current_core(core_, generation_)) core->delete_object(id);
-}
-
-std::uint64_t ObjectHandle::release() noexcept { return std::exchange(id_, 0); }
-
-// ---- FieldHandle ----
-
-FieldHandle::FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id,
-                           std::uint64_t generation)
-    : core_(std::move(core)), id_(id), generation_(generation) {}
-
-FieldHandle::FieldHandle(FieldHandle&& other) noexcept
-    : core_(std::move(other.core_)),
-      id_(std::exchange(other.id_, 0)),
-      generation_(other.generation_) {}
-
-FieldHandle& FieldHandle::operator=(FieldHandle&& other) noexcept {
-  if (this != &other) {
-    drop();
-    core_ = std::move(other.core_);
-    id_ = std::exchange(other.id_, 0);
-    generation_ = other.generation_;
-  }
-  return *this;
-}
-
-FieldHandle::~FieldHandle() { drop(); }
-
-void FieldHandle::drop() noexcept {
-  if (id_ == 0) return;
-  try {
-    remove();
-  } catch (...) {
-    // As for ObjectHandle.
-  }
+  current("UpdateObject").update_object(id(), detail::to_proto(sphere));
 }
 
 void FieldHandle::update(const SpringFieldSpec& spring) {
   check(spring);
-  require_current(core_, generation_, "UpdateField", id_).update_field(id_, detail::to_proto(spring));
+  current("UpdateField").update_field(id(), detail::to_proto(spring));
 }
-
-void FieldHandle::remove() {
-  const std::uint64_t id = std::exchange(id_, 0);
-  if (id == 0) return;
-  if (auto core = current_core(core_, generation_)) core->delete_field(id);
-}
-
-std::uint64_t FieldHandle::release() noexcept { return std::exchange(id_, 0); }
 
 }  // namespace haptic

@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "haptic/error.hpp"
@@ -35,64 +36,71 @@ struct ClientConfig {
   std::uint32_t state_decimation = 1;              ///< State every n-th tick; 0: no state stream.
 };
 
-/// A registered object (wall or sphere). Move-only; removes the object when destroyed (errors are
-/// swallowed there: call remove() to see them). Harmless if it outlives its Client.
-class ObjectHandle {
+namespace detail {
+
+/// What ObjectHandle and FieldHandle share: a weak reference to the client's internals, the
+/// item's id and the scene generation it was made in. Move-only; removes the item when destroyed
+/// (errors are swallowed there: call remove() to see them). Harmless if it outlives its Client.
+class ItemHandle {
  public:
-  ObjectHandle() = default;
-  ObjectHandle(ObjectHandle&& other) noexcept;
-  ObjectHandle& operator=(ObjectHandle&& other) noexcept;
-  ObjectHandle(const ObjectHandle&) = delete;
-  ObjectHandle& operator=(const ObjectHandle&) = delete;
-  ~ObjectHandle();
+  ItemHandle(ItemHandle&& other) noexcept;
+  ItemHandle& operator=(ItemHandle&& other) noexcept;
+  ItemHandle(const ItemHandle&) = delete;
+  ItemHandle& operator=(const ItemHandle&) = delete;
+  ~ItemHandle();
 
   std::uint64_t id() const noexcept { return id_; }
-  /// True while this handle will remove the object.
+  /// True while this handle will remove the item.
   bool owned() const noexcept { return id_ != 0; }
-  /// Replaces the object (a wall stays a wall only if you pass a WallSpec). Throws haptic::Error.
-  void update(const WallSpec& wall);
-  void update(const SphereSpec& sphere);
-  /// Removes the object now; its force ramps out on the server. Throws haptic::Error. Does
+  /// Removes the item now; its force ramps out on the server. Throws haptic::Error. Does
   /// nothing if the handle owns nothing, its Client is gone, or Client::apply_scene replaced it.
   void remove();
-  /// Stops owning the object (it stays until removed by id or the session ends); returns its id.
+  /// Stops owning the item (it stays until the session ends); returns its id.
   std::uint64_t release() noexcept;
 
+ protected:
+  enum class Kind { kObject, kField };
+  explicit ItemHandle(Kind kind) : kind_(kind) {}
+  ItemHandle(Kind kind, std::weak_ptr<ClientCore> core, std::uint64_t id, std::uint64_t generation);
+  /// The client, if it still exists and the item is still in its scene; else throws (`call`
+  /// names the operation in the error).
+  ClientCore& current(const char* call) const;
+
  private:
-  friend class Client;
-  ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation);
-  void drop() noexcept;  // removes the object if owned, swallowing errors
-  std::weak_ptr<detail::ClientCore> core_;
+  void drop() noexcept;  // removes the item if owned, swallowing errors
+  Kind kind_;
+  std::weak_ptr<ClientCore> core_;
   std::uint64_t id_ = 0;
   std::uint64_t generation_ = 0;  // the client's scene generation when the item was made
 };
 
-/// A registered energy field. Same ownership rules as ObjectHandle.
-class FieldHandle {
- public:
-  FieldHandle() = default;
-  FieldHandle(FieldHandle&& other) noexcept;
-  FieldHandle& operator=(FieldHandle&& other) noexcept;
-  FieldHandle(const FieldHandle&) = delete;
-  FieldHandle& operator=(const FieldHandle&) = delete;
-  ~FieldHandle();
+}  // namespace detail
 
-  std::uint64_t id() const noexcept { return id_; }
-  bool owned() const noexcept { return id_ != 0; }
-  /// Replaces the field. Throws haptic::Error.
-  void update(const SpringFieldSpec& spring);
-  /// As ObjectHandle::remove.
-  void remove();
-  /// As ObjectHandle::release.
-  std::uint64_t release() noexcept;
+/// A registered object (wall or sphere); see detail::ItemHandle for ownership.
+class ObjectHandle : public detail::ItemHandle {
+ public:
+  ObjectHandle() : ItemHandle(Kind::kObject) {}
+  /// Replaces the object (a wall stays a wall only if you pass a WallSpec). Throws haptic::Error.
+  void update(const WallSpec& wall);
+  void update(const SphereSpec& sphere);
 
  private:
   friend class Client;
-  FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation);
-  void drop() noexcept;
-  std::weak_ptr<detail::ClientCore> core_;
-  std::uint64_t id_ = 0;
-  std::uint64_t generation_ = 0;  // the client's scene generation when the item was made
+  ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation)
+      : ItemHandle(Kind::kObject, std::move(core), id, generation) {}
+};
+
+/// A registered energy field; see detail::ItemHandle for ownership.
+class FieldHandle : public detail::ItemHandle {
+ public:
+  FieldHandle() : ItemHandle(Kind::kField) {}
+  /// Replaces the field. Throws haptic::Error.
+  void update(const SpringFieldSpec& spring);
+
+ private:
+  friend class Client;
+  FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation)
+      : ItemHandle(Kind::kField, std::move(core), id, generation) {}
 };
 
 /// The handles of a scene applied by Client::apply_scene, each list in the order given.
