@@ -5,6 +5,7 @@
 
 #include <memory>
 
+#include "engine/device/dc_motor_plant.hpp"
 #include "runtime/simulated_device.hpp"
 #include "runtime/tick_runner.hpp"
 
@@ -68,6 +69,33 @@ void BM_EvaluateScene(benchmark::State& state) {
   state.counters["items"] = 3 * n;
 }
 BENCHMARK(BM_EvaluateScene)->Arg(0)->Arg(1)->Arg(3)->Arg(333);
+
+// Plant step cost per simulated millisecond (one 1 kHz tick) at each plant's default sub-steps:
+// document 000's motor with and without inductance (the full model sub-steps to resolve t_e).
+void BM_DcMotorStep(benchmark::State& state) {
+  const auto model = state.range(0) == 0 ? engine::DcMotorModel::kWithoutInductance
+                                         : engine::DcMotorModel::kWithInductance;
+  engine::DcMotorPlant plant(engine::DcMotorParams{}, model);
+  double u = 0.5;
+  for (auto _ : state) {
+    plant.step(u, 0.001);
+    u = -u;  // a square wave keeps the state moving
+    benchmark::DoNotOptimize(plant.state());
+  }
+  state.counters["substeps"] = plant.substeps_for(0.001);
+}
+BENCHMARK(BM_DcMotorStep)->Arg(0)->Arg(1)->ArgName("with_inductance");
+
+void BM_PointMassStep(benchmark::State& state) {
+  engine::PointMassPlant plant(engine::PointMassParams{});
+  engine::Vec3 F{0.0, 0.0, 0.5};
+  for (auto _ : state) {
+    plant.step(F, 0.001, [](const engine::Vec3&, const engine::Vec3&) { return engine::Vec3{}; });
+    F = -F;
+    benchmark::DoNotOptimize(plant.state());
+  }
+}
+BENCHMARK(BM_PointMassStep);
 
 }  // namespace
 
