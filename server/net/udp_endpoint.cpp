@@ -5,6 +5,7 @@
 #include <poll.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -118,6 +119,12 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
     if (const auto version = sessions_.subscribers_version(); version != subscribers_version) {
       subscribers = sessions_.subscribers();
       subscribers_version = version;
+      // Forget the sequence counters of sessions that are gone (a resubscribed session restarts
+      // at 1, which receivers accept: they order samples by tick).
+      std::erase_if(sequences, [&](const auto& entry) {
+        return std::none_of(subscribers.begin(), subscribers.end(),
+                            [&](const Subscriber& s) { return s.session_id == entry.first; });
+      });
     }
     for (std::uint64_t tick = last_tick + 1; tick <= newest; ++tick) {
       runtime::TickSample sample;

@@ -53,7 +53,6 @@ void LoopThread::run_real_time() {
     ++tick;
     runner_.run(tick, deadline - start_ns_);
     completed_.store(tick, std::memory_order_release);
-    completed_.notify_all();
     deadline += period_ns_;
     const std::int64_t now = monotonic_now_ns();
     if (now > deadline) {
@@ -79,7 +78,8 @@ void LoopThread::run_lockstep() {
       runner_.run(tick, static_cast<std::int64_t>(tick - 1) * period_ns_);
       completed_.store(tick, std::memory_order_release);
     }
-    completed_.notify_all();
+    step_signal_.fetch_add(1, std::memory_order_release);
+    step_signal_.notify_all();
   }
 }
 
@@ -88,9 +88,10 @@ std::uint64_t LoopThread::step(std::uint32_t ticks) {
   const std::uint64_t target = completed_ticks() + ticks;
   target_.store(target, std::memory_order_release);
   target_.notify_all();
-  for (std::uint64_t done = completed_ticks(); done < target; done = completed_ticks()) {
-    if (stop_requested_.load(std::memory_order_acquire)) break;
-    completed_.wait(done, std::memory_order_acquire);
+  for (;;) {
+    const std::uint32_t seen = step_signal_.load(std::memory_order_acquire);
+    if (completed_ticks() >= target || stop_requested_.load(std::memory_order_acquire)) break;
+    step_signal_.wait(seen, std::memory_order_acquire);
   }
   return completed_ticks();
 }
@@ -115,8 +116,9 @@ void LoopThread::stop() {
   stop_requested_.store(true, std::memory_order_release);
   target_.fetch_add(1, std::memory_order_acq_rel);
   target_.notify_all();
-  completed_.notify_all();
   if (thread_.joinable()) thread_.join();
+  step_signal_.fetch_add(1, std::memory_order_release);  // releases any step() still waiting
+  step_signal_.notify_all();
 }
 
 }  // namespace haptic::runtime

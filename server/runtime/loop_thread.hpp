@@ -74,6 +74,9 @@ class LoopThread {
   std::atomic<bool> stop_requested_{false};
   std::atomic<std::uint64_t> completed_{0};
   std::atomic<std::uint64_t> target_{0};  // lockstep: run until this tick
+  // Lockstep: bumped after each batch of ticks and by stop(), so a waiting step() always wakes
+  // (a 32-bit word: libstdc++ waits on it with a plain futex).
+  std::atomic<std::uint32_t> step_signal_{0};
   std::mutex step_mutex_;                 // serialises step() callers (off the loop)
 };
 

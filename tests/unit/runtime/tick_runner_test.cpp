@@ -198,5 +198,21 @@ TEST(LoopThread, LockstepStepRunsExactlyTheTicksAskedFor) {
   EXPECT_EQ(counters.ticks.load(), loop.completed_ticks());
 }
 
+TEST(LoopThread, StepAfterStopReturnsAtOnce) {
+  SimulatedPointMassDevice device(engine::PointMassParams{}, {}, 20.0);
+  SceneExchange scenes(std::make_unique<const engine::CompiledScene>());
+  SampleRing samples;
+  LoopCounters counters;
+  LatenessHistogram lateness;
+  TickRunner runner(device, scenes, samples, counters, TickConfig{});
+  LoopConfig config;
+  config.mode = TimeMode::kLockstep;
+  LoopThread loop(runner, counters, lateness, config);
+  loop.start();
+  EXPECT_EQ(loop.step(3), 3u);
+  loop.stop();
+  EXPECT_EQ(loop.step(1000), 3u);  // nothing runs any more, and the caller is not stranded
+}
+
 }  // namespace
 }  // namespace haptic::runtime
