@@ -7,6 +7,7 @@
 #include <sstream>
 #include <thread>
 
+#include "app/devices.hpp"
 #include "net/validation.hpp"
 
 namespace haptic::app {
@@ -114,6 +115,7 @@ std::string validate(const v1::ServerConfig& config) {
     return "real_time.spin_us: must be shorter than the loop period (" +
            std::to_string(period_us) + " us)";
   }
+  if (auto e = validate_device(config); !e.empty()) return e;
   net::SceneLimits limits;
   engine::HandInput hand;
   if (auto e = net::to_hand_input(config.initial_operator(), "initial_operator", limits, hand);

@@ -13,16 +13,6 @@
 namespace haptic::app {
 namespace {
 
-engine::PointMassParams plant_params(const v1::SimulatedPointMassConfig& device) {
-  engine::PointMassParams params;
-  params.mass = device.mass();
-  params.damping = device.damping();
-  params.substeps = device.substeps();
-  params.workspace_min = net::to_engine(device.workspace_min());
-  params.workspace_max = net::to_engine(device.workspace_max());
-  return params;
-}
-
 std::int64_t ms_to_ticks(std::uint32_t ms, double rate_hz) {
   return std::max<std::int64_t>(1, std::llround(static_cast<double>(ms) * 1e-3 * rate_hz));
 }
@@ -31,17 +21,15 @@ std::int64_t ms_to_ticks(std::uint32_t ms, double rate_hz) {
 
 Server::Server(const v1::ServerConfig& config)
     : config_(config),
-      device_(std::make_unique<runtime::SimulatedPointMassDevice>(
-          plant_params(config.simulated_point_mass()),
-          engine::PointMassState{net::to_engine(config.simulated_point_mass().initial_position()), {}},
-          config.simulated_point_mass().max_force())),
+      simulated_(make_device(config)),
+      device_(simulated_.device.get()),
       scenes_(std::make_unique<const engine::CompiledScene>()),
       sessions_(config.max_sessions(), std::chrono::milliseconds(config.lease_timeout_ms())),
       udp_(sessions_, samples_) {
   const double rate = config.loop_rate_hz();
   runtime::TickConfig tick;
   tick.period_s = 1.0 / rate;
-  tick.limits.max_force = config.simulated_point_mass().max_force();
+  tick.limits.max_force = device_->description().max_force;
   tick.output_ramp_ticks = ms_to_ticks(config.removal_ramp_ms(), rate);
   runner_ = std::make_unique<runtime::TickRunner>(*device_, scenes_, samples_, counters_, tick);
 
@@ -85,14 +73,14 @@ Server::Server(const v1::ServerConfig& config)
       !e.empty()) {
     throw std::runtime_error(e);
   }
-  device_->set_hand(hand);
+  simulated_.set_hand(hand);
 
   const std::uint32_t udp_port = config.udp_port();
   if (udp_port > 65535) throw std::runtime_error("udp_port: out of range");
   udp_.bind(config.udp_address(), static_cast<std::uint16_t>(udp_port));
 
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
-      sessions_, *scene_, events_, *loop_, samples_, device_->description(), device_.get(), udp_.port(),
+      sessions_, *scene_, events_, *loop_, samples_, device_->description(), simulated_.set_hand, udp_.port(),
       limits, [this] { return stats(); }});
   grpc::ServerBuilder builder;
   int selected_port = 0;

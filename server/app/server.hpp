@@ -19,7 +19,7 @@
 #include "net/session_registry.hpp"
 #include "net/udp_endpoint.hpp"
 #include "runtime/loop_thread.hpp"
-#include "runtime/simulated_device.hpp"
+#include "app/devices.hpp"
 #include "runtime/tick_runner.hpp"
 
 namespace haptic::app {
@@ -48,7 +48,8 @@ class Server {
   void log_status();
 
   v1::ServerConfig config_;
-  std::unique_ptr<runtime::SimulatedPointMassDevice> device_;
+  SimulatedDevice simulated_;  // the device and its simulated operator's input
+  runtime::Device* device_;    // = simulated_.device.get()
   runtime::SceneExchange scenes_;
   runtime::SampleRing samples_;
   runtime::LoopCounters counters_;

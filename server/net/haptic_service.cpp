@@ -246,7 +246,7 @@ grpc::Status HapticService::SubscribeState(grpc::ServerContext*,
 grpc::Status HapticService::SetOperator(grpc::ServerContext*, const v1::SetOperatorRequest* request,
                                         v1::Empty*) {
   if (auto status = check_session(request->session_id()); !status.ok()) return status;
-  if (deps_.simulated_device == nullptr) {
+  if (!deps_.set_hand) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
             "the device is real hardware: there is no simulated operator"};
   }
@@ -254,7 +254,7 @@ grpc::Status HapticService::SetOperator(grpc::ServerContext*, const v1::SetOpera
   if (auto error = to_hand_input(request->input(), "input", deps_.limits, hand); !error.empty()) {
     return invalid(error);
   }
-  deps_.simulated_device->set_hand(hand);
+  deps_.set_hand(hand);
   return grpc::Status::OK;
 }
 

@@ -13,7 +13,7 @@
 #include "net/validation.hpp"
 #include "runtime/device.hpp"
 #include "runtime/loop_thread.hpp"
-#include "runtime/simulated_device.hpp"
+#include "engine/operator/simulated_hand.hpp"
 
 namespace haptic::net {
 
@@ -24,7 +24,7 @@ struct ServiceDependencies {
   runtime::LoopThread& loop;
   const runtime::SampleRing& samples;
   const runtime::DeviceDescription& device;
-  runtime::SimulatedPointMassDevice* simulated_device;  // null for real hardware
+  std::function<void(const engine::HandInput&)> set_hand;  // empty for real hardware
   std::uint16_t udp_port;
   SceneLimits limits;
   std::function<v1::Stats()> stats;

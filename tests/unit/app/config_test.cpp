@@ -40,6 +40,8 @@ TEST(Config, ExplicitZeroIsKeptWhereZeroMeansSomething) {
 TEST(Config, TheShippedConfigurationFileParses) {
   EXPECT_NO_THROW(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/hapticd.json"));
   EXPECT_NO_THROW(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/docker/hapticd-container.json"));
+  EXPECT_TRUE(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/dc_motor_000.json")
+                  .has_simulated_dc_motor());
 }
 
 TEST(Config, BadValuesAreRejectedNamingTheField) {
@@ -56,6 +58,18 @@ TEST(Config, BadValuesAreRejectedNamingTheField) {
   EXPECT_NE(error_of(R"({"initial_operator": {"mode": "APPLY_FORCE", "force": {"x": "NaN"}}})")
                 .find("initial_operator.force.x"),
             std::string::npos);
+}
+
+TEST(Config, ImpossibleDeviceParametersAreRejectedNamingThem) {
+  EXPECT_NE(error_of(R"({"simulated_dc_motor": {"r": 1.5}})").find("simulated_dc_motor.r:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_dc_motor": {"eta": 0}})").find("simulated_dc_motor.eta:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_dc_motor": {"link_mass": -0.2}})").find("simulated_dc_motor.link_mass:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_dc_motor": {"gravity": "NaN"}})").find("simulated_dc_motor.gravity:"),
+            std::string::npos);
+  EXPECT_EQ(error_of(R"({"simulated_dc_motor": {"with_inductance": true, "gravity": 0}})"), "");
 }
 
 TEST(Config, MalformedJsonAndUnknownFieldsAreErrorsNamingTheSource) {

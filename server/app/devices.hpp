@@ -1,0 +1,29 @@
+#pragma once
+// The simulated devices a configuration can ask for, built from their configuration messages.
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "engine/device/dc_motor_plant.hpp"
+#include "engine/operator/simulated_hand.hpp"
+#include "haptic/v1/config.pb.h"
+#include "runtime/device.hpp"
+
+namespace haptic::app {
+
+/// Document 000's parameters from the configuration (defaults where unset).
+engine::DcMotorParams dc_motor_params(const v1::SimulatedDcMotorConfig& config);
+
+/// Empty when the configured device is physically possible, else "<field>: <what is wrong>".
+std::string validate_device(const v1::ServerConfig& config);
+
+struct SimulatedDevice {
+  std::unique_ptr<runtime::Device> device;
+  std::function<void(const engine::HandInput&)> set_hand;  // the simulated operator's input
+};
+
+/// The device the configuration names (the point mass unless simulated_dc_motor is present).
+SimulatedDevice make_device(const v1::ServerConfig& config);
+
+}  // namespace haptic::app

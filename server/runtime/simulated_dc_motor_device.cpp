@@ -1,0 +1,56 @@
+#include "runtime/simulated_dc_motor_device.hpp"
+
+#include <cmath>
+
+namespace haptic::runtime {
+
+SimulatedDcMotorDevice::SimulatedDcMotorDevice(const engine::DcMotorParams& params,
+                                               engine::DcMotorModel model, double initial_theta_L,
+                                               double max_force, std::uint32_t substeps)
+    : plant_(params, model, engine::DcMotorState{initial_theta_L / params.r, 0.0, 0.0}, substeps) {
+  description_.name = model == engine::DcMotorModel::kWithInductance
+                          ? "simulated 1-DOF DC motor, gearbox and link (000, with inductance)"
+                          : "simulated 1-DOF DC motor, gearbox and link (000, without inductance)";
+  description_.dof = 1;
+  description_.workspace_min = {-params.l, -params.l, 0.0};
+  description_.workspace_max = {params.l, params.l, 0.0};
+  description_.max_force = max_force;
+  description_.simulated = true;
+}
+
+void SimulatedDcMotorDevice::tool_state(double theta_m, double omega_m, engine::Vec3& p_WT,
+                                        engine::Vec3& v_WT) const {
+  const engine::DcMotorParams& p = plant_.params();
+  const double phi = p.r * theta_m + p.alpha_c;
+  const double omega_L = p.r * omega_m;
+  p_WT = {p.l * std::cos(phi), p.l * std::sin(phi), 0.0};
+  v_WT = {-p.l * std::sin(phi) * omega_L, p.l * std::cos(phi) * omega_L, 0.0};
+}
+
+DeviceStatus SimulatedDcMotorDevice::read(DeviceReading& reading) {
+  tool_state(plant_.state().theta_m, plant_.state().omega_m, reading.p_WT, reading.v_WT);
+  return std::isfinite(reading.p_WT.x) && std::isfinite(reading.v_WT.x) ? DeviceStatus::kOk
+                                                                         : DeviceStatus::kError;
+}
+
+DeviceStatus SimulatedDcMotorDevice::write(const DeviceCommand& command, double dt) {
+  if (const std::uint64_t version = hand_.version(); version != hand_version_) {
+    hand_version_ = version;
+    hand_time_s_ = 0.0;
+  }
+  const engine::HandInput hand = hand_.load();
+  const engine::DcMotorParams& p = plant_.params();
+  const double theta_m = plant_.state().theta_m;
+  const double tau_d = engine::external_joint_torque(p, p.r * theta_m, {command.F_T_W, {}});
+  const double u_m = p.R_m / p.k_m * (p.r / p.eta) * (p.gravity_torque(theta_m) + tau_d);
+  const double t = hand_time_s_;
+  plant_.step(u_m, dt, [&](double th, double om) {
+    engine::Vec3 p_WT, v_WT;
+    tool_state(th, om, p_WT, v_WT);
+    return engine::ExternalWrench{engine::hand_force(hand, p_WT, v_WT, t), {}};
+  });
+  hand_time_s_ += dt;
+  return std::isfinite(plant_.state().theta_m) ? DeviceStatus::kOk : DeviceStatus::kError;
+}
+
+}  // namespace haptic::runtime
