@@ -121,6 +121,7 @@ Stats from_proto(const v1::Stats& s) {
   out.force_faults = s.force_faults();
   out.force_saturations = s.force_saturations();
   out.leases_expired = s.leases_expired();
+  out.device_faults = s.device_faults();
   return out;
 }
 

@@ -168,6 +168,7 @@ v1::Stats Server::stats() const {
   stats.set_datagrams_received(udp_.counters().received.load(std::memory_order_relaxed));
   stats.set_datagrams_dropped(udp_.counters().dropped.load(std::memory_order_relaxed));
   stats.set_force_faults(counters_.force_faults.load(std::memory_order_relaxed));
+  stats.set_device_faults(counters_.device_errors.load(std::memory_order_relaxed));
   stats.set_force_saturations(counters_.force_saturations.load(std::memory_order_relaxed));
   stats.set_leases_expired(leases_expired_.load(std::memory_order_relaxed));
   const runtime::LatenessSummary send_delay = udp_.counters().send_delay.summarize();
@@ -198,6 +199,7 @@ void Server::housekeeping_loop() {
   const auto status_period = seconds(config_.status_period_s());
   auto next_status = steady_clock::now() + status_period;
   std::uint64_t faults_reported = 0;
+  std::uint64_t device_faults_reported = 0;
   std::unique_lock lock(housekeeping_mutex_);
   while (!housekeeping_wake_.wait_for(lock, kPeriod, [this] { return stopping_; })) {
     for (const std::uint64_t id : sessions_.expire(steady_clock::now())) {
@@ -213,6 +215,15 @@ void Server::housekeeping_loop() {
                                   " non-finite forces replaced by zero");
       spdlog::warn("loop: {} non-finite forces replaced by zero", faults - faults_reported);
       faults_reported = faults;
+    }
+    if (const auto faults = counters_.device_errors.load(std::memory_order_relaxed);
+        faults != device_faults_reported) {
+      service_->publish_event(v1::Event::DEVICE_FAULT, 0,
+                              std::to_string(faults - device_faults_reported) +
+                                  " ticks with a failed or non-finite device reading; zero force");
+      spdlog::error("device: {} ticks with a failed or non-finite reading; zero force commanded",
+                    faults - device_faults_reported);
+      device_faults_reported = faults;
     }
     if (status_period.count() > 0 && steady_clock::now() >= next_status) {
       next_status += status_period;

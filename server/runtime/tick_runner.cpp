@@ -32,9 +32,11 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
   sample.time_ns = time_ns;
 
   DeviceReading reading;
-  const bool read_ok = device_.read(reading) == DeviceStatus::kOk;
+  const bool read_ok = device_.read(reading) == DeviceStatus::kOk && engine::is_finite(reading.p_WT) &&
+                       engine::is_finite(reading.v_WT);
   engine::Vec3 F_requested;
   if (read_ok) {
+    last_good_reading_ = reading;
     const engine::SceneForce scene_force =
         engine::evaluate_scene(scene, reading.p_WT, reading.v_WT, static_cast<std::int64_t>(tick));
     F_requested = scene_force.F_T_W;
@@ -42,9 +44,22 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
     sample.contact_count = scene_force.contact_count;
     if (scene_force.ramping) sample.flags |= wire::kFlagRampingOut;
   } else {
-    // Without a reading no force can be justified: command zero.
+    // A failed or non-finite reading is a device fault: command zero at once (no ramp: nothing
+    // justifies any force), and publish the last good state, never a NaN.
     counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
+    sample.flags |= wire::kFlagDeviceFault;
+    reading = last_good_reading_;
     sample.p_WP = reading.p_WT;
+    guard_.reset();
+    if (device_.write(DeviceCommand{}, config_.period_s) != DeviceStatus::kOk) {
+      counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
+    }
+    sample.p_WT = reading.p_WT;
+    sample.v_WT = reading.v_WT;
+    if (output_gain(tick) == 0.0) output_zero_.store(true, std::memory_order_release);
+    samples_.publish(sample);
+    counters_.ticks.fetch_add(1, std::memory_order_relaxed);
+    return;
   }
 
   const double gain = output_gain(tick);

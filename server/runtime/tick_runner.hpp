@@ -51,6 +51,7 @@ class TickRunner {
   LoopCounters& counters_;
   TickConfig config_;
   engine::ForceGuard guard_;
+  DeviceReading last_good_reading_;  // what the samples show while the device is faulted
   std::atomic<std::uint64_t> ramp_first_tick_{UINT64_MAX};
   std::atomic<bool> output_zero_{false};
 };

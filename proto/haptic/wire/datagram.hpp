@@ -65,6 +65,8 @@ enum StateFlags : std::uint32_t {
   kFlagForceSaturated = 1u << 0,
   kFlagForceFault = 1u << 1,    // a non-finite force was replaced by zero
   kFlagRampingOut = 1u << 2,    // some force is ramping to zero (removed objects, shutdown)
+  kFlagDeviceFault = 1u << 3,   // the device's reading failed or was not finite: zero commanded,
+                                // the last good state shown
 };
 
 struct HeartbeatPayload {

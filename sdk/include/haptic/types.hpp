@@ -61,6 +61,7 @@ enum StateFlag : std::uint32_t {
   kForceSaturated = 1u << 0,  ///< the server's force limits cut the scene's force
   kForceFault = 1u << 1,      ///< a non-finite force was replaced by zero
   kRampingOut = 1u << 2,      ///< some force is ramping to zero (removed objects, shutdown)
+  kDeviceFault = 1u << 3,     ///< the device's reading failed or was not finite; zero commanded
 };
 
 /// One tick's sample as the server streamed it.
@@ -104,6 +105,7 @@ struct Stats {
   std::uint64_t force_faults = 0;
   std::uint64_t force_saturations = 0;
   std::uint64_t leases_expired = 0;
+  std::uint64_t device_faults = 0;
 };
 
 /// What the server's simulated operator (a hand holding the tool) does. Profiles and trajectories

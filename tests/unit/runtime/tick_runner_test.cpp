@@ -114,6 +114,56 @@ TEST(TickRunner, NonFiniteSceneForceNeverReachesTheDevice) {
   EXPECT_TRUE(std::isfinite(rig.device.description().max_force));
 }
 
+/// A device whose plant "blows up" from a given tick on: its reading becomes NaN.
+class FailingDevice final : public Device {
+ public:
+  explicit FailingDevice(std::uint64_t fail_from) : fail_from_(fail_from) {
+    description_.name = "failing";
+  }
+  const DeviceDescription& description() const override { return description_; }
+  DeviceStatus start() override { return DeviceStatus::kOk; }
+  void stop() override {}
+  DeviceStatus read(DeviceReading& reading) override {
+    ++reads_;
+    reading.p_WT = {0.0, 0.0, -0.001};
+    if (reads_ >= fail_from_) reading.p_WT.z = std::numeric_limits<double>::quiet_NaN();
+    return DeviceStatus::kOk;  // the device does not notice: the runner must
+  }
+  DeviceStatus write(const DeviceCommand& command, double) override {
+    last_command = command.F_T_W;
+    ++writes;
+    return DeviceStatus::kOk;
+  }
+  engine::Vec3 last_command;
+  int writes = 0;
+
+ private:
+  DeviceDescription description_;
+  std::uint64_t fail_from_;
+  std::uint64_t reads_ = 0;
+};
+
+TEST(TickRunner, NonFiniteReadingFaultsToZeroForceAndShowsTheLastGoodState) {
+  FailingDevice device(3);
+  SceneExchange scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0)));
+  SampleRing samples;
+  LoopCounters counters;
+  TickRunner runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50});
+  runner.run(1, 0);
+  runner.run(2, 1'000'000);
+  EXPECT_NEAR(device.last_command.z, 1.0, 1e-12);  // 1 mm into a 1000 N/m wall
+  runner.run(3, 2'000'000);
+  runner.run(4, 3'000'000);
+  EXPECT_EQ(device.last_command, engine::Vec3{});  // at once, not ramped
+  EXPECT_EQ(device.writes, 4);
+  EXPECT_EQ(counters.device_errors.load(), 2u);
+  TickSample s;
+  ASSERT_TRUE(samples.read(4, s));
+  EXPECT_TRUE(s.flags & wire::kFlagDeviceFault);
+  EXPECT_EQ(s.p_WT.z, -0.001);  // the last good reading, never NaN
+  EXPECT_EQ(s.F_T_W, engine::Vec3{});
+}
+
 TEST(TickRunner, SameInputsGiveBitIdenticalSamples) {
   auto run_once = [] {
     Rig rig(wall_scene(1000.0, 1.0));
