@@ -34,22 +34,18 @@ DeviceStatus SimulatedDcMotorDevice::read(DeviceReading& reading) {
 }
 
 DeviceStatus SimulatedDcMotorDevice::write(const DeviceCommand& command, double dt) {
-  if (const std::uint64_t version = hand_.version(); version != hand_version_) {
-    hand_version_ = version;
-    hand_time_s_ = 0.0;
-  }
-  const engine::HandInput hand = hand_.load();
+  double t = 0.0;
+  const engine::HandInput hand = hand_.begin_tick(t);
   const engine::DcMotorParams& p = plant_.params();
   const double theta_m = plant_.state().theta_m;
   const double tau_d = engine::external_joint_torque(p, p.r * theta_m, {command.F_T_W, {}});
   const double u_m = p.R_m / p.k_m * (p.r / p.eta) * (p.gravity_torque(theta_m) + tau_d);
-  const double t = hand_time_s_;
   plant_.step(u_m, dt, [&](double th, double om) {
     engine::Vec3 p_WT, v_WT;
     tool_state(th, om, p_WT, v_WT);
     return engine::ExternalWrench{engine::hand_force(hand, p_WT, v_WT, t), {}};
   });
-  hand_time_s_ += dt;
+  hand_.end_tick(dt);
   return std::isfinite(plant_.state().theta_m) ? DeviceStatus::kOk : DeviceStatus::kError;
 }
 

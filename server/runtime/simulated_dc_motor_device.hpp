@@ -16,7 +16,7 @@
 #include "engine/device/dc_motor_plant.hpp"
 #include "engine/operator/simulated_hand.hpp"
 #include "runtime/device.hpp"
-#include "runtime/latest_value.hpp"
+#include "runtime/simulated_operator.hpp"
 
 namespace haptic::runtime {
 
@@ -34,7 +34,7 @@ class SimulatedDcMotorDevice final : public Device {
 
   /// Off the loop: what the simulated hand does from the next tick on (its mass is not modelled
   /// on this device: the link's inertia dominates).
-  void set_hand(const engine::HandInput& input) { hand_.store(input); }
+  void set_hand(const engine::HandInput& input) { hand_.set(input); }
 
   const engine::DcMotorPlant& plant() const { return plant_; }
 
@@ -44,9 +44,7 @@ class SimulatedDcMotorDevice final : public Device {
 
   DeviceDescription description_;
   engine::DcMotorPlant plant_;
-  LatestValue<engine::HandInput> hand_;
-  std::uint64_t hand_version_ = 0;  // loop only
-  double hand_time_s_ = 0.0;        // loop only. Unit: s.
+  SimulatedOperator hand_;
 };
 
 }  // namespace haptic::runtime

@@ -21,21 +21,17 @@ DeviceStatus SimulatedPointMassDevice::read(DeviceReading& reading) {
 }
 
 DeviceStatus SimulatedPointMassDevice::write(const DeviceCommand& command, double dt) {
-  if (const std::uint64_t version = hand_.version(); version != hand_version_) {
-    hand_version_ = version;
-    hand_time_s_ = 0.0;
-  }
-  const engine::HandInput hand = hand_.load();
+  double t = 0.0;
+  const engine::HandInput hand = hand_.begin_tick(t);
   plant_.set_added_mass(engine::hand_mass(hand));
   // The hand is sampled per sub-step, at the sub-step's start time.
   const double h = dt / static_cast<double>(plant_.params().substeps);
-  double t = hand_time_s_;
   plant_.step(command.F_T_W, dt, [&](const engine::Vec3& p_WT, const engine::Vec3& v_WT) {
     const engine::Vec3 F = engine::hand_force(hand, p_WT, v_WT, t);
     t += h;
     return F;
   });
-  hand_time_s_ += dt;
+  hand_.end_tick(dt);
   return DeviceStatus::kOk;
 }
 

@@ -7,7 +7,7 @@
 #include "engine/device/point_mass_plant.hpp"
 #include "engine/operator/simulated_hand.hpp"
 #include "runtime/device.hpp"
-#include "runtime/latest_value.hpp"
+#include "runtime/simulated_operator.hpp"
 
 #include <cstdint>
 
@@ -25,15 +25,12 @@ class SimulatedPointMassDevice final : public Device {
   DeviceStatus write(const DeviceCommand& command, double dt) override;
 
   /// Off the loop: what the simulated hand does from the next tick on.
-  void set_hand(const engine::HandInput& input) { hand_.store(input); }
-  engine::HandInput hand() const { return hand_.load(); }
+  void set_hand(const engine::HandInput& input) { hand_.set(input); }
 
  private:
   DeviceDescription description_;
   engine::PointMassPlant plant_;
-  LatestValue<engine::HandInput> hand_;
-  std::uint64_t hand_version_ = 0;  // loop only: the input the hand time counts from
-  double hand_time_s_ = 0.0;        // loop only: time since that input was set. Unit: s.
+  SimulatedOperator hand_;
 };
 
 }  // namespace haptic::runtime

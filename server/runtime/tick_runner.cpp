@@ -34,15 +34,25 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
   DeviceReading reading;
   const bool read_ok = device_.read(reading) == DeviceStatus::kOk && engine::is_finite(reading.p_WT) &&
                        engine::is_finite(reading.v_WT);
-  engine::Vec3 F_requested;
+  const double gain = output_gain(tick);
+  engine::Vec3 F_command;
   if (read_ok) {
     last_good_reading_ = reading;
     const engine::SceneForce scene_force =
         engine::evaluate_scene(scene, reading.p_WT, reading.v_WT, static_cast<std::int64_t>(tick));
-    F_requested = scene_force.F_T_W;
     sample.p_WP = scene_force.p_WP;
     sample.contact_count = scene_force.contact_count;
-    if (scene_force.ramping) sample.flags |= wire::kFlagRampingOut;
+    if (scene_force.ramping || gain < 1.0) sample.flags |= wire::kFlagRampingOut;
+    const engine::GuardedForce guarded = guard_.apply(scene_force.F_T_W, config_.period_s, gain);
+    if (guarded.fault) {
+      sample.flags |= wire::kFlagForceFault;
+      counters_.force_faults.fetch_add(1, std::memory_order_relaxed);
+    }
+    if (guarded.saturated) {
+      sample.flags |= wire::kFlagForceSaturated;
+      counters_.force_saturations.fetch_add(1, std::memory_order_relaxed);
+    }
+    F_command = guarded.F_T_W;
   } else {
     // A failed or non-finite reading is a device fault: command zero at once (no ramp: nothing
     // justifies any force), and publish the last good state, never a NaN.
@@ -51,36 +61,16 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
     reading = last_good_reading_;
     sample.p_WP = reading.p_WT;
     guard_.reset();
-    if (device_.write(DeviceCommand{}, config_.period_s) != DeviceStatus::kOk) {
-      counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
-    }
-    sample.p_WT = reading.p_WT;
-    sample.v_WT = reading.v_WT;
-    if (output_gain(tick) == 0.0) output_zero_.store(true, std::memory_order_release);
-    samples_.publish(sample);
-    counters_.ticks.fetch_add(1, std::memory_order_relaxed);
-    return;
   }
 
-  const double gain = output_gain(tick);
-  if (gain < 1.0) sample.flags |= wire::kFlagRampingOut;
-  const engine::GuardedForce guarded = guard_.apply(F_requested, config_.period_s, gain);
-  if (guarded.fault) {
-    sample.flags |= wire::kFlagForceFault;
-    counters_.force_faults.fetch_add(1, std::memory_order_relaxed);
-  }
-  if (guarded.saturated) {
-    sample.flags |= wire::kFlagForceSaturated;
-    counters_.force_saturations.fetch_add(1, std::memory_order_relaxed);
-  }
-  if (device_.write(DeviceCommand{guarded.F_T_W}, config_.period_s) != DeviceStatus::kOk) {
+  if (device_.write(DeviceCommand{F_command}, config_.period_s) != DeviceStatus::kOk) {
     counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
   }
   if (gain == 0.0) output_zero_.store(true, std::memory_order_release);
 
   sample.p_WT = reading.p_WT;
   sample.v_WT = reading.v_WT;
-  sample.F_T_W = guarded.F_T_W;
+  sample.F_T_W = F_command;
   samples_.publish(sample);
   counters_.ticks.fetch_add(1, std::memory_order_relaxed);
 }

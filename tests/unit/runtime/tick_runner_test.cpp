@@ -226,17 +226,24 @@ TEST(TickRunner, NoAllocationInsideTenThousandTicksWithSceneSwapsBetween) {
   EXPECT_EQ(inside, 0u);
 }
 
-TEST(LoopThread, LockstepStepRunsExactlyTheTicksAskedFor) {
-  SimulatedPointMassDevice device(engine::PointMassParams{}, {}, 20.0);
-  SceneExchange scenes(std::make_unique<const engine::CompiledScene>());
+/// An empty scene and the default device behind a lockstep loop.
+struct LockstepRig {
+  LockstepRig() { loop.start(); }
+  SimulatedPointMassDevice device{engine::PointMassParams{}, {}, 20.0};
+  SceneExchange scenes{std::make_unique<const engine::CompiledScene>()};
   SampleRing samples;
   LoopCounters counters;
   LatenessHistogram lateness;
-  TickRunner runner(device, scenes, samples, counters, TickConfig{});
-  LoopConfig config;
-  config.mode = TimeMode::kLockstep;
-  LoopThread loop(runner, counters, lateness, config);
-  loop.start();
+  TickRunner runner{device, scenes, samples, counters, TickConfig{}};
+  LoopThread loop{runner, counters, lateness, LoopConfig{1000.0, TimeMode::kLockstep}};
+};
+
+TEST(LoopThread, LockstepStepRunsExactlyTheTicksAskedFor) {
+  LockstepRig rig;
+  LoopThread& loop = rig.loop;
+  SampleRing& samples = rig.samples;
+  TickRunner& runner = rig.runner;
+  LoopCounters& counters = rig.counters;
   EXPECT_EQ(loop.step(10), 10u);
   EXPECT_EQ(loop.step(5), 15u);
   EXPECT_EQ(loop.server_time_ns(), 15 * 1'000'000);
@@ -249,16 +256,8 @@ TEST(LoopThread, LockstepStepRunsExactlyTheTicksAskedFor) {
 }
 
 TEST(LoopThread, StepAfterStopReturnsAtOnce) {
-  SimulatedPointMassDevice device(engine::PointMassParams{}, {}, 20.0);
-  SceneExchange scenes(std::make_unique<const engine::CompiledScene>());
-  SampleRing samples;
-  LoopCounters counters;
-  LatenessHistogram lateness;
-  TickRunner runner(device, scenes, samples, counters, TickConfig{});
-  LoopConfig config;
-  config.mode = TimeMode::kLockstep;
-  LoopThread loop(runner, counters, lateness, config);
-  loop.start();
+  LockstepRig rig;
+  LoopThread& loop = rig.loop;
   EXPECT_EQ(loop.step(3), 3u);
   loop.stop();
   EXPECT_EQ(loop.step(1000), 3u);  // nothing runs any more, and the caller is not stranded
