@@ -81,6 +81,12 @@ v1::OperatorInput to_proto(const OperatorInput& input) {
         case OperatorInput::Profile::Shape::kStep: profile->set_shape(v1::ForceProfile::STEP); break;
         case OperatorInput::Profile::Shape::kRamp: profile->set_shape(v1::ForceProfile::RAMP); break;
         case OperatorInput::Profile::Shape::kSine: profile->set_shape(v1::ForceProfile::SINE); break;
+        case OperatorInput::Profile::Shape::kRecorded:
+          profile->set_shape(v1::ForceProfile::RECORDED);
+          for (const Vec3& sample : input.profile.samples) *profile->add_samples() = to_proto(sample);
+          profile->set_sample_period_s(input.profile.sample_period_s);
+          profile->set_repeat(input.profile.repeat);
+          break;
       }
       profile->set_start_s(input.profile.start_s);
       profile->set_rise_s(input.profile.rise_s);
@@ -101,6 +107,12 @@ DeviceInfo from_proto(const v1::DeviceInfo& info) {
   out.max_force = info.max_force();
   out.loop_rate_hz = info.loop_rate_hz();
   out.simulated = info.simulated();
+  out.model = info.model();
+  const v1::DeviceCapabilities& caps = info.capabilities();
+  out.capabilities = {caps.gravity(),        caps.brakes(),
+                      caps.flexible_modes(), caps.friction(),
+                      caps.force_sensor(),   caps.quantized_position(),
+                      caps.state_estimator(), caps.disturbance_observer()};
   return out;
 }
 

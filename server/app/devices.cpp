@@ -9,6 +9,19 @@
 
 namespace haptic::app {
 
+std::string validate_integrator(const std::string& name) {
+  if (name.empty() || engine::integrator_from_name(name)) return {};
+  return "unknown integrator \"" + name + "\"; expected rk4, semi_implicit_euler or explicit_euler";
+}
+
+engine::IntegrationSettings integration_settings(const std::string& name, std::uint32_t substeps,
+                                                 std::uint32_t default_substeps) {
+  engine::IntegrationSettings settings;
+  settings.method = name.empty() ? engine::Integrator::kRk4 : *engine::integrator_from_name(name);
+  settings.substeps = substeps > 0 ? substeps : default_substeps;
+  return settings;
+}
+
 engine::DcMotorParams dc_motor_params(const v1::SimulatedDcMotorConfig& config) {
   engine::DcMotorParams params;
   if (config.has_r()) params.r = config.r();
@@ -39,6 +52,9 @@ std::string validate_device(const v1::ServerConfig& config) {
   }
   if (!std::isfinite(motor.initial_angle())) return "simulated_dc_motor.initial_angle: must be finite";
   if (motor.substeps() > 10000) return "simulated_dc_motor.substeps: must be 0 (default) to 10000";
+  if (auto error = validate_integrator(motor.integrator()); !error.empty()) {
+    return "simulated_dc_motor.integrator: " + error;
+  }
   if (!std::isfinite(motor.max_force()) || motor.max_force() < 0.0 || motor.max_force() > 1e3) {
     return "simulated_dc_motor.max_force: must be 0 (default) to 1000";
   }
@@ -54,7 +70,7 @@ SimulatedDevice make_device(const v1::ServerConfig& config) {
         motor.with_inductance() ? engine::DcMotorModel::kWithInductance
                                 : engine::DcMotorModel::kWithoutInductance,
         motor.initial_angle(), motor.max_force() > 0.0 ? motor.max_force() : 5.0,
-        motor.substeps() > 0 ? motor.substeps() : 10);
+        integration_settings(motor.integrator(), motor.substeps(), 10));
     auto* raw = device.get();
     out.set_hand = [raw](const engine::HandInput& hand) { raw->set_hand(hand); };
     out.device = std::move(device);

@@ -12,6 +12,14 @@
 
 namespace haptic::app {
 
+/// Empty when `name` is "" (the default, RK4) or an integrator's name, else what is wrong.
+std::string validate_integrator(const std::string& name);
+
+/// The integrator a device's configuration asks for; `substeps` 0 takes `default_substeps`.
+/// `name` must have passed validate_integrator.
+engine::IntegrationSettings integration_settings(const std::string& name, std::uint32_t substeps,
+                                                 std::uint32_t default_substeps);
+
 /// Document 000's parameters from the configuration (defaults where unset).
 engine::DcMotorParams dc_motor_params(const v1::SimulatedDcMotorConfig& config);
 

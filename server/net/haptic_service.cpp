@@ -62,6 +62,17 @@ v1::DeviceInfo HapticService::device_info() const {
   info.set_max_force(deps_.device.max_force);
   info.set_loop_rate_hz(deps_.loop.config().rate_hz);
   info.set_simulated(deps_.device.simulated);
+  info.set_model(deps_.device.model);
+  const runtime::DeviceCapabilities& has = deps_.device.capabilities;
+  v1::DeviceCapabilities& caps = *info.mutable_capabilities();
+  caps.set_gravity(has.gravity);
+  caps.set_brakes(has.brakes);
+  caps.set_flexible_modes(has.flexible_modes);
+  caps.set_friction(has.friction);
+  caps.set_force_sensor(has.force_sensor);
+  caps.set_quantized_position(has.quantized_position);
+  caps.set_state_estimator(has.state_estimator);
+  caps.set_disturbance_observer(has.disturbance_observer);
   return info;
 }
 

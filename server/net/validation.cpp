@@ -238,8 +238,33 @@ std::string to_hand_input(const v1::OperatorInput& input, const std::string& pat
         case v1::ForceProfile::STEP: out.profile.shape = engine::ForceProfile::Shape::kStep; break;
         case v1::ForceProfile::RAMP: out.profile.shape = engine::ForceProfile::Shape::kRamp; break;
         case v1::ForceProfile::SINE: out.profile.shape = engine::ForceProfile::Shape::kSine; break;
+        case v1::ForceProfile::RECORDED: {
+          constexpr auto kMax = engine::RecordedForce::kMaxSamples;
+          if (profile.samples_size() == 0 || profile.samples_size() > static_cast<int>(kMax)) {
+            return ppath + ".samples: a RECORDED profile needs 1 to " + std::to_string(kMax) +
+                   " samples, got " + std::to_string(profile.samples_size());
+          }
+          if (auto e = check_range(profile.sample_period_s(), 1e-4, 10.0, ppath + ".sample_period_s");
+              !e.empty()) {
+            return e;
+          }
+          engine::RecordedForce& recorded = out.profile.recorded;
+          for (int i = 0; i < profile.samples_size(); ++i) {
+            if (auto e = check_vec(profile.samples(i), limits.max_force,
+                                   ppath + ".samples[" + std::to_string(i) + "]");
+                !e.empty()) {
+              return e;
+            }
+            recorded.samples[static_cast<std::size_t>(i)] = to_engine(profile.samples(i));
+          }
+          recorded.count = static_cast<std::uint32_t>(profile.samples_size());
+          recorded.sample_period_s = profile.sample_period_s();
+          recorded.repeat = profile.repeat();
+          out.profile.shape = engine::ForceProfile::Shape::kRecorded;
+          break;
+        }
         default:
-          return ppath + ".shape: must be CONSTANT, STEP, RAMP or SINE";
+          return ppath + ".shape: must be CONSTANT, STEP, RAMP, SINE or RECORDED";
       }
       return {};
     }

@@ -23,8 +23,25 @@ struct DeviceCommand {
   engine::Vec3 F_T_W;  // Force on the tool, in W. Unit: N.
 };
 
+/// What a device has, so the tick and the device compute only those terms (a balanced device gets
+/// no gravity compensation, a device without brakes no motor/brake split). Declared once, off the
+/// loop; the server reports it in DeviceInfo.
+struct DeviceCapabilities {
+  bool gravity = false;         // The plant carries a gravity load the device compensates.
+  bool brakes = false;          // Dissipative actuators beside the motors (power-based split).
+  bool flexible_modes = false;  // Structural modes are simulated.
+  bool friction = false;        // Joint or transmission friction is simulated.
+  bool force_sensor = false;    // A measured interaction force is available.
+  bool quantized_position = false;  // Positions come from encoder counts.
+  bool state_estimator = false; // Velocities come from an observer rather than differences.
+  bool disturbance_observer = false;  // Axes are shaped to a nominal model by a DOB.
+};
+
 struct DeviceDescription {
   std::string name;
+  /// Configuration name of the model ("point_mass", "dc_motor_000", "five_bar_003", …).
+  std::string model;
+  DeviceCapabilities capabilities;
   std::uint32_t dof = 3;
   engine::Vec3 workspace_min;  // Unit: m.
   engine::Vec3 workspace_max;  // Unit: m.
@@ -47,6 +64,11 @@ class Device {
   /// write(), so the next read() sees the state one period later (a zero-order hold of the command).
   virtual DeviceStatus read(DeviceReading& reading) = 0;
   virtual DeviceStatus write(const DeviceCommand& command, double dt) = 0;
+
+  /// On the loop, when a read or write has failed: motors to zero torque, brakes on where the
+  /// device has them. The loop goes on commanding zero force while the fault lasts; a device that
+  /// latches its safe state (a tripped watchdog) leaves it only when re-armed. Must not throw.
+  virtual void enter_safe_state() {}
 };
 
 }  // namespace haptic::runtime

@@ -6,11 +6,15 @@ namespace haptic::runtime {
 
 SimulatedDcMotorDevice::SimulatedDcMotorDevice(const engine::DcMotorParams& params,
                                                engine::DcMotorModel model, double initial_theta_L,
-                                               double max_force, std::uint32_t substeps)
-    : plant_(params, model, engine::DcMotorState{initial_theta_L / params.r, 0.0, 0.0}, substeps) {
+                                               double max_force,
+                                               engine::IntegrationSettings integration)
+    : plant_(params, model, engine::DcMotorState{initial_theta_L / params.r, 0.0, 0.0},
+             integration) {
   description_.name = model == engine::DcMotorModel::kWithInductance
                           ? "simulated 1-DOF DC motor, gearbox and link (000, with inductance)"
                           : "simulated 1-DOF DC motor, gearbox and link (000, without inductance)";
+  description_.model = "dc_motor_000";
+  description_.capabilities.gravity = params.g != 0.0;
   description_.dof = 1;
   description_.workspace_min = {-params.l, -params.l, 0.0};
   description_.workspace_max = {params.l, params.l, 0.0};
@@ -35,11 +39,13 @@ DeviceStatus SimulatedDcMotorDevice::read(DeviceReading& reading) {
 
 DeviceStatus SimulatedDcMotorDevice::write(const DeviceCommand& command, double dt) {
   double t = 0.0;
-  const engine::HandInput hand = hand_.begin_tick(t);
+  const engine::HandInput& hand = hand_.begin_tick(t);
   const engine::DcMotorParams& p = plant_.params();
   const double theta_m = plant_.state().theta_m;
   const double tau_d = engine::external_joint_torque(p, p.r * theta_m, {command.F_T_W, {}});
-  const double u_m = p.R_m / p.k_m * (p.r / p.eta) * (p.gravity_torque(theta_m) + tau_d);
+  // A device declared without gravity (g = 0: a horizontal link) skips the cosine altogether.
+  const double tau_g = description_.capabilities.gravity ? p.gravity_torque(theta_m) : 0.0;
+  const double u_m = p.R_m / p.k_m * (p.r / p.eta) * (tau_g + tau_d);
   plant_.step(u_m, dt, [&](double th, double om) {
     engine::Vec3 p_WT, v_WT;
     tool_state(th, om, p_WT, v_WT);

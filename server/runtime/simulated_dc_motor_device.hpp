@@ -24,7 +24,8 @@ class SimulatedDcMotorDevice final : public Device {
  public:
   /// `initial_theta_L`: the load angle at start. Unit: rad. `max_force`: at the tool. Unit: N.
   SimulatedDcMotorDevice(const engine::DcMotorParams& params, engine::DcMotorModel model,
-                         double initial_theta_L, double max_force, std::uint32_t substeps);
+                         double initial_theta_L, double max_force,
+                         engine::IntegrationSettings integration);
 
   const DeviceDescription& description() const override { return description_; }
   DeviceStatus start() override { return DeviceStatus::kOk; }

@@ -7,6 +7,7 @@ SimulatedPointMassDevice::SimulatedPointMassDevice(const engine::PointMassParams
                                                    double max_force)
     : plant_(params, initial) {
   description_.name = "simulated point mass (3-DOF mass-damper)";
+  description_.model = "point_mass";
   description_.dof = 3;
   description_.workspace_min = params.workspace_min;
   description_.workspace_max = params.workspace_max;
@@ -22,7 +23,7 @@ DeviceStatus SimulatedPointMassDevice::read(DeviceReading& reading) {
 
 DeviceStatus SimulatedPointMassDevice::write(const DeviceCommand& command, double dt) {
   double t = 0.0;
-  const engine::HandInput hand = hand_.begin_tick(t);
+  const engine::HandInput& hand = hand_.begin_tick(t);
   plant_.set_added_mass(engine::hand_mass(hand));
   // The hand is sampled per sub-step, at the sub-step's start time.
   const double h = dt / static_cast<double>(plant_.params().substeps);

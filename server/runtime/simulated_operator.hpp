@@ -16,13 +16,16 @@ class SimulatedOperator {
   void set(const engine::HandInput& input) { input_.store(input); }
 
   /// On the loop, at the start of a tick: the input, and in `t_s` the time since it arrived.
-  engine::HandInput begin_tick(double& t_s) {
+  /// The input (up to a few kB with a recorded force) is copied only when a new one has arrived;
+  /// the reference stays valid until the next begin_tick().
+  const engine::HandInput& begin_tick(double& t_s) {
     if (const std::uint64_t version = input_.version(); version != version_) {
-      version_ = version;
+      current_ = input_.load();
+      version_ = input_.version() == version ? version : 0;  // a store raced the load: reload next tick
       time_s_ = 0.0;
     }
     t_s = time_s_;
-    return input_.load();
+    return current_;
   }
 
   /// On the loop, after the plant has advanced by dt. Unit: s.
@@ -30,7 +33,8 @@ class SimulatedOperator {
 
  private:
   LatestValue<engine::HandInput> input_;
-  std::uint64_t version_ = 0;  // loop only: the input time_s_ counts from
+  engine::HandInput current_;  // loop only: the input in force
+  std::uint64_t version_ = 0;  // loop only: the version of current_
   double time_s_ = 0.0;        // loop only. Unit: s.
 };
 

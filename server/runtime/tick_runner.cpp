@@ -61,10 +61,12 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
     reading = last_good_reading_;
     sample.p_WP = reading.p_WT;
     guard_.reset();
+    device_.enter_safe_state();
   }
 
   if (device_.write(DeviceCommand{F_command}, config_.period_s) != DeviceStatus::kOk) {
     counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
+    device_.enter_safe_state();
   }
   if (gain == 0.0) output_zero_.store(true, std::memory_order_release);
 

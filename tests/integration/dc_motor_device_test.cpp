@@ -36,6 +36,9 @@ TEST_F(DcMotorDevice, ReportsItselfAndHoldsUnderGravityCompensation_Eq6_7) {
   Client client(config_for(server_));
   EXPECT_EQ(client.device_info().dof, 1u);
   EXPECT_NE(client.device_info().name.find("000"), std::string::npos);
+  EXPECT_EQ(client.device_info().model, "dc_motor_000");
+  EXPECT_TRUE(client.device_info().capabilities.gravity);
+  EXPECT_FALSE(client.device_info().capabilities.brakes);
   // Released at rest, gravity compensation (eq. 6.7) holds the link where it is.
   const State s = step_and_get(client, 2000);
   EXPECT_NEAR(s.position.x, kLength * std::cos(kAngle), 1e-9);

@@ -47,6 +47,8 @@ class SdkIntegration : public ::testing::Test {
 TEST_F(SdkIntegration, WallPushesBackWithStiffnessTimesPenetrationAlongItsNormal) {
   Client client(config_for(server_, "wall"));
   EXPECT_TRUE(client.device_info().simulated);
+  EXPECT_EQ(client.device_info().model, "point_mass");
+  EXPECT_FALSE(client.device_info().capabilities.gravity);
   EXPECT_EQ(client.device_info().loop_rate_hz, 1000.0);
   // A tilted wall through the origin; the hand pushes 5 N straight into it (Eom et al.'s −5 N).
   const Vec3 n{0.0, 0.6, 0.8};

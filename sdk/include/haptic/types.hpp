@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace haptic {
 
@@ -78,8 +80,22 @@ struct State {
   std::chrono::steady_clock::time_point received_at;  ///< Local receipt time.
 };
 
+/// What a device has (the server computes only those terms).
+struct DeviceCapabilities {
+  bool gravity = false;               ///< A gravity load the device compensates.
+  bool brakes = false;                ///< Brakes beside the motors.
+  bool flexible_modes = false;        ///< Simulated structural modes.
+  bool friction = false;              ///< Joint or transmission friction.
+  bool force_sensor = false;          ///< A measured interaction force.
+  bool quantized_position = false;    ///< Positions from encoder counts.
+  bool state_estimator = false;       ///< Velocities from an observer.
+  bool disturbance_observer = false;  ///< Axes shaped to a nominal mass-damper.
+};
+
 struct DeviceInfo {
   std::string name;
+  std::string model;         ///< "point_mass", "dc_motor_000", "five_bar_003", …
+  DeviceCapabilities capabilities;
   std::uint32_t dof = 0;
   Vec3 workspace_min;        ///< Unit: m.
   Vec3 workspace_max;        ///< Unit: m.
@@ -127,14 +143,19 @@ struct OperatorInput {
     Vec3 amplitude{};           ///< kSine: target + amplitude sin(2π f t). Unit: m.
     double frequency_hz = 0.0;  ///< Unit: Hz.
   };
-  /// How the pushing force changes over time (kPush); `force` is its amplitude.
+  /// How the pushing force changes over time (kPush); `force` is its amplitude (except kRecorded).
   struct Profile {
-    enum class Shape { kConstant, kStep, kRamp, kSine };
+    enum class Shape { kConstant, kStep, kRamp, kSine, kRecorded };
     Shape shape = Shape::kConstant;
     double start_s = 0.0;       ///< kStep, kRamp: when it begins. Unit: s.
     double rise_s = 0.0;        ///< kRamp: rise time. Unit: s.
     double frequency_hz = 0.0;  ///< kSine: offset + force sin(2π f t). Unit: Hz.
     Vec3 offset{};              ///< kSine. Unit: N.
+    /// kRecorded: forces one every `sample_period_s` (at most 512), linearly interpolated; after
+    /// the last the force holds it, or wraps round when `repeat`. Unit: N, in W.
+    std::vector<Vec3> samples;
+    double sample_period_s = 0.0;  ///< kRecorded. Unit: s.
+    bool repeat = false;           ///< kRecorded.
   };
 
   Mode mode = Mode::kRelease;
@@ -178,6 +199,17 @@ struct OperatorInput {
   static OperatorInput push(Vec3 force, Profile profile) {
     OperatorInput input = push(force);
     input.profile = profile;
+    return input;
+  }
+  /// The hand pushes with a recorded force: `samples` one every `sample_period_s` seconds.
+  static OperatorInput push_recorded(std::vector<Vec3> samples, double sample_period_s,
+                                     bool repeat = false) {
+    OperatorInput input;
+    input.mode = Mode::kPush;
+    input.profile.shape = Profile::Shape::kRecorded;
+    input.profile.samples = std::move(samples);
+    input.profile.sample_period_s = sample_period_s;
+    input.profile.repeat = repeat;
     return input;
   }
   /// The hand lets go.

@@ -44,15 +44,15 @@ double external_joint_torque(const DcMotorParams& params, double theta_L,
 }
 
 DcMotorPlant::DcMotorPlant(const DcMotorParams& params, DcMotorModel model,
-                           const DcMotorState& initial, std::uint32_t substeps)
+                           const DcMotorState& initial, IntegrationSettings integration)
     : params_(params),
       model_(model),
       state_(initial),
-      substeps_(substeps),
+      integration_(integration),
       inv_J_eff_(1.0 / params.J_eff()),
       gear_(params.r / params.eta) {
   assert(params.validate().empty());
-  assert(substeps >= 1);
+  if (integration_.substeps == 0) integration_.substeps = 1;
   if (model_ == DcMotorModel::kWithoutInductance) state_.i = algebraic_current(state_, 0.0);
 }
 
@@ -61,9 +61,10 @@ void DcMotorPlant::step(double u_m, double dt) {
 }
 
 std::uint32_t DcMotorPlant::substeps_for(double dt) const {
-  if (model_ == DcMotorModel::kWithoutInductance) return substeps_;
+  const std::uint32_t configured = integration_.substeps;
+  if (model_ == DcMotorModel::kWithoutInductance) return configured;
   const double needed = std::ceil(dt / (0.5 * params_.t_e()));
-  return needed > static_cast<double>(substeps_) ? static_cast<std::uint32_t>(needed) : substeps_;
+  return needed > static_cast<double>(configured) ? static_cast<std::uint32_t>(needed) : configured;
 }
 
 DcMotorPlant::Derivative DcMotorPlant::derivative(const DcMotorState& s, double u_m,

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <string>
 
+#include "engine/core/integrator.hpp"
 #include "engine/core/vec3.hpp"
 
 namespace haptic::engine {
@@ -98,35 +99,31 @@ enum class DcMotorModel {
 
 /// Integrates either model over one tick of length dt under a voltage u_m held constant over the
 /// tick (zero-order hold) and an external wrench that may depend on the state (the operator's
-/// hand), re-evaluated at every Runge–Kutta stage.
+/// hand), re-evaluated at every stage of the integrator.
 ///
-/// Integrator: classical RK4 with n equal sub-steps per tick. n is the configured count, raised
-/// for the model with inductance to ceil(dt / (t_e / 2)) so that the electrical pole
-/// (≈ −1/t_e) sits at h λ ≈ −0.5, well inside RK4's stability interval (−2.78, 0]. Dropping the
-/// inductance is therefore also what makes the simplified model cheap: its stiffest pole is
-/// the loaded mechanical one, B / J_eff.
+/// Integrator: selectable (engine/core/integrator.hpp), default classical RK4, with n equal
+/// sub-steps per tick. n is the configured count, raised for the model with inductance to
+/// ceil(dt / (t_e / 2)) so that the electrical pole (≈ −1/t_e) sits at h λ ≈ −0.5, inside every
+/// offered method's stability interval (Euler: (−2, 0]; RK4: (−2.78, 0]). Dropping the inductance
+/// is therefore also what makes the simplified model cheap: its stiffest pole is the loaded
+/// mechanical one, B / J_eff.
 class DcMotorPlant {
  public:
   DcMotorPlant(const DcMotorParams& params, DcMotorModel model, const DcMotorState& initial = {},
-               std::uint32_t substeps = 10);
+               IntegrationSettings integration = {});
 
   /// external(theta_m, omega_m) -> ExternalWrench. Not allocating: a plain callable, inlined.
   template <typename ExternalWrenchFn>
   void step(double u_m, double dt, ExternalWrenchFn&& external) {
-    const std::uint32_t n = substeps_for(dt);
-    const double h = dt / static_cast<double>(n);
-    for (std::uint32_t k = 0; k < n; ++k) {
-      const Derivative d1 = derivative(state_, u_m, torque_at(state_, external));
-      const DcMotorState s2 = advanced(state_, d1, 0.5 * h);
-      const Derivative d2 = derivative(s2, u_m, torque_at(s2, external));
-      const DcMotorState s3 = advanced(state_, d2, 0.5 * h);
-      const Derivative d3 = derivative(s3, u_m, torque_at(s3, external));
-      const DcMotorState s4 = advanced(state_, d3, h);
-      const Derivative d4 = derivative(s4, u_m, torque_at(s4, external));
-      state_.theta_m += h / 6.0 * (d1.theta_m + 2.0 * d2.theta_m + 2.0 * d3.theta_m + d4.theta_m);
-      state_.omega_m += h / 6.0 * (d1.omega_m + 2.0 * d2.omega_m + 2.0 * d3.omega_m + d4.omega_m);
-      state_.i += h / 6.0 * (d1.i + 2.0 * d2.i + 2.0 * d3.i + d4.i);
-    }
+    IntegrationSettings tick = integration_;
+    tick.substeps = substeps_for(dt);
+    StateVector<3> x{state_.theta_m, state_.omega_m, state_.i};
+    integrate_tick<1>(tick, x, dt, [&](const StateVector<3>& y) {
+      const DcMotorState s{y[0], y[1], y[2]};
+      const Derivative d = derivative(s, u_m, torque_at(s, external));
+      return StateVector<3>{d.theta_m, d.omega_m, d.i};
+    });
+    state_ = {x[0], x[1], x[2]};
     if (model_ == DcMotorModel::kWithoutInductance) state_.i = algebraic_current(state_, u_m);
   }
 
@@ -140,6 +137,7 @@ class DcMotorPlant {
   void set_state(const DcMotorState& state) { state_ = state; }
   const DcMotorParams& params() const { return params_; }
   DcMotorModel model() const { return model_; }
+  const IntegrationSettings& integration() const { return integration_; }
 
  private:
   struct Derivative {
@@ -152,9 +150,6 @@ class DcMotorPlant {
   double torque_at(const DcMotorState& s, ExternalWrenchFn& external) const {
     return external_joint_torque(params_, params_.r * s.theta_m, external(s.theta_m, s.omega_m));
   }
-  static DcMotorState advanced(const DcMotorState& s, const Derivative& d, double h) {
-    return {s.theta_m + h * d.theta_m, s.omega_m + h * d.omega_m, s.i + h * d.i};
-  }
   /// Right-hand side of the chosen model; tau_e is the load-side external torque (eq. 4.3).
   Derivative derivative(const DcMotorState& s, double u_m, double tau_e) const;
   double algebraic_current(const DcMotorState& s, double u_m) const;
@@ -162,7 +157,7 @@ class DcMotorPlant {
   DcMotorParams params_;
   DcMotorModel model_;
   DcMotorState state_;
-  std::uint32_t substeps_;
+  IntegrationSettings integration_;
   // Cached combinations, so a stage does no divisions it can avoid.
   double inv_J_eff_;
   double gear_;  // r / η

@@ -9,7 +9,9 @@
 // t is the time since this input was set, so a profile or trajectory starts when it is sent.
 // Everything here is trivially copyable: it crosses to the loop through a lock-free mailbox.
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 #include "engine/core/vec3.hpp"
@@ -26,14 +28,27 @@ struct TargetTrajectory {
   double frequency_hz = 0.0;  // kSine. Unit: Hz.
 };
 
-/// A force over time; `HandInput::force` is its amplitude.
+/// A recorded force, sampled at a fixed period and played back with linear interpolation between
+/// samples. After the last sample it holds that sample's value (record a zero to let go), unless
+/// `repeat`, in which case it wraps round to the first sample. Kept inline (no heap) so that the
+/// input stays trivially copyable; longer recordings are resampled by the client.
+struct RecordedForce {
+  static constexpr std::uint32_t kMaxSamples = 512;
+  std::uint32_t count = 0;
+  double sample_period_s = 0.0;  // Unit: s; > 0 when count > 0.
+  bool repeat = false;
+  std::array<Vec3, kMaxSamples> samples{};  // Unit: N, in W.
+};
+
+/// A force over time; `HandInput::force` is its amplitude (not used by kRecorded).
 struct ForceProfile {
-  enum class Shape { kConstant, kStep, kRamp, kSine };
+  enum class Shape { kConstant, kStep, kRamp, kSine, kRecorded };
   Shape shape = Shape::kConstant;
   double start_s = 0.0;       // kStep, kRamp: when it begins. Unit: s.
   double rise_s = 0.0;        // kRamp: from 0 to the amplitude over this time. Unit: s.
   double frequency_hz = 0.0;  // kSine: offset + amplitude sin(2π f t). Unit: Hz.
   Vec3 offset;                // kSine. Unit: N.
+  RecordedForce recorded;     // kRecorded.
 };
 
 struct HandInput {
@@ -85,10 +100,25 @@ inline void target_at(const HandInput& hand, double t, Vec3& position, Vec3& vel
   velocity = {};
 }
 
+/// A recording's force at time t ≥ 0. Unit: N.
+inline Vec3 recorded_force(const RecordedForce& recording, double t) {
+  if (recording.count == 0) return {};
+  const double position = t / recording.sample_period_s;  // in samples
+  const auto n = static_cast<double>(recording.count);
+  if (!recording.repeat && position >= n - 1.0) return recording.samples[recording.count - 1];
+  const double wrapped = recording.repeat ? std::fmod(position, n) : position;
+  const auto i = static_cast<std::uint32_t>(wrapped);
+  const std::uint32_t next = i + 1 < recording.count ? i + 1 : 0;
+  const double f = wrapped - static_cast<double>(i);
+  return (1.0 - f) * recording.samples[i] + f * recording.samples[next];
+}
+
 /// The force profile at time t. Unit: N.
 inline Vec3 profile_force(const HandInput& hand, double t) {
   const ForceProfile& profile = hand.profile;
   switch (profile.shape) {
+    case ForceProfile::Shape::kRecorded:
+      return recorded_force(profile.recorded, t);
     case ForceProfile::Shape::kStep:
       return t >= profile.start_s ? hand.force : Vec3{};
     case ForceProfile::Shape::kRamp: {

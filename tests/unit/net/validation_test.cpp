@@ -110,6 +110,22 @@ TEST(Validation, GripPresetsTrajectoriesAndProfiles) {
   push.mutable_profile()->set_rise_s(0.5);
   ASSERT_EQ(to_hand_input(push, "input", SceneLimits{}, hand), "");
   EXPECT_EQ(hand.profile.shape, engine::ForceProfile::Shape::kRamp);
+  push.mutable_profile()->set_shape(v1::ForceProfile::RECORDED);
+  EXPECT_EQ(to_hand_input(push, "input", SceneLimits{}, hand).rfind("input.profile.samples:", 0), 0u);
+  for (int i = 0; i < 3; ++i) push.mutable_profile()->add_samples()->set_z(-1.0 * i);
+  EXPECT_EQ(to_hand_input(push, "input", SceneLimits{}, hand)
+                .rfind("input.profile.sample_period_s:", 0), 0u);
+  push.mutable_profile()->set_sample_period_s(0.01);
+  push.mutable_profile()->mutable_samples(1)->set_x(std::numeric_limits<double>::quiet_NaN());
+  EXPECT_EQ(to_hand_input(push, "input", SceneLimits{}, hand)
+                .rfind("input.profile.samples[1]", 0), 0u);
+  push.mutable_profile()->mutable_samples(1)->set_x(0.0);
+  ASSERT_EQ(to_hand_input(push, "input", SceneLimits{}, hand), "");
+  EXPECT_EQ(hand.profile.shape, engine::ForceProfile::Shape::kRecorded);
+  EXPECT_EQ(hand.profile.recorded.count, 3u);
+  EXPECT_EQ(hand.profile.recorded.samples[2].z, -2.0);
+  for (int i = 0; i < 600; ++i) push.mutable_profile()->add_samples();
+  EXPECT_EQ(to_hand_input(push, "input", SceneLimits{}, hand).rfind("input.profile.samples:", 0), 0u);
   push.mutable_profile()->set_shape(static_cast<v1::ForceProfile::Shape>(9));
   EXPECT_EQ(to_hand_input(push, "input", SceneLimits{}, hand).rfind("input.profile.shape:", 0), 0u);
 }

@@ -42,6 +42,28 @@ TEST(ForceProfile, StepRampAndSineFollowTheirDefinitions) {
   EXPECT_EQ(engine::profile_force(push(F, {}), 123.0).z, -5.0);  // constant
 }
 
+TEST(ForceProfile, RecordedInterpolatesHoldsItsLastSampleOrRepeats) {
+  ForceProfile profile;
+  profile.shape = ForceProfile::Shape::kRecorded;
+  profile.recorded.count = 3;
+  profile.recorded.sample_period_s = 0.1;
+  profile.recorded.samples[0] = {0.0, 0.0, 0.0};
+  profile.recorded.samples[1] = {0.0, 0.0, -2.0};
+  profile.recorded.samples[2] = {1.0, 0.0, -4.0};
+  HandInput hand = push({9.0, 9.0, 9.0}, profile);  // the amplitude does not scale a recording
+  EXPECT_EQ(engine::profile_force(hand, 0.0).z, 0.0);
+  EXPECT_NEAR(engine::profile_force(hand, 0.05).z, -1.0, 1e-12);
+  EXPECT_NEAR(engine::profile_force(hand, 0.15).x, 0.5, 1e-12);
+  EXPECT_EQ(engine::profile_force(hand, 0.2).z, -4.0);
+  EXPECT_EQ(engine::profile_force(hand, 7.0).z, -4.0);  // holds the last sample
+  hand.profile.recorded.repeat = true;  // period 0.3 s, the last sample blends into the first
+  EXPECT_NEAR(engine::profile_force(hand, 0.25).z, -2.0, 1e-12);
+  EXPECT_NEAR(engine::profile_force(hand, 0.35).z, -1.0, 1e-12);
+  EXPECT_NEAR(engine::profile_force(hand, 3.05).z, -1.0, 1e-9);
+  hand.profile.recorded.count = 0;
+  EXPECT_EQ(engine::profile_force(hand, 0.1), Vec3{});
+}
+
 TEST(TargetTrajectory, LineAndSineGivePositionAndVelocity) {
   HandInput hand;
   hand.mode = HandInput::Mode::kFollowTarget;
@@ -144,6 +166,21 @@ TEST(SimulatedOperator, ProfileTimeStartsWhenTheInputArrives) {
   device.set_hand(push({0.0, 0.0, 1.0}, {ForceProfile::Shape::kStep, 0.1, 0.0, 0.0, {}}));
   EXPECT_EQ(run(device, 0.09).v_WT.z, 0.0);  // the step is 0.1 s after the input, not after start
   EXPECT_GT(run(device, 0.02).v_WT.z, 0.0);
+}
+
+TEST(SimulatedOperator, ARecordedPushDrivesTheToolAndANewInputReplacesIt) {
+  auto device = make_device(0.0);
+  ForceProfile profile;
+  profile.shape = ForceProfile::Shape::kRecorded;
+  profile.recorded.count = 2;
+  profile.recorded.sample_period_s = 0.05;
+  profile.recorded.samples[0] = {0.0, 0.0, 0.01};  // small: the 10 g mass stays in its workspace
+  profile.recorded.samples[1] = {0.0, 0.0, 0.01};
+  device.set_hand(push({}, profile));
+  EXPECT_GT(run(device, 0.05).v_WT.z, 0.0);
+  device.set_hand(push({0.0, 0.0, -0.03}, {}));  // a constant push the other way
+  const double before = run(device, 0.0).v_WT.z;
+  EXPECT_LT(run(device, 0.05).v_WT.z, before);
 }
 
 }  // namespace

@@ -134,8 +134,10 @@ class FailingDevice final : public Device {
     ++writes;
     return DeviceStatus::kOk;
   }
+  void enter_safe_state() override { ++safe_state_entries; }
   engine::Vec3 last_command;
   int writes = 0;
+  int safe_state_entries = 0;
 
  private:
   DeviceDescription description_;
@@ -152,10 +154,12 @@ TEST(TickRunner, NonFiniteReadingFaultsToZeroForceAndShowsTheLastGoodState) {
   runner.run(1, 0);
   runner.run(2, 1'000'000);
   EXPECT_NEAR(device.last_command.z, 1.0, 1e-12);  // 1 mm into a 1000 N/m wall
+  EXPECT_EQ(device.safe_state_entries, 0);
   runner.run(3, 2'000'000);
   runner.run(4, 3'000'000);
   EXPECT_EQ(device.last_command, engine::Vec3{});  // at once, not ramped
   EXPECT_EQ(device.writes, 4);
+  EXPECT_EQ(device.safe_state_entries, 2);  // motors off, brakes on, on every faulted tick
   EXPECT_EQ(counters.device_errors.load(), 2u);
   TickSample s;
   ASSERT_TRUE(samples.read(4, s));

@@ -1,0 +1,103 @@
+#pragma once
+// Fixed-step integrators shared by the plants. A plant's state is a fixed-size array laid out as
+// [q_0 … q_{n−1}, q̇_0 … q̇_{n−1}, extra…]: the first `kPositions` entries are positions whose
+// derivatives are the next `kPositions` entries (velocities); anything after them (a current, a
+// filter state) is a first-order state. The right-hand side is a callable
+// rhs(const State&) -> State returning dx/dt. Nothing here allocates.
+//
+// Which one to pick is a measured choice (docs/devices.md, "Integrators"): explicit Euler is the
+// cheapest and gains energy on an undamped oscillator; semi-implicit (symplectic) Euler costs the
+// same, keeps an undamped oscillator's energy bounded, and is first order; RK4 costs four
+// evaluations and is fourth order, stable for hλ in (−2.78, 0] on a real pole.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+namespace haptic::engine {
+
+enum class Integrator : std::uint8_t {
+  kExplicitEuler,      // x += h f(x)
+  kSemiImplicitEuler,  // q̇ += h q̈(q, q̇); q += h q̇(new); extra states explicit
+  kRk4,                // classical fourth-order Runge–Kutta
+};
+
+/// How a plant advances over one tick: `substeps` equal steps of the chosen method.
+struct IntegrationSettings {
+  Integrator method = Integrator::kRk4;
+  std::uint32_t substeps = 10;
+};
+
+constexpr std::string_view integrator_name(Integrator method) {
+  switch (method) {
+    case Integrator::kExplicitEuler: return "explicit_euler";
+    case Integrator::kSemiImplicitEuler: return "semi_implicit_euler";
+    case Integrator::kRk4: return "rk4";
+  }
+  return "unknown";
+}
+
+constexpr std::optional<Integrator> integrator_from_name(std::string_view name) {
+  if (name == "explicit_euler") return Integrator::kExplicitEuler;
+  if (name == "semi_implicit_euler") return Integrator::kSemiImplicitEuler;
+  if (name == "rk4") return Integrator::kRk4;
+  return std::nullopt;
+}
+
+/// Right-hand-side evaluations one step of `method` costs.
+constexpr int evaluations_per_step(Integrator method) {
+  return method == Integrator::kRk4 ? 4 : 1;
+}
+
+template <std::size_t N>
+using StateVector = std::array<double, N>;
+
+namespace detail {
+template <std::size_t N>
+constexpr StateVector<N> axpy(const StateVector<N>& x, double a, const StateVector<N>& d) {
+  StateVector<N> out{};
+  for (std::size_t i = 0; i < N; ++i) out[i] = x[i] + a * d[i];
+  return out;
+}
+}  // namespace detail
+
+/// One step of length h. `kPositions` matters only to the semi-implicit method.
+template <std::size_t kPositions, std::size_t N, typename Rhs>
+constexpr void integrate_step(Integrator method, StateVector<N>& x, double h, Rhs&& rhs) {
+  static_assert(2 * kPositions <= N, "the state holds positions, then their velocities");
+  switch (method) {
+    case Integrator::kExplicitEuler: {
+      x = detail::axpy(x, h, rhs(x));
+      return;
+    }
+    case Integrator::kSemiImplicitEuler: {
+      const StateVector<N> d = rhs(x);
+      for (std::size_t i = kPositions; i < N; ++i) x[i] += h * d[i];
+      for (std::size_t i = 0; i < kPositions; ++i) x[i] += h * x[kPositions + i];
+      return;
+    }
+    case Integrator::kRk4: {
+      const StateVector<N> k1 = rhs(x);
+      const StateVector<N> k2 = rhs(detail::axpy(x, 0.5 * h, k1));
+      const StateVector<N> k3 = rhs(detail::axpy(x, 0.5 * h, k2));
+      const StateVector<N> k4 = rhs(detail::axpy(x, h, k3));
+      for (std::size_t i = 0; i < N; ++i) {
+        x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+      }
+      return;
+    }
+  }
+}
+
+/// One tick of length dt as `settings.substeps` (at least one) equal steps.
+template <std::size_t kPositions, std::size_t N, typename Rhs>
+constexpr void integrate_tick(const IntegrationSettings& settings, StateVector<N>& x, double dt,
+                              Rhs&& rhs) {
+  const std::uint32_t n = settings.substeps > 0 ? settings.substeps : 1;
+  const double h = dt / static_cast<double>(n);
+  for (std::uint32_t k = 0; k < n; ++k) integrate_step<kPositions>(settings.method, x, h, rhs);
+}
+
+}  // namespace haptic::engine
