@@ -31,7 +31,8 @@ struct SimulatedDevice {
   std::function<void(const engine::HandInput&)> set_hand;  // the simulated operator's input
 };
 
-/// The device the configuration names (the point mass unless simulated_dc_motor is present).
+/// The device the configuration names: the point mass unless one of simulated_dc_motor,
+/// simulated_five_bar, simulated_joystick or simulated_parallel_dob is present.
 SimulatedDevice make_device(const v1::ServerConfig& config);
 
 }  // namespace haptic::app

@@ -16,6 +16,10 @@ enum class DeviceStatus : std::uint8_t { kOk, kError };
 struct DeviceReading {
   engine::Vec3 p_WT;  // Unit: m.
   engine::Vec3 v_WT;  // Unit: m/s.
+  /// The device holds its safe state (a tripped watchdog: motors off, brakes on) although the
+  /// reading is good: the loop treats the tick as a device fault (zero force, DEVICE_FAULT flag
+  /// and event) but still publishes this reading.
+  bool safe_state = false;
 };
 
 /// What the loop commands once per tick.

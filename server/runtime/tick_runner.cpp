@@ -32,8 +32,9 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
   sample.time_ns = time_ns;
 
   DeviceReading reading;
-  const bool read_ok = device_.read(reading) == DeviceStatus::kOk && engine::is_finite(reading.p_WT) &&
-                       engine::is_finite(reading.v_WT);
+  const bool read_good = device_.read(reading) == DeviceStatus::kOk &&
+                         engine::is_finite(reading.p_WT) && engine::is_finite(reading.v_WT);
+  const bool read_ok = read_good && !reading.safe_state;
   const double gain = output_gain(tick);
   engine::Vec3 F_command;
   if (read_ok) {
@@ -58,7 +59,11 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
     // justifies any force), and publish the last good state, never a NaN.
     counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
     sample.flags |= wire::kFlagDeviceFault;
-    reading = last_good_reading_;
+    if (read_good) {
+      last_good_reading_ = reading;  // a device holding its safe state still reports where it is
+    } else {
+      reading = last_good_reading_;
+    }
     sample.p_WP = reading.p_WT;
     guard_.reset();
     device_.enter_safe_state();

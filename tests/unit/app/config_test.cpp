@@ -42,6 +42,12 @@ TEST(Config, TheShippedConfigurationFileParses) {
   EXPECT_NO_THROW(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/docker/hapticd-container.json"));
   EXPECT_TRUE(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/dc_motor_000.json")
                   .has_simulated_dc_motor());
+  EXPECT_TRUE(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/five_bar_003.json")
+                  .has_simulated_five_bar());
+  EXPECT_TRUE(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/joystick_004.json")
+                  .has_simulated_joystick());
+  EXPECT_TRUE(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/parallel_dob_001.json")
+                  .has_simulated_parallel_dob());
 }
 
 TEST(Config, BadValuesAreRejectedNamingTheField) {
@@ -70,6 +76,41 @@ TEST(Config, ImpossibleDeviceParametersAreRejectedNamingThem) {
   EXPECT_NE(error_of(R"({"simulated_dc_motor": {"gravity": "NaN"}})").find("simulated_dc_motor.gravity:"),
             std::string::npos);
   EXPECT_EQ(error_of(R"({"simulated_dc_motor": {"with_inductance": true, "gravity": 0}})"), "");
+  EXPECT_NE(error_of(R"({"simulated_dc_motor": {"integrator": "rk45"}})")
+                .find("simulated_dc_motor.integrator: unknown integrator \"rk45\""),
+            std::string::npos);
+}
+
+TEST(Config, TheDocumentsDevicesAreCheckedNamingTheField) {
+  EXPECT_NE(error_of(R"({"simulated_dc_motor": {}, "simulated_joystick": {}})")
+                .find("at most one device"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_five_bar": {"velocity": "kalman"}})")
+                .find("simulated_five_bar.velocity:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_five_bar": {"inertias": "guessed"}})")
+                .find("simulated_five_bar.inertias:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_five_bar": {"substeps": 100000}})")
+                .find("simulated_five_bar.substeps:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_joystick": {"max_force": -1}})").find("simulated_joystick.max_force:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_joystick": {"initial_shaft_length": 2}})")
+                .find("simulated_joystick.initial_shaft_length:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_joystick": {"rearm_after_s": "NaN"}})")
+                .find("simulated_joystick.rearm_after_s:"),
+            std::string::npos);
+  // Q's cut-off must lie below the Nyquist rate of the loop.
+  EXPECT_NE(error_of(R"({"simulated_parallel_dob": {"cutoff_hz": 600}})")
+                .find("simulated_parallel_dob.cutoff_hz:"),
+            std::string::npos);
+  EXPECT_EQ(error_of(R"({"loop_rate_hz": 2000, "simulated_parallel_dob": {"cutoff_hz": 600}})"), "");
+  EXPECT_NE(error_of(R"({"simulated_parallel_dob": {"nominal_mass": -0.01}})")
+                .find("simulated_parallel_dob.nominal_mass:"),
+            std::string::npos);
+  EXPECT_EQ(error_of(R"({"simulated_five_bar": {"velocity": "estimator", "coriolis": false}})"), "");
 }
 
 TEST(Config, MalformedJsonAndUnknownFieldsAreErrorsNamingTheSource) {

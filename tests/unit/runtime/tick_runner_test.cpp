@@ -168,6 +168,48 @@ TEST(TickRunner, NonFiniteReadingFaultsToZeroForceAndShowsTheLastGoodState) {
   EXPECT_EQ(s.F_T_W, engine::Vec3{});
 }
 
+/// A device that holds its safe state (a tripped watchdog) from a given tick on, reading well.
+class LatchedDevice final : public Device {
+ public:
+  explicit LatchedDevice(std::uint64_t latch_from) : latch_from_(latch_from) {}
+  const DeviceDescription& description() const override { return description_; }
+  DeviceStatus start() override { return DeviceStatus::kOk; }
+  void stop() override {}
+  DeviceStatus read(DeviceReading& reading) override {
+    ++reads_;
+    reading.p_WT = {0.0, 0.0, -0.001 * static_cast<double>(reads_)};
+    reading.safe_state = reads_ >= latch_from_;
+    return DeviceStatus::kOk;
+  }
+  DeviceStatus write(const DeviceCommand& command, double) override {
+    last_command = command.F_T_W;
+    return DeviceStatus::kOk;
+  }
+  engine::Vec3 last_command;
+
+ private:
+  DeviceDescription description_;
+  std::uint64_t latch_from_;
+  std::uint64_t reads_ = 0;
+};
+
+TEST(TickRunner, ADeviceInItsSafeStateIsAFaultThatStillShowsWhereItIs) {
+  LatchedDevice device(2);
+  SceneExchange scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0)));
+  SampleRing samples;
+  LoopCounters counters;
+  TickRunner runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50});
+  runner.run(1, 0);
+  EXPECT_GT(device.last_command.z, 0.0);
+  runner.run(2, 1'000'000);
+  EXPECT_EQ(device.last_command, engine::Vec3{});
+  EXPECT_EQ(counters.device_errors.load(), 1u);
+  TickSample s;
+  ASSERT_TRUE(samples.read(2, s));
+  EXPECT_TRUE(s.flags & wire::kFlagDeviceFault);
+  EXPECT_EQ(s.p_WT.z, -0.002);  // this tick's reading, not the last one before the fault
+}
+
 TEST(TickRunner, SameInputsGiveBitIdenticalSamples) {
   auto run_once = [] {
     Rig rig(wall_scene(1000.0, 1.0));
