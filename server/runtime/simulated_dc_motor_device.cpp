@@ -42,7 +42,10 @@ DeviceStatus SimulatedDcMotorDevice::write(const DeviceCommand& command, double 
   const engine::HandInput& hand = hand_.begin_tick(t);
   const engine::DcMotorParams& p = plant_.params();
   const double theta_m = plant_.state().theta_m;
-  const double tau_d = engine::external_joint_torque(p, p.r * theta_m, {command.F_T_W, {}});
+  // A non-finite command is a fault: this tick runs with no device force (gravity stays compensated).
+  const bool command_ok = engine::is_finite(command.F_T_W);
+  const double tau_d =
+      command_ok ? engine::external_joint_torque(p, p.r * theta_m, {command.F_T_W, {}}) : 0.0;
   // A device declared without gravity (g = 0: a horizontal link) skips the cosine altogether.
   const double tau_g = description_.capabilities.gravity ? p.gravity_torque(theta_m) : 0.0;
   const double u_m = p.R_m / p.k_m * (p.r / p.eta) * (tau_g + tau_d);
@@ -52,7 +55,8 @@ DeviceStatus SimulatedDcMotorDevice::write(const DeviceCommand& command, double 
     return engine::ExternalWrench{engine::hand_force(hand, p_WT, v_WT, t), {}};
   });
   hand_.end_tick(dt);
-  return std::isfinite(plant_.state().theta_m) ? DeviceStatus::kOk : DeviceStatus::kError;
+  return command_ok && std::isfinite(plant_.state().theta_m) ? DeviceStatus::kOk
+                                                            : DeviceStatus::kError;
 }
 
 }  // namespace haptic::runtime

@@ -1,0 +1,145 @@
+// Per-tick cost of each simulated device (read + write: the plant's step at its default sub-steps
+// plus everything the device does around it — Jacobians, the motor/brake split, the estimator, the
+// disturbance observer) and of each controller on its own, so docs/devices.md's tables come from
+// one run. Every device is driven by the same push of the simulated hand; costs are per 1 ms tick.
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include "engine/control/brake_rule.hpp"
+#include "engine/control/dc_motor_control.hpp"
+#include "engine/control/disturbance_observer.hpp"
+#include "engine/control/joint_walls.hpp"
+#include "engine/control/state_estimator.hpp"
+#include "runtime/five_bar_estimator.hpp"
+#include "runtime/simulated_dc_motor_device.hpp"
+#include "runtime/simulated_device.hpp"
+#include "runtime/simulated_dob_device.hpp"
+#include "runtime/simulated_five_bar_device.hpp"
+#include "runtime/simulated_joystick_device.hpp"
+
+using namespace haptic;
+
+namespace {
+
+constexpr double kT = 1e-3;  // s
+
+engine::HandInput light_push(engine::Vec3 force) {
+  engine::HandInput hand;
+  hand.mode = engine::HandInput::Mode::kApplyForce;
+  hand.force = force;
+  return hand;
+}
+
+/// One tick of a device: read, then write a small force (what the loop does around the scene).
+template <typename DeviceT>
+void run_device(benchmark::State& state, DeviceT& device, engine::Vec3 command) {
+  runtime::DeviceReading reading;
+  for (auto _ : state) {
+    device.read(reading);
+    benchmark::DoNotOptimize(reading);
+    device.write(runtime::DeviceCommand{command}, kT);
+  }
+}
+
+void BM_Device_PointMass(benchmark::State& state) {
+  runtime::SimulatedPointMassDevice device(engine::PointMassParams{}, {{0, 0, 0}, {}}, 20.0);
+  run_device(state, device, {0, 0, 1e-4});
+}
+BENCHMARK(BM_Device_PointMass);
+
+void BM_Device_DcMotor000(benchmark::State& state) {
+  runtime::SimulatedDcMotorDevice device(
+      engine::DcMotorParams{},
+      state.range(0) ? engine::DcMotorModel::kWithInductance : engine::DcMotorModel::kWithoutInductance,
+      0.5, 5.0, engine::IntegrationSettings{});
+  run_device(state, device, {0, 0, 0});
+}
+BENCHMARK(BM_Device_DcMotor000)->Arg(0)->Arg(1)->ArgName("with_inductance");
+
+void BM_Device_FiveBar003(benchmark::State& state) {
+  runtime::SimulatedFiveBarOptions options;
+  options.plant.coriolis = state.range(0) != 0;
+  runtime::SimulatedFiveBarDevice device(engine::FiveBarParams{}, {}, options);
+  if (state.range(1)) device.set_velocity_estimator(std::make_unique<runtime::FiveBarStateEstimators>(kT));
+  device.set_hand(light_push({0.0, 0.0, 0.5}));
+  run_device(state, device, {0.0, 0.0, -0.5});
+}
+BENCHMARK(BM_Device_FiveBar003)->ArgsProduct({{1, 0}, {0, 1}})->ArgNames({"coriolis", "estimator"});
+
+void BM_Device_Joystick004(benchmark::State& state) {
+  runtime::SimulatedJoystickDevice device(runtime::SimulatedJoystickConfig{});
+  device.set_hand(light_push({0.2, 0.0, 0.0}));
+  run_device(state, device, {-0.2, 0.0, 0.0});
+}
+BENCHMARK(BM_Device_Joystick004);
+
+void BM_Device_ParallelDob001(benchmark::State& state) {
+  runtime::SimulatedDobDevice device(engine::Parallel2DofParams{}, engine::DisturbanceObserverParams{},
+                                     {0.0, 0.25, 0.0}, 10.0, state.range(0) != 0);
+  run_device(state, device, {0.0, 0.0, 0.0});
+}
+BENCHMARK(BM_Device_ParallelDob001)->Arg(1)->Arg(0)->ArgName("observer");
+
+// ---- Controllers on their own: one tick's computation each.
+
+void BM_Controller_TorsionSpring000(benchmark::State& state) {
+  const engine::DcMotorParams p;
+  engine::VirtualTorsionSpring spring(engine::exact_delayed_coefficients(1.0, 0.01, kT), p.r, 0.0);
+  double theta = 0.01;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(spring.torque(theta));
+    theta = -theta;
+  }
+}
+BENCHMARK(BM_Controller_TorsionSpring000);
+
+void BM_Controller_ConventionalWall003(benchmark::State& state) {
+  engine::ConventionalJointWall wall(engine::JointWallParams{800.0, 5.0});
+  double q = 1e-3;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(wall.torque(q));
+    q = -q;
+  }
+}
+BENCHMARK(BM_Controller_ConventionalWall003);
+
+void BM_Controller_EstimatorWall003(benchmark::State& state) {
+  engine::JointWallParams params{800.0, 5.0};
+  engine::EstimatorJointWall wall(params, engine::StateEstimatorParams{});
+  double q = 1e-3;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(wall.torque(q, 0.1));
+    q = -q;
+  }
+}
+BENCHMARK(BM_Controller_EstimatorWall003);
+
+void BM_Controller_BrakeRule004(benchmark::State& state) {
+  const engine::HybridRuleParams rule{7.78, 1e-3};
+  double q_dot = 0.3;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(engine::split_hybrid(0.5, q_dot, 0.1, rule));
+    q_dot = -q_dot;
+  }
+}
+BENCHMARK(BM_Controller_BrakeRule004);
+
+void BM_Controller_DisturbanceObserver001(benchmark::State& state) {
+  engine::DisturbanceObserver x_axis{engine::DisturbanceObserverParams{}};
+  engine::DisturbanceObserver y_axis{engine::DisturbanceObserverParams{}};
+  double v = 0.01;
+  for (auto _ : state) {
+    const double fx = x_axis.command(1.0, v);
+    const double fy = y_axis.command(-1.0, -v);
+    x_axis.update(fx, v);
+    y_axis.update(fy, -v);
+    benchmark::DoNotOptimize(fx + fy);
+    v = -v;
+  }
+}
+BENCHMARK(BM_Controller_DisturbanceObserver001);
+
+}  // namespace
+
+BENCHMARK_MAIN();
