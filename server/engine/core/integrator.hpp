@@ -63,41 +63,61 @@ constexpr StateVector<N> axpy(const StateVector<N>& x, double a, const StateVect
 }
 }  // namespace detail
 
+/// x += h f(x).
+template <std::size_t N, typename Rhs>
+constexpr void explicit_euler_step(StateVector<N>& x, double h, Rhs& rhs) {
+  const StateVector<N> d = rhs(x);
+  for (std::size_t i = 0; i < N; ++i) x[i] += h * d[i];
+}
+
+/// Velocities (and first-order states) first, then positions with the new velocities.
+template <std::size_t kPositions, std::size_t N, typename Rhs>
+constexpr void semi_implicit_euler_step(StateVector<N>& x, double h, Rhs& rhs) {
+  static_assert(2 * kPositions <= N, "the state holds positions, then their velocities");
+  const StateVector<N> d = rhs(x);
+  for (std::size_t i = kPositions; i < N; ++i) x[i] += h * d[i];
+  for (std::size_t i = 0; i < kPositions; ++i) x[i] += h * x[kPositions + i];
+}
+
+/// Classical fourth-order Runge–Kutta.
+template <std::size_t N, typename Rhs>
+constexpr void rk4_step(StateVector<N>& x, double h, Rhs& rhs) {
+  const StateVector<N> k1 = rhs(x);
+  const StateVector<N> k2 = rhs(detail::axpy(x, 0.5 * h, k1));
+  const StateVector<N> k3 = rhs(detail::axpy(x, 0.5 * h, k2));
+  const StateVector<N> k4 = rhs(detail::axpy(x, h, k3));
+  const double w = h / 6.0;
+  for (std::size_t i = 0; i < N; ++i) x[i] += w * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+}
+
 /// One step of length h. `kPositions` matters only to the semi-implicit method.
 template <std::size_t kPositions, std::size_t N, typename Rhs>
 constexpr void integrate_step(Integrator method, StateVector<N>& x, double h, Rhs&& rhs) {
-  static_assert(2 * kPositions <= N, "the state holds positions, then their velocities");
   switch (method) {
-    case Integrator::kExplicitEuler: {
-      x = detail::axpy(x, h, rhs(x));
-      return;
-    }
-    case Integrator::kSemiImplicitEuler: {
-      const StateVector<N> d = rhs(x);
-      for (std::size_t i = kPositions; i < N; ++i) x[i] += h * d[i];
-      for (std::size_t i = 0; i < kPositions; ++i) x[i] += h * x[kPositions + i];
-      return;
-    }
-    case Integrator::kRk4: {
-      const StateVector<N> k1 = rhs(x);
-      const StateVector<N> k2 = rhs(detail::axpy(x, 0.5 * h, k1));
-      const StateVector<N> k3 = rhs(detail::axpy(x, 0.5 * h, k2));
-      const StateVector<N> k4 = rhs(detail::axpy(x, h, k3));
-      for (std::size_t i = 0; i < N; ++i) {
-        x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-      }
-      return;
-    }
+    case Integrator::kExplicitEuler: explicit_euler_step(x, h, rhs); return;
+    case Integrator::kSemiImplicitEuler: semi_implicit_euler_step<kPositions>(x, h, rhs); return;
+    case Integrator::kRk4: rk4_step(x, h, rhs); return;
   }
 }
 
-/// One tick of length dt as `settings.substeps` (at least one) equal steps.
+/// One tick of length dt as `settings.substeps` (at least one) equal steps. The method is chosen
+/// once per tick, outside the sub-step loop, so each loop inlines one method's arithmetic.
 template <std::size_t kPositions, std::size_t N, typename Rhs>
 constexpr void integrate_tick(const IntegrationSettings& settings, StateVector<N>& x, double dt,
                               Rhs&& rhs) {
   const std::uint32_t n = settings.substeps > 0 ? settings.substeps : 1;
   const double h = dt / static_cast<double>(n);
-  for (std::uint32_t k = 0; k < n; ++k) integrate_step<kPositions>(settings.method, x, h, rhs);
+  switch (settings.method) {
+    case Integrator::kExplicitEuler:
+      for (std::uint32_t k = 0; k < n; ++k) explicit_euler_step(x, h, rhs);
+      return;
+    case Integrator::kSemiImplicitEuler:
+      for (std::uint32_t k = 0; k < n; ++k) semi_implicit_euler_step<kPositions>(x, h, rhs);
+      return;
+    case Integrator::kRk4:
+      for (std::uint32_t k = 0; k < n; ++k) rk4_step(x, h, rhs);
+      return;
+  }
 }
 
 }  // namespace haptic::engine
