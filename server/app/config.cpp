@@ -122,18 +122,24 @@ std::string validate(const v1::ServerConfig& config) {
       !e.empty()) {
     return e;
   }
-  for (int i = 0; i < config.initial_scene().objects_size(); ++i) {
+  return validate_scene(config.initial_scene(), "initial_scene");
+}
+
+std::string validate_scene(const v1::Scene& scene, const std::string& prefix) {
+  const net::SceneLimits limits;
+  const std::string dot = prefix.empty() ? "" : prefix + ".";
+  for (int i = 0; i < scene.objects_size(); ++i) {
     engine::ObjectSpec spec;
-    if (auto e = net::to_object_spec(config.initial_scene().objects(i),
-                                     "initial_scene.objects[" + std::to_string(i) + "]", limits, spec);
+    if (auto e = net::to_object_spec(scene.objects(i), dot + "objects[" + std::to_string(i) + "]",
+                                     limits, spec);
         !e.empty()) {
       return e;
     }
   }
-  for (int i = 0; i < config.initial_scene().fields_size(); ++i) {
+  for (int i = 0; i < scene.fields_size(); ++i) {
     engine::FieldSpec spec;
-    if (auto e = net::to_field_spec(config.initial_scene().fields(i),
-                                    "initial_scene.fields[" + std::to_string(i) + "]", limits, spec);
+    if (auto e = net::to_field_spec(scene.fields(i), dot + "fields[" + std::to_string(i) + "]",
+                                    limits, spec);
         !e.empty()) {
       return e;
     }
@@ -160,6 +166,22 @@ v1::ServerConfig load_config_file(const std::string& path) {
   std::stringstream text;
   text << file.rdbuf();
   return parse_config(text.str(), path);
+}
+
+v1::Scene load_scene_file(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) throw ConfigError(path + ": cannot open");
+  std::stringstream text;
+  text << file.rdbuf();
+  v1::Scene scene;
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = false;
+  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &scene, options);
+  if (!status.ok()) {
+    throw ConfigError(path + ": not a valid Scene: " + std::string(status.message()));
+  }
+  if (auto error = validate_scene(scene, ""); !error.empty()) throw ConfigError(path + ": " + error);
+  return scene;
 }
 
 std::string to_json(const v1::ServerConfig& config) {

@@ -24,6 +24,14 @@ v1::ServerConfig parse_config(const std::string& json, const std::string& source
 /// Reads and parses a file. Throws ConfigError naming the file.
 v1::ServerConfig load_config_file(const std::string& path);
 
+/// Reads a scene file: protobuf's JSON mapping of haptic.v1.Scene (unknown fields are errors),
+/// every object and field validated. Throws ConfigError naming the file and the element
+/// ("walls.json: objects[2].impedance.stiffness: …").
+v1::Scene load_scene_file(const std::string& path);
+
+/// Empty when every object and field of `scene` is valid, else "<prefix>.objects[i]…: …".
+std::string validate_scene(const v1::Scene& scene, const std::string& prefix);
+
 /// Sets every unset (zero) field to its default.
 void fill_defaults(v1::ServerConfig& config);
 

@@ -38,6 +38,10 @@ int main(int argc, char** argv) {
   bool print_config = false;
   cli.add_option("--config", config_path, "JSON file with a haptic.v1.ServerConfig")
       ->check(CLI::ExistingFile);
+  std::string scene_path;
+  cli.add_option("--scene", scene_path,
+                 "JSON file with a haptic.v1.Scene: the server's own scene (replaces initial_scene)")
+      ->check(CLI::ExistingFile);
   cli.add_option("--grpc-address", grpc_address, "override grpc_address (host:port; port 0 = any)");
   cli.add_option("--udp-port", udp_port, "override udp_port (0 = any)")->check(CLI::Range(0, 65535));
   cli.add_flag("--lockstep", lockstep, "run in LOCKSTEP time: ticks advance only by the Step RPC");
@@ -53,6 +57,7 @@ int main(int argc, char** argv) {
     if (!grpc_address.empty()) config.set_grpc_address(grpc_address);
     if (udp_port >= 0) config.set_udp_port(static_cast<std::uint32_t>(udp_port));
     if (lockstep) config.set_time_mode(haptic::v1::LOCKSTEP);
+    if (!scene_path.empty()) *config.mutable_initial_scene() = haptic::app::load_scene_file(scene_path);
     if (auto error = haptic::app::validate(config); !error.empty()) {
       throw haptic::app::ConfigError("configuration: " + error);
     }

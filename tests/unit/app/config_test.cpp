@@ -1,6 +1,8 @@
 // hapticd's configuration: protobuf JSON, defaults, and errors that name the field.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "app/config.hpp"
 
 namespace haptic::app {
@@ -111,6 +113,36 @@ TEST(Config, TheDocumentsDevicesAreCheckedNamingTheField) {
                 .find("simulated_parallel_dob.nominal_mass:"),
             std::string::npos);
   EXPECT_EQ(error_of(R"({"simulated_five_bar": {"velocity": "estimator", "coriolis": false}})"), "");
+}
+
+TEST(SceneFile, TheShippedSceneLoadsAndBadOnesNameTheFileAndTheElement) {
+  const v1::Scene scene =
+      load_scene_file(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/wall_sphere_spring.json");
+  EXPECT_EQ(scene.objects_size(), 2);
+  EXPECT_EQ(scene.fields_size(), 1);
+  EXPECT_TRUE(scene.objects(1).has_sphere());
+
+  const std::string path = ::testing::TempDir() + "/bad_scene.json";
+  const auto error_for = [&](const std::string& json) {
+    {
+      std::ofstream out(path);
+      out << json;
+    }
+    try {
+      load_scene_file(path);
+    } catch (const ConfigError& error) {
+      return std::string(error.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error_for(R"({"objects": [{"impedance": {"stiffness": 100}, "sphere": {"radius": -1}}]})")
+                .rfind(path + ": objects[0].sphere.radius", 0),
+            0u);
+  EXPECT_NE(error_for(R"({"objects": [{"colour": 3}]})").find("not a valid Scene"), std::string::npos);
+  EXPECT_NE(error_for(R"({"fields": [{"spring_to_point": {"stiffness": "NaN"}}]})")
+                .find("fields[0].spring_to_point.stiffness"),
+            std::string::npos);
+  EXPECT_EQ(error_for(R"({"objects": []})"), "");
 }
 
 TEST(Config, MalformedJsonAndUnknownFieldsAreErrorsNamingTheSource) {
