@@ -1,5 +1,6 @@
 #include "net/scene_store.hpp"
 
+#include <algorithm>
 #include <string>
 
 namespace haptic::net {
@@ -8,6 +9,15 @@ namespace {
 const char* kind_name(ItemKind kind) { return kind == ItemKind::kObject ? "object" : "field"; }
 
 bool is_live(const engine::ItemMeta& meta) { return meta.fade_begin_tick == engine::kNeverTick; }
+
+/// A new item that ramps in from `tick`.
+engine::ItemMeta appearing(std::uint64_t session_id, std::uint64_t id, std::int64_t tick) {
+  engine::ItemMeta meta;
+  meta.session_id = session_id;
+  meta.id = id;
+  meta.ramps.appear_tick = tick;
+  return meta;
+}
 
 }  // namespace
 
@@ -52,7 +62,7 @@ grpc::Status SceneStore::create(std::uint64_t session_id, ItemKind kind,
                 " objects and fields (max_objects_per_session)"};
   }
   id_out = next_id_++;
-  items_.emplace(id_out, Item{engine::ItemMeta{session_id, id_out, engine::kNeverTick}, kind, spec});
+  items_.emplace(id_out, Item{appearing(session_id, id_out, next_tick_()), kind, spec});
   publish_locked();
   return grpc::Status::OK;
 }
@@ -62,7 +72,38 @@ grpc::Status SceneStore::update(std::uint64_t session_id, ItemKind kind, std::ui
   std::lock_guard lock(mutex_);
   Item* item = nullptr;
   if (auto status = find_owned(session_id, kind, id, item); !status.ok()) return status;
+  // Cross-fade (see engine::ItemRamp): the new version fades in from `now`, and every older
+  // version of this item, the current one included, fades out against it.
+  const std::int64_t now = next_tick_();
+  superseded_.push_back(*item);
+  std::vector<engine::ItemMeta*> versions;  // oldest first: the list keeps update order
+  for (Item& old : superseded_) {
+    if (old.meta.id == id) versions.push_back(&old.meta);
+  }
+  if (versions.size() > engine::ItemRamp::kMaxSuperseded) {
+    // Updates faster than the ramp: the oldest version is dropped and the next-oldest takes over
+    // its share (its fade-in is treated as complete). The force steps by the dropped version's
+    // remaining share of the difference between the two — small, as that share has been fading.
+    versions[1]->ramps.appear_tick = engine::kAlwaysTick;
+    const std::uint64_t dropped_id = id;
+    const auto oldest = std::find_if(superseded_.begin(), superseded_.end(),
+                                     [&](const Item& old) { return old.meta.id == dropped_id; });
+    superseded_.erase(oldest);
+    versions.clear();
+    for (Item& old : superseded_) {
+      if (old.meta.id == id) versions.push_back(&old.meta);
+    }
+  }
+  for (engine::ItemMeta* version : versions) {
+    for (std::int64_t& at : version->ramps.superseded_at) {
+      if (at == engine::kNeverTick) {
+        at = now;
+        break;
+      }
+    }
+  }
   item->spec = spec;
+  item->meta.ramps.appear_tick = now;
   publish_locked();
   return grpc::Status::OK;
 }
@@ -98,14 +139,12 @@ grpc::Status SceneStore::replace_session_scene(std::uint64_t session_id,
   field_ids.clear();
   for (const auto& object : objects) {
     const std::uint64_t id = next_id_++;
-    items_.emplace(id, Item{engine::ItemMeta{session_id, id, engine::kNeverTick}, ItemKind::kObject,
-                            object});
+    items_.emplace(id, Item{appearing(session_id, id, fade_begin), ItemKind::kObject, object});
     object_ids.push_back(id);
   }
   for (const auto& field : fields) {
     const std::uint64_t id = next_id_++;
-    items_.emplace(id, Item{engine::ItemMeta{session_id, id, engine::kNeverTick}, ItemKind::kField,
-                            field});
+    items_.emplace(id, Item{appearing(session_id, id, fade_begin), ItemKind::kField, field});
     field_ids.push_back(id);
   }
   publish_locked();
@@ -139,6 +178,18 @@ std::size_t SceneStore::compact() {
       ++it;
     }
   }
+  // A superseded version is gone once any of its fade-outs has run its course.
+  const auto finished = [&](const Item& item) {
+    for (const std::int64_t at : item.meta.ramps.superseded_at) {
+      if (at != engine::kNeverTick && now > at + removal_ramp_ticks_) return true;
+    }
+    return item.meta.fade_begin_tick != engine::kNeverTick &&
+           now > item.meta.fade_begin_tick + removal_ramp_ticks_;
+  };
+  const std::size_t superseded_before = superseded_.size();
+  superseded_.erase(std::remove_if(superseded_.begin(), superseded_.end(), finished),
+                    superseded_.end());
+  removed += superseded_before - superseded_.size();
   if (removed > 0) publish_locked();
   exchange_.reclaim();
   return removed;
@@ -147,6 +198,7 @@ std::size_t SceneStore::compact() {
 SceneCounts SceneStore::counts() const {
   std::lock_guard lock(mutex_);
   SceneCounts counts;
+  counts.fading = static_cast<std::uint32_t>(superseded_.size());
   for (const auto& [id, item] : items_) {
     if (!is_live(item.meta)) {
       ++counts.fading;
@@ -161,14 +213,16 @@ SceneCounts SceneStore::counts() const {
 
 void SceneStore::publish_locked() {
   engine::SceneDescription description;
-  for (const auto& [id, item] : items_) {
+  const auto add = [&](const Item& item) {
     if (const auto* object = std::get_if<engine::ObjectSpec>(&item.spec)) {
       description.objects.push_back(engine::ObjectEntry{item.meta, *object});
     } else {
       description.fields.push_back(
           engine::FieldEntry{item.meta, std::get<engine::FieldSpec>(item.spec)});
     }
-  }
+  };
+  for (const auto& [id, item] : items_) add(item);
+  for (const Item& item : superseded_) add(item);
   exchange_.publish(std::make_unique<const engine::CompiledScene>(
       engine::compile_scene(description, removal_ramp_ticks_, ++generation_)));
 }

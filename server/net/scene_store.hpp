@@ -3,9 +3,10 @@
 // in full before anything moves, applied under one lock, compiled and published to the loop as a
 // new snapshot, so a request is applied whole or not at all.
 //
-// Removal never steps the force: a removed item stays in the compiled scene with its fade-out
-// start tick until its force has ramped to zero, then compact() drops it. Removed items are no
-// longer addressable.
+// No change steps the force: a new item ramps in from the tick after it is created; a removed
+// item stays in the compiled scene with its fade-out start tick until its force has ramped to
+// zero, then compact() drops it (removed items are no longer addressable); an updated item keeps
+// its id while its old version fades out and the new one fades in over the same ramp.
 
 #include <grpcpp/support/status.h>
 
@@ -77,6 +78,7 @@ class SceneStore {
 
   mutable std::mutex mutex_;
   std::map<std::uint64_t, Item> items_;  // by id; ordered, so compilation is deterministic
+  std::vector<Item> superseded_;         // old versions of updated items, fading out
   std::uint64_t next_id_ = 1;
   std::uint64_t generation_ = 0;
 };

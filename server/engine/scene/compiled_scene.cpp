@@ -25,6 +25,13 @@ double fade_gain(std::int64_t fade_begin_tick, std::int64_t tick, std::int64_t r
   return std::max(0.0, 1.0 - elapsed / ramp);
 }
 
+double ramp_gain(const ItemRamp& ramp, std::int64_t tick, std::int64_t ramp_ticks) {
+  double gain = fade_gain(ramp.fade_begin_tick, tick, ramp_ticks);
+  for (const std::int64_t superseded : ramp.superseded_at) gain *= fade_gain(superseded, tick, ramp_ticks);
+  if (ramp.appear_tick != kAlwaysTick) gain *= 1.0 - fade_gain(ramp.appear_tick, tick, ramp_ticks);
+  return gain;
+}
+
 CompiledScene compile_scene(const SceneDescription& description, std::int64_t removal_ramp_ticks,
                             std::uint64_t generation) {
   CompiledScene scene;
@@ -45,16 +52,16 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
       assert(norm(n_W) > 0.0);
       scene.half_spaces.push_back(CompiledHalfSpace{object.p_WO, n_W * (1.0 / norm(n_W)),
                                                     object.stiffness, object.damping,
-                                                    entry.meta.fade_begin_tick});
+                                                    entry.meta.ramp()});
     } else if (const auto* sphere = std::get_if<SphereSpec>(&object.shape)) {
       scene.spheres.push_back(CompiledSphere{object.p_WO, sphere->radius, object.stiffness,
-                                             object.damping, entry.meta.fade_begin_tick});
+                                             object.damping, entry.meta.ramp()});
     }
   }
   for (const FieldEntry& entry : description.fields) {
     if (const auto* spring = std::get_if<SpringToPointSpec>(&entry.spec.kind)) {
       scene.springs.push_back(CompiledSpring{spring->anchor_W, spring->stiffness, spring->damping,
-                                             spring->max_force, entry.meta.fade_begin_tick});
+                                             spring->max_force, entry.meta.ramp()});
     }
   }
   return scene;
@@ -68,10 +75,10 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
   const std::int64_t ramp = scene.removal_ramp_ticks;
 
   for (const CompiledHalfSpace& wall : scene.half_spaces) {
-    if (wall.fade_begin_tick != kNeverTick) out.ramping = true;
+    if (is_fading_out(wall.ramp)) out.ramping = true;
     const double d = dot(wall.point_W - p_WT, wall.normal_W);
     if (d <= 0.0) continue;
-    const double gain = fade_gain(wall.fade_begin_tick, tick, ramp);
+    const double gain = ramp_gain(wall.ramp, tick, ramp);
     if (gain == 0.0) continue;
     out.F_T_W += (gain * contact_magnitude(wall.stiffness, wall.damping, d, wall.normal_W, v_WT)) *
                  wall.normal_W;
@@ -83,12 +90,12 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
   }
 
   for (const CompiledSphere& sphere : scene.spheres) {
-    if (sphere.fade_begin_tick != kNeverTick) out.ramping = true;
+    if (is_fading_out(sphere.ramp)) out.ramping = true;
     const Vec3 r = p_WT - sphere.center_W;
     const double distance = norm(r);
     const double d = sphere.radius - distance;
     if (d <= 0.0) continue;
-    const double gain = fade_gain(sphere.fade_begin_tick, tick, ramp);
+    const double gain = ramp_gain(sphere.ramp, tick, ramp);
     if (gain == 0.0) continue;
     // At the exact centre the direction is undefined; push along +z.
     const Vec3 n = distance > 0.0 ? r * (1.0 / distance) : Vec3{0.0, 0.0, 1.0};
@@ -101,8 +108,8 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
   }
 
   for (const CompiledSpring& spring : scene.springs) {
-    if (spring.fade_begin_tick != kNeverTick) out.ramping = true;
-    const double gain = fade_gain(spring.fade_begin_tick, tick, ramp);
+    if (is_fading_out(spring.ramp)) out.ramping = true;
+    const double gain = ramp_gain(spring.ramp, tick, ramp);
     if (gain == 0.0) continue;
     // F = −∇U − b v with U = ½ k |p − anchor|².
     Vec3 F = -spring.stiffness * (p_WT - spring.anchor_W) - spring.damping * v_WT;

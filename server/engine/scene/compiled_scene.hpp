@@ -16,7 +16,7 @@ struct CompiledHalfSpace {
   Vec3 normal_W;      // Unit outward normal.
   double stiffness;   // Unit: N/m.
   double damping;     // Unit: N*s/m.
-  std::int64_t fade_begin_tick;
+  ItemRamp ramp;
 };
 
 struct CompiledSphere {
@@ -24,7 +24,7 @@ struct CompiledSphere {
   double radius;      // Unit: m.
   double stiffness;   // Unit: N/m.
   double damping;     // Unit: N*s/m.
-  std::int64_t fade_begin_tick;
+  ItemRamp ramp;
 };
 
 struct CompiledSpring {
@@ -32,7 +32,7 @@ struct CompiledSpring {
   double stiffness;   // Unit: N/m.
   double damping;     // Unit: N*s/m.
   double max_force;   // Unit: N; 0 = no clip.
-  std::int64_t fade_begin_tick;
+  ItemRamp ramp;
 };
 
 struct CompiledScene {
@@ -52,7 +52,7 @@ struct SceneForce {
   Vec3 F_T_W;                    // Force on the tool, in W. Unit: N.
   Vec3 p_WP;                     // Proxy point: the surface point of the deepest contact, else p_WT.
   std::uint32_t contact_count = 0;
-  bool ramping = false;          // Some item is fading out.
+  bool ramping = false;          // Some item is fading out (removed, or an old version of a change).
 };
 
 /// Sums every contribution at tool position p_WT and velocity v_WT. Does not allocate.
@@ -63,5 +63,13 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
 
 /// Gain of an item whose fade began at fade_begin_tick, at tick `tick`: 1 before, then linear to 0.
 double fade_gain(std::int64_t fade_begin_tick, std::int64_t tick, std::int64_t ramp_ticks);
+
+/// Whether the item is being removed or replaced by a newer version.
+inline bool is_fading_out(const ItemRamp& ramp) {
+  return ramp.fade_begin_tick != kNeverTick || ramp.superseded_at[0] != kNeverTick;
+}
+
+/// Gain of an item at tick `tick`: its fade-in times its fade-outs (see ItemRamp).
+double ramp_gain(const ItemRamp& ramp, std::int64_t tick, std::int64_t ramp_ticks);
 
 }  // namespace haptic::engine

@@ -2,6 +2,8 @@
 // The scene as clients describe it, after validation at the boundary (server/net): objects and
 // fields in engine types. Engine code assumes these are valid (finite, in range).
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <variant>
@@ -43,13 +45,36 @@ struct FieldSpec {
 };
 
 inline constexpr std::int64_t kNeverTick = std::numeric_limits<std::int64_t>::max();
+/// appear_tick of an item that was always there (no fade-in).
+inline constexpr std::int64_t kAlwaysTick = std::numeric_limits<std::int64_t>::min();
 
-/// Who owns an item, and whether it is fading out. An item whose fade began at tick t0 contributes
-/// with gain 1 - (tick - t0) / ramp_ticks, clamped to [0, 1], so removal never steps the force.
+/// When an item's force ramps in and out, so that no appearance, change or removal steps the
+/// force. With R the ramp length in ticks and ramp(x) = clamp(x / R, 0, 1), an item contributes with
+///   gain = in · out · Π_j out_j,   in = ramp(tick − appear_tick) (1 if it was always there),
+///   out = 1 − ramp(tick − fade_begin_tick) (removal), out_j = 1 − ramp(tick − superseded_at[j]).
+/// An update keeps the item's id and adds a version: the new one fades in from its appear tick and
+/// every older version of the item gets that tick in superseded_at. For versions v_1 (oldest) …
+/// v_n the gains are in_k Π_{j>k} (1 − in_j), which sum to 1 at every tick (a telescoping product),
+/// so a change cross-fades the force however fast updates come, up to kMaxVersions in flight.
+struct ItemRamp {
+  static constexpr std::size_t kMaxSuperseded = 3;  // so at most four versions of one item
+  std::int64_t appear_tick = kAlwaysTick;
+  std::int64_t fade_begin_tick = kNeverTick;
+  std::array<std::int64_t, kMaxSuperseded> superseded_at{kNeverTick, kNeverTick, kNeverTick};
+};
+
+/// Who owns an item, and how its force ramps.
 struct ItemMeta {
   std::uint64_t session_id = 0;  // 0: owned by the server itself.
-  std::uint64_t id = 0;          // Unique across all sessions.
+  std::uint64_t id = 0;          // Unique across all sessions; kept by updates.
   std::int64_t fade_begin_tick = kNeverTick;
+  ItemRamp ramps;                // appear and superseded ticks (fade_begin_tick above is the removal)
+
+  ItemRamp ramp() const {
+    ItemRamp out = ramps;
+    out.fade_begin_tick = fade_begin_tick;
+    return out;
+  }
 };
 
 struct ObjectEntry {

@@ -16,7 +16,7 @@ ObjectEntry wall(Vec3 point, Vec3 normal, double k, double b, std::int64_t fade 
   spec.stiffness = k;
   spec.damping = b;
   spec.shape = HalfSpaceSpec{normal};
-  return {{1, 1, fade}, spec};
+  return {{1, 1, fade, {}}, spec};
 }
 
 ObjectEntry sphere(Vec3 center, double radius, double k, double b,
@@ -26,12 +26,12 @@ ObjectEntry sphere(Vec3 center, double radius, double k, double b,
   spec.stiffness = k;
   spec.damping = b;
   spec.shape = SphereSpec{radius};
-  return {{1, 2, fade}, spec};
+  return {{1, 2, fade, {}}, spec};
 }
 
 FieldEntry spring(Vec3 anchor, double k, double b, double max_force,
                   std::int64_t fade = kNeverTick) {
-  return {{1, 3, fade}, FieldSpec{SpringToPointSpec{anchor, k, b, max_force}}};
+  return {{1, 3, fade, {}}, FieldSpec{SpringToPointSpec{anchor, k, b, max_force}}};
 }
 
 CompiledScene compile(SceneDescription d) { return compile_scene(d, 50, 1); }
@@ -54,9 +54,36 @@ TEST(CompiledScene, CompileFlattensByKindAndClampsTheRamp) {
   EXPECT_EQ(scene.half_spaces[1].point_W, (Vec3{0.0, 0.0, 0.1}));
   EXPECT_EQ(scene.spheres[0].center_W, (Vec3{0.1, 0.2, 0.3}));
   EXPECT_EQ(scene.spheres[0].radius, 0.02);
-  EXPECT_EQ(scene.spheres[0].fade_begin_tick, 7);
+  EXPECT_EQ(scene.spheres[0].ramp.fade_begin_tick, 7);
   EXPECT_EQ(scene.springs[0].max_force, 3.0);
   EXPECT_EQ(compile_scene(d, 80, 1).removal_ramp_ticks, 80);
+}
+
+TEST(ItemRamp, VersionsOfAnItemCrossFadeWithGainsThatSumToOne) {
+  constexpr std::int64_t kRamp = 50;
+  // v1 always there; v2 appears at 100, v3 at 120 (faster than the ramp), v4 at 130.
+  ItemRamp v1, v2, v3, v4;
+  v1.superseded_at = {100, 120, 130};
+  v2.appear_tick = 100;
+  v2.superseded_at = {120, 130, kNeverTick};
+  v3.appear_tick = 120;
+  v3.superseded_at = {130, kNeverTick, kNeverTick};
+  v4.appear_tick = 130;
+  double previous_v4 = 0.0;
+  for (std::int64_t tick = 90; tick < 200; ++tick) {
+    const double g1 = ramp_gain(v1, tick, kRamp), g2 = ramp_gain(v2, tick, kRamp);
+    const double g3 = ramp_gain(v3, tick, kRamp), g4 = ramp_gain(v4, tick, kRamp);
+    EXPECT_NEAR(g1 + g2 + g3 + g4, 1.0, 1e-12) << tick;
+    EXPECT_GE(g4, previous_v4);  // the newest only grows
+    previous_v4 = g4;
+  }
+  EXPECT_EQ(ramp_gain(v1, 99, kRamp), 1.0);
+  EXPECT_EQ(ramp_gain(v4, 180, kRamp), 1.0);
+  EXPECT_EQ(ramp_gain(v4, 130, kRamp), 0.0);  // a new item starts from zero
+  EXPECT_NEAR(ramp_gain(v4, 131, kRamp), 1.0 / kRamp, 1e-15);
+  // Removal of the newest fades it out from wherever it is.
+  v4.fade_begin_tick = 150;
+  EXPECT_NEAR(ramp_gain(v4, 160, kRamp), (30.0 / kRamp) * (1.0 - 10.0 / kRamp), 1e-12);
 }
 
 TEST(CompiledScene, EmptySceneGivesNoForceAndProxyAtTheTool) {

@@ -36,7 +36,7 @@ SceneDescription busy_scene() {
     spec.stiffness = k;
     spec.damping = b;
     spec.shape = shape;
-    d.objects.push_back({{1, d.objects.size() + 1, fade}, spec});
+    d.objects.push_back({{1, d.objects.size() + 1, fade, {}}, spec});
   };
   object({0, 0, -0.01}, {}, 1000.0, 1.0, HalfSpaceSpec{{0, 0, 1}}, kNeverTick);
   object({0.02, 0, 0}, {0.9238795, 0, 0.3826834, 0}, 800.0, 0.5, HalfSpaceSpec{{-1, 0, 0}},
@@ -45,8 +45,8 @@ SceneDescription busy_scene() {
   object({0.005, 0.005, 0}, {}, 600.0, 0.2, SphereSpec{0.01}, kNeverTick);
   object({-0.01, 0, 0.01}, {}, 400.0, 0.0, SphereSpec{0.015}, 5000);
   d.fields.push_back(
-      {{2, 10, kNeverTick}, FieldSpec{SpringToPointSpec{{0, 0, 0}, 50.0, 0.1, 2.0}}});
-  d.fields.push_back({{2, 11, 7000}, FieldSpec{SpringToPointSpec{{0.01, 0, 0}, 20.0, 0.0, 0.0}}});
+      {{2, 10, kNeverTick, {}}, FieldSpec{SpringToPointSpec{{0, 0, 0}, 50.0, 0.1, 2.0}}});
+  d.fields.push_back({{2, 11, 7000, {}}, FieldSpec{SpringToPointSpec{{0.01, 0, 0}, 20.0, 0.0, 0.0}}});
   return d;
 }
 

@@ -27,13 +27,23 @@ TEST(SceneStore, CreateUpdateDeleteAreSeenByTheLoop) {
   std::uint64_t id = 0;
   ASSERT_TRUE(rig.store.create(7, ItemKind::kObject, wall(0.0), id).ok());
   ASSERT_EQ(rig.scene().half_spaces.size(), 1u);
+  EXPECT_EQ(rig.scene().half_spaces[0].ramp.appear_tick, 1);  // ramps in from the next tick
+  rig.next_tick = 20;
   ASSERT_TRUE(rig.store.update(7, ItemKind::kObject, id, wall(0.01)).ok());
+  // The new version fades in from tick 20 while the old one fades out against it.
+  ASSERT_EQ(rig.scene().half_spaces.size(), 2u);
   EXPECT_DOUBLE_EQ(rig.scene().half_spaces[0].point_W.z, 0.01);
+  EXPECT_EQ(rig.scene().half_spaces[0].ramp.appear_tick, 20);
+  EXPECT_EQ(rig.scene().half_spaces[1].point_W.z, 0.0);
+  EXPECT_EQ(rig.scene().half_spaces[1].ramp.superseded_at[0], 20);
+  EXPECT_EQ(rig.store.counts().fading, 1u);
+  rig.next_tick = 71;  // the old version's ramp is over
+  EXPECT_EQ(rig.store.compact(), 1u);
   rig.next_tick = 100;
   ASSERT_TRUE(rig.store.remove(7, ItemKind::kObject, id).ok());
   // Still in the compiled scene, fading from tick 100; no longer addressable.
   ASSERT_EQ(rig.scene().half_spaces.size(), 1u);
-  EXPECT_EQ(rig.scene().half_spaces[0].fade_begin_tick, 100);
+  EXPECT_EQ(rig.scene().half_spaces[0].ramp.fade_begin_tick, 100);
   EXPECT_EQ(rig.store.remove(7, ItemKind::kObject, id).error_code(), grpc::StatusCode::NOT_FOUND);
   EXPECT_EQ(rig.store.counts().fading, 1u);
   rig.next_tick = 150;  // tick 150 is the ramp's last (gain 0): keep until it has run
@@ -41,6 +51,21 @@ TEST(SceneStore, CreateUpdateDeleteAreSeenByTheLoop) {
   rig.next_tick = 151;
   EXPECT_EQ(rig.store.compact(), 1u);
   EXPECT_TRUE(rig.scene().half_spaces.empty());
+}
+
+TEST(SceneStore, UpdatesFasterThanTheRampKeepAtMostFourVersionsWithGainsSummingToOne) {
+  StoreRig rig;
+  std::uint64_t id = 0;
+  ASSERT_TRUE(rig.store.create(7, ItemKind::kObject, wall(0.0), id).ok());
+  for (int k = 1; k <= 6; ++k) {  // an update every 5 ticks against a 50-tick ramp
+    rig.next_tick = 100 + 5 * k;
+    ASSERT_TRUE(rig.store.update(7, ItemKind::kObject, id, wall(0.001 * k)).ok());
+    const engine::CompiledScene& scene = rig.scene();
+    EXPECT_LE(scene.half_spaces.size(), 4u);
+    double sum = 0.0;
+    for (const auto& version : scene.half_spaces) sum += engine::ramp_gain(version.ramp, rig.next_tick + 3, 50);
+    EXPECT_NEAR(sum, 1.0, 1e-12) << k;
+  }
 }
 
 TEST(SceneStore, AnotherSessionsItemIsPermissionDenied) {

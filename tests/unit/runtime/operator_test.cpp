@@ -26,16 +26,16 @@ HandInput push(Vec3 force, ForceProfile profile) {
 
 TEST(ForceProfile, StepRampAndSineFollowTheirDefinitions) {
   const Vec3 F{0.0, 0.0, -5.0};
-  const HandInput step = push(F, {ForceProfile::Shape::kStep, 0.5, 0.0, 0.0, {}});
+  const HandInput step = push(F, {ForceProfile::Shape::kStep, 0.5, 0.0, 0.0, {}, {}});
   EXPECT_EQ(engine::profile_force(step, 0.499).z, 0.0);
   EXPECT_EQ(engine::profile_force(step, 0.5).z, -5.0);
 
-  const HandInput ramp = push(F, {ForceProfile::Shape::kRamp, 0.1, 0.4, 0.0, {}});
+  const HandInput ramp = push(F, {ForceProfile::Shape::kRamp, 0.1, 0.4, 0.0, {}, {}});
   EXPECT_EQ(engine::profile_force(ramp, 0.05).z, 0.0);
   EXPECT_DOUBLE_EQ(engine::profile_force(ramp, 0.2).z, -1.25);  // a quarter of the way up
   EXPECT_EQ(engine::profile_force(ramp, 0.6).z, -5.0);
 
-  const HandInput sine = push(F, {ForceProfile::Shape::kSine, 0.0, 0.0, 2.0, {0.0, 0.0, -1.0}});
+  const HandInput sine = push(F, {ForceProfile::Shape::kSine, 0.0, 0.0, 2.0, {0.0, 0.0, -1.0}, {}});
   EXPECT_NEAR(engine::profile_force(sine, 0.125).z, -1.0 - 5.0, 1e-12);  // sin(π/2)
   EXPECT_NEAR(engine::profile_force(sine, 0.25).z, -1.0, 1e-12);
 
@@ -163,7 +163,7 @@ TEST(SimulatedOperator, HandMassMovesWithTheToolOnlyWhileHolding) {
 TEST(SimulatedOperator, ProfileTimeStartsWhenTheInputArrives) {
   auto device = make_device(0.0);
   run(device, 1.0);  // time passes before the input is set
-  device.set_hand(push({0.0, 0.0, 1.0}, {ForceProfile::Shape::kStep, 0.1, 0.0, 0.0, {}}));
+  device.set_hand(push({0.0, 0.0, 1.0}, {ForceProfile::Shape::kStep, 0.1, 0.0, 0.0, {}, {}}));
   EXPECT_EQ(run(device, 0.09).v_WT.z, 0.0);  // the step is 0.1 s after the input, not after start
   EXPECT_GT(run(device, 0.02).v_WT.z, 0.0);
 }

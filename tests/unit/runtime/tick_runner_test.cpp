@@ -26,7 +26,7 @@ engine::CompiledScene wall_scene(double stiffness, double damping,
   wall.stiffness = stiffness;
   wall.damping = damping;
   wall.shape = engine::HalfSpaceSpec{{0.0, 0.0, 1.0}};
-  description.objects.push_back(engine::ObjectEntry{{1, 1, fade_begin}, wall});
+  description.objects.push_back(engine::ObjectEntry{{1, 1, fade_begin, {}}, wall});
   return engine::compile_scene(description, 50, generation);
 }
 
@@ -251,13 +251,13 @@ TEST(TickRunner, NoAllocationInsideTenThousandTicksWithSceneSwapsBetween) {
     wall.stiffness = 1000.0;
     wall.damping = 1.0;
     wall.shape = engine::HalfSpaceSpec{{0.0, 0.0, 1.0}};
-    description.objects.push_back({{1, 1, engine::kNeverTick}, wall});
+    description.objects.push_back({{1, 1, engine::kNeverTick, {}}, wall});
     engine::ObjectSpec sphere = wall;
     sphere.p_WO = {0.05, 0.0, 0.0};
     sphere.shape = engine::SphereSpec{0.01};
-    description.objects.push_back({{1, 2, block % 2 ? 1 : engine::kNeverTick}, sphere});
+    description.objects.push_back({{1, 2, block % 2 ? 1 : engine::kNeverTick, {}}, sphere});
     description.fields.push_back(
-        {{2, 3, engine::kNeverTick}, engine::FieldSpec{engine::SpringToPointSpec{{}, 10.0, 0.1, 2.0}}});
+        {{2, 3, engine::kNeverTick, {}}, engine::FieldSpec{engine::SpringToPointSpec{{}, 10.0, 0.1, 2.0}}});
     rig.scenes.publish(std::make_unique<const engine::CompiledScene>(
         engine::compile_scene(description, 50, static_cast<std::uint64_t>(block) + 2)));
     test::reset_allocations();
