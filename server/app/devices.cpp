@@ -199,6 +199,7 @@ SimulatedDevice make_device(const v1::ServerConfig& config) {
     runtime::SimulatedFiveBarOptions options;
     options.plant.integration = integration_settings(five_bar.integrator(), five_bar.substeps(), 10);
     options.plant.coriolis = !five_bar.has_coriolis() || five_bar.coriolis();
+    options.plant.flexible_mode = five_bar.flexible_mode();  // FiveBarFlexibleMode's defaults
     options.quantized = !five_bar.has_quantized_encoders() || five_bar.quantized_encoders();
     if (five_bar.max_force() > 0.0) options.max_force = five_bar.max_force();
     auto device = std::make_unique<runtime::SimulatedFiveBarDevice>(five_bar_params(five_bar),

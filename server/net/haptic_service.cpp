@@ -249,7 +249,10 @@ grpc::Status HapticService::SubscribeState(grpc::ServerContext*,
     return invalid("decimation: must be 0 (stop) to " + std::to_string(kMaxDecimation) + ", got " +
                    std::to_string(request->decimation()));
   }
-  const auto endpoint_known = deps_.sessions.subscribe(request->session_id(), request->decimation());
+  // The stream starts with the next tick the loop runs: samples the sender has yet to catch up
+  // with predate the subscription.
+  const auto endpoint_known = deps_.sessions.subscribe(request->session_id(), request->decimation(),
+                                                       deps_.loop.completed_ticks() + 1);
   response->set_udp_endpoint_known(endpoint_known.value_or(false));
   return grpc::Status::OK;
 }

@@ -74,11 +74,13 @@ bool SessionRegistry::on_heartbeat(std::uint64_t session_id, std::uint64_t seque
   return true;
 }
 
-std::optional<bool> SessionRegistry::subscribe(std::uint64_t session_id, std::uint32_t decimation) {
+std::optional<bool> SessionRegistry::subscribe(std::uint64_t session_id, std::uint32_t decimation,
+                                               std::uint64_t first_tick) {
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(session_id);
   if (it == sessions_.end()) return std::nullopt;
   it->second.decimation = decimation;
+  it->second.first_tick = first_tick;
   it->second.last_seen = SteadyClock::now();
   ++version_;
   return it->second.address.has_value();
@@ -109,7 +111,8 @@ std::vector<Subscriber> SessionRegistry::subscribers() const {
   std::lock_guard lock(mutex_);
   for (const auto& [id, session] : sessions_) {
     if (session.decimation == 0 || !session.address) continue;
-    out.push_back(Subscriber{id, session.info.key, *session.address, session.decimation});
+    out.push_back(Subscriber{id, session.info.key, *session.address, session.decimation,
+                             session.first_tick});
   }
   return out;
 }

@@ -37,6 +37,7 @@ struct Subscriber {
   wire::Key key{};
   UdpAddress address;
   std::uint32_t decimation = 1;
+  std::uint64_t first_tick = 0;  // the stream starts here: ticks before the subscription are not sent
 };
 
 class SessionRegistry {
@@ -55,9 +56,11 @@ class SessionRegistry {
   /// state goes to. Rejects (false) a sequence not above the last one (stale or replayed).
   bool on_heartbeat(std::uint64_t session_id, std::uint64_t sequence, const UdpAddress& from);
 
-  /// Sets the state-stream decimation (0 stops it); nullopt if the session does not exist, else
-  /// whether its UDP address is known yet.
-  std::optional<bool> subscribe(std::uint64_t session_id, std::uint32_t decimation);
+  /// Sets the state-stream decimation (0 stops it), streaming from tick `first_tick` on (the
+  /// sender may still be catching up with older ticks; those are not this subscription's);
+  /// nullopt if the session does not exist, else whether its UDP address is known yet.
+  std::optional<bool> subscribe(std::uint64_t session_id, std::uint32_t decimation,
+                                std::uint64_t first_tick = 0);
 
   /// Removes and returns the sessions whose lease ran out at `now`.
   std::vector<std::uint64_t> expire(SteadyClock::time_point now);
@@ -76,6 +79,7 @@ class SessionRegistry {
     std::optional<UdpAddress> address;
     std::uint64_t last_heartbeat_sequence = 0;
     std::uint32_t decimation = 0;
+    std::uint64_t first_tick = 0;
   };
 
   mutable std::mutex mutex_;

@@ -134,7 +134,7 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
       }
       bool first_send = true;
       for (const Subscriber& subscriber : subscribers) {
-        if (tick % subscriber.decimation != 0) continue;
+        if (tick % subscriber.decimation != 0 || tick < subscriber.first_tick) continue;
         wire::Header header;
         header.session_id = subscriber.session_id;
         header.sequence = ++sequences[subscriber.session_id];

@@ -26,7 +26,7 @@ SimulatedFiveBarDevice::SimulatedFiveBarDevice(const engine::FiveBarParams& para
   description_.capabilities.gravity = false;  // counterbalanced (L2371–2380)
   description_.capabilities.friction = true;
   description_.capabilities.quantized_position = options.quantized;
-  description_.capabilities.flexible_modes = false;
+  description_.capabilities.flexible_modes = options.plant.flexible_mode;
   description_.dof = 3;
   description_.max_force = options.max_force;
   description_.simulated = true;
@@ -56,6 +56,7 @@ engine::FiveBarJoints SimulatedFiveBarDevice::measure(const engine::FiveBarJoint
 
 void SimulatedFiveBarDevice::set_plant_state(const engine::FiveBarState& state) {
   plant_.set_state(state);
+  plant_.set_mode_state({});
   q_measured_ = measure(state.q);
   qdot_estimate_ = {};
   difference_.reset(q_measured_);
@@ -71,6 +72,7 @@ void SimulatedFiveBarDevice::set_velocity_estimator(
 
 DeviceStatus SimulatedFiveBarDevice::read(DeviceReading& reading) {
   const engine::FiveBarParams& p = plant_.params();
+  // What the encoders give: the rigid tip of the measured joints, without link 5's deflection.
   reading.p_WT = engine::five_bar_tip_position(p, q_measured_);
   const engine::FiveBarMatrix J = engine::five_bar_jacobian(p, q_measured_);
   const engine::FiveBarJoints& w = qdot_estimate_;
@@ -78,7 +80,9 @@ DeviceStatus SimulatedFiveBarDevice::read(DeviceReading& reading) {
                   J[1][0] * w[0] + J[1][1] * w[1] + J[1][2] * w[2],
                   J[2][0] * w[0] + J[2][1] * w[1] + J[2][2] * w[2]};
   const engine::FiveBarState& s = plant_.state();
-  return finite(reading.p_WT) && finite(reading.v_WT) && finite(s.q) && finite(s.qdot)
+  const engine::FiveBarModeState& mode = plant_.mode_state();
+  return finite(reading.p_WT) && finite(reading.v_WT) && finite(s.q) && finite(s.qdot) &&
+                 std::isfinite(mode.eta) && std::isfinite(mode.eta_dot)
              ? DeviceStatus::kOk
              : DeviceStatus::kError;
 }
@@ -99,11 +103,14 @@ DeviceStatus SimulatedFiveBarDevice::write(const DeviceCommand& command, double 
   hand_.end_tick(dt);
 
   const engine::FiveBarState& s = plant_.state();
-  if (!finite(s.q) || !finite(s.qdot)) return DeviceStatus::kError;
+  const engine::FiveBarModeState& mode = plant_.mode_state();
+  if (!finite(s.q) || !finite(s.qdot) || !std::isfinite(mode.eta) || !std::isfinite(mode.eta_dot)) {
+    return DeviceStatus::kError;
+  }
   q_measured_ = measure(s.q);
   if (estimator_) {
     engine::Vec3 p_WT, v_WT;
-    plant_.tip_state(s, p_WT, v_WT);
+    plant_.physical_tip_state(p_WT, v_WT);  // where the hand holds it
     const engine::FiveBarJoints tau_user =
         engine::five_bar_joint_torque(p, s.q, engine::hand_force(hand, p_WT, v_WT, t + dt));
     qdot_estimate_ = estimator_->update(q_measured_, plant_.applied_torque(), tau_user, dt);

@@ -11,6 +11,13 @@
 // The command F_T_W becomes τ = Jᵀ(q_m) F (eq. 3.58), saturated per joint at the D/A limit
 // (L3237) by the plant. No gravity compensation: the device is balanced (L2371–2380). The
 // operator's force acts at the tip through Jᵀ, and a gripping hand's mass moves with the tip.
+//
+// With options.plant.flexible_mode link 5 carries one horizontal bending mode (engine
+// FiveBarFlexibleMode) and capabilities.flexible_modes is set. The hand then holds the physical,
+// deflected tip p_rigid(q) + φ1(l) η n(q0), but the reading stays what the sensors give: the
+// encoders measure only the joints, so p_WT and v_WT are the rigid tip of the measured joints and
+// do not see the deflection (the thesis' strain gauge at the clamp, eq. 3.115, would; it is not
+// simulated). plant().physical_tip_state() gives the deflected tip.
 
 #include <cstdint>
 #include <memory>
@@ -39,7 +46,7 @@ class FiveBarVelocityEstimator {
 };
 
 struct SimulatedFiveBarOptions {
-  engine::FiveBarPlantOptions plant;  // RK4 × 10 sub-steps, Coriolis on.
+  engine::FiveBarPlantOptions plant;  // RK4 × 10 sub-steps, Coriolis on, rigid link 5.
   bool quantized = true;              // Read the angles through the encoders.
   double velocity_cutoff = 20.0;      // ω0 of the velocity low-pass (L3193). Unit: rad/s.
   /// Largest tool force the server may command: ≈ the smallest joint limit over the 0.6 m arm
@@ -67,7 +74,8 @@ class SimulatedFiveBarDevice final : public Device {
   void set_velocity_estimator(std::unique_ptr<FiveBarVelocityEstimator> estimator);
 
   const engine::FiveBarPlant& plant() const { return plant_; }
-  /// Off the loop (tests, resets): replaces the plant state and restarts the sensing at rest.
+  /// Off the loop (tests, resets): replaces the plant state, puts the flexible mode at rest and
+  /// restarts the sensing at rest.
   void set_plant_state(const engine::FiveBarState& state);
   /// The joint angles as last measured. Unit: rad.
   const engine::FiveBarJoints& measured_joints() const { return q_measured_; }

@@ -34,7 +34,58 @@ Vec3 tip_bias_acceleration(const FiveBarParams& p, const FiveBarState& s) {
           rho_bias * S0 + 2.0 * rho_dot * C0 * w0 - rho * S0 * w0 * w0, z_bias};
 }
 
+/// n(q0) = (−S0, C0, 0): horizontal, perpendicular to link 5, the way the tip moves for q̇0 > 0
+/// (the deflection direction of the single link, L1950–1956).
+Vec3 deflection_direction(double q0) { return {-std::sin(q0), std::cos(q0), 0.0}; }
+
+/// Columns of J_f = ∂p_WT/∂(q0, q1, q2, η) for p_WT = p_rigid(q) + φ1(l) η n(q0): the rigid
+/// columns (eq. 3.120 with l4 → l_f), q0's gaining φ1(l) η n'(q0), and φ1(l) n for η.
+std::array<Vec3, 4> flexible_jacobian(const FiveBarParams& p, const FiveBarFlexibleMode& mode,
+                                      const FiveBarJoints& q, double eta) {
+  const FiveBarMatrix J = five_bar_jacobian(p, q);
+  const double C0 = std::cos(q[0]), S0 = std::sin(q[0]);
+  const double w = mode.tip_shape * eta;  // tip deflection, m
+  return {{{J[0][0] - w * C0, J[1][0] - w * S0, J[2][0]},
+           {J[0][1], J[1][1], J[2][1]},
+           {J[0][2], J[1][2], J[2][2]},
+           {-mode.tip_shape * S0, mode.tip_shape * C0, 0.0}}};
+}
+
+/// Solves the symmetric 3×3 system D a = b (Cramer's rule; D positive definite).
+FiveBarJoints solve3(const FiveBarMatrix& D, const FiveBarJoints& b) {
+  const double c00 = D[1][1] * D[2][2] - D[1][2] * D[2][1];
+  const double c01 = D[1][2] * D[2][0] - D[1][0] * D[2][2];
+  const double c02 = D[1][0] * D[2][1] - D[1][1] * D[2][0];
+  const double det = D[0][0] * c00 + D[0][1] * c01 + D[0][2] * c02;
+  const double c11 = D[0][0] * D[2][2] - D[0][2] * D[2][0];
+  const double c12 = D[0][1] * D[2][0] - D[0][0] * D[2][1];
+  const double c22 = D[0][0] * D[1][1] - D[0][1] * D[1][0];
+  // D symmetric: the inverse is the cofactor matrix over det.
+  return {(c00 * b[0] + c01 * b[1] + c02 * b[2]) / det,
+          (c01 * b[0] + c11 * b[1] + c12 * b[2]) / det,
+          (c02 * b[0] + c12 * b[1] + c22 * b[2]) / det};
+}
+
 }  // namespace
+
+FiveBarFlexibleMode FiveBarFlexibleMode::from_beam(const HubPayloadBeamParams& beam, double zeta) {
+  FiveBarFlexibleMode mode;
+  mode.omega = hub_payload_first_frequency(beam);
+  mode.zeta = zeta;
+  mode.rho = beam.rho;
+  mode.beta = clamped_free_participation(1, beam.L);
+  mode.tip_shape = clamped_free_tip_value(1, beam.L);
+  return mode;
+}
+
+std::string FiveBarFlexibleMode::validate() const {
+  if (!positive(omega)) return bad("mode.omega", "must be finite and > 0", omega);
+  if (!non_negative(zeta)) return bad("mode.zeta", "must be finite and >= 0", zeta);
+  if (!positive(rho)) return bad("mode.rho", "must be finite and > 0", rho);
+  if (!std::isfinite(beta)) return bad("mode.beta", "must be finite", beta);
+  if (!std::isfinite(tip_shape)) return bad("mode.tip_shape", "must be finite", tip_shape);
+  return {};
+}
 
 FiveBarJoints five_bar_home() { return {0.0, 0.5 * std::numbers::pi, std::numbers::pi}; }
 
@@ -129,6 +180,11 @@ FiveBarPlant::FiveBarPlant(const FiveBarParams& params, const FiveBarState& init
                            const FiveBarPlantOptions& options)
     : params_(params), options_(options), state_(initial) {
   assert(params.validate().empty());
+  // The hub's inertia with the mode eliminated, D00 − ρβ1², must stay positive; D00 ≥ J_h − |α3|.
+  assert(!options.flexible_mode ||
+         (options.mode.validate().empty() &&
+          options.mode.rho * options.mode.beta * options.mode.beta <
+              params.J_hub - std::abs(params.alpha3)));
 }
 
 void FiveBarPlant::step(const FiveBarJoints& tau_command, double dt) {
@@ -207,6 +263,122 @@ void FiveBarPlant::tip_state(const FiveBarState& s, Vec3& p_WT, Vec3& v_WT) cons
   v_WT = {J[0][0] * s.qdot[0] + J[0][1] * s.qdot[1] + J[0][2] * s.qdot[2],
           J[1][0] * s.qdot[0] + J[1][1] * s.qdot[1] + J[1][2] * s.qdot[2],
           J[2][0] * s.qdot[0] + J[2][1] * s.qdot[1] + J[2][2] * s.qdot[2]};
+}
+
+void FiveBarPlant::flexible_tip_state(const FiveBarState& s, const FiveBarModeState& m,
+                                      Vec3& p_WT, Vec3& v_WT) const {
+  const std::array<Vec3, 4> J = flexible_jacobian(params_, options_.mode, s.q, m.eta);
+  p_WT = five_bar_tip_position(params_, s.q) +
+         (options_.mode.tip_shape * m.eta) * deflection_direction(s.q[0]);
+  v_WT = s.qdot[0] * J[0] + s.qdot[1] * J[1] + s.qdot[2] * J[2] + m.eta_dot * J[3];
+}
+
+void FiveBarPlant::physical_tip_state(Vec3& p_WT, Vec3& v_WT) const {
+  if (options_.flexible_mode) {
+    flexible_tip_state(state_, mode_, p_WT, v_WT);
+  } else {
+    tip_state(state_, p_WT, v_WT);
+  }
+}
+
+FiveBarFlexibleMatrix FiveBarPlant::flexible_mass_matrix(const FiveBarJoints& q, double eta,
+                                                         double tip_mass) const {
+  const FiveBarFlexibleMode& mode = options_.mode;
+  const FiveBarMatrix D = mass_matrix(q, 0.0);
+  FiveBarFlexibleMatrix M{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    for (std::size_t j = 0; j < 3; ++j) M[i][j] = D[i][j];
+  }
+  // Eq. 3.31 with n = 1: ρη² on the hub, ρβ1 between hub and mode, ρ on the mode.
+  M[0][0] += mode.rho * eta * eta;
+  M[0][3] = M[3][0] = mode.rho * mode.beta;
+  M[3][3] = mode.rho;
+  if (tip_mass != 0.0) {
+    const std::array<Vec3, 4> J = flexible_jacobian(params_, mode, q, eta);
+    for (std::size_t i = 0; i < 4; ++i) {
+      for (std::size_t j = 0; j < 4; ++j) M[i][j] += tip_mass * dot(J[i], J[j]);
+    }
+  }
+  return M;
+}
+
+FiveBarPlant::FlexibleSystem FiveBarPlant::flexible_system(const FiveBarState& s,
+                                                           const FiveBarModeState& m,
+                                                           const FiveBarJoints& tau,
+                                                           const Vec3& F_T_W,
+                                                           double tip_mass) const {
+  const FiveBarFlexibleMode& mode = options_.mode;
+  const FiveBarFlexibleMatrix M = flexible_mass_matrix(s.q, m.eta, tip_mass);
+  const std::array<Vec3, 4> J = flexible_jacobian(params_, mode, s.q, m.eta);
+  // Generalized forces: the motors, J_fᵀ F at the deflected tip, the mode's spring and damper
+  // (ρω1² η of eq. 3.30 and the modal damping 2ζω1ρ η̇).
+  double Q[4] = {tau[0] + dot(J[0], F_T_W), tau[1] + dot(J[1], F_T_W), tau[2] + dot(J[2], F_T_W),
+                 dot(J[3], F_T_W) - mode.rho * mode.omega * mode.omega * m.eta -
+                     2.0 * mode.zeta * mode.omega * mode.rho * m.eta_dot};
+  if (options_.coriolis) {
+    // The linkage's velocity terms (L2382), eq. 3.29's 2ρηη̇q̇0 and eq. 3.30's −ρηq̇0², and a tip
+    // mass's m J_fᵀ (J̇_f ẋ), with p̈ = J_f ẍ + J̇_f ẋ:
+    // J̇_f ẋ = J̇ q̇ + φ1(l) (2 η̇ q̇0 n'(q0) − η q̇0² n(q0)).
+    const FiveBarJoints c = velocity_torques(s, 0.0);
+    const double w0 = s.qdot[0];
+    Q[0] -= c[0] + 2.0 * mode.rho * m.eta * m.eta_dot * w0;
+    Q[1] -= c[1];
+    Q[2] -= c[2];
+    Q[3] += mode.rho * m.eta * w0 * w0;
+    if (tip_mass != 0.0) {
+      const double C0 = std::cos(s.q[0]), S0 = std::sin(s.q[0]);
+      const Vec3 n{-S0, C0, 0.0}, dn{-C0, -S0, 0.0};
+      const Vec3 bias = tip_bias_acceleration(params_, s) +
+                        mode.tip_shape * (2.0 * m.eta_dot * w0 * dn - m.eta * w0 * w0 * n);
+      for (std::size_t i = 0; i < 4; ++i) Q[i] -= tip_mass * dot(J[i], bias);
+    }
+  }
+  FlexibleSystem out;
+  out.m_etaeta = M[3][3];
+  out.net_eta = Q[3];
+  for (std::size_t i = 0; i < 3; ++i) {
+    out.m_qeta[i] = M[i][3];
+    out.net[i] = Q[i] - M[i][3] * Q[3] / M[3][3];
+    for (std::size_t j = 0; j < 3; ++j) out.D[i][j] = M[i][j] - M[i][3] * M[j][3] / M[3][3];
+  }
+  return out;
+}
+
+FiveBarJoints FiveBarPlant::flexible_non_friction_torque(const FiveBarState& s,
+                                                         const FiveBarModeState& m,
+                                                         const FiveBarJoints& tau,
+                                                         const Vec3& F_T_W, double tip_mass) const {
+  return flexible_system(s, m, tau, F_T_W, tip_mass).net;
+}
+
+FiveBarFlexibleAcceleration FiveBarPlant::flexible_acceleration(const FiveBarState& s,
+                                                                const FiveBarModeState& m,
+                                                                const FiveBarJoints& tau,
+                                                                const Vec3& F_T_W,
+                                                                double tip_mass) const {
+  const FlexibleSystem sys = flexible_system(s, m, tau, F_T_W, tip_mass);
+  FiveBarJoints net = sys.net;
+  for (std::size_t i = 0; i < 3; ++i) {
+    net[i] -= params_.friction[i].resisting(s.qdot[i], net[i]);
+  }
+  FiveBarFlexibleAcceleration a;
+  a.qddot = solve3(sys.D, net);
+  a.eta_ddot = (sys.net_eta - sys.m_qeta[0] * a.qddot[0] - sys.m_qeta[1] * a.qddot[1] -
+                sys.m_qeta[2] * a.qddot[2]) /
+               sys.m_etaeta;
+  return a;
+}
+
+double FiveBarPlant::flexible_energy(const FiveBarState& s, const FiveBarModeState& m,
+                                     double tip_mass) const {
+  const FiveBarFlexibleMatrix M = flexible_mass_matrix(s.q, m.eta, tip_mass);
+  const double v[4] = {s.qdot[0], s.qdot[1], s.qdot[2], m.eta_dot};
+  double kinetic = 0.0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    for (std::size_t j = 0; j < 4; ++j) kinetic += v[i] * M[i][j] * v[j];
+  }
+  const FiveBarFlexibleMode& mode = options_.mode;
+  return 0.5 * kinetic + 0.5 * mode.rho * mode.omega * mode.omega * m.eta * m.eta;
 }
 
 FiveBarJoints five_bar_encoder_reading(const FiveBarParams& params, const FiveBarJoints& q) {

@@ -1,7 +1,8 @@
 #pragma once
 // Document 003's haptic device: Madill 1998's gravity-balanced, dynamically decoupled five-bar
 // linkage (Madill, "Modelling and Control of a Haptic Interface: A Mechatronics Approach", ch. 3.13,
-// 4.2, 5), with its last link treated as rigid.
+// 4.2, 5), with its last link rigid or, optionally, carrying one flexible mode
+// (FiveBarFlexibleMode).
 //
 // Joints (Table 3.1, L2090–2101): q0 the base ("horizontal", about the vertical axis z0), q1 the
 // axial joint (link 1), q2 the vertical joint (link 2 of the parallelogram). Home pose
@@ -17,6 +18,7 @@
 
 #include "engine/core/integrator.hpp"
 #include "engine/core/vec3.hpp"
+#include "engine/device/flexible_link.hpp"
 #include "engine/device/joint_friction.hpp"
 
 namespace haptic::engine {
@@ -126,6 +128,55 @@ struct FiveBarState {
   FiveBarJoints qdot{};               // Unit: rad/s.
 };
 
+/// The state of link 5's flexible mode: η is q_1 of eqs. 3.29–3.31 (the thesis' ν in the
+/// five-bar's L2032), the coordinate of the normalized clamped-free shape φ1 (∫₀ˡ φ1² dx = 1), so
+/// the tip deflects by φ1(l) η. Positive η bends the tip the way positive q̇0 moves it.
+struct FiveBarModeState {
+  double eta = 0.0;      // η. Unit: m^(3/2) (φ1 carries m^(−1/2), φ1 η is in m).
+  double eta_dot = 0.0;  // η̇. Unit: m^(3/2)/s.
+};
+
+/// One flexible mode of link 5, bending in the horizontal plane and coupled to the base joint q0,
+/// as in the single flexible link of eqs. 3.29–3.31 (Madill, §3.3) with n = 1:
+///   (D00(q1, q2) + ρ η²) q̈0 + ρ β1 η̈ + c0 + 2 ρ η η̇ q̇0 = τ0 − τ_f0 + (Jᵀ F)0,
+///   ρ η̈ + ρ β1 q̈0 − ρ η q̇0² + 2 ζ ω1 ρ η̇ + ρ ω1² η = φ1(l) n·F,
+/// where n = (−S0, C0, 0) is the horizontal direction perpendicular to the link (−z_e of
+/// eq. 3.118) and F the force on the tip. Why the horizontal direction and q0: it is the only one
+/// the hub couples to (L2032, footnote 4: the vertical modes do not interact with q0), and the
+/// lowest structural mode the thesis measured is horizontal (≈ 19 Hz, L2726, L2830). The link's
+/// rigid rotary inertia ⅓ρl³ of eq. 3.29 is not added: the identified D00 (Table 5.4) holds it.
+/// The coupling ρβ1 is the single link's, clamp on the axis [simplification: on the five-bar the
+/// clamp sits ≈ 0.15 m out and the link tilts with q2, which would scale the coupling; L2117].
+///
+/// Defaults: the thesis' beam (HubPayloadBeamParams: L = 0.449 m, ρ = 0.163 kg/m) with ω1 the
+/// hub + payload frequency of eq. 5.11, 222.31 rad/s (printed 223). In eq. 3.30 ω1 is the mode's
+/// frequency with the hub held; with the hub free the coupled mode rises by 1/√(1 − ρβ1²/D00),
+/// to 223.04 rad/s at home (D00 = 0.733 kg·m²): 0.12 Hz, the small hub effect L2832 reports.
+/// The payload's mass is carried by ω1 alone, not by the modal mass, so the tip's static
+/// compliance φ1(l)²/(ρω1²) = 1.11 mm/N is ≈ 3× the bare tube's l³/(3EI) = 0.34 mm/N: the
+/// frequency is the thesis', the stiffness softer [consequence of the single-link model].
+/// ζ = 0.02: the thesis measures no damping for link 5; the aluminium alone would give far less
+/// (a material loss factor of ≈ 1e−3, ζ ≈ 5e−4), but the clamp at link 4 and the bolted load
+/// cell add joint damping, and 1–5 % is the usual range for bolted light-alloy structures
+/// [assumption].
+struct FiveBarFlexibleMode {
+  double omega = 222.30927722583857;  // ω1, with the hub held (eq. 3.30). Unit: rad/s.
+  double zeta = 0.02;                 // ζ, modal damping ratio (see above). Dimensionless.
+  double rho = 0.163;                 // ρ, the link's mass per length (modal mass). Unit: kg/m.
+  /// β1 = ∫₀ˡ x φ1 dx = 2 l^(3/2) / (p1 l)² (clamped_free_participation). Unit: m^(3/2).
+  double beta = 0.17113890732627945;
+  /// φ1(l) = 2 / √l, the shape at the tip (clamped_free_tip_value). Unit: m^(−1/2).
+  double tip_shape = 2.9847421946994452;
+
+  /// The mode of a beam `beam` (ω1 from eq. 5.11, β1 and φ1(l) from the clamped-free shape of
+  /// length beam.L, ρ = beam.rho) with damping ratio zeta. The defaults are
+  /// from_beam(HubPayloadBeamParams{}, 0.02).
+  static FiveBarFlexibleMode from_beam(const HubPayloadBeamParams& beam, double zeta);
+
+  /// Empty when usable, otherwise one message naming the first bad parameter.
+  std::string validate() const;
+};
+
 /// Options the plant is built with.
 struct FiveBarPlantOptions {
   /// RK4 with 10 sub-steps (h = 100 µs at 1 kHz): the fastest pole the plant sees is the tight
@@ -136,7 +187,21 @@ struct FiveBarPlantOptions {
   /// Keep the centripetal/Coriolis terms of L2382. Dropping them is the thesis' "haptic speeds"
   /// approximation (L2388: velocities are small, the robot behaves as SISO double integrators).
   bool coriolis = true;
+  /// Add link 5's first horizontal mode (FiveBarFlexibleMode; off by default). With it the
+  /// integrated state is [q0, q1, q2, η, q̇0, q̇1, q̇2, η̇]; without it the plant is the rigid one,
+  /// step for step the same arithmetic. `coriolis = false` also drops the mode's velocity terms.
+  bool flexible_mode = false;
+  FiveBarFlexibleMode mode;
 };
+
+/// Joint and modal accelerations of the flexible plant. Units: rad/s², m^(3/2)/s².
+struct FiveBarFlexibleAcceleration {
+  FiveBarJoints qddot{};
+  double eta_ddot = 0.0;
+};
+
+/// A symmetric 4×4 matrix over (q0, q1, q2, η), row-major.
+using FiveBarFlexibleMatrix = std::array<std::array<double, 4>, 4>;
 
 /// The rigid, gravity-balanced five-bar (L2382 for α3 = 0; the general α3 terms follow from
 /// eq. 4.10 by Lagrange's equations [derived here], and reduce to L2382 at α3 = 0):
@@ -150,6 +215,11 @@ struct FiveBarPlantOptions {
 /// the decoupled joints, approximate when α3 or the hand mass couple q1 and q2), and after each
 /// sub-step a joint inside the stick band that friction can hold is set at rest. The commanded
 /// torque is held over the tick (zero-order hold) and saturated at torque_limit.
+///
+/// With options.flexible_mode the mode of FiveBarFlexibleMode joins as a fourth coordinate η: the
+/// tip becomes p_WT = p_rigid(q) + φ1(l) η n(q0), the mass matrix the 4×4 of eq. 3.31 over
+/// (q, η) (plus m J_fᵀJ_f for a tip mass, J_f = ∂p_WT/∂(q, η)), and friction acts on the joints
+/// with η eliminated (the Schur complement), so a stuck hub holds against the ringing link.
 class FiveBarPlant {
  public:
   explicit FiveBarPlant(const FiveBarParams& params, const FiveBarState& initial = {},
@@ -162,6 +232,10 @@ class FiveBarPlant {
             double tip_mass = 0.0) {
     for (std::size_t i = 0; i < 3; ++i) {
       applied_[i] = saturate(tau_command[i], params_.torque_limit[i]);
+    }
+    if (options_.flexible_mode) {
+      step_flexible(dt, tip_force, tip_mass);
+      return;
     }
     StateVector<6> x{state_.q[0],    state_.q[1],    state_.q[2],
                      state_.qdot[0], state_.qdot[1], state_.qdot[2]};
@@ -219,17 +293,109 @@ class FiveBarPlant {
   /// Tip position (m) and velocity (m/s) in W.
   void tip_state(const FiveBarState& s, Vec3& p_WT, Vec3& v_WT) const;
 
+  // -- The flexible mode (used when options().flexible_mode; callable either way). --
+
+  /// The physical tip with the link's deflection: p_WT = p_rigid(q) + φ1(l) η n(q0),
+  /// n = (−S0, C0, 0), and v_WT = J_f [q̇; η̇]. Units: m, m/s.
+  void flexible_tip_state(const FiveBarState& s, const FiveBarModeState& m, Vec3& p_WT,
+                          Vec3& v_WT) const;
+
+  /// The tip as it is now: flexible_tip_state when the mode is on, tip_state otherwise.
+  void physical_tip_state(Vec3& p_WT, Vec3& v_WT) const;
+
+  /// M(q, η) of eq. 3.31 for the five-bar: D(q) with ρη² added to D00, ρβ1 coupling q0 and η,
+  /// ρ on η, plus tip_mass · J_fᵀJ_f. Unit: kg·m² (joint–joint), kg·m^(1/2) (joint–η), kg/m (η–η).
+  FiveBarFlexibleMatrix flexible_mass_matrix(const FiveBarJoints& q, double eta,
+                                             double tip_mass = 0.0) const;
+
+  /// Accelerations of the flexible plant for saturated torques `tau` (N·m), a tip force (N) at the
+  /// deflected tip and a tip mass (kg).
+  FiveBarFlexibleAcceleration flexible_acceleration(const FiveBarState& s,
+                                                    const FiveBarModeState& m,
+                                                    const FiveBarJoints& tau, const Vec3& F_T_W,
+                                                    double tip_mass = 0.0) const;
+
+  /// The joint torques friction must hold for q̈ = 0 with the mode free: every torque but
+  /// friction and inertia after η is eliminated, Q_q − c_q − M_qη (Q_η − c_η) / M_ηη. Unit: N·m.
+  FiveBarJoints flexible_non_friction_torque(const FiveBarState& s, const FiveBarModeState& m,
+                                             const FiveBarJoints& tau, const Vec3& F_T_W,
+                                             double tip_mass = 0.0) const;
+
+  /// Kinetic energy ½ ẋᵀ M ẋ (links, mode, coupling, tip mass) plus the strain energy
+  /// ½ ρ ω1² η². Unit: J.
+  double flexible_energy(const FiveBarState& s, const FiveBarModeState& m,
+                         double tip_mass = 0.0) const;
+
   const FiveBarState& state() const { return state_; }
   void set_state(const FiveBarState& state) { state_ = state; }
+  /// The flexible mode's state (at rest, and unused, when the mode is off).
+  const FiveBarModeState& mode_state() const { return mode_; }
+  void set_mode_state(const FiveBarModeState& mode) { mode_ = mode; }
   /// The saturated torque applied over the last tick (what an estimator should be fed, L3230).
   const FiveBarJoints& applied_torque() const { return applied_; }
   const FiveBarParams& params() const { return params_; }
   const FiveBarPlantOptions& options() const { return options_; }
 
  private:
+  /// The flexible plant's equations with η eliminated (see flexible_non_friction_torque).
+  struct FlexibleSystem {
+    FiveBarMatrix D{};        // M_qq − M_qη M_qηᵀ / M_ηη. Unit: kg·m².
+    FiveBarJoints net{};      // Q_q − c_q − M_qη (Q_η − c_η) / M_ηη. Unit: N·m.
+    FiveBarJoints m_qeta{};   // M_qη. Unit: kg·m^(1/2).
+    double m_etaeta = 0.0;    // M_ηη. Unit: kg/m.
+    double net_eta = 0.0;     // Q_η − c_η. Unit: kg·m^(1/2)/s².
+  };
+  FlexibleSystem flexible_system(const FiveBarState& s, const FiveBarModeState& m,
+                                 const FiveBarJoints& tau, const Vec3& F_T_W,
+                                 double tip_mass) const;
+
+  /// One tick of the flexible plant (applied_ already saturated): state
+  /// [q0, q1, q2, η, q̇0, q̇1, q̇2, η̇], the same integrator, sub-steps and stick rule as the rigid
+  /// step, with friction on the η-eliminated joint torques.
+  template <typename TipForceFn>
+  void step_flexible(double dt, TipForceFn& tip_force, double tip_mass) {
+    StateVector<8> x{state_.q[0],    state_.q[1],    state_.q[2],    mode_.eta,
+                     state_.qdot[0], state_.qdot[1], state_.qdot[2], mode_.eta_dot};
+    const auto joints = [](const StateVector<8>& s) {
+      return FiveBarState{{s[0], s[1], s[2]}, {s[4], s[5], s[6]}};
+    };
+    const auto mode = [](const StateVector<8>& s) { return FiveBarModeState{s[3], s[7]}; };
+    const auto rhs = [&](const StateVector<8>& s) {
+      const FiveBarState at = joints(s);
+      const FiveBarModeState m = mode(s);
+      Vec3 p_WT, v_WT;
+      flexible_tip_state(at, m, p_WT, v_WT);
+      const FiveBarFlexibleAcceleration a =
+          flexible_acceleration(at, m, applied_, tip_force(p_WT, v_WT), tip_mass);
+      return StateVector<8>{s[4], s[5], s[6], s[7], a.qddot[0], a.qddot[1], a.qddot[2], a.eta_ddot};
+    };
+    const std::uint32_t n = options_.integration.substeps > 0 ? options_.integration.substeps : 1;
+    const double h = dt / static_cast<double>(n);
+    for (std::uint32_t k = 0; k < n; ++k) {
+      integrate_step<4>(options_.integration.method, x, h, rhs);
+      // Karnopp's stick as in step(), on the torques left once the mode is eliminated: a stuck
+      // hub holds while the link rings against it.
+      const FiveBarState at = joints(x);
+      const FiveBarModeState m = mode(x);
+      Vec3 p_WT, v_WT;
+      flexible_tip_state(at, m, p_WT, v_WT);
+      const FiveBarJoints other =
+          flexible_non_friction_torque(at, m, applied_, tip_force(p_WT, v_WT), tip_mass);
+      for (std::size_t i = 0; i < 3; ++i) {
+        const CoulombViscousFriction& f = params_.friction[i];
+        if (std::abs(x[4 + i]) < f.stick_velocity && std::abs(other[i]) <= f.coulomb) {
+          x[4 + i] = 0.0;
+        }
+      }
+    }
+    state_ = joints(x);
+    mode_ = mode(x);
+  }
+
   FiveBarParams params_;
   FiveBarPlantOptions options_;
   FiveBarState state_;
+  FiveBarModeState mode_{};
   FiveBarJoints applied_{};
 };
 

@@ -48,6 +48,24 @@ double clamped_free_frequency(const BeamParams& beam, int k) {
   return pl * pl * std::sqrt(beam.E * beam.I / (beam.rho_A * l2 * l2));
 }
 
+double clamped_free_shape(int k, double x, double length) {
+  const double pl = clamped_free_root(k);
+  const double p = pl / length;
+  const double sigma = (std::cosh(pl) + std::cos(pl)) / (std::sinh(pl) + std::sin(pl));
+  const double px = p * x;
+  return (std::cosh(px) - std::cos(px) - sigma * (std::sinh(px) - std::sin(px))) /
+         std::sqrt(length);
+}
+
+double clamped_free_tip_value(int k, double length) {
+  return clamped_free_shape(k, length, length);
+}
+
+double clamped_free_participation(int k, double length) {
+  const double pl = clamped_free_root(k);
+  return 2.0 * length * std::sqrt(length) / (pl * pl);
+}
+
 double hub_payload_characteristic(const HubPayloadBeamParams& b, double omega) {
   const double beta = std::sqrt(std::sqrt(b.rho * omega * omega / (b.E * b.I)));
   const double x = beta * b.L;

@@ -29,6 +29,22 @@ double clamped_free_root(int k);
 /// and the line before it). For §5.4's tube: ω_1 = 436 rad/s (69 Hz). Unit: rad/s.
 double clamped_free_frequency(const BeamParams& beam, int k = 1);
 
+/// The k-th clamped-free mode shape (B.8 with B.9's root p_k l), normalized so that
+/// ∫₀ˡ φ_k² dx = 1 (L1102–1106): φ_k(x) = [cosh p x − cos p x − σ_k (sinh p x − sin p x)] / √l,
+/// σ_k = (cosh p l + cos p l) / (sinh p l + sin p l), p = p_k. Signed so that φ_k''(0) > 0.
+/// Meant for small k (the hyperbolic terms cancel in floating point as p x grows).
+/// Units: x and length in m; φ in m^(−1/2).
+double clamped_free_shape(int k, double x, double length);
+
+/// φ_k(l), the normalized shape's value at the free end: 2 (−1)^(k+1) / √l (k = 1: 2.985 m^(−1/2)
+/// for l = 0.449 m). Computed from clamped_free_shape. Unit: m^(−1/2).
+double clamped_free_tip_value(int k, double length);
+
+/// The modal participation of eqs. 3.29–3.31, β_k = ∫₀ˡ x φ_k dx. Since φ'''' = p⁴ φ and the free
+/// end has φ''(l) = φ'''(l) = 0, integrating by parts twice gives β_k = φ_k''(0) / p_k⁴
+/// = 2 l^(3/2) / (p_k l)² [derived here]; k = 1: 0.5688 l^(3/2). Unit: m^(3/2).
+double clamped_free_participation(int k, double length);
+
 /// Rossi's hub + beam + tip payload (eq. 5.11, L2800–2824).
 struct HubPayloadBeamParams {
   double J0 = 0.677;   // Hub inertia of the base joint q0. Unit: kg·m².

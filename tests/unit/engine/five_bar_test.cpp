@@ -1,9 +1,10 @@
 // Document 003's five-bar haptic device (Madill 1998): kinematics (eqs. 3.118, 3.120, 5.1–5.3),
 // the balanced, decoupled dynamics (eq. 4.10, L2382), Table 5.4's friction identification,
-// the D/A torque limit (L3237), the encoders (Table 5.2) and the flexible link's frequencies
-// (eqs. 5.10, 5.11).
+// the D/A torque limit (L3237), the encoders (Table 5.2), the flexible link's frequencies
+// (eqs. 5.10, 5.11) and the plant's optional flexible mode (eqs. 3.29–3.31).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -325,7 +326,9 @@ TEST(FiveBarDynamics, FrictionIdentificationReproducesTheTable_Table5_4) {
   for (int i = 0; i < 3; ++i) {
     std::vector<double> r_values{0.1, 0.2, 0.3}, peaks, times;
     for (const double r : r_values) {
-      FiveBarPlant plant(p, {}, {{Integrator::kRk4, 1}, true});
+      FiveBarPlantOptions options;
+      options.integration = {Integrator::kRk4, 1};
+      FiveBarPlant plant(p, {}, options);
       const double q_start = plant.state().q[i];
       double peak = 0.0, t = 0.0;
       for (int k = 0; k < 40000; ++k) {
@@ -474,6 +477,277 @@ TEST(FlexibleLink, HubAndPayloadFirstModeIs223RadPerSecond_Eq5_11) {
   HubPayloadBeamParams bare = beam;
   bare.M_p = 0.0;
   EXPECT_GT(hub_payload_first_frequency(bare), w);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The plant's flexible mode (eqs. 3.29–3.31, one mode on the base joint q0).
+
+FiveBarPlantOptions flexible_options(double zeta = 0.02) {
+  FiveBarPlantOptions options;
+  options.flexible_mode = true;
+  options.mode.zeta = zeta;
+  return options;
+}
+
+// The defaults are the thesis' beam: ω1 from eq. 5.11, β1 and φ1(l) of the normalized
+// clamped-free shape (B.8, ∫φ² = 1), checked here by quadrature rather than the closed forms.
+TEST(FiveBarFlexibleMode, DefaultsAreTheThesisBeam_Eq3_31_Eq5_11) {
+  const FiveBarFlexibleMode defaults;
+  const FiveBarFlexibleMode beam = FiveBarFlexibleMode::from_beam(HubPayloadBeamParams{}, 0.02);
+  EXPECT_EQ(defaults.omega, beam.omega);
+  EXPECT_EQ(defaults.beta, beam.beta);
+  EXPECT_EQ(defaults.tip_shape, beam.tip_shape);
+  EXPECT_EQ(defaults.rho, beam.rho);
+  EXPECT_EQ(defaults.zeta, 0.02);
+  EXPECT_NEAR(defaults.omega, 222.31, 0.005);
+  const double l = HubPayloadBeamParams{}.L;
+  const int n = 20000;
+  double norm = 0.0, beta = 0.0;
+  for (int i = 0; i < n; ++i) {  // midpoint rule
+    const double x = (i + 0.5) * l / n;
+    const double phi = clamped_free_shape(1, x, l);
+    norm += phi * phi * l / n;
+    beta += x * phi * l / n;
+  }
+  std::printf("  beta1 %.6f m^1.5 (quadrature %.6f), phi1(l) %.6f m^-0.5, int phi^2 %.9f\n",
+              defaults.beta, beta, defaults.tip_shape, norm);
+  EXPECT_NEAR(norm, 1.0, 1e-8);
+  EXPECT_NEAR(defaults.beta, beta, 1e-8);
+  EXPECT_NEAR(defaults.tip_shape, 2.0 / std::sqrt(l), 1e-12);
+  EXPECT_NEAR(clamped_free_tip_value(2, l), -2.0 / std::sqrt(l), 1e-9);  // 2 (−1)^(k+1) / √l
+  EXPECT_EQ(defaults.validate(), "");
+  FiveBarFlexibleMode bad_mode;
+  bad_mode.zeta = -0.1;
+  EXPECT_EQ(bad_mode.validate().rfind("mode.zeta: ", 0), 0u);
+}
+
+// The linearized hub + mode of eq. 3.31 at home, M̄ = [[D00, ρβ1], [ρβ1, ρ]], K = diag(0, ρω1²):
+// det(K − Ω² M̄) = 0, solved as a 2×2 generalized eigenproblem (independent of the plant code).
+double coupled_frequency(const FiveBarParams& p, const FiveBarFlexibleMode& mode) {
+  const double C1 = std::cos(five_bar_home()[1]), C2 = std::cos(five_bar_home()[2]);
+  const double M[2][2] = {{p.J_hub + p.alpha1 * C1 * C1 + p.alpha2 * C2 * C2, mode.rho * mode.beta},
+                          {mode.rho * mode.beta, mode.rho}};
+  const double K[2][2] = {{0.0, 0.0}, {0.0, mode.rho * mode.omega * mode.omega}};
+  // det(K − λM) = a λ² + b λ + c.
+  const double a = M[0][0] * M[1][1] - M[0][1] * M[1][0];
+  const double b = -(K[0][0] * M[1][1] + K[1][1] * M[0][0] - K[0][1] * M[1][0] - K[1][0] * M[0][1]);
+  const double c = K[0][0] * K[1][1] - K[0][1] * K[1][0];
+  const double lambda = (-b + std::sqrt(b * b - 4.0 * a * c)) / (2.0 * a);
+  return std::sqrt(lambda);
+}
+
+struct Ring {
+  std::vector<double> t, eta, hub_rate;
+  double momentum_error = 0.0;  // worst |p0 − impulse| / impulse after the impulse
+};
+
+// A 5 N·m, 1 ms torque pulse on q0 of the frictionless plant at home, then 0.4 s free, sampled at
+// 10 kHz (RK4, h = 100 µs).
+Ring ring_after_hub_impulse(double zeta) {
+  const FiveBarParams p = frictionless();
+  FiveBarPlantOptions options = flexible_options(zeta);
+  options.integration = {Integrator::kRk4, 1};
+  FiveBarPlant plant(p, {}, options);
+  const double dt = 1e-4, torque = 5.0, pulse = 1e-3;
+  Ring ring;
+  for (int k = 0; k < 4010; ++k) {
+    const bool on = k < 10;
+    plant.step({on ? torque : 0.0, 0.0, 0.0}, dt);
+    if (on) continue;
+    const FiveBarState& s = plant.state();
+    const FiveBarModeState& m = plant.mode_state();
+    ring.t.push_back((k + 1) * dt);
+    ring.eta.push_back(m.eta);
+    ring.hub_rate.push_back(s.qdot[0]);
+    // No torque on q0 after the pulse: ∂L/∂q̇0 = (D00 + ρη²) q̇0 + ρβ1 η̇ (eq. 3.29) stays at the
+    // impulse.
+    const FiveBarFlexibleMatrix M = plant.flexible_mass_matrix(s.q, m.eta);
+    const double p0 = M[0][0] * s.qdot[0] + M[0][3] * m.eta_dot;
+    const double impulse = torque * pulse;
+    ring.momentum_error = std::max(ring.momentum_error, std::abs(p0 - impulse) / impulse);
+  }
+  return ring;
+}
+
+// Frequency from the zero crossings of a signal (linear interpolation between samples).
+double crossing_frequency(const std::vector<double>& t, const std::vector<double>& x) {
+  std::vector<double> crossings;
+  for (std::size_t k = 1; k < x.size(); ++k) {
+    if ((x[k - 1] < 0.0) != (x[k] < 0.0)) {
+      crossings.push_back(t[k - 1] + (t[k] - t[k - 1]) * x[k - 1] / (x[k - 1] - x[k]));
+    }
+  }
+  if (crossings.size() < 3) return 0.0;
+  return kPi * static_cast<double>(crossings.size() - 1) / (crossings.back() - crossings.front());
+}
+
+TEST(FiveBarFlexibleMode, HubImpulseRingsAtTheCoupledFrequency_Eq3_31) {
+  const FiveBarFlexibleMode mode;
+  const double predicted = coupled_frequency(frictionless(), mode);
+  const Ring ring = ring_after_hub_impulse(mode.zeta);
+  const double from_eta = crossing_frequency(ring.t, ring.eta);
+  // The hub rate rings about its mean drift: subtract the mean over whole samples.
+  std::vector<double> hub = ring.hub_rate;
+  double mean = 0.0;
+  for (const double v : hub) mean += v / static_cast<double>(hub.size());
+  for (double& v : hub) v -= mean;
+  const double from_hub = crossing_frequency(ring.t, hub);
+  // ζ lowers the ringing to Ω √(1 − ζ_c²), 0.02 % here (see the next test for ζ_c).
+  const double D00 = frictionless().J_hub + frictionless().alpha2;
+  const double zeta_c = mode.zeta / std::sqrt(1.0 - mode.rho * mode.beta * mode.beta / D00);
+  std::printf("  coupled prediction %.3f rad/s (%.3f Hz; damped %.3f; omega1 with the hub held "
+              "%.3f); measured from eta %.3f, from the hub rate %.3f rad/s; momentum error %.2g\n",
+              predicted, predicted / (2.0 * kPi), predicted * std::sqrt(1.0 - zeta_c * zeta_c),
+              mode.omega, from_eta, from_hub, ring.momentum_error);
+  EXPECT_NEAR(from_eta, predicted, 0.02 * predicted);
+  EXPECT_NEAR(from_hub, predicted, 0.02 * predicted);
+  // Tighter than the hub-held ω1 is from the prediction (0.33 %), so the coupling is what rings.
+  EXPECT_NEAR(from_eta, predicted, 1e-3 * predicted);
+  EXPECT_LT(ring.momentum_error, 1e-9);
+}
+
+// Eq. 3.30 with the modal damping 2ζω1ρη̇: with the hub free (no torque, no friction) the mode is
+// the one-degree oscillator ρ(1 − ρβ1²/D00) η̈ + 2ζω1ρ η̇ + ρω1² η = 0 (momentum eliminated), so
+// its damping ratio is ζ_c = ζ / √(1 − ρβ1²/D00) and the log decrement 2πζ_c / √(1 − ζ_c²).
+TEST(FiveBarFlexibleMode, ModeDecaysAtTheStatedDamping_Eq3_30) {
+  const FiveBarParams p = frictionless();
+  const FiveBarFlexibleMode mode;
+  const double D00 = p.J_hub + p.alpha2;  // at home: C1 = 0, C2 = −1
+  const double zeta_c = mode.zeta / std::sqrt(1.0 - mode.rho * mode.beta * mode.beta / D00);
+  const double expected = 2.0 * kPi * zeta_c / std::sqrt(1.0 - zeta_c * zeta_c);
+  const Ring ring = ring_after_hub_impulse(mode.zeta);
+  // Positive peaks of η, refined by a parabola through the three samples around each.
+  std::vector<double> peaks;
+  for (std::size_t k = 1; k + 1 < ring.eta.size(); ++k) {
+    const double a = ring.eta[k - 1], b = ring.eta[k], c = ring.eta[k + 1];
+    if (b > 0.0 && b >= a && b > c) {
+      const double curvature = a - 2.0 * b + c;
+      peaks.push_back(b - 0.125 * (a - c) * (a - c) / curvature);
+    }
+  }
+  ASSERT_GE(peaks.size(), 12u);
+  const std::size_t cycles = 10;
+  const double measured = std::log(peaks[1] / peaks[1 + cycles]) / static_cast<double>(cycles);
+  std::printf("  log decrement over %zu cycles: %.5f (expected %.5f, zeta %.3f, coupled %.5f); "
+              "energy ratio per cycle %.4f\n",
+              cycles, measured, expected, mode.zeta, zeta_c, std::exp(-2.0 * measured));
+  EXPECT_NEAR(measured, expected, 0.05 * expected);
+}
+
+// With ζ = 0, no friction and no torque the Lagrangian of eqs. 3.29–3.31 (links + mode + coupling
+// + strain, a tip mass included) has no dissipation: RK4 must hold the total energy over 1 s.
+TEST(FiveBarFlexibleMode, UndampedTotalEnergyIsConserved_Eq3_31) {
+  struct Case {
+    FiveBarJoints qdot;
+    double deflection;  // initial tip deflection φ1(l) η, m
+    double tip_mass;    // kg
+  };
+  const Case cases[] = {{{2.0, -3.0, 4.0}, 2e-3, 0.0},
+                        {{2.0, -3.0, 4.0}, 2e-3, 0.5},
+                        {{0.3, -0.3, 0.3}, 5e-3, 0.0},
+                        {{0.3, -0.3, 0.3}, 5e-3, 0.5}};
+  for (const Case& c : cases) {
+    const FiveBarPlantOptions options = flexible_options(0.0);
+    FiveBarPlant plant(frictionless(), {five_bar_home(), c.qdot}, options);
+    plant.set_mode_state({c.deflection / options.mode.tip_shape, 0.0});
+    const auto strain = [&](const FiveBarPlant& at) {
+      const double eta = at.mode_state().eta;
+      return 0.5 * options.mode.rho * options.mode.omega * options.mode.omega * eta * eta;
+    };
+    const double e0 = plant.flexible_energy(plant.state(), plant.mode_state(), c.tip_mass);
+    double worst = 0.0, strain_max = 0.0;
+    for (int k = 0; k < 1000; ++k) {
+      plant.step({}, 1e-3, [](const Vec3&, const Vec3&) { return Vec3{}; }, c.tip_mass);
+      const double e = plant.flexible_energy(plant.state(), plant.mode_state(), c.tip_mass);
+      worst = std::max(worst, std::abs(e - e0) / e0);
+      strain_max = std::max(strain_max, strain(plant));
+    }
+    std::printf("  qdot0 %.1f rad/s, tip mass %.1f kg: E0 %.6g J, peak strain energy %.3g J, "
+                "worst |dE|/E over 1 s %.2g\n",
+                c.qdot[0], c.tip_mass, e0, strain_max, worst);
+    EXPECT_LT(worst, 1e-6);
+    EXPECT_GT(std::abs(plant.state().q[1] - five_bar_home()[1]), 0.2);  // the links really moved
+  }
+}
+
+// A constant sideways push at the tip below the hub's Coulomb friction: the hub holds still
+// (friction acts on the η-eliminated torque) and the link settles at the model's static
+// deflection φ1(l)² F / (ρω1²) (eq. 3.30 at rest: ρω1² η = φ1(l) n·F).
+TEST(FiveBarFlexibleMode, SidewaysPushDeflectsTheLinkWhileFrictionHoldsTheHub_Eq3_30) {
+  const FiveBarParams p;  // Table 5.4's friction: the hub holds 0.125 N·m
+  const FiveBarPlantOptions options = flexible_options(0.5);  // well damped, to settle fast
+  FiveBarPlant plant(p, {}, options);
+  const double F = 0.15;  // N along +y = n at home: 0.09 N·m about q0 < 0.125 N·m
+  for (int k = 0; k < 300; ++k) {
+    plant.step({}, 1e-3, [&](const Vec3&, const Vec3&) { return Vec3{0.0, F, 0.0}; });
+  }
+  const double expected = options.mode.tip_shape * options.mode.tip_shape * F /
+                          (options.mode.rho * options.mode.omega * options.mode.omega);
+  Vec3 p_WT, v_WT;
+  plant.physical_tip_state(p_WT, v_WT);
+  std::printf("  deflection %.4f mm under %.2f N (model %.4f mm, %.3f mm/N); hub moved %.3g rad\n",
+              1e3 * p_WT.y, F, 1e3 * expected, 1e3 * expected / F,
+              plant.state().q[0] - five_bar_home()[0]);
+  EXPECT_EQ(plant.state().q[0], five_bar_home()[0]);
+  EXPECT_NEAR(p_WT.y, expected, 1e-6 * expected);
+  EXPECT_NEAR(p_WT.x, 0.6, 1e-6);  // the bend is sideways (first order)
+}
+
+// Mode off: the rigid plant as it was before the flexible path existed, bit for bit. The values
+// were recorded from the rigid plant (x86-64, IEEE doubles) on a scenario that exercises friction,
+// the tip force, a tip mass and two integrators.
+TEST(FiveBarFlexibleMode, ModeOffIsTheRigidPlantBitForBit) {
+  const FiveBarJoints recorded[2][2] = {
+      {{0x1.1f3c758cbc51ap-5, 0x1.a75e41359001dp+0, 0x1.941f144c07b21p+1},
+       {-0x1.442ac40b347b7p-2, -0x1.2069da81125dap-1, -0x1.d48e105b22a2dp-6}},
+      {{0x1.1ec3645e4fdf3p-5, 0x1.a7557431c1f5cp+0, 0x1.941ea43bb362ap+1},
+       {-0x1.4465e543d756p-2, -0x1.206fa552bcbedp-1, -0x1.cf21b7ae3e3bdp-6}}};
+  const auto run = [](const FiveBarPlantOptions& options) {
+    FiveBarPlant plant(FiveBarParams{}, {five_bar_home(), {0.2, -0.1, 0.3}}, options);
+    const Vec3 anchor{0.58, 0.02, 0.31};
+    for (int k = 0; k < 500; ++k) {
+      const double t = 1e-3 * k;
+      const auto hand = [&](const Vec3& p, const Vec3& v) {
+        return -200.0 * (p - anchor) - 2.0 * v;
+      };
+      plant.step({0.5 * std::sin(7.0 * t), 0.3 * std::cos(5.0 * t), -0.2}, 1e-3, hand, 0.3);
+    }
+    return plant;
+  };
+  for (int variant = 0; variant < 2; ++variant) {
+    FiveBarPlantOptions options;
+    if (variant == 1) options.integration = {Integrator::kSemiImplicitEuler, 3};
+    options.flexible_mode = false;
+    options.mode.omega = 50.0;  // ignored when the mode is off
+    const FiveBarPlant plant = run(options);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(plant.state().q[i], recorded[variant][0][i]) << variant << " q" << i;
+      EXPECT_EQ(plant.state().qdot[i], recorded[variant][1][i]) << variant << " qdot" << i;
+    }
+    EXPECT_EQ(plant.mode_state().eta, 0.0);
+    Vec3 p_physical, v_physical, p_rigid, v_rigid;
+    plant.physical_tip_state(p_physical, v_physical);
+    plant.tip_state(plant.state(), p_rigid, v_rigid);
+    EXPECT_EQ(p_physical, p_rigid);
+    EXPECT_EQ(v_physical, v_rigid);
+  }
+  // And the flexible path reduces to it as the link stiffens: the tip gap falls as 1/ω1².
+  const auto gap = [&](double omega) {
+    FiveBarPlantOptions rigid_options;
+    FiveBarPlantOptions stiff = flexible_options(0.02);
+    stiff.mode.omega = omega;
+    const FiveBarPlant rigid = run(rigid_options);
+    const FiveBarPlant flexible = run(stiff);
+    Vec3 a, b, va, vb;
+    rigid.physical_tip_state(a, va);
+    flexible.physical_tip_state(b, vb);
+    return norm(a - b);
+  };
+  const double gap1 = gap(1000.0), gap2 = gap(2000.0);
+  std::printf("  tip gap to the rigid plant after 0.5 s: %.3g m (omega1 1000 rad/s), "
+              "%.3g m (2000)\n", gap1, gap2);
+  EXPECT_LT(gap1, 1e-3);
+  EXPECT_LT(gap2, 0.4 * gap1);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // Document 003's five-bar as a hapticd device (Madill 1998): the tool force through Jᵀ
 // (eq. 3.58), encoder readings (Table 5.2), the conventional velocity (eq. 6.2), the operator's
-// hand at the tip, and faults.
+// hand at the tip, the optional flexible mode (eqs. 3.29–3.31), and faults.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -120,6 +120,69 @@ TEST(SimulatedFiveBarDevice, ReadsThroughTheEncodersWhenQuantized_Table5_2) {
   EXPECT_NEAR(quantized.measured_joints()[1] - engine::five_bar_home()[1], kPi / 6000.0, 1e-12);
   ASSERT_EQ(quantized.read(a), DeviceStatus::kOk);
   EXPECT_NEAR(a.p_WT.x - 0.6, -0.3 * std::sin(kPi / 6000.0), 1e-12);
+}
+
+// The flexible mode is declared, and the reading stays the encoders' rigid tip while the hand
+// pushes the physical tip sideways: the difference is exactly link 5's deflection φ1(l) η n.
+TEST(SimulatedFiveBarDevice, FlexibleModeIsDeclaredAndTheReadingIsTheEncodersRigidTip_Eq3_31) {
+  SimulatedFiveBarOptions options;
+  options.plant.flexible_mode = true;
+  SimulatedFiveBarDevice device(engine::FiveBarParams{}, {}, options);
+  EXPECT_TRUE(device.description().capabilities.flexible_modes);
+  engine::HandInput hand;
+  hand.mode = engine::HandInput::Mode::kApplyForce;
+  hand.force = {0.0, 2.0, 0.0};  // sideways at home: 1.2 N·m about q0, above its friction
+  device.set_hand(hand);
+  for (int k = 0; k < 100; ++k) ASSERT_EQ(device.write({}, kT), DeviceStatus::kOk);
+  DeviceReading reading;
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  const engine::FiveBarParams p;
+  EXPECT_EQ(reading.p_WT, engine::five_bar_tip_position(p, device.measured_joints()));
+  engine::Vec3 p_physical, v_physical;
+  device.plant().physical_tip_state(p_physical, v_physical);
+  const engine::Vec3 p_rigid = engine::five_bar_tip_position(p, device.plant().state().q);
+  const double q0 = device.plant().state().q[0];
+  const double deflection = options.plant.mode.tip_shape * device.plant().mode_state().eta;
+  const engine::Vec3 bend = p_physical - p_rigid;
+  EXPECT_NEAR(bend.x, -deflection * std::sin(q0), 1e-15);
+  EXPECT_NEAR(bend.y, deflection * std::cos(q0), 1e-15);
+  EXPECT_EQ(bend.z, 0.0);
+  // Pushed from the tip, the link bends ahead of the hub (≈ φ1(l)² F / (ρω1²) ≈ 2 mm at 2 N).
+  EXPECT_GT(deflection, 5e-4);
+  EXPECT_GT(q0, 0.0);
+  // set_plant_state puts the mode at rest again.
+  device.set_plant_state({});
+  EXPECT_EQ(device.plant().mode_state().eta, 0.0);
+  EXPECT_EQ(device.plant().mode_state().eta_dot, 0.0);
+}
+
+// Mode off (the default) is the rigid device: the same readings, tick for tick, as one built with
+// the option spelled out and the mode's parameters changed.
+TEST(SimulatedFiveBarDevice, FlexibleModeOffIsTheRigidDevice) {
+  SimulatedFiveBarOptions off;
+  off.plant.flexible_mode = false;
+  off.plant.mode.omega = 100.0;
+  SimulatedFiveBarDevice rigid(engine::FiveBarParams{});
+  SimulatedFiveBarDevice explicit_off(engine::FiveBarParams{}, {}, off);
+  EXPECT_FALSE(explicit_off.description().capabilities.flexible_modes);
+  engine::HandInput hand;
+  hand.mode = engine::HandInput::Mode::kApplyForce;
+  hand.force = {1.0, 2.0, 1.5};
+  rigid.set_hand(hand);
+  explicit_off.set_hand(hand);
+  DeviceReading a, b;
+  for (int k = 0; k < 200; ++k) {
+    ASSERT_EQ(rigid.write({{0.5, -0.5, 0.2}}, kT), DeviceStatus::kOk);
+    ASSERT_EQ(explicit_off.write({{0.5, -0.5, 0.2}}, kT), DeviceStatus::kOk);
+    ASSERT_EQ(rigid.read(a), DeviceStatus::kOk);
+    ASSERT_EQ(explicit_off.read(b), DeviceStatus::kOk);
+    ASSERT_EQ(a.p_WT, b.p_WT);
+    ASSERT_EQ(a.v_WT, b.v_WT);
+  }
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(rigid.plant().state().q[i], explicit_off.plant().state().q[i]);
+    EXPECT_EQ(rigid.plant().state().qdot[i], explicit_off.plant().state().qdot[i]);
+  }
 }
 
 class ConstantVelocity final : public FiveBarVelocityEstimator {
