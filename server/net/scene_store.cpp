@@ -11,10 +11,12 @@ const char* kind_name(ItemKind kind) { return kind == ItemKind::kObject ? "objec
 bool is_live(const engine::ItemMeta& meta) { return meta.fade_begin_tick == engine::kNeverTick; }
 
 /// A new item that ramps in from `tick`.
-engine::ItemMeta appearing(std::uint64_t session_id, std::uint64_t id, std::int64_t tick) {
+engine::ItemMeta appearing(std::uint64_t session_id, std::uint64_t id, std::int64_t tick,
+                           std::uint64_t version_key) {
   engine::ItemMeta meta;
   meta.session_id = session_id;
   meta.id = id;
+  meta.version_key = version_key;
   meta.ramps.appear_tick = tick;
   return meta;
 }
@@ -22,11 +24,13 @@ engine::ItemMeta appearing(std::uint64_t session_id, std::uint64_t id, std::int6
 }  // namespace
 
 SceneStore::SceneStore(runtime::SceneExchange& exchange, std::function<std::int64_t()> next_tick,
-                       std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session)
+                       std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session,
+                       double period_s)
     : exchange_(exchange),
       next_tick_(std::move(next_tick)),
       removal_ramp_ticks_(removal_ramp_ticks < 1 ? 1 : removal_ramp_ticks),
-      max_items_per_session_(max_items_per_session) {}
+      max_items_per_session_(max_items_per_session),
+      period_s_(period_s) {}
 
 std::uint32_t SceneStore::live_items_of(std::uint64_t session_id) const {
   std::uint32_t count = 0;
@@ -62,7 +66,8 @@ grpc::Status SceneStore::create(std::uint64_t session_id, ItemKind kind,
                 " objects and fields (max_objects_per_session)"};
   }
   id_out = next_id_++;
-  items_.emplace(id_out, Item{appearing(session_id, id_out, next_tick_()), kind, spec});
+  items_.emplace(id_out, Item{appearing(session_id, id_out, next_tick_(), next_version_key_++),
+                              kind, spec});
   publish_locked();
   return grpc::Status::OK;
 }
@@ -103,7 +108,9 @@ grpc::Status SceneStore::update(std::uint64_t session_id, ItemKind kind, std::ui
     }
   }
   item->spec = spec;
+  item->meta.ramps = engine::ItemRamp{};
   item->meta.ramps.appear_tick = now;
+  item->meta.version_key = next_version_key_++;
   publish_locked();
   return grpc::Status::OK;
 }
@@ -139,12 +146,14 @@ grpc::Status SceneStore::replace_session_scene(std::uint64_t session_id,
   field_ids.clear();
   for (const auto& object : objects) {
     const std::uint64_t id = next_id_++;
-    items_.emplace(id, Item{appearing(session_id, id, fade_begin), ItemKind::kObject, object});
+    items_.emplace(id, Item{appearing(session_id, id, fade_begin, next_version_key_++),
+                            ItemKind::kObject, object});
     object_ids.push_back(id);
   }
   for (const auto& field : fields) {
     const std::uint64_t id = next_id_++;
-    items_.emplace(id, Item{appearing(session_id, id, fade_begin), ItemKind::kField, field});
+    items_.emplace(id, Item{appearing(session_id, id, fade_begin, next_version_key_++),
+                            ItemKind::kField, field});
     field_ids.push_back(id);
   }
   publish_locked();
@@ -224,7 +233,7 @@ void SceneStore::publish_locked() {
   for (const auto& [id, item] : items_) add(item);
   for (const Item& item : superseded_) add(item);
   exchange_.publish(std::make_unique<const engine::CompiledScene>(
-      engine::compile_scene(description, removal_ramp_ticks_, ++generation_)));
+      engine::compile_scene(description, removal_ramp_ticks_, ++generation_, period_s_)));
 }
 
 }  // namespace haptic::net

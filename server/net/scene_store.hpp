@@ -34,8 +34,10 @@ struct SceneCounts {
 class SceneStore {
  public:
   /// next_tick() tells the index of the next tick the loop will run (fade-outs begin there).
+  /// period_s: the loop period (s), for the discrete impedance laws.
   SceneStore(runtime::SceneExchange& exchange, std::function<std::int64_t()> next_tick,
-             std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session);
+             std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session,
+             double period_s = 1e-3);
 
   grpc::Status create(std::uint64_t session_id, ItemKind kind,
                       const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec,
@@ -75,11 +77,13 @@ class SceneStore {
   std::function<std::int64_t()> next_tick_;
   std::int64_t removal_ramp_ticks_;
   std::uint32_t max_items_per_session_;
+  double period_s_;
 
   mutable std::mutex mutex_;
   std::map<std::uint64_t, Item> items_;  // by id; ordered, so compilation is deterministic
   std::vector<Item> superseded_;         // old versions of updated items, fading out
   std::uint64_t next_id_ = 1;
+  std::uint64_t next_version_key_ = 1;  // every version of every item gets its own
   std::uint64_t generation_ = 0;
 };
 

@@ -43,8 +43,16 @@ class SnapshotExchange {
 
   /// On the loop, at the top of a tick: the newest snapshot. Lock- and allocation-free.
   const T& adopt() {
+    return adopt([](const T&, const T&) {});
+  }
+
+  /// As adopt(); when the snapshot changes, first calls carry(previous, next) — while the
+  /// previous one is still guaranteed alive — so the loop can carry its own state across.
+  template <typename Carry>
+  const T& adopt(Carry&& carry) {
     const Node* node = current_.load(std::memory_order_acquire);
     if (node != adopted_) {
+      if (adopted_ != nullptr) carry(*adopted_->value, *node->value);
       adopted_ = node;
       adopted_generation_.store(node->generation, std::memory_order_release);
     }

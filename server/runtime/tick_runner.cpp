@@ -25,7 +25,11 @@ double TickRunner::output_gain(std::uint64_t tick) const {
 }
 
 void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
-  const engine::CompiledScene& scene = scenes_.adopt();
+  // A new scene takes over the contacts, filters and meters of the items it shares with the last.
+  const engine::CompiledScene& scene = scenes_.adopt(
+      [](const engine::CompiledScene& from, const engine::CompiledScene& to) {
+        engine::carry_state(from, to);
+      });
 
   TickSample sample;
   sample.tick = tick;
@@ -40,7 +44,8 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
   if (read_ok) {
     last_good_reading_ = reading;
     const engine::SceneForce scene_force =
-        engine::evaluate_scene(scene, reading.p_WT, reading.v_WT, static_cast<std::int64_t>(tick));
+        engine::evaluate_scene(scene, reading.p_WT, reading.v_WT, static_cast<std::int64_t>(tick),
+                               config_.period_s);
     sample.p_WP = scene_force.p_WP;
     sample.contact_count = scene_force.contact_count;
     if (scene_force.ramping || gain < 1.0) sample.flags |= wire::kFlagRampingOut;

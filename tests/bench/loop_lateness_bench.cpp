@@ -21,9 +21,9 @@ engine::CompiledScene default_scene() {
   wall.stiffness = 1000.0;
   wall.damping = 1.0;
   wall.shape = engine::HalfSpaceSpec{{0.0, 0.0, 1.0}};
-  description.objects.push_back({{1, 1, engine::kNeverTick}, wall});
+  description.objects.push_back({{1, 1, engine::kNeverTick, {}}, wall});
   description.fields.push_back(
-      {{1, 2, engine::kNeverTick}, engine::FieldSpec{engine::SpringToPointSpec{{0, 0, 0.02}, 20.0, 0.0, 0.0}}});
+      {{1, 2, engine::kNeverTick, {}}, engine::FieldSpec{engine::SpringToPointSpec{{0, 0, 0.02}, 20.0, 0.0, 0.0}}});
   return engine::compile_scene(description, 50, 1);
 }
 

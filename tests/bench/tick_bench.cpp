@@ -22,17 +22,17 @@ engine::CompiledScene scene_with(int walls, int spheres, int springs) {
     wall.stiffness = 1000.0;
     wall.damping = 1.0;
     wall.shape = engine::HalfSpaceSpec{{0.0, 0.0, 1.0}};
-    description.objects.push_back({{1, id++, engine::kNeverTick}, wall});
+    description.objects.push_back({{1, id++, engine::kNeverTick, {}}, wall});
   }
   for (int i = 0; i < spheres; ++i) {
     engine::ObjectSpec sphere;
     sphere.p_WO = {0.001 * i, 0.0, 0.0};
     sphere.stiffness = 1000.0;
     sphere.shape = engine::SphereSpec{0.01};
-    description.objects.push_back({{1, id++, engine::kNeverTick}, sphere});
+    description.objects.push_back({{1, id++, engine::kNeverTick, {}}, sphere});
   }
   for (int i = 0; i < springs; ++i) {
-    description.fields.push_back({{1, id++, engine::kNeverTick},
+    description.fields.push_back({{1, id++, engine::kNeverTick, {}},
                                   engine::FieldSpec{engine::SpringToPointSpec{{0, 0, 0.02}, 20.0, 0.1, 0.0}}});
   }
   return engine::compile_scene(description, 50, 1);

@@ -15,6 +15,37 @@ double contact_magnitude(double stiffness, double damping, double d, const Vec3&
   return std::max(0.0, stiffness * d - damping * dot(v, n));
 }
 
+ImpedanceDiscretization discretization_of(ContactLaw law) {
+  switch (law) {
+    case ContactLaw::kExactZoh: return ImpedanceDiscretization::kExactZoh;
+    case ContactLaw::kTustin: return ImpedanceDiscretization::kTustin;
+    default: return ImpedanceDiscretization::kBackwardDifference;
+  }
+}
+
+/// Whether a primitive can take the stateless fast path.
+bool is_fast(const ObjectSpec& object) {
+  return object.law == ContactLaw::kVelocity && object.static_friction == 0.0 &&
+         object.dynamic_friction == 0.0 &&
+         (std::holds_alternative<HalfSpaceSpec>(object.shape) ||
+          std::holds_alternative<SphereSpec>(object.shape));
+}
+
+/// Records one item's contribution this tick in its meter and publishes the totals. An item that
+/// does no work now and did none at the last sample adds nothing: skipped, so idle items cost a
+/// dot product.
+inline void meter(SceneState& state, std::uint32_t index, const Vec3& F, const Vec3& v, double dt) {
+  EnergyMeter& m = state.meters[index];
+  const double power = dot(F, v);
+  if (power == 0.0 && m.last_power == 0.0) {
+    m.has_last = true;
+    return;
+  }
+  m.add_power(power, dt);
+  state.work_out[index].store(m.work_out, std::memory_order_relaxed);
+  state.work_in[index].store(m.work_in, std::memory_order_relaxed);
+}
+
 }  // namespace
 
 double fade_gain(std::int64_t fade_begin_tick, std::int64_t tick, std::int64_t ramp_ticks) {
@@ -26,6 +57,12 @@ double fade_gain(std::int64_t fade_begin_tick, std::int64_t tick, std::int64_t r
 }
 
 double ramp_gain(const ItemRamp& ramp, std::int64_t tick, std::int64_t ramp_ticks) {
+  // The common case — an item long since ramped in, neither removed nor replaced — costs three
+  // compares. (superseded_at fills from its front.)
+  if (ramp.fade_begin_tick == kNeverTick && ramp.superseded_at[0] == kNeverTick &&
+      (ramp.appear_tick == kAlwaysTick || tick - ramp.appear_tick >= ramp_ticks)) {
+    return 1.0;
+  }
   double gain = fade_gain(ramp.fade_begin_tick, tick, ramp_ticks);
   for (const std::int64_t superseded : ramp.superseded_at) gain *= fade_gain(superseded, tick, ramp_ticks);
   if (ramp.appear_tick != kAlwaysTick) gain *= 1.0 - fade_gain(ramp.appear_tick, tick, ramp_ticks);
@@ -33,91 +70,311 @@ double ramp_gain(const ItemRamp& ramp, std::int64_t tick, std::int64_t ramp_tick
 }
 
 CompiledScene compile_scene(const SceneDescription& description, std::int64_t removal_ramp_ticks,
-                            std::uint64_t generation) {
+                            std::uint64_t generation, double period_s) {
   CompiledScene scene;
   scene.removal_ramp_ticks = std::max<std::int64_t>(1, removal_ramp_ticks);
   scene.generation = generation;
-  // Exact sizes, so the arrays hold no slack and no push_back below reallocates.
-  const auto half_space_count = std::count_if(
-      description.objects.begin(), description.objects.end(),
-      [](const ObjectEntry& e) { return std::holds_alternative<HalfSpaceSpec>(e.spec.shape); });
-  scene.half_spaces.reserve(static_cast<std::size_t>(half_space_count));
-  scene.spheres.reserve(description.objects.size() - static_cast<std::size_t>(half_space_count));
-  scene.springs.reserve(description.fields.size());
+  scene.period_s = period_s;
+  SceneState& state = *scene.state;
+  const std::size_t items = description.objects.size() + description.fields.size();
+  state.meters.resize(items);
+  state.meter_keys.reserve(items);
+  state.meter_ids.reserve(items);
+  state.work_out = std::make_unique<std::atomic<double>[]>(items);
+  state.work_in = std::make_unique<std::atomic<double>[]>(items);
+  const auto new_meter = [&](const ItemMeta& meta) {
+    state.meter_keys.push_back(meta.state_key());
+    state.meter_ids.push_back(meta.id);
+    return static_cast<std::uint32_t>(state.meter_keys.size() - 1);
+  };
+
   for (const ObjectEntry& entry : description.objects) {
     const ObjectSpec& object = entry.spec;
-    if (const auto* half_space = std::get_if<HalfSpaceSpec>(&object.shape)) {
-      // Normalised after the rotation so a slightly non-unit quaternion cannot scale the force.
-      const Vec3 n_W = rotate(object.R_WO, half_space->normal_O);
-      assert(norm(n_W) > 0.0);
-      scene.half_spaces.push_back(CompiledHalfSpace{object.p_WO, n_W * (1.0 / norm(n_W)),
-                                                    object.stiffness, object.damping,
-                                                    entry.meta.ramp()});
-    } else if (const auto* sphere = std::get_if<SphereSpec>(&object.shape)) {
-      scene.spheres.push_back(CompiledSphere{object.p_WO, sphere->radius, object.stiffness,
-                                             object.damping, entry.meta.ramp()});
+    const std::uint32_t meter_index = new_meter(entry.meta);
+    if (is_fast(object)) {
+      if (const auto* half_space = std::get_if<HalfSpaceSpec>(&object.shape)) {
+        // Normalised after the rotation so a slightly non-unit quaternion cannot scale the force.
+        const Vec3 n_W = rotate(object.R_WO, half_space->normal_O);
+        assert(norm(n_W) > 0.0);
+        scene.half_spaces.push_back(CompiledHalfSpace{object.p_WO, n_W * (1.0 / norm(n_W)),
+                                                      object.stiffness, object.damping,
+                                                      entry.meta.ramp(), meter_index});
+      } else {
+        const auto& sphere = std::get<SphereSpec>(object.shape);
+        scene.spheres.push_back(CompiledSphere{object.p_WO, sphere.radius, object.stiffness,
+                                               object.damping, entry.meta.ramp(), meter_index});
+      }
+      continue;
     }
+    if (const auto* mesh = std::get_if<MeshShapeSpec>(&object.shape)) {
+      CompiledMesh compiled;
+      compiled.model = mesh->model;
+      compiled.pose = MeshPose{object.p_WO, object.R_WO, {}, {}};
+      compiled.params.stiffness = object.stiffness;
+      compiled.params.damping = object.damping;
+      compiled.ramp = entry.meta.ramp();
+      compiled.state = static_cast<std::uint32_t>(state.meshes.size());
+      compiled.meter = meter_index;
+      MeshState mesh_state;
+      mesh_state.key = entry.meta.state_key();
+      mesh_state.id = entry.meta.id;
+      state.meshes.push_back(mesh_state);
+      scene.meshes.push_back(std::move(compiled));
+      continue;
+    }
+    CompiledContact compiled;
+    std::visit(
+        [&](const auto& shape) {
+          using S = std::decay_t<decltype(shape)>;
+          if constexpr (!std::is_same_v<S, MeshShapeSpec>) compiled.shape = shape;
+        },
+        object.shape);
+    compiled.X_WO = ObjectPose{object.p_WO, object.R_WO};
+    compiled.material = ContactMaterial{object.stiffness, object.damping, object.static_friction,
+                                        object.dynamic_friction};
+    compiled.law = object.law;
+    if (object.law != ContactLaw::kVelocity) {
+      compiled.weights = impedance_weights(
+          ImpedanceParams{object.stiffness, object.damping, object.impedance_mass},
+          discretization_of(object.law), period_s);
+    }
+    compiled.ramp = entry.meta.ramp();
+    compiled.state = static_cast<std::uint32_t>(state.contacts.size());
+    compiled.meter = meter_index;
+    ContactState contact_state;
+    contact_state.key = entry.meta.state_key();
+    contact_state.filter = ImpedanceFilter(compiled.weights);
+    state.contacts.push_back(contact_state);
+    scene.contacts.push_back(std::move(compiled));
   }
+
   for (const FieldEntry& entry : description.fields) {
+    const std::uint32_t meter_index = new_meter(entry.meta);
     if (const auto* spring = std::get_if<SpringToPointSpec>(&entry.spec.kind)) {
       scene.springs.push_back(CompiledSpring{spring->anchor_W, spring->stiffness, spring->damping,
-                                             spring->max_force, entry.meta.ramp()});
+                                             spring->max_force, entry.meta.ramp(), meter_index});
+      continue;
     }
+    CompiledField compiled;
+    std::visit(
+        [&](const auto& kind) {
+          using K = std::decay_t<decltype(kind)>;
+          if constexpr (!std::is_same_v<K, SpringToPointSpec>) compiled.spec = kind;
+        },
+        entry.spec.kind);
+    compiled.ramp = entry.meta.ramp();
+    compiled.meter = meter_index;
+    scene.fields.push_back(std::move(compiled));
   }
+
+  scene.stages = (scene.half_spaces.empty() ? 0u : kStageHalfSpaces) |
+                 (scene.spheres.empty() ? 0u : kStageSpheres) |
+                 (scene.contacts.empty() ? 0u : kStageContacts) |
+                 (scene.meshes.empty() ? 0u : kStageMeshes) |
+                 (scene.springs.empty() ? 0u : kStageSprings) |
+                 (scene.fields.empty() ? 0u : kStageFields);
   return scene;
 }
 
+void carry_state(const CompiledScene& from, const CompiledScene& to) {
+  const SceneState& old_state = *from.state;
+  SceneState& new_state = *to.state;
+  // Both sides are short and compiled in item order, in which keys ascend except where a newer
+  // version (a larger key) follows; a merge over key-sorted views would need scratch space, so
+  // match by a forward scan with a moving start (linear when the orders agree, which is the rule).
+  const auto carry = [](const auto& old_items, auto& new_items, auto key_of, auto copy) {
+    std::size_t start = 0;
+    for (auto& item : new_items) {
+      const std::uint64_t key = key_of(item);
+      for (std::size_t probe = 0; probe < old_items.size(); ++probe) {
+        const std::size_t i = (start + probe) % old_items.size();
+        if (key_of(old_items[i]) == key) {
+          copy(old_items[i], item);
+          start = i + 1;
+          break;
+        }
+      }
+    }
+  };
+  carry(old_state.contacts, new_state.contacts, [](const ContactState& s) { return s.key; },
+        [](const ContactState& a, ContactState& b) {
+          b.proxy = a.proxy;
+          b.touching = a.touching;
+          // The filter's weights are the new version's own; only its past samples carry over.
+          b.filter.copy_history_from(a.filter);
+        });
+  carry(old_state.meshes, new_state.meshes, [](const MeshState& s) { return s.key; },
+        [](const MeshState& a, MeshState& b) {
+          b.god = a.god;
+          b.needs_rebase = a.needs_rebase;
+        });
+  // A mesh version new to `to` takes over the god object of its item's newest old version.
+  for (MeshState& fresh : new_state.meshes) {
+    if (fresh.god.initialized) continue;
+    const MeshState* newest = nullptr;
+    for (const MeshState& old : old_state.meshes) {
+      if (old.id == fresh.id && old.key != fresh.key && (!newest || old.key > newest->key)) newest = &old;
+    }
+    if (newest && newest->god.initialized) {
+      fresh.god = newest->god;
+      fresh.needs_rebase = true;
+    }
+  }
+  // Energy meters, by key, with their published totals.
+  std::size_t start = 0;
+  for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
+    for (std::size_t probe = 0; probe < old_state.meter_keys.size(); ++probe) {
+      const std::size_t i = (start + probe) % old_state.meter_keys.size();
+      if (old_state.meter_keys[i] == new_state.meter_keys[j]) {
+        new_state.meters[j] = old_state.meters[i];
+        new_state.work_out[j].store(new_state.meters[j].work_out, std::memory_order_relaxed);
+        new_state.work_in[j].store(new_state.meters[j].work_in, std::memory_order_relaxed);
+        start = i + 1;
+        break;
+      }
+    }
+  }
+}
+
 SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Vec3& v_WT,
-                          std::int64_t tick) {
+                          std::int64_t tick, double dt) {
   SceneForce out;
   out.p_WP = p_WT;
   double deepest = 0.0;
   const std::int64_t ramp = scene.removal_ramp_ticks;
+  SceneState& state = *scene.state;
 
-  for (const CompiledHalfSpace& wall : scene.half_spaces) {
-    if (is_fading_out(wall.ramp)) out.ramping = true;
-    const double d = dot(wall.point_W - p_WT, wall.normal_W);
-    if (d <= 0.0) continue;
-    const double gain = ramp_gain(wall.ramp, tick, ramp);
-    if (gain == 0.0) continue;
-    out.F_T_W += (gain * contact_magnitude(wall.stiffness, wall.damping, d, wall.normal_W, v_WT)) *
-                 wall.normal_W;
-    ++out.contact_count;
-    if (d > deepest) {
-      deepest = d;
-      out.p_WP = p_WT + d * wall.normal_W;
+  if (scene.stages & kStageHalfSpaces) {
+    for (const CompiledHalfSpace& wall : scene.half_spaces) {
+      if (is_fading_out(wall.ramp)) out.ramping = true;
+      const double d = dot(wall.point_W - p_WT, wall.normal_W);
+      const double gain = d > 0.0 ? ramp_gain(wall.ramp, tick, ramp) : 0.0;
+      const Vec3 F =
+          gain > 0.0
+              ? (gain * contact_magnitude(wall.stiffness, wall.damping, d, wall.normal_W, v_WT)) *
+                    wall.normal_W
+              : Vec3{};
+      meter(state, wall.meter, F, v_WT, dt);
+      if (gain == 0.0) continue;
+      out.F_T_W += F;
+      ++out.contact_count;
+      if (d > deepest) {
+        deepest = d;
+        out.p_WP = p_WT + d * wall.normal_W;
+      }
     }
   }
 
-  for (const CompiledSphere& sphere : scene.spheres) {
-    if (is_fading_out(sphere.ramp)) out.ramping = true;
-    const Vec3 r = p_WT - sphere.center_W;
-    const double distance = norm(r);
-    const double d = sphere.radius - distance;
-    if (d <= 0.0) continue;
-    const double gain = ramp_gain(sphere.ramp, tick, ramp);
-    if (gain == 0.0) continue;
-    // At the exact centre the direction is undefined; push along +z.
-    const Vec3 n = distance > 0.0 ? r * (1.0 / distance) : Vec3{0.0, 0.0, 1.0};
-    out.F_T_W += (gain * contact_magnitude(sphere.stiffness, sphere.damping, d, n, v_WT)) * n;
-    ++out.contact_count;
-    if (d > deepest) {
-      deepest = d;
-      out.p_WP = sphere.center_W + sphere.radius * n;
+  if (scene.stages & kStageSpheres) {
+    for (const CompiledSphere& sphere : scene.spheres) {
+      if (is_fading_out(sphere.ramp)) out.ramping = true;
+      const Vec3 r = p_WT - sphere.center_W;
+      const double distance = norm(r);
+      const double d = sphere.radius - distance;
+      const double gain = d > 0.0 ? ramp_gain(sphere.ramp, tick, ramp) : 0.0;
+      // At the exact centre the direction is undefined; push along +z.
+      const Vec3 n = distance > 0.0 ? r * (1.0 / distance) : Vec3{0.0, 0.0, 1.0};
+      const Vec3 F =
+          gain > 0.0 ? (gain * contact_magnitude(sphere.stiffness, sphere.damping, d, n, v_WT)) * n
+                     : Vec3{};
+      meter(state, sphere.meter, F, v_WT, dt);
+      if (gain == 0.0) continue;
+      out.F_T_W += F;
+      ++out.contact_count;
+      if (d > deepest) {
+        deepest = d;
+        out.p_WP = sphere.center_W + sphere.radius * n;
+      }
     }
   }
 
-  for (const CompiledSpring& spring : scene.springs) {
-    if (is_fading_out(spring.ramp)) out.ramping = true;
-    const double gain = ramp_gain(spring.ramp, tick, ramp);
-    if (gain == 0.0) continue;
-    // F = −∇U − b v with U = ½ k |p − anchor|².
-    Vec3 F = -spring.stiffness * (p_WT - spring.anchor_W) - spring.damping * v_WT;
-    if (spring.max_force > 0.0) {
-      const double magnitude = norm(F);
-      if (magnitude > spring.max_force) F *= spring.max_force / magnitude;
+  if (scene.stages & kStageContacts) {
+    for (const CompiledContact& contact : scene.contacts) {
+      if (is_fading_out(contact.ramp)) out.ramping = true;
+      ContactState& s = state.contacts[contact.state];
+      const double gain = ramp_gain(contact.ramp, tick, ramp);
+      ContactForce force;
+      if (contact.law == ContactLaw::kVelocity) {
+        force = s.proxy.update(contact.shape, contact.X_WO, contact.material, p_WT, v_WT);
+      } else {
+        // A discrete impedance on the sampled penetration along the closest point's normal.
+        const ShapeQuery q = query(contact.shape, contact.X_WO, p_WT);
+        if (q.signed_distance < 0.0) {
+          if (!s.touching) {
+            s.filter.reset();
+            s.touching = true;
+          }
+          force.penetration = -q.signed_distance;
+          force.n_W = q.n_W;
+          force.p_WP = q.p_WS;
+          force.in_contact = true;
+          force.F_T_W = std::max(0.0, s.filter.update(force.penetration)) * q.n_W;
+        } else {
+          s.touching = false;
+          force.p_WP = p_WT;
+        }
+      }
+      const Vec3 F = gain * force.F_T_W;
+      meter(state, contact.meter, F, v_WT, dt);
+      if (!force.in_contact || gain == 0.0) continue;
+      out.F_T_W += F;
+      ++out.contact_count;
+      if (force.penetration > deepest) {
+        deepest = force.penetration;
+        out.p_WP = force.p_WP;
+      }
     }
-    out.F_T_W += gain * F;
+  }
+
+  if (scene.stages & kStageMeshes) {
+    for (const CompiledMesh& mesh : scene.meshes) {
+      if (is_fading_out(mesh.ramp)) out.ramping = true;
+      MeshState& s = state.meshes[mesh.state];
+      if (!s.god.initialized) reset_god_object(s.god, mesh.pose, p_WT);
+      if (s.needs_rebase) {
+        rebase_god_object(s.god, mesh.model->bvh, mesh.pose, mesh.params);
+        s.needs_rebase = false;
+      }
+      const GodObjectOutput g =
+          update_god_object(s.god, mesh.model->bvh, mesh.pose, mesh.params, p_WT, v_WT);
+      const double gain = ramp_gain(mesh.ramp, tick, ramp);
+      const Vec3 F = gain * g.F_T_W;
+      meter(state, mesh.meter, F, v_WT, dt);
+      if (!g.in_contact || gain == 0.0) continue;
+      out.F_T_W += F;
+      ++out.contact_count;
+      const double depth = norm(g.p_WP - p_WT);
+      if (depth > deepest) {
+        deepest = depth;
+        out.p_WP = g.p_WP;
+      }
+    }
+  }
+
+  if (scene.stages & kStageSprings) {
+    for (const CompiledSpring& spring : scene.springs) {
+      if (is_fading_out(spring.ramp)) out.ramping = true;
+      const double gain = ramp_gain(spring.ramp, tick, ramp);
+      // F = −∇U − b v with U = ½ k |p − anchor|².
+      Vec3 F = -spring.stiffness * (p_WT - spring.anchor_W) - spring.damping * v_WT;
+      if (spring.max_force > 0.0) {
+        const double magnitude = norm(F);
+        if (magnitude > spring.max_force) F *= spring.max_force / magnitude;
+      }
+      F *= gain;
+      meter(state, spring.meter, F, v_WT, dt);
+      out.F_T_W += F;
+    }
+  }
+
+  if (scene.stages & kStageFields) {
+    for (const CompiledField& field : scene.fields) {
+      if (is_fading_out(field.ramp)) out.ramping = true;
+      const double gain = ramp_gain(field.ramp, tick, ramp);
+      const Vec3 F = gain * evaluate_field(field.spec, p_WT, v_WT).F_T_W;
+      meter(state, field.meter, F, v_WT, dt);
+      out.F_T_W += F;
+    }
   }
   return out;
 }

@@ -1,51 +1,150 @@
 #pragma once
-// The scene compiled for the loop: flat arrays per kind of contribution, world-frame geometry
-// precomputed, nothing the scene does not use. Immutable once built; the loop reads it through a
-// pointer handed over by runtime/SnapshotExchange and never allocates or frees it.
+// The scene compiled for the loop: one flat array per stage, world-frame geometry precomputed,
+// nothing the scene does not use (docs/scene.md lists the stages). The geometry and parameters are
+// immutable once built; the loop reads them through a pointer handed over by
+// runtime/SnapshotExchange and never allocates or frees them.
+//
+// What must outlive a snapshot — contact proxies, impedance filters' past samples, god objects,
+// energy meters — lives in the snapshot's SceneState, written only by the loop. When the loop
+// adopts a newer snapshot it carries each item version's state across by key (carry_state), so
+// an unrelated change elsewhere in the scene never resets a contact.
 
+#include <atomic>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "engine/core/vec3.hpp"
+#include "engine/scene/contact_proxy.hpp"
+#include "engine/scene/fields.hpp"
+#include "engine/scene/god_object.hpp"
+#include "engine/scene/impedance.hpp"
 #include "engine/scene/scene_spec.hpp"
+#include "engine/scene/shapes.hpp"
 
 namespace haptic::engine {
 
+/// Stage 1, the fast path: a frictionless half-space with the measured-velocity law. Stateless.
 struct CompiledHalfSpace {
   Vec3 point_W;       // A point on the surface. Unit: m.
   Vec3 normal_W;      // Unit outward normal.
   double stiffness;   // Unit: N/m.
   double damping;     // Unit: N*s/m.
   ItemRamp ramp;
+  std::uint32_t meter = 0;  // index into SceneState::meters
 };
 
+/// Stage 2, the fast path: a frictionless sphere with the measured-velocity law. Stateless.
 struct CompiledSphere {
   Vec3 center_W;      // Unit: m.
   double radius;      // Unit: m.
   double stiffness;   // Unit: N/m.
   double damping;     // Unit: N*s/m.
   ItemRamp ramp;
+  std::uint32_t meter = 0;
 };
 
+/// Stage 3: any primitive that needs state — a box or capsule, friction (a ContactProxy), or a
+/// discretized impedance law (an ImpedanceFilter on the penetration).
+struct CompiledContact {
+  PrimitiveShape shape;
+  ObjectPose X_WO;
+  ContactMaterial material;
+  ContactLaw law = ContactLaw::kVelocity;
+  ImpedanceWeights weights;  // for the discrete laws
+  ItemRamp ramp;
+  std::uint32_t state = 0;   // index into SceneState::contacts
+  std::uint32_t meter = 0;
+};
+
+/// Stage 4: a triangle mesh rendered with a god object.
+struct CompiledMesh {
+  std::shared_ptr<const MeshModel> model;
+  MeshPose pose;
+  GodObjectParams params;
+  ItemRamp ramp;
+  std::uint32_t state = 0;   // index into SceneState::meshes
+  std::uint32_t meter = 0;
+};
+
+/// Stage 5: a spring pulling the tool to a point (the original field).
 struct CompiledSpring {
   Vec3 anchor_W;      // Unit: m.
   double stiffness;   // Unit: N/m.
   double damping;     // Unit: N*s/m.
   double max_force;   // Unit: N; 0 = no clip.
   ItemRamp ramp;
+  std::uint32_t meter = 0;
+};
+
+/// Stage 6: every other energy field (engine/scene/fields).
+struct CompiledField {
+  EnergyFieldSpec spec;
+  ItemRamp ramp;
+  std::uint32_t meter = 0;
+};
+
+/// Per item-version state of a stateful contact.
+struct ContactState {
+  std::uint64_t key = 0;
+  ContactProxy proxy;
+  ImpedanceFilter filter;
+  bool touching = false;  // the filter's contact has started
+};
+
+struct MeshState {
+  std::uint64_t key = 0;
+  std::uint64_t id = 0;        // the item; a new version of it inherits the god object
+  GodObjectState god;
+  bool needs_rebase = false;   // inherited from an earlier version of the mesh
+};
+
+/// What the loop writes. Meters are reported through relaxed atomics (work_to_device,
+/// work_from_device per meter), read off the loop for GetSceneEnergy.
+struct SceneState {
+  std::vector<ContactState> contacts;
+  std::vector<MeshState> meshes;
+  std::vector<EnergyMeter> meters;
+  std::vector<std::uint64_t> meter_keys;  // the item version each meter belongs to
+  std::vector<std::uint64_t> meter_ids;   // the item (for reports)
+  std::unique_ptr<std::atomic<double>[]> work_out;  // J given to the device, per meter
+  std::unique_ptr<std::atomic<double>[]> work_in;   // J absorbed from the device, per meter
+};
+
+/// Which stages a compiled scene runs (docs/scene.md); an empty stage is skipped entirely.
+enum SceneStage : std::uint32_t {
+  kStageHalfSpaces = 1u << 0,
+  kStageSpheres = 1u << 1,
+  kStageContacts = 1u << 2,
+  kStageMeshes = 1u << 3,
+  kStageSprings = 1u << 4,
+  kStageFields = 1u << 5,
 };
 
 struct CompiledScene {
   std::vector<CompiledHalfSpace> half_spaces;
   std::vector<CompiledSphere> spheres;
+  std::vector<CompiledContact> contacts;
+  std::vector<CompiledMesh> meshes;
   std::vector<CompiledSpring> springs;
-  std::int64_t removal_ramp_ticks = 50;  // Ticks over which a removed item fades out; >= 1.
+  std::vector<CompiledField> fields;
+  std::uint32_t stages = 0;              // SceneStage bits of the non-empty stages
+  std::int64_t removal_ramp_ticks = 50;  // Ticks over which an item ramps in or out; >= 1.
+  double period_s = 1e-3;                // The loop period the discrete laws were built for.
   std::uint64_t generation = 0;          // Increases with every published scene.
+  std::unique_ptr<SceneState> state = std::make_unique<SceneState>();  // written by the loop only
 };
 
-/// Flattens a description into a compiled scene (off the loop; allocates).
+/// Flattens a description into a compiled scene (off the loop; allocates). period_s: the loop
+/// period (s), for the discrete impedance laws.
 CompiledScene compile_scene(const SceneDescription& description, std::int64_t removal_ramp_ticks,
-                            std::uint64_t generation);
+                            std::uint64_t generation, double period_s = 1e-3);
+
+/// On the loop, when it adopts `to` after `from`: copies every item version's state that both
+/// hold (matched by key); a mesh version new in `to` inherits the god object of the newest
+/// version of the same item in `from` and is rebased onto its new geometry at its first tick.
+/// Does not allocate.
+void carry_state(const CompiledScene& from, const CompiledScene& to);
 
 /// What the scene asks of the device at one tick.
 struct SceneForce {
@@ -55,11 +154,12 @@ struct SceneForce {
   bool ramping = false;          // Some item is fading out (removed, or an old version of a change).
 };
 
-/// Sums every contribution at tool position p_WT and velocity v_WT. Does not allocate.
+/// Sums every contribution at tool position p_WT and velocity v_WT, updates the scene state and
+/// the energy meters (dt: the tick period, s). Does not allocate.
 /// Contact with a half-space: d = dot(point - p, n) > 0 is the penetration, F = (k d - b dot(v, n)) n
 /// clamped so a wall only pushes (never pulls). Sphere: the same along the radial direction.
 SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Vec3& v_WT,
-                          std::int64_t tick);
+                          std::int64_t tick, double dt = 1e-3);
 
 /// Gain of an item whose fade began at fade_begin_tick, at tick `tick`: 1 before, then linear to 0.
 double fade_gain(std::int64_t fade_begin_tick, std::int64_t tick, std::int64_t ramp_ticks);

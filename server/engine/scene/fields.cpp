@@ -384,19 +384,5 @@ std::string validate_field(const EnergyFieldSpec& spec) {
 
 // ---- energy bookkeeping ----------------------------------------------------------------------
 
-void EnergyMeter::add(const Vec3& F_T_W, const Vec3& v_WT, double dt) {
-  const double power = dot(F_T_W, v_WT);
-  if (has_last) {
-    const double dW = 0.5 * (last_power + power) * dt;  // trapezoidal rule
-    work += dW;
-    if (dW > 0.0) {
-      work_out += dW;
-    } else {
-      work_in -= dW;
-    }
-  }
-  last_power = power;
-  has_last = true;
-}
 
 }  // namespace haptic::engine

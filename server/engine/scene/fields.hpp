@@ -251,7 +251,22 @@ struct EnergyMeter {
 
   /// F_T_W: the field's force this tick (N); v_WT: tool velocity (m/s); dt: time since the
   /// previous sample (s), ignored on the first.
-  void add(const Vec3& F_T_W, const Vec3& v_WT, double dt);
+  void add(const Vec3& F_T_W, const Vec3& v_WT, double dt) { add_power(dot(F_T_W, v_WT), dt); }
+
+  /// The same with the power P = F·v already formed. Unit: W.
+  void add_power(double power, double dt) {
+    if (has_last) {
+      const double dW = 0.5 * (last_power + power) * dt;  // trapezoidal rule
+      work += dW;
+      if (dW > 0.0) {
+        work_out += dW;
+      } else {
+        work_in -= dW;
+      }
+    }
+    last_power = power;
+    has_last = true;
+  }
   void reset() { *this = EnergyMeter{}; }
 };
 

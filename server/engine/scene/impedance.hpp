@@ -108,6 +108,13 @@ class ImpedanceFilter {
   void reset(double d_previous = 0.0, double rate_previous = 0.0,
              double acceleration_previous = 0.0);
 
+  /// Takes another filter's past samples, keeping its own weights: a new version of a law (a
+  /// parameter change) continues from the old one's history instead of restarting the contact.
+  void copy_history_from(const ImpedanceFilter& other) {
+    history_ = other.history_;
+    velocity_ = other.velocity_;
+  }
+
   /// The force f(k) (Unit: N, > 0 pushes out) for the penetration d(k) (Unit: m); remembers d(k).
   double update(double d) {
     const auto& w = weights_.lag;

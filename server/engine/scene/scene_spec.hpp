@@ -6,10 +6,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <variant>
 #include <vector>
 
 #include "engine/core/vec3.hpp"
+#include "engine/scene/fields.hpp"
+#include "engine/scene/mesh.hpp"
 
 namespace haptic::engine {
 
@@ -24,12 +27,52 @@ struct SphereSpec {
   double radius = 0.0;  // Unit: m. > 0.
 };
 
+/// Solid box centred on the object origin, its faces normal to O's axes.
+struct BoxSpec {
+  Vec3 half_extents;  // Half the side lengths along O's x, y, z. Unit: m. Each > 0.
+};
+
+/// Solid capsule: the points within `radius` of the segment from (0, 0, −half_length) to
+/// (0, 0, +half_length) in O (a cylinder along O's z axis with hemispherical caps).
+struct CapsuleSpec {
+  double radius = 0.0;       // Unit: m. > 0.
+  double half_length = 0.0;  // Half the length of the axis segment. Unit: m. >= 0 (0: a sphere).
+};
+
+/// A validated triangle mesh and its bounding-volume hierarchy, built once off the loop and
+/// shared (never copied) by every snapshot that holds the object.
+struct MeshModel {
+  Mesh mesh;
+  MeshBvh bvh;
+};
+
+/// A triangle mesh in O, rendered with a god object (engine/scene/god_object).
+struct MeshShapeSpec {
+  std::shared_ptr<const MeshModel> model;
+};
+
+/// How a contact turns penetration into force along the normal.
+enum class ContactLaw : std::uint8_t {
+  /// F = max(0, K d − B v·n) with the device's measured velocity v (the default).
+  kVelocity,
+  /// F = K d + B ḋ + M d̈ on the sampled penetration, by backward differences (000 eq. 8.15).
+  kBackwardDifference,
+  /// The exact zero-order-hold form of 000 eq. 8.11 (weights a1 + a2 = K, eq. 8.12).
+  kExactZoh,
+  /// Tustin's bilinear form (unstable with B > 0 on a real device: see docs/scene.md).
+  kTustin,
+};
+
 struct ObjectSpec {
   Vec3 p_WO;           // Object origin in W. Unit: m.
   Quat R_WO;           // Object orientation in W (unit quaternion).
   double stiffness = 0.0;  // Unit: N/m.
   double damping = 0.0;    // Unit: N*s/m.
-  std::variant<HalfSpaceSpec, SphereSpec> shape;
+  double impedance_mass = 0.0;    // M of the discrete laws. Unit: kg.
+  double static_friction = 0.0;   // μ_s (needs the kVelocity law).
+  double dynamic_friction = 0.0;  // μ_d ≤ μ_s.
+  ContactLaw law = ContactLaw::kVelocity;
+  std::variant<HalfSpaceSpec, SphereSpec, BoxSpec, CapsuleSpec, MeshShapeSpec> shape;
 };
 
 /// Potential U = 1/2 k |p - anchor|^2; F = -k (p - anchor) - b v, clipped to max_force if > 0.
@@ -41,7 +84,9 @@ struct SpringToPointSpec {
 };
 
 struct FieldSpec {
-  std::variant<SpringToPointSpec> kind;
+  std::variant<SpringToPointSpec, PotentialFieldSpec, SpringFieldSpec, LinearFieldSpec,
+               ViscousFieldSpec, DetentFieldSpec>
+      kind;
 };
 
 inline constexpr std::int64_t kNeverTick = std::numeric_limits<std::int64_t>::max();
@@ -69,6 +114,10 @@ struct ItemMeta {
   std::uint64_t id = 0;          // Unique across all sessions; kept by updates.
   std::int64_t fade_begin_tick = kNeverTick;
   ItemRamp ramps;                // appear and superseded ticks (fade_begin_tick above is the removal)
+  /// Unique per version of an item: the key its loop state is carried by. 0: the item's id.
+  std::uint64_t version_key = 0;
+
+  std::uint64_t state_key() const { return version_key != 0 ? version_key : id; }
 
   ItemRamp ramp() const {
     ItemRamp out = ramps;

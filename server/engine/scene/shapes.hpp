@@ -56,17 +56,7 @@ Quat quat_from_axis_angle(const Vec3& axis, double angle_rad);
 //   HalfSpaceSpec: the surface passes through the object origin with outward normal normal_O.
 //   SphereSpec:    a solid sphere of the given radius centred on the object origin.
 
-/// Solid box centred on the object origin, its faces normal to O's axes.
-struct BoxSpec {
-  Vec3 half_extents;  // Half the side lengths along O's x, y, z. Unit: m. Each > 0.
-};
-
-/// Solid capsule: the points within `radius` of the segment from (0, 0, −half_length) to
-/// (0, 0, +half_length) in O (a cylinder along O's z axis with hemispherical caps).
-struct CapsuleSpec {
-  double radius = 0.0;       // Unit: m. > 0.
-  double half_length = 0.0;  // Half the length of the axis segment. Unit: m. >= 0 (0: a sphere).
-};
+// BoxSpec and CapsuleSpec are in scene_spec.hpp too.
 
 /// Any primitive; what a contact proxy or a scene compiler holds per object.
 using PrimitiveShape = std::variant<HalfSpaceSpec, SphereSpec, BoxSpec, CapsuleSpec>;

@@ -53,6 +53,13 @@ std::vector<std::pair<std::string, std::function<Made()>>> every_device() {
          device->set_velocity_estimator(std::make_unique<FiveBarStateEstimators>(kT));
          return wrap(std::move(device));
        }},
+      {"five_bar_003",  // with the flexible link (eq. 3.31) on
+       [] {
+         SimulatedFiveBarOptions options;
+         options.plant.flexible_mode = true;
+         return wrap(std::make_unique<SimulatedFiveBarDevice>(engine::FiveBarParams{},
+                                                              engine::FiveBarState{}, options));
+       }},
       {"joystick_004",
        [] { return wrap(std::make_unique<SimulatedJoystickDevice>(SimulatedJoystickConfig{})); }},
       {"parallel_2dof_001",

@@ -1,0 +1,213 @@
+// The compiled scene's stateful stages: primitives with friction and discrete impedance laws,
+// meshes with a god object, energy fields, energy meters, and the loop state that a newer
+// snapshot carries across (engine/scene/compiled_scene).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "engine/scene/compiled_scene.hpp"
+#include "support/allocation_counter.hpp"
+
+namespace haptic::engine {
+namespace {
+
+constexpr double kT = 1e-3;
+
+ObjectEntry object(std::uint64_t id, std::uint64_t key, ObjectSpec spec) {
+  ItemMeta meta;
+  meta.session_id = 1;
+  meta.id = id;
+  meta.version_key = key;
+  return {meta, std::move(spec)};
+}
+
+FieldEntry field(std::uint64_t id, std::uint64_t key, FieldSpec spec) {
+  ItemMeta meta;
+  meta.session_id = 1;
+  meta.id = id;
+  meta.version_key = key;
+  return {meta, std::move(spec)};
+}
+
+ObjectSpec box_with_friction(double mu_s, double mu_d) {
+  ObjectSpec spec;
+  spec.stiffness = 1000.0;
+  spec.static_friction = mu_s;
+  spec.dynamic_friction = mu_d;
+  spec.shape = BoxSpec{{0.05, 0.05, 0.01}};  // top face at z = 0.01
+  return spec;
+}
+
+std::shared_ptr<const MeshModel> plate(double z) {
+  auto model = std::make_shared<MeshModel>();
+  model->mesh.vertices_O = {{-0.1, -0.1, z}, {0.1, -0.1, z}, {0.1, 0.1, z}, {-0.1, 0.1, z}};
+  model->mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+  model->bvh = MeshBvh::build(model->mesh);
+  return model;
+}
+
+TEST(SceneStages, OnlyTheStagesAScenesItemsNeedAreCompiled) {
+  EXPECT_EQ(compile_scene({}, 50, 1).stages, 0u);
+  SceneDescription d;
+  ObjectSpec wall;
+  wall.stiffness = 1000.0;
+  wall.shape = HalfSpaceSpec{{0, 0, 1}};
+  d.objects.push_back(object(1, 1, wall));
+  EXPECT_EQ(compile_scene(d, 50, 1).stages, static_cast<std::uint32_t>(kStageHalfSpaces));
+  ObjectSpec rough = wall;
+  rough.static_friction = 0.5;  // friction needs a proxy: the stateful stage
+  d.objects.push_back(object(2, 2, rough));
+  d.fields.push_back(field(3, 3, FieldSpec{ViscousFieldSpec{0.5, {}, 0.0, 0.0}}));
+  const CompiledScene scene = compile_scene(d, 50, 1);
+  EXPECT_EQ(scene.stages, static_cast<std::uint32_t>(kStageHalfSpaces | kStageContacts | kStageFields));
+  EXPECT_EQ(scene.contacts.size(), 1u);
+  EXPECT_EQ(scene.state->contacts.size(), 1u);
+  EXPECT_EQ(scene.state->meters.size(), 3u);
+}
+
+TEST(SceneStages, BoxWithFrictionSticksThenSlidesAtTheDynamicCone) {
+  SceneDescription d;
+  d.objects.push_back(object(1, 1, box_with_friction(0.5, 0.3)));
+  const CompiledScene scene = compile_scene(d, 50, 1);
+  // 2 mm into the top face (F_n = 2 N), then dragged along +x.
+  SceneForce f = evaluate_scene(scene, {0, 0, 0.008}, {}, 100, kT);
+  EXPECT_NEAR(f.F_T_W.z, 2.0, 1e-12);
+  f = evaluate_scene(scene, {0.0005, 0, 0.008}, {}, 101, kT);  // within the static cone
+  EXPECT_NEAR(f.F_T_W.x, -0.5, 1e-9);
+  for (int k = 0; k < 100; ++k) f = evaluate_scene(scene, {0.0005 + 0.0001 * k, 0, 0.008}, {}, 102 + k, kT);
+  EXPECT_NEAR(f.F_T_W.x, -0.3 * 2.0, 1e-9);  // sliding: μ_d F_n
+}
+
+TEST(SceneStages, AnUnrelatedChangeKeepsTheContactState) {
+  SceneDescription d;
+  d.objects.push_back(object(1, 1, box_with_friction(0.5, 0.3)));
+  const CompiledScene before = compile_scene(d, 50, 1);
+  evaluate_scene(before, {0, 0, 0.008}, {}, 100, kT);
+  evaluate_scene(before, {0.0005, 0, 0.008}, {}, 101, kT);  // sticking, 0.5 N of friction
+  // Another client adds a sphere elsewhere: a new snapshot with the box's version unchanged.
+  ObjectSpec sphere;
+  sphere.stiffness = 500.0;
+  sphere.p_WO = {1, 1, 1};
+  sphere.shape = SphereSpec{0.01};
+  d.objects.push_back(object(2, 2, sphere));
+  const CompiledScene after = compile_scene(d, 50, 2);
+  carry_state(before, after);
+  const SceneForce f = evaluate_scene(after, {0.0006, 0, 0.008}, {}, 102, kT);
+  EXPECT_NEAR(f.F_T_W.x, -0.6, 1e-9);  // the proxy stayed where it stuck
+  // Without the carry the contact would have restarted at the closest point: no friction yet.
+  const CompiledScene fresh = compile_scene(d, 50, 3);
+  EXPECT_NEAR(evaluate_scene(fresh, {0.0006, 0, 0.008}, {}, 102, kT).F_T_W.x, 0.0, 1e-12);
+}
+
+TEST(SceneStages, ExactZohLawIsTheDiscreteSpringDamperOnThePenetration_Eq8_11) {
+  SceneDescription d;
+  ObjectSpec wall;
+  wall.stiffness = 1000.0;
+  wall.damping = 2.0;
+  wall.law = ContactLaw::kExactZoh;
+  wall.shape = HalfSpaceSpec{{0, 0, 1}};
+  d.objects.push_back(object(1, 1, wall));
+  const CompiledScene scene = compile_scene(d, 50, 1, kT);
+  ASSERT_EQ(scene.contacts.size(), 1u);  // a discrete law needs the filter's state
+  ImpedanceFilter reference(ImpedanceParams{1000.0, 2.0, 0.0}, ImpedanceDiscretization::kExactZoh, kT);
+  reference.reset();
+  for (int k = 1; k <= 20; ++k) {
+    const double d_k = 1e-4 * k;
+    const double expected = std::max(0.0, reference.update(d_k));
+    EXPECT_NEAR(evaluate_scene(scene, {0, 0, -d_k}, {}, 100 + k, kT).F_T_W.z, expected, 1e-12);
+  }
+}
+
+TEST(SceneStages, AMeshPlateCannotBePushedThroughAndANewVersionKeepsTheSide) {
+  SceneDescription d;
+  ObjectSpec mesh;
+  mesh.stiffness = 1000.0;
+  mesh.shape = MeshShapeSpec{plate(0.0)};
+  d.objects.push_back(object(1, 1, mesh));
+  const CompiledScene scene = compile_scene(d, 50, 1);
+  EXPECT_EQ(scene.stages, static_cast<std::uint32_t>(kStageMeshes));
+  evaluate_scene(scene, {0, 0, 0.01}, {}, 100, kT);              // above the plate
+  SceneForce f = evaluate_scene(scene, {0, 0, -0.02}, {}, 101, kT);  // through it in one tick
+  EXPECT_NEAR(f.F_T_W.z, 1000.0 * 0.02, 1000.0 * 1e-5);  // held on top
+  // The client moves the plate up by 1 mm (a new version of the same item): the god object is
+  // carried over and rebased, so the force follows the geometry instead of dropping to zero.
+  SceneDescription moved;
+  ObjectSpec raised = mesh;
+  raised.shape = MeshShapeSpec{plate(0.001)};
+  moved.objects.push_back(object(1, 2, raised));
+  const CompiledScene next = compile_scene(moved, 50, 2);
+  carry_state(scene, next);
+  f = evaluate_scene(next, {0, 0, -0.02}, {}, 102, kT);
+  EXPECT_NEAR(f.F_T_W.z, 1000.0 * 0.021, 1000.0 * 1e-5);
+}
+
+TEST(SceneStages, EnergyMetersReportWhatEachItemExchangedWithTheDevice) {
+  SceneDescription d;
+  ObjectSpec wall;
+  wall.stiffness = 1000.0;
+  wall.shape = HalfSpaceSpec{{0, 0, 1}};
+  d.objects.push_back(object(1, 1, wall));
+  d.fields.push_back(field(2, 2, FieldSpec{ViscousFieldSpec{0.5, {}, 0.0, 0.0}}));
+  const CompiledScene scene = compile_scene(d, 50, 1);
+  // In and out of the wall at 0.1 m/s: a spring gives back what it took; the damper only takes.
+  double z = 0.001;
+  const double v = 0.1;
+  std::int64_t tick = 100;
+  for (int k = 0; k < 40; ++k, ++tick) {
+    z -= v * kT;
+    evaluate_scene(scene, {0, 0, z}, {0, 0, -v}, tick, kT);
+  }
+  for (int k = 0; k < 40; ++k, ++tick) {
+    z += v * kT;
+    evaluate_scene(scene, {0, 0, z}, {0, 0, v}, tick, kT);
+  }
+  const SceneState& s = *scene.state;
+  EXPECT_EQ(s.meter_ids[0], 1u);
+  const double wall_in = s.work_in[0].load(), wall_out = s.work_out[0].load();
+  // ½ K d² = 4.5 mJ at d = 3 mm each way; the trapezoid rule over the instant reversal of the
+  // velocity differs between the two halves by at most one tick's power at the bottom, K d v T.
+  EXPECT_NEAR(wall_in, 0.5 * 1000.0 * 0.003 * 0.003, 1000.0 * 0.003 * v * kT);
+  EXPECT_NEAR(wall_out, wall_in, 1000.0 * 0.003 * v * kT + 1e-12);
+  // B v² over the 79 intervals between the 80 samples (the first sample only starts the meter).
+  EXPECT_NEAR(s.work_in[1].load(), 0.5 * v * v * 79 * kT, 1e-12);
+  EXPECT_EQ(s.work_out[1].load(), 0.0);
+}
+
+TEST(SceneStages, EveryStateStageAllocatesNothingPerTick) {
+  SceneDescription d;
+  d.objects.push_back(object(1, 1, box_with_friction(0.5, 0.3)));
+  ObjectSpec mesh;
+  mesh.stiffness = 800.0;
+  mesh.shape = MeshShapeSpec{plate(-0.005)};
+  d.objects.push_back(object(2, 2, mesh));
+  ObjectSpec capsule;
+  capsule.stiffness = 600.0;
+  capsule.damping = 1.0;
+  capsule.law = ContactLaw::kBackwardDifference;
+  capsule.shape = CapsuleSpec{0.01, 0.02};
+  d.objects.push_back(object(3, 3, capsule));
+  PotentialFieldSpec well;
+  well.distance = point_distance({0, 0, 0});
+  well.kind = PotentialKind::kPolynomial;
+  well.order = 2;
+  well.gain = 50.0;
+  well.offset = 0.05;
+  d.fields.push_back(field(4, 4, FieldSpec{well}));
+  const CompiledScene scene = compile_scene(d, 50, 1);
+  const CompiledScene next = compile_scene(d, 50, 2);
+  haptic::test::reset_allocations();
+  {
+    haptic::test::CountAllocations counting;
+    for (std::int64_t tick = 0; tick < 5000; ++tick) {
+      const double t = static_cast<double>(tick) * kT;
+      const Vec3 p{0.03 * std::sin(3 * t), 0.02 * std::cos(5 * t), 0.012 * std::sin(7 * t)};
+      evaluate_scene(tick < 2500 ? scene : next, p, {0.09 * std::cos(3 * t), 0, 0}, tick, kT);
+      if (tick == 2500) carry_state(scene, next);
+    }
+  }
+  EXPECT_EQ(haptic::test::allocations(), 0u);
+}
+
+}  // namespace
+}  // namespace haptic::engine
