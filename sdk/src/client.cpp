@@ -1,5 +1,10 @@
 #include "haptic/client.hpp"
 
+#include <google/protobuf/util/json_util.h>
+
+#include <fstream>
+#include <sstream>
+
 #include <cmath>
 #include <string>
 #include <utility>
@@ -127,6 +132,79 @@ FieldHandle Client::add_spring_field(const SpringFieldSpec& spring) {
   detail::ClientCore& core = require(core_);
   const std::uint64_t id = core.create_field(detail::to_proto(spring));
   return FieldHandle(core_, id, core.scene_generation());
+}
+
+ObjectHandle Client::add_box(const BoxSpec& box) {
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_object(detail::to_proto(box));
+  return ObjectHandle(core_, id, core.scene_generation());
+}
+
+ObjectHandle Client::add_capsule(const CapsuleSpec& capsule) {
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_object(detail::to_proto(capsule));
+  return ObjectHandle(core_, id, core.scene_generation());
+}
+
+ObjectHandle Client::add_mesh(const MeshSpec& mesh) {
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_object(detail::to_proto(mesh));
+  return ObjectHandle(core_, id, core.scene_generation());
+}
+
+FieldHandle Client::add_field(const DistanceSpringSpec& spring) {
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_field(detail::to_proto(spring));
+  return FieldHandle(core_, id, core.scene_generation());
+}
+
+FieldHandle Client::add_field(const PotentialFieldSpec& potential) {
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_field(detail::to_proto(potential));
+  return FieldHandle(core_, id, core.scene_generation());
+}
+
+FieldHandle Client::add_field(const LinearFieldSpec& linear) {
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_field(detail::to_proto(linear));
+  return FieldHandle(core_, id, core.scene_generation());
+}
+
+FieldHandle Client::add_field(const ViscousFieldSpec& viscous) {
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_field(detail::to_proto(viscous));
+  return FieldHandle(core_, id, core.scene_generation());
+}
+
+FieldHandle Client::add_field(const DetentFieldSpec& detent) {
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_field(detail::to_proto(detent));
+  return FieldHandle(core_, id, core.scene_generation());
+}
+
+Client::FileScene Client::apply_scene_file(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) throw InvalidArgumentError(path + ": cannot open");
+  std::stringstream text;
+  text << file.rdbuf();
+  v1::Scene scene;
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = false;
+  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &scene, options);
+  if (!status.ok()) {
+    throw InvalidArgumentError(path + ": not a valid Scene: " + std::string(status.message()));
+  }
+  detail::ClientCore& core = require(core_);
+  const v1::ApplySceneResponse reply = core.apply_scene(scene);
+  const std::uint64_t generation = core.scene_generation();
+  FileScene handles;
+  for (int i = 0; i < reply.object_ids_size(); ++i) {
+    handles.objects.push_back(ObjectHandle(core_, reply.object_ids(i), generation));
+  }
+  for (int i = 0; i < reply.field_ids_size(); ++i) {
+    handles.fields.push_back(FieldHandle(core_, reply.field_ids(i), generation));
+  }
+  return handles;
 }
 
 SceneHandles Client::apply_scene(const std::vector<WallSpec>& walls,

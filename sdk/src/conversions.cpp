@@ -14,10 +14,128 @@ Vec3 from_proto(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 namespace {
 void set_impedance(v1::Object& object, const Impedance& impedance) {
-  object.mutable_impedance()->set_stiffness(impedance.stiffness);
-  object.mutable_impedance()->set_damping(impedance.damping);
+  v1::Impedance& out = *object.mutable_impedance();
+  out.set_stiffness(impedance.stiffness);
+  out.set_damping(impedance.damping);
+  out.set_static_friction(impedance.static_friction);
+  out.set_dynamic_friction(impedance.dynamic_friction);
+  out.set_mass(impedance.mass);
+  switch (impedance.law) {
+    case ImpedanceLaw::kVelocity: out.set_law(v1::Impedance::VELOCITY); break;
+    case ImpedanceLaw::kBackwardDifference: out.set_law(v1::Impedance::BACKWARD_DIFFERENCE); break;
+    case ImpedanceLaw::kExactZoh: out.set_law(v1::Impedance::EXACT_ZOH); break;
+    case ImpedanceLaw::kTustin: out.set_law(v1::Impedance::TUSTIN); break;
+  }
+}
+
+void set_pose(v1::Object& object, const Pose& pose) {
+  *object.mutable_pose()->mutable_position() = to_proto(pose.position);
+  auto* q = object.mutable_pose()->mutable_orientation();
+  q->set_w(pose.orientation.w);
+  q->set_x(pose.orientation.x);
+  q->set_y(pose.orientation.y);
+  q->set_z(pose.orientation.z);
+}
+
+v1::Distance distance_to_proto(const Distance& distance) {
+  v1::Distance out;
+  switch (distance.kind) {
+    case Distance::Kind::kPoint: out.set_kind(v1::Distance::POINT); break;
+    case Distance::Kind::kLine: out.set_kind(v1::Distance::LINE); break;
+    case Distance::Kind::kPlane: out.set_kind(v1::Distance::PLANE); break;
+    case Distance::Kind::kSphere: out.set_kind(v1::Distance::SPHERE); break;
+  }
+  *out.mutable_origin() = to_proto(distance.origin);
+  *out.mutable_axis() = to_proto(distance.axis);
+  out.set_radius(distance.radius);
+  return out;
 }
 }  // namespace
+
+v1::Object to_proto(const BoxSpec& box) {
+  v1::Object object;
+  set_pose(object, box.pose);
+  set_impedance(object, box.impedance);
+  *object.mutable_box()->mutable_half_extents() = to_proto(box.half_extents);
+  return object;
+}
+
+v1::Object to_proto(const CapsuleSpec& capsule) {
+  v1::Object object;
+  set_pose(object, capsule.pose);
+  set_impedance(object, capsule.impedance);
+  object.mutable_capsule()->set_radius(capsule.radius);
+  object.mutable_capsule()->set_half_length(capsule.half_length);
+  return object;
+}
+
+v1::Object to_proto(const MeshSpec& mesh) {
+  v1::Object object;
+  set_pose(object, mesh.pose);
+  set_impedance(object, mesh.impedance);
+  auto* out = object.mutable_mesh();
+  for (const Vec3& v : mesh.vertices) *out->add_vertices() = to_proto(v);
+  for (const std::uint32_t i : mesh.indices) out->add_indices(i);
+  return object;
+}
+
+v1::Field to_proto(const DistanceSpringSpec& spring) {
+  v1::Field field;
+  auto* s = field.mutable_spring();
+  *s->mutable_anchor() = distance_to_proto(spring.anchor);
+  s->set_stiffness(spring.stiffness);
+  s->set_damping(spring.damping);
+  s->set_max_force(spring.max_force);
+  return field;
+}
+
+v1::Field to_proto(const PotentialFieldSpec& potential) {
+  v1::Field field;
+  auto* p = field.mutable_potential();
+  *p->mutable_distance() = distance_to_proto(potential.distance);
+  p->set_kind(potential.kind == PotentialFieldSpec::Kind::kKhatib ? v1::PotentialField::KHATIB
+                                                                  : v1::PotentialField::POLYNOMIAL);
+  p->set_order(potential.order);
+  p->set_gain(potential.gain);
+  p->set_offset(potential.offset);
+  p->set_influence_distance(potential.influence_distance);
+  p->set_min_distance(potential.min_distance);
+  p->set_gradient(potential.central_differences ? v1::PotentialField::CENTRAL_DIFFERENCE
+                                                : v1::PotentialField::ANALYTIC);
+  return field;
+}
+
+v1::Field to_proto(const LinearFieldSpec& linear) {
+  v1::Field field;
+  auto* l = field.mutable_linear();
+  *l->mutable_origin() = to_proto(linear.origin);
+  *l->mutable_force() = to_proto(linear.force);
+  for (const Vec3& row : linear.jacobian) *l->add_jacobian() = to_proto(row);
+  l->set_radius(linear.radius);
+  l->set_fade_width(linear.fade_width);
+  return field;
+}
+
+v1::Field to_proto(const ViscousFieldSpec& viscous) {
+  v1::Field field;
+  auto* v = field.mutable_viscous();
+  v->set_damping(viscous.damping);
+  *v->mutable_center() = to_proto(viscous.center);
+  v->set_radius(viscous.radius);
+  v->set_fade_width(viscous.fade_width);
+  return field;
+}
+
+v1::Field to_proto(const DetentFieldSpec& detent) {
+  v1::Field field;
+  auto* d = field.mutable_detent();
+  *d->mutable_distance() = distance_to_proto(detent.distance);
+  d->set_depth(detent.depth);
+  d->set_radius(detent.radius);
+  d->set_rim_height(detent.rim_height);
+  d->set_rim_width(detent.rim_width);
+  return field;
+}
 
 v1::Object to_proto(const WallSpec& wall) {
   v1::Object object;

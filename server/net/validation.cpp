@@ -1,7 +1,10 @@
 #include "net/validation.hpp"
 
 #include <cmath>
+#include <memory>
 #include <sstream>
+
+#include "engine/scene/shapes.hpp"
 
 namespace haptic::net {
 namespace {
@@ -38,7 +41,86 @@ std::string check_impedance(const v1::Impedance& impedance, const std::string& p
       !e.empty()) {
     return e;
   }
-  return check_range(impedance.damping(), 0.0, limits.max_damping, path + ".damping");
+  if (auto e = check_range(impedance.damping(), 0.0, limits.max_damping, path + ".damping");
+      !e.empty()) {
+    return e;
+  }
+  if (auto e = check_range(impedance.static_friction(), 0.0, limits.max_friction,
+                           path + ".static_friction");
+      !e.empty()) {
+    return e;
+  }
+  if (auto e = check_range(impedance.dynamic_friction(), 0.0, impedance.static_friction(),
+                           path + ".dynamic_friction");
+      !e.empty()) {
+    return e + " (at most static_friction)";
+  }
+  if (auto e = check_range(impedance.mass(), 0.0, limits.max_impedance_mass, path + ".mass");
+      !e.empty()) {
+    return e;
+  }
+  switch (impedance.law()) {
+    case v1::Impedance::VELOCITY:
+      if (impedance.mass() != 0.0) return path + ".mass: needs a discrete law (VELOCITY has no mass term)";
+      return {};
+    case v1::Impedance::BACKWARD_DIFFERENCE:
+    case v1::Impedance::EXACT_ZOH:
+    case v1::Impedance::TUSTIN:
+      if (impedance.static_friction() > 0.0) {
+        return path + ".static_friction: friction needs the VELOCITY law";
+      }
+      if (impedance.law() == v1::Impedance::TUSTIN && impedance.damping() > 0.0) {
+        return path + ".law: TUSTIN with damping > 0 is unstable on every sampled device (its "
+                      "damper has a pole at z = -1); use EXACT_ZOH or BACKWARD_DIFFERENCE";
+      }
+      return {};
+    default:
+      return path + ".law: must be VELOCITY, BACKWARD_DIFFERENCE, EXACT_ZOH or TUSTIN, got " +
+             std::to_string(static_cast<int>(impedance.law()));
+  }
+}
+
+engine::ContactLaw to_law(v1::Impedance::Law law) {
+  switch (law) {
+    case v1::Impedance::BACKWARD_DIFFERENCE: return engine::ContactLaw::kBackwardDifference;
+    case v1::Impedance::EXACT_ZOH: return engine::ContactLaw::kExactZoh;
+    case v1::Impedance::TUSTIN: return engine::ContactLaw::kTustin;
+    default: return engine::ContactLaw::kVelocity;
+  }
+}
+
+/// Prefixes an engine validator's message ("half_extents.y: …") with the path, or "" if none.
+std::string at(const std::string& path, const std::string& message) {
+  return message.empty() ? message : path + "." + message;
+}
+
+std::string to_distance(const v1::Distance& d, const std::string& path, const SceneLimits& limits,
+                        engine::DistanceSpec& out) {
+  if (auto e = check_vec(d.origin(), limits.max_abs_position, path + ".origin"); !e.empty()) return e;
+  const engine::Vec3 origin = to_engine(d.origin());
+  switch (d.kind()) {
+    case v1::Distance::POINT:
+      out = engine::point_distance(origin);
+      break;
+    case v1::Distance::LINE:
+    case v1::Distance::PLANE: {
+      if (auto e = check_vec(d.axis(), 1e6, path + ".axis"); !e.empty()) return e;
+      const engine::Vec3 axis = to_engine(d.axis());
+      if (!(engine::norm(axis) > 1e-9)) return path + ".axis: must be non-zero";
+      out = d.kind() == v1::Distance::LINE ? engine::line_distance(origin, axis)
+                                           : engine::plane_distance(origin, axis);
+      break;
+    }
+    case v1::Distance::SPHERE:
+      if (auto e = check_range(d.radius(), 1e-6, limits.max_radius, path + ".radius"); !e.empty()) {
+        return e;
+      }
+      out = engine::sphere_distance(origin, d.radius());
+      break;
+    default:
+      return path + ".kind: must be POINT, LINE, PLANE or SPHERE";
+  }
+  return at(path, engine::validate_field(out));
 }
 
 // An unset orientation is identity; a set one must be a unit quaternion to within 1e-3 and is
@@ -81,8 +163,13 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
   out.p_WO = to_engine(object.pose().position());
   if (!object.has_impedance()) return path + ".impedance: is required";
   if (auto e = check_impedance(object.impedance(), path + ".impedance", limits); !e.empty()) return e;
-  out.stiffness = object.impedance().stiffness();
-  out.damping = object.impedance().damping();
+  const v1::Impedance& impedance = object.impedance();
+  out.stiffness = impedance.stiffness();
+  out.damping = impedance.damping();
+  out.static_friction = impedance.static_friction();
+  out.dynamic_friction = impedance.dynamic_friction();
+  out.impedance_mass = impedance.mass();
+  out.law = to_law(impedance.law());
 
   switch (object.shape_case()) {
     case v1::Object::kHalfSpace: {
@@ -103,10 +190,62 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
       out.shape = engine::SphereSpec{radius};
       return {};
     }
+    case v1::Object::kBox: {
+      const std::string box_path = path + ".box.half_extents";
+      if (auto e = check_vec(object.box().half_extents(), limits.max_radius, box_path); !e.empty()) {
+        return e;
+      }
+      const engine::BoxSpec box{to_engine(object.box().half_extents())};
+      if (auto e = engine::validate(box); !e.empty()) return path + ".box." + e;
+      out.shape = box;
+      return {};
+    }
+    case v1::Object::kCapsule: {
+      const engine::CapsuleSpec capsule{object.capsule().radius(), object.capsule().half_length()};
+      if (auto e = check_range(capsule.radius, 0.0, limits.max_radius, path + ".capsule.radius");
+          !e.empty()) {
+        return e;
+      }
+      if (auto e = check_range(capsule.half_length, 0.0, limits.max_radius,
+                               path + ".capsule.half_length");
+          !e.empty()) {
+        return e;
+      }
+      if (auto e = engine::validate(capsule); !e.empty()) return path + ".capsule." + e;
+      out.shape = capsule;
+      return {};
+    }
+    case v1::Object::kMesh: {
+      const v1::TriangleMesh& mesh = object.mesh();
+      const std::string mesh_path = path + ".mesh";
+      if (mesh.indices_size() % 3 != 0) {
+        return mesh_path + ".indices: must hold three per triangle, got " +
+               std::to_string(mesh.indices_size());
+      }
+      if (static_cast<std::size_t>(mesh.indices_size() / 3) > limits.max_mesh_triangles) {
+        return mesh_path + ".indices: " + std::to_string(mesh.indices_size() / 3) +
+               " triangles exceed the limit of " + std::to_string(limits.max_mesh_triangles);
+      }
+      auto model = std::make_shared<engine::MeshModel>();
+      model->mesh.vertices_O.reserve(static_cast<std::size_t>(mesh.vertices_size()));
+      for (int i = 0; i < mesh.vertices_size(); ++i) {
+        model->mesh.vertices_O.push_back(to_engine(mesh.vertices(i)));
+      }
+      model->mesh.triangles.reserve(static_cast<std::size_t>(mesh.indices_size() / 3));
+      for (int i = 0; i + 2 < mesh.indices_size(); i += 3) {
+        model->mesh.triangles.push_back({mesh.indices(i), mesh.indices(i + 1), mesh.indices(i + 2)});
+      }
+      if (auto e = engine::validate_mesh(model->mesh, limits.max_mesh_triangles); !e.empty()) {
+        return mesh_path + "." + e;
+      }
+      model->bvh = engine::MeshBvh::build(model->mesh);
+      out.shape = engine::MeshShapeSpec{std::move(model)};
+      return {};
+    }
     case v1::Object::SHAPE_NOT_SET:
       break;
   }
-  return path + ".shape: one of half_space, sphere is required";
+  return path + ".shape: one of half_space, sphere, box, capsule, mesh is required";
 }
 
 std::string to_field_spec(const v1::Field& field, const std::string& path,
@@ -134,10 +273,104 @@ std::string to_field_spec(const v1::Field& field, const std::string& path,
                                            spring.damping(), spring.max_force()};
       return {};
     }
+    case v1::Field::kSpring: {
+      const auto& spring = field.spring();
+      const std::string p = path + ".spring";
+      engine::SpringFieldSpec spec;
+      if (auto e = to_distance(spring.anchor(), p + ".anchor", limits, spec.anchor); !e.empty()) return e;
+      spec.stiffness = spring.stiffness();
+      spec.damping = spring.damping();
+      spec.max_force = spring.max_force();
+      if (auto e = check_range(spec.stiffness, 0.0, limits.max_stiffness, p + ".stiffness"); !e.empty()) return e;
+      if (auto e = check_range(spec.damping, 0.0, limits.max_damping, p + ".damping"); !e.empty()) return e;
+      if (auto e = check_range(spec.max_force, 0.0, limits.max_force, p + ".max_force"); !e.empty()) return e;
+      if (auto e = engine::validate_field(spec); !e.empty()) return p + "." + e;
+      out.kind = spec;
+      return {};
+    }
+    case v1::Field::kPotential: {
+      const auto& potential = field.potential();
+      const std::string p = path + ".potential";
+      engine::PotentialFieldSpec spec;
+      if (auto e = to_distance(potential.distance(), p + ".distance", limits, spec.distance); !e.empty()) {
+        return e;
+      }
+      switch (potential.kind()) {
+        case v1::PotentialField::POLYNOMIAL: spec.kind = engine::PotentialKind::kPolynomial; break;
+        case v1::PotentialField::KHATIB: spec.kind = engine::PotentialKind::kKhatib; break;
+        default: return p + ".kind: must be POLYNOMIAL or KHATIB";
+      }
+      spec.order = static_cast<int>(potential.order() == 0 ? 2 : potential.order());
+      spec.gain = potential.gain();
+      spec.offset = potential.offset();
+      spec.influence_distance = potential.influence_distance();
+      spec.min_distance = potential.min_distance();
+      switch (potential.gradient()) {
+        case v1::PotentialField::ANALYTIC: spec.gradient = engine::GradientMethod::kAnalytic; break;
+        case v1::PotentialField::CENTRAL_DIFFERENCE:
+          spec.gradient = engine::GradientMethod::kCentralDifference;
+          break;
+        default: return p + ".gradient: must be ANALYTIC or CENTRAL_DIFFERENCE";
+      }
+      if (potential.difference_step() != 0.0) spec.difference_step = potential.difference_step();
+      if (auto e = engine::validate_field(spec); !e.empty()) return p + "." + e;
+      out.kind = spec;
+      return {};
+    }
+    case v1::Field::kLinear: {
+      const auto& linear = field.linear();
+      const std::string p = path + ".linear";
+      engine::LinearFieldSpec spec;
+      if (auto e = check_vec(linear.origin(), limits.max_abs_position, p + ".origin"); !e.empty()) return e;
+      if (auto e = check_vec(linear.force(), limits.max_force, p + ".force"); !e.empty()) return e;
+      if (linear.jacobian_size() != 3) {
+        return p + ".jacobian: must have three rows, got " + std::to_string(linear.jacobian_size());
+      }
+      for (int row = 0; row < 3; ++row) {
+        if (auto e = check_vec(linear.jacobian(row), limits.max_stiffness,
+                               p + ".jacobian[" + std::to_string(row) + "]");
+            !e.empty()) {
+          return e;
+        }
+        spec.jacobian[static_cast<std::size_t>(row)] = to_engine(linear.jacobian(row));
+      }
+      spec.origin_W = to_engine(linear.origin());
+      spec.force_W = to_engine(linear.force());
+      spec.radius = linear.radius();
+      spec.fade_width = linear.fade_width();
+      if (auto e = engine::validate_field(spec); !e.empty()) return p + "." + e;
+      out.kind = spec;
+      return {};
+    }
+    case v1::Field::kViscous: {
+      const auto& viscous = field.viscous();
+      const std::string p = path + ".viscous";
+      if (auto e = check_range(viscous.damping(), 0.0, limits.max_damping, p + ".damping"); !e.empty()) return e;
+      if (auto e = check_vec(viscous.center(), limits.max_abs_position, p + ".center"); !e.empty()) return e;
+      engine::ViscousFieldSpec spec{viscous.damping(), to_engine(viscous.center()), viscous.radius(),
+                                    viscous.fade_width()};
+      if (auto e = engine::validate_field(spec); !e.empty()) return p + "." + e;
+      out.kind = spec;
+      return {};
+    }
+    case v1::Field::kDetent: {
+      const auto& detent = field.detent();
+      const std::string p = path + ".detent";
+      engine::DetentFieldSpec spec;
+      if (auto e = to_distance(detent.distance(), p + ".distance", limits, spec.distance); !e.empty()) return e;
+      spec.depth = detent.depth();
+      spec.radius = detent.radius();
+      spec.rim_height = detent.rim_height();
+      spec.rim_width = detent.rim_width();
+      if (auto e = engine::validate_field(spec); !e.empty()) return p + "." + e;
+      out.kind = spec;
+      return {};
+    }
     case v1::Field::KIND_NOT_SET:
       break;
   }
-  return path + ".kind: one of spring_to_point is required";
+  return path + ".kind: one of spring_to_point, spring, potential, linear, viscous, detent is "
+                "required";
 }
 
 std::string to_hand_input(const v1::OperatorInput& input, const std::string& path,

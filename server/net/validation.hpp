@@ -3,6 +3,7 @@
 // or an error that names the offending field ("object.impedance.stiffness: must be finite and
 // >= 0, got nan"). Engine code downstream assumes valid input.
 
+#include <cstddef>
 #include <string>
 
 #include "engine/operator/simulated_hand.hpp"
@@ -19,9 +20,13 @@ struct SceneLimits {
   double max_damping = 1.0e4;       // Unit: N*s/m.
   double max_radius = 10.0;         // Unit: m.
   double max_force = 1.0e4;         // Unit: N.
+  std::size_t max_mesh_triangles = 20000;  // per mesh
+  double max_friction = 10.0;       // μ_s, μ_d.
+  double max_impedance_mass = 100.0;  // Unit: kg.
 };
 
-/// Each returns an empty string on success, else "<path>: <what is wrong>".
+/// Each returns an empty string on success, else "<path>: <what is wrong>". A mesh is validated
+/// in full and its bounding-volume hierarchy built here, off the loop.
 std::string to_object_spec(const v1::Object& object, const std::string& path,
                            const SceneLimits& limits, engine::ObjectSpec& out);
 std::string to_field_spec(const v1::Field& field, const std::string& path,

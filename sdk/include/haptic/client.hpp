@@ -127,6 +127,24 @@ class Client {
   ObjectHandle add_wall(const WallSpec& wall);
   ObjectHandle add_sphere(const SphereSpec& sphere);
   FieldHandle add_spring_field(const SpringFieldSpec& spring);
+  ObjectHandle add_box(const BoxSpec& box);
+  ObjectHandle add_capsule(const CapsuleSpec& capsule);
+  /// The server validates the mesh in full (InvalidArgumentError names the bad triangle or edge)
+  /// and builds its hierarchy before it reaches the loop.
+  ObjectHandle add_mesh(const MeshSpec& mesh);
+  FieldHandle add_field(const DistanceSpringSpec& spring);
+  FieldHandle add_field(const PotentialFieldSpec& potential);
+  FieldHandle add_field(const LinearFieldSpec& linear);
+  FieldHandle add_field(const ViscousFieldSpec& viscous);
+  FieldHandle add_field(const DetentFieldSpec& detent);
+  /// Replaces this session's scene with a scene file (protobuf's JSON mapping of haptic.v1.Scene,
+  /// as hapticd --scene reads); all or nothing, like apply_scene. InvalidArgumentError names the
+  /// file, or the server's path ("scene.objects[2].box.half_extents.y: …").
+  struct FileScene {
+    std::vector<ObjectHandle> objects;  ///< in file order
+    std::vector<FieldHandle> fields;
+  };
+  FileScene apply_scene_file(const std::string& path);
   /// Replaces all of this session's objects and fields at once; if anything is refused, nothing
   /// changes. The server numbers the objects walls first, then spheres ("scene.objects[i]" in its
   /// messages). Handles from earlier calls go stale: their remove() and destructor do nothing and

@@ -26,11 +26,30 @@ struct Quaternion {
   friend bool operator==(const Quaternion&, const Quaternion&) = default;
 };
 
-/// A virtual spring-damper.
+/// How penetration becomes force along a surface's normal (docs/scene.md).
+enum class ImpedanceLaw {
+  kVelocity,            ///< K d − B v·n with the device's measured velocity (the default)
+  kBackwardDifference,  ///< K d + B ḋ + M d̈ on the sampled penetration
+  kExactZoh,            ///< the exact zero-order-hold spring-damper (000 eq. 8.11)
+  kTustin,              ///< bilinear; the server refuses it with damping > 0 (unstable)
+};
+
+/// A virtual spring-damper, with optional Coulomb friction (kVelocity law only).
 struct Impedance {
   double stiffness = 0.0;  ///< Unit: N/m. Finite, >= 0.
   double damping = 0.0;    ///< Unit: N·s/m. Finite, >= 0.
+  double static_friction = 0.0;   ///< μ_s >= 0.
+  double dynamic_friction = 0.0;  ///< 0 <= μ_d <= μ_s.
+  ImpedanceLaw law = ImpedanceLaw::kVelocity;
+  double mass = 0.0;       ///< M of the discrete laws. Unit: kg.
   friend bool operator==(const Impedance&, const Impedance&) = default;
+};
+
+/// Where an object is: its origin and orientation in W.
+struct Pose {
+  Vec3 position{};          ///< Unit: m.
+  Quaternion orientation{};
+  friend bool operator==(const Pose&, const Pose&) = default;
 };
 
 /// A half-space wall: the plane through `point` with outward `normal`; the solid lies behind it.
@@ -56,6 +75,86 @@ struct SpringFieldSpec {
   double damping = 0.0;     ///< Unit: N·s/m.
   double max_force = 0.0;   ///< Unit: N. 0: no clip.
   friend bool operator==(const SpringFieldSpec&, const SpringFieldSpec&) = default;
+};
+
+/// A solid box centred on its pose, faces normal to the pose's axes.
+struct BoxSpec {
+  Pose pose{};
+  Vec3 half_extents{};      ///< Unit: m. Each > 0.
+  Impedance impedance{};
+};
+
+/// A solid capsule along its pose's z axis: radius around the segment ±half_length.
+struct CapsuleSpec {
+  Pose pose{};
+  double radius = 0.0;       ///< Unit: m. > 0.
+  double half_length = 0.0;  ///< Unit: m. >= 0.
+  Impedance impedance{};
+};
+
+/// A triangle mesh in its pose's frame, rendered with a god object (thin parts hold).
+struct MeshSpec {
+  Pose pose{};
+  std::vector<Vec3> vertices;          ///< Unit: m, in the object frame.
+  std::vector<std::uint32_t> indices;  ///< Three per triangle.
+  Impedance impedance{};
+};
+
+/// A distance function the fields are built on.
+struct Distance {
+  enum class Kind { kPoint, kLine, kPlane, kSphere };
+  Kind kind = Kind::kPoint;
+  Vec3 origin{};            ///< Unit: m.
+  Vec3 axis{0, 0, 1};       ///< kLine: direction; kPlane: normal.
+  double radius = 0.0;      ///< kSphere. Unit: m.
+};
+
+/// A spring onto a point, line or plane (the zero set of `anchor`).
+struct DistanceSpringSpec {
+  Distance anchor{};
+  double stiffness = 0.0;   ///< Unit: N/m.
+  double damping = 0.0;     ///< Unit: N·s/m.
+  double max_force = 0.0;   ///< Unit: N. 0: no clip.
+};
+
+/// F = −∇U over a distance f: polynomial (1/n) K (c − f)ⁿ where f < c, or Khatib
+/// (1/n) K (1/f − 1/f0)ⁿ where f < f0 (Russo eqs. 5.6–5.7).
+struct PotentialFieldSpec {
+  enum class Kind { kPolynomial, kKhatib };
+  Distance distance{};
+  Kind kind = Kind::kPolynomial;
+  std::uint32_t order = 2;          ///< n, 2 … 8.
+  double gain = 0.0;
+  double offset = 0.0;              ///< c (polynomial). Unit: m.
+  double influence_distance = 0.0;  ///< f0 (Khatib). Unit: m.
+  double min_distance = 0.0;        ///< Khatib's force is capped below this. Unit: m.
+  bool central_differences = false; ///< gradient by central differences instead of analytic
+};
+
+/// F = F0 + K (p − origin) inside `radius`, fading (C¹) to zero over the outer `fade_width`.
+struct LinearFieldSpec {
+  Vec3 origin{};            ///< Unit: m.
+  Vec3 force{};             ///< Unit: N.
+  Vec3 jacobian[3]{};       ///< Rows of K. Unit: N/m.
+  double radius = 0.0;      ///< Unit: m.
+  double fade_width = 0.0;  ///< Unit: m.
+};
+
+/// F = −B v, everywhere (radius 0) or inside a sphere with a fade.
+struct ViscousFieldSpec {
+  double damping = 0.0;     ///< Unit: N·s/m.
+  Vec3 center{};
+  double radius = 0.0;      ///< Unit: m. 0: everywhere.
+  double fade_width = 0.0;  ///< Unit: m.
+};
+
+/// A potential well with a repulsive rim around the zero set of `distance`.
+struct DetentFieldSpec {
+  Distance distance{};
+  double depth = 0.0;       ///< Unit: J.
+  double radius = 0.0;      ///< Unit: m.
+  double rim_height = 0.0;  ///< Unit: J.
+  double rim_width = 0.0;   ///< Unit: m.
 };
 
 /// Bits of State::flags.

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <variant>
 
 #include "net/validation.hpp"
 
@@ -128,6 +130,86 @@ TEST(Validation, GripPresetsTrajectoriesAndProfiles) {
   EXPECT_EQ(to_hand_input(push, "input", SceneLimits{}, hand).rfind("input.profile.samples:", 0), 0u);
   push.mutable_profile()->set_shape(static_cast<v1::ForceProfile::Shape>(9));
   EXPECT_EQ(to_hand_input(push, "input", SceneLimits{}, hand).rfind("input.profile.shape:", 0), 0u);
+}
+
+v1::Object object_with(double stiffness) {
+  v1::Object object;
+  object.mutable_impedance()->set_stiffness(stiffness);
+  return object;
+}
+
+TEST(Validation, NewShapesAndMaterialsNameWhatIsWrong) {
+  engine::ObjectSpec spec;
+  v1::Object box = object_with(1000.0);
+  box.mutable_box()->mutable_half_extents()->set_x(0.01);
+  box.mutable_box()->mutable_half_extents()->set_y(0.01);
+  EXPECT_EQ(to_object_spec(box, "o", SceneLimits{}, spec).rfind("o.box.half_extents.z", 0), 0u);
+  box.mutable_box()->mutable_half_extents()->set_z(0.01);
+  ASSERT_EQ(to_object_spec(box, "o", SceneLimits{}, spec), "");
+  EXPECT_TRUE(std::holds_alternative<engine::BoxSpec>(spec.shape));
+
+  v1::Object capsule = object_with(1000.0);
+  capsule.mutable_capsule()->set_radius(0.01);
+  capsule.mutable_capsule()->set_half_length(-0.1);
+  EXPECT_EQ(to_object_spec(capsule, "o", SceneLimits{}, spec).rfind("o.capsule.half_length", 0), 0u);
+
+  v1::Object rough = box;
+  rough.mutable_impedance()->set_static_friction(0.3);
+  rough.mutable_impedance()->set_dynamic_friction(0.5);  // more than static
+  EXPECT_EQ(to_object_spec(rough, "o", SceneLimits{}, spec).rfind("o.impedance.dynamic_friction", 0), 0u);
+  rough.mutable_impedance()->set_dynamic_friction(0.2);
+  rough.mutable_impedance()->set_law(v1::Impedance::EXACT_ZOH);
+  EXPECT_EQ(to_object_spec(rough, "o", SceneLimits{}, spec),
+            "o.impedance.static_friction: friction needs the VELOCITY law");
+  rough.mutable_impedance()->set_law(v1::Impedance::VELOCITY);
+  ASSERT_EQ(to_object_spec(rough, "o", SceneLimits{}, spec), "");
+  EXPECT_EQ(spec.static_friction, 0.3);
+  EXPECT_EQ(spec.dynamic_friction, 0.2);
+
+  v1::Object mesh = object_with(1000.0);
+  for (const auto& [x, y] : {std::pair{0.0, 0.0}, {0.01, 0.0}, {0.0, 0.01}, {0.01, 0.01}}) {
+    auto* v = mesh.mutable_mesh()->add_vertices();
+    v->set_x(x);
+    v->set_y(y);
+  }
+  for (std::uint32_t i : {0u, 1u, 2u, 1u, 3u, 2u}) mesh.mutable_mesh()->add_indices(i);
+  ASSERT_EQ(to_object_spec(mesh, "o", SceneLimits{}, spec), "");
+  const auto& model = std::get<engine::MeshShapeSpec>(spec.shape).model;
+  ASSERT_TRUE(model);
+  EXPECT_EQ(model->bvh.triangle_count(), 2u);  // built here, off the loop
+  SceneLimits one_triangle;
+  one_triangle.max_mesh_triangles = 1;
+  EXPECT_EQ(to_object_spec(mesh, "o", one_triangle, spec).rfind("o.mesh.indices: 2 triangles exceed", 0), 0u);
+  mesh.mutable_mesh()->add_indices(0);
+  EXPECT_EQ(to_object_spec(mesh, "o", SceneLimits{}, spec).rfind("o.mesh.indices: must hold three", 0), 0u);
+}
+
+TEST(Validation, NewFieldsNameWhatIsWrong) {
+  engine::FieldSpec spec;
+  v1::Field spring;
+  spring.mutable_spring()->mutable_anchor()->set_kind(v1::Distance::LINE);
+  spring.mutable_spring()->set_stiffness(10.0);
+  EXPECT_EQ(to_field_spec(spring, "f", SceneLimits{}, spec), "f.spring.anchor.axis: must be non-zero");
+  spring.mutable_spring()->mutable_anchor()->mutable_axis()->set_x(1.0);
+  ASSERT_EQ(to_field_spec(spring, "f", SceneLimits{}, spec), "");
+  EXPECT_TRUE(std::holds_alternative<engine::SpringFieldSpec>(spec.kind));
+
+  v1::Field linear;
+  linear.mutable_linear()->set_radius(0.05);
+  linear.mutable_linear()->set_fade_width(0.01);
+  EXPECT_EQ(to_field_spec(linear, "f", SceneLimits{}, spec).rfind("f.linear.jacobian: must have three rows", 0), 0u);
+  for (int i = 0; i < 3; ++i) linear.mutable_linear()->add_jacobian();
+  linear.mutable_linear()->mutable_jacobian(1)->set_z(std::numeric_limits<double>::infinity());
+  EXPECT_EQ(to_field_spec(linear, "f", SceneLimits{}, spec).rfind("f.linear.jacobian[1].z", 0), 0u);
+
+  v1::Field khatib;
+  khatib.mutable_potential()->set_kind(v1::PotentialField::KHATIB);
+  khatib.mutable_potential()->set_gain(1.0);
+  khatib.mutable_potential()->set_influence_distance(0.01);
+  khatib.mutable_potential()->set_min_distance(0.02);  // must be below the influence distance
+  EXPECT_EQ(to_field_spec(khatib, "f", SceneLimits{}, spec).rfind("f.potential.", 0), 0u);
+  khatib.mutable_potential()->set_min_distance(0.001);
+  EXPECT_EQ(to_field_spec(khatib, "f", SceneLimits{}, spec), "");
 }
 
 }  // namespace

@@ -1,0 +1,189 @@
+// The scene vocabulary over gRPC, from the SDK and from scene files, against the real hapticd in
+// lockstep: boxes, capsules, meshes (held by a god object), friction, discrete laws, the energy
+// fields, and bad input that names the element and changes nothing.
+#include <gtest/gtest.h>
+
+#include <haptic/haptic.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+
+#include "integration/server_process.hpp"
+
+namespace haptic {
+namespace {
+
+using std::chrono::seconds;
+
+ClientConfig config_for(const test::ServerProcess& server) {
+  ClientConfig config;
+  config.server_address = server.address();
+  config.client_name = "scene-vocabulary";
+  return config;
+}
+
+State step_and_get(Client& client, std::uint32_t ticks) {
+  const std::uint64_t tick = client.step(ticks);
+  State state;
+  EXPECT_TRUE(client.wait_for_tick(tick, state, seconds(5))) << "no state for tick " << tick;
+  return state;
+}
+
+class SceneVocabulary : public ::testing::Test {
+ protected:
+  // The point-mass device starts at z = 20 mm.
+  test::ServerProcess server_{test::lockstep_config()};
+};
+
+TEST_F(SceneVocabulary, ABoxTopCarriesTheHandsPushAtKTimesPenetration) {
+  Client client(config_for(server_));
+  // A box whose top face is at z = 0, rotated 90° about z (a square box: same top).
+  auto box = client.add_box({.pose = {.position = {0, 0, -0.01}, .orientation = {0.7071067811865476, 0, 0, 0.7071067811865476}},
+                             .half_extents = {0.05, 0.05, 0.01},
+                             .impedance = {.stiffness = 1000.0, .damping = 1.0}});
+  step_and_get(client, 100);  // a new object ramps in over 50 ms before anyone leans on it
+  client.set_operator(OperatorInput::push({0, 0, -2.0}));
+  const State s = step_and_get(client, 3000);
+  EXPECT_EQ(s.contact_count, 1u);
+  EXPECT_NEAR(s.force.z, 2.0, 1e-3);
+  EXPECT_NEAR(s.position.z, -0.002, 1e-5);
+  EXPECT_NEAR(s.proxy.z, 0.0, 1e-9);  // the surface point above the tool
+}
+
+TEST_F(SceneVocabulary, AThinMeshPlateHoldsAPushThatWouldGoStraightThrough) {
+  Client client(config_for(server_));
+  // One two-triangle plate at z = 0, no thickness at all.
+  auto plate = client.add_mesh({.pose = {},
+                                .vertices = {{-0.05, -0.05, 0}, {0.05, -0.05, 0}, {0.05, 0.05, 0}, {-0.05, 0.05, 0}},
+                                .indices = {0, 1, 2, 0, 2, 3},
+                                .impedance = {.stiffness = 1000.0, .damping = 1.0}});
+  client.set_operator(OperatorInput::push({0, 0, -3.0}));
+  const State s = step_and_get(client, 3000);
+  EXPECT_EQ(s.contact_count, 1u);
+  EXPECT_NEAR(s.force.z, 3.0, 1e-3);
+  EXPECT_NEAR(s.position.z, -0.003, 2e-5);  // the tool sinks K⁻¹ F below; the proxy stays on top
+  EXPECT_GT(s.proxy.z, 0.0);
+}
+
+TEST_F(SceneVocabulary, FrictionHoldsASidewaysPushBelowTheStaticCone) {
+  Client client(config_for(server_));
+  auto floor = client.add_box({.pose = {.position = {0, 0, -0.01}},
+                               .half_extents = {0.09, 0.09, 0.01},
+                               .impedance = {.stiffness = 1000.0, .damping = 2.0,
+                                             .static_friction = 0.5, .dynamic_friction = 0.4}});
+  step_and_get(client, 100);
+  // A hand (500 N/m, 5 N·s/m) pulling towards 6 mm below the surface presses with 2 N: the box
+  // takes 1000 d = 500 (6 mm − d), d = 2 mm.
+  client.set_operator(OperatorInput::follow({0, 0, -0.006}, 500.0, 5.0));
+  const State pressed = step_and_get(client, 2000);
+  ASSERT_EQ(pressed.contact_count, 1u);
+  EXPECT_NEAR(pressed.force.z, 2.0, 1e-3);
+  // The hand's target moves 1.8 mm sideways: sticking, the proxy holds and the friction spring
+  // (K = 1000 N/m) and the hand share the offset, 1000 x = 500 (1.8 mm − x): x = 0.6 mm and
+  // 0.6 N of friction, inside μ_s F_n = 1 N.
+  client.set_operator(OperatorInput::follow({0.0018, 0, -0.006}, 500.0, 5.0));
+  const State held = step_and_get(client, 2000);
+  EXPECT_NEAR(held.force.x, -0.6, 1e-3);
+  EXPECT_NEAR(held.position.x, 0.0006, 1e-5);
+  // 10 mm sideways asks for more than the cone: it slides and comes to rest where the hand's pull
+  // has fallen to the dynamic cone, μ_d F_n = 0.8 N.
+  client.set_operator(OperatorInput::follow({0.010, 0, -0.006}, 500.0, 5.0));
+  const State slid = step_and_get(client, 3000);
+  EXPECT_NEAR(slid.force.x, -0.8, 0.01);
+  EXPECT_NEAR(slid.position.x, 0.010 - 0.8 / 500.0, 2e-5);
+}
+
+TEST_F(SceneVocabulary, FieldsPullTheToolWhereTheirPotentialsSay) {
+  Client client(config_for(server_));
+  // A spring onto the plane z = 5 mm, and a viscous field that damps the approach.
+  auto plane_spring = client.add_field(DistanceSpringSpec{
+      .anchor = {.kind = Distance::Kind::kPlane, .origin = {0, 0, 0.005}, .axis = {0, 0, 1}},
+      .stiffness = 50.0});
+  auto viscous = client.add_field(ViscousFieldSpec{.damping = 0.5});
+  State s = step_and_get(client, 3000);
+  EXPECT_NEAR(s.position.z, 0.005, 1e-5);
+  EXPECT_NEAR(s.position.x, 0.0, 1e-12);  // a plane constrains only its normal
+  // A detent (a well with a rim) 10 mm to the side replaces the spring and draws the tool in.
+  plane_spring.remove();
+  auto detent = client.add_field(DetentFieldSpec{
+      .distance = {.kind = Distance::Kind::kPoint, .origin = {0.01, 0, 0.005}},
+      .depth = 0.01, .radius = 0.02, .rim_height = 0.002, .rim_width = 0.005});
+  s = step_and_get(client, 4000);
+  EXPECT_NEAR(s.position.x, 0.01, 1e-4);
+  EXPECT_NEAR(s.position.z, 0.005, 1e-4);
+  // A polynomial potential (n = 2) is a soft repulsive ball: K (c − f) outward inside f < c.
+  detent.remove();
+  auto ball = client.add_field(PotentialFieldSpec{
+      .distance = {.kind = Distance::Kind::kPoint, .origin = {0.0, 0, 0.005}},
+      .order = 2, .gain = 0.5, .offset = 0.02});
+  // After the ramps (the ball in, the detent out), still inside, being pushed out along +x.
+  s = step_and_get(client, 60);
+  const double f = std::hypot(s.position.x, s.position.z - 0.005);
+  ASSERT_LT(f, 0.02);
+  EXPECT_NEAR(s.force.x, 0.5 * (0.02 - f) * s.position.x / f - 0.5 * s.velocity.x, 1e-6);
+  // Overdamped by the viscous field, it creeps up to the ball's surface, where the push ends.
+  s = step_and_get(client, 3000);
+  EXPECT_LT(s.position.x, 0.02);
+  EXPECT_GT(s.position.x, 0.019);
+}
+
+TEST_F(SceneVocabulary, BadGeometryAndImpossibleLawsAreRefusedNamingTheElement) {
+  Client client(config_for(server_));
+  try {
+    auto bad = client.add_mesh({.vertices = {{0, 0, 0}, {1e-3, 0, 0}, {0, 1e-3, 0}, {2e-3, 0, 0}},
+                                .indices = {0, 1, 2, 0, 1, 3},  // the second is degenerate
+                                .impedance = {.stiffness = 1000.0}});
+    FAIL() << "a degenerate triangle was accepted";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("mesh.triangles[1]: zero area"), std::string::npos)
+        << error.what();
+  }
+  try {
+    auto bad = client.add_box({.half_extents = {0.01, 0.0, 0.01}, .impedance = {.stiffness = 1000.0}});
+    FAIL() << "a flat box was accepted";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("box.half_extents.y"), std::string::npos) << error.what();
+  }
+  try {
+    auto bad = client.add_box({.half_extents = {0.01, 0.01, 0.01},
+                               .impedance = {.stiffness = 1000.0, .damping = 1.0, .law = ImpedanceLaw::kTustin}});
+    FAIL() << "an unstable Tustin damper was accepted";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("impedance.law: TUSTIN"), std::string::npos) << error.what();
+  }
+  try {
+    auto bad = client.add_field(LinearFieldSpec{.radius = 0.1, .fade_width = 0.0});
+    FAIL() << "a linear field without a fade was accepted";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("linear."), std::string::npos) << error.what();
+  }
+}
+
+TEST_F(SceneVocabulary, AScenefileAppliesWholeOrNotAtAll) {
+  Client client(config_for(server_));
+  auto handles = client.apply_scene_file(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/wall_sphere_spring.json");
+  EXPECT_EQ(handles.objects.size(), 2u);
+  EXPECT_EQ(handles.fields.size(), 1u);
+  const State before = step_and_get(client, 2000);
+  // A file with one good and one bad object changes nothing, and the error names the object.
+  const std::string path = ::testing::TempDir() + "/half_bad_scene.json";
+  {
+    std::ofstream out(path);
+    out << R"({"objects": [{"impedance": {"stiffness": 100}, "sphere": {"radius": 0.01}},
+                          {"impedance": {"stiffness": 100}, "capsule": {"radius": -1}}]})";
+  }
+  try {
+    client.apply_scene_file(path);
+    FAIL() << "a bad scene file was applied";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("objects[1].capsule.radius"), std::string::npos)
+        << error.what();
+  }
+  const State after = step_and_get(client, 100);
+  EXPECT_NEAR(after.position.z, before.position.z, 1e-9);  // the old scene still holds the tool
+  EXPECT_THROW(client.apply_scene_file(path + ".missing"), InvalidArgumentError);
+}
+
+}  // namespace
+}  // namespace haptic
