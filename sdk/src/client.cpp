@@ -116,15 +116,15 @@ Client& Client::operator=(Client&&) noexcept = default;
 ObjectHandle Client::add_wall(const WallSpec& wall) {
   check(wall);
   detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_object(detail::to_proto(wall));
-  return ObjectHandle(core_, id, core.scene_generation());
+  const v1::ItemRef made = core.create_object(detail::to_proto(wall));
+  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
 }
 
 ObjectHandle Client::add_sphere(const SphereSpec& sphere) {
   check(sphere);
   detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_object(detail::to_proto(sphere));
-  return ObjectHandle(core_, id, core.scene_generation());
+  const v1::ItemRef made = core.create_object(detail::to_proto(sphere));
+  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
 }
 
 FieldHandle Client::add_spring_field(const SpringFieldSpec& spring) {
@@ -136,20 +136,20 @@ FieldHandle Client::add_spring_field(const SpringFieldSpec& spring) {
 
 ObjectHandle Client::add_box(const BoxSpec& box) {
   detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_object(detail::to_proto(box));
-  return ObjectHandle(core_, id, core.scene_generation());
+  const v1::ItemRef made = core.create_object(detail::to_proto(box));
+  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
 }
 
 ObjectHandle Client::add_capsule(const CapsuleSpec& capsule) {
   detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_object(detail::to_proto(capsule));
-  return ObjectHandle(core_, id, core.scene_generation());
+  const v1::ItemRef made = core.create_object(detail::to_proto(capsule));
+  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
 }
 
 ObjectHandle Client::add_mesh(const MeshSpec& mesh) {
   detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_object(detail::to_proto(mesh));
-  return ObjectHandle(core_, id, core.scene_generation());
+  const v1::ItemRef made = core.create_object(detail::to_proto(mesh));
+  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
 }
 
 FieldHandle Client::add_field(const DistanceSpringSpec& spring) {
@@ -197,6 +197,10 @@ Client::FileScene Client::apply_scene_file(const std::string& path) {
   detail::ClientCore& core = require(core_);
   const v1::ApplySceneResponse reply = core.apply_scene(scene);
   const std::uint64_t generation = core.scene_generation();
+  last_scene_stability_.clear();
+  for (const auto& report : reply.object_stability()) {
+    last_scene_stability_.push_back(detail::from_proto(report));
+  }
   FileScene handles;
   for (int i = 0; i < reply.object_ids_size(); ++i) {
     handles.objects.push_back(ObjectHandle(core_, reply.object_ids(i), generation));
@@ -205,6 +209,19 @@ Client::FileScene Client::apply_scene_file(const std::string& path) {
     handles.fields.push_back(FieldHandle(core_, reply.field_ids(i), generation));
   }
   return handles;
+}
+
+std::vector<ItemEnergy> Client::scene_energy() {
+  v1::SessionRef request;
+  request.set_session_id(session_id());
+  const auto reply = require(core_).call<v1::SessionRef, v1::SceneEnergy>(
+      "GetSceneEnergy", &v1::Haptic::Stub::GetSceneEnergy, request);
+  std::vector<ItemEnergy> out;
+  for (const auto& item : reply.items()) {
+    out.push_back({item.id(), item.session_id(), item.is_object(), item.given_to_device(),
+                   item.absorbed_from_device()});
+  }
+  return out;
 }
 
 SceneHandles Client::apply_scene(const std::vector<WallSpec>& walls,
@@ -220,6 +237,10 @@ SceneHandles Client::apply_scene(const std::vector<WallSpec>& walls,
   detail::ClientCore& core = require(core_);
   const v1::ApplySceneResponse reply = core.apply_scene(scene);
   const std::uint64_t generation = core.scene_generation();
+  last_scene_stability_.clear();
+  for (const auto& report : reply.object_stability()) {
+    last_scene_stability_.push_back(detail::from_proto(report));
+  }
   SceneHandles handles;
   int next_object = 0;
   for (std::size_t i = 0; i < walls.size(); ++i) {

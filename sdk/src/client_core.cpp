@@ -115,13 +115,12 @@ void ClientCore::close_session() {
   call<v1::SessionRef, v1::Empty>("CloseSession", &v1::Haptic::Stub::CloseSession, ref);
 }
 
-std::uint64_t ClientCore::create_object(const v1::Object& object) {
+v1::ItemRef ClientCore::create_object(const v1::Object& object) {
   v1::CreateObjectRequest request;
   request.set_session_id(session_id_);
   *request.mutable_object() = object;
   return call<v1::CreateObjectRequest, v1::ItemRef>("CreateObject", &v1::Haptic::Stub::CreateObject,
-                                                    request)
-      .id();
+                                                    request);
 }
 
 void ClientCore::update_object(std::uint64_t id, const v1::Object& object) {

@@ -30,7 +30,7 @@ class ClientCore {
     return response;
   }
 
-  std::uint64_t create_object(const v1::Object& object);
+  v1::ItemRef create_object(const v1::Object& object);
   void update_object(std::uint64_t id, const v1::Object& object);
   void delete_object(std::uint64_t id);
   std::uint64_t create_field(const v1::Field& field);

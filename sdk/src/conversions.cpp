@@ -234,6 +234,19 @@ DeviceInfo from_proto(const v1::DeviceInfo& info) {
   return out;
 }
 
+StabilityReport from_proto(const v1::StabilityReport& r) {
+  StabilityReport out;
+  out.colgate_min_damping = r.colgate_min_damping();
+  out.device_mass = r.device_mass();
+  out.device_damping = r.device_damping();
+  out.passive = r.passive();
+  out.device_known = r.device_known();
+  out.stable = r.stable();
+  out.max_stable_stiffness = r.max_stable_stiffness();
+  out.max_pole_magnitude = r.max_pole_magnitude();
+  return out;
+}
+
 Stats from_proto(const v1::Stats& s) {
   Stats out;
   out.ticks = s.ticks();

@@ -24,6 +24,7 @@ v1::Field to_proto(const DetentFieldSpec& field);
 v1::OperatorInput to_proto(const OperatorInput& input);
 DeviceInfo from_proto(const v1::DeviceInfo& info);
 Stats from_proto(const v1::Stats& stats);
+StabilityReport from_proto(const v1::StabilityReport& report);
 /// A sample from a Step reply (sequence 0: it came by no datagram; received_at: now).
 State from_proto(const v1::ToolState& state);
 

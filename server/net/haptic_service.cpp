@@ -6,6 +6,31 @@
 namespace haptic::net {
 namespace {
 
+/// Colgate's bound and the sampled margin of an object's impedance on this device (docs/scene.md).
+/// The VELOCITY law uses the device's measured velocity; the margin models it by the backward
+/// difference, the discrete law closest to it.
+v1::StabilityReport stability_report(const engine::ObjectSpec& spec,
+                                     const runtime::DeviceDescription& device, double period_s) {
+  v1::StabilityReport report;
+  report.set_colgate_min_damping(engine::colgate_bound(spec.stiffness, spec.damping, period_s));
+  report.set_device_mass(device.apparent_mass);
+  report.set_device_damping(device.apparent_damping);
+  report.set_passive(device.apparent_damping > report.colgate_min_damping());
+  report.set_device_known(device.apparent_mass > 0.0);
+  if (!report.device_known() || spec.stiffness <= 0.0) return report;
+  const auto discretization = spec.law == engine::ContactLaw::kExactZoh ? engine::ImpedanceDiscretization::kExactZoh
+                              : spec.law == engine::ContactLaw::kTustin
+                                  ? engine::ImpedanceDiscretization::kTustin
+                                  : engine::ImpedanceDiscretization::kBackwardDifference;
+  const engine::SampledWallMargin margin = engine::sampled_wall_margin(
+      engine::ImpedanceParams{spec.stiffness, spec.damping, spec.impedance_mass}, discretization,
+      engine::MassDamperDevice{device.apparent_mass, device.apparent_damping}, period_s);
+  report.set_stable(margin.stable);
+  report.set_max_stable_stiffness(margin.max_stable_stiffness);
+  report.set_max_pole_magnitude(margin.max_pole_magnitude);
+  return report;
+}
+
 constexpr std::uint32_t kApiVersion = v1::API_VERSION_CURRENT;
 constexpr std::uint32_t kMaxDecimation = 1000;
 constexpr std::uint32_t kMaxStepTicks = 1'000'000;
@@ -120,6 +145,7 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext*, const v1::CreateO
     return status;
   }
   response->set_id(id);
+  *response->mutable_stability() = stability_report(spec, deps_.device, period_s());
   return grpc::Status::OK;
 }
 
@@ -171,6 +197,20 @@ grpc::Status HapticService::DeleteField(grpc::ServerContext*, const v1::DeleteRe
   return deps_.scene.remove(request->session_id(), ItemKind::kField, request->id());
 }
 
+grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext*, const v1::SessionRef* request,
+                                           v1::SceneEnergy* response) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  for (const engine::ItemEnergyTotals& item : deps_.scene.energy()) {
+    v1::ItemEnergy& out = *response->add_items();
+    out.set_id(item.id);
+    out.set_session_id(item.session_id);
+    out.set_is_object(item.is_object);
+    out.set_given_to_device(item.given);
+    out.set_absorbed_from_device(item.absorbed);
+  }
+  return grpc::Status::OK;
+}
+
 grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplySceneRequest* request,
                                        v1::ApplySceneResponse* response) {
   if (auto status = check_session(request->session_id()); !status.ok()) return status;
@@ -198,6 +238,9 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplyScen
                                                       object_ids, field_ids);
       !status.ok()) {
     return status;
+  }
+  for (const engine::ObjectSpec& object : objects) {
+    *response->add_object_stability() = stability_report(object, deps_.device, period_s());
   }
   for (auto id : object_ids) response->add_object_ids(id);
   for (auto id : field_ids) response->add_field_ids(id);

@@ -57,6 +57,8 @@ class HapticService final : public v1::Haptic::Service {
                           v1::ApplySceneResponse*) override;
   grpc::Status GetDeviceInfo(grpc::ServerContext*, const v1::SessionRef*,
                              v1::DeviceInfo*) override;
+  grpc::Status GetSceneEnergy(grpc::ServerContext*, const v1::SessionRef* request,
+                              v1::SceneEnergy* response) override;
   grpc::Status GetStats(grpc::ServerContext*, const v1::SessionRef*, v1::Stats*) override;
   grpc::Status WatchEvents(grpc::ServerContext*, const v1::WatchEventsRequest*,
                            grpc::ServerWriter<v1::Event>*) override;
@@ -69,6 +71,7 @@ class HapticService final : public v1::Haptic::Service {
   v1::DeviceInfo device_info() const;
 
  private:
+  double period_s() const { return 1.0 / deps_.loop.config().rate_hz; }
   grpc::Status check_session(std::uint64_t session_id) const;
 
   ServiceDependencies deps_;

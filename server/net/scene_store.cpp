@@ -220,6 +220,12 @@ SceneCounts SceneStore::counts() const {
   return counts;
 }
 
+std::vector<engine::ItemEnergyTotals> SceneStore::energy() const {
+  std::vector<engine::ItemEnergyTotals> out;
+  exchange_.with_adopted([&](const engine::CompiledScene& scene) { out = engine::energy_totals(scene); });
+  return out;
+}
+
 void SceneStore::publish_locked() {
   engine::SceneDescription description;
   const auto add = [&](const Item& item) {

@@ -61,6 +61,10 @@ class SceneStore {
 
   SceneCounts counts() const;
 
+  /// Energy exchanged with the device per item, as the loop has metered it (empty before the
+  /// loop's first tick).
+  std::vector<engine::ItemEnergyTotals> energy() const;
+
  private:
   struct Item {
     engine::ItemMeta meta;

@@ -51,6 +51,10 @@ struct DeviceDescription {
   engine::Vec3 workspace_max;  // Unit: m.
   double max_force = 0.0;      // Unit: N.
   bool simulated = false;
+  /// The device at its tool point as a mass-damper per axis (for the stability report of a wall);
+  /// 0 when the device gives no such model. Units: kg, N·s/m.
+  double apparent_mass = 0.0;
+  double apparent_damping = 0.0;
 };
 
 class Device {

@@ -19,6 +19,11 @@ SimulatedDcMotorDevice::SimulatedDcMotorDevice(const engine::DcMotorParams& para
   description_.workspace_min = {-params.l, -params.l, 0.0};
   description_.workspace_max = {params.l, params.l, 0.0};
   description_.max_force = max_force;
+  // Along the link's tangent: the tool speed is l r θ̇_m, so J_eff θ̇_m² / 2 = m v² / 2 gives
+  // m = J_eff / (l r)², and the motor's damping B (with the back-EMF) reflects the same way.
+  const double arm = params.l * params.r;
+  description_.apparent_mass = params.J_eff() / (arm * arm);
+  description_.apparent_damping = params.B() / (arm * arm);
   description_.simulated = true;
 }
 

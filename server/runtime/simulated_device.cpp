@@ -12,6 +12,8 @@ SimulatedPointMassDevice::SimulatedPointMassDevice(const engine::PointMassParams
   description_.workspace_min = params.workspace_min;
   description_.workspace_max = params.workspace_max;
   description_.max_force = max_force;
+  description_.apparent_mass = params.mass;
+  description_.apparent_damping = params.damping;
   description_.simulated = true;
 }
 

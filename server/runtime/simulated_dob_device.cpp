@@ -35,6 +35,10 @@ SimulatedDobDevice::SimulatedDobDevice(const engine::Parallel2DofParams& plant,
   description_.workspace_min = {-0.1, 0.15, 0.0};
   description_.workspace_max = {0.1, 0.32, 0.0};
   description_.max_force = max_force;
+  if (observer_enabled) {  // below Q's cut-off each axis is the nominal mass-damper (eq. 5)
+    description_.apparent_mass = observer.nominal_mass;
+    description_.apparent_damping = observer.nominal_damping;
+  }
   description_.simulated = true;
 }
 

@@ -59,6 +59,22 @@ class SnapshotExchange {
     return *node->value;
   }
 
+  /// Off the loop: calls f(snapshot) with the snapshot the loop adopted last, kept alive for the
+  /// call (reclaim() cannot free it meanwhile). Returns false, without calling f, before the loop
+  /// has adopted any.
+  template <typename F>
+  bool with_adopted(F&& f) const {
+    std::lock_guard lock(mutex_);
+    const std::uint64_t in_use = adopted_generation_.load(std::memory_order_acquire);
+    for (const auto& node : retained_) {
+      if (node->generation == in_use) {
+        f(*node->value);
+        return true;
+      }
+    }
+    return false;
+  }
+
   /// Generation the loop adopted last.
   std::uint64_t adopted_generation() const {
     return adopted_generation_.load(std::memory_order_acquire);

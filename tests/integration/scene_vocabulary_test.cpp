@@ -185,5 +185,55 @@ TEST_F(SceneVocabulary, AScenefileAppliesWholeOrNotAtAll) {
   EXPECT_THROW(client.apply_scene_file(path + ".missing"), InvalidArgumentError);
 }
 
+TEST_F(SceneVocabulary, RegistrationReportsColgatesBoundAndTheSampledMarginOnThisDevice) {
+  Client client(config_for(server_));
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {1000.0, 1.0}});
+  const StabilityReport& r = wall.stability();
+  EXPECT_DOUBLE_EQ(r.colgate_min_damping, 1000.0 * 0.001 / 2 + 1.0);  // K T / 2 + |B|
+  EXPECT_TRUE(r.device_known);
+  EXPECT_EQ(r.device_mass, 0.01);     // the point mass (Eom et al.)
+  EXPECT_EQ(r.device_damping, 0.022);
+  EXPECT_FALSE(r.passive);            // 0.022 N·s/m of physical damping is far below 1.5
+  EXPECT_GT(r.max_stable_stiffness, 0.0);
+  EXPECT_EQ(r.stable, 1000.0 < r.max_stable_stiffness);
+  EXPECT_EQ(r.stable, r.max_pole_magnitude < 1.0);
+  // A far stiffer wall with the same damping is past the margin.
+  auto stiff = client.add_wall({.point = {0, 0, -1}, .normal = {0, 0, 1}, .impedance = {1e6, 1.0}});
+  EXPECT_FALSE(stiff.stability().stable);
+  EXPECT_GT(stiff.stability().max_pole_magnitude, 1.0);
+  client.apply_scene({{.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {200.0, 2.0}}}, {}, {});
+  ASSERT_EQ(client.last_scene_stability().size(), 1u);
+  EXPECT_DOUBLE_EQ(client.last_scene_stability()[0].colgate_min_damping, 200.0 * 0.001 / 2 + 2.0);
+}
+
+TEST_F(SceneVocabulary, EachItemReportsTheEnergyItExchangedWithTheDevice) {
+  Client client(config_for(server_));
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {1000.0, 0.0}});
+  auto viscous = client.add_field(ViscousFieldSpec{.damping = 0.2});
+  step_and_get(client, 100);
+  client.set_operator(OperatorInput::push({0, 0, -2.0}));  // in...
+  step_and_get(client, 2000);
+  client.set_operator(OperatorInput::push({0, 0, 2.0}));   // ...and out
+  step_and_get(client, 300);
+  const std::vector<ItemEnergy> energy = client.scene_energy();
+  const auto find = [&](std::uint64_t id) {
+    for (const ItemEnergy& e : energy) {
+      if (e.id == id) return e;
+    }
+    ADD_FAILURE() << "no energy for item " << id;
+    return ItemEnergy{};
+  };
+  const ItemEnergy w = find(wall.id());
+  const ItemEnergy v = find(viscous.id());
+  EXPECT_TRUE(w.is_object);
+  EXPECT_FALSE(v.is_object);
+  // The undamped wall stored ½ K d² = 2 mJ at 2 mm and gave it back (to within the trapezoid's
+  // error over the contact's few ticks); the viscous field only absorbed.
+  EXPECT_GT(w.absorbed_from_device, 0.0015);
+  EXPECT_NEAR(w.given_to_device, w.absorbed_from_device, 0.2 * w.absorbed_from_device);
+  EXPECT_GT(v.absorbed_from_device, 0.0);
+  EXPECT_EQ(v.given_to_device, 0.0);
+}
+
 }  // namespace
 }  // namespace haptic

@@ -83,11 +83,16 @@ class ObjectHandle : public detail::ItemHandle {
   /// Replaces the object (a wall stays a wall only if you pass a WallSpec). Throws haptic::Error.
   void update(const WallSpec& wall);
   void update(const SphereSpec& sphere);
+  /// The server's stability report for the impedance as registered (add_* only; empty after
+  /// apply_scene, which reports in Client::last_scene_stability()).
+  const StabilityReport& stability() const noexcept { return stability_; }
 
  private:
   friend class Client;
-  ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation)
-      : ItemHandle(Kind::kObject, std::move(core), id, generation) {}
+  ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation,
+               StabilityReport stability = {})
+      : ItemHandle(Kind::kObject, std::move(core), id, generation), stability_(stability) {}
+  StabilityReport stability_;
 };
 
 /// A registered energy field; see detail::ItemHandle for ownership.
@@ -145,6 +150,12 @@ class Client {
     std::vector<FieldHandle> fields;
   };
   FileScene apply_scene_file(const std::string& path);
+  /// Stability reports of the objects of the last apply_scene or apply_scene_file, in order.
+  const std::vector<StabilityReport>& last_scene_stability() const noexcept {
+    return last_scene_stability_;
+  }
+  /// Energy every object and field has exchanged with the device (GetSceneEnergy).
+  std::vector<ItemEnergy> scene_energy();
   /// Replaces all of this session's objects and fields at once; if anything is refused, nothing
   /// changes. The server numbers the objects walls first, then spheres ("scene.objects[i]" in its
   /// messages). Handles from earlier calls go stale: their remove() and destructor do nothing and
@@ -193,6 +204,7 @@ class Client {
   void close();
 
  private:
+  std::vector<StabilityReport> last_scene_stability_;
   std::shared_ptr<detail::ClientCore> core_;
 };
 

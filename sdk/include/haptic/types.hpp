@@ -203,6 +203,28 @@ struct DeviceInfo {
   bool simulated = false;
 };
 
+/// What the server can say about an object's impedance on its device (docs/scene.md): Colgate's
+/// passivity bound and, where the device gives a mass-damper model, the sampled stability margin.
+struct StabilityReport {
+  double colgate_min_damping = 0.0;   ///< K T / 2 + |B|. Unit: N·s/m.
+  double device_mass = 0.0;           ///< 0 when the device gives no model. Unit: kg.
+  double device_damping = 0.0;        ///< Unit: N·s/m.
+  bool passive = false;               ///< device_damping > colgate_min_damping
+  bool device_known = false;
+  bool stable = false;                ///< the sampled loop in contact is stable (known devices)
+  double max_stable_stiffness = 0.0;  ///< Unit: N/m.
+  double max_pole_magnitude = 0.0;
+};
+
+/// Work one object or field has exchanged with the device since it was registered.
+struct ItemEnergy {
+  std::uint64_t id = 0;
+  std::uint64_t session_id = 0;       ///< 0: the server's own scene
+  bool is_object = false;
+  double given_to_device = 0.0;       ///< Unit: J.
+  double absorbed_from_device = 0.0;  ///< Unit: J.
+};
+
 /// The server's counters (GetStats).
 struct Stats {
   std::uint64_t ticks = 0;

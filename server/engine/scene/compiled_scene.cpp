@@ -80,17 +80,21 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
   state.meters.resize(items);
   state.meter_keys.reserve(items);
   state.meter_ids.reserve(items);
+  state.meter_sessions.reserve(items);
+  state.meter_is_object.reserve(items);
   state.work_out = std::make_unique<std::atomic<double>[]>(items);
   state.work_in = std::make_unique<std::atomic<double>[]>(items);
-  const auto new_meter = [&](const ItemMeta& meta) {
+  const auto new_meter = [&](const ItemMeta& meta, bool is_object) {
     state.meter_keys.push_back(meta.state_key());
     state.meter_ids.push_back(meta.id);
+    state.meter_sessions.push_back(meta.session_id);
+    state.meter_is_object.push_back(is_object ? 1 : 0);
     return static_cast<std::uint32_t>(state.meter_keys.size() - 1);
   };
 
   for (const ObjectEntry& entry : description.objects) {
     const ObjectSpec& object = entry.spec;
-    const std::uint32_t meter_index = new_meter(entry.meta);
+    const std::uint32_t meter_index = new_meter(entry.meta, true);
     if (is_fast(object)) {
       if (const auto* half_space = std::get_if<HalfSpaceSpec>(&object.shape)) {
         // Normalised after the rotation so a slightly non-unit quaternion cannot scale the force.
@@ -149,7 +153,7 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
   }
 
   for (const FieldEntry& entry : description.fields) {
-    const std::uint32_t meter_index = new_meter(entry.meta);
+    const std::uint32_t meter_index = new_meter(entry.meta, false);
     if (const auto* spring = std::get_if<SpringToPointSpec>(&entry.spec.kind)) {
       scene.springs.push_back(CompiledSpring{spring->anchor_W, spring->stiffness, spring->damping,
                                              spring->max_force, entry.meta.ramp(), meter_index});
@@ -227,13 +231,44 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
       const std::size_t i = (start + probe) % old_state.meter_keys.size();
       if (old_state.meter_keys[i] == new_state.meter_keys[j]) {
         new_state.meters[j] = old_state.meters[i];
-        new_state.work_out[j].store(new_state.meters[j].work_out, std::memory_order_relaxed);
-        new_state.work_in[j].store(new_state.meters[j].work_in, std::memory_order_relaxed);
         start = i + 1;
         break;
       }
     }
   }
+  // A version that is gone leaves its totals to a remaining version of the same item.
+  for (std::size_t i = 0; i < old_state.meter_keys.size(); ++i) {
+    const auto& keys = new_state.meter_keys;
+    if (std::find(keys.begin(), keys.end(), old_state.meter_keys[i]) != keys.end()) continue;
+    for (std::size_t j = 0; j < keys.size(); ++j) {
+      if (new_state.meter_ids[j] == old_state.meter_ids[i]) {
+        new_state.meters[j].work += old_state.meters[i].work;
+        new_state.meters[j].work_out += old_state.meters[i].work_out;
+        new_state.meters[j].work_in += old_state.meters[i].work_in;
+        break;
+      }
+    }
+  }
+  for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
+    new_state.work_out[j].store(new_state.meters[j].work_out, std::memory_order_relaxed);
+    new_state.work_in[j].store(new_state.meters[j].work_in, std::memory_order_relaxed);
+  }
+}
+
+std::vector<ItemEnergyTotals> energy_totals(const CompiledScene& scene) {
+  const SceneState& state = *scene.state;
+  std::vector<ItemEnergyTotals> out;
+  for (std::size_t i = 0; i < state.meter_ids.size(); ++i) {
+    const std::uint64_t id = state.meter_ids[i];
+    auto it = std::find_if(out.begin(), out.end(), [&](const ItemEnergyTotals& e) { return e.id == id; });
+    if (it == out.end()) {
+      out.push_back({id, state.meter_sessions[i], state.meter_is_object[i] != 0, 0.0, 0.0});
+      it = out.end() - 1;
+    }
+    it->given += state.work_out[i].load(std::memory_order_relaxed);
+    it->absorbed += state.work_in[i].load(std::memory_order_relaxed);
+  }
+  return out;
 }
 
 SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Vec3& v_WT,

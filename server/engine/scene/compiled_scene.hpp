@@ -107,6 +107,8 @@ struct SceneState {
   std::vector<EnergyMeter> meters;
   std::vector<std::uint64_t> meter_keys;  // the item version each meter belongs to
   std::vector<std::uint64_t> meter_ids;   // the item (for reports)
+  std::vector<std::uint64_t> meter_sessions;  // its owner (for reports)
+  std::vector<std::uint8_t> meter_is_object;  // 1: an object, 0: a field
   std::unique_ptr<std::atomic<double>[]> work_out;  // J given to the device, per meter
   std::unique_ptr<std::atomic<double>[]> work_in;   // J absorbed from the device, per meter
 };
@@ -142,9 +144,23 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
 
 /// On the loop, when it adopts `to` after `from`: copies every item version's state that both
 /// hold (matched by key); a mesh version new in `to` inherits the god object of the newest
-/// version of the same item in `from` and is rebased onto its new geometry at its first tick.
-/// Does not allocate.
+/// version of the same item in `from` and is rebased onto its new geometry at its first tick; the
+/// energy of a version that `to` no longer holds is added to a version of the same item that it
+/// does, so an item's totals survive its updates. Does not allocate.
 void carry_state(const CompiledScene& from, const CompiledScene& to);
+
+/// One item's energy totals, read off the loop.
+struct ItemEnergyTotals {
+  std::uint64_t id = 0;
+  std::uint64_t session_id = 0;
+  bool is_object = false;
+  double given = 0.0;     // Work done on the tool. Unit: J.
+  double absorbed = 0.0;  // Work done by the tool. Unit: J.
+};
+
+/// Off the loop: the energy totals of every item in `scene`, versions of one item summed, in item
+/// order. Reads the loop's relaxed atomics (a total may be a tick older than another).
+std::vector<ItemEnergyTotals> energy_totals(const CompiledScene& scene);
 
 /// What the scene asks of the device at one tick.
 struct SceneForce {
