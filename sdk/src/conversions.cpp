@@ -263,6 +263,7 @@ Stats from_proto(const v1::Stats& s) {
   out.datagrams_dropped = s.datagrams_dropped();
   out.force_faults = s.force_faults();
   out.force_saturations = s.force_saturations();
+  out.passivity_active_ticks = s.passivity_active_ticks();
   out.leases_expired = s.leases_expired();
   out.device_faults = s.device_faults();
   return out;

@@ -116,6 +116,15 @@ std::string validate(const v1::ServerConfig& config) {
            std::to_string(period_us) + " us)";
   }
   if (auto e = validate_device(config); !e.empty()) return e;
+  const v1::PassivityConfig& passivity = config.passivity();
+  if (!std::isfinite(passivity.max_damping()) || passivity.max_damping() < 0.0 ||
+      passivity.max_damping() > 1e5) {
+    return "passivity.max_damping: must be 0 (default) to 100000 N*s/m";
+  }
+  if (!std::isfinite(passivity.velocity_threshold()) || passivity.velocity_threshold() < 0.0 ||
+      passivity.velocity_threshold() > 1.0) {
+    return "passivity.velocity_threshold: must be 0 (default) to 1 m/s";
+  }
   net::SceneLimits limits;
   engine::HandInput hand;
   if (auto e = net::to_hand_input(config.initial_operator(), "initial_operator", limits, hand);

@@ -31,6 +31,16 @@ Server::Server(const v1::ServerConfig& config)
   tick.period_s = 1.0 / rate;
   tick.limits.max_force = device_->description().max_force;
   tick.output_ramp_ticks = ms_to_ticks(config.removal_ramp_ms(), rate);
+  const v1::PassivityConfig& passivity = config.passivity();
+  const double device_mass = device_->description().apparent_mass;
+  const bool passivity_on = passivity.has_enabled() ? passivity.enabled() : device_mass > 0.0;
+  if (passivity_on) {
+    const double threshold = passivity.velocity_threshold() > 0.0 ? passivity.velocity_threshold() : 1e-4;
+    engine::PassivityControllerParams params =
+        engine::passivity_params_for_device(device_mass > 0.0 ? device_mass : 0.01, tick.period_s, threshold);
+    if (passivity.max_damping() > 0.0) params.max_damping = passivity.max_damping();
+    tick.passivity = params;
+  }
   runner_ = std::make_unique<runtime::TickRunner>(*device_, scenes_, samples_, counters_, tick);
 
   runtime::LoopConfig loop;
@@ -170,6 +180,7 @@ v1::Stats Server::stats() const {
   stats.set_force_faults(counters_.force_faults.load(std::memory_order_relaxed));
   stats.set_device_faults(counters_.device_errors.load(std::memory_order_relaxed));
   stats.set_force_saturations(counters_.force_saturations.load(std::memory_order_relaxed));
+  stats.set_passivity_active_ticks(counters_.passivity_active_ticks.load(std::memory_order_relaxed));
   stats.set_leases_expired(leases_expired_.load(std::memory_order_relaxed));
   const runtime::LatenessSummary send_delay = udp_.counters().send_delay.summarize();
   stats.set_send_delay_p50_us(send_delay.p50_us);

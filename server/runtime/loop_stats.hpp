@@ -56,6 +56,7 @@ struct LoopCounters {
   std::atomic<std::uint64_t> force_faults{0};      // non-finite forces replaced by zero
   std::atomic<std::uint64_t> force_saturations{0};
   std::atomic<std::uint64_t> device_errors{0};
+  std::atomic<std::uint64_t> passivity_active_ticks{0};  // ticks the passivity controller damped
 };
 
 }  // namespace haptic::runtime

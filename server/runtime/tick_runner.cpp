@@ -15,6 +15,7 @@ TickRunner::TickRunner(Device& device, SceneExchange& scenes, SampleRing& sample
       config_(config),
       guard_(config.limits) {
   config_.output_ramp_ticks = std::max<std::int64_t>(1, config_.output_ramp_ticks);
+  if (config_.passivity) passivity_.emplace(*config_.passivity);
 }
 
 double TickRunner::output_gain(std::uint64_t tick) const {
@@ -49,7 +50,19 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
     sample.p_WP = scene_force.p_WP;
     sample.contact_count = scene_force.contact_count;
     if (scene_force.ramping || gain < 1.0) sample.flags |= wire::kFlagRampingOut;
-    const engine::GuardedForce guarded = guard_.apply(scene_force.F_T_W, config_.period_s, gain);
+    engine::Vec3 F_scene = scene_force.F_T_W;
+    if (passivity_) {
+      // The port is watched every tick, in contact or not, so the held force's work is booked
+      // for every period. Out of contact the account keeps a deficit — a stiff wall's bounce
+      // lasts two or three samples and ends owing energy — but drops a surplus, so a long passive
+      // contact cannot bank energy that hides a later active one.
+      const engine::Vec3 F_contacts = scene_force.F_T_W - scene_force.F_fields_W;
+      const engine::PassivityStep step = passivity_->apply(F_contacts, reading.v_WT, reading.p_WT);
+      if (step.alpha > 0.0) counters_.passivity_active_ticks.fetch_add(1, std::memory_order_relaxed);
+      F_scene = step.F_T_W + scene_force.F_fields_W;
+      if (F_contacts == engine::Vec3{} && passivity_->energy() > 0.0) passivity_->reset();
+    }
+    const engine::GuardedForce guarded = guard_.apply(F_scene, config_.period_s, gain);
     if (guarded.fault) {
       sample.flags |= wire::kFlagForceFault;
       counters_.force_faults.fetch_add(1, std::memory_order_relaxed);

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <optional>
 
 #include "engine/safety/force_guard.hpp"
 #include "engine/scene/compiled_scene.hpp"
@@ -13,6 +14,7 @@
 #include "runtime/loop_stats.hpp"
 #include "runtime/sample_ring.hpp"
 #include "runtime/snapshot_exchange.hpp"
+#include "engine/safety/passivity.hpp"
 
 namespace haptic::runtime {
 
@@ -22,6 +24,13 @@ struct TickConfig {
   double period_s = 0.001;               // Unit: s.
   engine::ForceLimits limits;
   std::int64_t output_ramp_ticks = 50;   // Length of the shutdown ramp, >= 1.
+  /// The passivity controller at the device port (Hannaford & Ryu 2002), between the scene and
+  /// the force guard; absent: off. It watches the contact force of the scene's objects — where
+  /// sampling makes stiff walls active — and adds damping only while the energy observed since
+  /// the contact began is negative, so a passive contact passes unchanged. Fields pass through:
+  /// a field a client turns on under the tool, or a non-conservative first-order field, is a
+  /// deliberate source of energy (metered and reported per field).
+  std::optional<engine::PassivityControllerParams> passivity;
 };
 
 class TickRunner {
@@ -46,6 +55,7 @@ class TickRunner {
   double output_gain(std::uint64_t tick) const;
 
   Device& device_;
+  std::optional<engine::PassivityController> passivity_;
   SceneExchange& scenes_;
   SampleRing& samples_;
   LoopCounters& counters_;

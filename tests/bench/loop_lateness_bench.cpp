@@ -41,7 +41,7 @@ Result run(double seconds, double rate_hz, std::int64_t spin_ns) {
   runtime::LoopCounters counters;
   runtime::LatenessHistogram lateness;
   runtime::TickRunner runner(device, scenes, samples, counters,
-                             runtime::TickConfig{1.0 / rate_hz, {}, 50});
+                             runtime::TickConfig{1.0 / rate_hz, {}, 50, {}});
   runtime::LoopConfig config;
   config.rate_hz = rate_hz;
   config.spin_ns = spin_ns;

@@ -7,7 +7,11 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
+#include <cstdio>
 #include <fstream>
+#include <string>
+#include <utility>
 
 #include "integration/server_process.hpp"
 
@@ -233,6 +237,50 @@ TEST_F(SceneVocabulary, EachItemReportsTheEnergyItExchangedWithTheDevice) {
   EXPECT_NEAR(w.given_to_device, w.absorbed_from_device, 0.2 * w.absorbed_from_device);
   EXPECT_GT(v.absorbed_from_device, 0.0);
   EXPECT_EQ(v.given_to_device, 0.0);
+}
+
+/// Largest tool speed over the last `ticks` ticks, stepping one tick at a time. Unit: m/s.
+double peak_speed(Client& client, int ticks) {
+  double peak = 0.0;
+  for (int k = 0; k < ticks; ++k) {
+    const State s = step_and_get(client, 1);
+    peak = std::max(peak, std::sqrt(s.velocity.x * s.velocity.x + s.velocity.y * s.velocity.y +
+                                    s.velocity.z * s.velocity.z));
+  }
+  return peak;
+}
+
+TEST(PassivityController, AStiffWallMadeActiveBySamplingIsCalmedAndAPassiveOneIsLeftAlone) {
+  // K = 20 000 N/m on the 10 g point mass at 1 kHz: far beyond the sampled margin, the wall
+  // gives back more energy at each bounce than it took (Hannaford & Ryu 2002, Fig. 6).
+  const auto bounce = [](bool passivity) {
+    test::ServerProcess server(test::lockstep_config(
+        std::string(R"("passivity": {"enabled": )") + (passivity ? "true" : "false") + "}"));
+    Client client(config_for(server));
+    auto wall = client.add_wall({.point = {0, 0, 0.0195}, .normal = {0, 0, 1}, .impedance = {20000.0, 0.0}});
+    step_and_get(client, 100);
+    client.set_operator(OperatorInput::push({0, 0, -0.5}));
+    step_and_get(client, 2000);
+    return std::pair{peak_speed(client, 500), client.stats().passivity_active_ticks};
+  };
+  const auto [without_speed, without_ticks] = bounce(false);
+  const auto [with_speed, with_ticks] = bounce(true);
+  std::printf("  peak speed over the last 0.5 s: %.3g m/s without, %.3g m/s with the controller "
+              "(%llu damped ticks)\n",
+              without_speed, with_speed, static_cast<unsigned long long>(with_ticks));
+  EXPECT_EQ(without_ticks, 0u);
+  EXPECT_GT(with_ticks, 0u);
+  EXPECT_GT(without_speed, 0.05);  // still bouncing
+  EXPECT_LT(with_speed, 0.2 * without_speed);
+
+  // A wall within its margin (1000 N/m, 1 N·s/m): the controller never acts.
+  test::ServerProcess server(test::lockstep_config());
+  Client client(config_for(server));
+  auto wall = client.add_wall({.point = {0, 0, 0.0195}, .normal = {0, 0, 1}, .impedance = {1000.0, 1.0}});
+  step_and_get(client, 100);
+  client.set_operator(OperatorInput::push({0, 0, -2.0}));
+  step_and_get(client, 2000);
+  EXPECT_EQ(client.stats().passivity_active_ticks, 0u);
 }
 
 }  // namespace

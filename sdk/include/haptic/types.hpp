@@ -241,6 +241,7 @@ struct Stats {
   std::uint64_t datagrams_dropped = 0;
   std::uint64_t force_faults = 0;
   std::uint64_t force_saturations = 0;
+  std::uint64_t passivity_active_ticks = 0;  ///< ticks the passivity controller added damping
   std::uint64_t leases_expired = 0;
   std::uint64_t device_faults = 0;
 };

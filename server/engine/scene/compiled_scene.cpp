@@ -399,6 +399,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
       F *= gain;
       meter(state, spring.meter, F, v_WT, dt);
       out.F_T_W += F;
+      out.F_fields_W += F;
     }
   }
 
@@ -409,6 +410,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
       const Vec3 F = gain * evaluate_field(field.spec, p_WT, v_WT).F_T_W;
       meter(state, field.meter, F, v_WT, dt);
       out.F_T_W += F;
+      out.F_fields_W += F;
     }
   }
   return out;

@@ -165,6 +165,7 @@ std::vector<ItemEnergyTotals> energy_totals(const CompiledScene& scene);
 /// What the scene asks of the device at one tick.
 struct SceneForce {
   Vec3 F_T_W;                    // Force on the tool, in W. Unit: N.
+  Vec3 F_fields_W;               // The part of F_T_W from fields (springs, potentials, …). Unit: N.
   Vec3 p_WP;                     // Proxy point: the surface point of the deepest contact, else p_WT.
   std::uint32_t contact_count = 0;
   bool ramping = false;          // Some item is fading out (removed, or an old version of a change).

@@ -35,7 +35,7 @@ struct Rig {
   explicit Rig(engine::CompiledScene scene = {}, double z0 = 0.01)
       : device(engine::PointMassParams{}, engine::PointMassState{{0.0, 0.0, z0}, {}}, 20.0),
         scenes(std::make_unique<const engine::CompiledScene>(std::move(scene))),
-        runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50}) {}
+        runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}}) {}
 
   TickSample run(std::uint64_t ticks) {
     TickSample last;
@@ -150,7 +150,7 @@ TEST(TickRunner, NonFiniteReadingFaultsToZeroForceAndShowsTheLastGoodState) {
   SceneExchange scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0)));
   SampleRing samples;
   LoopCounters counters;
-  TickRunner runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50});
+  TickRunner runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}});
   runner.run(1, 0);
   runner.run(2, 1'000'000);
   EXPECT_NEAR(device.last_command.z, 1.0, 1e-12);  // 1 mm into a 1000 N/m wall
@@ -198,7 +198,7 @@ TEST(TickRunner, ADeviceInItsSafeStateIsAFaultThatStillShowsWhereItIs) {
   SceneExchange scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0)));
   SampleRing samples;
   LoopCounters counters;
-  TickRunner runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50});
+  TickRunner runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}});
   runner.run(1, 0);
   EXPECT_GT(device.last_command.z, 0.0);
   runner.run(2, 1'000'000);
