@@ -224,6 +224,18 @@ std::vector<ItemEnergy> Client::scene_energy() {
   return out;
 }
 
+std::vector<ObjectState> Client::object_states() {
+  v1::SessionRef request;
+  request.set_session_id(session_id());
+  const auto reply = require(core_).call<v1::SessionRef, v1::ObjectStates>(
+      "GetObjectStates", &v1::Haptic::Stub::GetObjectStates, request);
+  std::vector<ObjectState> out;
+  for (const auto& object : reply.objects()) {
+    out.push_back({object.id(), detail::from_proto(object.position()), detail::from_proto(object.velocity())});
+  }
+  return out;
+}
+
 SceneHandles Client::apply_scene(const std::vector<WallSpec>& walls,
                                  const std::vector<SphereSpec>& spheres,
                                  const std::vector<SpringFieldSpec>& springs) {

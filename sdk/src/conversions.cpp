@@ -28,6 +28,12 @@ void set_impedance(v1::Object& object, const Impedance& impedance) {
   }
 }
 
+void set_dynamics(v1::Object& object, const Dynamics& dynamics) {
+  if (dynamics.mass == 0.0 && dynamics.damping == 0.0) return;
+  object.mutable_dynamics()->set_mass(dynamics.mass);
+  object.mutable_dynamics()->set_damping(dynamics.damping);
+}
+
 void set_pose(v1::Object& object, const Pose& pose) {
   *object.mutable_pose()->mutable_position() = to_proto(pose.position);
   auto* q = object.mutable_pose()->mutable_orientation();
@@ -57,6 +63,7 @@ v1::Object to_proto(const BoxSpec& box) {
   set_pose(object, box.pose);
   set_impedance(object, box.impedance);
   *object.mutable_box()->mutable_half_extents() = to_proto(box.half_extents);
+  set_dynamics(object, box.dynamics);
   return object;
 }
 
@@ -66,6 +73,7 @@ v1::Object to_proto(const CapsuleSpec& capsule) {
   set_impedance(object, capsule.impedance);
   object.mutable_capsule()->set_radius(capsule.radius);
   object.mutable_capsule()->set_half_length(capsule.half_length);
+  set_dynamics(object, capsule.dynamics);
   return object;
 }
 
@@ -150,6 +158,7 @@ v1::Object to_proto(const SphereSpec& sphere) {
   *object.mutable_pose()->mutable_position() = to_proto(sphere.center);
   set_impedance(object, sphere.impedance);
   object.mutable_sphere()->set_radius(sphere.radius);
+  set_dynamics(object, sphere.dynamics);
   return object;
 }
 

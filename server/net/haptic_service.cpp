@@ -211,6 +211,18 @@ grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext*, const v1::Sessi
   return grpc::Status::OK;
 }
 
+grpc::Status HapticService::GetObjectStates(grpc::ServerContext*, const v1::SessionRef* request,
+                                            v1::ObjectStates* response) {
+  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  for (const engine::ObjectMotion& motion : deps_.scene.motions()) {
+    v1::ObjectState& out = *response->add_objects();
+    out.set_id(motion.id);
+    *out.mutable_position() = to_proto(motion.p_WO);
+    *out.mutable_velocity() = to_proto(motion.v_WO);
+  }
+  return grpc::Status::OK;
+}
+
 grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplySceneRequest* request,
                                        v1::ApplySceneResponse* response) {
   if (auto status = check_session(request->session_id()); !status.ok()) return status;

@@ -59,6 +59,8 @@ class HapticService final : public v1::Haptic::Service {
                              v1::DeviceInfo*) override;
   grpc::Status GetSceneEnergy(grpc::ServerContext*, const v1::SessionRef* request,
                               v1::SceneEnergy* response) override;
+  grpc::Status GetObjectStates(grpc::ServerContext*, const v1::SessionRef* request,
+                               v1::ObjectStates* response) override;
   grpc::Status GetStats(grpc::ServerContext*, const v1::SessionRef*, v1::Stats*) override;
   grpc::Status WatchEvents(grpc::ServerContext*, const v1::WatchEventsRequest*,
                            grpc::ServerWriter<v1::Event>*) override;

@@ -226,6 +226,12 @@ std::vector<engine::ItemEnergyTotals> SceneStore::energy() const {
   return out;
 }
 
+std::vector<engine::ObjectMotion> SceneStore::motions() const {
+  std::vector<engine::ObjectMotion> out;
+  exchange_.with_adopted([&](const engine::CompiledScene& scene) { out = engine::object_motions(scene); });
+  return out;
+}
+
 void SceneStore::publish_locked() {
   engine::SceneDescription description;
   const auto add = [&](const Item& item) {

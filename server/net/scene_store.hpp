@@ -65,6 +65,9 @@ class SceneStore {
   /// loop's first tick).
   std::vector<engine::ItemEnergyTotals> energy() const;
 
+  /// The virtual masses as the loop has moved them (empty before the loop's first tick).
+  std::vector<engine::ObjectMotion> motions() const;
+
  private:
   struct Item {
     engine::ItemMeta meta;

@@ -171,6 +171,36 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
   out.impedance_mass = impedance.mass();
   out.law = to_law(impedance.law());
 
+  if (object.has_dynamics()) {
+    const v1::Dynamics& dynamics = object.dynamics();
+    const std::string d = path + ".dynamics";
+    if (object.shape_case() == v1::Object::kHalfSpace || object.shape_case() == v1::Object::kMesh) {
+      return d + ": only spheres, boxes and capsules can be virtual masses";
+    }
+    if (auto e = check_range(dynamics.mass(), 1e-6, limits.max_object_mass, d + ".mass"); !e.empty()) {
+      return e;
+    }
+    if (auto e = check_range(dynamics.damping(), 0.0, limits.max_damping, d + ".damping"); !e.empty()) {
+      return e;
+    }
+    // The tool and the mass meet through the sampled contact spring: its mode must be well
+    // resolved (ω T ≤ 0.5, ω = √(K/m)), and the held contact force must not pump the mass
+    // (Colgate: B_contact + B_V > K T / 2).
+    const double T = limits.period_s;
+    const double K = out.stiffness;
+    if (dynamics.mass() < 4.0 * K * T * T) {
+      return d + ".mass: " + describe(dynamics.mass()) + " kg is too light for stiffness " +
+             describe(K) + " N/m at " + describe(1.0 / T) + " Hz: needs at least 4 K T^2 = " +
+             describe(4.0 * K * T * T) + " kg";
+    }
+    if (out.damping + dynamics.damping() <= 0.5 * K * T) {
+      return d + ".damping: impedance.damping + dynamics.damping must exceed K T / 2 = " +
+             describe(0.5 * K * T) + " N*s/m for the pushed mass to stay passive";
+    }
+    out.object_mass = dynamics.mass();
+    out.object_damping = dynamics.damping();
+  }
+
   switch (object.shape_case()) {
     case v1::Object::kHalfSpace: {
       const auto& normal = object.half_space().normal();

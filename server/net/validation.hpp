@@ -23,6 +23,8 @@ struct SceneLimits {
   std::size_t max_mesh_triangles = 20000;  // per mesh
   double max_friction = 10.0;       // μ_s, μ_d.
   double max_impedance_mass = 100.0;  // Unit: kg.
+  double max_object_mass = 1000.0;    // Virtual masses. Unit: kg.
+  double period_s = 1e-3;             // The loop period, for the sampled-stability checks. Unit: s.
 };
 
 /// Each returns an empty string on success, else "<path>: <what is wrong>". A mesh is validated

@@ -239,6 +239,34 @@ TEST_F(SceneVocabulary, EachItemReportsTheEnergyItExchangedWithTheDevice) {
   EXPECT_EQ(v.given_to_device, 0.0);
 }
 
+TEST_F(SceneVocabulary, TheHandPushesAVirtualMassAndEveryClientSeesWhereItWent_Eq7_1) {
+  Client client(config_for(server_));
+  Client watcher(config_for(server_));
+  // A 100 g ball on a rough floor (B_V = 4 N·s/m) 20 mm to the side of the tool.
+  auto ball = client.add_sphere({.center = {0.02, 0, 0.02}, .radius = 0.01,
+                                 .impedance = {.stiffness = 1000.0, .damping = 2.0},
+                                 .dynamics = {.mass = 0.1, .damping = 4.0}});
+  step_and_get(client, 100);
+  client.set_operator(OperatorInput::push({0.2, 0, 0}));
+  step_and_get(client, 1500);
+  const std::vector<ObjectState> seen = watcher.object_states();
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_EQ(seen[0].id, ball.id());
+  // Tool and ball move together at the terminal speed F / (B_V + b_tool) = 0.2 / 4.022 m/s.
+  EXPECT_NEAR(seen[0].velocity.x, 0.2 / 4.022, 1e-4);
+  EXPECT_GT(seen[0].position.x, 0.04);
+  EXPECT_NEAR(seen[0].position.y, 0.0, 1e-12);
+  // Too light for its contact stiffness at 1 kHz: refused with the bound it needs.
+  try {
+    auto feather = client.add_sphere({.center = {0, 0.05, 0}, .radius = 0.01,
+                                      .impedance = {.stiffness = 1000.0, .damping = 2.0},
+                                      .dynamics = {.mass = 0.001, .damping = 0.0}});
+    FAIL() << "a mass too light for its stiffness was accepted";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("dynamics.mass"), std::string::npos) << error.what();
+  }
+}
+
 /// Largest tool speed over the last `ticks` ticks, stepping one tick at a time. Unit: m/s.
 double peak_speed(Client& client, int ticks) {
   double peak = 0.0;

@@ -156,6 +156,8 @@ class Client {
   }
   /// Energy every object and field has exchanged with the device (GetSceneEnergy).
   std::vector<ItemEnergy> scene_energy();
+  /// Every virtual mass in the scene and where it is now (GetObjectStates).
+  std::vector<ObjectState> object_states();
   /// Replaces all of this session's objects and fields at once; if anything is refused, nothing
   /// changes. The server numbers the objects walls first, then spheres ("scene.objects[i]" in its
   /// messages). Handles from earlier calls go stale: their remove() and destructor do nothing and

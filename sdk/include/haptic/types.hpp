@@ -60,11 +60,19 @@ struct WallSpec {
   friend bool operator==(const WallSpec&, const WallSpec&) = default;
 };
 
+/// A virtual mass the tool can push (000 eq. 7.1): m Ẍ + B Ẋ = f. mass 0: the object is fixed.
+struct Dynamics {
+  double mass = 0.0;        ///< Unit: kg.
+  double damping = 0.0;     ///< B, viscous friction with the ground. Unit: N·s/m.
+  friend bool operator==(const Dynamics&, const Dynamics&) = default;
+};
+
 /// A solid sphere the tool is pushed out of.
 struct SphereSpec {
   Vec3 center{};            ///< Unit: m.
   double radius = 0.0;      ///< Unit: m. > 0.
   Impedance impedance{};
+  Dynamics dynamics{};      ///< mass > 0: the sphere can be pushed around
   friend bool operator==(const SphereSpec&, const SphereSpec&) = default;
 };
 
@@ -82,6 +90,7 @@ struct BoxSpec {
   Pose pose{};
   Vec3 half_extents{};      ///< Unit: m. Each > 0.
   Impedance impedance{};
+  Dynamics dynamics{};      ///< mass > 0: the box can be pushed around
 };
 
 /// A solid capsule along its pose's z axis: radius around the segment ±half_length.
@@ -90,6 +99,7 @@ struct CapsuleSpec {
   double radius = 0.0;       ///< Unit: m. > 0.
   double half_length = 0.0;  ///< Unit: m. >= 0.
   Impedance impedance{};
+  Dynamics dynamics{};
 };
 
 /// A triangle mesh in its pose's frame, rendered with a god object (thin parts hold).
@@ -214,6 +224,13 @@ struct StabilityReport {
   bool stable = false;                ///< the sampled loop in contact is stable (known devices)
   double max_stable_stiffness = 0.0;  ///< Unit: N/m.
   double max_pole_magnitude = 0.0;
+};
+
+/// Where a virtual mass has been pushed to.
+struct ObjectState {
+  std::uint64_t id = 0;
+  Vec3 position{};   ///< Its origin in W. Unit: m.
+  Vec3 velocity{};   ///< Unit: m/s.
 };
 
 /// Work one object or field has exchanged with the device since it was registered.

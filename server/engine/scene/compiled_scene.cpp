@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <variant>
 
 namespace haptic::engine {
@@ -26,9 +27,30 @@ ImpedanceDiscretization discretization_of(ContactLaw law) {
 /// Whether a primitive can take the stateless fast path.
 bool is_fast(const ObjectSpec& object) {
   return object.law == ContactLaw::kVelocity && object.static_friction == 0.0 &&
+         object.object_mass == 0.0 &&
          object.dynamic_friction == 0.0 &&
          (std::holds_alternative<HalfSpaceSpec>(object.shape) ||
           std::holds_alternative<SphereSpec>(object.shape));
+}
+
+/// Advances m Ẍ + B Ẋ = F (000 eq. 7.1) by dt with F held: with z = B dt / m,
+///   Ẋ₁ = Ẋ₀ e^{−z} + (F/m) dt φ(z),  X₁ = X₀ + dt (Ẋ₀ φ(z) + (F/m) dt g(z)),
+///   φ(z) = (1 − e^{−z})/z, g(z) = (z − 1 + e^{−z})/z² (series below z = 1e-3),
+/// the same exact step as the point-mass plant's. m > 0.
+void advance_virtual_mass(double m, double B, const Vec3& F, double dt, Vec3& X, Vec3& V) {
+  const double z = B * dt / m;
+  double phi, g;
+  if (z < 1e-3) {
+    phi = 1.0 - z / 2.0 + z * z / 6.0;
+    g = 0.5 - z / 6.0 + z * z / 24.0;
+  } else {
+    const double e = std::exp(-z);
+    phi = (1.0 - e) / z;
+    g = (z - 1.0 + e) / (z * z);
+  }
+  const Vec3 a = (1.0 / m) * F;
+  X += dt * (phi * V + (dt * g) * a);
+  V = std::exp(-z) * V + (dt * phi) * a;
 }
 
 /// Records one item's contribution this tick in its meter and publishes the totals. An item that
@@ -142,11 +164,14 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
           ImpedanceParams{object.stiffness, object.damping, object.impedance_mass},
           discretization_of(object.law), period_s);
     }
+    compiled.object_mass = object.object_mass;
+    compiled.object_damping = object.object_damping;
     compiled.ramp = entry.meta.ramp();
     compiled.state = static_cast<std::uint32_t>(state.contacts.size());
     compiled.meter = meter_index;
     ContactState contact_state;
     contact_state.key = entry.meta.state_key();
+    contact_state.id = entry.meta.id;
     contact_state.filter = ImpedanceFilter(compiled.weights);
     state.contacts.push_back(contact_state);
     scene.contacts.push_back(std::move(compiled));
@@ -171,6 +196,12 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
     scene.fields.push_back(std::move(compiled));
   }
 
+  state.motion = std::make_unique<std::atomic<double>[]>(6 * state.contacts.size());
+  for (const CompiledContact& contact : scene.contacts) {
+    const Vec3& p = contact.X_WO.p_WO;
+    const double start[6] = {p.x, p.y, p.z, 0.0, 0.0, 0.0};
+    for (int k = 0; k < 6; ++k) state.motion[6 * contact.state + k].store(start[k], std::memory_order_relaxed);
+  }
   scene.stages = (scene.half_spaces.empty() ? 0u : kStageHalfSpaces) |
                  (scene.spheres.empty() ? 0u : kStageSpheres) |
                  (scene.contacts.empty() ? 0u : kStageContacts) |
@@ -204,6 +235,8 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
         [](const ContactState& a, ContactState& b) {
           b.proxy = a.proxy;
           b.touching = a.touching;
+          b.displacement_W = a.displacement_W;
+          b.velocity_W = a.velocity_W;
           // The filter's weights are the new version's own; only its past samples carry over.
           b.filter.copy_history_from(a.filter);
         });
@@ -212,6 +245,22 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
           b.god = a.god;
           b.needs_rebase = a.needs_rebase;
         });
+  // A virtual mass's new version (a client moved or resized it) keeps the motion of its item's
+  // newest old version: the client's pose is where it started, the displacement is the pushing.
+  for (ContactState& fresh : new_state.contacts) {
+    const ContactState* newest = nullptr;
+    for (const ContactState& old : old_state.contacts) {
+      if (old.key == fresh.key) {
+        newest = nullptr;
+        break;
+      }
+      if (old.id == fresh.id && (!newest || old.key > newest->key)) newest = &old;
+    }
+    if (newest) {
+      fresh.displacement_W = newest->displacement_W;
+      fresh.velocity_W = newest->velocity_W;
+    }
+  }
   // A mesh version new to `to` takes over the god object of its item's newest old version.
   for (MeshState& fresh : new_state.meshes) {
     if (fresh.god.initialized) continue;
@@ -253,6 +302,24 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
     new_state.work_out[j].store(new_state.meters[j].work_out, std::memory_order_relaxed);
     new_state.work_in[j].store(new_state.meters[j].work_in, std::memory_order_relaxed);
   }
+}
+
+std::vector<ObjectMotion> object_motions(const CompiledScene& scene) {
+  const SceneState& state = *scene.state;
+  std::vector<ObjectMotion> out;
+  for (const CompiledContact& contact : scene.contacts) {
+    if (contact.object_mass <= 0.0) continue;
+    const ContactState& s = state.contacts[contact.state];
+    ObjectMotion motion;
+    motion.id = s.id;
+    const auto at = [&](int k) { return state.motion[6 * contact.state + k].load(std::memory_order_relaxed); };
+    motion.p_WO = {at(0), at(1), at(2)};
+    motion.v_WO = {at(3), at(4), at(5)};
+    // The live version of an item is compiled before its superseded ones: keep the first.
+    auto it = std::find_if(out.begin(), out.end(), [&](const ObjectMotion& m) { return m.id == motion.id; });
+    if (it == out.end()) out.push_back(motion);
+  }
+  return out;
 }
 
 std::vector<ItemEnergyTotals> energy_totals(const CompiledScene& scene) {
@@ -328,12 +395,16 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
       if (is_fading_out(contact.ramp)) out.ramping = true;
       ContactState& s = state.contacts[contact.state];
       const double gain = ramp_gain(contact.ramp, tick, ramp);
+      const bool moves = contact.object_mass > 0.0;
+      const ObjectPose X_WO = moves ? ObjectPose{contact.X_WO.p_WO + s.displacement_W, contact.X_WO.R_WO}
+                                    : contact.X_WO;
+      const Vec3 v_rel = moves ? v_WT - s.velocity_W : v_WT;  // the tool relative to the object
       ContactForce force;
       if (contact.law == ContactLaw::kVelocity) {
-        force = s.proxy.update(contact.shape, contact.X_WO, contact.material, p_WT, v_WT);
+        force = s.proxy.update(contact.shape, X_WO, contact.material, p_WT, v_rel);
       } else {
         // A discrete impedance on the sampled penetration along the closest point's normal.
-        const ShapeQuery q = query(contact.shape, contact.X_WO, p_WT);
+        const ShapeQuery q = query(contact.shape, X_WO, p_WT);
         if (q.signed_distance < 0.0) {
           if (!s.touching) {
             s.filter.reset();
@@ -351,6 +422,14 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
       }
       const Vec3 F = gain * force.F_T_W;
       meter(state, contact.meter, F, v_WT, dt);
+      if (moves) {
+        // 000 eq. 7.1 under the contact's reaction −F held over the tick, integrated exactly.
+        advance_virtual_mass(contact.object_mass, contact.object_damping, -1.0 * F, dt,
+                             s.displacement_W, s.velocity_W);
+        const Vec3 p = contact.X_WO.p_WO + s.displacement_W;
+        const double now[6] = {p.x, p.y, p.z, s.velocity_W.x, s.velocity_W.y, s.velocity_W.z};
+        for (int k = 0; k < 6; ++k) state.motion[6 * contact.state + k].store(now[k], std::memory_order_relaxed);
+      }
       if (!force.in_contact || gain == 0.0) continue;
       out.F_T_W += F;
       ++out.contact_count;

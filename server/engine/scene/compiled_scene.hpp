@@ -52,6 +52,8 @@ struct CompiledContact {
   ContactMaterial material;
   ContactLaw law = ContactLaw::kVelocity;
   ImpedanceWeights weights;  // for the discrete laws
+  double object_mass = 0.0;     // > 0: a virtual mass that moves (000 eq. 7.1). Unit: kg.
+  double object_damping = 0.0;  // B_V. Unit: N·s/m.
   ItemRamp ramp;
   std::uint32_t state = 0;   // index into SceneState::contacts
   std::uint32_t meter = 0;
@@ -87,9 +89,12 @@ struct CompiledField {
 /// Per item-version state of a stateful contact.
 struct ContactState {
   std::uint64_t key = 0;
+  std::uint64_t id = 0;   // the item; a new version of a virtual mass keeps its motion
   ContactProxy proxy;
   ImpedanceFilter filter;
   bool touching = false;  // the filter's contact has started
+  Vec3 displacement_W;    // a virtual mass: X(t), its origin's displacement from its pose. Unit: m.
+  Vec3 velocity_W;        // Ẋ(t). Unit: m/s.
 };
 
 struct MeshState {
@@ -111,6 +116,9 @@ struct SceneState {
   std::vector<std::uint8_t> meter_is_object;  // 1: an object, 0: a field
   std::unique_ptr<std::atomic<double>[]> work_out;  // J given to the device, per meter
   std::unique_ptr<std::atomic<double>[]> work_in;   // J absorbed from the device, per meter
+  /// Virtual masses' position and velocity (6 per contact: x, y, z, ẋ, ẏ, ż in W), published each
+  /// tick for ObjectStates. Units: m, m/s.
+  std::unique_ptr<std::atomic<double>[]> motion;
 };
 
 /// Which stages a compiled scene runs (docs/scene.md); an empty stage is skipped entirely.
@@ -148,6 +156,16 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
 /// energy of a version that `to` no longer holds is added to a version of the same item that it
 /// does, so an item's totals survive its updates. Does not allocate.
 void carry_state(const CompiledScene& from, const CompiledScene& to);
+
+/// A virtual mass's state, read off the loop.
+struct ObjectMotion {
+  std::uint64_t id = 0;
+  Vec3 p_WO;  // Where its origin is now. Unit: m.
+  Vec3 v_WO;  // Unit: m/s.
+};
+
+/// Off the loop: every virtual mass in `scene` (the newest version of each item).
+std::vector<ObjectMotion> object_motions(const CompiledScene& scene);
 
 /// One item's energy totals, read off the loop.
 struct ItemEnergyTotals {

@@ -73,6 +73,10 @@ struct ObjectSpec {
   double dynamic_friction = 0.0;  // μ_d ≤ μ_s.
   ContactLaw law = ContactLaw::kVelocity;
   std::variant<HalfSpaceSpec, SphereSpec, BoxSpec, CapsuleSpec, MeshShapeSpec> shape;
+  /// A virtual mass the tool can push (000 eq. 7.1, f_V = m_V Ẍ + B_V Ẋ): the object translates
+  /// under the reaction of its contact force. 0: fixed. Unit: kg.
+  double object_mass = 0.0;
+  double object_damping = 0.0;  // B_V, its viscous friction with the ground. Unit: N·s/m.
 };
 
 /// Potential U = 1/2 k |p - anchor|^2; F = -k (p - anchor) - b v, clipped to max_force if > 0.

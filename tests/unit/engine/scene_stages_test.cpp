@@ -174,6 +174,39 @@ TEST(SceneStages, EnergyMetersReportWhatEachItemExchangedWithTheDevice) {
   EXPECT_EQ(s.work_out[1].load(), 0.0);
 }
 
+TEST(SceneStages, AVirtualMassPushedAtConstantSpeedFeelsItsViscousFriction_Eq7_1) {
+  // A 0.2 kg box on a rough surface (B_V = 3 N·s/m), pushed by a tool moving at 0.05 m/s along x.
+  // Once the box has caught up, Ẍ = 0 and eq. 7.1 leaves f_V = B_V Ẋ = 0.15 N.
+  SceneDescription d;
+  ObjectSpec box;
+  box.stiffness = 2000.0;
+  box.damping = 5.0;
+  box.shape = BoxSpec{{0.01, 0.01, 0.01}};
+  box.p_WO = {0.02, 0, 0};
+  box.object_mass = 0.2;
+  box.object_damping = 3.0;
+  d.objects.push_back(object(1, 1, box));
+  const CompiledScene scene = compile_scene(d, 50, 1, kT);
+  const double v = 0.05;
+  SceneForce f;
+  for (int k = 0; k < 3000; ++k) {
+    f = evaluate_scene(scene, {0.005 + v * kT * k, 0, 0}, {v, 0, 0}, 100 + k, kT);
+  }
+  EXPECT_NEAR(-f.F_T_W.x, 3.0 * v, 1e-6);  // the tool feels B_V v pushing back
+  const std::vector<ObjectMotion> motions = object_motions(scene);
+  ASSERT_EQ(motions.size(), 1u);
+  EXPECT_EQ(motions[0].id, 1u);
+  EXPECT_NEAR(motions[0].v_WO.x, v, 1e-9);
+  // The box's face is where the tool is less the contact's penetration f / K — plus the tick the
+  // box has just moved (its state is reported after the step, the tool's was sampled before).
+  EXPECT_NEAR(motions[0].p_WO.x - 0.01 - (0.005 + v * kT * 2999), -3.0 * v / 2000.0 + v * kT, 1e-9);
+  // Left alone, it coasts to rest after X_stop = m v / B_V (the exact solution of eq. 7.1).
+  const double x_release = motions[0].p_WO.x;
+  for (int k = 0; k < 2000; ++k) evaluate_scene(scene, {-1, 0, 0}, {}, 4000 + k, kT);
+  EXPECT_NEAR(object_motions(scene)[0].p_WO.x - x_release, 0.2 * v / 3.0, 1e-6);
+  EXPECT_NEAR(object_motions(scene)[0].v_WO.x, 0.0, 1e-9);
+}
+
 TEST(SceneStages, EveryStateStageAllocatesNothingPerTick) {
   SceneDescription d;
   d.objects.push_back(object(1, 1, box_with_friction(0.5, 0.3)));
