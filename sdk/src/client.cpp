@@ -140,6 +140,12 @@ ObjectHandle Client::add_box(const BoxSpec& box) {
   return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
 }
 
+ObjectHandle Client::add_tangent_plane(const TangentPlaneSpec& plane) {
+  detail::ClientCore& core = require(core_);
+  const v1::ItemRef made = core.create_object(detail::to_proto(plane));
+  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
+}
+
 ObjectHandle Client::add_capsule(const CapsuleSpec& capsule) {
   detail::ClientCore& core = require(core_);
   const v1::ItemRef made = core.create_object(detail::to_proto(capsule));
@@ -395,6 +401,10 @@ void ObjectHandle::update(const WallSpec& wall) {
 void ObjectHandle::update(const SphereSpec& sphere) {
   check(sphere);
   current("UpdateObject").update_object(id(), detail::to_proto(sphere));
+}
+
+void ObjectHandle::update(const TangentPlaneSpec& plane) {
+  current("UpdateObject").update_object(id(), detail::to_proto(plane));
 }
 
 void FieldHandle::update(const SpringFieldSpec& spring) {

@@ -20,6 +20,7 @@ void set_impedance(v1::Object& object, const Impedance& impedance) {
   out.set_static_friction(impedance.static_friction);
   out.set_dynamic_friction(impedance.dynamic_friction);
   out.set_mass(impedance.mass);
+  out.set_transparency_optimal_damping(impedance.transparency_optimal_damping);
   switch (impedance.law) {
     case ImpedanceLaw::kVelocity: out.set_law(v1::Impedance::VELOCITY); break;
     case ImpedanceLaw::kBackwardDifference: out.set_law(v1::Impedance::BACKWARD_DIFFERENCE); break;
@@ -64,6 +65,18 @@ v1::Object to_proto(const BoxSpec& box) {
   set_impedance(object, box.impedance);
   *object.mutable_box()->mutable_half_extents() = to_proto(box.half_extents);
   set_dynamics(object, box.dynamics);
+  return object;
+}
+
+v1::Object to_proto(const TangentPlaneSpec& plane) {
+  v1::Object object;
+  set_pose(object, plane.pose);
+  set_impedance(object, plane.impedance);
+  auto* out = object.mutable_tangent_plane();
+  *out->mutable_normal() = to_proto(plane.normal);
+  *out->mutable_reference() = to_proto(plane.reference);
+  out->set_tangential_stiffness(plane.tangential_stiffness);
+  out->set_tangential_damping(plane.tangential_damping);
   return object;
 }
 
@@ -253,6 +266,8 @@ StabilityReport from_proto(const v1::StabilityReport& r) {
   out.stable = r.stable();
   out.max_stable_stiffness = r.max_stable_stiffness();
   out.max_pole_magnitude = r.max_pole_magnitude();
+  out.chosen_damping = r.chosen_damping();
+  out.robustly_stable = r.robustly_stable();
   return out;
 }
 

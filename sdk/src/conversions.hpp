@@ -16,6 +16,7 @@ v1::Field to_proto(const SpringFieldSpec& spring);
 v1::Object to_proto(const BoxSpec& box);
 v1::Object to_proto(const CapsuleSpec& capsule);
 v1::Object to_proto(const MeshSpec& mesh);
+v1::Object to_proto(const TangentPlaneSpec& plane);
 v1::Field to_proto(const DistanceSpringSpec& spring);
 v1::Field to_proto(const PotentialFieldSpec& field);
 v1::Field to_proto(const LinearFieldSpec& field);

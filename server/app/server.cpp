@@ -60,6 +60,8 @@ Server::Server(const v1::ServerConfig& config)
   // The initial scene belongs to the server itself (session 0) and never expires.
   net::SceneLimits limits;
   limits.period_s = tick.period_s;
+  limits.device_mass = device_->description().apparent_mass;
+  limits.device_damping = device_->description().apparent_damping;
   std::vector<engine::ObjectSpec> objects(static_cast<std::size_t>(config.initial_scene().objects_size()));
   for (int i = 0; i < config.initial_scene().objects_size(); ++i) {
     if (auto e = net::to_object_spec(config.initial_scene().objects(i), "initial_scene.objects",

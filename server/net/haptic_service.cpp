@@ -1,5 +1,7 @@
 #include "net/haptic_service.hpp"
 
+#include "engine/analysis/wall_design.hpp"
+
 #include <cctype>
 #include <chrono>
 
@@ -10,8 +12,19 @@ namespace {
 /// The VELOCITY law uses the device's measured velocity; the margin models it by the backward
 /// difference, the discrete law closest to it.
 v1::StabilityReport stability_report(const engine::ObjectSpec& spec,
-                                     const runtime::DeviceDescription& device, double period_s) {
+                                     const runtime::DeviceDescription& device, double period_s,
+                                     bool optimal_damping = false) {
   v1::StabilityReport report;
+  if (optimal_damping && device.apparent_mass > 0.0) {
+    engine::WallDesignParams design;
+    design.mass = device.apparent_mass;
+    design.damping = device.apparent_damping;
+    design.wall_stiffness = spec.stiffness;
+    design.wall_damping = spec.damping;
+    design.sample_period = period_s;
+    report.set_chosen_damping(spec.damping);
+    report.set_robustly_stable(engine::robust_stability_norm(design, spec.damping) <= 1.0);
+  }
   report.set_colgate_min_damping(engine::colgate_bound(spec.stiffness, spec.damping, period_s));
   report.set_device_mass(device.apparent_mass);
   report.set_device_damping(device.apparent_damping);
@@ -145,7 +158,9 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext*, const v1::CreateO
     return status;
   }
   response->set_id(id);
-  *response->mutable_stability() = stability_report(spec, deps_.device, period_s());
+  *response->mutable_stability() =
+      stability_report(spec, deps_.device, period_s(),
+                       request->object().impedance().transparency_optimal_damping());
   return grpc::Status::OK;
 }
 
@@ -251,8 +266,10 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplyScen
       !status.ok()) {
     return status;
   }
-  for (const engine::ObjectSpec& object : objects) {
-    *response->add_object_stability() = stability_report(object, deps_.device, period_s());
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    *response->add_object_stability() = stability_report(
+        objects[i], deps_.device, period_s(),
+        request->scene().objects(static_cast<int>(i)).impedance().transparency_optimal_damping());
   }
   for (auto id : object_ids) response->add_object_ids(id);
   for (auto id : field_ids) response->add_field_ids(id);

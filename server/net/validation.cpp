@@ -4,6 +4,7 @@
 #include <memory>
 #include <sstream>
 
+#include "engine/analysis/wall_design.hpp"
 #include "engine/scene/shapes.hpp"
 
 namespace haptic::net {
@@ -166,6 +167,22 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
   const v1::Impedance& impedance = object.impedance();
   out.stiffness = impedance.stiffness();
   out.damping = impedance.damping();
+  if (impedance.transparency_optimal_damping()) {
+    if (limits.device_mass <= 0.0) {
+      return path + ".impedance.transparency_optimal_damping: needs a device that gives its mass "
+                    "and damping (this one does not)";
+    }
+    if (!(impedance.stiffness() > 0.0)) {
+      return path + ".impedance.transparency_optimal_damping: needs stiffness > 0";
+    }
+    engine::WallDesignParams design;
+    design.mass = limits.device_mass;
+    design.damping = limits.device_damping;
+    design.wall_stiffness = impedance.stiffness();
+    design.wall_damping = impedance.damping() > 0.0 ? impedance.damping() : 1.0;
+    design.sample_period = limits.period_s;
+    out.damping = engine::optimise_controller_damping(design).controller_damping;
+  }
   out.static_friction = impedance.static_friction();
   out.dynamic_friction = impedance.dynamic_friction();
   out.impedance_mass = impedance.mass();
@@ -272,10 +289,36 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
       out.shape = engine::MeshShapeSpec{std::move(model)};
       return {};
     }
+    case v1::Object::kTangentPlane: {
+      const v1::TangentPlane& plane = object.tangent_plane();
+      const std::string p = path + ".tangent_plane";
+      if (auto e = check_vec(plane.normal(), 1e6, p + ".normal"); !e.empty()) return e;
+      if (!(engine::norm(to_engine(plane.normal())) > 1e-9)) return p + ".normal: must be non-zero";
+      if (auto e = check_vec(plane.reference(), limits.max_abs_position, p + ".reference"); !e.empty()) {
+        return e;
+      }
+      if (auto e = check_range(plane.tangential_stiffness(), 0.0, limits.max_stiffness,
+                               p + ".tangential_stiffness");
+          !e.empty()) {
+        return e;
+      }
+      if (auto e = check_range(plane.tangential_damping(), 0.0, limits.max_damping,
+                               p + ".tangential_damping");
+          !e.empty()) {
+        return e;
+      }
+      if (out.static_friction > 0.0) {
+        return path + ".impedance.static_friction: a tangent plane's tangential law is its spring";
+      }
+      const engine::Vec3 n = to_engine(plane.normal());
+      out.shape = engine::TangentPlaneSpec{n * (1.0 / engine::norm(n)), to_engine(plane.reference()),
+                                           plane.tangential_stiffness(), plane.tangential_damping()};
+      return {};
+    }
     case v1::Object::SHAPE_NOT_SET:
       break;
   }
-  return path + ".shape: one of half_space, sphere, box, capsule, mesh is required";
+  return path + ".shape: one of half_space, sphere, box, capsule, mesh, tangent_plane is required";
 }
 
 std::string to_field_spec(const v1::Field& field, const std::string& path,

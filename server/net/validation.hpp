@@ -25,6 +25,9 @@ struct SceneLimits {
   double max_impedance_mass = 100.0;  // Unit: kg.
   double max_object_mass = 1000.0;    // Virtual masses. Unit: kg.
   double period_s = 1e-3;             // The loop period, for the sampled-stability checks. Unit: s.
+  /// The device as a mass-damper at its tool point (DeviceDescription::apparent_*); 0: unknown.
+  double device_mass = 0.0;     // Unit: kg.
+  double device_damping = 0.0;  // Unit: N*s/m.
 };
 
 /// Each returns an empty string on success, else "<path>: <what is wrong>". A mesh is validated

@@ -267,6 +267,43 @@ TEST_F(SceneVocabulary, TheHandPushesAVirtualMassAndEveryClientSeesWhereItWent_E
   }
 }
 
+TEST_F(SceneVocabulary, ATangentPlaneFromASlowHostHoldsTheToolAndPullsItToItsReferencePoint) {
+  Client client(config_for(server_));
+  // The host says: the surface near the tool is the plane z = 0 (normal +z), and the tool should
+  // rest at (5 mm, 0) on it. The hand pushes 1 N down.
+  auto plane = client.add_tangent_plane({.normal = {0, 0, 1}, .reference = {0.005, 0, 0},
+                                         .tangential_stiffness = 200.0, .tangential_damping = 2.0,
+                                         .impedance = {.stiffness = 1000.0, .damping = 1.0}});
+  step_and_get(client, 100);
+  client.set_operator(OperatorInput::push({0, 0, -1.0}));
+  State s = step_and_get(client, 3000);
+  EXPECT_NEAR(s.position.z, -0.001, 1e-5);  // F / K behind the plane
+  EXPECT_NEAR(s.position.x, 0.005, 1e-5);   // drawn to the reference point
+  // At 25 Hz the host sends the next plane, tilted and a little higher: the change cross-fades.
+  plane.update({.normal = {0, 0.1, 1}, .reference = {0.005, 0, 0.001},
+                .tangential_stiffness = 200.0, .tangential_damping = 2.0,
+                .impedance = {.stiffness = 1000.0, .damping = 1.0}});
+  double largest_step = 0.0;
+  double previous = s.force.z;
+  for (int k = 0; k < 40; ++k) {
+    s = step_and_get(client, 1);
+    largest_step = std::max(largest_step, std::abs(s.force.z - previous));
+    previous = s.force.z;
+  }
+  EXPECT_LT(largest_step, 0.1);  // no jump: at most a few percent of the 1 N per tick
+}
+
+TEST_F(SceneVocabulary, AWallCanAskForTheTransparencyOptimalDamping_001Eq11) {
+  Client client(config_for(server_));
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1},
+                               .impedance = {.stiffness = 1000.0, .damping = 1.0,
+                                             .transparency_optimal_damping = true}});
+  // Eom et al.'s device (0.01 kg, 0.022 N·s/m), K = 1000 N/m, w1 at 100 rad/s: B_c* ≈ 15.46 N·s/m
+  // (docs/devices.md), robustly stable at ±50 %.
+  EXPECT_NEAR(wall.stability().chosen_damping, 15.46, 0.05);
+  EXPECT_TRUE(wall.stability().robustly_stable);
+}
+
 /// Largest tool speed over the last `ticks` ticks, stepping one tick at a time. Unit: m/s.
 double peak_speed(Client& client, int ticks) {
   double peak = 0.0;

@@ -83,6 +83,7 @@ class ObjectHandle : public detail::ItemHandle {
   /// Replaces the object (a wall stays a wall only if you pass a WallSpec). Throws haptic::Error.
   void update(const WallSpec& wall);
   void update(const SphereSpec& sphere);
+  void update(const TangentPlaneSpec& plane);
   /// The server's stability report for the impedance as registered (add_* only; empty after
   /// apply_scene, which reports in Client::last_scene_stability()).
   const StabilityReport& stability() const noexcept { return stability_; }
@@ -134,6 +135,7 @@ class Client {
   FieldHandle add_spring_field(const SpringFieldSpec& spring);
   ObjectHandle add_box(const BoxSpec& box);
   ObjectHandle add_capsule(const CapsuleSpec& capsule);
+  ObjectHandle add_tangent_plane(const TangentPlaneSpec& plane);
   /// The server validates the mesh in full (InvalidArgumentError names the bad triangle or edge)
   /// and builds its hierarchy before it reaches the loop.
   ObjectHandle add_mesh(const MeshSpec& mesh);

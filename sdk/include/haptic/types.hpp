@@ -42,6 +42,9 @@ struct Impedance {
   double dynamic_friction = 0.0;  ///< 0 <= μ_d <= μ_s.
   ImpedanceLaw law = ImpedanceLaw::kVelocity;
   double mass = 0.0;       ///< M of the discrete laws. Unit: kg.
+  /// Let the server replace `damping` by Eom et al.'s transparency-optimal value for this
+  /// stiffness on its device (reported in StabilityReport::chosen_damping).
+  bool transparency_optimal_damping = false;
   friend bool operator==(const Impedance&, const Impedance&) = default;
 };
 
@@ -107,6 +110,19 @@ struct MeshSpec {
   Pose pose{};
   std::vector<Vec3> vertices;          ///< Unit: m, in the object frame.
   std::vector<std::uint32_t> indices;  ///< Three per triangle.
+  Impedance impedance{};
+};
+
+/// Russo's tangent-plane local model: the plane through the pose position with outward `normal`
+/// (object frame), the impedance along the normal behind it, and a tangential spring-damper that
+/// pulls the tool towards `reference` within the plane. For a slow host that sends the surface
+/// nearest the tool a few tens of times a second (update() it; the change cross-fades).
+struct TangentPlaneSpec {
+  Pose pose{};
+  Vec3 normal{0, 0, 1};
+  Vec3 reference{};                  ///< Object frame. Unit: m.
+  double tangential_stiffness = 0.0; ///< Unit: N/m.
+  double tangential_damping = 0.0;   ///< Unit: N·s/m.
   Impedance impedance{};
 };
 
@@ -224,6 +240,8 @@ struct StabilityReport {
   bool stable = false;                ///< the sampled loop in contact is stable (known devices)
   double max_stable_stiffness = 0.0;  ///< Unit: N/m.
   double max_pole_magnitude = 0.0;
+  double chosen_damping = 0.0;        ///< with transparency_optimal_damping. Unit: N·s/m.
+  bool robustly_stable = false;       ///< ‖L‖∞ ≤ 1 at chosen_damping (001 eq. 17)
 };
 
 /// Where a virtual mass has been pushed to.

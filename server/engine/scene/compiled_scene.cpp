@@ -152,7 +152,15 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
     std::visit(
         [&](const auto& shape) {
           using S = std::decay_t<decltype(shape)>;
-          if constexpr (!std::is_same_v<S, MeshShapeSpec>) compiled.shape = shape;
+          if constexpr (std::is_same_v<S, TangentPlaneSpec>) {
+            compiled.shape = HalfSpaceSpec{shape.normal_O};
+            compiled.tangent_plane = true;
+            compiled.reference_W = object.p_WO + rotate(object.R_WO, shape.reference_O);
+            compiled.tangential_stiffness = shape.tangential_stiffness;
+            compiled.tangential_damping = shape.tangential_damping;
+          } else if constexpr (!std::is_same_v<S, MeshShapeSpec>) {
+            compiled.shape = shape;
+          }
         },
         object.shape);
     compiled.X_WO = ObjectPose{object.p_WO, object.R_WO};
@@ -245,8 +253,10 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
           b.god = a.god;
           b.needs_rebase = a.needs_rebase;
         });
-  // A virtual mass's new version (a client moved or resized it) keeps the motion of its item's
-  // newest old version: the client's pose is where it started, the displacement is the pushing.
+  // A new version of a contact (a client changed its pose or impedance) continues from its item's
+  // newest old version: a virtual mass keeps its motion (the pose is where it started, the
+  // displacement is the pushing), a discrete law its past samples (no damper spike from a
+  // restarted difference), a friction proxy its place on the surface (in the object frame).
   for (ContactState& fresh : new_state.contacts) {
     const ContactState* newest = nullptr;
     for (const ContactState& old : old_state.contacts) {
@@ -259,6 +269,9 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
     if (newest) {
       fresh.displacement_W = newest->displacement_W;
       fresh.velocity_W = newest->velocity_W;
+      fresh.proxy = newest->proxy;
+      fresh.touching = newest->touching;
+      fresh.filter.copy_history_from(newest->filter);
     }
   }
   // A mesh version new to `to` takes over the god object of its item's newest old version.
@@ -419,6 +432,14 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
           s.touching = false;
           force.p_WP = p_WT;
         }
+      }
+      if (contact.tangent_plane && force.in_contact) {
+        // Russo ch. 5: within the plane, a spring-damper about the surface reference point.
+        const Vec3& n = force.n_W;
+        const Vec3 offset = p_WT - contact.reference_W;
+        const Vec3 offset_t = offset - dot(offset, n) * n;
+        const Vec3 v_t = v_rel - dot(v_rel, n) * n;
+        force.F_T_W += -contact.tangential_stiffness * offset_t - contact.tangential_damping * v_t;
       }
       const Vec3 F = gain * force.F_T_W;
       meter(state, contact.meter, F, v_WT, dt);

@@ -52,6 +52,12 @@ struct CompiledContact {
   ContactMaterial material;
   ContactLaw law = ContactLaw::kVelocity;
   ImpedanceWeights weights;  // for the discrete laws
+  /// A tangent plane (Russo ch. 5): the shape is its half-space; in contact, a tangential
+  /// spring-damper pulls the tool towards reference_W within the plane.
+  bool tangent_plane = false;
+  Vec3 reference_W;             // Unit: m.
+  double tangential_stiffness = 0.0;  // Unit: N/m.
+  double tangential_damping = 0.0;    // Unit: N·s/m.
   double object_mass = 0.0;     // > 0: a virtual mass that moves (000 eq. 7.1). Unit: kg.
   double object_damping = 0.0;  // B_V. Unit: N·s/m.
   ItemRamp ramp;

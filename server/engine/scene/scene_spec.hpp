@@ -39,6 +39,17 @@ struct CapsuleSpec {
   double half_length = 0.0;  // Half the length of the axis segment. Unit: m. >= 0 (0: a sphere).
 };
 
+/// Russo's tangent-plane local model (1990, ch. 5): the plane through the object origin with
+/// outward normal normal_O that a slow host sends for the surface nearest the tool, with a
+/// tangential spring-damper about a surface reference point (the normal law is the object's
+/// impedance). Acts only while the tool is behind the plane. Frame O.
+struct TangentPlaneSpec {
+  Vec3 normal_O{0.0, 0.0, 1.0};  // Non-zero; normalised at compile time.
+  Vec3 reference_O;              // The tangential spring's rest point. Unit: m.
+  double tangential_stiffness = 0.0;  // K_t. Unit: N/m.
+  double tangential_damping = 0.0;    // b_t. Unit: N·s/m.
+};
+
 /// A validated triangle mesh and its bounding-volume hierarchy, built once off the loop and
 /// shared (never copied) by every snapshot that holds the object.
 struct MeshModel {
@@ -72,7 +83,7 @@ struct ObjectSpec {
   double static_friction = 0.0;   // μ_s (needs the kVelocity law).
   double dynamic_friction = 0.0;  // μ_d ≤ μ_s.
   ContactLaw law = ContactLaw::kVelocity;
-  std::variant<HalfSpaceSpec, SphereSpec, BoxSpec, CapsuleSpec, MeshShapeSpec> shape;
+  std::variant<HalfSpaceSpec, SphereSpec, BoxSpec, CapsuleSpec, MeshShapeSpec, TangentPlaneSpec> shape;
   /// A virtual mass the tool can push (000 eq. 7.1, f_V = m_V Ẍ + B_V Ẋ): the object translates
   /// under the reaction of its contact force. 0: fixed. Unit: kg.
   double object_mass = 0.0;
