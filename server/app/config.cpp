@@ -116,6 +116,10 @@ std::string validate(const v1::ServerConfig& config) {
            std::to_string(period_us) + " us)";
   }
   if (auto e = validate_device(config); !e.empty()) return e;
+  if (!std::isfinite(config.session_force_budget()) || config.session_force_budget() < 0.0) {
+    return "session_force_budget: must be 0 (none) or a positive force in N, got " +
+           std::to_string(config.session_force_budget());
+  }
   const v1::PassivityConfig& passivity = config.passivity();
   if (!std::isfinite(passivity.max_damping()) || passivity.max_damping() < 0.0 ||
       passivity.max_damping() > 1e5) {

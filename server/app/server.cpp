@@ -55,7 +55,8 @@ Server::Server(const v1::ServerConfig& config)
 
   scene_ = std::make_unique<net::SceneStore>(
       scenes_, [this] { return static_cast<std::int64_t>(loop_->completed_ticks() + 1); },
-      tick.output_ramp_ticks, config.max_objects_per_session(), tick.period_s);
+      tick.output_ramp_ticks, config.max_objects_per_session(), tick.period_s,
+      config.session_force_budget());
 
   // The initial scene belongs to the server itself (session 0) and never expires.
   net::SceneLimits limits;

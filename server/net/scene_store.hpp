@@ -37,7 +37,7 @@ class SceneStore {
   /// period_s: the loop period (s), for the discrete impedance laws.
   SceneStore(runtime::SceneExchange& exchange, std::function<std::int64_t()> next_tick,
              std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session,
-             double period_s = 1e-3);
+             double period_s = 1e-3, double session_force_budget = 0.0);
 
   grpc::Status create(std::uint64_t session_id, ItemKind kind,
                       const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec,
@@ -85,6 +85,7 @@ class SceneStore {
   std::int64_t removal_ramp_ticks_;
   std::uint32_t max_items_per_session_;
   double period_s_;
+  double session_force_budget_;
 
   mutable std::mutex mutex_;
   std::map<std::uint64_t, Item> items_;  // by id; ordered, so compilation is deterministic

@@ -92,8 +92,10 @@ double ramp_gain(const ItemRamp& ramp, std::int64_t tick, std::int64_t ramp_tick
 }
 
 CompiledScene compile_scene(const SceneDescription& description, std::int64_t removal_ramp_ticks,
-                            std::uint64_t generation, double period_s) {
+                            std::uint64_t generation, double period_s,
+                            double session_force_budget) {
   CompiledScene scene;
+  scene.session_force_budget = session_force_budget;
   scene.removal_ramp_ticks = std::max<std::int64_t>(1, removal_ramp_ticks);
   scene.generation = generation;
   scene.period_s = period_s;
@@ -106,6 +108,13 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
   state.meter_is_object.reserve(items);
   state.work_out = std::make_unique<std::atomic<double>[]>(items);
   state.work_in = std::make_unique<std::atomic<double>[]>(items);
+  const auto slot_of = [&](std::uint64_t session_id) {
+    auto& sessions = state.slot_sessions;
+    const auto it = std::find(sessions.begin(), sessions.end(), session_id);
+    if (it != sessions.end()) return static_cast<std::uint32_t>(it - sessions.begin());
+    sessions.push_back(session_id);
+    return static_cast<std::uint32_t>(sessions.size() - 1);
+  };
   const auto new_meter = [&](const ItemMeta& meta, bool is_object) {
     state.meter_keys.push_back(meta.state_key());
     state.meter_ids.push_back(meta.id);
@@ -124,11 +133,13 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
         assert(norm(n_W) > 0.0);
         scene.half_spaces.push_back(CompiledHalfSpace{object.p_WO, n_W * (1.0 / norm(n_W)),
                                                       object.stiffness, object.damping,
-                                                      entry.meta.ramp(), meter_index});
+                                                      entry.meta.ramp(), meter_index,
+                                                      slot_of(entry.meta.session_id)});
       } else {
         const auto& sphere = std::get<SphereSpec>(object.shape);
         scene.spheres.push_back(CompiledSphere{object.p_WO, sphere.radius, object.stiffness,
-                                               object.damping, entry.meta.ramp(), meter_index});
+                                               object.damping, entry.meta.ramp(), meter_index,
+                                               slot_of(entry.meta.session_id)});
       }
       continue;
     }
@@ -141,6 +152,7 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
       compiled.ramp = entry.meta.ramp();
       compiled.state = static_cast<std::uint32_t>(state.meshes.size());
       compiled.meter = meter_index;
+      compiled.slot = slot_of(entry.meta.session_id);
       MeshState mesh_state;
       mesh_state.key = entry.meta.state_key();
       mesh_state.id = entry.meta.id;
@@ -177,6 +189,7 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
     compiled.ramp = entry.meta.ramp();
     compiled.state = static_cast<std::uint32_t>(state.contacts.size());
     compiled.meter = meter_index;
+    compiled.slot = slot_of(entry.meta.session_id);
     ContactState contact_state;
     contact_state.key = entry.meta.state_key();
     contact_state.id = entry.meta.id;
@@ -189,7 +202,8 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
     const std::uint32_t meter_index = new_meter(entry.meta, false);
     if (const auto* spring = std::get_if<SpringToPointSpec>(&entry.spec.kind)) {
       scene.springs.push_back(CompiledSpring{spring->anchor_W, spring->stiffness, spring->damping,
-                                             spring->max_force, entry.meta.ramp(), meter_index});
+                                             spring->max_force, entry.meta.ramp(), meter_index,
+                                             slot_of(entry.meta.session_id)});
       continue;
     }
     CompiledField compiled;
@@ -201,9 +215,12 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
         entry.spec.kind);
     compiled.ramp = entry.meta.ramp();
     compiled.meter = meter_index;
+    compiled.slot = slot_of(entry.meta.session_id);
     scene.fields.push_back(std::move(compiled));
   }
 
+  state.slot_force.assign(state.slot_sessions.size(), Vec3{});
+  state.slot_fields.assign(state.slot_sessions.size(), Vec3{});
   state.motion = std::make_unique<std::atomic<double>[]>(6 * state.contacts.size());
   for (const CompiledContact& contact : scene.contacts) {
     const Vec3& p = contact.X_WO.p_WO;
@@ -358,6 +375,18 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
   double deepest = 0.0;
   const std::int64_t ramp = scene.removal_ramp_ticks;
   SceneState& state = *scene.state;
+  // With a per-session budget each session's items add up apart first (clipped at the end).
+  const bool budgeted = scene.session_force_budget > 0.0;
+  if (budgeted) {
+    std::fill(state.slot_force.begin(), state.slot_force.end(), Vec3{});
+    std::fill(state.slot_fields.begin(), state.slot_fields.end(), Vec3{});
+  }
+  const auto contribute = [&](std::uint32_t slot, const Vec3& F, bool field) {
+    Vec3& total = budgeted ? state.slot_force[slot] : out.F_T_W;
+    Vec3& fields = budgeted ? state.slot_fields[slot] : out.F_fields_W;
+    total += F;
+    if (field) fields += F;
+  };
 
   if (scene.stages & kStageHalfSpaces) {
     for (const CompiledHalfSpace& wall : scene.half_spaces) {
@@ -371,7 +400,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
               : Vec3{};
       meter(state, wall.meter, F, v_WT, dt);
       if (gain == 0.0) continue;
-      out.F_T_W += F;
+      contribute(wall.slot, F, false);
       ++out.contact_count;
       if (d > deepest) {
         deepest = d;
@@ -394,7 +423,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
                      : Vec3{};
       meter(state, sphere.meter, F, v_WT, dt);
       if (gain == 0.0) continue;
-      out.F_T_W += F;
+      contribute(sphere.slot, F, false);
       ++out.contact_count;
       if (d > deepest) {
         deepest = d;
@@ -452,7 +481,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
         for (int k = 0; k < 6; ++k) state.motion[6 * contact.state + k].store(now[k], std::memory_order_relaxed);
       }
       if (!force.in_contact || gain == 0.0) continue;
-      out.F_T_W += F;
+      contribute(contact.slot, F, false);
       ++out.contact_count;
       if (force.penetration > deepest) {
         deepest = force.penetration;
@@ -476,7 +505,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
       const Vec3 F = gain * g.F_T_W;
       meter(state, mesh.meter, F, v_WT, dt);
       if (!g.in_contact || gain == 0.0) continue;
-      out.F_T_W += F;
+      contribute(mesh.slot, F, false);
       ++out.contact_count;
       const double depth = norm(g.p_WP - p_WT);
       if (depth > deepest) {
@@ -498,8 +527,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
       }
       F *= gain;
       meter(state, spring.meter, F, v_WT, dt);
-      out.F_T_W += F;
-      out.F_fields_W += F;
+      contribute(spring.slot, F, true);
     }
   }
 
@@ -509,8 +537,18 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
       const double gain = ramp_gain(field.ramp, tick, ramp);
       const Vec3 F = gain * evaluate_field(field.spec, p_WT, v_WT).F_T_W;
       meter(state, field.meter, F, v_WT, dt);
-      out.F_T_W += F;
-      out.F_fields_W += F;
+      contribute(field.slot, F, true);
+    }
+  }
+
+  if (budgeted) {
+    for (std::size_t slot = 0; slot < state.slot_force.size(); ++slot) {
+      const Vec3& F = state.slot_force[slot];
+      const double magnitude = norm(F);
+      const bool clip = state.slot_sessions[slot] != 0 && magnitude > scene.session_force_budget;
+      const double scale = clip ? scene.session_force_budget / magnitude : 1.0;
+      out.F_T_W += scale * F;
+      out.F_fields_W += scale * state.slot_fields[slot];
     }
   }
   return out;

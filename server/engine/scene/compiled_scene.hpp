@@ -32,6 +32,7 @@ struct CompiledHalfSpace {
   double damping;     // Unit: N*s/m.
   ItemRamp ramp;
   std::uint32_t meter = 0;  // index into SceneState::meters
+  std::uint32_t slot = 0;   // the owner's index into SceneState::slot_sessions
 };
 
 /// Stage 2, the fast path: a frictionless sphere with the measured-velocity law. Stateless.
@@ -42,6 +43,7 @@ struct CompiledSphere {
   double damping;     // Unit: N*s/m.
   ItemRamp ramp;
   std::uint32_t meter = 0;
+  std::uint32_t slot = 0;
 };
 
 /// Stage 3: any primitive that needs state — a box or capsule, friction (a ContactProxy), or a
@@ -63,6 +65,7 @@ struct CompiledContact {
   ItemRamp ramp;
   std::uint32_t state = 0;   // index into SceneState::contacts
   std::uint32_t meter = 0;
+  std::uint32_t slot = 0;
 };
 
 /// Stage 4: a triangle mesh rendered with a god object.
@@ -73,6 +76,7 @@ struct CompiledMesh {
   ItemRamp ramp;
   std::uint32_t state = 0;   // index into SceneState::meshes
   std::uint32_t meter = 0;
+  std::uint32_t slot = 0;
 };
 
 /// Stage 5: a spring pulling the tool to a point (the original field).
@@ -83,6 +87,7 @@ struct CompiledSpring {
   double max_force;   // Unit: N; 0 = no clip.
   ItemRamp ramp;
   std::uint32_t meter = 0;
+  std::uint32_t slot = 0;
 };
 
 /// Stage 6: every other energy field (engine/scene/fields).
@@ -90,6 +95,7 @@ struct CompiledField {
   EnergyFieldSpec spec;
   ItemRamp ramp;
   std::uint32_t meter = 0;
+  std::uint32_t slot = 0;
 };
 
 /// Per item-version state of a stateful contact.
@@ -125,6 +131,11 @@ struct SceneState {
   /// Virtual masses' position and velocity (6 per contact: x, y, z, ẋ, ẏ, ż in W), published each
   /// tick for ObjectStates. Units: m, m/s.
   std::unique_ptr<std::atomic<double>[]> motion;
+  /// The sessions that own items, and per session this tick's force and its fields' part (used
+  /// only with a per-session force budget). Units: N.
+  std::vector<std::uint64_t> slot_sessions;
+  std::vector<Vec3> slot_force;
+  std::vector<Vec3> slot_fields;
 };
 
 /// Which stages a compiled scene runs (docs/scene.md); an empty stage is skipped entirely.
@@ -146,6 +157,9 @@ struct CompiledScene {
   std::vector<CompiledField> fields;
   std::uint32_t stages = 0;              // SceneStage bits of the non-empty stages
   std::int64_t removal_ramp_ticks = 50;  // Ticks over which an item ramps in or out; >= 1.
+  /// Largest force one session's items may exert together (the server's own scene is exempt);
+  /// 0: no budget. Unit: N.
+  double session_force_budget = 0.0;
   double period_s = 1e-3;                // The loop period the discrete laws were built for.
   std::uint64_t generation = 0;          // Increases with every published scene.
   std::unique_ptr<SceneState> state = std::make_unique<SceneState>();  // written by the loop only
@@ -154,7 +168,8 @@ struct CompiledScene {
 /// Flattens a description into a compiled scene (off the loop; allocates). period_s: the loop
 /// period (s), for the discrete impedance laws.
 CompiledScene compile_scene(const SceneDescription& description, std::int64_t removal_ramp_ticks,
-                            std::uint64_t generation, double period_s = 1e-3);
+                            std::uint64_t generation, double period_s = 1e-3,
+                            double session_force_budget = 0.0);
 
 /// On the loop, when it adopts `to` after `from`: copies every item version's state that both
 /// hold (matched by key); a mesh version new in `to` inherits the god object of the newest

@@ -60,6 +60,9 @@ TEST(Config, BadValuesAreRejectedNamingTheField) {
                 .find("simulated_point_mass.initial_position"),
             std::string::npos);
   EXPECT_NE(error_of(R"({"real_time": {"spin_us": 5000}})").find("real_time.spin_us"), std::string::npos);
+  EXPECT_NE(error_of(R"({"session_force_budget": -1})").find("session_force_budget"), std::string::npos);
+  EXPECT_NE(error_of(R"({"passivity": {"max_damping": "NaN"}})").find("passivity.max_damping"),
+            std::string::npos);
   EXPECT_NE(error_of(R"({"initial_scene": {"objects": [{"sphere": {"radius": 0.01}}]}})")
                 .find("initial_scene.objects[0].impedance"),
             std::string::npos);

@@ -207,6 +207,27 @@ TEST(SceneStages, AVirtualMassPushedAtConstantSpeedFeelsItsViscousFriction_Eq7_1
   EXPECT_NEAR(object_motions(scene)[0].v_WO.x, 0.0, 1e-9);
 }
 
+TEST(SceneStages, EachSessionsForceIsClippedToItsBudgetAndTheServersSceneIsExempt) {
+  SceneDescription d;
+  const auto wall_of = [&](std::uint64_t session, std::uint64_t id, double k) {
+    ObjectSpec wall;
+    wall.stiffness = k;
+    wall.shape = HalfSpaceSpec{{0, 0, 1}};
+    ObjectEntry entry = object(id, id, wall);
+    entry.meta.session_id = session;
+    d.objects.push_back(entry);
+  };
+  wall_of(7, 1, 1000.0);   // session 7: two walls, 1 N + 3 N at 1 mm
+  wall_of(7, 2, 3000.0);
+  wall_of(8, 3, 1000.0);   // session 8: 1 N
+  wall_of(0, 4, 10000.0);  // the server's own scene: 10 N, no budget
+  const Vec3 p{0, 0, -0.001};
+  EXPECT_NEAR(evaluate_scene(compile_scene(d, 50, 1, kT), p, {}, 100, kT).F_T_W.z, 15.0, 1e-9);
+  const SceneForce f = evaluate_scene(compile_scene(d, 50, 1, kT, 2.5), p, {}, 100, kT);
+  EXPECT_NEAR(f.F_T_W.z, 2.5 + 1.0 + 10.0, 1e-9);  // session 7's 4 N clipped to 2.5 N
+  EXPECT_EQ(f.contact_count, 4u);
+}
+
 TEST(SceneStages, EveryStateStageAllocatesNothingPerTick) {
   SceneDescription d;
   d.objects.push_back(object(1, 1, box_with_friction(0.5, 0.3)));
