@@ -1,4 +1,5 @@
 #include "engine/control/disturbance_observer.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <cassert>
 #include <cmath>
@@ -7,12 +8,6 @@
 
 namespace haptic::engine {
 namespace {
-
-std::string bad(const char* name, const char* requirement, double value) {
-  std::ostringstream out;
-  out << name << ": " << requirement << ", got " << value;
-  return out.str();
-}
 
 /// g = B̄ / (1 − e^{−x}) = (M̄/T) · x / (1 − e^{−x}), x = B̄T/M̄, with its limit M̄/T at B̄ = 0.
 double nominal_inverse_gain(const DisturbanceObserverParams& p) {
@@ -25,16 +20,16 @@ double nominal_inverse_gain(const DisturbanceObserverParams& p) {
 
 std::string DisturbanceObserverParams::validate() const {
   if (!(std::isfinite(nominal_mass) && nominal_mass > 0.0)) {
-    return bad("nominal_mass", "must be finite and > 0", nominal_mass);
+    return bad_parameter("nominal_mass", "must be finite and > 0", nominal_mass);
   }
   if (!(std::isfinite(nominal_damping) && nominal_damping >= 0.0)) {
-    return bad("nominal_damping", "must be finite and >= 0", nominal_damping);
+    return bad_parameter("nominal_damping", "must be finite and >= 0", nominal_damping);
   }
   if (!(std::isfinite(sample_period) && sample_period > 0.0)) {
-    return bad("sample_period", "must be finite and > 0", sample_period);
+    return bad_parameter("sample_period", "must be finite and > 0", sample_period);
   }
   if (!(std::isfinite(cutoff) && cutoff > 0.0 && cutoff < std::numbers::pi / sample_period)) {
-    return bad("cutoff", "must be finite and in (0, π / sample_period)", cutoff);
+    return bad_parameter("cutoff", "must be finite and in (0, π / sample_period)", cutoff);
   }
   return {};
 }

@@ -1,30 +1,21 @@
 #include "engine/control/joint_walls.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <cassert>
 #include <cmath>
 #include <sstream>
 
 namespace haptic::engine {
-namespace {
-
-std::string bad(const char* name, const char* requirement, double value) {
-  std::ostringstream out;
-  out << name << ": " << requirement << ", got " << value;
-  return out.str();
-}
-
-}  // namespace
-
 std::string JointWallParams::validate() const {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   const auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  if (!non_negative(stiffness)) return bad("stiffness", "must be finite and >= 0", stiffness);
-  if (!non_negative(damping)) return bad("damping", "must be finite and >= 0", damping);
+  if (!non_negative(stiffness)) return bad_parameter("stiffness", "must be finite and >= 0", stiffness);
+  if (!non_negative(damping)) return bad_parameter("damping", "must be finite and >= 0", damping);
   if (!positive(velocity_cutoff)) {
-    return bad("velocity_cutoff", "must be finite and > 0", velocity_cutoff);
+    return bad_parameter("velocity_cutoff", "must be finite and > 0", velocity_cutoff);
   }
   if (!positive(sample_period)) {
-    return bad("sample_period", "must be finite and > 0", sample_period);
+    return bad_parameter("sample_period", "must be finite and > 0", sample_period);
   }
   return {};
 }

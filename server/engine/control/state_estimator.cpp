@@ -1,4 +1,5 @@
 #include "engine/control/state_estimator.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <algorithm>
 #include <cassert>
@@ -7,12 +8,6 @@
 
 namespace haptic::engine {
 namespace {
-
-std::string bad(const char* name, const char* requirement, double value) {
-  std::ostringstream out;
-  out << name << ": " << requirement << ", got " << value;
-  return out.str();
-}
 
 Matrix2 operator*(const Matrix2& a, const Matrix2& b) {
   return {a.m00 * b.m00 + a.m01 * b.m10, a.m00 * b.m01 + a.m01 * b.m11,
@@ -74,26 +69,26 @@ Matrix2 riccati_left_side(const Matrix2& A, const Vector2& C, const Matrix2& W, 
 std::string StateEstimatorParams::validate() const {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   const auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  if (!positive(inertia)) return bad("inertia", "must be finite and > 0", inertia);
-  if (!non_negative(damping)) return bad("damping", "must be finite and >= 0", damping);
+  if (!positive(inertia)) return bad_parameter("inertia", "must be finite and > 0", inertia);
+  if (!non_negative(damping)) return bad_parameter("damping", "must be finite and >= 0", damping);
   if (!positive(process_noise_position)) {
-    return bad("process_noise_position", "must be finite and > 0", process_noise_position);
+    return bad_parameter("process_noise_position", "must be finite and > 0", process_noise_position);
   }
   if (!non_negative(process_noise_torque)) {
-    return bad("process_noise_torque", "must be finite and >= 0", process_noise_torque);
+    return bad_parameter("process_noise_torque", "must be finite and >= 0", process_noise_torque);
   }
   if (!positive(measurement_noise)) {
-    return bad("measurement_noise", "must be finite and > 0", measurement_noise);
+    return bad_parameter("measurement_noise", "must be finite and > 0", measurement_noise);
   }
   if (!non_negative(friction_coulomb)) {
-    return bad("friction_coulomb", "must be finite and >= 0", friction_coulomb);
+    return bad_parameter("friction_coulomb", "must be finite and >= 0", friction_coulomb);
   }
   if (!positive(friction_velocity)) {
-    return bad("friction_velocity", "must be finite and > 0", friction_velocity);
+    return bad_parameter("friction_velocity", "must be finite and > 0", friction_velocity);
   }
-  if (!positive(torque_limit)) return bad("torque_limit", "must be finite and > 0", torque_limit);
+  if (!positive(torque_limit)) return bad_parameter("torque_limit", "must be finite and > 0", torque_limit);
   if (!positive(sample_period)) {
-    return bad("sample_period", "must be finite and > 0", sample_period);
+    return bad_parameter("sample_period", "must be finite and > 0", sample_period);
   }
   return {};
 }

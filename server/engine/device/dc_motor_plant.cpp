@@ -1,38 +1,29 @@
 #include "engine/device/dc_motor_plant.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <cassert>
 #include <cmath>
 #include <sstream>
 
 namespace haptic::engine {
-namespace {
-
-std::string bad(const char* name, const char* requirement, double value) {
-  std::ostringstream out;
-  out << name << ": " << requirement << ", got " << value;
-  return out.str();
-}
-
-}  // namespace
-
 std::string DcMotorParams::validate() const {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   const auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
   const auto unit_interval = [](double v) { return std::isfinite(v) && v > 0.0 && v <= 1.0; };
-  if (!positive(R_m)) return bad("R_m", "must be finite and > 0", R_m);
-  if (!positive(L_m)) return bad("L_m", "must be finite and > 0", L_m);
-  if (!positive(k_m)) return bad("k_m", "must be finite and > 0", k_m);
-  if (!positive(k_b)) return bad("k_b", "must be finite and > 0", k_b);
-  if (!positive(J_m)) return bad("J_m", "must be finite and > 0", J_m);
-  if (!non_negative(B_m)) return bad("B_m", "must be finite and >= 0", B_m);
-  if (!unit_interval(r)) return bad("r", "must be in (0, 1]", r);
-  if (!unit_interval(eta)) return bad("eta", "must be in (0, 1]", eta);
-  if (!non_negative(I_zz)) return bad("I_zz", "must be finite and >= 0", I_zz);
-  if (!non_negative(m)) return bad("m", "must be finite and >= 0", m);
-  if (!non_negative(l_c)) return bad("l_c", "must be finite and >= 0", l_c);
-  if (!non_negative(l)) return bad("l", "must be finite and >= 0", l);
-  if (!std::isfinite(alpha_c)) return bad("alpha_c", "must be finite", alpha_c);
-  if (!non_negative(g)) return bad("g", "must be finite and >= 0", g);
+  if (!positive(R_m)) return bad_parameter("R_m", "must be finite and > 0", R_m);
+  if (!positive(L_m)) return bad_parameter("L_m", "must be finite and > 0", L_m);
+  if (!positive(k_m)) return bad_parameter("k_m", "must be finite and > 0", k_m);
+  if (!positive(k_b)) return bad_parameter("k_b", "must be finite and > 0", k_b);
+  if (!positive(J_m)) return bad_parameter("J_m", "must be finite and > 0", J_m);
+  if (!non_negative(B_m)) return bad_parameter("B_m", "must be finite and >= 0", B_m);
+  if (!unit_interval(r)) return bad_parameter("r", "must be in (0, 1]", r);
+  if (!unit_interval(eta)) return bad_parameter("eta", "must be in (0, 1]", eta);
+  if (!non_negative(I_zz)) return bad_parameter("I_zz", "must be finite and >= 0", I_zz);
+  if (!non_negative(m)) return bad_parameter("m", "must be finite and >= 0", m);
+  if (!non_negative(l_c)) return bad_parameter("l_c", "must be finite and >= 0", l_c);
+  if (!non_negative(l)) return bad_parameter("l", "must be finite and >= 0", l);
+  if (!std::isfinite(alpha_c)) return bad_parameter("alpha_c", "must be finite", alpha_c);
+  if (!non_negative(g)) return bad_parameter("g", "must be finite and >= 0", g);
   return {};
 }
 

@@ -1,4 +1,5 @@
 #include "engine/device/five_bar.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <cassert>
 #include <cmath>
@@ -7,12 +8,6 @@
 
 namespace haptic::engine {
 namespace {
-
-std::string bad(const std::string& name, const char* requirement, double value) {
-  std::ostringstream out;
-  out << name << ": " << requirement << ", got " << value;
-  return out.str();
-}
 
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 bool non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
@@ -79,11 +74,11 @@ FiveBarFlexibleMode FiveBarFlexibleMode::from_beam(const HubPayloadBeamParams& b
 }
 
 std::string FiveBarFlexibleMode::validate() const {
-  if (!positive(omega)) return bad("mode.omega", "must be finite and > 0", omega);
-  if (!non_negative(zeta)) return bad("mode.zeta", "must be finite and >= 0", zeta);
-  if (!positive(rho)) return bad("mode.rho", "must be finite and > 0", rho);
-  if (!std::isfinite(beta)) return bad("mode.beta", "must be finite", beta);
-  if (!std::isfinite(tip_shape)) return bad("mode.tip_shape", "must be finite", tip_shape);
+  if (!positive(omega)) return bad_parameter("mode.omega", "must be finite and > 0", omega);
+  if (!non_negative(zeta)) return bad_parameter("mode.zeta", "must be finite and >= 0", zeta);
+  if (!positive(rho)) return bad_parameter("mode.rho", "must be finite and > 0", rho);
+  if (!std::isfinite(beta)) return bad_parameter("mode.beta", "must be finite", beta);
+  if (!std::isfinite(tip_shape)) return bad_parameter("mode.tip_shape", "must be finite", tip_shape);
   return {};
 }
 
@@ -98,37 +93,37 @@ FiveBarParams FiveBarParams::theoretical() {
 }
 
 std::string FiveBarParams::validate() const {
-  if (!positive(l1)) return bad("l1", "must be finite and > 0", l1);
-  if (!positive(l_f)) return bad("l_f", "must be finite and > 0", l_f);
-  if (!positive(alpha1)) return bad("alpha1", "must be finite and > 0", alpha1);
-  if (!positive(alpha2)) return bad("alpha2", "must be finite and > 0", alpha2);
-  if (!std::isfinite(alpha3)) return bad("alpha3", "must be finite", alpha3);
+  if (!positive(l1)) return bad_parameter("l1", "must be finite and > 0", l1);
+  if (!positive(l_f)) return bad_parameter("l_f", "must be finite and > 0", l_f);
+  if (!positive(alpha1)) return bad_parameter("alpha1", "must be finite and > 0", alpha1);
+  if (!positive(alpha2)) return bad_parameter("alpha2", "must be finite and > 0", alpha2);
+  if (!std::isfinite(alpha3)) return bad_parameter("alpha3", "must be finite", alpha3);
   // D's q1–q2 block [[α1, α3 C], [α3 C, α2]] must stay positive definite for every C in [−1, 1].
   if (alpha3 * alpha3 >= alpha1 * alpha2) {
-    return bad("alpha3", "must satisfy alpha3^2 < alpha1 * alpha2 (positive-definite inertia)",
+    return bad_parameter("alpha3", "must satisfy alpha3^2 < alpha1 * alpha2 (positive-definite inertia)",
                alpha3);
   }
-  if (!positive(J_hub)) return bad("J_hub", "must be finite and > 0", J_hub);
+  if (!positive(J_hub)) return bad_parameter("J_hub", "must be finite and > 0", J_hub);
   // D00 = J_h + α1 C1² + α2 C2² + 2 α3 C1 C2 ≥ J_h − |α3| when the q1–q2 block is definite.
   for (std::size_t i = 0; i < 3; ++i) {
     const std::string suffix = kJointSuffix[i];
     const CoulombViscousFriction& f = friction[i];
     if (!non_negative(f.coulomb)) {
-      return bad("friction" + suffix + ".coulomb", "must be finite and >= 0", f.coulomb);
+      return bad_parameter("friction" + suffix + ".coulomb", "must be finite and >= 0", f.coulomb);
     }
     if (!non_negative(f.viscous)) {
-      return bad("friction" + suffix + ".viscous", "must be finite and >= 0", f.viscous);
+      return bad_parameter("friction" + suffix + ".viscous", "must be finite and >= 0", f.viscous);
     }
     if (!positive(f.stick_velocity)) {
-      return bad("friction" + suffix + ".stick_velocity", "must be finite and > 0",
+      return bad_parameter("friction" + suffix + ".stick_velocity", "must be finite and > 0",
                  f.stick_velocity);
     }
     const double k = encoder_rad_per_count[i];
     if (!std::isfinite(k) || k == 0.0) {
-      return bad("encoder_rad_per_count" + suffix, "must be finite and non-zero", k);
+      return bad_parameter("encoder_rad_per_count" + suffix, "must be finite and non-zero", k);
     }
     if (!positive(torque_limit[i])) {
-      return bad("torque_limit" + suffix, "must be finite and > 0", torque_limit[i]);
+      return bad_parameter("torque_limit" + suffix, "must be finite and > 0", torque_limit[i]);
     }
   }
   return {};

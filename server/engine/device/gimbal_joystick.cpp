@@ -1,4 +1,5 @@
 #include "engine/device/gimbal_joystick.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <algorithm>
 #include <cassert>
@@ -7,12 +8,6 @@
 
 namespace haptic::engine {
 namespace {
-
-std::string bad(const std::string& name, const char* requirement, double value) {
-  std::ostringstream out;
-  out << name << ": " << requirement << ", got " << value;
-  return out.str();
-}
 
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 bool non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
@@ -118,38 +113,38 @@ Vec3 joystick_multiply_transposed(const JoystickMatrix& m, const Vec3& v) {
 // Parameters.
 
 std::string GimbalJoystickParams::validate() const {
-  if (!positive(r)) return bad("r", "must be finite and > 0", r);
-  if (!positive(R_min)) return bad("R_min", "must be finite and > 0", R_min);
-  if (!(std::isfinite(R_max) && R_max > R_min)) return bad("R_max", "must be finite and > R_min", R_max);
+  if (!positive(r)) return bad_parameter("r", "must be finite and > 0", r);
+  if (!positive(R_min)) return bad_parameter("R_min", "must be finite and > 0", R_min);
+  if (!(std::isfinite(R_max) && R_max > R_min)) return bad_parameter("R_max", "must be finite and > R_min", R_max);
   if (!(positive(gimbal_limit) && gimbal_limit < std::numbers::pi / 2.0)) {
-    return bad("gimbal_limit", "must be in (0, pi/2) (det J = 0 at pi/2, eq. 3.15)", gimbal_limit);
+    return bad_parameter("gimbal_limit", "must be in (0, pi/2) (det J = 0 at pi/2, eq. 3.15)", gimbal_limit);
   }
-  if (!positive(I_theta)) return bad("I_theta", "must be finite and > 0", I_theta);
-  if (!positive(I_phi)) return bad("I_phi", "must be finite and > 0", I_phi);
-  if (!positive(M_m)) return bad("M_m", "must be finite and > 0", M_m);
-  if (!positive(M_s)) return bad("M_s", "must be finite and > 0", M_s);
-  if (!positive(k_t)) return bad("k_t", "must be finite and > 0", k_t);
-  if (!non_negative(b_t)) return bad("b_t", "must be finite and >= 0", b_t);
-  if (!non_negative(F_d)) return bad("F_d", "must be finite and >= 0", F_d);
+  if (!positive(I_theta)) return bad_parameter("I_theta", "must be finite and > 0", I_theta);
+  if (!positive(I_phi)) return bad_parameter("I_phi", "must be finite and > 0", I_phi);
+  if (!positive(M_m)) return bad_parameter("M_m", "must be finite and > 0", M_m);
+  if (!positive(M_s)) return bad_parameter("M_s", "must be finite and > 0", M_s);
+  if (!positive(k_t)) return bad_parameter("k_t", "must be finite and > 0", k_t);
+  if (!non_negative(b_t)) return bad_parameter("b_t", "must be finite and >= 0", b_t);
+  if (!non_negative(F_d)) return bad_parameter("F_d", "must be finite and >= 0", F_d);
   if (!non_negative(gimbal_friction)) {
-    return bad("gimbal_friction", "must be finite and >= 0", gimbal_friction);
+    return bad_parameter("gimbal_friction", "must be finite and >= 0", gimbal_friction);
   }
-  if (!positive(stick_velocity)) return bad("stick_velocity", "must be finite and > 0", stick_velocity);
+  if (!positive(stick_velocity)) return bad_parameter("stick_velocity", "must be finite and > 0", stick_velocity);
   if (!positive(motor_time_constant)) {
-    return bad("motor_time_constant", "must be finite and > 0", motor_time_constant);
+    return bad_parameter("motor_time_constant", "must be finite and > 0", motor_time_constant);
   }
   if (!positive(brake_time_constant)) {
-    return bad("brake_time_constant", "must be finite and > 0", brake_time_constant);
+    return bad_parameter("brake_time_constant", "must be finite and > 0", brake_time_constant);
   }
-  if (!positive(motor_limit_gimbal)) return bad("motor_limit_gimbal", "must be finite and > 0", motor_limit_gimbal);
-  if (!positive(motor_limit_shaft)) return bad("motor_limit_shaft", "must be finite and > 0", motor_limit_shaft);
-  if (!positive(brake_limit_gimbal)) return bad("brake_limit_gimbal", "must be finite and > 0", brake_limit_gimbal);
-  if (!positive(brake_limit_shaft)) return bad("brake_limit_shaft", "must be finite and > 0", brake_limit_shaft);
+  if (!positive(motor_limit_gimbal)) return bad_parameter("motor_limit_gimbal", "must be finite and > 0", motor_limit_gimbal);
+  if (!positive(motor_limit_shaft)) return bad_parameter("motor_limit_shaft", "must be finite and > 0", motor_limit_shaft);
+  if (!positive(brake_limit_gimbal)) return bad_parameter("brake_limit_gimbal", "must be finite and > 0", brake_limit_gimbal);
+  if (!positive(brake_limit_shaft)) return bad_parameter("brake_limit_shaft", "must be finite and > 0", brake_limit_shaft);
   if (!(non_negative(brake_residual_gimbal) && brake_residual_gimbal <= brake_limit_gimbal)) {
-    return bad("brake_residual_gimbal", "must be in [0, brake_limit_gimbal]", brake_residual_gimbal);
+    return bad_parameter("brake_residual_gimbal", "must be in [0, brake_limit_gimbal]", brake_residual_gimbal);
   }
   if (!(non_negative(brake_residual_shaft) && brake_residual_shaft <= brake_limit_shaft)) {
-    return bad("brake_residual_shaft", "must be in [0, brake_limit_shaft]", brake_residual_shaft);
+    return bad_parameter("brake_residual_shaft", "must be in [0, brake_limit_shaft]", brake_residual_shaft);
   }
   return {};
 }
@@ -157,13 +152,13 @@ std::string GimbalJoystickParams::validate() const {
 std::string JoystickActuatorCommand::validate(const GimbalJoystickParams& params) const {
   for (std::size_t i = 0; i < 3; ++i) {
     if (!std::isfinite(motor[i])) {
-      return bad("motor[" + std::to_string(i) + "]", "must be finite", motor[i]);
+      return bad_parameter("motor[" + std::to_string(i) + "]", "must be finite", motor[i]);
     }
     const double limit = params.brake_limit(i);
     if (!(std::isfinite(brake[i]) && brake[i] >= 0.0 && brake[i] <= limit)) {
       std::ostringstream requirement;
       requirement << "must be in [0, " << limit << "]";
-      return bad("brake[" + std::to_string(i) + "]", requirement.str().c_str(), brake[i]);
+      return bad_parameter("brake[" + std::to_string(i) + "]", requirement.str().c_str(), brake[i]);
     }
   }
   return {};
@@ -275,12 +270,12 @@ double GimbalJoystickPlant::stick_band(double capacity, std::size_t i) const {
 // Eq. 3.38, cleaned.
 
 std::string CableTransmissionParams::validate() const {
-  if (!positive(m_s)) return bad("m_s", "must be finite and > 0", m_s);
-  if (!positive(k)) return bad("k", "must be finite and > 0", k);
-  if (!non_negative(F_d)) return bad("F_d", "must be finite and >= 0", F_d);
-  if (!positive(r)) return bad("r", "must be finite and > 0", r);
-  if (!non_negative(nu_alpha)) return bad("nu_alpha", "must be finite and >= 0", nu_alpha);
-  if (!positive(stick_velocity)) return bad("stick_velocity", "must be finite and > 0", stick_velocity);
+  if (!positive(m_s)) return bad_parameter("m_s", "must be finite and > 0", m_s);
+  if (!positive(k)) return bad_parameter("k", "must be finite and > 0", k);
+  if (!non_negative(F_d)) return bad_parameter("F_d", "must be finite and >= 0", F_d);
+  if (!positive(r)) return bad_parameter("r", "must be finite and > 0", r);
+  if (!non_negative(nu_alpha)) return bad_parameter("nu_alpha", "must be finite and >= 0", nu_alpha);
+  if (!positive(stick_velocity)) return bad_parameter("stick_velocity", "must be finite and > 0", stick_velocity);
   return {};
 }
 

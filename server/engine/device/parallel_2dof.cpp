@@ -1,4 +1,5 @@
 #include "engine/device/parallel_2dof.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <cassert>
 #include <cmath>
@@ -12,12 +13,6 @@ using parallel_2dof::Matrix2;
 using parallel_2dof::Planar;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::string bad(const char* name, const char* requirement, double value) {
-  std::ostringstream out;
-  out << name << ": " << requirement << ", got " << value;
-  return out.str();
-}
 
 double dot(const Planar& a, const Planar& b) { return a.x * b.x + a.y * b.y; }
 
@@ -33,38 +28,38 @@ std::string Parallel2DofParams::validate() const {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   const auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
   if (!non_negative(base_separation)) {
-    return bad("base_separation", "must be finite and >= 0", base_separation);
+    return bad_parameter("base_separation", "must be finite and >= 0", base_separation);
   }
   if (!positive(proximal_length)) {
-    return bad("proximal_length", "must be finite and > 0", proximal_length);
+    return bad_parameter("proximal_length", "must be finite and > 0", proximal_length);
   }
   if (!positive(distal_length)) {
-    return bad("distal_length", "must be finite and > 0", distal_length);
+    return bad_parameter("distal_length", "must be finite and > 0", distal_length);
   }
   if (!(proximal_length + distal_length > 0.5 * base_separation)) {
-    return bad("base_separation", "must be < 2 (proximal_length + distal_length) for a workspace",
+    return bad_parameter("base_separation", "must be < 2 (proximal_length + distal_length) for a workspace",
                base_separation);
   }
   if (!positive(joint_inertia)) {
-    return bad("joint_inertia", "must be finite and > 0", joint_inertia);
+    return bad_parameter("joint_inertia", "must be finite and > 0", joint_inertia);
   }
   if (!non_negative(end_effector_mass)) {
-    return bad("end_effector_mass", "must be finite and >= 0", end_effector_mass);
+    return bad_parameter("end_effector_mass", "must be finite and >= 0", end_effector_mass);
   }
   if (!non_negative(joint_viscous)) {
-    return bad("joint_viscous", "must be finite and >= 0", joint_viscous);
+    return bad_parameter("joint_viscous", "must be finite and >= 0", joint_viscous);
   }
   if (!non_negative(joint_coulomb)) {
-    return bad("joint_coulomb", "must be finite and >= 0", joint_coulomb);
+    return bad_parameter("joint_coulomb", "must be finite and >= 0", joint_coulomb);
   }
   if (!positive(stick_velocity)) {
-    return bad("stick_velocity", "must be finite and > 0", stick_velocity);
+    return bad_parameter("stick_velocity", "must be finite and > 0", stick_velocity);
   }
   if (!positive(max_joint_torque)) {
-    return bad("max_joint_torque", "must be finite and > 0", max_joint_torque);
+    return bad_parameter("max_joint_torque", "must be finite and > 0", max_joint_torque);
   }
   if (integration.substeps < 1) {
-    return bad("integration.substeps", "must be >= 1", static_cast<double>(integration.substeps));
+    return bad_parameter("integration.substeps", "must be >= 1", static_cast<double>(integration.substeps));
   }
   return {};
 }

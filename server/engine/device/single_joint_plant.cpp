@@ -1,4 +1,5 @@
 #include "engine/device/single_joint_plant.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <cassert>
 #include <cmath>
@@ -6,12 +7,6 @@
 
 namespace haptic::engine {
 namespace {
-
-std::string bad(const char* name, const char* requirement, double value) {
-  std::ostringstream out;
-  out << name << ": " << requirement << ", got " << value;
-  return out.str();
-}
 
 SingleJointParams with_row(double J, double B, double f) {
   SingleJointParams p;
@@ -26,13 +21,13 @@ SingleJointParams with_row(double J, double B, double f) {
 std::string SingleJointParams::validate() const {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   const auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  if (!positive(inertia)) return bad("inertia", "must be finite and > 0", inertia);
-  if (!non_negative(damping)) return bad("damping", "must be finite and >= 0", damping);
-  if (!non_negative(coulomb)) return bad("coulomb", "must be finite and >= 0", coulomb);
+  if (!positive(inertia)) return bad_parameter("inertia", "must be finite and > 0", inertia);
+  if (!non_negative(damping)) return bad_parameter("damping", "must be finite and >= 0", damping);
+  if (!non_negative(coulomb)) return bad_parameter("coulomb", "must be finite and >= 0", coulomb);
   if (!positive(stick_velocity)) {
-    return bad("stick_velocity", "must be finite and > 0", stick_velocity);
+    return bad_parameter("stick_velocity", "must be finite and > 0", stick_velocity);
   }
-  if (!positive(torque_limit)) return bad("torque_limit", "must be finite and > 0", torque_limit);
+  if (!positive(torque_limit)) return bad_parameter("torque_limit", "must be finite and > 0", torque_limit);
   return {};
 }
 

@@ -1,4 +1,5 @@
 #include "engine/scene/contact_proxy.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,26 +8,20 @@
 namespace haptic::engine {
 namespace {
 
-std::string bad(const char* field, const char* requirement, double value) {
-  std::ostringstream out;
-  out << field << ": " << requirement << ", got " << value;
-  return out.str();
-}
-
 bool non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
 
 }  // namespace
 
 std::string validate(const ContactMaterial& m) {
-  if (!non_negative(m.stiffness)) return bad("stiffness", "must be finite and >= 0", m.stiffness);
-  if (!non_negative(m.damping)) return bad("damping", "must be finite and >= 0", m.damping);
+  if (!non_negative(m.stiffness)) return bad_parameter("stiffness", "must be finite and >= 0", m.stiffness);
+  if (!non_negative(m.damping)) return bad_parameter("damping", "must be finite and >= 0", m.damping);
   if (!non_negative(m.static_friction)) {
-    return bad("static_friction", "must be finite and >= 0", m.static_friction);
+    return bad_parameter("static_friction", "must be finite and >= 0", m.static_friction);
   }
   if (!non_negative(m.dynamic_friction) || m.dynamic_friction > m.static_friction) {
     std::ostringstream requirement;
     requirement << "must be finite, >= 0 and <= static_friction (" << m.static_friction << ")";
-    return bad("dynamic_friction", requirement.str().c_str(), m.dynamic_friction);
+    return bad_parameter("dynamic_friction", requirement.str().c_str(), m.dynamic_friction);
   }
   return {};
 }

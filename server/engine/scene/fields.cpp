@@ -1,4 +1,5 @@
 #include "engine/scene/fields.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <algorithm>
 #include <cassert>
@@ -31,19 +32,6 @@ double smoothstep_slope(double t) { return 6.0 * t * (1.0 - t); }
 
 bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
 bool finite_non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
-
-std::string bad(const std::string& name, const char* requirement, double value) {
-  std::ostringstream out;
-  out << name << ": " << requirement << ", got " << value;
-  return out.str();
-}
-
-std::string bad(const std::string& name, const char* requirement, const Vec3& value) {
-  std::ostringstream out;
-  out << name << ": " << requirement << ", got (" << value.x << ", " << value.y << ", " << value.z
-      << ")";
-  return out.str();
-}
 
 std::string prefixed(const char* prefix, std::string message) {
   return message.empty() ? message : std::string(prefix) + "." + message;
@@ -269,17 +257,17 @@ FieldSample evaluate_field(const EnergyFieldSpec& spec, const Vec3& p_WT, const 
 std::string validate_field(const DistanceSpec& spec) {
   if (spec.kind != DistanceKind::kPoint && spec.kind != DistanceKind::kLine &&
       spec.kind != DistanceKind::kPlane && spec.kind != DistanceKind::kSphere) {
-    return bad("kind", "must be point, line, plane or sphere",
+    return bad_parameter("kind", "must be point, line, plane or sphere",
                static_cast<double>(static_cast<int>(spec.kind)));
   }
-  if (!is_finite(spec.origin_W)) return bad("origin_W", "must be finite", spec.origin_W);
+  if (!is_finite(spec.origin_W)) return bad_parameter("origin_W", "must be finite", spec.origin_W);
   if (spec.kind == DistanceKind::kLine || spec.kind == DistanceKind::kPlane) {
     if (!is_finite(spec.axis_W) || !(norm(spec.axis_W) > kMinAxisNorm)) {
-      return bad("axis_W", "must be finite with norm > 1e-12", spec.axis_W);
+      return bad_parameter("axis_W", "must be finite with norm > 1e-12", spec.axis_W);
     }
   }
   if (spec.kind == DistanceKind::kSphere && !finite_positive(spec.radius)) {
-    return bad("radius", "must be finite and > 0", spec.radius);
+    return bad_parameter("radius", "must be finite and > 0", spec.radius);
   }
   return {};
 }
@@ -287,35 +275,35 @@ std::string validate_field(const DistanceSpec& spec) {
 std::string validate_field(const PotentialFieldSpec& spec) {
   if (std::string m = prefixed("distance", validate_field(spec.distance)); !m.empty()) return m;
   if (spec.kind != PotentialKind::kPolynomial && spec.kind != PotentialKind::kKhatib) {
-    return bad("kind", "must be polynomial or khatib",
+    return bad_parameter("kind", "must be polynomial or khatib",
                static_cast<double>(static_cast<int>(spec.kind)));
   }
   if (spec.order < 2 || spec.order > kMaxPotentialOrder) {
-    return bad("order", "must be an integer in [2, 8]", static_cast<double>(spec.order));
+    return bad_parameter("order", "must be an integer in [2, 8]", static_cast<double>(spec.order));
   }
-  if (!finite_non_negative(spec.gain)) return bad("gain", "must be finite and >= 0", spec.gain);
+  if (!finite_non_negative(spec.gain)) return bad_parameter("gain", "must be finite and >= 0", spec.gain);
   if (spec.gradient != GradientMethod::kAnalytic &&
       spec.gradient != GradientMethod::kCentralDifference) {
-    return bad("gradient", "must be analytic or central_difference",
+    return bad_parameter("gradient", "must be analytic or central_difference",
                static_cast<double>(static_cast<int>(spec.gradient)));
   }
   if (!finite_positive(spec.difference_step) || spec.difference_step > kMaxDifferenceStep) {
-    return bad("difference_step", "must be finite, > 0 and <= 0.01", spec.difference_step);
+    return bad_parameter("difference_step", "must be finite, > 0 and <= 0.01", spec.difference_step);
   }
   if (spec.kind == PotentialKind::kPolynomial) {
-    if (!std::isfinite(spec.offset)) return bad("offset", "must be finite", spec.offset);
+    if (!std::isfinite(spec.offset)) return bad_parameter("offset", "must be finite", spec.offset);
     return {};
   }
   // Khatib: U and its gradient are unbounded as f → 0 (eq. 5.7); admitted only with the cap.
   if (!finite_positive(spec.influence_distance)) {
-    return bad("influence_distance", "must be finite and > 0", spec.influence_distance);
+    return bad_parameter("influence_distance", "must be finite and > 0", spec.influence_distance);
   }
   if (!finite_positive(spec.min_distance) || spec.min_distance >= spec.influence_distance) {
-    return bad("min_distance", "must be finite, > 0 and < influence_distance", spec.min_distance);
+    return bad_parameter("min_distance", "must be finite, > 0 and < influence_distance", spec.min_distance);
   }
   const PotentialProfile at_min = potential_profile(spec, spec.min_distance);
   if (!std::isfinite(at_min.U) || !std::isfinite(at_min.dU_df)) {
-    return bad("min_distance", "too small: the force there overflows", spec.min_distance);
+    return bad_parameter("min_distance", "too small: the force there overflows", spec.min_distance);
   }
   return {};
 }
@@ -323,57 +311,57 @@ std::string validate_field(const PotentialFieldSpec& spec) {
 std::string validate_field(const SpringFieldSpec& spec) {
   if (std::string m = prefixed("anchor", validate_field(spec.anchor)); !m.empty()) return m;
   if (!finite_non_negative(spec.stiffness)) {
-    return bad("stiffness", "must be finite and >= 0", spec.stiffness);
+    return bad_parameter("stiffness", "must be finite and >= 0", spec.stiffness);
   }
   if (!finite_non_negative(spec.damping)) {
-    return bad("damping", "must be finite and >= 0", spec.damping);
+    return bad_parameter("damping", "must be finite and >= 0", spec.damping);
   }
   if (!finite_non_negative(spec.max_force)) {
-    return bad("max_force", "must be finite and >= 0", spec.max_force);
+    return bad_parameter("max_force", "must be finite and >= 0", spec.max_force);
   }
   return {};
 }
 
 std::string validate_field(const LinearFieldSpec& spec) {
-  if (!is_finite(spec.origin_W)) return bad("origin_W", "must be finite", spec.origin_W);
-  if (!is_finite(spec.force_W)) return bad("force_W", "must be finite", spec.force_W);
+  if (!is_finite(spec.origin_W)) return bad_parameter("origin_W", "must be finite", spec.origin_W);
+  if (!is_finite(spec.force_W)) return bad_parameter("force_W", "must be finite", spec.force_W);
   static constexpr const char* kRows[] = {"jacobian[0]", "jacobian[1]", "jacobian[2]"};
   for (int i = 0; i < 3; ++i) {
-    if (!is_finite(spec.jacobian[i])) return bad(kRows[i], "must be finite", spec.jacobian[i]);
+    if (!is_finite(spec.jacobian[i])) return bad_parameter(kRows[i], "must be finite", spec.jacobian[i]);
   }
-  if (!finite_positive(spec.radius)) return bad("radius", "must be finite and > 0", spec.radius);
+  if (!finite_positive(spec.radius)) return bad_parameter("radius", "must be finite and > 0", spec.radius);
   if (!finite_positive(spec.fade_width) || spec.fade_width > spec.radius) {
-    return bad("fade_width", "must be finite, > 0 and <= radius", spec.fade_width);
+    return bad_parameter("fade_width", "must be finite, > 0 and <= radius", spec.fade_width);
   }
   return {};
 }
 
 std::string validate_field(const ViscousFieldSpec& spec) {
   if (!finite_non_negative(spec.damping)) {
-    return bad("damping", "must be finite and >= 0", spec.damping);
+    return bad_parameter("damping", "must be finite and >= 0", spec.damping);
   }
-  if (!is_finite(spec.center_W)) return bad("center_W", "must be finite", spec.center_W);
+  if (!is_finite(spec.center_W)) return bad_parameter("center_W", "must be finite", spec.center_W);
   if (!finite_non_negative(spec.radius)) {
-    return bad("radius", "must be finite and >= 0 (0: everywhere)", spec.radius);
+    return bad_parameter("radius", "must be finite and >= 0 (0: everywhere)", spec.radius);
   }
   if (!std::isfinite(spec.fade_width)) {
-    return bad("fade_width", "must be finite", spec.fade_width);
+    return bad_parameter("fade_width", "must be finite", spec.fade_width);
   }
   if (spec.radius > 0.0 && (!(spec.fade_width > 0.0) || spec.fade_width > spec.radius)) {
-    return bad("fade_width", "must be > 0 and <= radius when radius > 0", spec.fade_width);
+    return bad_parameter("fade_width", "must be > 0 and <= radius when radius > 0", spec.fade_width);
   }
   return {};
 }
 
 std::string validate_field(const DetentFieldSpec& spec) {
   if (std::string m = prefixed("distance", validate_field(spec.distance)); !m.empty()) return m;
-  if (!finite_positive(spec.depth)) return bad("depth", "must be finite and > 0", spec.depth);
-  if (!finite_positive(spec.radius)) return bad("radius", "must be finite and > 0", spec.radius);
+  if (!finite_positive(spec.depth)) return bad_parameter("depth", "must be finite and > 0", spec.depth);
+  if (!finite_positive(spec.radius)) return bad_parameter("radius", "must be finite and > 0", spec.radius);
   if (!finite_non_negative(spec.rim_height)) {
-    return bad("rim_height", "must be finite and >= 0", spec.rim_height);
+    return bad_parameter("rim_height", "must be finite and >= 0", spec.rim_height);
   }
   if (!finite_positive(spec.rim_width)) {
-    return bad("rim_width", "must be finite and > 0", spec.rim_width);
+    return bad_parameter("rim_width", "must be finite and > 0", spec.rim_width);
   }
   return {};
 }

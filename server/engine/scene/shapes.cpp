@@ -1,4 +1,5 @@
 #include "engine/scene/shapes.hpp"
+#include "engine/core/parameter_checks.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -30,24 +31,11 @@ Vec3 direction_or(const Vec3& v, double length, const Vec3& fallback) {
   return {scaled.x / scaled_length, scaled.y / scaled_length, scaled.z / scaled_length};
 }
 
-std::string bad(const std::string& field, const char* requirement, double value) {
-  std::ostringstream out;
-  out << field << ": " << requirement << ", got " << value;
-  return out.str();
-}
-
-std::string bad(const std::string& field, const char* requirement, const Vec3& value) {
-  std::ostringstream out;
-  out << field << ": " << requirement << ", got (" << value.x << ", " << value.y << ", "
-      << value.z << ")";
-  return out.str();
-}
-
 /// The first non-finite component of v, named field.x/.y/.z; "" when all are finite.
 std::string non_finite_component(const std::string& field, const Vec3& v) {
-  if (!std::isfinite(v.x)) return bad(field + ".x", "must be finite", v.x);
-  if (!std::isfinite(v.y)) return bad(field + ".y", "must be finite", v.y);
-  if (!std::isfinite(v.z)) return bad(field + ".z", "must be finite", v.z);
+  if (!std::isfinite(v.x)) return bad_parameter(field + ".x", "must be finite", v.x);
+  if (!std::isfinite(v.y)) return bad_parameter(field + ".y", "must be finite", v.y);
+  if (!std::isfinite(v.z)) return bad_parameter(field + ".z", "must be finite", v.z);
   return {};
 }
 
@@ -181,14 +169,14 @@ std::string validate(const HalfSpaceSpec& shape) {
   }
   const double length = norm(shape.normal_O);
   if (!(length > 0.0) || !std::isfinite(length)) {
-    return bad("normal_O", "must be non-zero with a finite length", shape.normal_O);
+    return bad_parameter("normal_O", "must be non-zero with a finite length", shape.normal_O);
   }
   return {};
 }
 
 std::string validate(const SphereSpec& shape) {
   if (!std::isfinite(shape.radius) || !(shape.radius > 0.0)) {
-    return bad("radius", "must be finite and > 0", shape.radius);
+    return bad_parameter("radius", "must be finite and > 0", shape.radius);
   }
   return {};
 }
@@ -198,17 +186,17 @@ std::string validate(const BoxSpec& shape) {
   const char* names[3] = {"half_extents.x", "half_extents.y", "half_extents.z"};
   for (int i = 0; i < 3; ++i) {
     const double v = component(h, i);
-    if (!std::isfinite(v) || !(v > 0.0)) return bad(names[i], "must be finite and > 0", v);
+    if (!std::isfinite(v) || !(v > 0.0)) return bad_parameter(names[i], "must be finite and > 0", v);
   }
   return {};
 }
 
 std::string validate(const CapsuleSpec& shape) {
   if (!std::isfinite(shape.radius) || !(shape.radius > 0.0)) {
-    return bad("radius", "must be finite and > 0", shape.radius);
+    return bad_parameter("radius", "must be finite and > 0", shape.radius);
   }
   if (!std::isfinite(shape.half_length) || !(shape.half_length >= 0.0)) {
-    return bad("half_length", "must be finite and >= 0", shape.half_length);
+    return bad_parameter("half_length", "must be finite and >= 0", shape.half_length);
   }
   return {};
 }
