@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <limits>
 #include <variant>
 
 namespace haptic::engine {
@@ -176,6 +177,15 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
         },
         object.shape);
     compiled.X_WO = ObjectPose{object.p_WO, object.R_WO};
+    compiled.bounding_radius = std::visit(
+        [](const auto& shape) {
+          using S = std::decay_t<decltype(shape)>;
+          if constexpr (std::is_same_v<S, SphereSpec>) return shape.radius;
+          if constexpr (std::is_same_v<S, BoxSpec>) return norm(shape.half_extents);
+          if constexpr (std::is_same_v<S, CapsuleSpec>) return shape.radius + shape.half_length;
+          return std::numeric_limits<double>::infinity();
+        },
+        object.shape);
     compiled.material = ContactMaterial{object.stiffness, object.damping, object.static_friction,
                                         object.dynamic_friction};
     compiled.law = object.law;
@@ -442,7 +452,13 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
                                     : contact.X_WO;
       const Vec3 v_rel = moves ? v_WT - s.velocity_W : v_WT;  // the tool relative to the object
       ContactForce force;
-      if (contact.law == ContactLaw::kVelocity) {
+      const Vec3 from_centre = p_WT - X_WO.p_WO;
+      if (dot(from_centre, from_centre) > contact.bounding_radius * contact.bounding_radius) {
+        // The tool is outside the shape's bounding sphere: no contact, and no shape query.
+        s.proxy.reset();
+        s.touching = false;
+        force.p_WP = p_WT;
+      } else if (contact.law == ContactLaw::kVelocity) {
         force = s.proxy.update(contact.shape, X_WO, contact.material, p_WT, v_rel);
       } else {
         // A discrete impedance on the sampled penetration along the closest point's normal.

@@ -54,6 +54,9 @@ struct CompiledContact {
   ContactMaterial material;
   ContactLaw law = ContactLaw::kVelocity;
   ImpedanceWeights weights;  // for the discrete laws
+  /// Radius of a sphere about X_WO.p_WO that holds the whole shape (a cheap early-out for a
+  /// far tool); infinite for a half-space or tangent plane. Unit: m.
+  double bounding_radius = 0.0;
   /// A tangent plane (Russo ch. 5): the shape is its half-space; in contact, a tangential
   /// spring-damper pulls the tool towards reference_W within the plane.
   bool tangent_plane = false;
