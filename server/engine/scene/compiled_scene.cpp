@@ -4,6 +4,7 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <variant>
 
 namespace haptic::engine {
@@ -94,7 +95,9 @@ double ramp_gain(const ItemRamp& ramp, std::int64_t tick, std::int64_t ramp_tick
 
 CompiledScene compile_scene(const SceneDescription& description, std::int64_t removal_ramp_ticks,
                             std::uint64_t generation, double period_s,
-                            double session_force_budget) {
+                            double session_force_budget, std::uint32_t ports) {
+  assert(ports >= 1);
+  ports = std::max<std::uint32_t>(1, ports);
   CompiledScene scene;
   scene.session_force_budget = session_force_budget;
   scene.removal_ramp_ticks = std::max<std::int64_t>(1, removal_ramp_ticks);
@@ -102,13 +105,14 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
   scene.period_s = period_s;
   SceneState& state = *scene.state;
   const std::size_t items = description.objects.size() + description.fields.size();
-  state.meters.resize(items);
+  state.ports = ports;
+  state.meters.resize(items * ports);
   state.meter_keys.reserve(items);
   state.meter_ids.reserve(items);
   state.meter_sessions.reserve(items);
   state.meter_is_object.reserve(items);
-  state.work_out = std::make_unique<std::atomic<double>[]>(items);
-  state.work_in = std::make_unique<std::atomic<double>[]>(items);
+  state.work_out = std::make_unique<std::atomic<double>[]>(items * ports);
+  state.work_in = std::make_unique<std::atomic<double>[]>(items * ports);
   const auto slot_of = [&](std::uint64_t session_id) {
     auto& sessions = state.slot_sessions;
     const auto it = std::find(sessions.begin(), sessions.end(), session_id);
@@ -195,6 +199,7 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
           discretization_of(object.law), period_s);
     }
     compiled.object_mass = object.object_mass;
+    if (object.object_mass > 0.0) scene.masses.push_back(static_cast<std::uint32_t>(scene.contacts.size()));
     compiled.object_damping = object.object_damping;
     compiled.ramp = entry.meta.ramp();
     compiled.state = static_cast<std::uint32_t>(state.contacts.size());
@@ -231,7 +236,18 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
 
   state.slot_force.assign(state.slot_sessions.size(), Vec3{});
   state.slot_fields.assign(state.slot_sessions.size(), Vec3{});
-  state.motion = std::make_unique<std::atomic<double>[]>(6 * state.contacts.size());
+  // Every further port starts with port 0's fresh state.
+  state.contacts_per_port = static_cast<std::uint32_t>(state.contacts.size());
+  state.meshes_per_port = static_cast<std::uint32_t>(state.meshes.size());
+  state.meters_per_port = static_cast<std::uint32_t>(items);
+  state.contacts.reserve(state.contacts.size() * ports);
+  state.meshes.reserve(state.meshes.size() * ports);
+  for (std::uint32_t port = 1; port < ports; ++port) {
+    for (std::uint32_t i = 0; i < state.contacts_per_port; ++i) state.contacts.push_back(state.contacts[i]);
+    for (std::uint32_t i = 0; i < state.meshes_per_port; ++i) state.meshes.push_back(state.meshes[i]);
+  }
+  state.motions.assign(state.contacts_per_port, ContactMotion{});
+  state.motion = std::make_unique<std::atomic<double>[]>(6 * state.contacts_per_port);
   for (const CompiledContact& contact : scene.contacts) {
     const Vec3& p = contact.X_WO.p_WO;
     const double start[6] = {p.x, p.y, p.z, 0.0, 0.0, 0.0};
@@ -252,7 +268,7 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
   // Both sides are short and compiled in item order, in which keys ascend except where a newer
   // version (a larger key) follows; a merge over key-sorted views would need scratch space, so
   // match by a forward scan with a moving start (linear when the orders agree, which is the rule).
-  const auto carry = [](const auto& old_items, auto& new_items, auto key_of, auto copy) {
+  const auto carry = [](const auto& old_items, auto&& new_items, auto key_of, auto copy) {
     std::size_t start = 0;
     for (auto& item : new_items) {
       const std::uint64_t key = key_of(item);
@@ -266,79 +282,109 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
       }
     }
   };
-  carry(old_state.contacts, new_state.contacts, [](const ContactState& s) { return s.key; },
-        [](const ContactState& a, ContactState& b) {
-          b.proxy = a.proxy;
-          b.touching = a.touching;
-          b.displacement_W = a.displacement_W;
-          b.velocity_W = a.velocity_W;
-          // The filter's weights are the new version's own; only its past samples carry over.
-          b.filter.copy_history_from(a.filter);
-        });
-  carry(old_state.meshes, new_state.meshes, [](const MeshState& s) { return s.key; },
-        [](const MeshState& a, MeshState& b) {
-          b.god = a.god;
-          b.needs_rebase = a.needs_rebase;
-        });
-  // A new version of a contact (a client changed its pose or impedance) continues from its item's
-  // newest old version: a virtual mass keeps its motion (the pose is where it started, the
-  // displacement is the pushing), a discrete law its past samples (no damper spike from a
-  // restarted difference), a friction proxy its place on the surface (in the object frame).
-  for (ContactState& fresh : new_state.contacts) {
-    const ContactState* newest = nullptr;
-    for (const ContactState& old : old_state.contacts) {
-      if (old.key == fresh.key) {
-        newest = nullptr;
+  const std::span<const ContactState> old_keys(old_state.contacts.data(), old_state.contacts_per_port);
+  const std::span<const ContactState> new_keys(new_state.contacts.data(), new_state.contacts_per_port);
+  // A virtual mass moves once, whichever tools push it: its motion carries once, by port 0's keys
+  // (every port holds the same item versions in the same order).
+  for (std::size_t j = 0; j < new_keys.size(); ++j) {
+    const ContactState* same = nullptr;
+    const ContactState* newest = nullptr;  // the item's newest old version, for a new version
+    for (const ContactState& old : old_keys) {
+      if (old.key == new_keys[j].key) {
+        same = &old;
         break;
       }
-      if (old.id == fresh.id && (!newest || old.key > newest->key)) newest = &old;
+      if (old.id == new_keys[j].id && (!newest || old.key > newest->key)) newest = &old;
     }
-    if (newest) {
-      fresh.displacement_W = newest->displacement_W;
-      fresh.velocity_W = newest->velocity_W;
-      fresh.proxy = newest->proxy;
-      fresh.touching = newest->touching;
-      fresh.filter.copy_history_from(newest->filter);
-    }
+    const ContactState* source = same ? same : newest;
+    if (!source) continue;
+    const ContactMotion& old_motion = old_state.motions[static_cast<std::size_t>(source - old_keys.data())];
+    new_state.motions[j].displacement_W = old_motion.displacement_W;
+    new_state.motions[j].velocity_W = old_motion.velocity_W;
   }
-  // A mesh version new to `to` takes over the god object of its item's newest old version.
-  for (MeshState& fresh : new_state.meshes) {
-    if (fresh.god.initialized) continue;
-    const MeshState* newest = nullptr;
-    for (const MeshState& old : old_state.meshes) {
-      if (old.id == fresh.id && old.key != fresh.key && (!newest || old.key > newest->key)) newest = &old;
+  const std::uint32_t ports = std::min(old_state.ports, new_state.ports);
+  for (std::uint32_t port = 0; port < ports; ++port) {
+    const std::span<const ContactState> old_contacts(
+        old_state.contacts.data() + std::size_t{port} * old_state.contacts_per_port, old_state.contacts_per_port);
+    const std::span<ContactState> new_contacts(
+        new_state.contacts.data() + std::size_t{port} * new_state.contacts_per_port, new_state.contacts_per_port);
+    carry(old_contacts, new_contacts, [](const ContactState& s) { return s.key; },
+          [](const ContactState& a, ContactState& b) {
+            b.proxy = a.proxy;
+            b.touching = a.touching;
+            // The filter's weights are the new version's own; only its past samples carry over.
+            b.filter.copy_history_from(a.filter);
+          });
+    // A new version of a contact (a client changed its pose or impedance) continues from its
+    // item's newest old version: a discrete law its past samples (no damper spike from a
+    // restarted difference), a friction proxy its place on the surface (in the object frame).
+    for (ContactState& fresh : new_contacts) {
+      const ContactState* newest = nullptr;
+      for (const ContactState& old : old_contacts) {
+        if (old.key == fresh.key) {
+          newest = nullptr;
+          break;
+        }
+        if (old.id == fresh.id && (!newest || old.key > newest->key)) newest = &old;
+      }
+      if (newest) {
+        fresh.proxy = newest->proxy;
+        fresh.touching = newest->touching;
+        fresh.filter.copy_history_from(newest->filter);
+      }
     }
-    if (newest && newest->god.initialized) {
-      fresh.god = newest->god;
-      fresh.needs_rebase = true;
+    const std::span<const MeshState> old_meshes(
+        old_state.meshes.data() + std::size_t{port} * old_state.meshes_per_port, old_state.meshes_per_port);
+    const std::span<MeshState> new_meshes(
+        new_state.meshes.data() + std::size_t{port} * new_state.meshes_per_port, new_state.meshes_per_port);
+    carry(old_meshes, new_meshes, [](const MeshState& s) { return s.key; },
+          [](const MeshState& a, MeshState& b) {
+            b.god = a.god;
+            b.needs_rebase = a.needs_rebase;
+          });
+    // A mesh version new to `to` takes over the god object of its item's newest old version.
+    for (MeshState& fresh : new_meshes) {
+      if (fresh.god.initialized) continue;
+      const MeshState* newest = nullptr;
+      for (const MeshState& old : old_meshes) {
+        if (old.id == fresh.id && old.key != fresh.key && (!newest || old.key > newest->key)) newest = &old;
+      }
+      if (newest && newest->god.initialized) {
+        fresh.god = newest->god;
+        fresh.needs_rebase = true;
+      }
     }
-  }
-  // Energy meters, by key, with their published totals.
-  std::size_t start = 0;
-  for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
-    for (std::size_t probe = 0; probe < old_state.meter_keys.size(); ++probe) {
-      const std::size_t i = (start + probe) % old_state.meter_keys.size();
-      if (old_state.meter_keys[i] == new_state.meter_keys[j]) {
-        new_state.meters[j] = old_state.meters[i];
-        start = i + 1;
-        break;
+    // Energy meters, by key.
+    const std::size_t old_base = std::size_t{port} * old_state.meters_per_port;
+    const std::size_t new_base = std::size_t{port} * new_state.meters_per_port;
+    std::size_t start = 0;
+    for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
+      for (std::size_t probe = 0; probe < old_state.meter_keys.size(); ++probe) {
+        const std::size_t i = (start + probe) % old_state.meter_keys.size();
+        if (old_state.meter_keys[i] == new_state.meter_keys[j]) {
+          new_state.meters[new_base + j] = old_state.meters[old_base + i];
+          start = i + 1;
+          break;
+        }
+      }
+    }
+    // A version that is gone leaves its totals to a remaining version of the same item.
+    for (std::size_t i = 0; i < old_state.meter_keys.size(); ++i) {
+      const auto& keys = new_state.meter_keys;
+      if (std::find(keys.begin(), keys.end(), old_state.meter_keys[i]) != keys.end()) continue;
+      for (std::size_t j = 0; j < keys.size(); ++j) {
+        if (new_state.meter_ids[j] == old_state.meter_ids[i]) {
+          EnergyMeter& heir = new_state.meters[new_base + j];
+          const EnergyMeter& gone = old_state.meters[old_base + i];
+          heir.work += gone.work;
+          heir.work_out += gone.work_out;
+          heir.work_in += gone.work_in;
+          break;
+        }
       }
     }
   }
-  // A version that is gone leaves its totals to a remaining version of the same item.
-  for (std::size_t i = 0; i < old_state.meter_keys.size(); ++i) {
-    const auto& keys = new_state.meter_keys;
-    if (std::find(keys.begin(), keys.end(), old_state.meter_keys[i]) != keys.end()) continue;
-    for (std::size_t j = 0; j < keys.size(); ++j) {
-      if (new_state.meter_ids[j] == old_state.meter_ids[i]) {
-        new_state.meters[j].work += old_state.meters[i].work;
-        new_state.meters[j].work_out += old_state.meters[i].work_out;
-        new_state.meters[j].work_in += old_state.meters[i].work_in;
-        break;
-      }
-    }
-  }
-  for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
+  for (std::size_t j = 0; j < new_state.meters.size(); ++j) {
     new_state.work_out[j].store(new_state.meters[j].work_out, std::memory_order_relaxed);
     new_state.work_in[j].store(new_state.meters[j].work_in, std::memory_order_relaxed);
   }
@@ -372,19 +418,32 @@ std::vector<ItemEnergyTotals> energy_totals(const CompiledScene& scene) {
       out.push_back({id, state.meter_sessions[i], state.meter_is_object[i] != 0, 0.0, 0.0});
       it = out.end() - 1;
     }
-    it->given += state.work_out[i].load(std::memory_order_relaxed);
-    it->absorbed += state.work_in[i].load(std::memory_order_relaxed);
+    for (std::size_t port = 0; port < state.ports; ++port) {
+      const std::size_t meter = port * state.meters_per_port + i;
+      it->given += state.work_out[meter].load(std::memory_order_relaxed);
+      it->absorbed += state.work_in[meter].load(std::memory_order_relaxed);
+    }
   }
   return out;
 }
 
-SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Vec3& v_WT,
-                          std::int64_t tick, double dt) {
+namespace {
+
+/// evaluate_scene_port's body, inlined into both entry points so that evaluate_scene's port 0
+/// costs nothing over a scene with one port.
+[[gnu::always_inline]] inline SceneForce evaluate_port(const CompiledScene& scene, std::uint32_t port,
+                                                       const Vec3& p_WT, const Vec3& v_WT,
+                                                       std::int64_t tick, double dt) {
   SceneForce out;
   out.p_WP = p_WT;
   double deepest = 0.0;
   const std::int64_t ramp = scene.removal_ramp_ticks;
   SceneState& state = *scene.state;
+  assert(port < state.ports);
+  // This port's slices of the per-port state.
+  ContactState* const contacts = state.contacts.data() + std::size_t{port} * state.contacts_per_port;
+  MeshState* const meshes = state.meshes.data() + std::size_t{port} * state.meshes_per_port;
+  const std::uint32_t meters = port * state.meters_per_port;
   // With a per-session budget each session's items add up apart first (clipped at the end).
   const bool budgeted = scene.session_force_budget > 0.0;
   if (budgeted) {
@@ -408,7 +467,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
               ? (gain * contact_magnitude(wall.stiffness, wall.damping, d, wall.normal_W, v_WT)) *
                     wall.normal_W
               : Vec3{};
-      meter(state, wall.meter, F, v_WT, dt);
+      meter(state, meters + wall.meter, F, v_WT, dt);
       if (gain == 0.0) continue;
       contribute(wall.slot, F, false);
       ++out.contact_count;
@@ -431,7 +490,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
       const Vec3 F =
           gain > 0.0 ? (gain * contact_magnitude(sphere.stiffness, sphere.damping, d, n, v_WT)) * n
                      : Vec3{};
-      meter(state, sphere.meter, F, v_WT, dt);
+      meter(state, meters + sphere.meter, F, v_WT, dt);
       if (gain == 0.0) continue;
       contribute(sphere.slot, F, false);
       ++out.contact_count;
@@ -445,12 +504,13 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
   if (scene.stages & kStageContacts) {
     for (const CompiledContact& contact : scene.contacts) {
       if (is_fading_out(contact.ramp)) out.ramping = true;
-      ContactState& s = state.contacts[contact.state];
+      ContactState& s = contacts[contact.state];
       const double gain = ramp_gain(contact.ramp, tick, ramp);
       const bool moves = contact.object_mass > 0.0;
-      const ObjectPose X_WO = moves ? ObjectPose{contact.X_WO.p_WO + s.displacement_W, contact.X_WO.R_WO}
+      ContactMotion& motion = state.motions[contact.state];
+      const ObjectPose X_WO = moves ? ObjectPose{contact.X_WO.p_WO + motion.displacement_W, contact.X_WO.R_WO}
                                     : contact.X_WO;
-      const Vec3 v_rel = moves ? v_WT - s.velocity_W : v_WT;  // the tool relative to the object
+      const Vec3 v_rel = moves ? v_WT - motion.velocity_W : v_WT;  // the tool relative to the object
       ContactForce force;
       const Vec3 from_centre = p_WT - X_WO.p_WO;
       if (dot(from_centre, from_centre) > contact.bounding_radius * contact.bounding_radius) {
@@ -487,15 +547,9 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
         force.F_T_W += -contact.tangential_stiffness * offset_t - contact.tangential_damping * v_t;
       }
       const Vec3 F = gain * force.F_T_W;
-      meter(state, contact.meter, F, v_WT, dt);
-      if (moves) {
-        // 000 eq. 7.1 under the contact's reaction −F held over the tick, integrated exactly.
-        advance_virtual_mass(contact.object_mass, contact.object_damping, -1.0 * F, dt,
-                             s.displacement_W, s.velocity_W);
-        const Vec3 p = contact.X_WO.p_WO + s.displacement_W;
-        const double now[6] = {p.x, p.y, p.z, s.velocity_W.x, s.velocity_W.y, s.velocity_W.z};
-        for (int k = 0; k < 6; ++k) state.motion[6 * contact.state + k].store(now[k], std::memory_order_relaxed);
-      }
+      meter(state, meters + contact.meter, F, v_WT, dt);
+      // The mass moves in advance_scene, under every port's reaction.
+      if (moves) motion.reaction_W += -1.0 * F;
       if (!force.in_contact || gain == 0.0) continue;
       contribute(contact.slot, F, false);
       ++out.contact_count;
@@ -509,7 +563,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
   if (scene.stages & kStageMeshes) {
     for (const CompiledMesh& mesh : scene.meshes) {
       if (is_fading_out(mesh.ramp)) out.ramping = true;
-      MeshState& s = state.meshes[mesh.state];
+      MeshState& s = meshes[mesh.state];
       if (!s.god.initialized) reset_god_object(s.god, mesh.pose, p_WT);
       if (s.needs_rebase) {
         rebase_god_object(s.god, mesh.model->bvh, mesh.pose, mesh.params);
@@ -519,7 +573,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
           update_god_object(s.god, mesh.model->bvh, mesh.pose, mesh.params, p_WT, v_WT);
       const double gain = ramp_gain(mesh.ramp, tick, ramp);
       const Vec3 F = gain * g.F_T_W;
-      meter(state, mesh.meter, F, v_WT, dt);
+      meter(state, meters + mesh.meter, F, v_WT, dt);
       if (!g.in_contact || gain == 0.0) continue;
       contribute(mesh.slot, F, false);
       ++out.contact_count;
@@ -542,7 +596,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
         if (magnitude > spring.max_force) F *= spring.max_force / magnitude;
       }
       F *= gain;
-      meter(state, spring.meter, F, v_WT, dt);
+      meter(state, meters + spring.meter, F, v_WT, dt);
       contribute(spring.slot, F, true);
     }
   }
@@ -552,7 +606,7 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
       if (is_fading_out(field.ramp)) out.ramping = true;
       const double gain = ramp_gain(field.ramp, tick, ramp);
       const Vec3 F = gain * evaluate_field(field.spec, p_WT, v_WT).F_T_W;
-      meter(state, field.meter, F, v_WT, dt);
+      meter(state, meters + field.meter, F, v_WT, dt);
       contribute(field.slot, F, true);
     }
   }
@@ -567,6 +621,35 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
       out.F_fields_W += scale * state.slot_fields[slot];
     }
   }
+  return out;
+}
+
+}  // namespace
+
+SceneForce evaluate_scene_port(const CompiledScene& scene, std::uint32_t port, const Vec3& p_WT,
+                               const Vec3& v_WT, std::int64_t tick, double dt) {
+  return evaluate_port(scene, port, p_WT, v_WT, tick, dt);
+}
+
+void advance_scene(const CompiledScene& scene, double dt) {
+  SceneState& state = *scene.state;
+  for (const std::uint32_t index : scene.masses) {
+    const CompiledContact& contact = scene.contacts[index];
+    ContactMotion& m = state.motions[contact.state];
+    // 000 eq. 7.1 under the ports' reactions held over the tick, integrated exactly.
+    advance_virtual_mass(contact.object_mass, contact.object_damping, m.reaction_W, dt,
+                         m.displacement_W, m.velocity_W);
+    m.reaction_W = Vec3{};
+    const Vec3 p = contact.X_WO.p_WO + m.displacement_W;
+    const double now[6] = {p.x, p.y, p.z, m.velocity_W.x, m.velocity_W.y, m.velocity_W.z};
+    for (int k = 0; k < 6; ++k) state.motion[6 * contact.state + k].store(now[k], std::memory_order_relaxed);
+  }
+}
+
+SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Vec3& v_WT,
+                          std::int64_t tick, double dt) {
+  const SceneForce out = evaluate_port(scene, 0, p_WT, v_WT, tick, dt);
+  if (!scene.masses.empty()) advance_scene(scene, dt);
   return out;
 }
 

@@ -101,17 +101,24 @@ struct CompiledField {
   std::uint32_t slot = 0;
 };
 
-/// Per item-version state of a stateful contact.
+/// Per item-version state of a stateful contact that belongs to one tool (one per port).
 struct ContactState {
   std::uint64_t key = 0;
-  std::uint64_t id = 0;   // the item; a new version of a virtual mass keeps its motion
+  std::uint64_t id = 0;   // the item; a new version of it inherits the proxy and filter
   ContactProxy proxy;
   ImpedanceFilter filter;
   bool touching = false;  // the filter's contact has started
-  Vec3 displacement_W;    // a virtual mass: X(t), its origin's displacement from its pose. Unit: m.
-  Vec3 velocity_W;        // Ẋ(t). Unit: m/s.
 };
 
+/// Per item-version motion of a stateful contact, shared by every port: a virtual mass moves once
+/// per tick under the reactions of all the tools touching it (000 eq. 7.1).
+struct ContactMotion {
+  Vec3 displacement_W;  // X(t), its origin's displacement from its pose. Unit: m.
+  Vec3 velocity_W;      // Ẋ(t). Unit: m/s.
+  Vec3 reaction_W;      // This tick's reactions −F summed over the ports so far. Unit: N.
+};
+
+/// Per item-version state of a mesh that belongs to one tool (one per port).
 struct MeshState {
   std::uint64_t key = 0;
   std::uint64_t id = 0;        // the item; a new version of it inherits the god object
@@ -119,23 +126,31 @@ struct MeshState {
   bool needs_rebase = false;   // inherited from an earlier version of the mesh
 };
 
-/// What the loop writes. Meters are reported through relaxed atomics (work_to_device,
-/// work_from_device per meter), read off the loop for GetSceneEnergy.
+/// What the loop writes. What belongs to one tool is held once per port, port-major: port p's
+/// entry for contact state i is contacts[p * contacts_per_port + i], and likewise for meshes and
+/// meters (meters_per_port is the number of items). Meters are reported through relaxed atomics
+/// (work_out, work_in per meter and port), read off the loop for GetSceneEnergy.
 struct SceneState {
-  std::vector<ContactState> contacts;
-  std::vector<MeshState> meshes;
-  std::vector<EnergyMeter> meters;
-  std::vector<std::uint64_t> meter_keys;  // the item version each meter belongs to
+  std::uint32_t ports = 1;                // tools evaluated against the scene each tick; >= 1
+  std::uint32_t contacts_per_port = 0;
+  std::uint32_t meshes_per_port = 0;
+  std::uint32_t meters_per_port = 0;
+  std::vector<ContactState> contacts;     // per port
+  std::vector<ContactMotion> motions;     // per contact state, shared by the ports
+  std::vector<MeshState> meshes;          // per port
+  std::vector<EnergyMeter> meters;        // per port
+  std::vector<std::uint64_t> meter_keys;  // the item version each meter belongs to (per item)
   std::vector<std::uint64_t> meter_ids;   // the item (for reports)
   std::vector<std::uint64_t> meter_sessions;  // its owner (for reports)
   std::vector<std::uint8_t> meter_is_object;  // 1: an object, 0: a field
-  std::unique_ptr<std::atomic<double>[]> work_out;  // J given to the device, per meter
-  std::unique_ptr<std::atomic<double>[]> work_in;   // J absorbed from the device, per meter
+  std::unique_ptr<std::atomic<double>[]> work_out;  // J given to the device, per meter and port
+  std::unique_ptr<std::atomic<double>[]> work_in;   // J absorbed from the device, per meter and port
   /// Virtual masses' position and velocity (6 per contact: x, y, z, ẋ, ẏ, ż in W), published each
   /// tick for ObjectStates. Units: m, m/s.
   std::unique_ptr<std::atomic<double>[]> motion;
-  /// The sessions that own items, and per session this tick's force and its fields' part (used
-  /// only with a per-session force budget). Units: N.
+  /// The sessions that own items, and per session one port's force this tick and its fields' part
+  /// (used only with a per-session force budget; cleared at the start of every port's evaluation,
+  /// so ports are evaluated one after another, on the loop). Units: N.
   std::vector<std::uint64_t> slot_sessions;
   std::vector<Vec3> slot_force;
   std::vector<Vec3> slot_fields;
@@ -158,6 +173,8 @@ struct CompiledScene {
   std::vector<CompiledMesh> meshes;
   std::vector<CompiledSpring> springs;
   std::vector<CompiledField> fields;
+  /// The contacts that are virtual masses (indices into `contacts`), which advance_scene moves.
+  std::vector<std::uint32_t> masses;
   std::uint32_t stages = 0;              // SceneStage bits of the non-empty stages
   std::int64_t removal_ramp_ticks = 50;  // Ticks over which an item ramps in or out; >= 1.
   /// Largest force one session's items may exert together (the server's own scene is exempt);
@@ -169,16 +186,19 @@ struct CompiledScene {
 };
 
 /// Flattens a description into a compiled scene (off the loop; allocates). period_s: the loop
-/// period (s), for the discrete impedance laws.
+/// period (s), for the discrete impedance laws. ports: how many tools (one per device) are
+/// evaluated against the scene each tick, each with its own contact state and meters; >= 1.
 CompiledScene compile_scene(const SceneDescription& description, std::int64_t removal_ramp_ticks,
                             std::uint64_t generation, double period_s = 1e-3,
-                            double session_force_budget = 0.0);
+                            double session_force_budget = 0.0, std::uint32_t ports = 1);
 
 /// On the loop, when it adopts `to` after `from`: copies every item version's state that both
-/// hold (matched by key); a mesh version new in `to` inherits the god object of the newest
-/// version of the same item in `from` and is rebased onto its new geometry at its first tick; the
-/// energy of a version that `to` no longer holds is added to a version of the same item that it
-/// does, so an item's totals survive its updates. Does not allocate.
+/// hold (matched by key), per port for each port both hold (a port only `to` has starts fresh)
+/// and once for a virtual mass's motion; a version new in `to` inherits its item's newest old
+/// version's proxy, filter history and motion, and a mesh version its god object, rebased onto its
+/// new geometry at its first tick; the energy of a version that `to` no longer holds is added to
+/// a version of the same item that it does, so an item's totals survive its updates. Does not
+/// allocate.
 void carry_state(const CompiledScene& from, const CompiledScene& to);
 
 /// A virtual mass's state, read off the loop.
@@ -200,8 +220,8 @@ struct ItemEnergyTotals {
   double absorbed = 0.0;  // Work done by the tool. Unit: J.
 };
 
-/// Off the loop: the energy totals of every item in `scene`, versions of one item summed, in item
-/// order. Reads the loop's relaxed atomics (a total may be a tick older than another).
+/// Off the loop: the energy totals of every item in `scene`, versions of one item and ports
+/// summed, in item order. Reads the loop's relaxed atomics (a total may be a tick older than another).
 std::vector<ItemEnergyTotals> energy_totals(const CompiledScene& scene);
 
 /// What the scene asks of the device at one tick.
@@ -213,8 +233,20 @@ struct SceneForce {
   bool ramping = false;          // Some item is fading out (removed, or an old version of a change).
 };
 
-/// Sums every contribution at tool position p_WT and velocity v_WT, updates the scene state and
-/// the energy meters (dt: the tick period, s). Does not allocate.
+/// One tool's force: sums every contribution at port `port`'s tool position p_WT and velocity
+/// v_WT, updates that port's contact state and energy meters (dt: the tick period, s), and adds
+/// the reaction −F of each virtual mass it touches to the mass's accumulator without moving it
+/// (advance_scene does, once every port has been evaluated). Each session's force budget applies
+/// to this port's force alone. port < the scene's ports. Does not allocate.
+SceneForce evaluate_scene_port(const CompiledScene& scene, std::uint32_t port, const Vec3& p_WT,
+                               const Vec3& v_WT, std::int64_t tick, double dt = 1e-3);
+
+/// Advances every virtual mass by dt under the reactions the ports accumulated this tick, held
+/// over the tick (000 eq. 7.1, integrated exactly), clears the accumulators and publishes the
+/// motion. Does not allocate.
+void advance_scene(const CompiledScene& scene, double dt = 1e-3);
+
+/// One tool, one tick: evaluate_scene_port for port 0, then advance_scene. Does not allocate.
 /// Contact with a half-space: d = dot(point - p, n) > 0 is the penetration, F = (k d - b dot(v, n)) n
 /// clamped so a wall only pushes (never pulls). Sphere: the same along the radial direction.
 SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Vec3& v_WT,

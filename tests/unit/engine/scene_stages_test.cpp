@@ -261,6 +261,200 @@ TEST(SceneStages, EveryStateStageAllocatesNothingPerTick) {
     }
   }
   EXPECT_EQ(haptic::test::allocations(), 0u);
+
+  // Two ports sharing the scene, with a virtual mass both push, carried from one port to two.
+  ObjectSpec mass;
+  mass.stiffness = 2000.0;
+  mass.damping = 5.0;
+  mass.shape = BoxSpec{{0.01, 0.01, 0.01}};
+  mass.p_WO = {0.0, 0.0, -0.02};
+  mass.object_mass = 0.2;
+  mass.object_damping = 3.0;
+  d.objects.push_back(object(5, 5, mass));
+  const CompiledScene one_port = compile_scene(d, 50, 3);
+  const CompiledScene two_ports = compile_scene(d, 50, 4, kT, 0.0, 2);
+  haptic::test::reset_allocations();
+  {
+    haptic::test::CountAllocations counting;
+    for (std::int64_t tick = 0; tick < 5000; ++tick) {
+      const double t = static_cast<double>(tick) * kT;
+      const Vec3 p{0.03 * std::sin(3 * t), 0.02 * std::cos(5 * t), 0.012 * std::sin(7 * t)};
+      const Vec3 v{0.09 * std::cos(3 * t), 0, 0};
+      if (tick < 2500) {
+        evaluate_scene(one_port, p, v, tick, kT);
+        continue;
+      }
+      if (tick == 2500) carry_state(one_port, two_ports);
+      evaluate_scene_port(two_ports, 0, p, v, tick, kT);
+      evaluate_scene_port(two_ports, 1, -1.0 * p, -1.0 * v, tick, kT);
+      advance_scene(two_ports, kT);
+    }
+  }
+  EXPECT_EQ(haptic::test::allocations(), 0u);
+}
+
+/// A 0.2 kg box on a rough surface (B_V = 3 N·s/m), 2000 N/m and 5 N·s/m, its -x face at x = 0.01.
+ObjectSpec virtual_mass_box() {
+  ObjectSpec box;
+  box.stiffness = 2000.0;
+  box.damping = 5.0;
+  box.shape = BoxSpec{{0.01, 0.01, 0.01}};
+  box.p_WO = {0.02, 0, 0};
+  box.object_mass = 0.2;
+  box.object_damping = 3.0;
+  return box;
+}
+
+TEST(SceneStages, TwoToolsPushingAVirtualMassTogetherEachFeelHalfItsViscousFriction_Eq7_1) {
+  // Two tools on the box's -x face (at y = ±5 mm), both moving along x at 0.05 m/s. The box moves
+  // once per tick under the sum of their reactions, so once it has caught up Ẍ = 0 and eq. 7.1
+  // gives f_V = B_V Ẋ = 0.15 N in all, shared equally: 0.075 N each (a single tool feels 0.15 N).
+  SceneDescription d;
+  d.objects.push_back(object(1, 1, virtual_mass_box()));
+  const CompiledScene scene = compile_scene(d, 50, 1, kT, 0.0, 2);
+  const double v = 0.05;
+  SceneForce f0, f1;
+  for (int k = 0; k < 3000; ++k) {
+    const double x = 0.005 + v * kT * k;
+    f0 = evaluate_scene_port(scene, 0, {x, 0.005, 0}, {v, 0, 0}, 100 + k, kT);
+    f1 = evaluate_scene_port(scene, 1, {x, -0.005, 0}, {v, 0, 0}, 100 + k, kT);
+    advance_scene(scene, kT);
+  }
+  EXPECT_NEAR(-f0.F_T_W.x, 3.0 * v / 2.0, 1e-6);
+  EXPECT_NEAR(-f1.F_T_W.x, 3.0 * v / 2.0, 1e-6);
+  const std::vector<ObjectMotion> motions = object_motions(scene);
+  ASSERT_EQ(motions.size(), 1u);
+  EXPECT_NEAR(motions[0].v_WO.x, v, 1e-9);
+  // The face is where the tools are less each contact's penetration (B_V v / 2) / K, plus the
+  // tick the box has just moved.
+  EXPECT_NEAR(motions[0].p_WO.x - 0.01 - (0.005 + v * kT * 2999), -1.5 * v / 2000.0 + v * kT, 1e-9);
+}
+
+TEST(SceneStages, AVirtualMassSqueezedFromBothSidesStaysWhileEachToolFeelsItsContact_Eq7_1) {
+  // Two tools close in on the box from opposite faces at 0.05 m/s each. Their reactions cancel in
+  // the sum that drives the box (eq. 7.1 with f_V = 0 from rest), so it stays where it is, and
+  // each tool feels its own contact K d + B v (v the tool's speed relative to the still box).
+  SceneDescription d;
+  d.objects.push_back(object(1, 1, virtual_mass_box()));
+  const CompiledScene scene = compile_scene(d, 50, 1, kT, 0.0, 2);
+  const double v = 0.05;
+  SceneForce f0, f1;
+  double x0 = 0.0, x1 = 0.0;
+  for (int k = 0; k < 200; ++k) {
+    x0 = 0.005 + v * kT * k;  // towards the -x face at x = 0.01
+    x1 = 0.035 - v * kT * k;  // towards the +x face at x = 0.03
+    f0 = evaluate_scene_port(scene, 0, {x0, 0, 0}, {v, 0, 0}, 100 + k, kT);
+    f1 = evaluate_scene_port(scene, 1, {x1, 0, 0}, {-v, 0, 0}, 100 + k, kT);
+    advance_scene(scene, kT);
+  }
+  const std::vector<ObjectMotion> motions = object_motions(scene);
+  ASSERT_EQ(motions.size(), 1u);
+  EXPECT_NEAR(motions[0].p_WO.x, 0.02, 1e-9);
+  EXPECT_NEAR(motions[0].v_WO.x, 0.0, 1e-9);
+  EXPECT_NEAR(-f0.F_T_W.x, 2000.0 * (x0 - 0.01) + 5.0 * v, 1e-6);
+  EXPECT_NEAR(f1.F_T_W.x, 2000.0 * (0.03 - x1) + 5.0 * v, 1e-6);
+  EXPECT_GT(-f0.F_T_W.x, 10.0);  // 4.95 mm deep: a real squeeze, not a touch
+  // One tool alone would have pushed the box away: it is the sum that drives the mass.
+  const CompiledScene alone = compile_scene(d, 50, 2, kT);
+  for (int k = 0; k < 200; ++k) evaluate_scene(alone, {0.005 + v * kT * k, 0, 0}, {v, 0, 0}, 100 + k, kT);
+  EXPECT_GT(object_motions(alone)[0].v_WO.x, 0.01);
+}
+
+TEST(SceneStages, EachPortHasItsOwnFrictionProxy) {
+  // Port 0 sticks on the friction box while port 1 slides elsewhere on its top face: each feels
+  // its own friction, port 0 the static spring K |P − S|, port 1 the dynamic cone μ_d F_n.
+  SceneDescription d;
+  d.objects.push_back(object(1, 1, box_with_friction(0.5, 0.3)));
+  const CompiledScene scene = compile_scene(d, 50, 1, kT, 0.0, 2);
+  // 2 mm into the top face (F_n = 2 N) at both ports.
+  evaluate_scene_port(scene, 0, {0, 0, 0.008}, {}, 100, kT);
+  evaluate_scene_port(scene, 1, {0.02, 0.02, 0.008}, {}, 100, kT);
+  advance_scene(scene, kT);
+  SceneForce f0, f1;
+  for (int k = 0; k < 100; ++k) {
+    f0 = evaluate_scene_port(scene, 0, {0.0005, 0, 0.008}, {}, 101 + k, kT);  // within the cone
+    f1 = evaluate_scene_port(scene, 1, {0.02, 0.02 + 0.0001 * k, 0.008}, {}, 101 + k, kT);
+    advance_scene(scene, kT);
+  }
+  EXPECT_NEAR(f0.F_T_W.x, -0.5, 1e-9);
+  EXPECT_NEAR(f0.F_T_W.y, 0.0, 1e-12);
+  EXPECT_NEAR(f0.F_T_W.z, 2.0, 1e-12);
+  EXPECT_NEAR(f1.F_T_W.x, 0.0, 1e-12);
+  EXPECT_NEAR(f1.F_T_W.y, -0.3 * 2.0, 1e-9);  // sliding: μ_d F_n
+  EXPECT_NEAR(f1.F_T_W.z, 2.0, 1e-12);
+}
+
+TEST(SceneStages, ASnapshotForMorePortsKeepsPortZerosStateAndStartsTheNewPortFresh) {
+  SceneDescription d;
+  d.objects.push_back(object(1, 1, box_with_friction(0.5, 0.3)));
+  ObjectSpec mass = virtual_mass_box();
+  mass.p_WO = {0.2, 0, 0};  // its -x face at x = 0.19
+  d.objects.push_back(object(2, 2, mass));
+  const CompiledScene before = compile_scene(d, 50, 1, kT);
+  const double v = 0.05;
+  for (int k = 0; k < 300; ++k) evaluate_scene(before, {0.185 + v * kT * k, 0, 0}, {v, 0, 0}, k, kT);
+  evaluate_scene(before, {0, 0, 0.008}, {}, 300, kT);
+  evaluate_scene(before, {0.0005, 0, 0.008}, {}, 301, kT);  // sticking, 0.5 N of friction
+  ASSERT_GT(object_motions(before)[0].v_WO.x, 0.0);          // the mass is coasting
+  // A second device joins: the same items, compiled for two ports.
+  const CompiledScene after = compile_scene(d, 50, 2, kT, 0.0, 2);
+  carry_state(before, after);
+  const std::vector<ItemEnergyTotals> energy_before = energy_totals(before);
+  const std::vector<ItemEnergyTotals> energy_after = energy_totals(after);
+  ASSERT_EQ(energy_after.size(), energy_before.size());
+  for (std::size_t i = 0; i < energy_before.size(); ++i) {
+    EXPECT_EQ(energy_after[i].given, energy_before[i].given);
+    EXPECT_EQ(energy_after[i].absorbed, energy_before[i].absorbed);
+  }
+  const SceneForce f0 = evaluate_scene_port(after, 0, {0.0006, 0, 0.008}, {}, 302, kT);
+  const SceneForce f1 = evaluate_scene_port(after, 1, {0.0006, 0, 0.008}, {}, 302, kT);
+  advance_scene(after, kT);
+  EXPECT_NEAR(f0.F_T_W.x, -0.6, 1e-9);   // port 0's proxy stayed where it stuck
+  EXPECT_NEAR(f1.F_T_W.x, 0.0, 1e-12);   // port 1's contact starts at the closest point
+  EXPECT_NEAR(f1.F_T_W.z, 2.0, 1e-12);
+  // The mass's motion carried once: it coasts on exactly as it would have in the old snapshot.
+  evaluate_scene(before, {0.0006, 0, 0.008}, {}, 302, kT);
+  const ObjectMotion expected = object_motions(before)[0];
+  const ObjectMotion carried = object_motions(after)[0];
+  EXPECT_EQ(carried.id, 2u);
+  EXPECT_DOUBLE_EQ(carried.p_WO.x, expected.p_WO.x);
+  EXPECT_DOUBLE_EQ(carried.v_WO.x, expected.v_WO.x);
+}
+
+TEST(SceneStages, EnergyTotalsSumTheMetersOfEveryPort) {
+  SceneDescription d;
+  ObjectSpec wall;
+  wall.stiffness = 1000.0;
+  wall.shape = HalfSpaceSpec{{0, 0, 1}};
+  d.objects.push_back(object(1, 1, wall));
+  d.fields.push_back(field(2, 2, FieldSpec{ViscousFieldSpec{0.5, {}, 0.0, 0.0}}));
+  const CompiledScene scene = compile_scene(d, 50, 1, kT, 0.0, 2);
+  // Port 0 goes 3 mm into the wall and back at 0.1 m/s; port 1 moves through free space above it
+  // at 0.2 m/s, so only the viscous field meters its work.
+  double z = 0.001;
+  const double v0 = 0.1, v1 = 0.2;
+  std::int64_t tick = 100;
+  for (int k = 0; k < 80; ++k, ++tick) {
+    const double vz = k < 40 ? -v0 : v0;
+    z += vz * kT;
+    evaluate_scene_port(scene, 0, {0, 0, z}, {0, 0, vz}, tick, kT);
+    evaluate_scene_port(scene, 1, {v1 * kT * k, 0, 0.5}, {v1, 0, 0}, tick, kT);
+    advance_scene(scene, kT);
+  }
+  const std::vector<ItemEnergyTotals> totals = energy_totals(scene);
+  ASSERT_EQ(totals.size(), 2u);
+  EXPECT_EQ(totals[0].id, 1u);
+  // The wall: port 0's ½ K d² each way, as with one tool (to within one tick's power, K d v T).
+  EXPECT_NEAR(totals[0].absorbed, 0.5 * 1000.0 * 0.003 * 0.003, 1000.0 * 0.003 * v0 * kT);
+  EXPECT_NEAR(totals[0].given, totals[0].absorbed, 1000.0 * 0.003 * v0 * kT + 1e-12);
+  // The viscous field: B v² over 79 intervals at each port, summed.
+  const double port0 = 0.5 * v0 * v0 * 79 * kT, port1 = 0.5 * v1 * v1 * 79 * kT;
+  const SceneState& s = *scene.state;
+  EXPECT_NEAR(s.work_in[1].load(), port0, 1e-12);
+  EXPECT_NEAR(s.work_in[s.meters_per_port + 1].load(), port1, 1e-12);
+  EXPECT_EQ(s.work_in[s.meters_per_port + 0].load(), 0.0);  // port 1 never touched the wall
+  EXPECT_NEAR(totals[1].absorbed, port0 + port1, 1e-12);
+  EXPECT_EQ(totals[1].given, 0.0);
 }
 
 }  // namespace
