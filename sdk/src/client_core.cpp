@@ -52,6 +52,7 @@ ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
   v1::OpenSessionRequest open;
   open.set_client_name(config_.client_name);
   open.set_api_version(kApiVersion);
+  open.set_device_index(config_.device_index);
   const auto opened = call<v1::OpenSessionRequest, v1::OpenSessionResponse>(
       "OpenSession", &v1::Haptic::Stub::OpenSession, open);
   session_id_ = opened.session_id();

@@ -11,24 +11,6 @@
 #include "net/validation.hpp"
 
 namespace haptic::app {
-namespace {
-
-void default_vec(v1::Vec3* v, double x, double y, double z) {
-  v->set_x(x);
-  v->set_y(y);
-  v->set_z(z);
-}
-
-std::string check_positive(double value, double max, const std::string& path) {
-  if (!std::isfinite(value) || value <= 0.0 || value > max) {
-    std::ostringstream out;
-    out << path << ": must be finite and in (0, " << max << "], got " << value;
-    return out.str();
-  }
-  return {};
-}
-
-}  // namespace
 
 void fill_defaults(v1::ServerConfig& config) {
   if (config.grpc_address().empty()) config.set_grpc_address("0.0.0.0:50051");
@@ -42,15 +24,10 @@ void fill_defaults(v1::ServerConfig& config) {
   if (config.max_sessions() == 0) config.set_max_sessions(32);
   if (config.max_objects_per_session() == 0) config.set_max_objects_per_session(256);
 
-  auto* device = config.mutable_simulated_point_mass();
-  if (device->mass() == 0.0) device->set_mass(0.01);           // Eom et al., experiment
-  if (device->damping() == 0.0) device->set_damping(0.022);    // Eom et al., experiment
-  if (device->substeps() == 0) device->set_substeps(10);
-  // Start 20 mm above the origin, clear of a wall at z = 0 (touch_wall's).
-  if (!device->has_initial_position()) default_vec(device->mutable_initial_position(), 0.0, 0.0, 0.02);
-  if (!device->has_workspace_min()) default_vec(device->mutable_workspace_min(), -0.1, -0.1, -0.1);
-  if (!device->has_workspace_max()) default_vec(device->mutable_workspace_max(), 0.1, 0.1, 0.1);
-  if (device->max_force() == 0.0) device->set_max_force(20.0);
+  fill_point_mass_defaults(*config.mutable_simulated_point_mass());
+  for (v1::DeviceConfig& extra : *config.mutable_extra_devices()) {
+    if (extra.has_simulated_point_mass()) fill_point_mass_defaults(*extra.mutable_simulated_point_mass());
+  }
 
   auto* real_time = config.mutable_real_time();
   if (!real_time->has_use_fifo()) real_time->set_use_fifo(true);
@@ -83,25 +60,7 @@ std::string validate(const v1::ServerConfig& config) {
   if (config.time_mode() != v1::REAL_TIME && config.time_mode() != v1::LOCKSTEP) {
     return "time_mode: must be REAL_TIME or LOCKSTEP";
   }
-  const auto& device = config.simulated_point_mass();
-  if (auto e = check_positive(device.mass(), 1e3, "simulated_point_mass.mass"); !e.empty()) return e;
-  if (!std::isfinite(device.damping()) || device.damping() < 0.0) {
-    return "simulated_point_mass.damping: must be finite and >= 0";
-  }
-  if (device.substeps() > 10000) return "simulated_point_mass.substeps: must be 1 to 10000";
-  if (auto e = check_positive(device.max_force(), 1e4, "simulated_point_mass.max_force"); !e.empty()) {
-    return e;
-  }
-  const auto& lo = device.workspace_min();
-  const auto& hi = device.workspace_max();
-  if (!(lo.x() < hi.x() && lo.y() < hi.y() && lo.z() < hi.z())) {
-    return "simulated_point_mass.workspace_min: must be below workspace_max on every axis";
-  }
-  const auto& p0 = device.initial_position();
-  if (p0.x() < lo.x() || p0.x() > hi.x() || p0.y() < lo.y() || p0.y() > hi.y() ||
-      p0.z() < lo.z() || p0.z() > hi.z()) {
-    return "simulated_point_mass.initial_position: must lie inside the workspace";
-  }
+  if (auto e = validate_point_mass(config.simulated_point_mass()); !e.empty()) return e;
   if (config.real_time().fifo_priority() < 1 || config.real_time().fifo_priority() > 99) {
     return "real_time.fifo_priority: must be 1 to 99";
   }

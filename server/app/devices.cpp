@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 #include <utility>
 
 #include "net/validation.hpp"
@@ -113,6 +114,150 @@ engine::Parallel2DofParams parallel_params(const v1::SimulatedParallelDobConfig&
 
 }  // namespace
 
+namespace {
+
+std::string check_positive(double value, double max, const std::string& path) {
+  if (!std::isfinite(value) || value <= 0.0 || value > max) {
+    std::ostringstream out;
+    out << path << ": must be finite and in (0, " << max << "], got " << value;
+    return out.str();
+  }
+  return {};
+}
+
+void default_vec(v1::Vec3* v, double x, double y, double z) {
+  v->set_x(x);
+  v->set_y(y);
+  v->set_z(z);
+}
+
+std::string validate_five_bar(const v1::SimulatedFiveBarConfig& five_bar) {
+  if (!five_bar.velocity().empty() && five_bar.velocity() != "difference" &&
+      five_bar.velocity() != "estimator") {
+    return "simulated_five_bar.velocity: must be \"difference\" or \"estimator\", got \"" +
+           five_bar.velocity() + "\"";
+  }
+  if (!five_bar.inertias().empty() && five_bar.inertias() != "identified" &&
+      five_bar.inertias() != "theoretical") {
+    return "simulated_five_bar.inertias: must be \"identified\" or \"theoretical\", got \"" +
+           five_bar.inertias() + "\"";
+  }
+  return validate_common("simulated_five_bar", five_bar.integrator(), five_bar.substeps(),
+                         five_bar.max_force());
+}
+
+std::string validate_joystick(const v1::SimulatedJoystickConfig& joystick) {
+  if (auto error = validate_common("simulated_joystick", joystick.integrator(),
+                                   joystick.substeps(), joystick.max_force());
+      !error.empty()) {
+    return error;
+  }
+  if (joystick.has_rearm_after_s() && !std::isfinite(joystick.rearm_after_s())) {
+    return "simulated_joystick.rearm_after_s: must be finite";
+  }
+  if (auto error = joystick_config(joystick).validate(); !error.empty()) {
+    if (error.rfind("initial.R:", 0) == 0) {
+      return "simulated_joystick.initial_shaft_length" + error.substr(std::string("initial.R").size());
+    }
+    return "simulated_joystick: " + error;
+  }
+  return {};
+}
+
+std::string validate_parallel_dob(const v1::SimulatedParallelDobConfig& dob, double rate) {
+  if (auto error = validate_common("simulated_parallel_dob", dob.integrator(), dob.substeps(),
+                                   dob.max_force());
+      !error.empty()) {
+    return error;
+  }
+  if (!std::isfinite(dob.cutoff_hz()) || dob.cutoff_hz() < 0.0 || dob.cutoff_hz() >= rate / 2.0) {
+    return "simulated_parallel_dob.cutoff_hz: must be 0 (default) or below half the loop rate (" +
+           std::to_string(rate / 2.0) + " Hz), got " + std::to_string(dob.cutoff_hz());
+  }
+  if (auto error = observer_params(dob, rate).validate(); !error.empty()) {
+    return "simulated_parallel_dob." + error;
+  }
+  if (auto error = parallel_params(dob).validate(); !error.empty()) {
+    return "simulated_parallel_dob: " + error;
+  }
+  return {};
+}
+
+/// One port's device; errors name the device's field ("simulated_joystick.substeps: ...").
+std::string validate_one(const v1::DeviceConfig& device, double rate) {
+  switch (device.device_case()) {
+    case v1::DeviceConfig::kSimulatedPointMass:
+      return validate_point_mass(device.simulated_point_mass());
+    case v1::DeviceConfig::kSimulatedDcMotor:
+      return validate_dc_motor(device.simulated_dc_motor());
+    case v1::DeviceConfig::kSimulatedFiveBar:
+      return validate_five_bar(device.simulated_five_bar());
+    case v1::DeviceConfig::kSimulatedJoystick:
+      return validate_joystick(device.simulated_joystick());
+    case v1::DeviceConfig::kSimulatedParallelDob:
+      return validate_parallel_dob(device.simulated_parallel_dob(), rate);
+    case v1::DeviceConfig::DEVICE_NOT_SET:
+      break;
+  }
+  return "device: must set one of simulated_point_mass, simulated_dc_motor, simulated_five_bar, "
+         "simulated_joystick, simulated_parallel_dob";
+}
+
+double loop_rate_of(const v1::ServerConfig& config) {
+  return config.loop_rate_hz() > 0.0 ? config.loop_rate_hz() : 1000.0;
+}
+
+}  // namespace
+
+void fill_point_mass_defaults(v1::SimulatedPointMassConfig& mass) {
+  if (mass.mass() == 0.0) mass.set_mass(0.01);           // Eom et al., experiment
+  if (mass.damping() == 0.0) mass.set_damping(0.022);    // Eom et al., experiment
+  if (mass.substeps() == 0) mass.set_substeps(10);
+  // Start 20 mm above the origin, clear of a wall at z = 0 (touch_wall's).
+  if (!mass.has_initial_position()) default_vec(mass.mutable_initial_position(), 0.0, 0.0, 0.02);
+  if (!mass.has_workspace_min()) default_vec(mass.mutable_workspace_min(), -0.1, -0.1, -0.1);
+  if (!mass.has_workspace_max()) default_vec(mass.mutable_workspace_max(), 0.1, 0.1, 0.1);
+  if (mass.max_force() == 0.0) mass.set_max_force(20.0);
+}
+
+std::string validate_point_mass(const v1::SimulatedPointMassConfig& device) {
+  if (auto e = check_positive(device.mass(), 1e3, "simulated_point_mass.mass"); !e.empty()) return e;
+  if (!std::isfinite(device.damping()) || device.damping() < 0.0) {
+    return "simulated_point_mass.damping: must be finite and >= 0";
+  }
+  if (device.substeps() > 10000) return "simulated_point_mass.substeps: must be 1 to 10000";
+  if (auto e = check_positive(device.max_force(), 1e4, "simulated_point_mass.max_force"); !e.empty()) {
+    return e;
+  }
+  const auto& lo = device.workspace_min();
+  const auto& hi = device.workspace_max();
+  if (!(lo.x() < hi.x() && lo.y() < hi.y() && lo.z() < hi.z())) {
+    return "simulated_point_mass.workspace_min: must be below workspace_max on every axis";
+  }
+  const auto& p0 = device.initial_position();
+  if (p0.x() < lo.x() || p0.x() > hi.x() || p0.y() < lo.y() || p0.y() > hi.y() ||
+      p0.z() < lo.z() || p0.z() > hi.z()) {
+    return "simulated_point_mass.initial_position: must lie inside the workspace";
+  }
+  return {};
+}
+
+v1::DeviceConfig primary_device(const v1::ServerConfig& config) {
+  v1::DeviceConfig out;
+  if (config.has_simulated_dc_motor()) {
+    *out.mutable_simulated_dc_motor() = config.simulated_dc_motor();
+  } else if (config.has_simulated_five_bar()) {
+    *out.mutable_simulated_five_bar() = config.simulated_five_bar();
+  } else if (config.has_simulated_joystick()) {
+    *out.mutable_simulated_joystick() = config.simulated_joystick();
+  } else if (config.has_simulated_parallel_dob()) {
+    *out.mutable_simulated_parallel_dob() = config.simulated_parallel_dob();
+  } else {
+    *out.mutable_simulated_point_mass() = config.simulated_point_mass();
+  }
+  return out;
+}
+
 std::string validate_device(const v1::ServerConfig& config) {
   const int devices = int{config.has_simulated_dc_motor()} + int{config.has_simulated_five_bar()} +
                       int{config.has_simulated_joystick()} +
@@ -121,128 +266,91 @@ std::string validate_device(const v1::ServerConfig& config) {
     return "simulated_dc_motor, simulated_five_bar, simulated_joystick, simulated_parallel_dob: "
            "at most one device may be configured, got " + std::to_string(devices);
   }
-  if (config.has_simulated_dc_motor()) return validate_dc_motor(config.simulated_dc_motor());
-  if (config.has_simulated_five_bar()) {
-    const auto& five_bar = config.simulated_five_bar();
-    if (!five_bar.velocity().empty() && five_bar.velocity() != "difference" &&
-        five_bar.velocity() != "estimator") {
-      return "simulated_five_bar.velocity: must be \"difference\" or \"estimator\", got \"" +
-             five_bar.velocity() + "\"";
-    }
-    if (!five_bar.inertias().empty() && five_bar.inertias() != "identified" &&
-        five_bar.inertias() != "theoretical") {
-      return "simulated_five_bar.inertias: must be \"identified\" or \"theoretical\", got \"" +
-             five_bar.inertias() + "\"";
-    }
-    return validate_common("simulated_five_bar", five_bar.integrator(), five_bar.substeps(),
-                           five_bar.max_force());
+  const double rate = loop_rate_of(config);
+  if (auto error = validate_one(primary_device(config), rate); !error.empty()) return error;
+  if (config.extra_devices_size() > kMaxExtraDevices) {
+    return "extra_devices: at most " + std::to_string(kMaxExtraDevices) + " extra devices, got " +
+           std::to_string(config.extra_devices_size());
   }
-  if (config.has_simulated_joystick()) {
-    const auto& joystick = config.simulated_joystick();
-    if (auto error = validate_common("simulated_joystick", joystick.integrator(),
-                                     joystick.substeps(), joystick.max_force());
-        !error.empty()) {
-      return error;
+  for (int i = 0; i < config.extra_devices_size(); ++i) {
+    if (auto error = validate_one(config.extra_devices(i), rate); !error.empty()) {
+      return "extra_devices[" + std::to_string(i) + "]." + error;
     }
-    if (joystick.has_rearm_after_s() && !std::isfinite(joystick.rearm_after_s())) {
-      return "simulated_joystick.rearm_after_s: must be finite";
-    }
-    if (auto error = joystick_config(joystick).validate(); !error.empty()) {
-      if (error.rfind("initial.R:", 0) == 0) {
-        return "simulated_joystick.initial_shaft_length" + error.substr(std::string("initial.R").size());
-      }
-      return "simulated_joystick: " + error;
-    }
-    return {};
-  }
-  if (config.has_simulated_parallel_dob()) {
-    const auto& dob = config.simulated_parallel_dob();
-    if (auto error = validate_common("simulated_parallel_dob", dob.integrator(), dob.substeps(),
-                                     dob.max_force());
-        !error.empty()) {
-      return error;
-    }
-    const double rate = config.loop_rate_hz() > 0.0 ? config.loop_rate_hz() : 1000.0;
-    if (!std::isfinite(dob.cutoff_hz()) || dob.cutoff_hz() < 0.0 || dob.cutoff_hz() >= rate / 2.0) {
-      return "simulated_parallel_dob.cutoff_hz: must be 0 (default) or below half the loop rate (" +
-             std::to_string(rate / 2.0) + " Hz), got " + std::to_string(dob.cutoff_hz());
-    }
-    if (auto error = observer_params(dob, rate).validate(); !error.empty()) {
-      return "simulated_parallel_dob." + error;
-    }
-    if (auto error = parallel_params(dob).validate(); !error.empty()) {
-      return "simulated_parallel_dob: " + error;
-    }
-    return {};
   }
   return {};
 }
 
-SimulatedDevice make_device(const v1::ServerConfig& config) {
+SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
   SimulatedDevice out;
-  if (config.has_simulated_dc_motor()) {
-    const auto& motor = config.simulated_dc_motor();
-    auto device = std::make_unique<runtime::SimulatedDcMotorDevice>(
-        dc_motor_params(motor),
-        motor.with_inductance() ? engine::DcMotorModel::kWithInductance
-                                : engine::DcMotorModel::kWithoutInductance,
-        motor.initial_angle(), motor.max_force() > 0.0 ? motor.max_force() : 5.0,
-        integration_settings(motor.integrator(), motor.substeps(), 10));
+  // Every simulated device takes its operator's input the same way.
+  auto adopt = [&out](auto device) {
     auto* raw = device.get();
     out.set_hand = [raw](const engine::HandInput& hand) { raw->set_hand(hand); };
     out.device = std::move(device);
-    return out;
-  }
-  const double rate_hz = config.loop_rate_hz() > 0.0 ? config.loop_rate_hz() : 1000.0;
-  if (config.has_simulated_five_bar()) {
-    const auto& five_bar = config.simulated_five_bar();
-    runtime::SimulatedFiveBarOptions options;
-    options.plant.integration = integration_settings(five_bar.integrator(), five_bar.substeps(), 10);
-    options.plant.coriolis = !five_bar.has_coriolis() || five_bar.coriolis();
-    options.plant.flexible_mode = five_bar.flexible_mode();  // FiveBarFlexibleMode's defaults
-    options.quantized = !five_bar.has_quantized_encoders() || five_bar.quantized_encoders();
-    if (five_bar.max_force() > 0.0) options.max_force = five_bar.max_force();
-    auto device = std::make_unique<runtime::SimulatedFiveBarDevice>(five_bar_params(five_bar),
-                                                                     engine::FiveBarState{}, options);
-    if (five_bar.velocity() == "estimator") {
-      device->set_velocity_estimator(std::make_unique<runtime::FiveBarStateEstimators>(1.0 / rate_hz));
+    return std::move(out);
+  };
+  switch (config.device_case()) {
+    case v1::DeviceConfig::kSimulatedDcMotor: {
+      const auto& motor = config.simulated_dc_motor();
+      return adopt(std::make_unique<runtime::SimulatedDcMotorDevice>(
+          dc_motor_params(motor),
+          motor.with_inductance() ? engine::DcMotorModel::kWithInductance
+                                  : engine::DcMotorModel::kWithoutInductance,
+          motor.initial_angle(), motor.max_force() > 0.0 ? motor.max_force() : 5.0,
+          integration_settings(motor.integrator(), motor.substeps(), 10)));
     }
-    auto* raw = device.get();
-    out.set_hand = [raw](const engine::HandInput& hand) { raw->set_hand(hand); };
-    out.device = std::move(device);
-    return out;
+    case v1::DeviceConfig::kSimulatedFiveBar: {
+      const auto& five_bar = config.simulated_five_bar();
+      runtime::SimulatedFiveBarOptions options;
+      options.plant.integration = integration_settings(five_bar.integrator(), five_bar.substeps(), 10);
+      options.plant.coriolis = !five_bar.has_coriolis() || five_bar.coriolis();
+      options.plant.flexible_mode = five_bar.flexible_mode();  // FiveBarFlexibleMode's defaults
+      options.quantized = !five_bar.has_quantized_encoders() || five_bar.quantized_encoders();
+      if (five_bar.max_force() > 0.0) options.max_force = five_bar.max_force();
+      auto device = std::make_unique<runtime::SimulatedFiveBarDevice>(five_bar_params(five_bar),
+                                                                       engine::FiveBarState{}, options);
+      if (five_bar.velocity() == "estimator") {
+        device->set_velocity_estimator(
+            std::make_unique<runtime::FiveBarStateEstimators>(1.0 / loop_rate_hz));
+      }
+      return adopt(std::move(device));
+    }
+    case v1::DeviceConfig::kSimulatedJoystick:
+      return adopt(
+          std::make_unique<runtime::SimulatedJoystickDevice>(joystick_config(config.simulated_joystick())));
+    case v1::DeviceConfig::kSimulatedParallelDob: {
+      const auto& dob = config.simulated_parallel_dob();
+      return adopt(std::make_unique<runtime::SimulatedDobDevice>(
+          parallel_params(dob), observer_params(dob, loop_rate_hz), engine::Vec3{0.0, 0.25, 0.0},
+          dob.max_force() > 0.0 ? dob.max_force() : 10.0,
+          !dob.has_disturbance_observer() || dob.disturbance_observer()));
+    }
+    case v1::DeviceConfig::kSimulatedPointMass:
+    case v1::DeviceConfig::DEVICE_NOT_SET:
+      break;
   }
-  if (config.has_simulated_joystick()) {
-    auto device =
-        std::make_unique<runtime::SimulatedJoystickDevice>(joystick_config(config.simulated_joystick()));
-    auto* raw = device.get();
-    out.set_hand = [raw](const engine::HandInput& hand) { raw->set_hand(hand); };
-    out.device = std::move(device);
-    return out;
-  }
-  if (config.has_simulated_parallel_dob()) {
-    const auto& dob = config.simulated_parallel_dob();
-    auto device = std::make_unique<runtime::SimulatedDobDevice>(
-        parallel_params(dob), observer_params(dob, rate_hz), engine::Vec3{0.0, 0.25, 0.0},
-        dob.max_force() > 0.0 ? dob.max_force() : 10.0,
-        !dob.has_disturbance_observer() || dob.disturbance_observer());
-    auto* raw = device.get();
-    out.set_hand = [raw](const engine::HandInput& hand) { raw->set_hand(hand); };
-    out.device = std::move(device);
-    return out;
-  }
-  const auto& mass = config.simulated_point_mass();
+  // The point mass (its defaults filled by the configuration's loader).
+  const v1::SimulatedPointMassConfig& mass = config.simulated_point_mass();
   engine::PointMassParams params;
   params.mass = mass.mass();
   params.damping = mass.damping();
   params.substeps = mass.substeps();
   params.workspace_min = net::to_engine(mass.workspace_min());
   params.workspace_max = net::to_engine(mass.workspace_max());
-  auto device = std::make_unique<runtime::SimulatedPointMassDevice>(
-      params, engine::PointMassState{net::to_engine(mass.initial_position()), {}}, mass.max_force());
-  auto* raw = device.get();
-  out.set_hand = [raw](const engine::HandInput& hand) { raw->set_hand(hand); };
-  out.device = std::move(device);
+  return adopt(std::make_unique<runtime::SimulatedPointMassDevice>(
+      params, engine::PointMassState{net::to_engine(mass.initial_position()), {}}, mass.max_force()));
+}
+
+SimulatedDevice make_device(const v1::ServerConfig& config) {
+  return make_device(primary_device(config), loop_rate_of(config));
+}
+
+std::vector<SimulatedDevice> make_devices(const v1::ServerConfig& config) {
+  std::vector<SimulatedDevice> out;
+  out.push_back(make_device(config));
+  for (const v1::DeviceConfig& extra : config.extra_devices()) {
+    out.push_back(make_device(extra, loop_rate_of(config)));
+  }
   return out;
 }
 

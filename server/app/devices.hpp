@@ -1,9 +1,11 @@
 #pragma once
-// The simulated devices a configuration can ask for, built from their configuration messages.
+// The simulated devices a configuration can ask for, built from their configuration messages:
+// port 0's from ServerConfig's top-level device fields, ports 1.. from extra_devices.
 
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "engine/device/dc_motor_plant.hpp"
 #include "engine/operator/simulated_hand.hpp"
@@ -23,16 +25,36 @@ engine::IntegrationSettings integration_settings(const std::string& name, std::u
 /// Document 000's parameters from the configuration (defaults where unset).
 engine::DcMotorParams dc_motor_params(const v1::SimulatedDcMotorConfig& config);
 
-/// Empty when the configured device is physically possible, else "<field>: <what is wrong>".
+/// Most extra device ports a server may have (ports 1..kMaxExtraDevices).
+inline constexpr int kMaxExtraDevices = 7;
+
+/// Fills the point mass's unset fields with their defaults (Eom et al.'s experiment).
+void fill_point_mass_defaults(v1::SimulatedPointMassConfig& mass);
+
+/// Empty when the (defaulted) point mass is valid, else "simulated_point_mass.<field>: <what>".
+std::string validate_point_mass(const v1::SimulatedPointMassConfig& mass);
+
+/// Empty when every configured device (port 0's and extra_devices') is physically possible, else
+/// "<field>: <what is wrong>", an extra device's prefixed with "extra_devices[i].".
+/// loop_rate_hz 0 is taken as its default.
 std::string validate_device(const v1::ServerConfig& config);
+
+/// Port 0's device as a DeviceConfig: the point mass unless one of simulated_dc_motor,
+/// simulated_five_bar, simulated_joystick or simulated_parallel_dob is present.
+v1::DeviceConfig primary_device(const v1::ServerConfig& config);
 
 struct SimulatedDevice {
   std::unique_ptr<runtime::Device> device;
   std::function<void(const engine::HandInput&)> set_hand;  // the simulated operator's input
 };
 
-/// The device the configuration names: the point mass unless one of simulated_dc_motor,
-/// simulated_five_bar, simulated_joystick or simulated_parallel_dob is present.
+/// The device `config` names (one must be set), for a loop at `loop_rate_hz` (Hz).
+SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz);
+
+/// Port 0's device: make_device(primary_device(config), loop rate).
 SimulatedDevice make_device(const v1::ServerConfig& config);
+
+/// Every device port's device, port 0 first, then extra_devices in order.
+std::vector<SimulatedDevice> make_devices(const v1::ServerConfig& config);
 
 }  // namespace haptic::app

@@ -17,31 +17,59 @@ std::int64_t ms_to_ticks(std::uint32_t ms, double rate_hz) {
   return std::max<std::int64_t>(1, std::llround(static_cast<double>(ms) * 1e-3 * rate_hz));
 }
 
+std::vector<std::unique_ptr<runtime::SampleRing>> make_rings(std::size_t ports) {
+  std::vector<std::unique_ptr<runtime::SampleRing>> rings;
+  for (std::size_t i = 0; i < ports; ++i) rings.push_back(std::make_unique<runtime::SampleRing>());
+  return rings;
+}
+
+std::vector<runtime::SampleRing*> ring_pointers(
+    const std::vector<std::unique_ptr<runtime::SampleRing>>& rings) {
+  std::vector<runtime::SampleRing*> out;
+  for (const auto& ring : rings) out.push_back(ring.get());
+  return out;
+}
+
+/// The empty scene the loop runs until the store publishes its first, with every port's state.
+std::unique_ptr<const engine::CompiledScene> empty_scene(std::uint32_t ports) {
+  return std::make_unique<const engine::CompiledScene>(
+      engine::compile_scene(engine::SceneDescription{}, 1, 0, 1e-3, 0.0, ports));
+}
+
 }  // namespace
 
 Server::Server(const v1::ServerConfig& config)
     : config_(config),
-      simulated_(make_device(config)),
-      device_(simulated_.device.get()),
-      scenes_(std::make_unique<const engine::CompiledScene>()),
+      simulated_(make_devices(config)),
+      scenes_(empty_scene(static_cast<std::uint32_t>(simulated_.size()))),
+      samples_(make_rings(simulated_.size())),
       sessions_(config.max_sessions(), std::chrono::milliseconds(config.lease_timeout_ms())),
-      udp_(sessions_, samples_) {
+      udp_(sessions_, ring_pointers(samples_)) {
   const double rate = config.loop_rate_hz();
+  const auto ports = static_cast<std::uint32_t>(simulated_.size());
   runtime::TickConfig tick;
   tick.period_s = 1.0 / rate;
-  tick.limits.max_force = device_->description().max_force;
   tick.output_ramp_ticks = ms_to_ticks(config.removal_ramp_ms(), rate);
-  const v1::PassivityConfig& passivity = config.passivity();
-  const double device_mass = device_->description().apparent_mass;
-  const bool passivity_on = passivity.has_enabled() ? passivity.enabled() : device_mass > 0.0;
-  if (passivity_on) {
-    const double threshold = passivity.velocity_threshold() > 0.0 ? passivity.velocity_threshold() : 1e-4;
-    engine::PassivityControllerParams params =
-        engine::passivity_params_for_device(device_mass > 0.0 ? device_mass : 0.01, tick.period_s, threshold);
-    if (passivity.max_damping() > 0.0) params.max_damping = passivity.max_damping();
-    tick.passivity = params;
+  // Each port's force limit and passivity controller follow its own device.
+  std::vector<runtime::TickPort> tick_ports;
+  for (std::uint32_t i = 0; i < ports; ++i) {
+    runtime::Device& device = *simulated_[i].device;
+    runtime::TickPort port{&device, samples_[i].get(), {}, std::nullopt};
+    port.limits.max_force = device.description().max_force;
+    const v1::PassivityConfig& passivity = config.passivity();
+    const double device_mass = device.description().apparent_mass;
+    const bool passivity_on = passivity.has_enabled() ? passivity.enabled() : device_mass > 0.0;
+    if (passivity_on) {
+      const double threshold = passivity.velocity_threshold() > 0.0 ? passivity.velocity_threshold() : 1e-4;
+      engine::PassivityControllerParams params = engine::passivity_params_for_device(
+          device_mass > 0.0 ? device_mass : 0.01, tick.period_s, threshold);
+      if (passivity.max_damping() > 0.0) params.max_damping = passivity.max_damping();
+      port.passivity = params;
+    }
+    tick_ports.push_back(port);
   }
-  runner_ = std::make_unique<runtime::TickRunner>(*device_, scenes_, samples_, counters_, tick);
+  runner_ = std::make_unique<runtime::TickRunner>(tick_ports, scenes_, counters_, tick);
+  const runtime::DeviceDescription& primary = simulated_.front().device->description();
 
   runtime::LoopConfig loop;
   loop.rate_hz = rate;
@@ -56,13 +84,13 @@ Server::Server(const v1::ServerConfig& config)
   scene_ = std::make_unique<net::SceneStore>(
       scenes_, [this] { return static_cast<std::int64_t>(loop_->completed_ticks() + 1); },
       tick.output_ramp_ticks, config.max_objects_per_session(), tick.period_s,
-      config.session_force_budget());
+      config.session_force_budget(), ports);
 
   // The initial scene belongs to the server itself (session 0) and never expires.
   net::SceneLimits limits;
   limits.period_s = tick.period_s;
-  limits.device_mass = device_->description().apparent_mass;
-  limits.device_damping = device_->description().apparent_damping;
+  limits.device_mass = primary.apparent_mass;  // port 0's: objects are validated once for all ports
+  limits.device_damping = primary.apparent_damping;
   std::vector<engine::ObjectSpec> objects(static_cast<std::size_t>(config.initial_scene().objects_size()));
   for (int i = 0; i < config.initial_scene().objects_size(); ++i) {
     if (auto e = net::to_object_spec(config.initial_scene().objects(i), "initial_scene.objects",
@@ -87,15 +115,21 @@ Server::Server(const v1::ServerConfig& config)
       !e.empty()) {
     throw std::runtime_error(e);
   }
-  simulated_.set_hand(hand);
+  // Every simulated hand starts with the configured input.
+  for (const SimulatedDevice& simulated : simulated_) simulated.set_hand(hand);
 
   const std::uint32_t udp_port = config.udp_port();
   if (udp_port > 65535) throw std::runtime_error("udp_port: out of range");
   udp_.bind(config.udp_address(), static_cast<std::uint16_t>(udp_port));
 
+  std::vector<net::DevicePort> service_ports;
+  for (std::uint32_t i = 0; i < ports; ++i) {
+    service_ports.push_back(net::DevicePort{samples_[i].get(), &simulated_[i].device->description(),
+                                            simulated_[i].set_hand});
+  }
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
-      sessions_, *scene_, events_, *loop_, samples_, device_->description(), simulated_.set_hand, udp_.port(),
-      limits, [this] { return stats(); }});
+      sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
+      [this] { return stats(); }});
   grpc::ServerBuilder builder;
   int selected_port = 0;
   builder.AddListeningPort(config.grpc_address(), grpc::InsecureServerCredentials(), &selected_port);
@@ -110,7 +144,11 @@ Server::Server(const v1::ServerConfig& config)
 Server::~Server() { shutdown(); }
 
 void Server::start() {
-  if (device_->start() != runtime::DeviceStatus::kOk) throw std::runtime_error("device failed to start");
+  for (std::size_t i = 0; i < simulated_.size(); ++i) {
+    if (simulated_[i].device->start() != runtime::DeviceStatus::kOk) {
+      throw std::runtime_error("device " + std::to_string(i) + " failed to start");
+    }
+  }
   const runtime::RealtimeSetup setup = loop_->start();
   if (loop_->config().mode == runtime::TimeMode::kRealTime && loop_->config().use_fifo) {
     if (!setup.fifo) {
@@ -132,7 +170,11 @@ void Server::start() {
   status_last_ns_ = runtime::monotonic_now_ns();
   housekeeping_ = std::thread([this] { housekeeping_loop(); });
   started_ = true;
-  spdlog::info("hapticd: {} at {} Hz ({}), gRPC port {}, UDP port {}", device_->description().name,
+  std::string devices = simulated_.front().device->description().name;
+  for (std::size_t i = 1; i < simulated_.size(); ++i) {
+    devices += " + port " + std::to_string(i) + ": " + simulated_[i].device->description().name;
+  }
+  spdlog::info("hapticd: {} at {} Hz ({}), gRPC port {}, UDP port {}", devices,
                config_.loop_rate_hz(), v1::TimeMode_Name(config_.time_mode()), grpc_port_,
                udp_.port());
 }
@@ -149,9 +191,11 @@ void Server::shutdown() {
   } else {
     loop_->stop();
   }
-  // With the loop stopped, leave the device with zero force.
-  device_->write(runtime::DeviceCommand{}, 0.0);
-  device_->stop();
+  // With the loop stopped, leave every device with zero force.
+  for (const SimulatedDevice& simulated : simulated_) {
+    simulated.device->write(runtime::DeviceCommand{}, 0.0);
+    simulated.device->stop();
+  }
   {
     std::lock_guard lock(housekeeping_mutex_);
     stopping_ = true;

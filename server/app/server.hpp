@@ -1,5 +1,5 @@
 #pragma once
-// hapticd assembled: device, loop, scene store, sessions, UDP data plane, gRPC control plane and
+// hapticd assembled: devices (one per device port), loop, scene store, sessions, UDP data plane, gRPC control plane and
 // the housekeeping thread (leases, scene compaction, status line, events). Used by main() and by
 // tests that want a whole server in-process.
 
@@ -11,6 +11,7 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "haptic/v1/config.pb.h"
 #include "net/event_hub.hpp"
@@ -48,10 +49,9 @@ class Server {
   void log_status();
 
   v1::ServerConfig config_;
-  SimulatedDevice simulated_;  // the device and its simulated operator's input
-  runtime::Device* device_;    // = simulated_.device.get()
+  std::vector<SimulatedDevice> simulated_;  // per device port: the device and its operator's input
   runtime::SceneExchange scenes_;
-  runtime::SampleRing samples_;
+  std::vector<std::unique_ptr<runtime::SampleRing>> samples_;  // per device port
   runtime::LoopCounters counters_;
   runtime::LatenessHistogram lateness_;
   std::unique_ptr<runtime::TickRunner> runner_;

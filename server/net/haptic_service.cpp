@@ -75,6 +75,11 @@ grpc::Status HapticService::check_session(std::uint64_t session_id) const {
   return grpc::Status::OK;
 }
 
+const DevicePort& HapticService::port_of(std::uint64_t session_id) const {
+  const std::uint32_t index = deps_.sessions.device_index_of(session_id).value_or(0);
+  return deps_.ports[index < deps_.ports.size() ? index : 0];
+}
+
 void HapticService::publish_event(v1::Event::Kind kind, std::uint64_t session_id,
                                   const std::string& message) {
   v1::Event event;
@@ -91,17 +96,18 @@ void HapticService::end_session(std::uint64_t session_id, v1::Event::Kind why) {
                 std::to_string(faded) + " objects and fields ramping out");
 }
 
-v1::DeviceInfo HapticService::device_info() const {
+v1::DeviceInfo HapticService::device_info(std::uint32_t port) const {
+  const runtime::DeviceDescription& device = *deps_.ports[port].device;
   v1::DeviceInfo info;
-  info.set_name(deps_.device.name);
-  info.set_dof(deps_.device.dof);
-  *info.mutable_workspace_min() = to_proto(deps_.device.workspace_min);
-  *info.mutable_workspace_max() = to_proto(deps_.device.workspace_max);
-  info.set_max_force(deps_.device.max_force);
+  info.set_name(device.name);
+  info.set_dof(device.dof);
+  *info.mutable_workspace_min() = to_proto(device.workspace_min);
+  *info.mutable_workspace_max() = to_proto(device.workspace_max);
+  info.set_max_force(device.max_force);
   info.set_loop_rate_hz(deps_.loop.config().rate_hz);
-  info.set_simulated(deps_.device.simulated);
-  info.set_model(deps_.device.model);
-  const runtime::DeviceCapabilities& has = deps_.device.capabilities;
+  info.set_simulated(device.simulated);
+  info.set_model(device.model);
+  const runtime::DeviceCapabilities& has = device.capabilities;
   v1::DeviceCapabilities& caps = *info.mutable_capabilities();
   caps.set_gravity(has.gravity);
   caps.set_brakes(has.brakes);
@@ -122,7 +128,12 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext*, const v1::OpenSess
                 ", server speaks " + std::to_string(kApiVersion)};
   }
   if (auto error = check_client_name(request->client_name()); !error.empty()) return invalid(error);
-  const auto session = deps_.sessions.open(request->client_name());
+  if (request->device_index() >= deps_.ports.size()) {
+    return invalid("device_index: must be 0 to " + std::to_string(deps_.ports.size() - 1) +
+                   " (this server has " + std::to_string(deps_.ports.size()) +
+                   " device ports), got " + std::to_string(request->device_index()));
+  }
+  const auto session = deps_.sessions.open(request->client_name(), request->device_index());
   if (!session) {
     return {grpc::StatusCode::RESOURCE_EXHAUSTED, "too many sessions open (max_sessions)"};
   }
@@ -130,7 +141,7 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext*, const v1::OpenSess
   response->set_udp_key(std::string(session->key.begin(), session->key.end()));
   response->set_udp_port(deps_.udp_port);
   response->set_api_version(kApiVersion);
-  *response->mutable_device() = device_info();
+  *response->mutable_device() = device_info(request->device_index());
   response->set_lease_timeout_ms(static_cast<std::uint32_t>(deps_.sessions.lease_timeout().count()));
   response->set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
   publish_event(v1::Event::SESSION_OPENED, session->id, "client '" + request->client_name() + "'");
@@ -159,7 +170,7 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext*, const v1::CreateO
   }
   response->set_id(id);
   *response->mutable_stability() =
-      stability_report(spec, deps_.device, period_s(),
+      stability_report(spec, *port_of(request->session_id()).device, period_s(),
                        request->object().impedance().transparency_optimal_damping());
   return grpc::Status::OK;
 }
@@ -266,9 +277,10 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplyScen
       !status.ok()) {
     return status;
   }
+  const runtime::DeviceDescription& device = *port_of(request->session_id()).device;
   for (std::size_t i = 0; i < objects.size(); ++i) {
     *response->add_object_stability() = stability_report(
-        objects[i], deps_.device, period_s(),
+        objects[i], device, period_s(),
         request->scene().objects(static_cast<int>(i)).impedance().transparency_optimal_damping());
   }
   for (auto id : object_ids) response->add_object_ids(id);
@@ -282,7 +294,7 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplyScen
 grpc::Status HapticService::GetDeviceInfo(grpc::ServerContext*, const v1::SessionRef* request,
                                           v1::DeviceInfo* response) {
   if (auto status = check_session(request->session_id()); !status.ok()) return status;
-  *response = device_info();
+  *response = device_info(deps_.sessions.device_index_of(request->session_id()).value_or(0));
   return grpc::Status::OK;
 }
 
@@ -332,7 +344,8 @@ grpc::Status HapticService::SubscribeState(grpc::ServerContext*,
 grpc::Status HapticService::SetOperator(grpc::ServerContext*, const v1::SetOperatorRequest* request,
                                         v1::Empty*) {
   if (auto status = check_session(request->session_id()); !status.ok()) return status;
-  if (!deps_.set_hand) {
+  const DevicePort& port = port_of(request->session_id());
+  if (!port.set_hand) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
             "the device is real hardware: there is no simulated operator"};
   }
@@ -340,7 +353,7 @@ grpc::Status HapticService::SetOperator(grpc::ServerContext*, const v1::SetOpera
   if (auto error = to_hand_input(request->input(), "input", deps_.limits, hand); !error.empty()) {
     return invalid(error);
   }
-  deps_.set_hand(hand);
+  port.set_hand(hand);
   return grpc::Status::OK;
 }
 
@@ -359,7 +372,7 @@ grpc::Status HapticService::Step(grpc::ServerContext*, const v1::StepRequest* re
   response->set_tick(tick);
   response->set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
   runtime::TickSample sample;
-  if (deps_.samples.read(tick, sample)) {
+  if (port_of(request->session_id()).samples->read(tick, sample)) {
     v1::ToolState* state = response->mutable_state();
     state->set_tick(sample.tick);
     state->set_server_time_s(static_cast<double>(sample.time_ns) * 1e-9);

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "haptic/v1/service.grpc.pb.h"
 #include "net/event_hub.hpp"
@@ -17,14 +18,19 @@
 
 namespace haptic::net {
 
+/// One device port as the control plane sees it: what a session bound to it is told and moves.
+struct DevicePort {
+  const runtime::SampleRing* samples = nullptr;  // the port's tick samples (Step's reply)
+  const runtime::DeviceDescription* device = nullptr;
+  std::function<void(const engine::HandInput&)> set_hand;  // empty for real hardware
+};
+
 struct ServiceDependencies {
   SessionRegistry& sessions;
   SceneStore& scene;
   EventHub& events;
   runtime::LoopThread& loop;
-  const runtime::SampleRing& samples;
-  const runtime::DeviceDescription& device;
-  std::function<void(const engine::HandInput&)> set_hand;  // empty for real hardware
+  std::vector<DevicePort> ports;  // port 0 first; not empty
   std::uint16_t udp_port;
   SceneLimits limits;
   std::function<v1::Stats()> stats;
@@ -70,11 +76,14 @@ class HapticService final : public v1::Haptic::Service {
                            v1::Empty*) override;
   grpc::Status Step(grpc::ServerContext*, const v1::StepRequest*, v1::StepResponse*) override;
 
-  v1::DeviceInfo device_info() const;
+  /// What OpenSession and GetDeviceInfo tell a session bound to device port `port`.
+  v1::DeviceInfo device_info(std::uint32_t port = 0) const;
 
  private:
   double period_s() const { return 1.0 / deps_.loop.config().rate_hz; }
   grpc::Status check_session(std::uint64_t session_id) const;
+  /// The device port an open session is bound to (port 0's if it has just gone).
+  const DevicePort& port_of(std::uint64_t session_id) const;
 
   ServiceDependencies deps_;
 };

@@ -25,13 +25,14 @@ engine::ItemMeta appearing(std::uint64_t session_id, std::uint64_t id, std::int6
 
 SceneStore::SceneStore(runtime::SceneExchange& exchange, std::function<std::int64_t()> next_tick,
                        std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session,
-                       double period_s, double session_force_budget)
+                       double period_s, double session_force_budget, std::uint32_t ports)
     : exchange_(exchange),
       next_tick_(std::move(next_tick)),
       removal_ramp_ticks_(removal_ramp_ticks < 1 ? 1 : removal_ramp_ticks),
       max_items_per_session_(max_items_per_session),
       period_s_(period_s),
-      session_force_budget_(session_force_budget) {}
+      session_force_budget_(session_force_budget),
+      ports_(ports < 1 ? 1 : ports) {}
 
 std::uint32_t SceneStore::live_items_of(std::uint64_t session_id) const {
   std::uint32_t count = 0;
@@ -247,7 +248,7 @@ void SceneStore::publish_locked() {
   for (const Item& item : superseded_) add(item);
   exchange_.publish(std::make_unique<const engine::CompiledScene>(
       engine::compile_scene(description, removal_ramp_ticks_, ++generation_, period_s_,
-                            session_force_budget_)));
+                            session_force_budget_, ports_)));
 }
 
 }  // namespace haptic::net

@@ -34,10 +34,11 @@ struct SceneCounts {
 class SceneStore {
  public:
   /// next_tick() tells the index of the next tick the loop will run (fade-outs begin there).
-  /// period_s: the loop period (s), for the discrete impedance laws.
+  /// period_s: the loop period (s), for the discrete impedance laws. ports: the device ports
+  /// the loop evaluates every compiled scene at (>= 1).
   SceneStore(runtime::SceneExchange& exchange, std::function<std::int64_t()> next_tick,
              std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session,
-             double period_s = 1e-3, double session_force_budget = 0.0);
+             double period_s = 1e-3, double session_force_budget = 0.0, std::uint32_t ports = 1);
 
   grpc::Status create(std::uint64_t session_id, ItemKind kind,
                       const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec,
@@ -86,6 +87,7 @@ class SceneStore {
   std::uint32_t max_items_per_session_;
   double period_s_;
   double session_force_budget_;
+  std::uint32_t ports_;  // device ports each compiled scene is evaluated at
 
   mutable std::mutex mutex_;
   std::map<std::uint64_t, Item> items_;  // by id; ordered, so compilation is deterministic

@@ -15,7 +15,8 @@ bool same_address(const UdpAddress& a, const UdpAddress& b) {
 SessionRegistry::SessionRegistry(std::uint32_t max_sessions, std::chrono::milliseconds lease_timeout)
     : max_sessions_(max_sessions), lease_timeout_(lease_timeout) {}
 
-std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name) {
+std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
+                                                 std::uint32_t device_index) {
   // Ids and keys come from the OS entropy source: a session id is also the capability that lets a
   // client change its own objects, so it must not be guessable.
   std::random_device entropy;
@@ -29,6 +30,7 @@ std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name)
     session.info.id = random64();
   } while (session.info.id == 0 || sessions_.contains(session.info.id));
   session.info.client_name = client_name;
+  session.info.device_index = device_index;
   for (auto& byte : session.info.key) byte = static_cast<std::uint8_t>(entropy());
   session.last_seen = SteadyClock::now();
   SessionInfo info = session.info;
@@ -56,6 +58,13 @@ std::optional<wire::Key> SessionRegistry::key_of(std::uint64_t session_id) const
   auto it = sessions_.find(session_id);
   if (it == sessions_.end()) return std::nullopt;
   return it->second.info.key;
+}
+
+std::optional<std::uint32_t> SessionRegistry::device_index_of(std::uint64_t session_id) const {
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(session_id);
+  if (it == sessions_.end()) return std::nullopt;
+  return it->second.info.device_index;
 }
 
 bool SessionRegistry::on_heartbeat(std::uint64_t session_id, std::uint64_t sequence,
@@ -112,7 +121,7 @@ std::vector<Subscriber> SessionRegistry::subscribers() const {
   for (const auto& [id, session] : sessions_) {
     if (session.decimation == 0 || !session.address) continue;
     out.push_back(Subscriber{id, session.info.key, *session.address, session.decimation,
-                             session.first_tick});
+                             session.first_tick, session.info.device_index});
   }
   return out;
 }

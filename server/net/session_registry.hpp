@@ -29,6 +29,7 @@ struct SessionInfo {
   std::uint64_t id = 0;
   std::string client_name;
   wire::Key key{};
+  std::uint32_t device_index = 0;  // the device port the session is bound to
 };
 
 /// What the data-plane sender needs per subscribed session.
@@ -38,19 +39,23 @@ struct Subscriber {
   UdpAddress address;
   std::uint32_t decimation = 1;
   std::uint64_t first_tick = 0;  // the stream starts here: ticks before the subscription are not sent
+  std::uint32_t device_index = 0;  // whose samples it is sent
 };
 
 class SessionRegistry {
  public:
   SessionRegistry(std::uint32_t max_sessions, std::chrono::milliseconds lease_timeout);
 
-  /// Opens a session with a fresh random id and key; nullopt when max_sessions are open.
-  std::optional<SessionInfo> open(const std::string& client_name);
+  /// Opens a session bound to device port `device_index` with a fresh random id and key; nullopt
+  /// when max_sessions are open.
+  std::optional<SessionInfo> open(const std::string& client_name, std::uint32_t device_index = 0);
   /// Removes the session; false if it did not exist.
   bool close(std::uint64_t session_id);
   /// Renews the lease; false if the session does not exist.
   bool touch(std::uint64_t session_id);
   std::optional<wire::Key> key_of(std::uint64_t session_id) const;
+  /// The device port the session is bound to; nullopt if the session does not exist.
+  std::optional<std::uint32_t> device_index_of(std::uint64_t session_id) const;
 
   /// A heartbeat authenticated with the session's key: renews the lease and records the address
   /// state goes to. Rejects (false) a sequence not above the last one (stale or replayed).

@@ -18,8 +18,8 @@
 
 namespace haptic::net {
 
-UdpEndpoint::UdpEndpoint(SessionRegistry& sessions, runtime::SampleRing& samples)
-    : sessions_(sessions), samples_(samples) {}
+UdpEndpoint::UdpEndpoint(SessionRegistry& sessions, std::vector<runtime::SampleRing*> rings)
+    : sessions_(sessions), rings_(std::move(rings)) {}
 
 UdpEndpoint::~UdpEndpoint() {
   stop();
@@ -72,7 +72,7 @@ void UdpEndpoint::start(std::optional<std::int64_t> time_origin_ns, int sender_c
 
 void UdpEndpoint::stop() {
   stopping_.store(true);
-  samples_.stop();  // wakes the sender
+  for (runtime::SampleRing* ring : rings_) ring->stop();  // wakes the sender
   if (receiver_.joinable()) receiver_.join();
   if (sender_.joinable()) sender_.join();
 }
@@ -110,12 +110,17 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
   std::vector<Subscriber> subscribers;
   std::map<std::uint64_t, std::uint64_t> sequences;  // per session, last sequence sent
   std::uint64_t subscribers_version = ~0ull;
-  std::uint64_t last_tick = samples_.newest();
+  // The loop publishes the ports in order, the last port last: once its ring holds a tick, every
+  // port's ring does.
+  const runtime::SampleRing& last_ring = *rings_.back();
+  std::uint64_t last_tick = last_ring.newest();
+  std::vector<runtime::TickSample> samples(rings_.size());  // this tick's, per port
+  std::vector<bool> present(rings_.size());
   std::array<std::uint8_t, wire::kMaxDatagramSize> buffer{};
-  while (!samples_.stopping()) {
-    samples_.wait_beyond(last_tick);
-    if (samples_.stopping()) break;
-    const std::uint64_t newest = samples_.newest();
+  while (!last_ring.stopping()) {
+    last_ring.wait_beyond(last_tick);
+    if (last_ring.stopping()) break;
+    const std::uint64_t newest = last_ring.newest();
     if (const auto version = sessions_.subscribers_version(); version != subscribers_version) {
       subscribers = sessions_.subscribers();
       subscribers_version = version;
@@ -127,14 +132,18 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
       });
     }
     for (std::uint64_t tick = last_tick + 1; tick <= newest; ++tick) {
-      runtime::TickSample sample;
-      if (!samples_.read(tick, sample)) {
-        counters_.samples_missed.fetch_add(1, std::memory_order_relaxed);
-        continue;
+      bool any = false;
+      for (std::size_t port = 0; port < rings_.size(); ++port) {
+        present[port] = rings_[port]->read(tick, samples[port]);
+        if (!present[port]) counters_.samples_missed.fetch_add(1, std::memory_order_relaxed);
+        any = any || present[port];
       }
+      if (!any) continue;
       bool first_send = true;
       for (const Subscriber& subscriber : subscribers) {
         if (tick % subscriber.decimation != 0 || tick < subscriber.first_tick) continue;
+        if (subscriber.device_index >= rings_.size() || !present[subscriber.device_index]) continue;
+        const runtime::TickSample& sample = samples[subscriber.device_index];
         wire::Header header;
         header.session_id = subscriber.session_id;
         header.sequence = ++sequences[subscriber.session_id];

@@ -4,13 +4,14 @@
 //
 // Two threads: the receiver authenticates heartbeats (unknown session, bad tag, wrong version,
 // stale sequence: dropped and counted); the sender wakes on each published tick sample and encodes
-// it only for the sessions subscribed at that decimation.
+// it only for the sessions subscribed at that decimation, each from its own device port's ring.
 
 #include <atomic>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "net/session_registry.hpp"
 #include "runtime/loop_stats.hpp"
@@ -30,7 +31,8 @@ struct UdpCounters {
 
 class UdpEndpoint {
  public:
-  UdpEndpoint(SessionRegistry& sessions, runtime::SampleRing& samples);
+  /// rings: one per device port, port 0 first; the loop publishes them in that order each tick.
+  UdpEndpoint(SessionRegistry& sessions, std::vector<runtime::SampleRing*> rings);
   ~UdpEndpoint();
   UdpEndpoint(const UdpEndpoint&) = delete;
   UdpEndpoint& operator=(const UdpEndpoint&) = delete;
@@ -44,7 +46,7 @@ class UdpEndpoint {
   /// sender_cpu >= 0 the sender runs on that CPU: the loop's, so that the loop's wake-up reaches a
   /// thread on a busy CPU instead of an idle one (on a VM, waking an idle vCPU cost ≈ 70 µs).
   void start(std::optional<std::int64_t> time_origin_ns = std::nullopt, int sender_cpu = -1);
-  /// Stops both threads (the sample ring must be stopped or still publishing).
+  /// Stops both threads (the sample rings must be stopped or still publishing).
   void stop();
 
   const UdpCounters& counters() const { return counters_; }
@@ -54,7 +56,7 @@ class UdpEndpoint {
   void send_loop(std::optional<std::int64_t> time_origin_ns, int cpu);
 
   SessionRegistry& sessions_;
-  runtime::SampleRing& samples_;
+  std::vector<runtime::SampleRing*> rings_;
   int socket_ = -1;
   std::uint16_t port_ = 0;
   std::atomic<bool> stopping_{false};

@@ -8,14 +8,19 @@ namespace haptic::runtime {
 
 TickRunner::TickRunner(Device& device, SceneExchange& scenes, SampleRing& samples,
                        LoopCounters& counters, const TickConfig& config)
-    : device_(device),
-      scenes_(scenes),
-      samples_(samples),
-      counters_(counters),
-      config_(config),
-      guard_(config.limits) {
+    : TickRunner(std::vector<TickPort>{TickPort{&device, &samples, config.limits, config.passivity}},
+                 scenes, counters, config) {}
+
+TickRunner::TickRunner(const std::vector<TickPort>& ports, SceneExchange& scenes,
+                       LoopCounters& counters, const TickConfig& config)
+    : scenes_(scenes), counters_(counters), config_(config) {
   config_.output_ramp_ticks = std::max<std::int64_t>(1, config_.output_ramp_ticks);
-  if (config_.passivity) passivity_.emplace(*config_.passivity);
+  ports_.reserve(ports.size());
+  for (const TickPort& port : ports) {
+    Port& out = ports_.emplace_back(Port{port.device, port.samples, std::nullopt,
+                                         engine::ForceGuard(port.limits), DeviceReading{}});
+    if (port.passivity) out.passivity.emplace(*port.passivity);
+  }
 }
 
 double TickRunner::output_gain(std::uint64_t tick) const {
@@ -31,38 +36,48 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
       [](const engine::CompiledScene& from, const engine::CompiledScene& to) {
         engine::carry_state(from, to);
       });
+  const double gain = output_gain(tick);
+  const auto ports = static_cast<std::uint32_t>(ports_.size());
+  for (std::uint32_t index = 0; index < ports; ++index) run_port(scene, index, tick, time_ns, gain);
+  // The virtual masses move once, under the reactions of every port (000 eq. 7.1).
+  if (!scene.masses.empty()) engine::advance_scene(scene, config_.period_s);
+  if (gain == 0.0) output_zero_.store(true, std::memory_order_release);
+  counters_.ticks.fetch_add(1, std::memory_order_relaxed);
+}
 
+void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t index,
+                          std::uint64_t tick, std::int64_t time_ns, double gain) {
+  Port& port = ports_[index];
+  Device& device = *port.device;
   TickSample sample;
   sample.tick = tick;
   sample.time_ns = time_ns;
 
   DeviceReading reading;
-  const bool read_good = device_.read(reading) == DeviceStatus::kOk &&
+  const bool read_good = device.read(reading) == DeviceStatus::kOk &&
                          engine::is_finite(reading.p_WT) && engine::is_finite(reading.v_WT);
   const bool read_ok = read_good && !reading.safe_state;
-  const double gain = output_gain(tick);
   engine::Vec3 F_command;
   if (read_ok) {
-    last_good_reading_ = reading;
-    const engine::SceneForce scene_force =
-        engine::evaluate_scene(scene, reading.p_WT, reading.v_WT, static_cast<std::int64_t>(tick),
-                               config_.period_s);
+    port.last_good_reading = reading;
+    const engine::SceneForce scene_force = engine::evaluate_scene_port(
+        scene, index, reading.p_WT, reading.v_WT, static_cast<std::int64_t>(tick), config_.period_s);
     sample.p_WP = scene_force.p_WP;
     sample.contact_count = scene_force.contact_count;
     if (scene_force.ramping || gain < 1.0) sample.flags |= wire::kFlagRampingOut;
     engine::Vec3 F_scene = scene_force.F_T_W;
-    if (passivity_) {
+    if (port.passivity) {
       // The port is watched every tick, in contact or not, so the held force's work is booked
       // for every period. Out of contact the account keeps a deficit — a stiff wall's bounce
       // lasts two or three samples and ends owing energy — but drops a surplus, so a long passive
       // contact cannot bank energy that hides a later active one.
       const engine::Vec3 F_contacts = scene_force.F_T_W - scene_force.F_fields_W;
-      const engine::PassivityStep step = passivity_->apply(F_contacts, reading.v_WT, reading.p_WT);
+      const engine::PassivityStep step = port.passivity->apply(F_contacts, reading.v_WT, reading.p_WT);
       if (step.alpha > 0.0) counters_.passivity_active_ticks.fetch_add(1, std::memory_order_relaxed);
       F_scene = step.F_T_W + scene_force.F_fields_W;
-      if (F_contacts == engine::Vec3{} && passivity_->energy() > 0.0) passivity_->reset();
+      if (F_contacts == engine::Vec3{} && port.passivity->energy() > 0.0) port.passivity->reset();
     }
-    const engine::GuardedForce guarded = guard_.apply(F_scene, config_.period_s, gain);
+    const engine::GuardedForce guarded = port.guard.apply(F_scene, config_.period_s, gain);
     if (guarded.fault) {
       sample.flags |= wire::kFlagForceFault;
       counters_.force_faults.fetch_add(1, std::memory_order_relaxed);
@@ -78,26 +93,24 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
     counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
     sample.flags |= wire::kFlagDeviceFault;
     if (read_good) {
-      last_good_reading_ = reading;  // a device holding its safe state still reports where it is
+      port.last_good_reading = reading;  // a device holding its safe state still reports where it is
     } else {
-      reading = last_good_reading_;
+      reading = port.last_good_reading;
     }
     sample.p_WP = reading.p_WT;
-    guard_.reset();
-    device_.enter_safe_state();
+    port.guard.reset();
+    device.enter_safe_state();
   }
 
-  if (device_.write(DeviceCommand{F_command}, config_.period_s) != DeviceStatus::kOk) {
+  if (device.write(DeviceCommand{F_command}, config_.period_s) != DeviceStatus::kOk) {
     counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
-    device_.enter_safe_state();
+    device.enter_safe_state();
   }
-  if (gain == 0.0) output_zero_.store(true, std::memory_order_release);
 
   sample.p_WT = reading.p_WT;
   sample.v_WT = reading.v_WT;
   sample.F_T_W = F_command;
-  samples_.publish(sample);
-  counters_.ticks.fetch_add(1, std::memory_order_relaxed);
+  port.samples->publish(sample);
 }
 
 }  // namespace haptic::runtime

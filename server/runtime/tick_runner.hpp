@@ -1,12 +1,14 @@
 #pragma once
 // One tick of the loop, in the order of docs/architecture.md:
-//   adopt scene -> device.read -> compiled scene -> safety -> device.write -> publish sample.
+//   adopt scene -> per device port: device.read -> compiled scene at that port -> safety ->
+//   device.write -> publish that port's sample -> advance the virtual masses.
 // Separate from the thread that paces it so tests can run ticks directly (lockstep, allocation
 // counting) and both time modes share exactly this code.
 
 #include <atomic>
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "engine/safety/force_guard.hpp"
 #include "engine/scene/compiled_scene.hpp"
@@ -22,6 +24,8 @@ using SceneExchange = SnapshotExchange<engine::CompiledScene>;
 
 struct TickConfig {
   double period_s = 0.001;               // Unit: s.
+  /// Port 0's force limits (and passivity, below) for the one-device constructor; the ports
+  /// constructor takes each port's own from its TickPort.
   engine::ForceLimits limits;
   std::int64_t output_ramp_ticks = 50;   // Length of the shutdown ramp, >= 1.
   /// The passivity controller at the device port (Hannaford & Ryu 2002), between the scene and
@@ -33,12 +37,28 @@ struct TickConfig {
   std::optional<engine::PassivityControllerParams> passivity;
 };
 
+/// One device port: a device (one user's tool) evaluated against the shared scene, with its own
+/// force limits, passivity controller and the ring its samples are published to.
+struct TickPort {
+  Device* device = nullptr;
+  SampleRing* samples = nullptr;
+  engine::ForceLimits limits;
+  std::optional<engine::PassivityControllerParams> passivity;  // absent: off
+};
+
 class TickRunner {
  public:
+  /// One device: port 0 with config.limits and config.passivity.
   TickRunner(Device& device, SceneExchange& scenes, SampleRing& samples, LoopCounters& counters,
              const TickConfig& config);
+  /// Several device ports sharing one scene (compiled with at least ports.size() ports), run in
+  /// order each tick; config.limits and config.passivity are not used. ports is not empty.
+  TickRunner(const std::vector<TickPort>& ports, SceneExchange& scenes, LoopCounters& counters,
+             const TickConfig& config);
 
-  /// On the loop: runs tick number `tick` (1, 2, ...) starting at server time `time_ns`.
+  /// On the loop: runs tick number `tick` (1, 2, ...) starting at server time `time_ns`: every
+  /// port in order (each publishes its sample to its own ring, the last port's last), then the
+  /// virtual masses advance once under all the ports' reactions.
   void run(std::uint64_t tick, std::int64_t time_ns);
 
   /// Any thread: from tick `first_tick` on, the output gain falls linearly to zero over
@@ -52,16 +72,23 @@ class TickRunner {
   const TickConfig& config() const { return config_; }
 
  private:
-  double output_gain(std::uint64_t tick) const;
+  /// What the loop keeps per port (sized at construction).
+  struct Port {
+    Device* device;
+    SampleRing* samples;
+    std::optional<engine::PassivityController> passivity;
+    engine::ForceGuard guard;
+    DeviceReading last_good_reading;  // what the samples show while the device is faulted
+  };
 
-  Device& device_;
-  std::optional<engine::PassivityController> passivity_;
+  double output_gain(std::uint64_t tick) const;
+  void run_port(const engine::CompiledScene& scene, std::uint32_t index, std::uint64_t tick,
+                std::int64_t time_ns, double gain);
+
+  std::vector<Port> ports_;
   SceneExchange& scenes_;
-  SampleRing& samples_;
   LoopCounters& counters_;
   TickConfig config_;
-  engine::ForceGuard guard_;
-  DeviceReading last_good_reading_;  // what the samples show while the device is faulted
   std::atomic<std::uint64_t> ramp_first_tick_{UINT64_MAX};
   std::atomic<bool> output_zero_{false};
 };

@@ -34,6 +34,9 @@ struct ClientConfig {
   std::chrono::milliseconds rpc_timeout{2000};     ///< Deadline of every control-plane call.
   std::chrono::milliseconds heartbeat_period{100}; ///< UDP heartbeat period; keep well under the lease.
   std::uint32_t state_decimation = 1;              ///< State every n-th tick; 0: no state stream.
+  /// The server's device port this client uses (its device info, simulated operator, state):
+  /// 0 is the configured device, 1.. the server's extra_devices (several users, one scene).
+  std::uint32_t device_index = 0;
 };
 
 namespace detail {

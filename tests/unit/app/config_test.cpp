@@ -118,6 +118,38 @@ TEST(Config, TheDocumentsDevicesAreCheckedNamingTheField) {
   EXPECT_EQ(error_of(R"({"simulated_five_bar": {"velocity": "estimator", "coriolis": false}})"), "");
 }
 
+TEST(Config, ExtraDevicesAreCheckedLikePortZerosNamingTheirIndex) {
+  // Defaults fill an extra point mass like port 0's; any device may be an extra one.
+  const v1::ServerConfig config = parse_config(
+      R"({"extra_devices": [{"simulated_point_mass": {"initial_position": {"y": 0.02}}},
+                            {"simulated_joystick": {}}]})", "x");
+  ASSERT_EQ(config.extra_devices_size(), 2);
+  EXPECT_EQ(config.extra_devices(0).simulated_point_mass().mass(), 0.01);
+  EXPECT_EQ(config.extra_devices(0).simulated_point_mass().max_force(), 20.0);
+  EXPECT_TRUE(config.extra_devices(1).has_simulated_joystick());
+  EXPECT_TRUE(load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/multi_user.json")
+                  .extra_devices(0).has_simulated_point_mass());
+
+  const std::string bad_mass = error_of(
+      R"({"extra_devices": [{"simulated_point_mass": {}}, {"simulated_point_mass": {"mass": -1}}]})");
+  EXPECT_NE(bad_mass.find("extra_devices[1].simulated_point_mass.mass:"), std::string::npos) << bad_mass;
+  EXPECT_NE(error_of(R"({"extra_devices": [{"simulated_point_mass": {"initial_position": {"z": 5}}}]})")
+                .find("extra_devices[0].simulated_point_mass.initial_position:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"extra_devices": [{"simulated_five_bar": {"velocity": "kalman"}}]})")
+                .find("extra_devices[0].simulated_five_bar.velocity:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"extra_devices": [{"simulated_parallel_dob": {"cutoff_hz": 600}}]})")
+                .find("extra_devices[0].simulated_parallel_dob.cutoff_hz:"),
+            std::string::npos);
+  const std::string empty = error_of(R"({"extra_devices": [{}]})");
+  EXPECT_NE(empty.find("extra_devices[0].device: must set one of"), std::string::npos) << empty;
+  std::string eight = R"({"extra_devices": [)";
+  for (int i = 0; i < 8; ++i) eight += std::string(i ? "," : "") + R"({"simulated_point_mass": {}})";
+  eight += "]}";
+  EXPECT_NE(error_of(eight).find("extra_devices: at most 7"), std::string::npos) << error_of(eight);
+}
+
 TEST(SceneFile, TheShippedSceneLoadsAndBadOnesNameTheFileAndTheElement) {
   const v1::Scene scene =
       load_scene_file(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/wall_sphere_spring.json");

@@ -272,6 +272,60 @@ TEST(TickRunner, NoAllocationInsideTenThousandTicksWithSceneSwapsBetween) {
   EXPECT_EQ(inside, 0u);
 }
 
+TEST(TickRunner, TwoPortsPushOneVirtualMassTogetherWithoutAllocating_Eq7_1) {
+  // Two point masses side by side, each with its own ring, and a 100 g box (B_V = 4 N·s/m) in
+  // front of both; each hand pushes +x.
+  SimulatedPointMassDevice device0(engine::PointMassParams{}, {{0.0, 0.0, 0.0}, {}}, 20.0);
+  SimulatedPointMassDevice device1(engine::PointMassParams{}, {{0.0, 0.02, 0.0}, {}}, 20.0);
+  engine::SceneDescription description;
+  engine::ObjectSpec box;
+  box.p_WO = {0.02, 0.01, 0.0};
+  box.stiffness = 1000.0;
+  box.damping = 2.0;
+  box.shape = engine::BoxSpec{{0.005, 0.03, 0.01}};
+  box.object_mass = 0.1;
+  box.object_damping = 4.0;
+  description.objects.push_back({{1, 1, engine::kNeverTick, {}}, box});
+  SceneExchange scenes(std::make_unique<const engine::CompiledScene>(
+      engine::compile_scene(description, 50, 1, kPeriod, 0.0, 2)));
+  SampleRing ring0, ring1;
+  LoopCounters counters;
+  TickRunner runner({TickPort{&device0, &ring0, {}, {}}, TickPort{&device1, &ring1, {}, {}}}, scenes,
+                    counters, TickConfig{kPeriod, {}, 50, {}});
+  engine::HandInput hand0 = push(0.0), hand1 = push(0.0);
+  hand0.force = {0.2, 0.0, 0.0};
+  hand1.force = {0.3, 0.0, 0.0};
+  device0.set_hand(hand0);
+  device1.set_hand(hand1);
+  std::uint64_t tick = 0;
+  auto run = [&](int ticks) {
+    for (int i = 0; i < ticks; ++i) {
+      ++tick;
+      runner.run(tick, static_cast<std::int64_t>(tick - 1) * 1'000'000);
+    }
+  };
+  run(100);
+  test::reset_allocations();
+  {
+    test::CountAllocations counting;
+    run(600);
+  }
+  EXPECT_EQ(test::allocations(), 0u);
+  TickSample s0, s1;
+  ASSERT_TRUE(ring0.read(tick, s0));
+  ASSERT_TRUE(ring1.read(tick, s1));
+  // Both tools and the box move at (F_0 + F_1) / (B_V + b_0 + b_1); each ring holds its own tool.
+  const double b = engine::PointMassParams{}.damping;
+  const double v = 0.5 / (4.0 + 2.0 * b);
+  EXPECT_NEAR(s0.v_WT.x, v, 1e-4);
+  EXPECT_NEAR(s1.v_WT.x, v, 1e-4);
+  EXPECT_NEAR(s0.p_WT.y, 0.0, 1e-12);
+  EXPECT_NEAR(s1.p_WT.y, 0.02, 1e-12);
+  EXPECT_NEAR(-s0.F_T_W.x, 0.2 - b * v, 2e-3);
+  EXPECT_NEAR(-s1.F_T_W.x, 0.3 - b * v, 2e-3);
+  EXPECT_EQ(counters.ticks.load(), tick);  // one count per tick, not per port
+}
+
 /// An empty scene and the default device behind a lockstep loop.
 struct LockstepRig {
   LockstepRig() { loop.start(); }
