@@ -21,6 +21,7 @@ void set_impedance(v1::Object& object, const Impedance& impedance) {
   out.set_dynamic_friction(impedance.dynamic_friction);
   out.set_mass(impedance.mass);
   out.set_transparency_optimal_damping(impedance.transparency_optimal_damping);
+  out.set_virtual_coupling(impedance.virtual_coupling);
   switch (impedance.law) {
     case ImpedanceLaw::kVelocity: out.set_law(v1::Impedance::VELOCITY); break;
     case ImpedanceLaw::kBackwardDifference: out.set_law(v1::Impedance::BACKWARD_DIFFERENCE); break;
@@ -267,6 +268,7 @@ StabilityReport from_proto(const v1::StabilityReport& r) {
   out.max_stable_stiffness = r.max_stable_stiffness();
   out.max_pole_magnitude = r.max_pole_magnitude();
   out.chosen_damping = r.chosen_damping();
+  out.chosen_stiffness = r.chosen_stiffness();
   out.robustly_stable = r.robustly_stable();
   return out;
 }

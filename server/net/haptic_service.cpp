@@ -13,7 +13,7 @@ namespace {
 /// difference, the discrete law closest to it.
 v1::StabilityReport stability_report(const engine::ObjectSpec& spec,
                                      const runtime::DeviceDescription& device, double period_s,
-                                     bool optimal_damping = false) {
+                                     bool optimal_damping = false, bool virtual_coupling = false) {
   v1::StabilityReport report;
   if (optimal_damping && device.apparent_mass > 0.0) {
     engine::WallDesignParams design;
@@ -24,6 +24,10 @@ v1::StabilityReport stability_report(const engine::ObjectSpec& spec,
     design.sample_period = period_s;
     report.set_chosen_damping(spec.damping);
     report.set_robustly_stable(engine::robust_stability_norm(design, spec.damping) <= 1.0);
+  }
+  if (virtual_coupling) {
+    report.set_chosen_stiffness(spec.stiffness);
+    report.set_chosen_damping(spec.damping);
   }
   report.set_colgate_min_damping(engine::colgate_bound(spec.stiffness, spec.damping, period_s));
   report.set_device_mass(device.apparent_mass);
@@ -171,7 +175,8 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext*, const v1::CreateO
   response->set_id(id);
   *response->mutable_stability() =
       stability_report(spec, *port_of(request->session_id()).device, period_s(),
-                       request->object().impedance().transparency_optimal_damping());
+                       request->object().impedance().transparency_optimal_damping(),
+                       request->object().impedance().virtual_coupling());
   return grpc::Status::OK;
 }
 
@@ -281,7 +286,8 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplyScen
   for (std::size_t i = 0; i < objects.size(); ++i) {
     *response->add_object_stability() = stability_report(
         objects[i], device, period_s(),
-        request->scene().objects(static_cast<int>(i)).impedance().transparency_optimal_damping());
+        request->scene().objects(static_cast<int>(i)).impedance().transparency_optimal_damping(),
+        request->scene().objects(static_cast<int>(i)).impedance().virtual_coupling());
   }
   for (auto id : object_ids) response->add_object_ids(id);
   for (auto id : field_ids) response->add_field_ids(id);

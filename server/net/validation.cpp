@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "engine/analysis/wall_design.hpp"
+#include "engine/scene/impedance.hpp"
 #include "engine/scene/shapes.hpp"
 
 namespace haptic::net {
@@ -167,6 +168,19 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
   const v1::Impedance& impedance = object.impedance();
   out.stiffness = impedance.stiffness();
   out.damping = impedance.damping();
+  if (impedance.virtual_coupling()) {
+    if (impedance.transparency_optimal_damping()) {
+      return path + ".impedance.virtual_coupling: not with transparency_optimal_damping";
+    }
+    if (!(limits.device_damping > 0.0)) {
+      return path + ".impedance.virtual_coupling: needs a device that gives its damping (this one "
+                    "does not)";
+    }
+    const engine::VirtualCouplingDesign coupling = engine::design_virtual_coupling(
+        limits.device_mass > 0.0 ? limits.device_mass : 1.0, limits.device_damping, limits.period_s);
+    out.stiffness = coupling.gains.stiffness;
+    out.damping = coupling.gains.damping;
+  }
   if (impedance.transparency_optimal_damping()) {
     if (limits.device_mass <= 0.0) {
       return path + ".impedance.transparency_optimal_damping: needs a device that gives its mass "

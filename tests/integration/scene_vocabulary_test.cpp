@@ -304,6 +304,27 @@ TEST_F(SceneVocabulary, AWallCanAskForTheTransparencyOptimalDamping_001Eq11) {
   EXPECT_TRUE(wall.stability().robustly_stable);
 }
 
+TEST_F(SceneVocabulary, AVirtualCouplingIsPassiveOnThisDeviceWhateverTheObject) {
+  Client client(config_for(server_));
+  // Colgate et al. 1995 on the default device (b = 0.022 N·s/m, 1 kHz): B_c = b/2 = 0.011 N·s/m,
+  // K_c = 0.9 · 2 (b − B_c) / T = 19.8 N/m — passive, and soft.
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1},
+                               .impedance = {.stiffness = 5000.0, .virtual_coupling = true}});
+  const StabilityReport& r = wall.stability();
+  EXPECT_NEAR(r.chosen_stiffness, 19.8, 1e-9);
+  EXPECT_NEAR(r.chosen_damping, 0.011, 1e-12);
+  EXPECT_TRUE(r.passive);
+  EXPECT_TRUE(r.stable);
+  try {
+    auto both = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1},
+                                 .impedance = {.stiffness = 1000.0, .transparency_optimal_damping = true,
+                                               .virtual_coupling = true}});
+    FAIL() << "two replacements of the same impedance were accepted";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("impedance.virtual_coupling"), std::string::npos);
+  }
+}
+
 /// Largest tool speed over the last `ticks` ticks, stepping one tick at a time. Unit: m/s.
 double peak_speed(Client& client, int ticks) {
   double peak = 0.0;

@@ -45,6 +45,9 @@ struct Impedance {
   /// Let the server replace `damping` by Eom et al.'s transparency-optimal value for this
   /// stiffness on its device (reported in StabilityReport::chosen_damping).
   bool transparency_optimal_damping = false;
+  /// Let the server replace stiffness and damping by a virtual coupling that is passive on its
+  /// device (Colgate et al. 1995; soft on a lightly damped device; reported in the StabilityReport).
+  bool virtual_coupling = false;
   friend bool operator==(const Impedance&, const Impedance&) = default;
 };
 
@@ -240,7 +243,8 @@ struct StabilityReport {
   bool stable = false;                ///< the sampled loop in contact is stable (known devices)
   double max_stable_stiffness = 0.0;  ///< Unit: N/m.
   double max_pole_magnitude = 0.0;
-  double chosen_damping = 0.0;        ///< with transparency_optimal_damping. Unit: N·s/m.
+  double chosen_damping = 0.0;        ///< with transparency_optimal_damping or virtual_coupling. Unit: N·s/m.
+  double chosen_stiffness = 0.0;      ///< with virtual_coupling. Unit: N/m.
   bool robustly_stable = false;       ///< ‖L‖∞ ≤ 1 at chosen_damping (001 eq. 17)
 };
 
