@@ -66,6 +66,7 @@ v1::Object to_proto(const BoxSpec& box) {
   set_impedance(object, box.impedance);
   *object.mutable_box()->mutable_half_extents() = to_proto(box.half_extents);
   set_dynamics(object, box.dynamics);
+  object.set_shared(box.shared);
   return object;
 }
 
@@ -88,6 +89,7 @@ v1::Object to_proto(const CapsuleSpec& capsule) {
   object.mutable_capsule()->set_radius(capsule.radius);
   object.mutable_capsule()->set_half_length(capsule.half_length);
   set_dynamics(object, capsule.dynamics);
+  object.set_shared(capsule.shared);
   return object;
 }
 
@@ -98,6 +100,7 @@ v1::Object to_proto(const MeshSpec& mesh) {
   auto* out = object.mutable_mesh();
   for (const Vec3& v : mesh.vertices) *out->add_vertices() = to_proto(v);
   for (const std::uint32_t i : mesh.indices) out->add_indices(i);
+  object.set_shared(mesh.shared);
   return object;
 }
 
@@ -164,6 +167,7 @@ v1::Object to_proto(const WallSpec& wall) {
   *object.mutable_pose()->mutable_position() = to_proto(wall.point);
   set_impedance(object, wall.impedance);
   *object.mutable_half_space()->mutable_normal() = to_proto(wall.normal);
+  object.set_shared(wall.shared);
   return object;
 }
 
@@ -173,6 +177,7 @@ v1::Object to_proto(const SphereSpec& sphere) {
   set_impedance(object, sphere.impedance);
   object.mutable_sphere()->set_radius(sphere.radius);
   set_dynamics(object, sphere.dynamics);
+  object.set_shared(sphere.shared);
   return object;
 }
 

@@ -43,16 +43,19 @@ std::uint32_t SceneStore::live_items_of(std::uint64_t session_id) const {
 }
 
 grpc::Status SceneStore::find_owned(std::uint64_t session_id, ItemKind kind, std::uint64_t id,
-                                    Item*& item) {
+                                    Item*& item, bool to_update) {
   auto it = items_.find(id);
   if (it == items_.end() || it->second.kind != kind || !is_live(it->second.meta)) {
     return {grpc::StatusCode::NOT_FOUND,
             std::string("id: no ") + kind_name(kind) + " with id " + std::to_string(id)};
   }
-  if (it->second.meta.session_id != session_id) {
+  const auto* object = std::get_if<engine::ObjectSpec>(&it->second.spec);
+  const bool shared = object != nullptr && object->shared;
+  if (it->second.meta.session_id != session_id && !(to_update && shared)) {
     return {grpc::StatusCode::PERMISSION_DENIED,
             std::string("id: ") + kind_name(kind) + " " + std::to_string(id) +
-                " belongs to another session"};
+                (shared ? " is shared, but only its owner may delete it"
+                        : " belongs to another session")};
   }
   item = &it->second;
   return grpc::Status::OK;
@@ -78,7 +81,15 @@ grpc::Status SceneStore::update(std::uint64_t session_id, ItemKind kind, std::ui
                                 const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec) {
   std::lock_guard lock(mutex_);
   Item* item = nullptr;
-  if (auto status = find_owned(session_id, kind, id, item); !status.ok()) return status;
+  if (auto status = find_owned(session_id, kind, id, item, true); !status.ok()) return status;
+  if (item->meta.session_id != session_id) {
+    // Another session updates a shared object: it stays shared, and its owner's.
+    const auto* updated = std::get_if<engine::ObjectSpec>(&spec);
+    if (updated == nullptr || !updated->shared) {
+      return {grpc::StatusCode::PERMISSION_DENIED,
+              "object.shared: only the owner may make a shared object private"};
+    }
+  }
   // Cross-fade (see engine::ItemRamp): the new version fades in from `now`, and every older
   // version of this item, the current one included, fades out against it.
   const std::int64_t now = next_tick_();

@@ -76,8 +76,10 @@ class SceneStore {
     std::variant<engine::ObjectSpec, engine::FieldSpec> spec;
   };
 
+  /// The live item `id` of `kind` that `session_id` may change: its own, or (to update) another
+  /// session's shared object.
   grpc::Status find_owned(std::uint64_t session_id, ItemKind kind, std::uint64_t id,
-                          Item*& item);
+                          Item*& item, bool to_update = false);
   std::uint32_t live_items_of(std::uint64_t session_id) const;
   void publish_locked();
 

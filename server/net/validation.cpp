@@ -165,6 +165,7 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
   out.p_WO = to_engine(object.pose().position());
   if (!object.has_impedance()) return path + ".impedance: is required";
   if (auto e = check_impedance(object.impedance(), path + ".impedance", limits); !e.empty()) return e;
+  out.shared = object.shared();
   const v1::Impedance& impedance = object.impedance();
   out.stiffness = impedance.stiffness();
   out.damping = impedance.damping();

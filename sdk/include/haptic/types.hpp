@@ -63,6 +63,7 @@ struct WallSpec {
   Vec3 point{};             ///< Unit: m.
   Vec3 normal{0, 0, 1};     ///< Non-zero; the server normalises it.
   Impedance impedance{};
+  bool shared = false;      ///< any session may update it; only its owner deletes it
   friend bool operator==(const WallSpec&, const WallSpec&) = default;
 };
 
@@ -79,6 +80,7 @@ struct SphereSpec {
   double radius = 0.0;      ///< Unit: m. > 0.
   Impedance impedance{};
   Dynamics dynamics{};      ///< mass > 0: the sphere can be pushed around
+  bool shared = false;      ///< any session may update it; only its owner deletes it
   friend bool operator==(const SphereSpec&, const SphereSpec&) = default;
 };
 
@@ -97,6 +99,7 @@ struct BoxSpec {
   Vec3 half_extents{};      ///< Unit: m. Each > 0.
   Impedance impedance{};
   Dynamics dynamics{};      ///< mass > 0: the box can be pushed around
+  bool shared = false;      ///< any session may update it; only its owner deletes it
 };
 
 /// A solid capsule along its pose's z axis: radius around the segment ±half_length.
@@ -106,6 +109,7 @@ struct CapsuleSpec {
   double half_length = 0.0;  ///< Unit: m. >= 0.
   Impedance impedance{};
   Dynamics dynamics{};
+  bool shared = false;      ///< any session may update it; only its owner deletes it
 };
 
 /// A triangle mesh in its pose's frame, rendered with a god object (thin parts hold).
@@ -114,6 +118,7 @@ struct MeshSpec {
   std::vector<Vec3> vertices;          ///< Unit: m, in the object frame.
   std::vector<std::uint32_t> indices;  ///< Three per triangle.
   Impedance impedance{};
+  bool shared = false;      ///< any session may update it; only its owner deletes it
 };
 
 /// Russo's tangent-plane local model: the plane through the pose position with outward `normal`

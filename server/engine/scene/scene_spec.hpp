@@ -88,6 +88,10 @@ struct ObjectSpec {
   /// under the reaction of its contact force. 0: fixed. Unit: kg.
   double object_mass = 0.0;
   double object_damping = 0.0;  // B_V, its viscous friction with the ground. Unit: N·s/m.
+  /// Sharing rule: any session may update a shared object (move it, change its impedance); only
+  /// its owner may delete it, and it goes when the owner's session does. Not shared: only the
+  /// owner changes it. Every tool feels every object either way.
+  bool shared = false;
 };
 
 /// Potential U = 1/2 k |p - anchor|^2; F = -k (p - anchor) - b v, clipped to max_force if > 0.

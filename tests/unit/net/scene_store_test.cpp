@@ -68,6 +68,29 @@ TEST(SceneStore, UpdatesFasterThanTheRampKeepAtMostFourVersionsWithGainsSummingT
   }
 }
 
+TEST(SceneStore, ASharedObjectAnySessionMayUpdateButOnlyItsOwnerDeletes) {
+  StoreRig rig;
+  std::uint64_t id = 0;
+  engine::ObjectSpec table = wall(0.0);
+  table.shared = true;
+  ASSERT_TRUE(rig.store.create(1, ItemKind::kObject, table, id).ok());
+  engine::ObjectSpec moved = table;
+  moved.p_WO.z = 0.01;
+  EXPECT_TRUE(rig.store.update(2, ItemKind::kObject, id, moved).ok());  // another session moves it
+  EXPECT_DOUBLE_EQ(rig.scene().half_spaces[0].point_W.z, 0.01);
+  const grpc::Status remove = rig.store.remove(2, ItemKind::kObject, id);
+  EXPECT_EQ(remove.error_code(), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_NE(remove.error_message().find("only its owner may delete it"), std::string::npos);
+  engine::ObjectSpec made_private = moved;
+  made_private.shared = false;
+  EXPECT_EQ(rig.store.update(2, ItemKind::kObject, id, made_private).error_code(),
+            grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_TRUE(rig.store.update(1, ItemKind::kObject, id, made_private).ok());  // the owner may
+  EXPECT_EQ(rig.store.update(2, ItemKind::kObject, id, moved).error_code(),
+            grpc::StatusCode::PERMISSION_DENIED);  // now private
+  EXPECT_EQ(rig.store.remove_session(1), 1u);  // it goes with its owner
+}
+
 TEST(SceneStore, AnotherSessionsItemIsPermissionDenied) {
   StoreRig rig;
   std::uint64_t id = 0;

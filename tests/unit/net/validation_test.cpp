@@ -147,6 +147,10 @@ TEST(Validation, NewShapesAndMaterialsNameWhatIsWrong) {
   box.mutable_box()->mutable_half_extents()->set_z(0.01);
   ASSERT_EQ(to_object_spec(box, "o", SceneLimits{}, spec), "");
   EXPECT_TRUE(std::holds_alternative<engine::BoxSpec>(spec.shape));
+  EXPECT_FALSE(spec.shared);
+  box.set_shared(true);
+  ASSERT_EQ(to_object_spec(box, "o", SceneLimits{}, spec), "");
+  EXPECT_TRUE(spec.shared);
 
   v1::Object capsule = object_with(1000.0);
   capsule.mutable_capsule()->set_radius(0.01);
