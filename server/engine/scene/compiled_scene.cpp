@@ -55,6 +55,41 @@ void advance_virtual_mass(double m, double B, const Vec3& F, double dt, Vec3& X,
   V = std::exp(-z) * V + (dt * phi) * a;
 }
 
+/// Coulomb friction on a mesh contact, the friction cone of Salisbury et al. 1995 on the god
+/// object's result: the contact point sticks at an anchor on the surface (kept in O, so a moving
+/// mesh carries it) while the tangential offset |t| from the frictionless proxy stays within
+/// μ_s d (d the penetration along the contact normal), adding the friction spring K t; past the
+/// cone the anchor slides to the dynamic cone, |t| = μ_d d. The anchor is projected onto the
+/// primary constraint plane each tick (exact on a face; across an edge it follows the new face).
+void apply_mesh_friction(const CompiledMesh& mesh, MeshState& s, GodObjectOutput& g,
+                         const Vec3& p_WT) {
+  if (!g.in_contact) {
+    s.anchored = false;
+    s.sliding = false;
+    return;
+  }
+  const Vec3 to_proxy = g.p_WP - p_WT;
+  const double distance = norm(to_proxy);
+  const Vec3 n = g.plane_count > 0 ? g.normals_W[0]
+                                   : (distance > 0.0 ? (1.0 / distance) * to_proxy : Vec3{0, 0, 1});
+  const double d = dot(to_proxy, n);  // penetration along the contact normal. Unit: m.
+  const ObjectPose X_WO{mesh.pose.p_WO, mesh.pose.R_WO};
+  Vec3 p_stick = g.p_WP;
+  if (s.anchored && d > 0.0) {
+    const Vec3 a_W = to_world(X_WO, s.anchor_O);
+    const Vec3 t = (a_W - dot(a_W - g.p_WP, n) * n) - g.p_WP;  // in the plane, from the proxy
+    const double offset = norm(t);
+    // Sticking holds up to the static cone; once sliding, it slides (on the dynamic cone) until
+    // the tool comes back inside the dynamic cone.
+    s.sliding = s.sliding ? offset > mesh.dynamic_friction * d : offset > mesh.static_friction * d;
+    p_stick = s.sliding ? g.p_WP + (mesh.dynamic_friction * d / offset) * t : g.p_WP + t;
+  }
+  s.anchor_O = to_object(X_WO, p_stick);
+  s.anchored = true;
+  g.F_T_W += mesh.params.stiffness * (p_stick - g.p_WP);
+  g.p_WP = p_stick;
+}
+
 /// Records one item's contribution this tick in its meter and publishes the totals. An item that
 /// does no work now and did none at the last sample adds nothing: skipped, so idle items cost a
 /// dot product.
@@ -154,6 +189,8 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
       compiled.pose = MeshPose{object.p_WO, object.R_WO, {}, {}};
       compiled.params.stiffness = object.stiffness;
       compiled.params.damping = object.damping;
+      compiled.static_friction = object.static_friction;
+      compiled.dynamic_friction = object.dynamic_friction;
       compiled.ramp = entry.meta.ramp();
       compiled.state = static_cast<std::uint32_t>(state.meshes.size());
       compiled.meter = meter_index;
@@ -341,6 +378,9 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
           [](const MeshState& a, MeshState& b) {
             b.god = a.god;
             b.needs_rebase = a.needs_rebase;
+            b.anchor_O = a.anchor_O;
+            b.anchored = a.anchored;
+            b.sliding = a.sliding;
           });
     // A mesh version new to `to` takes over the god object of its item's newest old version.
     for (MeshState& fresh : new_meshes) {
@@ -569,8 +609,9 @@ namespace {
         rebase_god_object(s.god, mesh.model->bvh, mesh.pose, mesh.params);
         s.needs_rebase = false;
       }
-      const GodObjectOutput g =
+      GodObjectOutput g =
           update_god_object(s.god, mesh.model->bvh, mesh.pose, mesh.params, p_WT, v_WT);
+      if (mesh.static_friction > 0.0) apply_mesh_friction(mesh, s, g, p_WT);
       const double gain = ramp_gain(mesh.ramp, tick, ramp);
       const Vec3 F = gain * g.F_T_W;
       meter(state, meters + mesh.meter, F, v_WT, dt);

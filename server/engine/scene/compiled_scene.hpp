@@ -76,6 +76,8 @@ struct CompiledMesh {
   std::shared_ptr<const MeshModel> model;
   MeshPose pose;
   GodObjectParams params;
+  double static_friction = 0.0;   // μ_s of the material (0: the god object slides freely).
+  double dynamic_friction = 0.0;  // μ_d ≤ μ_s.
   ItemRamp ramp;
   std::uint32_t state = 0;   // index into SceneState::meshes
   std::uint32_t meter = 0;
@@ -124,6 +126,11 @@ struct MeshState {
   std::uint64_t id = 0;        // the item; a new version of it inherits the god object
   GodObjectState god;
   bool needs_rebase = false;   // inherited from an earlier version of the mesh
+  /// Friction: where the contact sticks, in O (the frictionless god object's proxy slides; this
+  /// point holds while the tool stays inside the static cone).
+  Vec3 anchor_O;
+  bool anchored = false;
+  bool sliding = false;   // kinetic friction until the tool is back inside the dynamic cone
 };
 
 /// What the loop writes. What belongs to one tool is held once per port, port-major: port p's

@@ -228,11 +228,42 @@ TEST(SceneStages, EachSessionsForceIsClippedToItsBudgetAndTheServersSceneIsExemp
   EXPECT_EQ(f.contact_count, 4u);
 }
 
+TEST(SceneStages, AMeshWithFrictionSticksThenSlidesAtTheDynamicCone) {
+  // The same drag as the box's: a plate with μ_s = 0.5, μ_d = 0.3, the tool 2 mm under its
+  // surface (F_n = 2 N) dragged along +x.
+  SceneDescription d;
+  ObjectSpec mesh;
+  mesh.stiffness = 1000.0;
+  mesh.static_friction = 0.5;
+  mesh.dynamic_friction = 0.3;
+  mesh.shape = MeshShapeSpec{plate(0.0)};
+  d.objects.push_back(object(1, 1, mesh));
+  const CompiledScene scene = compile_scene(d, 50, 1, kT);
+  evaluate_scene(scene, {0, 0, 0.001}, {}, 100, kT);  // above: free
+  SceneForce f = evaluate_scene(scene, {0, 0, -0.002}, {}, 101, kT);
+  EXPECT_NEAR(f.F_T_W.z, 2.0 + 1000.0 * 1e-6, 1e-9);  // K (d + the god object's 1 µm margin)
+  EXPECT_NEAR(f.F_T_W.x, 0.0, 1e-9);
+  f = evaluate_scene(scene, {0.0005, 0, -0.002}, {}, 102, kT);  // inside the static cone: sticks
+  EXPECT_NEAR(f.F_T_W.x, -0.5, 1e-3);
+  for (int k = 0; k < 100; ++k) f = evaluate_scene(scene, {0.0005 + 0.0001 * k, 0, -0.002}, {}, 103 + k, kT);
+  EXPECT_NEAR(f.F_T_W.x, -0.3 * 2.0, 2e-3);  // sliding: μ_d F_n
+  // Frictionless, the same drag feels nothing sideways.
+  mesh.static_friction = mesh.dynamic_friction = 0.0;
+  SceneDescription smooth;
+  smooth.objects.push_back(object(1, 1, mesh));
+  const CompiledScene slick = compile_scene(smooth, 50, 1, kT);
+  evaluate_scene(slick, {0, 0, 0.001}, {}, 100, kT);
+  evaluate_scene(slick, {0, 0, -0.002}, {}, 101, kT);
+  EXPECT_NEAR(evaluate_scene(slick, {0.0005, 0, -0.002}, {}, 102, kT).F_T_W.x, 0.0, 1e-9);
+}
+
 TEST(SceneStages, EveryStateStageAllocatesNothingPerTick) {
   SceneDescription d;
   d.objects.push_back(object(1, 1, box_with_friction(0.5, 0.3)));
   ObjectSpec mesh;
   mesh.stiffness = 800.0;
+  mesh.static_friction = 0.4;  // the friction path too
+  mesh.dynamic_friction = 0.3;
   mesh.shape = MeshShapeSpec{plate(-0.005)};
   d.objects.push_back(object(2, 2, mesh));
   ObjectSpec capsule;
