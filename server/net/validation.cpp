@@ -206,8 +206,9 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
   if (object.has_dynamics()) {
     const v1::Dynamics& dynamics = object.dynamics();
     const std::string d = path + ".dynamics";
-    if (object.shape_case() == v1::Object::kHalfSpace || object.shape_case() == v1::Object::kMesh) {
-      return d + ": only spheres, boxes and capsules can be virtual masses";
+    if (object.shape_case() == v1::Object::kHalfSpace ||
+        object.shape_case() == v1::Object::kTangentPlane) {
+      return d + ": only bounded objects (spheres, boxes, capsules, meshes) can be virtual masses";
     }
     if (auto e = check_range(dynamics.mass(), 1e-6, limits.max_object_mass, d + ".mass"); !e.empty()) {
       return e;

@@ -40,7 +40,7 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
   const auto ports = static_cast<std::uint32_t>(ports_.size());
   for (std::uint32_t index = 0; index < ports; ++index) run_port(scene, index, tick, time_ns, gain);
   // The virtual masses move once, under the reactions of every port (000 eq. 7.1).
-  if (!scene.masses.empty()) engine::advance_scene(scene, config_.period_s);
+  if (!scene.masses.empty() || !scene.mesh_masses.empty()) engine::advance_scene(scene, config_.period_s);
   if (gain == 0.0) output_zero_.store(true, std::memory_order_release);
   counters_.ticks.fetch_add(1, std::memory_order_relaxed);
 }

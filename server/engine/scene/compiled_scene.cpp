@@ -61,8 +61,8 @@ void advance_virtual_mass(double m, double B, const Vec3& F, double dt, Vec3& X,
 /// μ_s d (d the penetration along the contact normal), adding the friction spring K t; past the
 /// cone the anchor slides to the dynamic cone, |t| = μ_d d. The anchor is projected onto the
 /// primary constraint plane each tick (exact on a face; across an edge it follows the new face).
-void apply_mesh_friction(const CompiledMesh& mesh, MeshState& s, GodObjectOutput& g,
-                         const Vec3& p_WT) {
+void apply_mesh_friction(const CompiledMesh& mesh, const MeshPose& pose, MeshState& s,
+                         GodObjectOutput& g, const Vec3& p_WT) {
   if (!g.in_contact) {
     s.anchored = false;
     s.sliding = false;
@@ -73,7 +73,7 @@ void apply_mesh_friction(const CompiledMesh& mesh, MeshState& s, GodObjectOutput
   const Vec3 n = g.plane_count > 0 ? g.normals_W[0]
                                    : (distance > 0.0 ? (1.0 / distance) * to_proxy : Vec3{0, 0, 1});
   const double d = dot(to_proxy, n);  // penetration along the contact normal. Unit: m.
-  const ObjectPose X_WO{mesh.pose.p_WO, mesh.pose.R_WO};
+  const ObjectPose X_WO{pose.p_WO, pose.R_WO};
   Vec3 p_stick = g.p_WP;
   if (s.anchored && d > 0.0) {
     const Vec3 a_W = to_world(X_WO, s.anchor_O);
@@ -191,6 +191,9 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
       compiled.params.damping = object.damping;
       compiled.static_friction = object.static_friction;
       compiled.dynamic_friction = object.dynamic_friction;
+      compiled.object_mass = object.object_mass;
+      compiled.object_damping = object.object_damping;
+      if (object.object_mass > 0.0) scene.mesh_masses.push_back(static_cast<std::uint32_t>(scene.meshes.size()));
       compiled.ramp = entry.meta.ramp();
       compiled.state = static_cast<std::uint32_t>(state.meshes.size());
       compiled.meter = meter_index;
@@ -284,6 +287,13 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
     for (std::uint32_t i = 0; i < state.meshes_per_port; ++i) state.meshes.push_back(state.meshes[i]);
   }
   state.motions.assign(state.contacts_per_port, ContactMotion{});
+  state.mesh_motions.assign(state.meshes_per_port, ContactMotion{});
+  state.mesh_motion = std::make_unique<std::atomic<double>[]>(6 * state.meshes_per_port);
+  for (const CompiledMesh& mesh : scene.meshes) {
+    const Vec3& p = mesh.pose.p_WO;
+    const double start[6] = {p.x, p.y, p.z, 0.0, 0.0, 0.0};
+    for (int k = 0; k < 6; ++k) state.mesh_motion[6 * mesh.state + k].store(start[k], std::memory_order_relaxed);
+  }
   state.motion = std::make_unique<std::atomic<double>[]>(6 * state.contacts_per_port);
   for (const CompiledContact& contact : scene.contacts) {
     const Vec3& p = contact.X_WO.p_WO;
@@ -319,26 +329,37 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
       }
     }
   };
-  const std::span<const ContactState> old_keys(old_state.contacts.data(), old_state.contacts_per_port);
-  const std::span<const ContactState> new_keys(new_state.contacts.data(), new_state.contacts_per_port);
   // A virtual mass moves once, whichever tools push it: its motion carries once, by port 0's keys
-  // (every port holds the same item versions in the same order).
-  for (std::size_t j = 0; j < new_keys.size(); ++j) {
-    const ContactState* same = nullptr;
-    const ContactState* newest = nullptr;  // the item's newest old version, for a new version
-    for (const ContactState& old : old_keys) {
-      if (old.key == new_keys[j].key) {
-        same = &old;
-        break;
+  // (every port holds the same item versions in the same order), from the same version or else
+  // from the item's newest old version.
+  const auto carry_motion = [](const auto& old_keys, const auto& new_keys,
+                               const std::vector<ContactMotion>& old_motions,
+                               std::vector<ContactMotion>& new_motions) {
+    for (std::size_t j = 0; j < new_keys.size(); ++j) {
+      std::size_t source = old_keys.size();
+      std::size_t newest = old_keys.size();
+      for (std::size_t i = 0; i < old_keys.size(); ++i) {
+        if (old_keys[i].key == new_keys[j].key) {
+          source = i;
+          break;
+        }
+        if (old_keys[i].id == new_keys[j].id &&
+            (newest == old_keys.size() || old_keys[i].key > old_keys[newest].key)) {
+          newest = i;
+        }
       }
-      if (old.id == new_keys[j].id && (!newest || old.key > newest->key)) newest = &old;
+      if (source == old_keys.size()) source = newest;
+      if (source == old_keys.size()) continue;
+      new_motions[j].displacement_W = old_motions[source].displacement_W;
+      new_motions[j].velocity_W = old_motions[source].velocity_W;
     }
-    const ContactState* source = same ? same : newest;
-    if (!source) continue;
-    const ContactMotion& old_motion = old_state.motions[static_cast<std::size_t>(source - old_keys.data())];
-    new_state.motions[j].displacement_W = old_motion.displacement_W;
-    new_state.motions[j].velocity_W = old_motion.velocity_W;
-  }
+  };
+  carry_motion(std::span<const ContactState>(old_state.contacts.data(), old_state.contacts_per_port),
+               std::span<const ContactState>(new_state.contacts.data(), new_state.contacts_per_port),
+               old_state.motions, new_state.motions);
+  carry_motion(std::span<const MeshState>(old_state.meshes.data(), old_state.meshes_per_port),
+               std::span<const MeshState>(new_state.meshes.data(), new_state.meshes_per_port),
+               old_state.mesh_motions, new_state.mesh_motions);
   const std::uint32_t ports = std::min(old_state.ports, new_state.ports);
   for (std::uint32_t port = 0; port < ports; ++port) {
     const std::span<const ContactState> old_contacts(
@@ -442,6 +463,16 @@ std::vector<ObjectMotion> object_motions(const CompiledScene& scene) {
     motion.p_WO = {at(0), at(1), at(2)};
     motion.v_WO = {at(3), at(4), at(5)};
     // The live version of an item is compiled before its superseded ones: keep the first.
+    auto it = std::find_if(out.begin(), out.end(), [&](const ObjectMotion& m) { return m.id == motion.id; });
+    if (it == out.end()) out.push_back(motion);
+  }
+  for (const CompiledMesh& mesh : scene.meshes) {
+    if (mesh.object_mass <= 0.0) continue;
+    ObjectMotion motion;
+    motion.id = state.meshes[mesh.state].id;
+    const auto at = [&](int k) { return state.mesh_motion[6 * mesh.state + k].load(std::memory_order_relaxed); };
+    motion.p_WO = {at(0), at(1), at(2)};
+    motion.v_WO = {at(3), at(4), at(5)};
     auto it = std::find_if(out.begin(), out.end(), [&](const ObjectMotion& m) { return m.id == motion.id; });
     if (it == out.end()) out.push_back(motion);
   }
@@ -604,17 +635,22 @@ namespace {
     for (const CompiledMesh& mesh : scene.meshes) {
       if (is_fading_out(mesh.ramp)) out.ramping = true;
       MeshState& s = meshes[mesh.state];
-      if (!s.god.initialized) reset_god_object(s.god, mesh.pose, p_WT);
+      const bool moves = mesh.object_mass > 0.0;
+      ContactMotion& motion = state.mesh_motions[mesh.state];
+      const MeshPose pose = moves ? MeshPose{mesh.pose.p_WO + motion.displacement_W, mesh.pose.R_WO,
+                                             motion.velocity_W, {}}
+                                  : mesh.pose;
+      if (!s.god.initialized) reset_god_object(s.god, pose, p_WT);
       if (s.needs_rebase) {
-        rebase_god_object(s.god, mesh.model->bvh, mesh.pose, mesh.params);
+        rebase_god_object(s.god, mesh.model->bvh, pose, mesh.params);
         s.needs_rebase = false;
       }
-      GodObjectOutput g =
-          update_god_object(s.god, mesh.model->bvh, mesh.pose, mesh.params, p_WT, v_WT);
-      if (mesh.static_friction > 0.0) apply_mesh_friction(mesh, s, g, p_WT);
+      GodObjectOutput g = update_god_object(s.god, mesh.model->bvh, pose, mesh.params, p_WT, v_WT);
+      if (mesh.static_friction > 0.0) apply_mesh_friction(mesh, pose, s, g, p_WT);
       const double gain = ramp_gain(mesh.ramp, tick, ramp);
       const Vec3 F = gain * g.F_T_W;
       meter(state, meters + mesh.meter, F, v_WT, dt);
+      if (moves) motion.reaction_W += -1.0 * F;  // moved once per tick by advance_scene
       if (!g.in_contact || gain == 0.0) continue;
       contribute(mesh.slot, F, false);
       ++out.contact_count;
@@ -685,12 +721,22 @@ void advance_scene(const CompiledScene& scene, double dt) {
     const double now[6] = {p.x, p.y, p.z, m.velocity_W.x, m.velocity_W.y, m.velocity_W.z};
     for (int k = 0; k < 6; ++k) state.motion[6 * contact.state + k].store(now[k], std::memory_order_relaxed);
   }
+  for (const std::uint32_t index : scene.mesh_masses) {
+    const CompiledMesh& mesh = scene.meshes[index];
+    ContactMotion& m = state.mesh_motions[mesh.state];
+    advance_virtual_mass(mesh.object_mass, mesh.object_damping, m.reaction_W, dt, m.displacement_W,
+                         m.velocity_W);
+    m.reaction_W = Vec3{};
+    const Vec3 p = mesh.pose.p_WO + m.displacement_W;
+    const double now[6] = {p.x, p.y, p.z, m.velocity_W.x, m.velocity_W.y, m.velocity_W.z};
+    for (int k = 0; k < 6; ++k) state.mesh_motion[6 * mesh.state + k].store(now[k], std::memory_order_relaxed);
+  }
 }
 
 SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Vec3& v_WT,
                           std::int64_t tick, double dt) {
   const SceneForce out = evaluate_port(scene, 0, p_WT, v_WT, tick, dt);
-  if (!scene.masses.empty()) advance_scene(scene, dt);
+  if (!scene.masses.empty() || !scene.mesh_masses.empty()) advance_scene(scene, dt);
   return out;
 }
 

@@ -76,6 +76,8 @@ struct CompiledMesh {
   std::shared_ptr<const MeshModel> model;
   MeshPose pose;
   GodObjectParams params;
+  double object_mass = 0.0;       // > 0: a virtual mass that moves (000 eq. 7.1). Unit: kg.
+  double object_damping = 0.0;    // B_V. Unit: N·s/m.
   double static_friction = 0.0;   // μ_s of the material (0: the god object slides freely).
   double dynamic_friction = 0.0;  // μ_d ≤ μ_s.
   ItemRamp ramp;
@@ -144,6 +146,8 @@ struct SceneState {
   std::uint32_t meters_per_port = 0;
   std::vector<ContactState> contacts;     // per port
   std::vector<ContactMotion> motions;     // per contact state, shared by the ports
+  std::vector<ContactMotion> mesh_motions;  // per mesh state, shared by the ports
+  std::unique_ptr<std::atomic<double>[]> mesh_motion;  // 6 per mesh, as `motion`
   std::vector<MeshState> meshes;          // per port
   std::vector<EnergyMeter> meters;        // per port
   std::vector<std::uint64_t> meter_keys;  // the item version each meter belongs to (per item)
@@ -182,6 +186,8 @@ struct CompiledScene {
   std::vector<CompiledField> fields;
   /// The contacts that are virtual masses (indices into `contacts`), which advance_scene moves.
   std::vector<std::uint32_t> masses;
+  /// The meshes that are virtual masses (indices into `meshes`).
+  std::vector<std::uint32_t> mesh_masses;
   std::uint32_t stages = 0;              // SceneStage bits of the non-empty stages
   std::int64_t removal_ramp_ticks = 50;  // Ticks over which an item ramps in or out; >= 1.
   /// Largest force one session's items may exert together (the server's own scene is exempt);

@@ -257,6 +257,31 @@ TEST(SceneStages, AMeshWithFrictionSticksThenSlidesAtTheDynamicCone) {
   EXPECT_NEAR(evaluate_scene(slick, {0.0005, 0, -0.002}, {}, 102, kT).F_T_W.x, 0.0, 1e-9);
 }
 
+TEST(SceneStages, AMeshVirtualMassIsPushedLikeAnyOther_Eq7_1) {
+  // A 0.2 kg plate on a rough floor (B_V = 3 N·s/m), pushed from above by a tool moving down at
+  // 0.05 m/s: once it has caught up, the tool feels B_V v and the plate moves at v.
+  SceneDescription d;
+  ObjectSpec mesh;
+  mesh.stiffness = 2000.0;
+  mesh.damping = 5.0;
+  mesh.shape = MeshShapeSpec{plate(0.0)};
+  mesh.object_mass = 0.2;
+  mesh.object_damping = 3.0;
+  d.objects.push_back(object(1, 1, mesh));
+  const CompiledScene scene = compile_scene(d, 50, 1, kT);
+  const double v = 0.05;
+  SceneForce f;
+  evaluate_scene(scene, {0, 0, 0.001}, {0, 0, -v}, 99, kT);
+  for (int k = 0; k < 3000; ++k) {
+    f = evaluate_scene(scene, {0, 0, 0.0005 - v * kT * k}, {0, 0, -v}, 100 + k, kT);
+  }
+  EXPECT_NEAR(f.F_T_W.z, 3.0 * v, 1e-4);
+  const std::vector<ObjectMotion> motions = object_motions(scene);
+  ASSERT_EQ(motions.size(), 1u);
+  EXPECT_NEAR(motions[0].v_WO.z, -v, 1e-6);
+  EXPECT_LT(motions[0].p_WO.z, -0.1);  // it went down with the tool
+}
+
 TEST(SceneStages, EveryStateStageAllocatesNothingPerTick) {
   SceneDescription d;
   d.objects.push_back(object(1, 1, box_with_friction(0.5, 0.3)));
