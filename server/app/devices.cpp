@@ -354,4 +354,29 @@ std::vector<SimulatedDevice> make_devices(const v1::ServerConfig& config) {
   return out;
 }
 
+std::vector<runtime::TickPort> tick_ports(const v1::ServerConfig& config,
+                                          const std::vector<SimulatedDevice>& devices,
+                                          const std::vector<runtime::SampleRing*>& rings,
+                                          double period_s) {
+  std::vector<runtime::TickPort> ports;
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    runtime::Device& device = *devices[i].device;
+    runtime::TickPort port{&device, rings[i], {}, std::nullopt};
+    port.limits.max_force = device.description().max_force;
+    const v1::PassivityConfig& passivity = config.passivity();
+    const double device_mass = device.description().apparent_mass;
+    const bool passivity_on = passivity.has_enabled() ? passivity.enabled() : device_mass > 0.0;
+    if (passivity_on) {
+      const double threshold =
+          passivity.velocity_threshold() > 0.0 ? passivity.velocity_threshold() : 1e-4;
+      engine::PassivityControllerParams params = engine::passivity_params_for_device(
+          device_mass > 0.0 ? device_mass : 0.01, period_s, threshold);
+      if (passivity.max_damping() > 0.0) params.max_damping = passivity.max_damping();
+      port.passivity = params;
+    }
+    ports.push_back(port);
+  }
+  return ports;
+}
+
 }  // namespace haptic::app

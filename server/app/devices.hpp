@@ -11,6 +11,7 @@
 #include "engine/operator/simulated_hand.hpp"
 #include "haptic/v1/config.pb.h"
 #include "runtime/device.hpp"
+#include "runtime/tick_runner.hpp"
 
 namespace haptic::app {
 
@@ -56,5 +57,13 @@ SimulatedDevice make_device(const v1::ServerConfig& config);
 
 /// Every device port's device, port 0 first, then extra_devices in order.
 std::vector<SimulatedDevice> make_devices(const v1::ServerConfig& config);
+
+/// The loop's view of every port: its device, its sample ring, its force limit and, as the
+/// configuration's `passivity` asks (by default where the device gives its mass), its passivity
+/// controller. rings[i] belongs to devices[i]. Shared by hapticd and haptic-lab.
+std::vector<runtime::TickPort> tick_ports(const v1::ServerConfig& config,
+                                          const std::vector<SimulatedDevice>& devices,
+                                          const std::vector<runtime::SampleRing*>& rings,
+                                          double period_s);
 
 }  // namespace haptic::app

@@ -51,23 +51,8 @@ Server::Server(const v1::ServerConfig& config)
   tick.period_s = 1.0 / rate;
   tick.output_ramp_ticks = ms_to_ticks(config.removal_ramp_ms(), rate);
   // Each port's force limit and passivity controller follow its own device.
-  std::vector<runtime::TickPort> tick_ports;
-  for (std::uint32_t i = 0; i < ports; ++i) {
-    runtime::Device& device = *simulated_[i].device;
-    runtime::TickPort port{&device, samples_[i].get(), {}, std::nullopt};
-    port.limits.max_force = device.description().max_force;
-    const v1::PassivityConfig& passivity = config.passivity();
-    const double device_mass = device.description().apparent_mass;
-    const bool passivity_on = passivity.has_enabled() ? passivity.enabled() : device_mass > 0.0;
-    if (passivity_on) {
-      const double threshold = passivity.velocity_threshold() > 0.0 ? passivity.velocity_threshold() : 1e-4;
-      engine::PassivityControllerParams params = engine::passivity_params_for_device(
-          device_mass > 0.0 ? device_mass : 0.01, tick.period_s, threshold);
-      if (passivity.max_damping() > 0.0) params.max_damping = passivity.max_damping();
-      port.passivity = params;
-    }
-    tick_ports.push_back(port);
-  }
+  const std::vector<runtime::TickPort> tick_ports =
+      app::tick_ports(config, simulated_, ring_pointers(samples_), tick.period_s);
   runner_ = std::make_unique<runtime::TickRunner>(tick_ports, scenes_, counters_, tick);
   const runtime::DeviceDescription& primary = simulated_.front().device->description();
 
