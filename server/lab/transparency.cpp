@@ -1,0 +1,63 @@
+#include "lab/transparency.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace haptic::lab {
+namespace {
+
+void require(bool ok, const std::string& message) {
+  if (!ok) throw std::invalid_argument(message);
+}
+
+}  // namespace
+
+TransparencyReport transparency_study(const engine::WallDesignParams& p, double lo, double hi,
+                                      int points) {
+  require(std::isfinite(p.mass) && p.mass > 0.0, "mass: must be finite and > 0");
+  require(std::isfinite(p.damping) && p.damping >= 0.0, "damping: must be finite and >= 0");
+  require(std::isfinite(p.wall_stiffness) && p.wall_stiffness > 0.0, "stiffness: must be finite and > 0");
+  require(std::isfinite(p.wall_damping) && p.wall_damping > 0.0, "wall damping: must be finite and > 0");
+  require(std::isfinite(p.sample_period) && p.sample_period > 0.0, "period: must be finite and > 0");
+  require(std::isfinite(p.weight_cutoff) && p.weight_cutoff > 0.0, "w1: must be finite and > 0");
+  require(p.mass_uncertainty >= 0.0 && p.mass_uncertainty < 1.0, "alpha: must be in [0, 1)");
+  require(p.damping_uncertainty >= 0.0 && p.damping_uncertainty < 1.0, "beta: must be in [0, 1)");
+  require(lo > 0.0 && hi > lo && points >= 2, "sweep: needs 0 < lo < hi and at least 2 points");
+  TransparencyReport report;
+  for (int i = 0; i < points; ++i) {
+    const double B_c = lo * std::pow(hi / lo, static_cast<double>(i) / (points - 1));
+    report.sweep.push_back({B_c, engine::transparency_index(p, B_c), engine::robust_stability_norm(p, B_c)});
+  }
+  report.optimum = engine::optimise_controller_damping(p, lo, hi);
+  return report;
+}
+
+void write_csv(const TransparencyReport& report, std::ostream& out) {
+  out << "controller_damping_n_s_m,transparency_index,robust_norm,robust_norm_db\n";
+  for (const TransparencyPoint& point : report.sweep) {
+    out << point.controller_damping << ',' << point.transparency_index << ',' << point.robust_norm
+        << ',' << engine::to_db(point.robust_norm) << '\n';
+  }
+}
+
+void write_markdown(const engine::WallDesignParams& p, const TransparencyReport& report,
+                    std::ostream& out) {
+  const engine::OptimalWallDesign& o = report.optimum;
+  out << "# Transparency and robust stability (Eom et al., eqs. 11 and 17)\n\n"
+      << "Device m = " << p.mass << " kg, b = " << p.damping << " N·s/m; wall K = " << p.wall_stiffness
+      << " N/m, B = " << p.wall_damping << " N·s/m; T = " << p.sample_period
+      << " s; w1 cut-off " << p.weight_cutoff << " rad/s; α = " << p.mass_uncertainty
+      << ", β = " << p.damping_uncertainty << ".\n\n"
+      << "Optimum B_c = " << o.controller_damping << " N·s/m: J = " << o.transparency_index
+      << ", ‖L‖∞ = " << engine::to_db(o.robust_stability_norm) << " dB — "
+      << (o.robustly_stable ? "robustly stable" : (o.nominal_loop_stable ? "NOT robustly stable"
+                                                                        : "nominal loop UNSTABLE"))
+      << ".\n\n| B_c [N·s/m] | J | ‖L‖∞ [dB] | robust |\n|---|---|---|---|\n";
+  for (const TransparencyPoint& point : report.sweep) {
+    out << "| " << point.controller_damping << " | " << point.transparency_index << " | "
+        << engine::to_db(point.robust_norm) << " | " << (point.robust_norm <= 1.0 ? "yes" : "no") << " |\n";
+  }
+}
+
+}  // namespace haptic::lab

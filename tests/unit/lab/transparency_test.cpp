@@ -1,0 +1,52 @@
+// haptic-lab transparency: 001's controller design swept over B_c (Eom et al., eqs. 11 and 17).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <sstream>
+#include <stdexcept>
+
+#include "lab/transparency.hpp"
+
+namespace haptic::lab {
+namespace {
+
+TEST(LabTransparency, TheSweepHasAnInteriorMinimumAtTheOptimumWhichIsRobust_Eq11_Eq17) {
+  const engine::WallDesignParams params;  // Eom et al.'s experiment
+  const TransparencyReport report = transparency_study(params);
+  ASSERT_EQ(report.sweep.size(), 41u);
+  EXPECT_NEAR(report.optimum.controller_damping, 15.46, 0.01);
+  EXPECT_TRUE(report.optimum.robustly_stable);
+  const auto best = std::min_element(report.sweep.begin(), report.sweep.end(),
+                                     [](const TransparencyPoint& a, const TransparencyPoint& b) {
+                                       return a.transparency_index < b.transparency_index;
+                                     });
+  EXPECT_GT(best - report.sweep.begin(), 0);  // interior, not at an end of the sweep
+  EXPECT_LT(best - report.sweep.begin(), 40);
+  EXPECT_GE(best->transparency_index, report.optimum.transparency_index);  // the search refines it
+  // Light damping is not robust (eq. 17, Fig. 8): the sweep's points around B_c = 1 say so.
+  for (const TransparencyPoint& point : report.sweep) {
+    if (point.controller_damping > 0.5 && point.controller_damping < 2.0) {
+      EXPECT_GT(point.robust_norm, 1.0) << point.controller_damping;
+    }
+  }
+  std::ostringstream csv, markdown;
+  write_csv(report, csv);
+  write_markdown(params, report, markdown);
+  EXPECT_EQ(csv.str().rfind("controller_damping_n_s_m,transparency_index,robust_norm,robust_norm_db\n", 0), 0u);
+  EXPECT_NE(markdown.str().find("robustly stable"), std::string::npos);
+}
+
+TEST(LabTransparency, BadParametersAreRefusedNamingThem) {
+  engine::WallDesignParams params;
+  params.mass = -1.0;
+  try {
+    transparency_study(params);
+    FAIL() << "a negative mass was accepted";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_EQ(std::string(error.what()).rfind("mass:", 0), 0u);
+  }
+  EXPECT_THROW(transparency_study(engine::WallDesignParams{}, 10.0, 1.0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace haptic::lab
