@@ -18,7 +18,7 @@ namespace haptic::app {
 
 std::string validate_integrator(const std::string& name) {
   if (name.empty() || engine::integrator_from_name(name)) return {};
-  return "unknown integrator \"" + name + "\"; expected rk4, semi_implicit_euler or explicit_euler";
+  return "unknown integrator \"" + name + "\"; expected rk4, semi_implicit_euler, explicit_euler, implicit_euler or trapezoidal";
 }
 
 engine::IntegrationSettings integration_settings(const std::string& name, std::uint32_t substeps,

@@ -146,7 +146,8 @@ int main(int argc, char** argv) {
                                        {"004 joystick", {"full"}},
                                        {"001 parallel DOB", {"full"}}};
   const engine::Integrator methods[] = {engine::Integrator::kExplicitEuler,
-                                        engine::Integrator::kSemiImplicitEuler, engine::Integrator::kRk4};
+                                        engine::Integrator::kSemiImplicitEuler, engine::Integrator::kRk4,
+                                        engine::Integrator::kImplicitEuler, engine::Integrator::kTrapezoidal};
   const std::uint32_t substeps[] = {1, 2, 5, 10, 20};
 
   std::ofstream csv;

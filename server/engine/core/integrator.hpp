@@ -8,13 +8,19 @@
 // Which one to pick is a measured choice (docs/devices.md, "Integrators"): explicit Euler is the
 // cheapest and gains energy on an undamped oscillator; semi-implicit (symplectic) Euler costs the
 // same, keeps an undamped oscillator's energy bounded, and is first order; RK4 costs four
-// evaluations and is fourth order, stable for hλ in (−2.78, 0] on a real pole.
+// evaluations and is fourth order, stable for hλ in (−2.78, 0] on a real pole; implicit Euler and
+// the trapezoidal rule solve a small nonlinear system per step (Newton) and are stable for any
+// step on a stable linear system — implicit Euler damping what it cannot resolve, the trapezoidal
+// rule keeping an undamped oscillator's energy.
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string_view>
+#include <utility>
 
 namespace haptic::engine {
 
@@ -22,6 +28,9 @@ enum class Integrator : std::uint8_t {
   kExplicitEuler,      // x += h f(x)
   kSemiImplicitEuler,  // q̇ += h q̈(q, q̇); q += h q̇(new); extra states explicit
   kRk4,                // classical fourth-order Runge–Kutta
+  kImplicitEuler,      // x₁ = x₀ + h f(x₁): first order, L-stable (damps what is stiff)
+  kTrapezoidal,        // x₁ = x₀ + h (f(x₀) + f(x₁))/2: second order, A-stable, keeps a linear
+                       // oscillator's energy
 };
 
 /// How a plant advances over one tick: `substeps` equal steps of the chosen method.
@@ -35,6 +44,8 @@ constexpr std::string_view integrator_name(Integrator method) {
     case Integrator::kExplicitEuler: return "explicit_euler";
     case Integrator::kSemiImplicitEuler: return "semi_implicit_euler";
     case Integrator::kRk4: return "rk4";
+    case Integrator::kImplicitEuler: return "implicit_euler";
+    case Integrator::kTrapezoidal: return "trapezoidal";
   }
   return "unknown";
 }
@@ -43,10 +54,13 @@ constexpr std::optional<Integrator> integrator_from_name(std::string_view name) 
   if (name == "explicit_euler") return Integrator::kExplicitEuler;
   if (name == "semi_implicit_euler") return Integrator::kSemiImplicitEuler;
   if (name == "rk4") return Integrator::kRk4;
+  if (name == "implicit_euler") return Integrator::kImplicitEuler;
+  if (name == "trapezoidal") return Integrator::kTrapezoidal;
   return std::nullopt;
 }
 
-/// Right-hand-side evaluations one step of `method` costs.
+/// Right-hand-side evaluations one step of `method` costs (the implicit ones: per Newton
+/// iteration, N + 1 for the finite-difference Jacobian and the residual).
 constexpr int evaluations_per_step(Integrator method) {
   return method == Integrator::kRk4 ? 4 : 1;
 }
@@ -90,6 +104,64 @@ constexpr void rk4_step(StateVector<N>& x, double h, Rhs& rhs) {
   for (std::size_t i = 0; i < N; ++i) x[i] += w * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
 }
 
+/// The implicit one-step methods: solve x₁ = x₀ + h (θ f(x₁) + (1 − θ) f(x₀)) by Newton's
+/// method with a forward-difference Jacobian and Gaussian elimination with partial pivoting
+/// (θ = 1: implicit Euler, θ = 1/2: trapezoidal). At most 8 iterations, stopping when the update
+/// is below 1e-12 of the state's size; a singular Newton matrix keeps the last iterate. Fixed-size
+/// arrays only.
+template <std::size_t N, typename Rhs>
+constexpr void theta_step(StateVector<N>& x, double h, double theta, Rhs& rhs) {
+  const StateVector<N> f0 = rhs(x);
+  StateVector<N> base = x;  // x₀ + h (1 − θ) f(x₀)
+  for (std::size_t i = 0; i < N; ++i) base[i] += h * (1.0 - theta) * f0[i];
+  StateVector<N> y = detail::axpy(x, h, f0);  // explicit Euler as the first guess
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    const StateVector<N> fy = rhs(y);
+    StateVector<N> residual{};  // g(y) = y − base − h θ f(y)
+    for (std::size_t i = 0; i < N; ++i) residual[i] = y[i] - base[i] - h * theta * fy[i];
+    std::array<std::array<double, N + 1>, N> a{};  // [I − h θ ∂f/∂y | −g]
+    for (std::size_t j = 0; j < N; ++j) {
+      const double step = 1e-7 * (std::abs(y[j]) + 1e-3);
+      StateVector<N> shifted = y;
+      shifted[j] += step;
+      const StateVector<N> fs = rhs(shifted);
+      for (std::size_t i = 0; i < N; ++i) {
+        a[i][j] = (i == j ? 1.0 : 0.0) - h * theta * (fs[i] - fy[i]) / step;
+      }
+    }
+    for (std::size_t i = 0; i < N; ++i) a[i][N] = -residual[i];
+    for (std::size_t col = 0; col < N; ++col) {  // elimination with partial pivoting
+      std::size_t pivot = col;
+      for (std::size_t r = col + 1; r < N; ++r) {
+        if (std::abs(a[r][col]) > std::abs(a[pivot][col])) pivot = r;
+      }
+      if (a[pivot][col] == 0.0) {
+        x = y;
+        return;
+      }
+      std::swap(a[col], a[pivot]);
+      for (std::size_t r = col + 1; r < N; ++r) {
+        const double factor = a[r][col] / a[col][col];
+        for (std::size_t c = col; c <= N; ++c) a[r][c] -= factor * a[col][c];
+      }
+    }
+    StateVector<N> delta{};
+    double size = 0.0, change = 0.0;
+    for (std::size_t i = N; i-- > 0;) {
+      double sum = a[i][N];
+      for (std::size_t c = i + 1; c < N; ++c) sum -= a[i][c] * delta[c];
+      delta[i] = sum / a[i][i];
+    }
+    for (std::size_t i = 0; i < N; ++i) {
+      y[i] += delta[i];
+      size = std::max(size, std::abs(y[i]));
+      change = std::max(change, std::abs(delta[i]));
+    }
+    if (change <= 1e-12 * (size + 1e-12)) break;
+  }
+  x = y;
+}
+
 /// One step of length h. `kPositions` matters only to the semi-implicit method.
 template <std::size_t kPositions, std::size_t N, typename Rhs>
 constexpr void integrate_step(Integrator method, StateVector<N>& x, double h, Rhs&& rhs) {
@@ -97,6 +169,8 @@ constexpr void integrate_step(Integrator method, StateVector<N>& x, double h, Rh
     case Integrator::kExplicitEuler: explicit_euler_step(x, h, rhs); return;
     case Integrator::kSemiImplicitEuler: semi_implicit_euler_step<kPositions>(x, h, rhs); return;
     case Integrator::kRk4: rk4_step(x, h, rhs); return;
+    case Integrator::kImplicitEuler: theta_step(x, h, 1.0, rhs); return;
+    case Integrator::kTrapezoidal: theta_step(x, h, 0.5, rhs); return;
   }
 }
 
@@ -116,6 +190,12 @@ constexpr void integrate_tick(const IntegrationSettings& settings, StateVector<N
       return;
     case Integrator::kRk4:
       for (std::uint32_t k = 0; k < n; ++k) rk4_step(x, h, rhs);
+      return;
+    case Integrator::kImplicitEuler:
+      for (std::uint32_t k = 0; k < n; ++k) theta_step(x, h, 1.0, rhs);
+      return;
+    case Integrator::kTrapezoidal:
+      for (std::uint32_t k = 0; k < n; ++k) theta_step(x, h, 0.5, rhs);
       return;
   }
 }

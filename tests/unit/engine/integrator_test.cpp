@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -63,9 +64,42 @@ TEST(Integrator, OnAnUndampedOscillatorExplicitEulerGainsEnergyAndSemiImplicitSt
   EXPECT_LT(symplectic_max, 1.0 + 2.0 * kOmega * 1e-3);
 }
 
+TEST(Integrator, ImplicitEulerAndTheTrapezoidalRuleConvergeAtOrdersOneAndTwo) {
+  for (const auto& [method, order] : {std::pair{Integrator::kImplicitEuler, 1.0},
+                                      std::pair{Integrator::kTrapezoidal, 2.0}}) {
+    const double coarse = error_after(method, 4);
+    const double fine = error_after(method, 8);
+    EXPECT_NEAR(std::log2(coarse / fine), order, 0.15)
+        << integrator_name(method) << ": errors " << coarse << " -> " << fine;
+  }
+}
+
+TEST(Integrator, TheImplicitMethodsStayStableWhereTheExplicitOnesBlowUp) {
+  // A stiff decay ẋ = −λ x with λ h = 100: explicit Euler multiplies by −99 per step.
+  const auto decay = [](const StateVector<2>& x) { return StateVector<2>{x[1], -1e5 * x[1]}; };
+  StateVector<2> explicit_x{0.0, 1.0}, implicit_x{0.0, 1.0}, trapezoid_x{0.0, 1.0};
+  for (int k = 0; k < 20; ++k) {
+    integrate_step<1>(Integrator::kExplicitEuler, explicit_x, 1e-3, decay);
+    integrate_step<1>(Integrator::kImplicitEuler, implicit_x, 1e-3, decay);
+    integrate_step<1>(Integrator::kTrapezoidal, trapezoid_x, 1e-3, decay);
+  }
+  EXPECT_GT(std::abs(explicit_x[1]), 1e30);
+  EXPECT_LT(std::abs(implicit_x[1]), 1e-30);    // L-stable: 1/(1 + λh) per step
+  EXPECT_LE(std::abs(trapezoid_x[1]), 1.0);     // A-stable: |(1 − λh/2)/(1 + λh/2)| < 1
+  // On the undamped oscillator the trapezoidal rule keeps the energy; implicit Euler drains it.
+  StateVector<2> trapezoid{1.0, 0.0}, backward{1.0, 0.0};
+  const double e0 = energy(trapezoid);
+  for (int tick = 0; tick < 2000; ++tick) {
+    integrate_tick<1>({Integrator::kTrapezoidal, 1}, trapezoid, 1e-3, oscillator());
+    integrate_tick<1>({Integrator::kImplicitEuler, 1}, backward, 1e-3, oscillator());
+  }
+  EXPECT_NEAR(energy(trapezoid) / e0, 1.0, 1e-9);
+  EXPECT_LT(energy(backward) / e0, 0.9);
+}
+
 TEST(Integrator, NamesRoundTripAndUnknownNamesAreRejected) {
-  for (const Integrator m :
-       {Integrator::kExplicitEuler, Integrator::kSemiImplicitEuler, Integrator::kRk4}) {
+  for (const Integrator m : {Integrator::kExplicitEuler, Integrator::kSemiImplicitEuler, Integrator::kRk4,
+                             Integrator::kImplicitEuler, Integrator::kTrapezoidal}) {
     EXPECT_EQ(integrator_from_name(integrator_name(m)), m);
   }
   EXPECT_FALSE(integrator_from_name("rk5").has_value());
