@@ -113,79 +113,67 @@ Client::~Client() = default;
 Client::Client(Client&&) noexcept = default;
 Client& Client::operator=(Client&&) noexcept = default;
 
+ObjectHandle Client::register_object(const detail::WireObject& object) {
+  detail::ClientCore& core = require(core_);
+  const v1::ItemRef made = core.create_object(object.message);
+  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
+}
+
+FieldHandle Client::register_field(const detail::WireField& field) {
+  detail::ClientCore& core = require(core_);
+  const std::uint64_t id = core.create_field(field.message);
+  return FieldHandle(core_, id, core.scene_generation());
+}
+
 ObjectHandle Client::add_wall(const WallSpec& wall) {
   check(wall);
-  detail::ClientCore& core = require(core_);
-  const v1::ItemRef made = core.create_object(detail::to_proto(wall));
-  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
+  return register_object({detail::to_proto(wall)});
 }
 
 ObjectHandle Client::add_sphere(const SphereSpec& sphere) {
   check(sphere);
-  detail::ClientCore& core = require(core_);
-  const v1::ItemRef made = core.create_object(detail::to_proto(sphere));
-  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
+  return register_object({detail::to_proto(sphere)});
 }
 
 FieldHandle Client::add_spring_field(const SpringFieldSpec& spring) {
   check(spring);
-  detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_field(detail::to_proto(spring));
-  return FieldHandle(core_, id, core.scene_generation());
+  return register_field({detail::to_proto(spring)});
 }
 
 ObjectHandle Client::add_box(const BoxSpec& box) {
-  detail::ClientCore& core = require(core_);
-  const v1::ItemRef made = core.create_object(detail::to_proto(box));
-  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
+  return register_object({detail::to_proto(box)});
 }
 
 ObjectHandle Client::add_tangent_plane(const TangentPlaneSpec& plane) {
-  detail::ClientCore& core = require(core_);
-  const v1::ItemRef made = core.create_object(detail::to_proto(plane));
-  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
+  return register_object({detail::to_proto(plane)});
 }
 
 ObjectHandle Client::add_capsule(const CapsuleSpec& capsule) {
-  detail::ClientCore& core = require(core_);
-  const v1::ItemRef made = core.create_object(detail::to_proto(capsule));
-  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
+  return register_object({detail::to_proto(capsule)});
 }
 
 ObjectHandle Client::add_mesh(const MeshSpec& mesh) {
-  detail::ClientCore& core = require(core_);
-  const v1::ItemRef made = core.create_object(detail::to_proto(mesh));
-  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
+  return register_object({detail::to_proto(mesh)});
 }
 
 FieldHandle Client::add_field(const DistanceSpringSpec& spring) {
-  detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_field(detail::to_proto(spring));
-  return FieldHandle(core_, id, core.scene_generation());
+  return register_field({detail::to_proto(spring)});
 }
 
 FieldHandle Client::add_field(const PotentialFieldSpec& potential) {
-  detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_field(detail::to_proto(potential));
-  return FieldHandle(core_, id, core.scene_generation());
+  return register_field({detail::to_proto(potential)});
 }
 
 FieldHandle Client::add_field(const LinearFieldSpec& linear) {
-  detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_field(detail::to_proto(linear));
-  return FieldHandle(core_, id, core.scene_generation());
+  return register_field({detail::to_proto(linear)});
 }
 
 FieldHandle Client::add_field(const ViscousFieldSpec& viscous) {
-  detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_field(detail::to_proto(viscous));
-  return FieldHandle(core_, id, core.scene_generation());
+  return register_field({detail::to_proto(viscous)});
 }
 
 FieldHandle Client::add_field(const DetentFieldSpec& detent) {
-  detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_field(detail::to_proto(detent));
-  return FieldHandle(core_, id, core.scene_generation());
+  return register_field({detail::to_proto(detent)});
 }
 
 Client::FileScene Client::apply_scene_file(const std::string& path) {
@@ -203,10 +191,7 @@ Client::FileScene Client::apply_scene_file(const std::string& path) {
   detail::ClientCore& core = require(core_);
   const v1::ApplySceneResponse reply = core.apply_scene(scene);
   const std::uint64_t generation = core.scene_generation();
-  last_scene_stability_.clear();
-  for (const auto& report : reply.object_stability()) {
-    last_scene_stability_.push_back(detail::from_proto(report));
-  }
+  last_scene_stability_ = detail::stability_reports(reply);
   FileScene handles;
   for (int i = 0; i < reply.object_ids_size(); ++i) {
     handles.objects.push_back(ObjectHandle(core_, reply.object_ids(i), generation));
@@ -255,10 +240,7 @@ SceneHandles Client::apply_scene(const std::vector<WallSpec>& walls,
   detail::ClientCore& core = require(core_);
   const v1::ApplySceneResponse reply = core.apply_scene(scene);
   const std::uint64_t generation = core.scene_generation();
-  last_scene_stability_.clear();
-  for (const auto& report : reply.object_stability()) {
-    last_scene_stability_.push_back(detail::from_proto(report));
-  }
+  last_scene_stability_ = detail::stability_reports(reply);
   SceneHandles handles;
   int next_object = 0;
   for (std::size_t i = 0; i < walls.size(); ++i) {

@@ -278,6 +278,12 @@ StabilityReport from_proto(const v1::StabilityReport& r) {
   return out;
 }
 
+std::vector<StabilityReport> stability_reports(const v1::ApplySceneResponse& reply) {
+  std::vector<StabilityReport> out;
+  for (const auto& report : reply.object_stability()) out.push_back(from_proto(report));
+  return out;
+}
+
 Stats from_proto(const v1::Stats& s) {
   Stats out;
   out.ticks = s.ticks();

@@ -1,6 +1,8 @@
 #pragma once
 // SDK value types <-> haptic.v1 messages.
 
+#include <vector>
+
 #include "haptic/types.hpp"
 #include "haptic/v1/device.pb.h"
 #include "haptic/v1/scene.pb.h"
@@ -26,6 +28,17 @@ v1::OperatorInput to_proto(const OperatorInput& input);
 DeviceInfo from_proto(const v1::DeviceInfo& info);
 Stats from_proto(const v1::Stats& stats);
 StabilityReport from_proto(const v1::StabilityReport& report);
+/// One StabilityReport per object of an ApplyScene reply, in order.
+std::vector<StabilityReport> stability_reports(const v1::ApplySceneResponse& reply);
+
+/// An object or field in its wire form, for Client's private registration helpers (the public
+/// header only forward-declares these, so protobuf stays out of it).
+struct WireObject {
+  v1::Object message;
+};
+struct WireField {
+  v1::Field message;
+};
 /// A sample from a Step reply (sequence 0: it came by no datagram; received_at: now).
 State from_proto(const v1::ToolState& state);
 

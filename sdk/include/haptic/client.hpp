@@ -23,6 +23,8 @@ namespace haptic {
 
 namespace detail {
 class ClientCore;
+struct WireObject;  // an object converted for the wire (sdk/src/conversions.hpp)
+struct WireField;
 }
 
 /// The API version this SDK speaks (haptic.v1.API_VERSION_CURRENT).
@@ -211,6 +213,10 @@ class Client {
   void close();
 
  private:
+  /// Registers one object or field, already converted for the wire, and hands back its handle.
+  ObjectHandle register_object(const detail::WireObject& object);
+  FieldHandle register_field(const detail::WireField& field);
+
   std::vector<StabilityReport> last_scene_stability_;
   std::shared_ptr<detail::ClientCore> core_;
 };

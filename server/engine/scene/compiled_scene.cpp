@@ -274,6 +274,8 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
     scene.fields.push_back(std::move(compiled));
   }
 
+  state.meter_source.assign(state.meter_keys.size(), SceneState::kNoMeter);
+  state.meter_taken.assign(state.meter_keys.size(), 0);
   state.slot_force.assign(state.slot_sessions.size(), Vec3{});
   state.slot_fields.assign(state.slot_sessions.size(), Vec3{});
   // Every further port starts with port 0's fresh state.
@@ -310,7 +312,7 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
 }
 
 void carry_state(const CompiledScene& from, const CompiledScene& to) {
-  const SceneState& old_state = *from.state;
+  SceneState& old_state = *from.state;  // the loop owns both states; meter_taken is scratch
   SceneState& new_state = *to.state;
   // Both sides are short and compiled in item order, in which keys ascend except where a newer
   // version (a larger key) follows; a merge over key-sorted views would need scratch space, so
@@ -361,6 +363,25 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
                std::span<const MeshState>(new_state.meshes.data(), new_state.meshes_per_port),
                old_state.mesh_motions, new_state.mesh_motions);
   const std::uint32_t ports = std::min(old_state.ports, new_state.ports);
+  // Energy meters, matched once by key for every port (a forward scan with a moving start: linear
+  // when the two snapshots list their items in the same order, the rule).
+  std::fill(old_state.meter_taken.begin(), old_state.meter_taken.end(), std::uint8_t{0});
+  {
+    std::size_t start = 0;
+    const std::size_t old_count = old_state.meter_keys.size();
+    for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
+      new_state.meter_source[j] = SceneState::kNoMeter;
+      for (std::size_t probe = 0; probe < old_count; ++probe) {
+        const std::size_t i = (start + probe) % old_count;
+        if (old_state.meter_keys[i] == new_state.meter_keys[j]) {
+          new_state.meter_source[j] = static_cast<std::uint32_t>(i);
+          old_state.meter_taken[i] = 1;
+          start = i + 1;
+          break;
+        }
+      }
+    }
+  }
   for (std::uint32_t port = 0; port < ports; ++port) {
     const std::span<const ContactState> old_contacts(
         old_state.contacts.data() + std::size_t{port} * old_state.contacts_per_port, old_state.contacts_per_port);
@@ -418,22 +439,15 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
     // Energy meters, by key.
     const std::size_t old_base = std::size_t{port} * old_state.meters_per_port;
     const std::size_t new_base = std::size_t{port} * new_state.meters_per_port;
-    std::size_t start = 0;
     for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
-      for (std::size_t probe = 0; probe < old_state.meter_keys.size(); ++probe) {
-        const std::size_t i = (start + probe) % old_state.meter_keys.size();
-        if (old_state.meter_keys[i] == new_state.meter_keys[j]) {
-          new_state.meters[new_base + j] = old_state.meters[old_base + i];
-          start = i + 1;
-          break;
-        }
+      if (new_state.meter_source[j] != SceneState::kNoMeter) {
+        new_state.meters[new_base + j] = old_state.meters[old_base + new_state.meter_source[j]];
       }
     }
     // A version that is gone leaves its totals to a remaining version of the same item.
     for (std::size_t i = 0; i < old_state.meter_keys.size(); ++i) {
-      const auto& keys = new_state.meter_keys;
-      if (std::find(keys.begin(), keys.end(), old_state.meter_keys[i]) != keys.end()) continue;
-      for (std::size_t j = 0; j < keys.size(); ++j) {
+      if (old_state.meter_taken[i]) continue;
+      for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
         if (new_state.meter_ids[j] == old_state.meter_ids[i]) {
           EnergyMeter& heir = new_state.meters[new_base + j];
           const EnergyMeter& gone = old_state.meters[old_base + i];

@@ -151,6 +151,11 @@ struct SceneState {
   std::vector<MeshState> meshes;          // per port
   std::vector<EnergyMeter> meters;        // per port
   std::vector<std::uint64_t> meter_keys;  // the item version each meter belongs to (per item)
+  /// carry_state's scratch, sized at compile so adoption allocates nothing: for each meter the
+  /// older snapshot's meter it continues (or kNoMeter), and whether a newer snapshot took it.
+  std::vector<std::uint32_t> meter_source;
+  std::vector<std::uint8_t> meter_taken;
+  static constexpr std::uint32_t kNoMeter = 0xffffffffu;
   std::vector<std::uint64_t> meter_ids;   // the item (for reports)
   std::vector<std::uint64_t> meter_sessions;  // its owner (for reports)
   std::vector<std::uint8_t> meter_is_object;  // 1: an object, 0: a field
