@@ -1,14 +1,21 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Charts for haptic-lab's CSV outputs (PNG and SVG side by side).
 
     scripts/plot_lab.py zwidth grid.csv out/zwidth        -> out/zwidth.png, out/zwidth.svg
     scripts/plot_lab.py transparency sweep.csv out/design -> out/design.png, out/design.svg
+    scripts/plot_lab.py run trace.csv out/trace           -> out/trace.png, out/trace.svg
 
 zwidth: the (K, B) grid, each cell marked by which tests call it stable (Colgate's bound,
 the sampled loop's eigenvalues, simulation). transparency: J(B_c) and ||L||inf(B_c) in dB against
-B_c on a log axis, with the robust-stability line at 0 dB.
+B_c on a log axis, with the robust-stability line at 0 dB. run: `haptic-lab run`'s trace over time
+in three stacked panels: the tool's position (m), the force on it (N) and the energy the scene
+gave to the device and took from it (J), one line per port and axis that moves (columns are read
+by name; extra columns are ignored), with the ticks whose flags are set marked on the force panel.
+
+Runs with /usr/bin/python3 and Debian's python3-matplotlib (Agg backend).
 """
 import csv
+import math
 import sys
 
 import matplotlib
@@ -17,9 +24,77 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def read(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
+def read(path, columns=()):
+    """The rows of a CSV file; exits with a message naming the file and any missing column."""
+    try:
+        with open(path, newline="") as f:
+            reader = csv.DictReader(f)
+            missing = [c for c in columns if c not in (reader.fieldnames or [])]
+            if missing:
+                sys.exit(f"plot_lab: {path}: missing column(s) {', '.join(missing)}")
+            return list(reader)
+    except OSError as error:
+        sys.exit(f"plot_lab: {path}: {error.strerror}")
+
+
+RUN_COLUMNS = ["port", "time_s", "x_m", "y_m", "z_m", "fx_n", "fy_n", "fz_n", "flags",
+               "energy_to_device_j", "energy_from_device_j"]
+PORT_COLOURS = ["#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3", "#937860", "#da8bc3", "#8c8c8c"]
+AXIS_STYLES = {"x": "-", "y": "--", "z": ":"}
+
+
+def value(row, column, line):
+    try:
+        return float(row[column])
+    except (TypeError, ValueError):
+        sys.exit(f"plot_lab: line {line}: column {column}: not a number: {row[column]!r}")
+
+
+def run(rows, out):
+    """haptic-lab run's trace: position, force and energy against time, per port."""
+    ports = {}
+    for line, r in enumerate(rows, start=2):
+        p = ports.setdefault(r["port"], {k: [] for k in RUN_COLUMNS[1:]})
+        for k in RUN_COLUMNS[1:]:
+            p[k].append(value(r, k, line))
+    if not ports:
+        sys.exit("plot_lab: the trace has no rows")
+
+    def moves(values, floor):
+        finite = [v for v in values if math.isfinite(v)]
+        return len(finite) != len(values) or (finite and max(finite) - min(finite) > floor)
+
+    fig, (pos, force, energy) = plt.subplots(3, 1, figsize=(7.5, 7.0), sharex=True)
+    for i, (port, p) in enumerate(sorted(ports.items(), key=lambda kv: int(float(kv[0])))):
+        colour = PORT_COLOURS[i % len(PORT_COLOURS)]
+        t = p["time_s"]
+        for axis in "xyz":
+            if moves(p[axis + "_m"], 1e-9):  # 1 nm: below it the axis is taken as still
+                pos.plot(t, p[axis + "_m"], color=colour, ls=AXIS_STYLES[axis], lw=1.1,
+                         label=f"port {port} {axis}")
+            if moves(p["f" + axis + "_n"], 1e-9) or any(v != 0.0 for v in p["f" + axis + "_n"]):
+                force.plot(t, p["f" + axis + "_n"], color=colour, ls=AXIS_STYLES[axis], lw=1.1,
+                           label=f"port {port} F{axis}")
+        energy.plot(t, p["energy_to_device_j"], color=colour, lw=1.1, label=f"port {port} to the device")
+        energy.plot(t, p["energy_from_device_j"], color=colour, lw=1.1, ls="--",
+                    label=f"port {port} from the device")
+        flagged = [time for time, f in zip(t, p["flags"]) if f != 0]
+        if flagged:
+            force.plot(flagged, [0.0] * len(flagged), "|", color="#d62728", ms=8,
+                       label=f"port {port}: flags set ({len(flagged)} ticks)")
+    for ax, label in ((pos, "tool position p_WT [m]"), (force, "force F_T_W [N]"),
+                      (energy, "energy [J]")):
+        ax.set_ylabel(label)
+        ax.grid(True, lw=0.4, alpha=0.5)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7, loc="best")
+        else:
+            ax.text(0.5, 0.5, "nothing moves", transform=ax.transAxes, ha="center", color="#777777")
+    energy.set_xlabel("time [s]")
+    pos.set_title("haptic-lab run: position, force and energy")
+    fig.tight_layout()
+    fig.savefig(out + ".png", dpi=120)
+    fig.savefig(out + ".svg")
 
 
 def zwidth(rows, out):
@@ -69,7 +144,14 @@ def transparency(rows, out):
     fig.savefig(out + ".svg")
 
 
+CHARTS = {
+    "zwidth": (zwidth, ["stiffness_n_m", "damping_n_s_m", "passive", "eigen_stable", "simulation_stable"]),
+    "transparency": (transparency, ["controller_damping_n_s_m", "transparency_index", "robust_norm_db"]),
+    "run": (run, RUN_COLUMNS),
+}
+
 if __name__ == "__main__":
-    if len(sys.argv) != 4 or sys.argv[1] not in ("zwidth", "transparency"):
+    if len(sys.argv) != 4 or sys.argv[1] not in CHARTS:
         sys.exit(__doc__)
-    {"zwidth": zwidth, "transparency": transparency}[sys.argv[1]](read(sys.argv[2]), sys.argv[3])
+    chart, columns = CHARTS[sys.argv[1]]
+    chart(read(sys.argv[2], columns), sys.argv[3])

@@ -1,6 +1,7 @@
 #include "lab/lab_run.hpp"
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <vector>
@@ -10,6 +11,10 @@
 #include "haptic/wire/datagram.hpp"
 #include "net/validation.hpp"
 #include "runtime/loop_stats.hpp"
+#include "runtime/simulated_dc_motor_device.hpp"
+#include "runtime/simulated_dob_device.hpp"
+#include "runtime/simulated_five_bar_device.hpp"
+#include "runtime/simulated_joystick_device.hpp"
 #include "runtime/tick_runner.hpp"
 
 namespace haptic::lab {
@@ -41,12 +46,42 @@ engine::SceneDescription initial_scene(const v1::ServerConfig& config, const net
   return description;
 }
 
+/// The joint state of a document device's plant (JointState's table); count 0 for a device
+/// without one (the point mass: the caller fills in its Cartesian state from the sample).
+JointState plant_joints(const runtime::Device& device) {
+  JointState out;
+  if (const auto* motor = dynamic_cast<const runtime::SimulatedDcMotorDevice*>(&device)) {
+    const double r = motor->plant().params().r;  // θ_L = r θ_m (000 eq. 3.1a)
+    out.count = 1;
+    out.q[0] = r * motor->plant().state().theta_m;
+    out.q_dot[0] = r * motor->plant().state().omega_m;
+  } else if (const auto* dob = dynamic_cast<const runtime::SimulatedDobDevice*>(&device)) {
+    const auto& s = dob->plant().state();
+    const engine::Parallel2DofKinematics k = dob->plant().kinematics({s[0], s[1]}, {s[2], s[3]});
+    out.count = 2;
+    out.q = {k.q.x, k.q.y, 0.0};
+    out.q_dot = {k.q_dot.x, k.q_dot.y, 0.0};
+  } else if (const auto* five_bar = dynamic_cast<const runtime::SimulatedFiveBarDevice*>(&device)) {
+    out.count = 3;
+    out.q = five_bar->plant().state().q;
+    out.q_dot = five_bar->plant().state().qdot;
+  } else if (const auto* joystick = dynamic_cast<const runtime::SimulatedJoystickDevice*>(&device)) {
+    namespace js = engine::joystick_state;
+    const auto& x = joystick->plant().state();
+    out.count = 3;
+    out.q = {x[js::kTheta], x[js::kPhi], x[js::kR]};
+    out.q_dot = {x[js::kThetaDot], x[js::kPhiDot], x[js::kRDot]};
+  }
+  return out;
+}
+
 }  // namespace
 
-RunSummary run_scene(const v1::ServerConfig& given, double duration_s, std::ostream& trace) {
+RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, const TickCallback& on_tick) {
   if (!(std::isfinite(duration_s) && duration_s > 0.0 && duration_s <= 3600.0)) {
     throw std::invalid_argument("duration: must be in (0, 3600] s, got " + std::to_string(duration_s));
   }
+  if (!on_tick) throw std::invalid_argument("on_tick: must be a callable");
   v1::ServerConfig config = given;
   app::fill_defaults(config);
   if (auto e = app::validate(config); !e.empty()) throw std::invalid_argument(e);
@@ -80,36 +115,83 @@ RunSummary run_scene(const v1::ServerConfig& given, double duration_s, std::ostr
   runtime::TickRunner runner(app::tick_ports(config, devices, ring_pointers, period_s), scenes, counters,
                              tick);
 
-  trace << "port,tick,time_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,fx_n,fy_n,fz_n,proxy_x_m,proxy_y_m,"
-           "proxy_z_m,contacts,flags,energy_to_device_j,energy_from_device_j\n";
   RunSummary summary;
   std::vector<double> last_power(ports, 0.0), given_j(ports, 0.0), taken_j(ports, 0.0);
+  std::vector<JointState> joints(ports);
   const auto ticks = static_cast<std::uint64_t>(std::llround(duration_s / period_s));
-  for (std::uint64_t k = 1; k <= ticks; ++k) {
+  bool go_on = true;
+  for (std::uint64_t k = 1; k <= ticks && go_on; ++k) {
+    // The plants' state now is what this tick's reading sees (the tick advances them after).
+    for (std::uint32_t p = 0; p < ports; ++p) joints[p] = plant_joints(*devices[p].device);
     const auto time_ns = static_cast<std::int64_t>(std::llround(static_cast<double>(k - 1) * period_s * 1e9));
     runner.run(k, time_ns);
+    summary.ticks = k;
     for (std::uint32_t p = 0; p < ports; ++p) {
-      runtime::TickSample s;
+      TickRecord record;
+      record.port = p;
+      runtime::TickSample& s = record.sample;
       if (!rings[p]->read(k, s)) continue;
       const double power = engine::dot(s.F_T_W, s.v_WT);
       const double work = k > 1 ? 0.5 * (last_power[p] + power) * period_s : 0.0;  // trapezoidal
       (work > 0.0 ? given_j[p] : taken_j[p]) += std::abs(work);
       last_power[p] = power;
-      const bool finite = engine::is_finite(s.p_WT) && engine::is_finite(s.v_WT) && engine::is_finite(s.F_T_W);
-      summary.finite = summary.finite && finite;
       if (s.flags & (wire::kFlagForceFault | wire::kFlagDeviceFault)) ++summary.fault_ticks;
-      trace << p << ',' << s.tick << ',' << static_cast<double>(s.time_ns) * 1e-9 << ',' << s.p_WT.x << ','
-            << s.p_WT.y << ',' << s.p_WT.z << ',' << s.v_WT.x << ',' << s.v_WT.y << ',' << s.v_WT.z << ','
-            << s.F_T_W.x << ',' << s.F_T_W.y << ',' << s.F_T_W.z << ',' << s.p_WP.x << ',' << s.p_WP.y
-            << ',' << s.p_WP.z << ',' << s.contact_count << ',' << s.flags << ',' << given_j[p] << ','
-            << taken_j[p] << '\n';
+      record.energy_to_device_j = given_j[p];
+      record.energy_from_device_j = taken_j[p];
+      record.joints = joints[p];
+      if (record.joints.count == 0) {  // the point mass: its Cartesian axes are its joints
+        record.joints.count = 3;
+        record.joints.q = {s.p_WT.x, s.p_WT.y, s.p_WT.z};
+        record.joints.q_dot = {s.v_WT.x, s.v_WT.y, s.v_WT.z};
+      }
+      // The loop publishes the last good reading when a plant fails, so its joints tell.
+      bool finite = engine::is_finite(s.p_WT) && engine::is_finite(s.v_WT) && engine::is_finite(s.F_T_W);
+      for (std::uint32_t j = 0; j < record.joints.count; ++j) {
+        finite = finite && std::isfinite(record.joints.q[j]) && std::isfinite(record.joints.q_dot[j]);
+      }
+      summary.finite = summary.finite && finite;
+      if (!on_tick(record)) go_on = false;
     }
   }
-  summary.ticks = ticks;
   for (std::uint32_t p = 0; p < ports; ++p) {
     summary.energy_to_device += given_j[p];
     summary.energy_from_device += taken_j[p];
   }
+  return summary;
+}
+
+RunSummary run_scene(const v1::ServerConfig& config, double duration_s, std::ostream& trace) {
+  const std::streamsize precision = trace.precision();
+  bool header_written = false;
+  auto header = [&] {
+    // Every value round-trips (max_digits10), so a trace reproduces a figure to the last bit.
+    trace.precision(std::numeric_limits<double>::max_digits10);
+    trace << "port,tick,time_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,fx_n,fy_n,fz_n,proxy_x_m,proxy_y_m,"
+             "proxy_z_m,contacts,flags,energy_to_device_j,energy_from_device_j,q0,q1,q2,q0_dot,"
+             "q1_dot,q2_dot\n";
+    header_written = true;
+  };
+  const RunSummary summary = simulate_scene(config, duration_s, [&](const TickRecord& r) {
+    if (!header_written) header();  // after validation, so a refused scene writes nothing
+    const runtime::TickSample& s = r.sample;
+    trace << r.port << ',' << s.tick << ',' << static_cast<double>(s.time_ns) * 1e-9 << ',' << s.p_WT.x << ','
+          << s.p_WT.y << ',' << s.p_WT.z << ',' << s.v_WT.x << ',' << s.v_WT.y << ',' << s.v_WT.z << ','
+          << s.F_T_W.x << ',' << s.F_T_W.y << ',' << s.F_T_W.z << ',' << s.p_WP.x << ',' << s.p_WP.y
+          << ',' << s.p_WP.z << ',' << s.contact_count << ',' << s.flags << ',' << r.energy_to_device_j << ','
+          << r.energy_from_device_j;
+    for (std::uint32_t j = 0; j < 3; ++j) {
+      trace << ',';
+      if (j < r.joints.count) trace << r.joints.q[j];
+    }
+    for (std::uint32_t j = 0; j < 3; ++j) {
+      trace << ',';
+      if (j < r.joints.count) trace << r.joints.q_dot[j];
+    }
+    trace << '\n';
+    return true;
+  });
+  if (!header_written) header();  // a run shorter than one tick
+  trace.precision(precision);
   return summary;
 }
 

@@ -1,26 +1,55 @@
 // haptic-lab: runs hapticd scenes in lockstep time, in-process, with the server's own loop code,
 // and writes what happened:
 //   haptic-lab run --scene S.json --duration D --out trace.csv   (S.json: a hapticd configuration)
-//   haptic-lab transparency [--mass … --stiffness … --w1 …] --csv sweep.csv --markdown report.md
-//   haptic-lab zwidth [--mass … --period … --law … --delay …] --csv grid.csv --markdown report.md
+//   haptic-lab transparency [--device C.json | --mass … --damping …] [--stiffness … --w1 …]
+//                           --csv sweep.csv --markdown report.md
+//   haptic-lab zwidth [--device C.json | --mass … --damping …] [--period … --law … --delay …]
+//                     --csv grid.csv --markdown report.md
+//   haptic-lab study [--short] [--case …] [--scheme …] [--steps …] --out DIR   (docs/numerics.md)
+// Exit status: 0 done; 2 bad input (a message on standard error names it, before any work);
+// 3 a run that went non-finite; CLI11's own codes (> 100) for malformed command lines.
 
 #include <CLI/CLI.hpp>
 #include <fstream>
+#include <functional>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "app/config.hpp"
+#include "lab/device_model.hpp"
 #include "lab/lab_run.hpp"
+#include "lab/study_command.hpp"
 #include "lab/transparency.hpp"
 #include "lab/zwidth.hpp"
 
 namespace {
 
-/// Writes a study's CSV (when asked) and its markdown report (to a file, or standard output).
+/// A subcommand: its parser, and what runs it once parsed (returns the exit status; may throw
+/// std::exception for bad input, which main reports with exit status 2). Adding a subcommand is
+/// one line in main: `commands.push_back(add_<name>(cli));` (or from_functions below).
+struct Subcommand {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+
+/// A subcommand that comes as a pair of functions, `CLI::App* add(CLI::App&, Options&)` and
+/// `int run(const Options&)`: `commands.push_back(from_functions<Options>(cli, add, run));`.
+template <typename Options, typename Add, typename Run>
+Subcommand from_functions(CLI::App& cli, Add add, Run run) {
+  auto options = std::make_shared<Options>();
+  CLI::App* app = add(cli, *options);
+  return {app, [options, run] { return run(*options); }};
+}
+
+/// Writes a study's CSV (when asked) and its markdown report (to a file, or standard output),
+/// followed by `appendix` (markdown).
 template <typename Params, typename Report>
 void write_reports(const Params& params, const Report& report, const std::string& csv_path,
-                   const std::string& markdown_path) {
+                   const std::string& markdown_path, const std::string& appendix) {
   if (!csv_path.empty()) {
     std::ofstream csv(csv_path);
     if (!csv) throw std::invalid_argument(csv_path + ": cannot write");
@@ -31,7 +60,126 @@ void write_reports(const Params& params, const Report& report, const std::string
     md.open(markdown_path);
     if (!md) throw std::invalid_argument(markdown_path + ": cannot write");
   }
-  haptic::lab::write_markdown(params, report, markdown_path.empty() ? std::cout : md);
+  std::ostream& out = markdown_path.empty() ? std::cout : md;
+  haptic::lab::write_markdown(params, report, out);
+  if (!appendix.empty()) out << '\n' << appendix;
+}
+
+/// `--device CONFIG.json`, the alternative to giving the model's mass and damping by hand.
+struct DeviceOption {
+  std::string path;
+  CLI::Option* device = nullptr;
+  CLI::Option* mass = nullptr;
+  CLI::Option* damping = nullptr;
+  CLI::Option* period = nullptr;
+
+  /// Adds --device, --mass, --damping and --period to `app`.
+  void add(CLI::App* app, double& mass_kg, double& damping_n_s_m, double& period_s) {
+    device = app->add_option("--device", path,
+                             "take the device model (apparent mass, damping) and the loop rate from "
+                             "this hapticd configuration (JSON); excludes --mass and --damping")
+                 ->check(CLI::ExistingFile);
+    mass = app->add_option("--mass", mass_kg, "device mass, kg (default 0.01)");
+    damping = app->add_option("--damping", damping_n_s_m, "device damping, N*s/m (default 0.022)");
+    period = app->add_option("--period", period_s,
+                             "sample period T, s (default 0.001, or 1/loop_rate_hz with --device)");
+  }
+
+  /// With --device: the model, its mass, damping and (unless --period was given) period copied
+  /// into the parameters (haptic::lab::apply_device_arguments).
+  std::optional<haptic::lab::DeviceModel> apply(double& mass_kg, double& damping_n_s_m, double& period_s) const {
+    return haptic::lab::apply_device_arguments({device->count() > 0 ? path : std::string(), mass->count() > 0,
+                                                damping->count() > 0, period->count() > 0},
+                                               mass_kg, damping_n_s_m, period_s);
+  }
+};
+
+Subcommand add_run(CLI::App& cli) {
+  struct Options {
+    std::string scene_path, out_path;
+    double duration_s = 1.0;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* app = cli.add_subcommand("run", "run one scene and write a per-tick trace (CSV)");
+  app->add_option("--scene", o->scene_path, "hapticd configuration (JSON haptic.v1.ServerConfig)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app->add_option("--duration", o->duration_s, "simulated time, s (default 1)");
+  app->add_option("--out", o->out_path, "trace file (CSV); default: standard output");
+  return {app, [o] {
+            const haptic::v1::ServerConfig config = haptic::app::load_config_file(o->scene_path);
+            std::ofstream file;
+            if (!o->out_path.empty()) {
+              file.open(o->out_path);
+              if (!file) throw std::invalid_argument(o->out_path + ": cannot write");
+            }
+            std::ostream& trace = o->out_path.empty() ? std::cout : file;
+            const haptic::lab::RunSummary summary = haptic::lab::run_scene(config, o->duration_s, trace);
+            std::cerr << "haptic-lab: " << summary.ticks << " ticks; energy to the device "
+                      << summary.energy_to_device << " J, from it " << summary.energy_from_device << " J; "
+                      << summary.fault_ticks << " fault ticks; "
+                      << (summary.finite ? "finite" : "NOT FINITE") << "\n";
+            return summary.finite ? 0 : 3;
+          }};
+}
+
+Subcommand add_transparency(CLI::App& cli) {
+  struct Options {
+    haptic::engine::WallDesignParams design;
+    DeviceOption device;
+    std::string csv_path, markdown_path;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* app = cli.add_subcommand(
+      "transparency", "001's controller design for a device model: J(B_c), ||L||inf(B_c), the optimum");
+  o->device.add(app, o->design.mass, o->design.damping, o->design.sample_period);
+  app->add_option("--stiffness", o->design.wall_stiffness, "wall stiffness K, N/m (default 1000)");
+  app->add_option("--wall-damping", o->design.wall_damping, "wall damping B, N*s/m (default 1)");
+  app->add_option("--w1", o->design.weight_cutoff, "transparency weight cut-off, rad/s (default 100)");
+  app->add_option("--alpha", o->design.mass_uncertainty, "mass uncertainty (default 0.5)");
+  app->add_option("--beta", o->design.damping_uncertainty, "damping uncertainty (default 0.5)");
+  app->add_option("--csv", o->csv_path, "write the sweep as CSV here");
+  app->add_option("--markdown", o->markdown_path, "write the report here; default: standard output");
+  return {app, [o] {
+            const auto model = o->device.apply(o->design.mass, o->design.damping, o->design.sample_period);
+            write_reports(o->design, haptic::lab::transparency_study(o->design), o->csv_path,
+                          o->markdown_path, model ? haptic::lab::describe(*model) : std::string());
+            return 0;
+          }};
+}
+
+/// The wall discretization named on the command line. Throws std::invalid_argument otherwise.
+haptic::engine::ImpedanceDiscretization discretization_from_name(const std::string& law) {
+  if (law == "backward_difference") return haptic::engine::ImpedanceDiscretization::kBackwardDifference;
+  if (law == "exact_zoh") return haptic::engine::ImpedanceDiscretization::kExactZoh;
+  if (law == "tustin") return haptic::engine::ImpedanceDiscretization::kTustin;
+  throw std::invalid_argument("--law: must be backward_difference, exact_zoh or tustin, got \"" + law + "\"");
+}
+
+Subcommand add_zwidth(CLI::App& cli) {
+  struct Options {
+    haptic::lab::ZWidthParams z;
+    DeviceOption device;
+    std::string law = "backward_difference", csv_path, markdown_path;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* app = cli.add_subcommand(
+      "zwidth", "the (K, B) region a device model renders: Colgate's bound, eigenvalues, simulation");
+  o->device.add(app, o->z.mass, o->z.damping, o->z.period);
+  app->add_option("--law", o->law, "backward_difference (default), exact_zoh or tustin");
+  app->add_option("--delay", o->z.delay_ticks, "extra ticks of delay (default 0)");
+  app->add_option("--hand-mass", o->z.hand_mass, "operator's hand mass, kg (default 0)");
+  app->add_option("--hand-stiffness", o->z.hand_stiffness, "hand stiffness, N/m (default 0)");
+  app->add_option("--hand-damping", o->z.hand_damping, "hand damping, N*s/m (default 0)");
+  app->add_option("--csv", o->csv_path, "write the grid as CSV here");
+  app->add_option("--markdown", o->markdown_path, "write the report here; default: standard output");
+  return {app, [o] {
+            o->z.discretization = discretization_from_name(o->law);
+            const auto model = o->device.apply(o->z.mass, o->z.damping, o->z.period);
+            write_reports(o->z, haptic::lab::zwidth(o->z), o->csv_path, o->markdown_path,
+                          model ? haptic::lab::describe(*model) : std::string());
+            return 0;
+          }};
 }
 
 }  // namespace
@@ -39,89 +187,22 @@ void write_reports(const Params& params, const Report& report, const std::string
 int main(int argc, char** argv) {
   CLI::App cli{"haptic-lab: runs hapticd scenes in lockstep time and reports on them"};
   cli.require_subcommand(1);
-  CLI::App* run = cli.add_subcommand("run", "run one scene and write a per-tick trace (CSV)");
-  std::string scene_path, out_path;
-  double duration_s = 1.0;
-  run->add_option("--scene", scene_path, "hapticd configuration (JSON haptic.v1.ServerConfig)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  run->add_option("--duration", duration_s, "simulated time, s (default 1)");
-  run->add_option("--out", out_path, "trace file (CSV); default: standard output");
-  CLI::App* transparency = cli.add_subcommand(
-      "transparency", "001's controller design for a device model: J(B_c), ||L||inf(B_c), the optimum");
-  haptic::engine::WallDesignParams design;
-  std::string csv_path, markdown_path;
-  transparency->add_option("--mass", design.mass, "device mass, kg (default 0.01)");
-  transparency->add_option("--damping", design.damping, "device damping, N*s/m (default 0.022)");
-  transparency->add_option("--stiffness", design.wall_stiffness, "wall stiffness K, N/m (default 1000)");
-  transparency->add_option("--wall-damping", design.wall_damping, "wall damping B, N*s/m (default 1)");
-  transparency->add_option("--period", design.sample_period, "sample period T, s (default 0.001)");
-  transparency->add_option("--w1", design.weight_cutoff, "transparency weight cut-off, rad/s (default 100)");
-  transparency->add_option("--alpha", design.mass_uncertainty, "mass uncertainty (default 0.5)");
-  transparency->add_option("--beta", design.damping_uncertainty, "damping uncertainty (default 0.5)");
-  transparency->add_option("--csv", csv_path, "write the sweep as CSV here");
-  transparency->add_option("--markdown", markdown_path, "write the report here; default: standard output");
-  CLI::App* zwidth = cli.add_subcommand(
-      "zwidth", "the (K, B) region a device model renders: Colgate's bound, eigenvalues, simulation");
-  haptic::lab::ZWidthParams z;
-  std::string law = "backward_difference", z_csv, z_markdown;
-  zwidth->add_option("--mass", z.mass, "device mass, kg (default 0.01)");
-  zwidth->add_option("--damping", z.damping, "device damping, N*s/m (default 0.022)");
-  zwidth->add_option("--period", z.period, "sample period, s (default 0.001)");
-  zwidth->add_option("--law", law, "backward_difference (default), exact_zoh or tustin");
-  zwidth->add_option("--delay", z.delay_ticks, "extra ticks of delay (default 0)");
-  zwidth->add_option("--hand-mass", z.hand_mass, "operator's hand mass, kg (default 0)");
-  zwidth->add_option("--hand-stiffness", z.hand_stiffness, "hand stiffness, N/m (default 0)");
-  zwidth->add_option("--hand-damping", z.hand_damping, "hand damping, N*s/m (default 0)");
-  zwidth->add_option("--csv", z_csv, "write the grid as CSV here");
-  zwidth->add_option("--markdown", z_markdown, "write the report here; default: standard output");
+  std::vector<Subcommand> commands;
+  commands.push_back(add_run(cli));
+  commands.push_back(add_transparency(cli));
+  commands.push_back(add_zwidth(cli));
+  commands.push_back(from_functions<haptic::lab::StudyCommandOptions>(cli, haptic::lab::add_study_command,
+                                                                     haptic::lab::run_study_command));
   CLI11_PARSE(cli, argc, argv);
 
-  if (*zwidth) {
+  for (const Subcommand& command : commands) {
+    if (!*command.app) continue;
     try {
-      if (law == "backward_difference") {
-        z.discretization = haptic::engine::ImpedanceDiscretization::kBackwardDifference;
-      } else if (law == "exact_zoh") {
-        z.discretization = haptic::engine::ImpedanceDiscretization::kExactZoh;
-      } else if (law == "tustin") {
-        z.discretization = haptic::engine::ImpedanceDiscretization::kTustin;
-      } else {
-        throw std::invalid_argument("law: must be backward_difference, exact_zoh or tustin, got \"" + law + "\"");
-      }
-      write_reports(z, haptic::lab::zwidth(z), z_csv, z_markdown);
-      return 0;
+      return command.run();
     } catch (const std::exception& error) {
-      std::cerr << "haptic-lab: " << error.what() << "\n";
+      std::cerr << "haptic-lab " << command.app->get_name() << ": " << error.what() << "\n";
       return 2;
     }
   }
-
-  if (*transparency) {
-    try {
-      write_reports(design, haptic::lab::transparency_study(design), csv_path, markdown_path);
-      return 0;
-    } catch (const std::exception& error) {
-      std::cerr << "haptic-lab: " << error.what() << "\n";
-      return 2;
-    }
-  }
-
-  try {
-    const haptic::v1::ServerConfig config = haptic::app::load_config_file(scene_path);
-    std::ofstream file;
-    if (!out_path.empty()) {
-      file.open(out_path);
-      if (!file) throw std::invalid_argument(out_path + ": cannot write");
-    }
-    std::ostream& trace = out_path.empty() ? std::cout : file;
-    const haptic::lab::RunSummary summary = haptic::lab::run_scene(config, duration_s, trace);
-    std::cerr << "haptic-lab: " << summary.ticks << " ticks; energy to the device "
-              << summary.energy_to_device << " J, from it " << summary.energy_from_device << " J; "
-              << summary.fault_ticks << " fault ticks; " << (summary.finite ? "finite" : "NOT FINITE")
-              << "\n";
-    return summary.finite ? 0 : 3;
-  } catch (const std::exception& error) {
-    std::cerr << "haptic-lab: " << error.what() << "\n";
-    return 2;
-  }
+  return 2;  // unreachable: require_subcommand(1)
 }

@@ -1,0 +1,195 @@
+#include "lab/device_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "app/config.hpp"
+#include "app/devices.hpp"
+#include "engine/device/five_bar.hpp"
+#include "engine/device/gimbal_joystick.hpp"
+#include "runtime/simulated_five_bar_device.hpp"
+#include "runtime/simulated_joystick_device.hpp"
+
+namespace haptic::lab {
+namespace {
+
+using Matrix = std::array<std::array<double, 3>, 3>;
+
+/// The inverse of a 3×3 matrix by cofactors; false when it is singular to working precision.
+bool invert(const Matrix& a, Matrix& inverse) {
+  const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                     a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                     a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+  double scale = 0.0;
+  for (const auto& row : a) {
+    for (double v : row) scale = std::max(scale, std::abs(v));
+  }
+  if (!std::isfinite(det) || std::abs(det) <= 1e-12 * scale * scale * scale) return false;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      // Cofactor of a[j][i] (the adjugate is the transposed cofactor matrix).
+      const int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
+      inverse[i][j] = (a[r0][c0] * a[r1][c1] - a[r0][c1] * a[r1][c0]) / det;
+    }
+  }
+  return true;
+}
+
+/// Diagonal of J⁻ᵀ A J⁻¹: a joint-space inertia (kg·m², kg) or damping (N·m·s/rad, N·s/m) seen at
+/// the tool along each axis of W with the other axes held. Units: kg or N·s/m.
+std::array<double, 3> at_tool(const Matrix& j_inverse, const Matrix& joint_space) {
+  std::array<double, 3> diagonal{};
+  for (int axis = 0; axis < 3; ++axis) {
+    double sum = 0.0;  // Σ_ab (J⁻¹)_a,axis A_ab (J⁻¹)_b,axis
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) sum += j_inverse[a][axis] * joint_space[a][b] * j_inverse[b][axis];
+    }
+    diagonal[axis] = sum;
+  }
+  return diagonal;
+}
+
+/// Fills `model` from a joint-space inertia and damping and the tip Jacobian (see the header).
+void from_joint_space(const Matrix& jacobian, const Matrix& inertia, const Matrix& damping,
+                      const std::string& where, DeviceModel& model) {
+  Matrix j_inverse{};
+  if (!invert(jacobian, j_inverse)) {
+    throw std::invalid_argument(where + ": the tool Jacobian is singular at the initial pose, so the "
+                                "device has no apparent mass there; move the initial pose or give "
+                                "--mass and --damping");
+  }
+  model.method = "jacobian";
+  model.axis_mass = at_tool(j_inverse, inertia);
+  model.axis_damping = at_tool(j_inverse, damping);
+  int best = 0;
+  for (int axis = 1; axis < 3; ++axis) {
+    const bool less_damped = model.axis_damping[axis] < model.axis_damping[best];
+    const bool as_damped_lighter = model.axis_damping[axis] == model.axis_damping[best] &&
+                                   model.axis_mass[axis] < model.axis_mass[best];
+    if (less_damped || as_damped_lighter) best = axis;
+  }
+  model.axis = best;
+  model.mass = model.axis_mass[best];
+  model.damping = model.axis_damping[best];
+}
+
+/// 003: D(q) of eq. 4.10 with the hub inertia (FiveBarPlant::mass_matrix), Table 5.4's viscous B
+/// per joint, J(q) of eq. 3.120, at the configured initial pose.
+void five_bar_model(const runtime::SimulatedFiveBarDevice& device, const std::string& where,
+                    DeviceModel& model) {
+  const engine::FiveBarPlant& plant = device.plant();
+  const engine::FiveBarJoints& q = plant.state().q;
+  Matrix damping{};
+  for (int i = 0; i < 3; ++i) damping[i][i] = plant.params().friction[i].viscous;
+  from_joint_space(engine::five_bar_jacobian(plant.params(), q), plant.mass_matrix(q), damping, where,
+                   model);
+}
+
+/// 004: eq. 3.27's diagonal inertia (I_θ, I_Φ) and the shaft's motor and load sides taken as one
+/// rigid body, M_m + M_s (L935; the sum that puts eq. 4.5's breakpoint at 41 rad/s, L940) — the
+/// cable's own mode, √(k_t (1/M_m + 1/M_s)) ≈ 1000 rad/s, is not modelled here — through
+/// ∂x/∂(θ, Φ, R) of eq. 3.13. The plant has no viscous friction (Coulomb friction and brakes only,
+/// which Colgate's bound does not credit), so B_q = 0.
+void joystick_model(const runtime::SimulatedJoystickDevice& device, const std::string& where,
+                    DeviceModel& model) {
+  namespace js = engine::joystick_state;
+  const engine::GimbalJoystickPlant& plant = device.plant();
+  const engine::GimbalJoystickParams& p = plant.params();
+  const engine::JoystickState& x = plant.state();
+  Matrix inertia{};
+  inertia[0][0] = p.I_theta;
+  inertia[1][1] = p.I_phi;
+  inertia[2][2] = p.M_m + p.M_s;
+  from_joint_space(engine::joystick_jacobian_R(x[js::kTheta], x[js::kPhi], x[js::kR]), inertia, Matrix{},
+                   where, model);
+}
+
+}  // namespace
+
+DeviceModel device_model(const v1::ServerConfig& given, const std::string& source) {
+  v1::ServerConfig config = given;
+  app::fill_defaults(config);
+  if (auto error = app::validate(config); !error.empty()) {
+    throw std::invalid_argument(source + ": " + error);
+  }
+  std::vector<app::SimulatedDevice> devices = app::make_devices(config);
+  const runtime::Device& device = *devices.front().device;
+  const runtime::DeviceDescription& description = device.description();
+  DeviceModel model;
+  model.source = source;
+  model.name = description.name;
+  model.model = description.model;
+  model.loop_rate_hz = config.loop_rate_hz();
+  const std::string where = source + ": device \"" + description.model + "\"";
+  if (description.apparent_mass > 0.0) {
+    model.method = "description";
+    model.mass = description.apparent_mass;
+    model.damping = description.apparent_damping;
+  } else if (const auto* five_bar = dynamic_cast<const runtime::SimulatedFiveBarDevice*>(&device)) {
+    five_bar_model(*five_bar, where, model);
+  } else if (const auto* joystick = dynamic_cast<const runtime::SimulatedJoystickDevice*>(&device)) {
+    joystick_model(*joystick, where, model);
+  } else {
+    throw std::invalid_argument(where + " gives no apparent mass at its tool point; give --mass and "
+                                "--damping instead of --device");
+  }
+  if (!(std::isfinite(model.mass) && model.mass > 0.0)) {
+    throw std::invalid_argument(where + ": apparent mass must be finite and > 0 kg, got " +
+                                std::to_string(model.mass));
+  }
+  if (!(std::isfinite(model.damping) && model.damping >= 0.0)) {
+    throw std::invalid_argument(where + ": apparent damping must be finite and >= 0 N*s/m, got " +
+                                std::to_string(model.damping));
+  }
+  return model;
+}
+
+DeviceModel device_model_from_file(const std::string& path) {
+  v1::ServerConfig config;
+  try {
+    config = app::load_config_file(path);
+  } catch (const app::ConfigError& error) {
+    throw std::invalid_argument(std::string("--device: ") + error.what());
+  }
+  return device_model(config, path);
+}
+
+std::optional<DeviceModel> apply_device_arguments(const DeviceArguments& arguments, double& mass_kg,
+                                                  double& damping_n_s_m, double& period_s) {
+  if (arguments.device_path.empty()) return std::nullopt;
+  if (arguments.mass_given || arguments.damping_given) {
+    const std::string given = arguments.mass_given && arguments.damping_given ? "--mass and --damping"
+                              : arguments.mass_given                          ? "--mass"
+                                                                              : "--damping";
+    throw std::invalid_argument("--device and " + given +
+                                " were both given: take the device model either from a configuration "
+                                "(--device) or by hand (--mass, --damping), not both");
+  }
+  DeviceModel model = device_model_from_file(arguments.device_path);
+  mass_kg = model.mass;
+  damping_n_s_m = model.damping;
+  if (!arguments.period_given) period_s = 1.0 / model.loop_rate_hz;
+  return model;
+}
+
+std::string describe(const DeviceModel& model) {
+  std::ostringstream out;
+  out << "Device model from `" << model.source << "`: " << model.name << " (" << model.model << ") at "
+      << model.loop_rate_hz << " Hz; m = " << model.mass << " kg, b = " << model.damping << " N·s/m";
+  if (model.method == "jacobian") {
+    static const char* kAxes[] = {"x", "y", "z"};
+    out << " along " << kAxes[model.axis] << " of W at the initial pose (J⁻ᵀ D J⁻¹ and J⁻ᵀ B J⁻¹, "
+        << "the least damped, then lightest, axis; per axis x, y, z: m = " << model.axis_mass[0] << ", "
+        << model.axis_mass[1] << ", " << model.axis_mass[2] << " kg, b = " << model.axis_damping[0]
+        << ", " << model.axis_damping[1] << ", " << model.axis_damping[2] << " N·s/m)";
+  } else {
+    out << " (the device's own apparent mass and damping)";
+  }
+  out << ".\n";
+  return out.str();
+}
+
+}  // namespace haptic::lab

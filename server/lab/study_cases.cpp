@@ -1,0 +1,352 @@
+// The study's ODE cases: a mass against a linear spring-damper (walls from soft to K = 1e7 N/m,
+// masses down to 1e-4 kg, zero damping, a 1e3 N force step, a NaN injected into the force), the
+// virtual mass on a viscous surface (000 eq. 7.1), and a joint with Coulomb friction (003) under
+// three friction models. Each is integrated with the engine's integrators (engine/core/
+// integrator.hpp, the code the plants use) and, where linear, with its exact ZOH discretization;
+// the linear ones are compared with their closed-form solutions.
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "engine/core/integrator.hpp"
+#include "engine/device/joint_friction.hpp"
+#include "engine/safety/force_guard.hpp"
+#include "lab/study.hpp"
+
+namespace haptic::lab {
+namespace {
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+
+/// m ẍ + B ẋ + K x = F(t) on one axis, with F(t) = force_before for t < step_time and
+/// force_after from then on. x is the tool's penetration coordinate (m; negative: inside the wall,
+/// the spring pushing it out), F the operator's force (N).
+struct LinearOscillator {
+  double mass = 0.01;       // m. Unit: kg.
+  double damping = 1.0;     // B. Unit: N·s/m.
+  double stiffness = 1e3;   // K. Unit: N/m. 0: no spring (a mass on a viscous surface).
+  double x0 = -0.005;       // Unit: m.
+  double v0 = 0.0;          // Unit: m/s.
+  double force_before = 0.0;  // Unit: N.
+  double force_after = 0.0;   // Unit: N.
+  double step_time = 0.0;     // Unit: s.
+  /// A NaN replaces the force over [nan_from, nan_until) (the NaN-injection case).
+  double nan_from = -1.0, nan_until = -1.0;
+  /// Pass the force through the server's last stage (engine::ForceGuard) as a device would see it.
+  bool guarded = false;
+
+  double force(double t) const {
+    if (t >= nan_from && t < nan_until) return kNan;
+    return t < step_time ? force_before : force_after;
+  }
+
+  /// Stored energy plus the potential of the current constant force: ½mv² + ½Kx² − F x (J).
+  double energy(double x, double v, double f) const {
+    return 0.5 * mass * v * v + 0.5 * stiffness * x * x - f * x;
+  }
+
+  /// The closed-form free-plus-constant-force solution from (x, v) over time t under force f.
+  void advance_exact(double& x, double& v, double f, double t) const {
+    const double m = mass, b = damping, k = stiffness;
+    if (k == 0.0) {
+      if (b == 0.0) {
+        x += v * t + 0.5 * f / m * t * t;
+        v += f / m * t;
+        return;
+      }
+      const double v_inf = f / b, tau = m / b, decay = std::exp(-t / tau);
+      x += v_inf * t + (v - v_inf) * tau * (1.0 - decay);
+      v = v_inf + (v - v_inf) * decay;
+      return;
+    }
+    const double x_eq = f / k;
+    const double y0 = x - x_eq;
+    const double sigma = b / (2.0 * m);
+    const double w2 = k / m - sigma * sigma;  // ω_d² (> 0: underdamped)
+    if (w2 > 0.0) {
+      const double wd = std::sqrt(w2);
+      const double c = (v + sigma * y0) / wd;
+      const double e = std::exp(-sigma * t), cs = std::cos(wd * t), sn = std::sin(wd * t);
+      x = x_eq + e * (y0 * cs + c * sn);
+      v = e * ((-sigma * y0 + c * wd) * cs + (-sigma * c - y0 * wd) * sn);
+    } else if (w2 < 0.0) {
+      const double r = std::sqrt(-w2), l1 = -sigma + r, l2 = -sigma - r;
+      const double c1 = (v - l2 * y0) / (l1 - l2), c2 = y0 - c1;
+      x = x_eq + c1 * std::exp(l1 * t) + c2 * std::exp(l2 * t);
+      v = c1 * l1 * std::exp(l1 * t) + c2 * l2 * std::exp(l2 * t);
+    } else {
+      const double c = v + sigma * y0, e = std::exp(-sigma * t);
+      x = x_eq + (y0 + c * t) * e;
+      v = (c - sigma * (y0 + c * t)) * e;
+    }
+  }
+};
+
+/// How far a run may go before it is called diverged: 1e3 times the larger of the start and the
+/// static deflection under the largest force, or 1 m.
+double bound_of(const LinearOscillator& o) {
+  double scale = std::abs(o.x0) + std::abs(o.v0) * std::sqrt(o.mass / std::max(o.stiffness, 1e-9));
+  if (o.stiffness > 0.0) scale = std::max(scale, std::max(std::abs(o.force_before), std::abs(o.force_after)) / o.stiffness);
+  return std::max(1e3 * scale, 1.0);
+}
+
+std::size_t output_count(const StudyCase& c) {
+  return static_cast<std::size_t>(std::llround(c.duration_s / c.output_period_s)) + 1;
+}
+
+Trajectory exact_solution(const LinearOscillator& o, const StudyCase& c) {
+  Trajectory out;
+  double x = o.x0, v = o.v0;
+  const std::size_t n = output_count(c);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) * c.output_period_s;
+    if (k > 0) {
+      const double t_prev = t - c.output_period_s;
+      if (t_prev < o.step_time && t > o.step_time) {  // split at the force step
+        o.advance_exact(x, v, o.force_before, o.step_time - t_prev);
+        o.advance_exact(x, v, o.force_after, t - o.step_time);
+      } else {
+        // The NaN window reaches the device as zero through the guard: the reference is the
+        // force the scene meant, which is zero there too (see nan_injection).
+        const double f = t_prev < o.step_time ? o.force_before : o.force_after;
+        o.advance_exact(x, v, f, c.output_period_s);
+      }
+    }
+    out.samples.push_back({x, 0.0, 0.0});
+    const double f_now = t < o.step_time ? o.force_before : o.force_after;
+    out.energy.push_back(o.energy(x, v, f_now));
+  }
+  return out;
+}
+
+/// Integrates the oscillator with `scheme` at step h (the force held over each step, as a
+/// device's D/A holds it), sampling every output period.
+Trajectory integrate(const LinearOscillator& o, const StudyCase& c, Scheme scheme, double h) {
+  if (!(std::isfinite(h) && h > 0.0)) throw std::invalid_argument(c.name + ": step must be > 0 s");
+  const auto steps_per_output = static_cast<std::int64_t>(std::llround(c.output_period_s / h));
+  const std::size_t n = output_count(c);
+  const double bound = bound_of(o);
+  engine::ForceGuard guard({1e9, 0.0});  // only its fault check matters here
+  engine::StateVector<2> x{o.x0, o.v0};
+  const std::array<std::array<double, 2>, 2> a{{{0.0, 1.0}, {-o.stiffness / o.mass, -o.damping / o.mass}}};
+  const ZohStep<2> zoh = exact_zoh<2>(a, {0.0, 1.0 / o.mass}, h);
+  Trajectory out;
+  out.samples.reserve(n);
+  out.energy.reserve(n);
+  out.samples.push_back({x[0], 0.0, 0.0});
+  out.energy.push_back(o.energy(x[0], x[1], o.force(0.0)));
+  std::int64_t step = 0;
+  for (std::size_t k = 1; k < n; ++k) {
+    for (std::int64_t i = 0; i < steps_per_output; ++i, ++step) {
+      // The force held over this step (a hair past its start, so a step that begins exactly on
+      // the force's switching time sees the new value despite rounding in step · h).
+      const double t = (static_cast<double>(step) + 1e-6) * h;
+      double f = o.force(t);
+      if (o.guarded) {
+        const engine::GuardedForce g = guard.apply({f, 0.0, 0.0}, h);
+        if (g.fault) ++out.fault_ticks;
+        f = g.F_T_W.x;
+      }
+      if (scheme == Scheme::kExactZoh) {
+        const double q = x[0], qd = x[1];
+        x[0] = zoh.phi[0][0] * q + zoh.phi[0][1] * qd + zoh.gamma[0] * f;
+        x[1] = zoh.phi[1][0] * q + zoh.phi[1][1] * qd + zoh.gamma[1] * f;
+      } else {
+        engine::integrate_step<1>(*as_integrator(scheme), x, h, [&](const engine::StateVector<2>& s) {
+          return engine::StateVector<2>{s[1], (f - o.stiffness * s[0] - o.damping * s[1]) / o.mass};
+        });
+      }
+    }
+    if (!(std::isfinite(x[0]) && std::isfinite(x[1]))) {
+      out.finite = false;
+      return out;
+    }
+    if (std::abs(x[0]) > bound) {
+      out.diverged = true;
+      return out;
+    }
+    const double t = static_cast<double>(k) * c.output_period_s;
+    out.samples.push_back({x[0], 0.0, 0.0});
+    const double f_now = o.force(t);
+    out.energy.push_back(o.energy(x[0], x[1], std::isfinite(f_now) ? f_now : 0.0));
+  }
+  return out;
+}
+
+/// A case for one oscillator: every scheme (exact ZOH included), the closed form as reference.
+StudyCase oscillator_case(std::string name, std::string title, std::string source, const LinearOscillator& o,
+                          double duration_s, const std::vector<double>& steps) {
+  StudyCase c;
+  c.name = std::move(name);
+  c.title = std::move(title);
+  c.source = std::move(source);
+  c.observable = "tool position x, m";
+  c.duration_s = duration_s;
+  c.output_period_s = 0.01;
+  c.schemes.assign(std::begin(kAllSchemes), std::end(kAllSchemes));
+  c.steps_s = steps;
+  c.conservative = o.damping == 0.0 && o.force_before == 0.0 && o.force_after == 0.0;
+  const StudyCase shape = c;  // what the closures need (not the closures themselves)
+  c.simulate = [o, shape](Scheme scheme, double h, const std::string&) { return integrate(o, shape, scheme, h); };
+  c.exact = [o, shape] { return exact_solution(o, shape); };
+  return c;
+}
+
+// --- 003's joint with Coulomb friction ------------------------------------------------------
+
+/// Madill's axial joint (Table 5.4: J = 0.204 kg·m², B = 0.012 N·m·s/rad, f = 0.088 N·m) held by
+/// a P-D wall τ = −K_p q − K_d q̇ for q < 0 (K_p = 400 N·m/rad, L2869) and pushed into it by the
+/// operator with τ_h = 0.5 N·m sin(2π·2 t) − 0.2 N·m. The friction model is the variant:
+/// Karnopp's stick band (the simulation's model, joint_friction.hpp), the smooth saturation the
+/// estimator assumes (f0 sat(q̇/v0), v0 = 0.03 rad/s, L3211), or viscous only.
+Trajectory joint_with_friction(Scheme scheme, double h, const std::string& variant, const StudyCase& c) {
+  constexpr double kInertia = 0.204, kDamping = 0.012, kCoulomb = 0.088;
+  constexpr double kWallStiffness = 400.0, kWallDamping = 1.0;
+  const engine::CoulombViscousFriction karnopp{kCoulomb, kDamping, 1e-4};
+  const engine::CoulombViscousFriction smooth{kCoulomb, kDamping, 0.03};
+  const auto integrator = as_integrator(scheme);
+  if (!integrator) throw std::invalid_argument(c.name + ": exact_zoh does not apply (friction is not linear)");
+  const auto steps_per_output = static_cast<std::int64_t>(std::llround(c.output_period_s / h));
+  const std::size_t n = output_count(c);
+  engine::StateVector<2> x{0.01, 0.0};  // q (rad), q̇ (rad/s): 10 mrad outside the wall
+  Trajectory out;
+  out.samples.push_back({x[0], 0.0, 0.0});
+  out.energy.push_back(0.5 * kInertia * x[1] * x[1]);
+  std::int64_t step = 0;
+  for (std::size_t k = 1; k < n; ++k) {
+    for (std::int64_t i = 0; i < steps_per_output; ++i, ++step) {
+      const double t = static_cast<double>(step) * h;
+      const double hand = 0.5 * std::sin(2.0 * 3.14159265358979323846 * 2.0 * t) - 0.2;  // N·m, held
+      engine::integrate_step<1>(*integrator, x, h, [&](const engine::StateVector<2>& s) {
+        const double wall = s[0] < 0.0 ? -kWallStiffness * s[0] - kWallDamping * s[1] : 0.0;
+        const double applied = hand + wall;
+        double friction = kDamping * s[1];
+        if (variant == "karnopp") friction = karnopp.resisting(s[1], applied);
+        if (variant == "smooth") friction = smooth.smooth(s[1]);
+        return engine::StateVector<2>{s[1], (applied - friction) / kInertia};
+      });
+    }
+    if (!(std::isfinite(x[0]) && std::isfinite(x[1]))) {
+      out.finite = false;
+      return out;
+    }
+    if (std::abs(x[0]) > 10.0) {
+      out.diverged = true;
+      return out;
+    }
+    out.samples.push_back({x[0], 0.0, 0.0});
+    const double wall_energy = x[0] < 0.0 ? 0.5 * kWallStiffness * x[0] * x[0] : 0.0;
+    out.energy.push_back(0.5 * kInertia * x[1] * x[1] + wall_energy);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<StudyCase> ode_cases(bool short_suite) {
+  // Steps over three decades (1e-5 … 1e-2 s), each dividing the 10 ms output period.
+  const std::vector<double> steps =
+      short_suite ? std::vector<double>{1e-5, 1e-4, 1e-3, 1e-2}
+                  : std::vector<double>{1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2};
+  const std::vector<double> fine_steps =  // for the stiffest cases: down to 1e-6 s
+      short_suite ? std::vector<double>{1e-6, 1e-5, 1e-4, 1e-3}
+                  : std::vector<double>{1e-6, 2e-6, 5e-6, 1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3, 1e-2};
+  const double duration = short_suite ? 0.2 : 0.5;
+  std::vector<StudyCase> cases;
+
+  LinearOscillator wall;  // 001's device mass against the transparency study's wall
+  wall.mass = 0.01;
+  wall.damping = 1.0;
+  wall.stiffness = 1e3;
+  wall.x0 = -0.005;
+  cases.push_back(oscillator_case(
+      "linear_wall", "Linear spring-damper wall, exact solution (m 0.01 kg, K 1e3 N/m, B 1 N·s/m)",
+      "001's device mass (Eom et al.); wall as in 001's design, bilateral so the solution is closed-form",
+      wall, duration, steps));
+
+  LinearOscillator surface;  // 000 eq. 7.1: f_V = m_V Ẍ + B_V Ẋ, pushed with 1 N from rest
+  surface.mass = 0.2;
+  surface.damping = 4.0;
+  surface.stiffness = 0.0;
+  surface.x0 = 0.0;
+  surface.force_before = surface.force_after = 1.0;
+  cases.push_back(oscillator_case(
+      "viscous_surface", "Virtual mass on a viscous surface (m_V 0.2 kg, B_V 4 N·s/m, 1 N push)",
+      "000 eq. 7.1, f_V = m_V Ẍ + B_V Ẋ", surface, duration, steps));
+
+  LinearOscillator stiff = wall;
+  stiff.stiffness = 1e5;
+  stiff.x0 = -1e-3;
+  cases.push_back(oscillator_case("stiff_wall", "Stiff wall (K 1e5 N/m, m 0.01 kg, B 1 N·s/m)",
+                                  "stiff case: K ≥ 1e5 N/m with m = 0.01 kg", stiff, duration, fine_steps));
+
+  LinearOscillator undamped = wall;
+  undamped.stiffness = 1e4;
+  undamped.damping = 0.0;
+  undamped.x0 = -1e-3;
+  cases.push_back(oscillator_case("zero_damping", "Zero damping (K 1e4 N/m, m 0.01 kg, B 0): energy must stay",
+                                  "extreme case: zero damping, the energy drift shows the scheme", undamped, duration, steps));
+
+  LinearOscillator tiny = wall;
+  tiny.mass = 1e-4;
+  tiny.damping = 0.1;
+  tiny.x0 = -1e-3;
+  cases.push_back(oscillator_case("tiny_mass", "Tiny mass (m 1e-4 kg, K 1e3 N/m, B 0.1 N·s/m)",
+                                  "extreme case: the smallest mass (1e-4 kg)", tiny, duration, fine_steps));
+
+  LinearOscillator hard = wall;
+  hard.stiffness = 1e7;
+  hard.damping = 10.0;
+  hard.x0 = -1e-4;
+  cases.push_back(oscillator_case("huge_stiffness", "K 1e7 N/m (m 0.01 kg, B 10 N·s/m)", "extreme case: the stiffest wall",
+                                  hard, short_suite ? 0.1 : 0.2, fine_steps));
+
+  LinearOscillator kick = wall;
+  kick.mass = 0.1;
+  kick.stiffness = 1e4;
+  kick.damping = 10.0;
+  kick.x0 = 0.0;
+  kick.force_before = 0.0;
+  kick.force_after = 1e3;
+  kick.step_time = 0.05;
+  cases.push_back(oscillator_case("force_step", "Force step of 1e3 N into a wall (K 1e4 N/m, m 0.1 kg, B 10 N·s/m)",
+                                  "extreme case: a 1e3 N force step at t = 0.05 s", kick, duration, steps));
+
+  // NaN in the force for 10 ms from t = 0.1 s. Unguarded, the integrator carries it into the state
+  // (a non-finite result, reported as such); through engine::ForceGuard, the server's last stage,
+  // it becomes zero — the force the scene meant — and the run matches the exact solution.
+  for (const bool guarded : {false, true}) {
+    LinearOscillator poisoned = wall;
+    poisoned.nan_from = 0.1;
+    poisoned.nan_until = 0.11;
+    poisoned.guarded = guarded;
+    cases.push_back(oscillator_case(
+        guarded ? "nan_guarded" : "nan_unguarded",
+        guarded ? "NaN force for 10 ms, through the force guard" : "NaN force for 10 ms, straight into the plant",
+        "extreme case; the guard is engine::ForceGuard, the loop's last stage", poisoned, duration, steps));
+  }
+
+  StudyCase friction;
+  friction.name = "joint_friction_models";
+  friction.title = "003 axial joint against a 400 N·m/rad wall: friction models";
+  friction.source = "003 Table 5.4 (axial J, B, f), L2869 (K_p 400), L3211 (smooth model, v0 0.03 rad/s)";
+  friction.observable = "joint angle q, rad";
+  friction.group = "fidelity";
+  friction.duration_s = duration;
+  friction.output_period_s = 0.01;
+  friction.schemes = {Scheme::kSemiImplicitEuler, Scheme::kRk4, Scheme::kImplicitEuler};
+  friction.steps_s = short_suite ? std::vector<double>{1e-5, 1e-4, 1e-3} : std::vector<double>{1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3};
+  friction.variants = {"karnopp", "smooth", "viscous_only"};
+  friction.reference_scheme = Scheme::kRk4;
+  friction.reference_step_s = short_suite ? 2e-6 : 1e-6;
+  const StudyCase friction_shape = friction;
+  friction.simulate = [friction_shape](Scheme scheme, double h, const std::string& variant) {
+    return joint_with_friction(scheme, h, variant, friction_shape);
+  };
+  cases.push_back(std::move(friction));
+  return cases;
+}
+
+}  // namespace haptic::lab
