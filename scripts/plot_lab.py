@@ -16,6 +16,7 @@ Runs with /usr/bin/python3 and Debian's python3-matplotlib (Agg backend).
 """
 import csv
 import math
+import os
 import sys
 
 import matplotlib
@@ -91,7 +92,7 @@ def run(rows, out):
         else:
             ax.text(0.5, 0.5, "nothing moves", transform=ax.transAxes, ha="center", color="#777777")
     energy.set_xlabel("time [s]")
-    pos.set_title("haptic-lab run: position, force and energy")
+    pos.set_title(f"haptic-lab run: position, force and energy ({os.path.basename(out)})")
     fig.tight_layout()
     fig.savefig(out + ".png", dpi=120)
     fig.savefig(out + ".svg")

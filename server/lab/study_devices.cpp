@@ -30,14 +30,16 @@
 #include "engine/device/dc_motor_plant.hpp"
 #include "haptic/wire/datagram.hpp"
 #include "lab/lab_run.hpp"
+#include "lab/lab_scenes.hpp"
 #include "lab/study.hpp"
 
 namespace haptic::lab {
 namespace {
 
 // ---------------------------------------------------------------------------------------------
-// The scenes. Each string is byte for byte the file named beside it (study_devices_test checks
-// that running the file gives the case's trajectory).
+// The scenes: the files under config/lab/, compiled in by the build (lab/lab_scenes.hpp is
+// generated from them, so the files are the one copy; study_devices_test checks that running a
+// file gives its case's trajectory).
 
 /// config/lab/dc_motor_mass_000.json. 000's 1-DOF device (DC motor, gearbox, link under gravity,
 /// gravity compensated; docs/devices.md) with the link at θ_L = 0.5 rad, so the tool (the link's
@@ -48,33 +50,7 @@ namespace {
 /// meets the scene's mass bounds at T = 1 ms: m_V ≥ 4 K T² = 0.004 kg, B + B_V ≥ K T / 2 = 0.5.
 /// The centre sits on the chord at angle 0.5 + 0.111 rad: 2 l sin(0.111 / 2) = 22.2 mm from the
 /// tool, 2.2 mm more than the radius.
-constexpr const char* kDcMotorMass = R"({
-  "loop_rate_hz": 1000,
-  "time_mode": "LOCKSTEP",
-  "simulated_dc_motor": {
-    "with_inductance": false,
-    "r": 0.1,
-    "eta": 0.9,
-    "link_mass": 0.2,
-    "link_length": 0.2,
-    "center_of_mass": 0.1,
-    "gravity": 9.81,
-    "initial_angle": 0.5,
-    "max_force": 5,
-    "integrator": "rk4",
-    "substeps": 10
-  },
-  "initial_scene": {
-    "objects": [{
-      "pose": {"position": {"x": 0.16381, "y": 0.11474, "z": 0}},
-      "impedance": {"stiffness": 1000, "damping": 1},
-      "dynamics": {"mass": 0.05, "damping": 2},
-      "sphere": {"radius": 0.02}
-    }]
-  },
-  "initial_operator": {"mode": "APPLY_FORCE", "force": {"x": -0.47943, "y": 0.87758, "z": 0}}
-}
-)";
+constexpr const char* kDcMotorMass = lab_scenes::k_dc_motor_mass_000;
 
 /// config/lab/parallel_dob_wall_001.json. 001's experiment (seed-000-001.md, "Experiment"): the
 /// 2-DOF parallel device behind its per-axis disturbance observer (nominal m = 0.01 kg,
@@ -84,32 +60,7 @@ constexpr const char* kDcMotorMass = R"({
 /// tool's start (0, 0.25, 0), so the push starts at the surface. (With the plain wall's
 /// B = 1 N·s/m the contact oscillates, as 001's Fig. 7 says, here into a saturated limit cycle
 /// 0.2 m deep: a chaotic trajectory that no step size reproduces, so not a case for numerics.)
-constexpr const char* kParallelDobWall = R"({
-  "loop_rate_hz": 1000,
-  "time_mode": "LOCKSTEP",
-  "simulated_parallel_dob": {
-    "disturbance_observer": true,
-    "cutoff_hz": 80,
-    "nominal_mass": 0.01,
-    "nominal_damping": 0.022,
-    "integrator": "rk4",
-    "substeps": 10,
-    "max_force": 10
-  },
-  "initial_scene": {
-    "objects": [{
-      "pose": {"position": {"x": 0, "y": 0.25, "z": 0}},
-      "impedance": {"stiffness": 1000, "damping": 15},
-      "half_space": {"normal": {"x": 0, "y": 1, "z": 0}}
-    }]
-  },
-  "initial_operator": {
-    "mode": "APPLY_FORCE",
-    "force": {"x": 0, "y": 2, "z": 0},
-    "profile": {"shape": "SINE", "frequency_hz": 5, "offset": {"x": 0, "y": -5, "z": 0}}
-  }
-}
-)";
+constexpr const char* kParallelDobWall = lab_scenes::k_parallel_dob_wall_001;
 
 /// config/lab/five_bar_wall_003.json. 003's five-bar (Madill; docs/devices.md) as configured in
 /// config/five_bar_003.json — π/6000 axial encoders, Table 5.4's joint friction, the non-linear
@@ -119,54 +70,14 @@ constexpr const char* kParallelDobWall = R"({
 /// stiff" for the position-only wall) is K = 400 / 0.3² = 4444 N/m at the tip; the scene's walls
 /// are Cartesian, so it is the half-space x > 0.599 m (normal −x), 1 mm from the tip, with
 /// B = 5 / 0.3² = 55.6 N·s/m (the estimator wall's Kd = 5 N·m·s/rad). The hand pushes 3 N along +x.
-constexpr const char* kFiveBarWall = R"({
-  "loop_rate_hz": 1000,
-  "time_mode": "LOCKSTEP",
-  "simulated_five_bar": {
-    "quantized_encoders": true,
-    "velocity": "estimator",
-    "coriolis": true,
-    "inertias": "identified",
-    "integrator": "rk4",
-    "substeps": 10,
-    "max_force": 12
-  },
-  "initial_scene": {
-    "objects": [{
-      "pose": {"position": {"x": 0.601, "y": 0, "z": 0.3}},
-      "impedance": {"stiffness": 4444, "damping": 55.6},
-      "half_space": {"normal": {"x": -1, "y": 0, "z": 0}}
-    }]
-  },
-  "initial_operator": {"mode": "APPLY_FORCE", "force": {"x": 3, "y": 0, "z": 0}}
-}
-)";
+constexpr const char* kFiveBarWall = lab_scenes::k_five_bar_wall_003;
 
 /// config/lab/five_bar_swing_003.json. The five-bar swung about its base joint q0 and its axial
 /// joint q1 by a 4 Hz sine force of 6 N amplitude along (0.6, 0.8, 0) at the tip, no scene:
 /// q̇0 drives the coupling (Coriolis) terms of L2382 and link 5's horizontal mode. The encoders
 /// are ideal (quantized_encoders false) so that the model choices, not the counts, set the
 /// difference; the fidelity cases switch `coriolis` and `flexible_mode`.
-constexpr const char* kFiveBarSwing = R"({
-  "loop_rate_hz": 1000,
-  "time_mode": "LOCKSTEP",
-  "simulated_five_bar": {
-    "quantized_encoders": false,
-    "velocity": "difference",
-    "coriolis": true,
-    "flexible_mode": false,
-    "inertias": "identified",
-    "integrator": "rk4",
-    "substeps": 10,
-    "max_force": 12
-  },
-  "initial_operator": {
-    "mode": "APPLY_FORCE",
-    "force": {"x": 3.6, "y": 4.8, "z": 0},
-    "profile": {"shape": "SINE", "frequency_hz": 4}
-  }
-}
-)";
+constexpr const char* kFiveBarSwing = lab_scenes::k_five_bar_swing_003;
 
 /// config/lab/joystick_shaft_004.json. 004's joystick (Russo; docs/devices.md) at mid-stroke
 /// (R = 0.24 m along z), the hand pushing 8 N down the shaft (−z) — above the sleeve's 5.66 N
@@ -176,26 +87,7 @@ constexpr const char* kFiveBarSwing = R"({
 /// ω = √(k_t (1/M_m + 1/M_s)) ≈ 1011 rad/s, the stiff part (explicit Euler needs h ω well below
 /// 2 with ζ ≈ 0.28: at h = 1 ms it diverges). The push keeps the shaft below the watchdog's
 /// 8 rad/s of the drive pulley (76 mm/s of shaft).
-constexpr const char* kJoystickShaft = R"({
-  "loop_rate_hz": 1000,
-  "time_mode": "LOCKSTEP",
-  "simulated_joystick": {
-    "integrator": "rk4",
-    "substeps": 10,
-    "max_force": 7,
-    "rearm_after_s": 1.0,
-    "initial_shaft_length": 0.24
-  },
-  "initial_scene": {
-    "objects": [{
-      "pose": {"position": {"x": 0, "y": 0, "z": 0.2395}},
-      "impedance": {"stiffness": 5000, "damping": 20},
-      "half_space": {"normal": {"x": 0, "y": 0, "z": 1}}
-    }]
-  },
-  "initial_operator": {"mode": "APPLY_FORCE", "force": {"x": 0, "y": 0, "z": -8}}
-}
-)";
+constexpr const char* kJoystickShaft = lab_scenes::k_joystick_shaft_004;
 
 // ---------------------------------------------------------------------------------------------
 // Running a scene with a scheme and a step.
