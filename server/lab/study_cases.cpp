@@ -1,7 +1,8 @@
 // The study's ODE cases: a mass against a linear spring-damper (walls from soft to K = 1e7 N/m,
 // masses down to 1e-4 kg, zero damping, a 1e3 N force step, a NaN injected into the force), the
-// virtual mass on a viscous surface (000 eq. 7.1), and a joint with Coulomb friction (003) under
-// three friction models. Each is integrated with the engine's integrators (engine/core/
+// virtual mass on a viscous surface (000 eq. 7.1), a joint with Coulomb friction (003) under
+// three friction models, a wall rendered at each tick period by each impedance law, and a Khatib
+// potential field (004) with its gradient analytic or by central differences. Each is integrated with the engine's integrators (engine/core/
 // integrator.hpp, the code the plants use) and, where linear, with its exact ZOH discretization;
 // the linear ones are compared with their closed-form solutions.
 
@@ -13,6 +14,8 @@
 #include "engine/core/integrator.hpp"
 #include "engine/device/joint_friction.hpp"
 #include "engine/safety/force_guard.hpp"
+#include "engine/scene/fields.hpp"
+#include "engine/scene/impedance.hpp"
 #include "lab/study.hpp"
 
 namespace haptic::lab {
@@ -243,6 +246,116 @@ Trajectory joint_with_friction(Scheme scheme, double h, const std::string& varia
   return out;
 }
 
+
+// --- A wall rendered by the loop: each impedance law at each tick period ---------------------
+
+/// 001's device (m = 0.01 kg, b = 0.022 N·s/m; Eom et al.) coupled to a K = 1e3 N/m, B = 1 N·s/m
+/// spring-damper the loop renders at tick period T with one of the scene's impedance laws
+/// (engine::ImpedanceFilter; 000 eqs. 8.9–8.16), the force held over each tick, the device's
+/// own motion integrated exactly between ticks. The reference is the continuous coupling,
+/// m ẍ + (b + B) ẋ + K x = 0, in closed form: the error is what rendering the wall at T costs.
+/// Variant "velocity" is the law on the device's measured velocity, f = K d + B v.
+constexpr double kDeviceMass = 0.01, kDeviceDamping = 0.022, kWallK = 1e3, kWallB = 1.0;
+
+Trajectory sampled_wall(Scheme scheme, double period, const std::string& law, const StudyCase& c) {
+  if (scheme != Scheme::kExactZoh) {
+    throw std::invalid_argument(c.name + ": the device is integrated exactly between ticks; scheme must be exact_zoh");
+  }
+  const engine::ImpedanceParams wall{kWallK, kWallB, 0.0};
+  engine::ImpedanceDiscretization discretization = engine::ImpedanceDiscretization::kBackwardDifference;
+  if (law == "exact_zoh") discretization = engine::ImpedanceDiscretization::kExactZoh;
+  if (law == "tustin") discretization = engine::ImpedanceDiscretization::kTustin;
+  if (law != "velocity" && law != "backward_difference" && law != "exact_zoh" && law != "tustin") {
+    throw std::invalid_argument(c.name + ": unknown impedance law \"" + law + "\"");
+  }
+  engine::ImpedanceFilter filter(wall, discretization, period);
+  const double x0 = -0.005;  // m: 5 mm in, at rest
+  filter.reset(-x0, 0.0);
+  const ZohStep<2> device = exact_zoh<2>({{{0.0, 1.0}, {0.0, -kDeviceDamping / kDeviceMass}}},
+                                         {0.0, 1.0 / kDeviceMass}, period);
+  const auto ticks_per_output = static_cast<std::int64_t>(std::llround(c.output_period_s / period));
+  const std::size_t n = output_count(c);
+  double x = x0, v = 0.0;
+  Trajectory out;
+  auto energy = [&] { return 0.5 * kDeviceMass * v * v + 0.5 * kWallK * x * x; };
+  out.samples.push_back({x, 0.0, 0.0});
+  out.energy.push_back(energy());
+  for (std::size_t k = 1; k < n; ++k) {
+    for (std::int64_t i = 0; i < ticks_per_output; ++i) {
+      const double d = -x;  // penetration, m (> 0 inside)
+      const double f = law == "velocity" ? kWallK * d - kWallB * v : filter.update(d);  // N, along +x
+      const double q = x, qd = v;
+      x = device.phi[0][0] * q + device.phi[0][1] * qd + device.gamma[0] * f;
+      v = device.phi[1][0] * q + device.phi[1][1] * qd + device.gamma[1] * f;
+    }
+    if (!(std::isfinite(x) && std::isfinite(v))) {
+      out.finite = false;
+      return out;
+    }
+    if (std::abs(x) > 5.0) {
+      out.diverged = true;
+      return out;
+    }
+    out.samples.push_back({x, 0.0, 0.0});
+    out.energy.push_back(energy());
+  }
+  return out;
+}
+
+// --- A potential field: the gradient analytic or by central differences ----------------------
+
+/// A 0.01 kg tool pushed by a constant 0.5 N toward a plane that repels it with Khatib's field
+/// (004 eq. 5.7, U = (1/n) K (1/f − 1/f0)ⁿ, n = 2, K = 1.67e-7 J·m², f0 = 20 mm, f_m = 1 mm),
+/// evaluated by engine::evaluate_field with the gradient analytic or by central differences
+/// (eq. 5.7, second, step 1e-3 or 1e-6 m). It bounces between 15 mm and ≈ 4 mm; nothing
+/// dissipates, so E = ½mv² + U + 0.5 N · z must stay.
+Trajectory khatib_bounce(Scheme scheme, double h, const std::string& variant, const StudyCase& c) {
+  const auto integrator = as_integrator(scheme);
+  if (!integrator) throw std::invalid_argument(c.name + ": exact_zoh does not apply (the field is not linear)");
+  engine::PotentialFieldSpec field;
+  field.distance = engine::plane_distance({0.0, 0.0, 0.0}, {0.0, 0.0, 1.0});
+  field.kind = engine::PotentialKind::kKhatib;
+  field.order = 2;
+  field.gain = 1.67e-7;
+  field.influence_distance = 0.02;
+  field.min_distance = 0.001;
+  if (variant == "central_1e-3" || variant == "central_1e-6") {
+    field.gradient = engine::GradientMethod::kCentralDifference;
+    field.difference_step = variant == "central_1e-3" ? 1e-3 : 1e-6;
+  } else if (variant != "analytic") {
+    throw std::invalid_argument(c.name + ": unknown gradient variant \"" + variant + "\"");
+  }
+  constexpr double kMass = 0.01, kPush = -0.5;  // kg; N along z
+  const auto steps_per_output = static_cast<std::int64_t>(std::llround(c.output_period_s / h));
+  const std::size_t n = output_count(c);
+  engine::StateVector<2> x{0.015, 0.0};  // z (m), ż (m/s)
+  auto energy = [&](const engine::StateVector<2>& s) {
+    return 0.5 * kMass * s[1] * s[1] + engine::evaluate_field(field, {0.0, 0.0, s[0]}, {}).U - kPush * s[0];
+  };
+  Trajectory out;
+  out.samples.push_back({x[0], 0.0, 0.0});
+  out.energy.push_back(energy(x));
+  for (std::size_t k = 1; k < n; ++k) {
+    for (std::int64_t i = 0; i < steps_per_output; ++i) {
+      engine::integrate_step<1>(*integrator, x, h, [&](const engine::StateVector<2>& s) {
+        const double fz = engine::evaluate_field(field, {0.0, 0.0, s[0]}, {0.0, 0.0, s[1]}).F_T_W.z;
+        return engine::StateVector<2>{s[1], (fz + kPush) / kMass};
+      });
+    }
+    if (!(std::isfinite(x[0]) && std::isfinite(x[1]))) {
+      out.finite = false;
+      return out;
+    }
+    if (std::abs(x[0]) > 1.0) {
+      out.diverged = true;
+      return out;
+    }
+    out.samples.push_back({x[0], 0.0, 0.0});
+    out.energy.push_back(energy(x));
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<StudyCase> ode_cases(bool short_suite) {
@@ -346,6 +459,49 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
     return joint_with_friction(scheme, h, variant, friction_shape);
   };
   cases.push_back(std::move(friction));
+
+  StudyCase laws;
+  laws.name = "sampled_wall_laws";
+  laws.title = "A wall rendered at tick period T by each impedance law (001's device, K 1e3 N/m, B 1 N·s/m)";
+  laws.source = "000 eqs. 8.9-8.16 (backward difference, exact ZOH), Tustin; the device's motion exact between ticks";
+  laws.observable = "tool position x, m";
+  laws.group = "impedance";
+  laws.duration_s = duration;
+  laws.output_period_s = 0.01;
+  laws.schemes = {Scheme::kExactZoh};
+  laws.steps_s = steps;  // here: the tick period T
+  laws.variants = {"velocity", "backward_difference", "exact_zoh", "tustin"};
+  const StudyCase laws_shape = laws;
+  laws.simulate = [laws_shape](Scheme scheme, double period, const std::string& law) {
+    return sampled_wall(scheme, period, law, laws_shape);
+  };
+  LinearOscillator continuous;  // m ẍ + (b + B) ẋ + K x = 0
+  continuous.mass = kDeviceMass;
+  continuous.damping = kDeviceDamping + kWallB;
+  continuous.stiffness = kWallK;
+  continuous.x0 = -0.005;
+  laws.exact = [continuous, laws_shape] { return exact_solution(continuous, laws_shape); };
+  cases.push_back(std::move(laws));
+
+  StudyCase khatib;
+  khatib.name = "khatib_field";
+  khatib.title = "Khatib's potential field against a 0.5 N push: gradient analytic or by central differences";
+  khatib.source = "004 eq. 5.7 (U = (1/n) K (1/f - 1/f0)^n; central differences, its second equation)";
+  khatib.observable = "tool height z, m";
+  khatib.group = "fields";
+  khatib.duration_s = duration;
+  khatib.output_period_s = 0.01;
+  khatib.schemes.assign(std::begin(kIntegratorSchemes), std::end(kIntegratorSchemes));
+  khatib.steps_s = short_suite ? std::vector<double>{1e-5, 1e-4, 1e-3} : std::vector<double>{1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3};
+  khatib.variants = {"analytic", "central_1e-6", "central_1e-3"};
+  khatib.reference_scheme = Scheme::kRk4;
+  khatib.reference_step_s = short_suite ? 2e-6 : 1e-6;
+  khatib.conservative = true;
+  const StudyCase khatib_shape = khatib;
+  khatib.simulate = [khatib_shape](Scheme scheme, double h, const std::string& variant) {
+    return khatib_bounce(scheme, h, variant, khatib_shape);
+  };
+  cases.push_back(std::move(khatib));
   return cases;
 }
 

@@ -212,3 +212,39 @@ TEST(StudyReport, SummaryGivesTheLargestStableStepAndTheCheapestAccurateRun) {
 
 }  // namespace
 }  // namespace haptic::lab
+
+namespace haptic::lab {
+namespace {
+
+TEST(StudyOdeCases, ImpedanceLawsAtTheTickPeriodAreFirstOrderAndFailAtCoarseRates) {
+  const StudyReport report = run_one(find_case("sampled_wall_laws"), {1e-5, 1e-4, 1e-3, 1e-2});
+  for (const std::string law : {"velocity", "backward_difference", "exact_zoh", "tustin"}) {
+    const double fine = row(report, Scheme::kExactZoh, 1e-5, law).error;
+    const double coarse = row(report, Scheme::kExactZoh, 1e-4, law).error;
+    EXPECT_NEAR(coarse / fine, 10.0, 1.0) << law;  // the held force lags by T/2: first order in T
+    EXPECT_TRUE(row(report, Scheme::kExactZoh, 1e-3, law).stable) << law;
+    EXPECT_FALSE(row(report, Scheme::kExactZoh, 1e-2, law).stable) << law;  // ωT = 3.2
+  }
+  // The ZOH takes away damping (≈ K T / 2 = 0.5 of the 1.022 N·s/m at 1 ms), so the rendered wall
+  // rings longer than the continuous one: a large trajectory error while still stable.
+  EXPECT_GT(row(report, Scheme::kExactZoh, 1e-3, "backward_difference").relative_error, 0.1);
+}
+
+TEST(StudyOdeCases, KhatibFieldGradientByCentralDifferencesHasItsOwnErrorFloor) {
+  const StudyReport report = run_one(find_case("khatib_field"), {1e-5, 1e-4}, {Scheme::kRk4, Scheme::kTrapezoidal});
+  // Analytic gradient: RK4 converges far below either difference step's floor.
+  EXPECT_LT(row(report, Scheme::kRk4, 1e-5, "analytic").relative_error, 1e-8);
+  // Step 1e-6 m: rounding (ε U / h) leaves ≈ 2.5e-7 of the motion; step 1e-3 m: the O(h²) error of
+  // eq. 5.7's differences near the surface, ≈ 20 %, whatever the time step.
+  const double fine_floor = row(report, Scheme::kRk4, 1e-5, "central_1e-6").relative_error;
+  EXPECT_GT(fine_floor, 1e-8);
+  EXPECT_LT(fine_floor, 1e-4);
+  EXPECT_GT(row(report, Scheme::kRk4, 1e-5, "central_1e-3").relative_error, 0.05);
+  EXPECT_NEAR(row(report, Scheme::kRk4, 1e-4, "central_1e-3").error, row(report, Scheme::kRk4, 1e-5, "central_1e-3").error,
+              1e-3 * row(report, Scheme::kRk4, 1e-5, "central_1e-3").error);
+  // Nothing dissipates: the trapezoidal rule keeps the energy to 1e-6 at 1e-4 s.
+  EXPECT_LT(std::abs(row(report, Scheme::kTrapezoidal, 1e-4, "analytic").energy_drift), 1e-6);
+}
+
+}  // namespace
+}  // namespace haptic::lab
