@@ -14,7 +14,7 @@ void require(bool ok, const std::string& message) {
 }  // namespace
 
 TransparencyReport transparency_study(const engine::WallDesignParams& p, double lo, double hi,
-                                      int points) {
+                                      int points, double widen_limit) {
   require(std::isfinite(p.mass) && p.mass > 0.0, "mass: must be finite and > 0");
   require(std::isfinite(p.damping) && p.damping >= 0.0, "damping: must be finite and >= 0");
   require(std::isfinite(p.wall_stiffness) && p.wall_stiffness > 0.0, "stiffness: must be finite and > 0");
@@ -25,11 +25,27 @@ TransparencyReport transparency_study(const engine::WallDesignParams& p, double 
   require(p.damping_uncertainty >= 0.0 && p.damping_uncertainty < 1.0, "beta: must be in [0, 1)");
   require(lo > 0.0 && hi > lo && points >= 2, "sweep: needs 0 < lo < hi and at least 2 points");
   TransparencyReport report;
+  const double points_per_decade = (points - 1) / std::log10(hi / lo);
+  report.optimum = engine::optimise_controller_damping(p, lo, hi);
+  auto at_edge = [&] { return report.optimum.controller_damping >= hi * (1.0 - 1e-3); };
+  while (at_edge() && hi * 10.0 <= widen_limit) {
+    hi *= 10.0;
+    points += static_cast<int>(std::lround(points_per_decade));
+    report.optimum = engine::optimise_controller_damping(p, lo, hi);
+  }
+  report.swept_to = hi;
+  report.optimum_at_edge = at_edge();
   for (int i = 0; i < points; ++i) {
     const double B_c = lo * std::pow(hi / lo, static_cast<double>(i) / (points - 1));
     report.sweep.push_back({B_c, engine::transparency_index(p, B_c), engine::robust_stability_norm(p, B_c)});
   }
-  report.optimum = engine::optimise_controller_damping(p, lo, hi);
+  if (!report.optimum.robustly_stable) {
+    for (const TransparencyPoint& point : report.sweep) {
+      if (point.robust_norm <= 1.0 && (!report.best_robust || point.transparency_index < report.best_robust->transparency_index)) {
+        report.best_robust = point;
+      }
+    }
+  }
   return report;
 }
 
@@ -53,7 +69,19 @@ void write_markdown(const engine::WallDesignParams& p, const TransparencyReport&
       << ", ‖L‖∞ = " << engine::to_db(o.robust_stability_norm) << " dB — "
       << (o.robustly_stable ? "robustly stable" : (o.nominal_loop_stable ? "NOT robustly stable"
                                                                         : "nominal loop UNSTABLE"))
-      << ".\n\n| B_c [N·s/m] | J | ‖L‖∞ [dB] | robust |\n|---|---|---|---|\n";
+      << ".\n\n";
+  if (report.best_robust) {
+    out << "Best robustly stable B_c on the sweep: " << report.best_robust->controller_damping
+        << " N·s/m (J = " << report.best_robust->transparency_index
+        << ", ‖L‖∞ = " << engine::to_db(report.best_robust->robust_norm) << " dB).\n\n";
+  } else if (!o.robustly_stable) {
+    out << "No swept B_c is robustly stable.\n\n";
+  }
+  if (report.optimum_at_edge) {
+    out << "The optimum is at the sweep's upper end (" << report.swept_to
+        << " N·s/m): J still falls beyond it.\n\n";
+  }
+  out << "| B_c [N·s/m] | J | ‖L‖∞ [dB] | robust |\n|---|---|---|---|\n";
   for (const TransparencyPoint& point : report.sweep) {
     out << "| " << point.controller_damping << " | " << point.transparency_index << " | "
         << engine::to_db(point.robust_norm) << " | " << (point.robust_norm <= 1.0 ? "yes" : "no") << " |\n";

@@ -3,6 +3,7 @@
 // index J(B_c) (eq. 11) and the robust-stability norm ‖L‖∞(B_c) (eq. 17) over a log sweep of the
 // controller damping B_c, the optimum, and the robust-stability verdict.
 
+#include <optional>
 #include <ostream>
 #include <vector>
 
@@ -19,12 +20,21 @@ struct TransparencyPoint {
 struct TransparencyReport {
   std::vector<TransparencyPoint> sweep;
   engine::OptimalWallDesign optimum;
+  double swept_to = 0.0;        // The sweep's upper end after any widening. Unit: N·s/m.
+  bool optimum_at_edge = false; // The optimum is still at that end (J falls beyond it).
+  /// Where the J-optimal B_c is not robustly stable: the sweep point with the smallest J among
+  /// those that are (eq. 17), the design Eom et al.'s recursive method settles on, to the grid's
+  /// resolution. Empty when the optimum is robust or no swept point is.
+  std::optional<TransparencyPoint> best_robust;
 };
 
-/// Sweeps B_c over [lo, hi] at `points` log-spaced values and finds the optimum. Throws
-/// std::invalid_argument naming a bad parameter.
+/// Sweeps B_c over [lo, hi] at `points` log-spaced values per decade-and-a-bit (41 over the
+/// default three decades) and finds the optimum. A heavily damped device (000's motor, 003's
+/// five-bar) has its optimum above 100 N·s/m: while the optimum lands on the sweep's upper end,
+/// the upper end is raised tenfold, up to `widen_limit`. Throws std::invalid_argument naming a
+/// bad parameter.
 TransparencyReport transparency_study(const engine::WallDesignParams& params, double lo = 0.1,
-                                      double hi = 100.0, int points = 41);
+                                      double hi = 100.0, int points = 41, double widen_limit = 1e5);
 
 /// The sweep as CSV: controller_damping_n_s_m, transparency_index, robust_norm, robust_norm_db.
 void write_csv(const TransparencyReport& report, std::ostream& out);

@@ -16,6 +16,7 @@ TEST(LabTransparency, TheSweepHasAnInteriorMinimumAtTheOptimumWhichIsRobust_Eq11
   ASSERT_EQ(report.sweep.size(), 41u);
   EXPECT_NEAR(report.optimum.controller_damping, 15.46, 0.01);
   EXPECT_TRUE(report.optimum.robustly_stable);
+  EXPECT_FALSE(report.best_robust.has_value());  // the optimum itself is robust
   const auto best = std::min_element(report.sweep.begin(), report.sweep.end(),
                                      [](const TransparencyPoint& a, const TransparencyPoint& b) {
                                        return a.transparency_index < b.transparency_index;
@@ -34,6 +35,32 @@ TEST(LabTransparency, TheSweepHasAnInteriorMinimumAtTheOptimumWhichIsRobust_Eq11
   write_markdown(params, report, markdown);
   EXPECT_EQ(csv.str().rfind("controller_damping_n_s_m,transparency_index,robust_norm,robust_norm_db\n", 0), 0u);
   EXPECT_NE(markdown.str().find("robustly stable"), std::string::npos);
+}
+
+TEST(LabTransparency, AHeavilyDampedDeviceWidensTheSweepUntilTheOptimumIsInside) {
+  engine::WallDesignParams params;  // 000's DC motor as haptic-lab's --device model gives it
+  params.mass = 0.1076;
+  params.damping = 7.868;
+  const TransparencyReport report = transparency_study(params);
+  EXPECT_GT(report.swept_to, 100.0);  // the default [0.1, 100] ends below the optimum
+  EXPECT_FALSE(report.optimum_at_edge);
+  EXPECT_GT(report.optimum.controller_damping, 100.0);
+  EXPECT_LT(report.optimum.controller_damping, 0.999 * report.swept_to);
+  EXPECT_NEAR(report.sweep.back().controller_damping, report.swept_to, 1e-9 * report.swept_to);
+  // There J's optimum is not robustly stable (eq. 17); the best swept B_c that is, is reported.
+  ASSERT_FALSE(report.optimum.robustly_stable);
+  ASSERT_TRUE(report.best_robust.has_value());
+  EXPECT_LE(report.best_robust->robust_norm, 1.0);
+  EXPECT_GT(report.best_robust->transparency_index, report.optimum.transparency_index);
+  for (const TransparencyPoint& point : report.sweep) {
+    if (point.robust_norm <= 1.0) EXPECT_GE(point.transparency_index, report.best_robust->transparency_index);
+  }
+  // Narrowing the widening limit leaves it at the edge, and the report says so.
+  const TransparencyReport capped = transparency_study(params, 0.1, 100.0, 41, 100.0);
+  EXPECT_TRUE(capped.optimum_at_edge);
+  std::ostringstream markdown;
+  write_markdown(params, capped, markdown);
+  EXPECT_NE(markdown.str().find("at the sweep's upper end (100 N·s/m)"), std::string::npos) << markdown.str();
 }
 
 TEST(LabTransparency, BadParametersAreRefusedNamingThem) {
