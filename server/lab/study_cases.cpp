@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 #include <string>
 
 #include "engine/core/integrator.hpp"
@@ -99,6 +100,34 @@ std::size_t output_count(const StudyCase& c) {
   return static_cast<std::size_t>(std::llround(c.duration_s / c.output_period_s)) + 1;
 }
 
+/// The sampling loop every ODE case shares: `advance(step_index)` takes one step of h, `observe()`
+/// returns the observable and the energy now, recorded at t = 0 and every output period. Stops on
+/// the first non-finite sample (finite = false) or the first beyond ±bound (diverged = true).
+template <typename Advance, typename Observe>
+Trajectory sample_run(const StudyCase& c, double h, double bound, Advance&& advance, Observe&& observe) {
+  const auto steps_per_output = static_cast<std::int64_t>(std::llround(c.output_period_s / h));
+  const std::size_t n = output_count(c);
+  Trajectory out;
+  out.samples.reserve(n);
+  out.energy.reserve(n);
+  std::int64_t step = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    for (std::int64_t i = 0; k > 0 && i < steps_per_output; ++i) advance(step++);
+    const auto [value, energy] = observe();
+    if (!(std::isfinite(value) && std::isfinite(energy))) {
+      out.finite = false;
+      return out;
+    }
+    if (std::abs(value) > bound) {
+      out.diverged = true;
+      return out;
+    }
+    out.samples.push_back({value, 0.0, 0.0});
+    out.energy.push_back(energy);
+  }
+  return out;
+}
+
 Trajectory exact_solution(const LinearOscillator& o, const StudyCase& c) {
   Trajectory out;
   double x = o.x0, v = o.v0;
@@ -128,53 +157,38 @@ Trajectory exact_solution(const LinearOscillator& o, const StudyCase& c) {
 /// device's D/A holds it), sampling every output period.
 Trajectory integrate(const LinearOscillator& o, const StudyCase& c, Scheme scheme, double h) {
   if (!(std::isfinite(h) && h > 0.0)) throw std::invalid_argument(c.name + ": step must be > 0 s");
-  const auto steps_per_output = static_cast<std::int64_t>(std::llround(c.output_period_s / h));
-  const std::size_t n = output_count(c);
-  const double bound = bound_of(o);
   engine::ForceGuard guard({1e9, 0.0});  // only its fault check matters here
   engine::StateVector<2> x{o.x0, o.v0};
   const std::array<std::array<double, 2>, 2> a{{{0.0, 1.0}, {-o.stiffness / o.mass, -o.damping / o.mass}}};
   const ZohStep<2> zoh = exact_zoh<2>(a, {0.0, 1.0 / o.mass}, h);
-  Trajectory out;
-  out.samples.reserve(n);
-  out.energy.reserve(n);
-  out.samples.push_back({x[0], 0.0, 0.0});
-  out.energy.push_back(o.energy(x[0], x[1], o.force(0.0)));
-  std::int64_t step = 0;
-  for (std::size_t k = 1; k < n; ++k) {
-    for (std::int64_t i = 0; i < steps_per_output; ++i, ++step) {
-      // The force held over this step (a hair past its start, so a step that begins exactly on
-      // the force's switching time sees the new value despite rounding in step · h).
-      const double t = (static_cast<double>(step) + 1e-6) * h;
-      double f = o.force(t);
-      if (o.guarded) {
-        const engine::GuardedForce g = guard.apply({f, 0.0, 0.0}, h);
-        if (g.fault) ++out.fault_ticks;
-        f = g.F_T_W.x;
-      }
-      if (scheme == Scheme::kExactZoh) {
-        const double q = x[0], qd = x[1];
-        x[0] = zoh.phi[0][0] * q + zoh.phi[0][1] * qd + zoh.gamma[0] * f;
-        x[1] = zoh.phi[1][0] * q + zoh.phi[1][1] * qd + zoh.gamma[1] * f;
-      } else {
-        engine::integrate_step<1>(*as_integrator(scheme), x, h, [&](const engine::StateVector<2>& s) {
-          return engine::StateVector<2>{s[1], (f - o.stiffness * s[0] - o.damping * s[1]) / o.mass};
-        });
-      }
+  std::uint64_t fault_ticks = 0;
+  double t_now = 0.0;
+  auto advance = [&](std::int64_t step) {
+    // The force held over this step (a hair past its start, so a step that begins exactly on
+    // the force's switching time sees the new value despite rounding in step · h).
+    double f = o.force((static_cast<double>(step) + 1e-6) * h);
+    if (o.guarded) {
+      const engine::GuardedForce g = guard.apply({f, 0.0, 0.0}, h);
+      if (g.fault) ++fault_ticks;
+      f = g.F_T_W.x;
     }
-    if (!(std::isfinite(x[0]) && std::isfinite(x[1]))) {
-      out.finite = false;
-      return out;
+    if (scheme == Scheme::kExactZoh) {
+      const double q = x[0], qd = x[1];
+      x[0] = zoh.phi[0][0] * q + zoh.phi[0][1] * qd + zoh.gamma[0] * f;
+      x[1] = zoh.phi[1][0] * q + zoh.phi[1][1] * qd + zoh.gamma[1] * f;
+    } else {
+      engine::integrate_step<1>(*as_integrator(scheme), x, h, [&](const engine::StateVector<2>& s) {
+        return engine::StateVector<2>{s[1], (f - o.stiffness * s[0] - o.damping * s[1]) / o.mass};
+      });
     }
-    if (std::abs(x[0]) > bound) {
-      out.diverged = true;
-      return out;
-    }
-    const double t = static_cast<double>(k) * c.output_period_s;
-    out.samples.push_back({x[0], 0.0, 0.0});
-    const double f_now = o.force(t);
-    out.energy.push_back(o.energy(x[0], x[1], std::isfinite(f_now) ? f_now : 0.0));
-  }
+    t_now = static_cast<double>(step + 1) * h;
+  };
+  auto observe = [&] {
+    const double f_now = o.force(t_now);
+    return std::pair{x[0], o.energy(x[0], x[1], std::isfinite(f_now) ? f_now : 0.0)};
+  };
+  Trajectory out = sample_run(c, h, bound_of(o), advance, observe);
+  out.fault_ticks = fault_ticks;
   return out;
 }
 
@@ -211,41 +225,25 @@ Trajectory joint_with_friction(Scheme scheme, double h, const std::string& varia
   const engine::CoulombViscousFriction smooth{kCoulomb, kDamping, 0.03};
   const auto integrator = as_integrator(scheme);
   if (!integrator) throw std::invalid_argument(c.name + ": exact_zoh does not apply (friction is not linear)");
-  const auto steps_per_output = static_cast<std::int64_t>(std::llround(c.output_period_s / h));
-  const std::size_t n = output_count(c);
   engine::StateVector<2> x{0.01, 0.0};  // q (rad), q̇ (rad/s): 10 mrad outside the wall
-  Trajectory out;
-  out.samples.push_back({x[0], 0.0, 0.0});
-  out.energy.push_back(0.5 * kInertia * x[1] * x[1]);
-  std::int64_t step = 0;
-  for (std::size_t k = 1; k < n; ++k) {
-    for (std::int64_t i = 0; i < steps_per_output; ++i, ++step) {
-      const double t = static_cast<double>(step) * h;
-      const double hand = 0.5 * std::sin(2.0 * 3.14159265358979323846 * 2.0 * t) - 0.2;  // N·m, held
-      engine::integrate_step<1>(*integrator, x, h, [&](const engine::StateVector<2>& s) {
-        const double wall = s[0] < 0.0 ? -kWallStiffness * s[0] - kWallDamping * s[1] : 0.0;
-        const double applied = hand + wall;
-        double friction = kDamping * s[1];
-        if (variant == "karnopp") friction = karnopp.resisting(s[1], applied);
-        if (variant == "smooth") friction = smooth.smooth(s[1]);
-        return engine::StateVector<2>{s[1], (applied - friction) / kInertia};
-      });
-    }
-    if (!(std::isfinite(x[0]) && std::isfinite(x[1]))) {
-      out.finite = false;
-      return out;
-    }
-    if (std::abs(x[0]) > 10.0) {
-      out.diverged = true;
-      return out;
-    }
-    out.samples.push_back({x[0], 0.0, 0.0});
+  auto advance = [&](std::int64_t step) {
+    const double t = static_cast<double>(step) * h;
+    const double hand = 0.5 * std::sin(2.0 * 3.14159265358979323846 * 2.0 * t) - 0.2;  // N·m, held
+    engine::integrate_step<1>(*integrator, x, h, [&](const engine::StateVector<2>& s) {
+      const double wall = s[0] < 0.0 ? -kWallStiffness * s[0] - kWallDamping * s[1] : 0.0;
+      const double applied = hand + wall;
+      double friction = kDamping * s[1];
+      if (variant == "karnopp") friction = karnopp.resisting(s[1], applied);
+      if (variant == "smooth") friction = smooth.smooth(s[1]);
+      return engine::StateVector<2>{s[1], (applied - friction) / kInertia};
+    });
+  };
+  auto observe = [&] {
     const double wall_energy = x[0] < 0.0 ? 0.5 * kWallStiffness * x[0] * x[0] : 0.0;
-    out.energy.push_back(0.5 * kInertia * x[1] * x[1] + wall_energy);
-  }
-  return out;
+    return std::pair{x[0], 0.5 * kInertia * x[1] * x[1] + wall_energy};
+  };
+  return sample_run(c, h, 10.0, advance, observe);
 }
-
 
 // --- A wall rendered by the loop: each impedance law at each tick period ---------------------
 
@@ -273,33 +271,16 @@ Trajectory sampled_wall(Scheme scheme, double period, const std::string& law, co
   filter.reset(-x0, 0.0);
   const ZohStep<2> device = exact_zoh<2>({{{0.0, 1.0}, {0.0, -kDeviceDamping / kDeviceMass}}},
                                          {0.0, 1.0 / kDeviceMass}, period);
-  const auto ticks_per_output = static_cast<std::int64_t>(std::llround(c.output_period_s / period));
-  const std::size_t n = output_count(c);
   double x = x0, v = 0.0;
-  Trajectory out;
-  auto energy = [&] { return 0.5 * kDeviceMass * v * v + 0.5 * kWallK * x * x; };
-  out.samples.push_back({x, 0.0, 0.0});
-  out.energy.push_back(energy());
-  for (std::size_t k = 1; k < n; ++k) {
-    for (std::int64_t i = 0; i < ticks_per_output; ++i) {
-      const double d = -x;  // penetration, m (> 0 inside)
-      const double f = law == "velocity" ? kWallK * d - kWallB * v : filter.update(d);  // N, along +x
-      const double q = x, qd = v;
-      x = device.phi[0][0] * q + device.phi[0][1] * qd + device.gamma[0] * f;
-      v = device.phi[1][0] * q + device.phi[1][1] * qd + device.gamma[1] * f;
-    }
-    if (!(std::isfinite(x) && std::isfinite(v))) {
-      out.finite = false;
-      return out;
-    }
-    if (std::abs(x) > 5.0) {
-      out.diverged = true;
-      return out;
-    }
-    out.samples.push_back({x, 0.0, 0.0});
-    out.energy.push_back(energy());
-  }
-  return out;
+  auto advance = [&](std::int64_t) {
+    const double d = -x;  // penetration, m (> 0 inside)
+    const double f = law == "velocity" ? kWallK * d - kWallB * v : filter.update(d);  // N, along +x
+    const double q = x, qd = v;
+    x = device.phi[0][0] * q + device.phi[0][1] * qd + device.gamma[0] * f;
+    v = device.phi[1][0] * q + device.phi[1][1] * qd + device.gamma[1] * f;
+  };
+  auto observe = [&] { return std::pair{x, 0.5 * kDeviceMass * v * v + 0.5 * kWallK * x * x}; };
+  return sample_run(c, period, 5.0, advance, observe);
 }
 
 // --- A potential field: the gradient analytic or by central differences ----------------------
@@ -326,34 +307,18 @@ Trajectory khatib_bounce(Scheme scheme, double h, const std::string& variant, co
     throw std::invalid_argument(c.name + ": unknown gradient variant \"" + variant + "\"");
   }
   constexpr double kMass = 0.01, kPush = -0.5;  // kg; N along z
-  const auto steps_per_output = static_cast<std::int64_t>(std::llround(c.output_period_s / h));
-  const std::size_t n = output_count(c);
   engine::StateVector<2> x{0.015, 0.0};  // z (m), ż (m/s)
-  auto energy = [&](const engine::StateVector<2>& s) {
-    return 0.5 * kMass * s[1] * s[1] + engine::evaluate_field(field, {0.0, 0.0, s[0]}, {}).U - kPush * s[0];
+  auto advance = [&](std::int64_t) {
+    engine::integrate_step<1>(*integrator, x, h, [&](const engine::StateVector<2>& s) {
+      const double fz = engine::evaluate_field(field, {0.0, 0.0, s[0]}, {0.0, 0.0, s[1]}).F_T_W.z;
+      return engine::StateVector<2>{s[1], (fz + kPush) / kMass};
+    });
   };
-  Trajectory out;
-  out.samples.push_back({x[0], 0.0, 0.0});
-  out.energy.push_back(energy(x));
-  for (std::size_t k = 1; k < n; ++k) {
-    for (std::int64_t i = 0; i < steps_per_output; ++i) {
-      engine::integrate_step<1>(*integrator, x, h, [&](const engine::StateVector<2>& s) {
-        const double fz = engine::evaluate_field(field, {0.0, 0.0, s[0]}, {0.0, 0.0, s[1]}).F_T_W.z;
-        return engine::StateVector<2>{s[1], (fz + kPush) / kMass};
-      });
-    }
-    if (!(std::isfinite(x[0]) && std::isfinite(x[1]))) {
-      out.finite = false;
-      return out;
-    }
-    if (std::abs(x[0]) > 1.0) {
-      out.diverged = true;
-      return out;
-    }
-    out.samples.push_back({x[0], 0.0, 0.0});
-    out.energy.push_back(energy(x));
-  }
-  return out;
+  auto observe = [&] {
+    const double U = engine::evaluate_field(field, {0.0, 0.0, x[0]}, {}).U;
+    return std::pair{x[0], 0.5 * kMass * x[1] * x[1] + U - kPush * x[0]};
+  };
+  return sample_run(c, h, 1.0, advance, observe);
 }
 
 }  // namespace
