@@ -192,16 +192,25 @@ Trajectory integrate(const LinearOscillator& o, const StudyCase& c, Scheme schem
   return out;
 }
 
-/// A case for one oscillator: every scheme (exact ZOH included), the closed form as reference.
-StudyCase oscillator_case(std::string name, std::string title, std::string source, const LinearOscillator& o,
-                          double duration_s, const std::vector<double>& steps) {
+/// A case's description (what the report and the charts print), sampled every 10 ms.
+StudyCase describe(std::string name, std::string title, std::string source, std::string observable,
+                   std::string group, double duration_s) {
   StudyCase c;
   c.name = std::move(name);
   c.title = std::move(title);
   c.source = std::move(source);
-  c.observable = "tool position x, m";
+  c.observable = std::move(observable);
+  c.group = std::move(group);
   c.duration_s = duration_s;
   c.output_period_s = 0.01;
+  return c;
+}
+
+/// A case for one oscillator: every scheme (exact ZOH included), the closed form as reference.
+StudyCase oscillator_case(std::string name, std::string title, std::string source, const LinearOscillator& o,
+                          double duration_s, const std::vector<double>& steps) {
+  StudyCase c = describe(std::move(name), std::move(title), std::move(source), "tool position x, m",
+                         "schemes", duration_s);
   c.schemes.assign(std::begin(kAllSchemes), std::end(kAllSchemes));
   c.steps_s = steps;
   c.conservative = o.damping == 0.0 && o.force_before == 0.0 && o.force_after == 0.0;
@@ -406,14 +415,10 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
         "extreme case; the guard is engine::ForceGuard, the loop's last stage", poisoned, duration, steps));
   }
 
-  StudyCase friction;
-  friction.name = "joint_friction_models";
-  friction.title = "003 axial joint against a 400 N·m/rad wall: friction models";
-  friction.source = "003 Table 5.4 (axial J, B, f), L2869 (K_p 400), L3211 (smooth model, v0 0.03 rad/s)";
-  friction.observable = "joint angle q, rad";
-  friction.group = "fidelity";
-  friction.duration_s = duration;
-  friction.output_period_s = 0.01;
+  StudyCase friction = describe("joint_friction_models",
+      "003 axial joint against a 400 N·m/rad wall: friction models",
+      "003 Table 5.4 (axial J, B, f), L2869 (K_p 400), L3211 (smooth model, v0 0.03 rad/s)",
+      "joint angle q, rad", "fidelity", duration);
   friction.schemes = {Scheme::kSemiImplicitEuler, Scheme::kRk4, Scheme::kImplicitEuler};
   friction.steps_s = short_suite ? std::vector<double>{1e-5, 1e-4, 1e-3} : std::vector<double>{1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3};
   friction.variants = {"karnopp", "smooth", "viscous_only"};
@@ -425,14 +430,10 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
   };
   cases.push_back(std::move(friction));
 
-  StudyCase laws;
-  laws.name = "sampled_wall_laws";
-  laws.title = "A wall rendered at tick period T by each impedance law (001's device, K 1e3 N/m, B 1 N·s/m)";
-  laws.source = "000 eqs. 8.9-8.16 (backward difference, exact ZOH), Tustin; the device's motion exact between ticks";
-  laws.observable = "tool position x, m";
-  laws.group = "impedance";
-  laws.duration_s = duration;
-  laws.output_period_s = 0.01;
+  StudyCase laws = describe("sampled_wall_laws",
+      "A wall rendered at tick period T by each impedance law (001's device, K 1e3 N/m, B 1 N·s/m)",
+      "000 eqs. 8.9-8.16 (backward difference, exact ZOH), Tustin; the device's motion exact between ticks",
+      "tool position x, m", "impedance", duration);
   laws.schemes = {Scheme::kExactZoh};
   laws.steps_s = steps;  // here: the tick period T
   laws.variants = {"velocity", "backward_difference", "exact_zoh", "tustin"};
@@ -448,14 +449,10 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
   laws.exact = [continuous, laws_shape] { return exact_solution(continuous, laws_shape); };
   cases.push_back(std::move(laws));
 
-  StudyCase khatib;
-  khatib.name = "khatib_field";
-  khatib.title = "Khatib's potential field against a 0.5 N push: gradient analytic or by central differences";
-  khatib.source = "004 eq. 5.7 (U = (1/n) K (1/f - 1/f0)^n; central differences, its second equation)";
-  khatib.observable = "tool height z, m";
-  khatib.group = "fields";
-  khatib.duration_s = duration;
-  khatib.output_period_s = 0.01;
+  StudyCase khatib = describe("khatib_field",
+      "Khatib's potential field against a 0.5 N push: gradient analytic or by central differences",
+      "004 eq. 5.7 (U = (1/n) K (1/f - 1/f0)^n; central differences, its second equation)",
+      "tool height z, m", "fields", duration);
   khatib.schemes.assign(std::begin(kIntegratorSchemes), std::end(kIntegratorSchemes));
   khatib.steps_s = short_suite ? std::vector<double>{1e-5, 1e-4, 1e-3} : std::vector<double>{1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3};
   khatib.variants = {"analytic", "central_1e-6", "central_1e-3"};
