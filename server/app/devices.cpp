@@ -379,4 +379,30 @@ std::vector<runtime::TickPort> tick_ports(const v1::ServerConfig& config,
   return ports;
 }
 
+DesignDevice scene_design_device(const std::vector<SimulatedDevice>& devices) {
+  DesignDevice design;
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    const runtime::DeviceDescription& d = devices[i].device->description();
+    if (!(d.apparent_mass > 0.0)) {  // one unknown: all unknown
+      DesignDevice unknown;
+      if (devices.size() > 1) {
+        unknown.unknown_reason = "port " + std::to_string(i) + "'s device (" + d.name +
+                                 ") does not, and objects are designed for every port";
+      }
+      return unknown;
+    }
+    const bool weaker = design.port < 0 || d.apparent_damping < design.damping ||
+                        (d.apparent_damping == design.damping && d.apparent_mass < design.mass);
+    if (weaker) {
+      design.mass = d.apparent_mass;
+      design.damping = d.apparent_damping;
+      design.port = static_cast<int>(i);
+      design.name = "port " + std::to_string(i) + "'s device (" + d.name + ")";
+      design.unknown_reason = devices.size() > 1 ? design.name + " does not, and objects are designed for every port"
+                                                 : "this one does not";
+    }
+  }
+  return design;
+}
+
 }  // namespace haptic::app

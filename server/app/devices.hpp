@@ -58,6 +58,23 @@ SimulatedDevice make_device(const v1::ServerConfig& config);
 /// Every device port's device, port 0 first, then extra_devices in order.
 std::vector<SimulatedDevice> make_devices(const v1::ServerConfig& config);
 
+/// The device model the scene's objects are designed and validated for (virtual coupling gains,
+/// transparency-optimal damping, the net layer's SceneLimits) when several ports render one scene:
+/// the least damped, then the lightest, of them, so that a design that holds for it holds on every
+/// port (Colgate's bound b > K T/2 + |B| only gets easier with more device damping). If any port's
+/// device gives no mass-damper model (apparent_mass 0), none is known (all 0) and the designs
+/// that need one are refused, naming the reason.
+struct DesignDevice {
+  double mass = 0.0;     // Unit: kg. 0: unknown.
+  double damping = 0.0;  // Unit: N*s/m.
+  int port = -1;         // The port whose device it is; -1 when unknown.
+  std::string name;      // "port 1's device (<its description name>)"; "" when unknown.
+  /// Why a design that needs the model cannot have it: "this one does not" for one port,
+  /// "port 2's device (<name>) does not" when another port's device lacks it.
+  std::string unknown_reason = "this one does not";
+};
+DesignDevice scene_design_device(const std::vector<SimulatedDevice>& devices);
+
 /// The loop's view of every port: its device, its sample ring, its force limit and, as the
 /// configuration's `passivity` asks (by default where the device gives its mass), its passivity
 /// controller. rings[i] belongs to devices[i]. Shared by hapticd and haptic-lab.

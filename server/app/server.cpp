@@ -54,7 +54,6 @@ Server::Server(const v1::ServerConfig& config)
   const std::vector<runtime::TickPort> tick_ports =
       app::tick_ports(config, simulated_, ring_pointers(samples_), tick.period_s);
   runner_ = std::make_unique<runtime::TickRunner>(tick_ports, scenes_, counters_, tick);
-  const runtime::DeviceDescription& primary = simulated_.front().device->description();
 
   runtime::LoopConfig loop;
   loop.rate_hz = rate;
@@ -74,8 +73,11 @@ Server::Server(const v1::ServerConfig& config)
   // The initial scene belongs to the server itself (session 0) and never expires.
   net::SceneLimits limits;
   limits.period_s = tick.period_s;
-  limits.device_mass = primary.apparent_mass;  // port 0's: objects are validated once for all ports
-  limits.device_damping = primary.apparent_damping;
+  // Objects are validated once for all ports: against the least damped port's device.
+  const DesignDevice design = scene_design_device(simulated_);
+  limits.device_mass = design.mass;
+  limits.device_damping = design.damping;
+  limits.device_unknown_reason = design.unknown_reason;
   std::vector<engine::ObjectSpec> objects(static_cast<std::size_t>(config.initial_scene().objects_size()));
   for (int i = 0; i < config.initial_scene().objects_size(); ++i) {
     if (auto e = net::to_object_spec(config.initial_scene().objects(i), "initial_scene.objects",

@@ -97,8 +97,10 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   }
   net::SceneLimits limits;
   limits.period_s = period_s;
-  limits.device_mass = devices.front().device->description().apparent_mass;
-  limits.device_damping = devices.front().device->description().apparent_damping;
+  const app::DesignDevice design = app::scene_design_device(devices);  // as hapticd validates
+  limits.device_mass = design.mass;
+  limits.device_damping = design.damping;
+  limits.device_unknown_reason = design.unknown_reason;
   const engine::SceneDescription description = initial_scene(config, limits);
   engine::HandInput hand;
   if (auto e = net::to_hand_input(config.initial_operator(), "initial_operator", limits, hand); !e.empty()) {

@@ -174,8 +174,8 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
       return path + ".impedance.virtual_coupling: not with transparency_optimal_damping";
     }
     if (!(limits.device_damping > 0.0)) {
-      return path + ".impedance.virtual_coupling: needs a device that gives its damping (this one "
-                    "does not)";
+      return path + ".impedance.virtual_coupling: needs a device that gives its damping (" +
+             limits.device_unknown_reason + ")";
     }
     const engine::VirtualCouplingDesign coupling = engine::design_virtual_coupling(
         limits.device_mass > 0.0 ? limits.device_mass : 1.0, limits.device_damping, limits.period_s);
@@ -185,7 +185,7 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
   if (impedance.transparency_optimal_damping()) {
     if (limits.device_mass <= 0.0) {
       return path + ".impedance.transparency_optimal_damping: needs a device that gives its mass "
-                    "and damping (this one does not)";
+                    "and damping (" + limits.device_unknown_reason + ")";
     }
     if (!(impedance.stiffness() > 0.0)) {
       return path + ".impedance.transparency_optimal_damping: needs stiffness > 0";

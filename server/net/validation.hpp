@@ -28,6 +28,9 @@ struct SceneLimits {
   /// The device as a mass-damper at its tool point (DeviceDescription::apparent_*); 0: unknown.
   double device_mass = 0.0;     // Unit: kg.
   double device_damping = 0.0;  // Unit: N*s/m.
+  /// Completes "needs a device that gives its damping (…)" when the model is missing: which
+  /// device lacks it (with several ports, the least damped or the one without a model).
+  std::string device_unknown_reason = "this one does not";
 };
 
 /// Each returns an empty string on success, else "<path>: <what is wrong>". A mesh is validated
