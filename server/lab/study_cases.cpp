@@ -17,6 +17,9 @@
 #include "engine/safety/force_guard.hpp"
 #include "engine/scene/fields.hpp"
 #include "engine/scene/impedance.hpp"
+#include "app/config.hpp"
+#include "lab/lab_run.hpp"
+#include "haptic/wire/datagram.hpp"
 #include "lab/study.hpp"
 
 namespace haptic::lab {
@@ -330,6 +333,60 @@ Trajectory khatib_bounce(Scheme scheme, double h, const std::string& variant, co
   return sample_run(c, h, 1.0, advance, observe);
 }
 
+
+// --- The same rendering through the whole server, at loop rates from 100 Hz to 10 kHz -------
+
+/// 001's device as hapticd's simulated point mass (0.01 kg, 0.022 N·s/m; exact under the held
+/// force) held by a spring-to-point field (K 1e3 N/m, B 1 N·s/m on the measured velocity: the
+/// velocity law) and pushed with a 0.5 N step by the simulated hand, run by simulate_scene —
+/// TickRunner, compiled scene, force guard — at loop rate 1/T with the passivity controller off
+/// (it would act on what is being measured). Reference: the continuous system in closed form.
+/// The configuration is printed in the case's source so that `haptic-lab run` reproduces a run.
+constexpr double kServerSpringK = 1e3, kServerSpringB = 1.0, kServerPush = 0.5, kServerAnchorZ = 0.02;
+
+std::string server_spring_config(double period) {
+  const long rate = std::lround(1.0 / period);
+  return "{\"loop_rate_hz\": " + std::to_string(rate) +
+         ", \"time_mode\": \"LOCKSTEP\", \"real_time\": {\"spin_us\": 10}, \"passivity\": {\"enabled\": false}, "
+         "\"simulated_point_mass\": {\"mass\": 0.01, \"damping\": 0.022, "
+         "\"initial_position\": {\"x\": 0, \"y\": 0, \"z\": 0.02}}, "
+         "\"initial_scene\": {\"fields\": [{\"spring_to_point\": {\"anchor\": {\"x\": 0, \"y\": 0, \"z\": 0.02}, "
+         "\"stiffness\": 1000, \"damping\": 1}}]}, "
+         "\"initial_operator\": {\"mode\": \"APPLY_FORCE\", \"force\": {\"x\": 0, \"y\": 0, \"z\": 0.5}}}";
+}
+
+Trajectory server_spring(Scheme scheme, double period, const StudyCase& c) {
+  if (scheme != Scheme::kExactZoh) {
+    throw std::invalid_argument(c.name + ": the point mass is integrated exactly under the held force; scheme must be exact_zoh");
+  }
+  const long rate = std::lround(1.0 / period);
+  if (rate < 100 || rate > 10000 || std::abs(1.0 / static_cast<double>(rate) - period) > 1e-12 * period) {
+    throw std::invalid_argument(c.name + ": the tick period must be 1/rate for a loop rate of 100 ... 10000 Hz, got " +
+                                std::to_string(period) + " s");
+  }
+  const v1::ServerConfig config = app::parse_config(server_spring_config(period), c.name);
+  const auto ticks_per_output = static_cast<std::uint64_t>(std::llround(c.output_period_s / period));
+  Trajectory out;
+  auto record = [&](const runtime::TickSample& s) {
+    const double x = s.p_WT.z - kServerAnchorZ, v = s.v_WT.z;
+    out.samples.push_back({x, 0.0, 0.0});
+    out.energy.push_back(0.5 * 0.01 * v * v + 0.5 * kServerSpringK * x * x - kServerPush * x);
+  };
+  // The sample of tick k is the state at (k − 1) T; the run covers the duration plus one tick so
+  // that the last output instant is sampled too.
+  simulate_scene(config, c.duration_s + period, [&](const TickRecord& r) {
+    const std::uint64_t index = r.sample.tick - 1;
+    if (!(engine::is_finite(r.sample.p_WT) && engine::is_finite(r.sample.v_WT))) {
+      out.finite = false;
+      return false;
+    }
+    if (index % ticks_per_output == 0 && out.samples.size() < output_count(c)) record(r.sample);
+    if (r.sample.flags & (wire::kFlagForceFault | wire::kFlagDeviceFault)) ++out.fault_ticks;
+    return true;
+  });
+  return out;
+}
+
 }  // namespace
 
 std::vector<StudyCase> ode_cases(bool short_suite) {
@@ -464,6 +521,26 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
     return khatib_bounce(scheme, h, variant, khatib_shape);
   };
   cases.push_back(std::move(khatib));
+
+  StudyCase server = describe("server_spring_rates",
+      "001's device on a spring through the whole server at loop rates 100 Hz ... 10 kHz",
+      "hapticd's point mass, spring_to_point field (K 1e3 N/m, B 1 N·s/m), 0.5 N hand step, passivity "
+      "controller off; the step is the tick period",
+      "tool position z from the anchor, m", "impedance", duration);
+  server.schemes = {Scheme::kExactZoh};
+  server.steps_s = short_suite ? std::vector<double>{1e-4, 1e-3, 1e-2} : std::vector<double>{1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2};
+  const StudyCase server_shape = server;
+  server.simulate = [server_shape](Scheme scheme, double period, const std::string&) {
+    return server_spring(scheme, period, server_shape);
+  };
+  LinearOscillator spring;  // m ẍ + (b + B) ẋ + K x = F
+  spring.mass = kDeviceMass;
+  spring.damping = kDeviceDamping + kServerSpringB;
+  spring.stiffness = kServerSpringK;
+  spring.x0 = 0.0;
+  spring.force_before = spring.force_after = kServerPush;
+  server.exact = [spring, server_shape] { return exact_solution(spring, server_shape); };
+  cases.push_back(std::move(server));
   return cases;
 }
 

@@ -248,3 +248,26 @@ TEST(StudyOdeCases, KhatibFieldGradientByCentralDifferencesHasItsOwnErrorFloor) 
 
 }  // namespace
 }  // namespace haptic::lab
+
+namespace haptic::lab {
+namespace {
+
+TEST(StudyOdeCases, TheWholeServerRendersTheVelocityLawsDifferenceEquationAtEveryRate) {
+  // Both cases are the same linear sampled loop (001's device, K 1e3, B 1 on the measured
+  // velocity, the force held over a tick), one excited by an initial displacement in the lab's
+  // model, the other by a hand step through hapticd's tick: the relative energy error, which
+  // does not depend on the excitation's size, must agree at every tick period.
+  const StudyReport lab = run_one(find_case("sampled_wall_laws"), {1e-4, 1e-3, 1e-2});
+  const StudyReport server = run_one(find_case("server_spring_rates"), {1e-4, 1e-3, 1e-2});
+  for (const double T : {1e-4, 1e-3}) {
+    const StudyResult& s = row(server, Scheme::kExactZoh, T);
+    EXPECT_TRUE(s.stable) << T;
+    EXPECT_NEAR(s.energy_drift, row(lab, Scheme::kExactZoh, T, "velocity").energy_drift, 1e-6 * s.energy_drift) << T;
+  }
+  EXPECT_FALSE(row(server, Scheme::kExactZoh, 1e-2).stable);  // ωT = 3.2: the rendered spring rings up
+  EXPECT_EQ(row(server, Scheme::kExactZoh, 1e-2).note.find("non-finite"), std::string::npos)
+      << "the force guard keeps it finite";
+}
+
+}  // namespace
+}  // namespace haptic::lab
