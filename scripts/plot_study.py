@@ -29,6 +29,9 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+# The same data draws the same bytes (no dates, fixed SVG ids): regenerated charts diff cleanly.
+plt.rcParams["svg.hashsalt"] = "hapticd"
 from matplotlib.lines import Line2D  # noqa: E402
 
 STUDY_COLUMNS = ["case", "group", "variant", "scheme", "step_s", "error", "relative_error",
@@ -254,8 +257,8 @@ def draw_case(ax, case, case_runs, reference, compact=False):
 
 
 def save(fig, path_without_extension):
-    fig.savefig(path_without_extension + ".png", dpi=120)
-    fig.savefig(path_without_extension + ".svg")
+    fig.savefig(path_without_extension + ".png", dpi=120, metadata={"Software": None})
+    fig.savefig(path_without_extension + ".svg", metadata={"Date": None})
     plt.close(fig)
 
 
