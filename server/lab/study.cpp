@@ -231,6 +231,13 @@ void validate_cases(const std::vector<StudyCase>& cases) {
       if (!(std::isfinite(step) && step > 0.0)) {
         throw std::invalid_argument(where + ": step must be finite and > 0 s, got " + format_number(step));
       }
+      if (step < kMinStep) {
+        throw std::invalid_argument(where + ": step " + format_number(step) + " s is below the study's " +
+                                    format_number(kMinStep) + " s");
+      }
+      if (c.check_step) {
+        if (const std::string why = c.check_step(step); !why.empty()) throw std::invalid_argument(where + ": " + why);
+      }
       if (!divides(step, c.output_period_s)) {
         throw std::invalid_argument(where + ": step " + format_number(step) +
                                     " s does not divide the output period " +

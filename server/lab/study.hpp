@@ -80,6 +80,9 @@ struct StudyCase {
   /// own copy of both: change them by building the case anew, not by editing the fields). Must throw std::invalid_argument for a step it cannot take (before any
   /// work) and otherwise return, however the run went.
   std::function<Trajectory(Scheme scheme, double step_s, const std::string& variant)> simulate;
+  /// Optional: "" when the case can take `step_s`, else why not (checked with the other
+  /// validation, before any run; e.g. a device case's step must divide its tick).
+  std::function<std::string(double step_s)> check_step;
   /// The exact solution, where one exists; empty: the reference is `reference_scheme` at
   /// `reference_step_s` (and, to show it has converged, also at twice that step).
   std::function<Trajectory()> exact;
@@ -120,6 +123,9 @@ struct StudyReport {
   std::vector<StudyResult> results;
 };
 
+/// The finest step the study takes: below it a single run of a case would take minutes. Unit: s.
+inline constexpr double kMinStep = 1e-7;
+
 struct StudyOptions {
   unsigned threads = 1;         // Runs in parallel (each run on one thread).
   double min_cpu_s = 0.02;      // Repeat a run until it has used this much CPU, for its timing.
@@ -133,9 +139,9 @@ struct StudyOptions {
 std::vector<StudyCase> ode_cases(bool short_suite);
 std::vector<StudyCase> device_cases(bool short_suite);
 
-/// Checks every case (a name, schemes, steps that are positive, finite and divide the output
-/// period, a duration the output period divides, a simulate function) and throws
-/// std::invalid_argument naming the first problem, before any work.
+/// Checks every case (a name, schemes, steps that are positive, finite, at least kMinStep and
+/// divide the output period, the case's own check_step, a duration the output period divides, a
+/// simulate function) and throws std::invalid_argument naming the first problem, before any work.
 void validate_cases(const std::vector<StudyCase>& cases);
 
 /// Runs the cases (validated first) and returns one row per case × variant × scheme × step.

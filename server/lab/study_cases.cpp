@@ -529,6 +529,13 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
       "tool position z from the anchor, m", "impedance", duration);
   server.schemes = {Scheme::kExactZoh};
   server.steps_s = short_suite ? std::vector<double>{1e-4, 1e-3, 1e-2} : std::vector<double>{1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2};
+  server.check_step = [](double period) -> std::string {
+    const long rate = std::lround(1.0 / period);
+    if (rate < 100 || rate > 10000 || std::abs(1.0 / static_cast<double>(rate) - period) > 1e-12 * period) {
+      return "the step is the tick period, 1/rate for a loop rate of 100 ... 10000 Hz; got " + std::to_string(period) + " s";
+    }
+    return "";
+  };
   const StudyCase server_shape = server;
   server.simulate = [server_shape](Scheme scheme, double period, const std::string&) {
     return server_spring(scheme, period, server_shape);

@@ -251,6 +251,14 @@ StudyCase make_case(DeviceScene scene, std::string title, std::string source, bo
   // 1,000 sub-steps are converged far below the models' differences.
   c.reference_scheme = Scheme::kRk4;
   c.reference_step_s = c.group == "fidelity" ? 1e-6 : 5e-7;
+  c.check_step = [period_s = 1.0 / scene.config.loop_rate_hz(), name = c.name](double step_s) {
+    try {
+      substeps_for(step_s, period_s, name);
+      return std::string();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what()).substr(name.size() + 2);  // validate_cases names the case
+    }
+  };
   c.simulate = [scene = std::move(scene)](Scheme scheme, double step_s, const std::string& variant) {
     return simulate_device(scene, scheme, step_s, variant);
   };

@@ -154,6 +154,11 @@ TEST(StudyRunner, BadCasesAreRefusedBeforeAnyWorkNamingTheCase) {
   expect_refused(bad, "linear_wall\": step must be finite and > 0 s, got -0.001");
   bad.steps_s = {3e-3};
   expect_refused(bad, "step 0.003 s does not divide the output period 0.01 s");
+  bad.steps_s = {1e-8};
+  expect_refused(bad, "step 1e-08 s is below the study's 1e-07 s");
+  bad.steps_s = {1e-3};
+  bad.check_step = [](double) { return std::string("not this one"); };
+  expect_refused(bad, "linear_wall\": not this one");
   bad = c;
   bad.schemes.clear();
   expect_refused(bad, "has no schemes");
