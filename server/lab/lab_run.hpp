@@ -68,6 +68,7 @@ RunSummary simulate_scene(const v1::ServerConfig& config, double duration_s, con
 ///   m/s); the joint cells past the device's joint count are empty. Numbers are written with
 ///   max_digits10 significant digits (they read back to the same double).
 /// Throws std::invalid_argument naming what is wrong before any work starts (nothing written).
-RunSummary run_scene(const v1::ServerConfig& config, double duration_s, std::ostream& trace);
+RunSummary run_scene(const v1::ServerConfig& config, double duration_s, std::ostream& trace,
+                     const std::function<void(std::uint64_t tick, std::uint64_t ticks)>& progress = {});
 
 }  // namespace haptic::lab

@@ -22,6 +22,7 @@
 #include "app/config.hpp"
 #include "lab/device_model.hpp"
 #include "lab/lab_run.hpp"
+#include "lab/progress_bar.hpp"
 #include "lab/study_command.hpp"
 #include "lab/transparency.hpp"
 #include "lab/zwidth.hpp"
@@ -114,7 +115,12 @@ Subcommand add_run(CLI::App& cli) {
               if (!file) throw std::invalid_argument(o->out_path + ": cannot write");
             }
             std::ostream& trace = o->out_path.empty() ? std::cout : file;
-            const haptic::lab::RunSummary summary = haptic::lab::run_scene(config, o->duration_s, trace);
+            // A bar for runs that take a while (over 1,000,000 ticks: ≳ 10 s with the trace).
+            haptic::lab::ProgressBar bar("haptic-lab run", true);
+            const haptic::lab::RunSummary summary = haptic::lab::run_scene(
+                config, o->duration_s, trace, [&bar](std::uint64_t tick, std::uint64_t ticks) {
+                  if (ticks > 1000000) bar.update(tick, ticks);
+                });
             std::cerr << "haptic-lab: " << summary.ticks << " ticks; energy to the device "
                       << summary.energy_to_device << " J, from it " << summary.energy_from_device << " J; "
                       << summary.fault_ticks << " fault ticks; "

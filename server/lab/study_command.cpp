@@ -1,7 +1,5 @@
 #include "lab/study_command.hpp"
 
-#include <unistd.h>
-
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -12,6 +10,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "lab/progress_bar.hpp"
 #include "lab/study.hpp"
 
 namespace haptic::lab {
@@ -64,38 +63,6 @@ std::vector<StudyCase> select_cases(const StudyCommandOptions& options) {
   return chosen;
 }
 
-/// "[=========>          ]  45% 120/260  linear_wall rk4 h=0.001", redrawn in place on a
-/// terminal, one line per tenth otherwise.
-class ProgressBar {
- public:
-  explicit ProgressBar(bool enabled) : enabled_(enabled), terminal_(isatty(STDERR_FILENO) != 0) {}
-
-  void update(std::size_t done, std::size_t total, const std::string& what) {
-    if (!enabled_ || total == 0) return;
-    const int percent = static_cast<int>(100 * done / total);
-    if (!terminal_) {
-      if (percent / 10 > last_tenth_ || done == total) {
-        last_tenth_ = percent / 10;
-        std::fprintf(stderr, "haptic-lab study: %3d%% (%zu/%zu)\n", percent, done, total);
-      }
-      return;
-    }
-    constexpr int kWidth = 30;
-    const int filled = static_cast<int>(kWidth * done / total);
-    std::string bar(static_cast<std::size_t>(filled), '=');
-    if (filled < kWidth) bar += '>';
-    bar.resize(kWidth, ' ');
-    std::fprintf(stderr, "\r[%s] %3d%% %zu/%zu  %-50.50s", bar.c_str(), percent, done, total, what.c_str());
-    if (done == total) std::fprintf(stderr, "\n");
-    std::fflush(stderr);
-  }
-
- private:
-  bool enabled_;
-  bool terminal_;
-  int last_tenth_ = -1;
-};
-
 std::ofstream open_for_writing(const std::filesystem::path& path) {
   std::ofstream out(path);
   if (!out) throw std::invalid_argument(path.string() + ": cannot write");
@@ -144,7 +111,7 @@ int run_study_command(const StudyCommandOptions& options) {
     StudyOptions run;
     run.threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
     run.min_cpu_s = options.min_cpu_s >= 0.0 ? options.min_cpu_s : (options.short_suite ? 0.002 : 0.02);
-    ProgressBar bar(options.progress);
+    ProgressBar bar("haptic-lab study", options.progress);
     run.progress = [&bar](std::size_t done, std::size_t total, const std::string& what) {
       bar.update(done, total, what);
     };
