@@ -209,6 +209,16 @@ StudyCase describe(std::string name, std::string title, std::string source, std:
   return c;
 }
 
+/// Sets c.simulate to simulate(scheme, step, variant, c) with a copy of c's description (the
+/// closure keeps the case's duration and output period, not the case itself).
+template <typename Simulate>
+void set_simulation(StudyCase& c, Simulate simulate) {
+  const StudyCase shape = c;
+  c.simulate = [shape, simulate](Scheme scheme, double step_s, const std::string& variant) {
+    return simulate(scheme, step_s, variant, shape);
+  };
+}
+
 /// A case for one oscillator: every scheme (exact ZOH included), the closed form as reference.
 StudyCase oscillator_case(std::string name, std::string title, std::string source, const LinearOscillator& o,
                           double duration_s, const std::vector<double>& steps) {
@@ -217,9 +227,10 @@ StudyCase oscillator_case(std::string name, std::string title, std::string sourc
   c.schemes.assign(std::begin(kAllSchemes), std::end(kAllSchemes));
   c.steps_s = steps;
   c.conservative = o.damping == 0.0 && o.force_before == 0.0 && o.force_after == 0.0;
-  const StudyCase shape = c;  // what the closures need (not the closures themselves)
-  c.simulate = [o, shape](Scheme scheme, double h, const std::string&) { return integrate(o, shape, scheme, h); };
-  c.exact = [o, shape] { return exact_solution(o, shape); };
+  set_simulation(c, [o](Scheme scheme, double h, const std::string&, const StudyCase& shape) {
+    return integrate(o, shape, scheme, h);
+  });
+  c.exact = [o, shape = c] { return exact_solution(o, shape); };
   return c;
 }
 
@@ -481,10 +492,7 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
   friction.variants = {"karnopp", "smooth", "viscous_only"};
   friction.reference_scheme = Scheme::kRk4;
   friction.reference_step_s = short_suite ? 2e-6 : 1e-6;
-  const StudyCase friction_shape = friction;
-  friction.simulate = [friction_shape](Scheme scheme, double h, const std::string& variant) {
-    return joint_with_friction(scheme, h, variant, friction_shape);
-  };
+  set_simulation(friction, joint_with_friction);
   cases.push_back(std::move(friction));
 
   StudyCase laws = describe("sampled_wall_laws",
@@ -494,16 +502,13 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
   laws.schemes = {Scheme::kExactZoh};
   laws.steps_s = steps;  // here: the tick period T
   laws.variants = {"velocity", "backward_difference", "exact_zoh", "tustin"};
-  const StudyCase laws_shape = laws;
-  laws.simulate = [laws_shape](Scheme scheme, double period, const std::string& law) {
-    return sampled_wall(scheme, period, law, laws_shape);
-  };
+  set_simulation(laws, sampled_wall);
   LinearOscillator continuous;  // m ẍ + (b + B) ẋ + K x = 0
   continuous.mass = kDeviceMass;
   continuous.damping = kDeviceDamping + kWallB;
   continuous.stiffness = kWallK;
   continuous.x0 = -0.005;
-  laws.exact = [continuous, laws_shape] { return exact_solution(continuous, laws_shape); };
+  laws.exact = [continuous, shape = laws] { return exact_solution(continuous, shape); };
   cases.push_back(std::move(laws));
 
   StudyCase khatib = describe("khatib_field",
@@ -516,10 +521,7 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
   khatib.reference_scheme = Scheme::kRk4;
   khatib.reference_step_s = short_suite ? 2e-6 : 1e-6;
   khatib.conservative = true;
-  const StudyCase khatib_shape = khatib;
-  khatib.simulate = [khatib_shape](Scheme scheme, double h, const std::string& variant) {
-    return khatib_bounce(scheme, h, variant, khatib_shape);
-  };
+  set_simulation(khatib, khatib_bounce);
   cases.push_back(std::move(khatib));
 
   StudyCase server = describe("server_spring_rates",
@@ -536,17 +538,16 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
     }
     return "";
   };
-  const StudyCase server_shape = server;
-  server.simulate = [server_shape](Scheme scheme, double period, const std::string&) {
-    return server_spring(scheme, period, server_shape);
-  };
+  set_simulation(server, [](Scheme scheme, double period, const std::string&, const StudyCase& shape) {
+    return server_spring(scheme, period, shape);
+  });
   LinearOscillator spring;  // m ẍ + (b + B) ẋ + K x = F
   spring.mass = kDeviceMass;
   spring.damping = kDeviceDamping + kServerSpringB;
   spring.stiffness = kServerSpringK;
   spring.x0 = 0.0;
   spring.force_before = spring.force_after = kServerPush;
-  server.exact = [spring, server_shape] { return exact_solution(spring, server_shape); };
+  server.exact = [spring, shape = server] { return exact_solution(spring, shape); };
   cases.push_back(std::move(server));
   return cases;
 }
