@@ -1,16 +1,12 @@
 #include "haptic/client.hpp"
 
-#include <google/protobuf/util/json_util.h>
-
-#include <fstream>
-#include <sstream>
-
 #include <cmath>
 #include <string>
 #include <utility>
 
 #include "client_core.hpp"
 #include "conversions.hpp"
+#include "haptic/io/scene_file.hpp"
 
 namespace haptic {
 namespace {
@@ -177,16 +173,9 @@ FieldHandle Client::add_field(const DetentFieldSpec& detent) {
 }
 
 Client::FileScene Client::apply_scene_file(const std::string& path) {
-  std::ifstream file(path);
-  if (!file) throw InvalidArgumentError(path + ": cannot open");
-  std::stringstream text;
-  text << file.rdbuf();
   v1::Scene scene;
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;
-  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &scene, options);
-  if (!status.ok()) {
-    throw InvalidArgumentError(path + ": not a valid Scene: " + std::string(status.message()));
+  if (const std::string error = io::read_scene_file(path, scene); !error.empty()) {
+    throw InvalidArgumentError(error);
   }
   detail::ClientCore& core = require(core_);
   const v1::ApplySceneResponse reply = core.apply_scene(scene);

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "app/devices.hpp"
+#include "haptic/io/scene_file.hpp"
 #include "net/validation.hpp"
 
 namespace haptic::app {
@@ -141,17 +142,8 @@ v1::ServerConfig load_config_file(const std::string& path) {
 }
 
 v1::Scene load_scene_file(const std::string& path) {
-  std::ifstream file(path);
-  if (!file) throw ConfigError(path + ": cannot open");
-  std::stringstream text;
-  text << file.rdbuf();
   v1::Scene scene;
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;
-  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &scene, options);
-  if (!status.ok()) {
-    throw ConfigError(path + ": not a valid Scene: " + std::string(status.message()));
-  }
+  if (const std::string error = io::read_scene_file(path, scene); !error.empty()) throw ConfigError(error);
   if (auto error = validate_scene(scene, ""); !error.empty()) throw ConfigError(path + ": " + error);
   return scene;
 }

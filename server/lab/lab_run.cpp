@@ -131,6 +131,7 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
     for (std::uint32_t p = 0; p < ports; ++p) {
       TickRecord record;
       record.port = p;
+      record.ticks = ticks;
       runtime::TickSample& s = record.sample;
       if (!rings[p]->read(k, s)) continue;
       const double power = engine::dot(s.F_T_W, s.v_WT);
@@ -164,8 +165,6 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
 
 RunSummary run_scene(const v1::ServerConfig& config, double duration_s, std::ostream& trace,
                      const std::function<void(std::uint64_t tick, std::uint64_t ticks)>& progress) {
-  const double rate_hz = config.loop_rate_hz() > 0.0 ? config.loop_rate_hz() : 1000.0;
-  const auto ticks = static_cast<std::uint64_t>(std::llround(duration_s * rate_hz));
   const std::streamsize precision = trace.precision();
   bool header_written = false;
   auto header = [&] {
@@ -193,7 +192,7 @@ RunSummary run_scene(const v1::ServerConfig& config, double duration_s, std::ost
       if (j < r.joints.count) trace << r.joints.q_dot[j];
     }
     trace << '\n';
-    if (progress && r.port == 0 && (s.tick % 1000 == 0 || s.tick == ticks)) progress(s.tick, ticks);
+    if (progress && r.port == 0 && (s.tick % 1000 == 0 || s.tick == r.ticks)) progress(s.tick, r.ticks);
     return true;
   });
   if (!header_written) header();  // a run shorter than one tick

@@ -43,6 +43,7 @@ struct JointState {
 /// One port's tick as simulate_scene reports it.
 struct TickRecord {
   std::uint32_t port = 0;
+  std::uint64_t ticks = 0;           // Ticks the run will take in all (the sample's tick counts to it).
   runtime::TickSample sample;        // What the loop published (tick from 1, time = (tick − 1) T).
   double energy_to_device_j = 0.0;   // Work the scene's force has done on the tool so far. Unit: J.
   double energy_from_device_j = 0.0; // Work the tool has done against it so far. Unit: J.

@@ -366,14 +366,21 @@ std::string server_spring_config(double period) {
          "\"initial_operator\": {\"mode\": \"APPLY_FORCE\", \"force\": {\"x\": 0, \"y\": 0, \"z\": 0.5}}}";
 }
 
+/// "" when `period` is 1/rate for a loop rate hapticd accepts (100 … 10000 Hz), else why not.
+std::string tick_period_problem(double period) {
+  const long rate = std::lround(1.0 / period);
+  if (rate < 100 || rate > 10000 || std::abs(1.0 / static_cast<double>(rate) - period) > 1e-12 * period) {
+    return "the step is the tick period, 1/rate for a loop rate of 100 ... 10000 Hz; got " + std::to_string(period) + " s";
+  }
+  return {};
+}
+
 Trajectory server_spring(Scheme scheme, double period, const StudyCase& c) {
   if (scheme != Scheme::kExactZoh) {
     throw std::invalid_argument(c.name + ": the point mass is integrated exactly under the held force; scheme must be exact_zoh");
   }
-  const long rate = std::lround(1.0 / period);
-  if (rate < 100 || rate > 10000 || std::abs(1.0 / static_cast<double>(rate) - period) > 1e-12 * period) {
-    throw std::invalid_argument(c.name + ": the tick period must be 1/rate for a loop rate of 100 ... 10000 Hz, got " +
-                                std::to_string(period) + " s");
+  if (const std::string problem = tick_period_problem(period); !problem.empty()) {
+    throw std::invalid_argument(c.name + ": " + problem);
   }
   const v1::ServerConfig config = app::parse_config(server_spring_config(period), c.name);
   const auto ticks_per_output = static_cast<std::uint64_t>(std::llround(c.output_period_s / period));
@@ -531,13 +538,7 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
       "tool position z from the anchor, m", "impedance", duration);
   server.schemes = {Scheme::kExactZoh};
   server.steps_s = short_suite ? std::vector<double>{1e-4, 1e-3, 1e-2} : std::vector<double>{1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2};
-  server.check_step = [](double period) -> std::string {
-    const long rate = std::lround(1.0 / period);
-    if (rate < 100 || rate > 10000 || std::abs(1.0 / static_cast<double>(rate) - period) > 1e-12 * period) {
-      return "the step is the tick period, 1/rate for a loop rate of 100 ... 10000 Hz; got " + std::to_string(period) + " s";
-    }
-    return "";
-  };
+  server.check_step = tick_period_problem;
   set_simulation(server, [](Scheme scheme, double period, const std::string&, const StudyCase& shape) {
     return server_spring(scheme, period, shape);
   });

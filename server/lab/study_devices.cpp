@@ -118,20 +118,25 @@ void set_integration(v1::ServerConfig& config, engine::Integrator method, std::u
   }
 }
 
-/// T / h as a whole number of sub-steps (1 … 10,000, what the configuration accepts), or
-/// std::invalid_argument naming the step.
-std::uint32_t substeps_for(double step_s, double period_s, const std::string& case_name) {
-  if (!(std::isfinite(step_s) && step_s > 0.0)) {
-    throw std::invalid_argument(case_name + ": step_s must be finite and > 0, got " + std::to_string(step_s));
-  }
+/// "" when h = step_s divides the tick period_s into 1 … 10,000 equal sub-steps (what the
+/// configuration accepts), else what is wrong with the step.
+std::string substep_problem(double step_s, double period_s) {
+  if (!(std::isfinite(step_s) && step_s > 0.0)) return "step_s must be finite and > 0, got " + std::to_string(step_s);
   const double ratio = period_s / step_s;
   const double n = std::round(ratio);
   if (n < 1.0 || n > 10000.0 || std::abs(ratio - n) > 1e-9 * n) {
-    throw std::invalid_argument(case_name + ": step_s " + std::to_string(step_s) +
-                                " s does not divide the " + std::to_string(period_s) +
-                                " s tick into 1 to 10000 equal sub-steps");
+    return "step_s " + std::to_string(step_s) + " s does not divide the " + std::to_string(period_s) +
+           " s tick into 1 to 10000 equal sub-steps";
   }
-  return static_cast<std::uint32_t>(n);
+  return {};
+}
+
+/// T / h as a whole number of sub-steps, or std::invalid_argument naming the case and the step.
+std::uint32_t substeps_for(double step_s, double period_s, const std::string& case_name) {
+  if (const std::string problem = substep_problem(step_s, period_s); !problem.empty()) {
+    throw std::invalid_argument(case_name + ": " + problem);
+  }
+  return static_cast<std::uint32_t>(std::round(period_s / step_s));
 }
 
 /// One device case's fixed parts.
@@ -251,13 +256,8 @@ StudyCase make_case(DeviceScene scene, std::string title, std::string source, bo
   // 1,000 sub-steps are converged far below the models' differences.
   c.reference_scheme = Scheme::kRk4;
   c.reference_step_s = c.group == "fidelity" ? 1e-6 : 5e-7;
-  c.check_step = [period_s = 1.0 / scene.config.loop_rate_hz(), name = c.name](double step_s) {
-    try {
-      substeps_for(step_s, period_s, name);
-      return std::string();
-    } catch (const std::invalid_argument& e) {
-      return std::string(e.what()).substr(name.size() + 2);  // validate_cases names the case
-    }
+  c.check_step = [period_s = 1.0 / scene.config.loop_rate_hz()](double step_s) {
+    return substep_problem(step_s, period_s);
   };
   c.simulate = [scene = std::move(scene)](Scheme scheme, double step_s, const std::string& variant) {
     return simulate_device(scene, scheme, step_s, variant);

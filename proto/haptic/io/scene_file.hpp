@@ -1,0 +1,16 @@
+#pragma once
+// Reading a scene file: a haptic.v1.Scene in protobuf's JSON mapping (config/scenes/). Shared by
+// hapticd (`--scene`, app::load_scene_file) and the SDK (Client::apply_scene_file), which builds
+// without the server.
+
+#include <string>
+
+#include "haptic/v1/scene.pb.h"
+
+namespace haptic::io {
+
+/// Parses the file at `path` into `out` (unknown fields are errors). Returns "" on success, else
+/// "<path>: cannot open" or "<path>: not a valid Scene: <parser's message>".
+std::string read_scene_file(const std::string& path, v1::Scene& out);
+
+}  // namespace haptic::io
