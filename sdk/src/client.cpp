@@ -366,16 +366,19 @@ std::uint64_t ItemHandle::release() noexcept { return std::exchange(id_, 0); }
 
 void ObjectHandle::update(const WallSpec& wall) {
   check(wall);
-  current("UpdateObject").update_object(id(), detail::to_proto(wall));
+  replace({detail::to_proto(wall)});
 }
 
 void ObjectHandle::update(const SphereSpec& sphere) {
   check(sphere);
-  current("UpdateObject").update_object(id(), detail::to_proto(sphere));
+  replace({detail::to_proto(sphere)});
 }
 
-void ObjectHandle::update(const TangentPlaneSpec& plane) {
-  current("UpdateObject").update_object(id(), detail::to_proto(plane));
+void ObjectHandle::update(const TangentPlaneSpec& plane) { replace({detail::to_proto(plane)}); }
+
+void ObjectHandle::replace(const detail::WireObject& object) {
+  stability_ =
+      detail::from_proto(current("UpdateObject").update_object(id(), object.message).stability());
 }
 
 void FieldHandle::update(const SpringFieldSpec& spring) {

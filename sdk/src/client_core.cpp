@@ -124,12 +124,13 @@ v1::ItemRef ClientCore::create_object(const v1::Object& object) {
                                                     request);
 }
 
-void ClientCore::update_object(std::uint64_t id, const v1::Object& object) {
+v1::ItemRef ClientCore::update_object(std::uint64_t id, const v1::Object& object) {
   v1::UpdateObjectRequest request;
   request.set_session_id(session_id_);
   request.set_object_id(id);
   *request.mutable_object() = object;
-  call<v1::UpdateObjectRequest, v1::Empty>("UpdateObject", &v1::Haptic::Stub::UpdateObject, request);
+  return call<v1::UpdateObjectRequest, v1::ItemRef>("UpdateObject",
+                                                    &v1::Haptic::Stub::UpdateObject, request);
 }
 
 void ClientCore::delete_object(std::uint64_t id) {

@@ -31,7 +31,8 @@ class ClientCore {
   }
 
   v1::ItemRef create_object(const v1::Object& object);
-  void update_object(std::uint64_t id, const v1::Object& object);
+  /// Replaces the object; returns the stability report of its new impedance.
+  v1::ItemRef update_object(std::uint64_t id, const v1::Object& object);
   void delete_object(std::uint64_t id);
   std::uint64_t create_field(const v1::Field& field);
   void update_field(std::uint64_t id, const v1::Field& field);

@@ -275,6 +275,7 @@ StabilityReport from_proto(const v1::StabilityReport& r) {
   out.chosen_damping = r.chosen_damping();
   out.chosen_stiffness = r.chosen_stiffness();
   out.robustly_stable = r.robustly_stable();
+  out.warning = r.warning();
   return out;
 }
 

@@ -1,8 +1,11 @@
 #include "app/config.hpp"
 
+#include <arpa/inet.h>
 #include <google/protobuf/util/json_util.h>
+#include <netdb.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -12,10 +15,68 @@
 #include "net/validation.hpp"
 
 namespace haptic::app {
+namespace {
+
+bool is_loopback_sockaddr(const sockaddr* address) {
+  if (address->sa_family == AF_INET) {
+    const auto* v4 = reinterpret_cast<const sockaddr_in*>(address);
+    return (ntohl(v4->sin_addr.s_addr) >> 24) == 127;
+  }
+  if (address->sa_family == AF_INET6) {
+    const in6_addr& v6 = reinterpret_cast<const sockaddr_in6*>(address)->sin6_addr;
+    if (IN6_IS_ADDR_LOOPBACK(&v6)) return true;
+    return IN6_IS_ADDR_V4MAPPED(&v6) && v6.s6_addr[12] == 127;
+  }
+  return false;
+}
+
+/// Refuses a non-loopback bind address unless remote access was accepted (insecure for now).
+std::string check_exposure(const v1::ServerConfig& config) {
+  if (config.insecure_remote_access()) return {};
+  const auto refuse = [](const char* field, const std::string& address) {
+    return std::string(field) + ": '" + address +
+           "' is not a loopback address. hapticd has no TLS or tokens yet, so anyone who reaches "
+           "it could open a session and command forces on the device. Bind 127.0.0.1 (the "
+           "default), or accept that with --insecure (insecure_remote_access: true)";
+  };
+  if (!is_loopback_host(host_of_address(config.grpc_address()))) {
+    return refuse("grpc_address", config.grpc_address());
+  }
+  if (!is_loopback_host(config.udp_address())) return refuse("udp_address", config.udp_address());
+  return {};
+}
+
+}  // namespace
+
+std::string host_of_address(const std::string& address) {
+  if (!address.empty() && address.front() == '[') {
+    const auto end = address.find(']');
+    return end == std::string::npos ? address : address.substr(1, end - 1);
+  }
+  const auto colon = address.rfind(':');
+  // "::1" alone (no port) has more than one colon: all of it is the host.
+  if (colon == std::string::npos || address.find(':') != colon) return address;
+  return address.substr(0, colon);
+}
+
+bool is_loopback_host(const std::string& host) {
+  if (host.empty()) return false;  // every interface
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* found = nullptr;
+  if (::getaddrinfo(host.c_str(), nullptr, &hints, &found) != 0 || found == nullptr) return false;
+  bool all_loopback = true;
+  for (const addrinfo* ai = found; ai != nullptr; ai = ai->ai_next) {
+    all_loopback = all_loopback && is_loopback_sockaddr(ai->ai_addr);
+  }
+  ::freeaddrinfo(found);
+  return all_loopback;
+}
 
 void fill_defaults(v1::ServerConfig& config) {
-  if (config.grpc_address().empty()) config.set_grpc_address("0.0.0.0:50051");
-  if (config.udp_address().empty()) config.set_udp_address("0.0.0.0");
+  if (config.grpc_address().empty()) config.set_grpc_address("127.0.0.1:50051");
+  if (config.udp_address().empty()) config.set_udp_address("127.0.0.1");
   if (!config.has_udp_port()) config.set_udp_port(50052);
   if (config.loop_rate_hz() == 0.0) config.set_loop_rate_hz(1000.0);
   if (config.time_mode() == v1::TIME_MODE_UNSPECIFIED) config.set_time_mode(v1::REAL_TIME);
@@ -61,6 +122,7 @@ std::string validate(const v1::ServerConfig& config) {
   if (config.time_mode() != v1::REAL_TIME && config.time_mode() != v1::LOCKSTEP) {
     return "time_mode: must be REAL_TIME or LOCKSTEP";
   }
+  if (auto e = check_exposure(config); !e.empty()) return e;
   if (auto e = validate_point_mass(config.simulated_point_mass()); !e.empty()) return e;
   if (config.real_time().fifo_priority() < 1 || config.real_time().fifo_priority() > 99) {
     return "real_time.fifo_priority: must be 1 to 99";

@@ -15,7 +15,7 @@ class ConfigError : public std::runtime_error {
 };
 
 /// The built-in configuration: real time at 1 kHz, the simulated point mass, gRPC on
-/// 0.0.0.0:50051, UDP on 50052.
+/// 127.0.0.1:50051, UDP on 127.0.0.1:50052 (loopback only).
 v1::ServerConfig default_config();
 
 /// Parses JSON text (unknown fields are errors), fills defaults, validates. Throws ConfigError.
@@ -37,6 +37,13 @@ void fill_defaults(v1::ServerConfig& config);
 
 /// Empty when valid, else "<field>: <what is wrong>".
 std::string validate(const v1::ServerConfig& config);
+
+/// The host part of a bind address "host:port", "[v6]:port" or a bare host.
+std::string host_of_address(const std::string& address);
+
+/// True when every address `host` names is a loopback address (127.0.0.0/8, ::1); false for ""
+/// or 0.0.0.0 (every interface) and for names that do not resolve.
+bool is_loopback_host(const std::string& host);
 
 /// The configuration as JSON, with defaults shown.
 std::string to_json(const v1::ServerConfig& config);

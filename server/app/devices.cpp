@@ -362,7 +362,7 @@ std::vector<runtime::TickPort> tick_ports(const v1::ServerConfig& config,
   for (std::size_t i = 0; i < devices.size(); ++i) {
     runtime::Device& device = *devices[i].device;
     runtime::TickPort port{&device, rings[i], {}, std::nullopt};
-    port.limits.max_force = device.description().max_force;
+    port.limits = engine::force_limits_for(device.description().max_force);
     const v1::PassivityConfig& passivity = config.passivity();
     const double device_mass = device.description().apparent_mass;
     const bool passivity_on = passivity.has_enabled() ? passivity.enabled() : device_mass > 0.0;

@@ -33,7 +33,9 @@ int main(int argc, char** argv) {
   std::string config_path;
   std::string ready_file;
   std::string grpc_address;
+  std::string udp_address;
   int udp_port = -1;
+  bool insecure = false;
   bool lockstep = false;
   bool print_config = false;
   cli.add_option("--config", config_path, "JSON file with a haptic.v1.ServerConfig")
@@ -43,7 +45,10 @@ int main(int argc, char** argv) {
                  "JSON file with a haptic.v1.Scene: the server's own scene (replaces initial_scene)")
       ->check(CLI::ExistingFile);
   cli.add_option("--grpc-address", grpc_address, "override grpc_address (host:port; port 0 = any)");
+  cli.add_option("--udp-address", udp_address, "override udp_address (the UDP bind address)");
   cli.add_option("--udp-port", udp_port, "override udp_port (0 = any)")->check(CLI::Range(0, 65535));
+  cli.add_flag("--insecure", insecure,
+               "serve non-loopback addresses without TLS or tokens (insecure_remote_access)");
   cli.add_flag("--lockstep", lockstep, "run in LOCKSTEP time: ticks advance only by the Step RPC");
   cli.add_option("--ready-file", ready_file,
                  "write {\"grpc_port\":..,\"udp_port\":..} here once listening");
@@ -55,6 +60,8 @@ int main(int argc, char** argv) {
     config = config_path.empty() ? haptic::app::default_config()
                                  : haptic::app::load_config_file(config_path);
     if (!grpc_address.empty()) config.set_grpc_address(grpc_address);
+    if (!udp_address.empty()) config.set_udp_address(udp_address);
+    if (insecure) config.set_insecure_remote_access(true);
     if (udp_port >= 0) config.set_udp_port(static_cast<std::uint32_t>(udp_port));
     if (lockstep) config.set_time_mode(haptic::v1::LOCKSTEP);
     if (!scene_path.empty()) *config.mutable_initial_scene() = haptic::app::load_scene_file(scene_path);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "app/config.hpp"
 #include "net/validation.hpp"
 #include "runtime/realtime.hpp"
 
@@ -161,9 +162,14 @@ void Server::start() {
   for (std::size_t i = 1; i < simulated_.size(); ++i) {
     devices += " + port " + std::to_string(i) + ": " + simulated_[i].device->description().name;
   }
-  spdlog::info("hapticd: {} at {} Hz ({}), gRPC port {}, UDP port {}", devices,
-               config_.loop_rate_hz(), v1::TimeMode_Name(config_.time_mode()), grpc_port_,
-               udp_.port());
+  spdlog::info("hapticd: {} at {} Hz ({}), gRPC {} (port {}), UDP {} (port {})", devices,
+               config_.loop_rate_hz(), v1::TimeMode_Name(config_.time_mode()),
+               config_.grpc_address(), grpc_port_, config_.udp_address(), udp_.port());
+  if (!is_loopback_host(host_of_address(config_.grpc_address())) ||
+      !is_loopback_host(config_.udp_address())) {
+    spdlog::warn("hapticd: serving a non-loopback address without TLS or tokens "
+                 "(insecure_remote_access): anyone who reaches it can command forces");
+  }
 }
 
 void Server::shutdown() {

@@ -2,6 +2,9 @@
 
 #include "engine/analysis/wall_design.hpp"
 
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
 #include <cctype>
 #include <chrono>
 
@@ -45,7 +48,24 @@ v1::StabilityReport stability_report(const engine::ObjectSpec& spec,
   report.set_stable(margin.stable);
   report.set_max_stable_stiffness(margin.max_stable_stiffness);
   report.set_max_pole_magnitude(margin.max_pole_magnitude);
+  if (!margin.stable) {
+    report.set_warning(fmt::format(
+        "not stable on this device: K = {:g} N/m with B = {:g} N*s/m at {:g} Hz exceeds the largest "
+        "stable stiffness, {:g} N/m (closed-loop pole {:.4f}); expect the contact to oscillate "
+        "unless the passivity controller damps it",
+        spec.stiffness, spec.damping, 1.0 / period_s, margin.max_stable_stiffness,
+        margin.max_pole_magnitude));
+  }
   return report;
+}
+
+/// An object accepted although its own report says it will not be stable: the client has the
+/// report; the operator sees it in the log.
+void log_if_unstable(const v1::StabilityReport& report, std::uint64_t session_id,
+                     std::uint64_t object_id) {
+  if (report.warning().empty()) return;
+  spdlog::warn("session {:016x}: object {} accepted but {}", session_id, object_id,
+               report.warning());
 }
 
 constexpr std::uint32_t kApiVersion = v1::API_VERSION_CURRENT;
@@ -177,17 +197,29 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext*, const v1::CreateO
       stability_report(spec, *port_of(request->session_id()).device, period_s(),
                        request->object().impedance().transparency_optimal_damping(),
                        request->object().impedance().virtual_coupling());
+  log_if_unstable(response->stability(), request->session_id(), id);
   return grpc::Status::OK;
 }
 
 grpc::Status HapticService::UpdateObject(grpc::ServerContext*, const v1::UpdateObjectRequest* request,
-                                         v1::Empty*) {
+                                         v1::ItemRef* response) {
   if (auto status = check_session(request->session_id()); !status.ok()) return status;
   engine::ObjectSpec spec;
   if (auto error = to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
     return invalid(error);
   }
-  return deps_.scene.update(request->session_id(), ItemKind::kObject, request->object_id(), spec);
+  if (auto status =
+          deps_.scene.update(request->session_id(), ItemKind::kObject, request->object_id(), spec);
+      !status.ok()) {
+    return status;
+  }
+  response->set_id(request->object_id());
+  *response->mutable_stability() =
+      stability_report(spec, *port_of(request->session_id()).device, period_s(),
+                       request->object().impedance().transparency_optimal_damping(),
+                       request->object().impedance().virtual_coupling());
+  log_if_unstable(response->stability(), request->session_id(), request->object_id());
+  return grpc::Status::OK;
 }
 
 grpc::Status HapticService::DeleteObject(grpc::ServerContext*, const v1::DeleteRequest* request,
@@ -288,6 +320,8 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplyScen
         objects[i], device, period_s(),
         request->scene().objects(static_cast<int>(i)).impedance().transparency_optimal_damping(),
         request->scene().objects(static_cast<int>(i)).impedance().virtual_coupling());
+    log_if_unstable(response->object_stability(static_cast<int>(i)), request->session_id(),
+                    object_ids[i]);
   }
   for (auto id : object_ids) response->add_object_ids(id);
   for (auto id : field_ids) response->add_field_ids(id);

@@ -52,7 +52,7 @@ class HapticService final : public v1::Haptic::Service {
   grpc::Status CreateObject(grpc::ServerContext*, const v1::CreateObjectRequest*,
                             v1::ItemRef*) override;
   grpc::Status UpdateObject(grpc::ServerContext*, const v1::UpdateObjectRequest*,
-                            v1::Empty*) override;
+                            v1::ItemRef*) override;
   grpc::Status DeleteObject(grpc::ServerContext*, const v1::DeleteRequest*, v1::Empty*) override;
   grpc::Status CreateField(grpc::ServerContext*, const v1::CreateFieldRequest*,
                            v1::ItemRef*) override;

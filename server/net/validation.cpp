@@ -37,6 +37,16 @@ std::string check_vec(const v1::Vec3& v, double max_abs, const std::string& path
   return {};
 }
 
+/// Each component of a size (half extents): finite and in (0, max].
+std::string check_positive_vec(const v1::Vec3& v, double max, const std::string& path) {
+  for (const auto& [value, axis] : {std::pair{v.x(), ".x"}, {v.y(), ".y"}, {v.z(), ".z"}}) {
+    if (!std::isfinite(value) || value <= 0.0 || value > max) {
+      return path + axis + ": must be finite and in (0, " + describe(max) + "], got " + describe(value);
+    }
+  }
+  return {};
+}
+
 std::string check_impedance(const v1::Impedance& impedance, const std::string& path,
                             const SceneLimits& limits) {
   if (auto e = check_range(impedance.stiffness(), 0.0, limits.max_stiffness, path + ".stiffness");
@@ -255,7 +265,8 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
     }
     case v1::Object::kBox: {
       const std::string box_path = path + ".box.half_extents";
-      if (auto e = check_vec(object.box().half_extents(), limits.max_radius, box_path); !e.empty()) {
+      if (auto e = check_positive_vec(object.box().half_extents(), limits.max_radius, box_path);
+          !e.empty()) {
         return e;
       }
       const engine::BoxSpec box{to_engine(object.box().half_extents())};
@@ -389,7 +400,8 @@ std::string to_field_spec(const v1::Field& field, const std::string& path,
         case v1::PotentialField::KHATIB: spec.kind = engine::PotentialKind::kKhatib; break;
         default: return p + ".kind: must be POLYNOMIAL or KHATIB";
       }
-      spec.order = static_cast<int>(potential.order() == 0 ? 2 : potential.order());
+      // No default: 0 is refused like any order outside 2 ... 8 (clamped only to stay an int).
+      spec.order = static_cast<int>(std::min<std::uint32_t>(potential.order(), 1000));
       spec.gain = potential.gain();
       spec.offset = potential.offset();
       spec.influence_distance = potential.influence_distance();

@@ -205,6 +205,18 @@ TEST_F(SceneVocabulary, RegistrationReportsColgatesBoundAndTheSampledMarginOnThi
   auto stiff = client.add_wall({.point = {0, 0, -1}, .normal = {0, 0, 1}, .impedance = {1e6, 1.0}});
   EXPECT_FALSE(stiff.stability().stable);
   EXPECT_GT(stiff.stability().max_pole_magnitude, 1.0);
+  // Accepted, but not without a word: the report says why (the server logs the same line).
+  EXPECT_NE(stiff.stability().warning.find("not stable on this device: K = 1e+06 N/m"),
+            std::string::npos)
+      << stiff.stability().warning;
+  EXPECT_EQ(r.warning.empty(), r.stable) << r.warning;
+  // An update reports on the new impedance: softened, the wall is stable and the warning goes.
+  stiff.update(WallSpec{.point = {0, 0, -1}, .normal = {0, 0, 1}, .impedance = {100.0, 1.0}});
+  EXPECT_TRUE(stiff.stability().stable);
+  EXPECT_EQ(stiff.stability().warning, "");
+  stiff.update(WallSpec{.point = {0, 0, -1}, .normal = {0, 0, 1}, .impedance = {1e6, 1.0}});
+  EXPECT_FALSE(stiff.stability().stable);
+  EXPECT_NE(stiff.stability().warning, "");
   client.apply_scene({{.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {200.0, 2.0}}}, {}, {});
   ASSERT_EQ(client.last_scene_stability().size(), 1u);
   EXPECT_DOUBLE_EQ(client.last_scene_stability()[0].colgate_min_damping, 200.0 * 0.001 / 2 + 2.0);

@@ -89,12 +89,13 @@ class ObjectHandle : public detail::ItemHandle {
   void update(const WallSpec& wall);
   void update(const SphereSpec& sphere);
   void update(const TangentPlaneSpec& plane);
-  /// The server's stability report for the impedance as registered (add_* only; empty after
+  /// The server's stability report for the impedance as registered or last updated (empty after
   /// apply_scene, which reports in Client::last_scene_stability()).
   const StabilityReport& stability() const noexcept { return stability_; }
 
  private:
   friend class Client;
+  void replace(const detail::WireObject& object);
   ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation,
                StabilityReport stability = {})
       : ItemHandle(Kind::kObject, std::move(core), id, generation), stability_(stability) {}

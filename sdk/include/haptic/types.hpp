@@ -251,6 +251,9 @@ struct StabilityReport {
   double chosen_damping = 0.0;        ///< with transparency_optimal_damping or virtual_coupling. Unit: N·s/m.
   double chosen_stiffness = 0.0;      ///< with virtual_coupling. Unit: N/m.
   bool robustly_stable = false;       ///< ‖L‖∞ ≤ 1 at chosen_damping (001 eq. 17)
+  /// Empty unless the server accepted the object but expects its contact not to stay stable on
+  /// this device (stable false); says why (the server logs it too).
+  std::string warning;
 };
 
 /// Where a virtual mass has been pushed to.

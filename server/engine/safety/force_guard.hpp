@@ -9,10 +9,22 @@
 
 namespace haptic::engine {
 
+/// The shortest time in which the guard lets a force go from zero to full scale (or back): the
+/// rate limit is max_force / this. A glitch (a jump of the proxy, a client's bad update) then
+/// reaches the hand as a 5 ms ramp, not as a step; a contact entered at K v below the limit (a
+/// 1000 N/m wall at up to 4 m/s on a 20 N device) is untouched. Unit: s.
+inline constexpr double kFullScaleForceRampTime = 0.002;
+
 struct ForceLimits {
-  double max_force = 20.0;         // Unit: N. Magnitude limit.
-  double max_force_rate = 20000.0; // Unit: N/s. Largest change of any component; 0: unlimited.
+  double max_force = 20.0;        // Unit: N. Magnitude limit.
+  double max_force_rate = 20.0 / kFullScaleForceRampTime;  // Unit: N/s. Largest change of any
+                                                           // component; 0: unlimited.
 };
+
+/// A device's limits: its maximum force, reached from zero in kFullScaleForceRampTime at best.
+inline ForceLimits force_limits_for(double max_force) {
+  return ForceLimits{max_force, max_force / kFullScaleForceRampTime};
+}
 
 struct GuardedForce {
   Vec3 F_T_W;              // Unit: N.

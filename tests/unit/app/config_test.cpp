@@ -19,7 +19,8 @@ std::string error_of(const std::string& json) {
 
 TEST(Config, DefaultsAreTheDocumentedOnes) {
   const v1::ServerConfig config = default_config();
-  EXPECT_EQ(config.grpc_address(), "0.0.0.0:50051");
+  EXPECT_EQ(config.grpc_address(), "127.0.0.1:50051");  // loopback unless asked otherwise
+  EXPECT_EQ(config.udp_address(), "127.0.0.1");
   EXPECT_EQ(config.udp_port(), 50052u);
   EXPECT_EQ(config.loop_rate_hz(), 1000.0);
   EXPECT_EQ(config.time_mode(), v1::REAL_TIME);
@@ -69,6 +70,39 @@ TEST(Config, BadValuesAreRejectedNamingTheField) {
   EXPECT_NE(error_of(R"({"initial_operator": {"mode": "APPLY_FORCE", "force": {"x": "NaN"}}})")
                 .find("initial_operator.force.x"),
             std::string::npos);
+}
+
+TEST(Config, NonLoopbackAddressesAreRefusedUnlessInsecureRemoteAccessIsAccepted) {
+  // Without TLS or tokens, a non-loopback bind would let anyone on the network command forces.
+  EXPECT_EQ(error_of(R"({"grpc_address": "0.0.0.0:50051"})").rfind("test.json: grpc_address: '0.0.0.0:50051' is not a loopback address", 0), 0u)
+      << error_of(R"({"grpc_address": "0.0.0.0:50051"})");
+  EXPECT_NE(error_of(R"({"grpc_address": "[::]:0"})").find("grpc_address: '[::]:0'"), std::string::npos);
+  EXPECT_NE(error_of(R"({"udp_address": "0.0.0.0"})").find("udp_address: '0.0.0.0' is not a loopback"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"grpc_address": "0.0.0.0:50051"})").find("--insecure"), std::string::npos);
+  // Loopback in any spelling is accepted; so is anything once remote access is accepted.
+  EXPECT_EQ(error_of(R"({"grpc_address": "127.0.0.1:0", "udp_address": "127.0.0.2"})"), "");
+  EXPECT_EQ(error_of(R"({"grpc_address": "[::1]:0", "udp_address": "::1"})"), "");
+  EXPECT_EQ(error_of(R"({"grpc_address": "localhost:0", "udp_address": "localhost"})"), "");
+  EXPECT_EQ(error_of(R"({"grpc_address": "0.0.0.0:50051", "udp_address": "0.0.0.0",
+                         "insecure_remote_access": true})"),
+            "");
+}
+
+TEST(Config, BindAddressesSplitIntoHostAndLoopbackIsRecognised) {
+  EXPECT_EQ(host_of_address("127.0.0.1:50051"), "127.0.0.1");
+  EXPECT_EQ(host_of_address("[::1]:50051"), "::1");
+  EXPECT_EQ(host_of_address("::1"), "::1");
+  EXPECT_EQ(host_of_address("localhost:1"), "localhost");
+  EXPECT_TRUE(is_loopback_host("127.0.0.1"));
+  EXPECT_TRUE(is_loopback_host("127.255.0.9"));
+  EXPECT_TRUE(is_loopback_host("::1"));
+  EXPECT_TRUE(is_loopback_host("::ffff:127.0.0.1"));
+  EXPECT_FALSE(is_loopback_host("0.0.0.0"));
+  EXPECT_FALSE(is_loopback_host("::"));
+  EXPECT_FALSE(is_loopback_host(""));
+  EXPECT_FALSE(is_loopback_host("10.0.0.1"));
+  EXPECT_FALSE(is_loopback_host("no-such-host.invalid"));
 }
 
 TEST(Config, ImpossibleDeviceParametersAreRejectedNamingThem) {

@@ -81,6 +81,26 @@ TEST(ForceGuard, RateLimitBoundsEachComponentsChangePerTick) {
   EXPECT_DOUBLE_EQ(guard.apply({0, 0, 5.0}, 2 * kDt).F_T_W.z, 2.0);
 }
 
+TEST(ForceGuard, AFullScaleStepIsSpreadOverTheRampTimeAtEveryLoopRate) {
+  // A device's limits: a 20 N step must not reach the hand in one tick (it did at 20,000 N/s).
+  for (const double rate_hz : {1000.0, 4000.0, 10000.0}) {
+    const double dt = 1.0 / rate_hz;
+    ForceGuard guard(force_limits_for(20.0));
+    int ticks = 0;
+    GuardedForce out;
+    do {
+      out = guard.apply({0, 0, 20.0}, dt);
+      ++ticks;
+      EXPECT_LE(out.F_T_W.z, 20.0 * ticks * dt / kFullScaleForceRampTime + 1e-9);
+    } while (out.F_T_W.z < 20.0 && ticks < 1000);
+    EXPECT_EQ(ticks, static_cast<int>(std::lround(kFullScaleForceRampTime * rate_hz))) << rate_hz;
+    // And back down just as gradually.
+    EXPECT_NEAR(guard.apply({0, 0, 0.0}, dt).F_T_W.z, 20.0 - 20.0 * dt / kFullScaleForceRampTime,
+                1e-9);
+  }
+  EXPECT_DOUBLE_EQ(ForceLimits{}.max_force_rate, force_limits_for(20.0).max_force_rate);
+}
+
 TEST(ForceGuard, ZeroRateMeansUnlimited) {
   ForceGuard guard(ForceLimits{100.0, 0.0});
   const GuardedForce out = guard.apply({0, 0, 90.0}, kDt);

@@ -143,7 +143,11 @@ TEST(Validation, NewShapesAndMaterialsNameWhatIsWrong) {
   v1::Object box = object_with(1000.0);
   box.mutable_box()->mutable_half_extents()->set_x(0.01);
   box.mutable_box()->mutable_half_extents()->set_y(0.01);
-  EXPECT_EQ(to_object_spec(box, "o", SceneLimits{}, spec).rfind("o.box.half_extents.z", 0), 0u);
+  EXPECT_EQ(to_object_spec(box, "o", SceneLimits{}, spec),
+            "o.box.half_extents.z: must be finite and in (0, 10], got 0");
+  box.mutable_box()->mutable_half_extents()->set_z(-0.01);  // a size, not a coordinate
+  EXPECT_EQ(to_object_spec(box, "o", SceneLimits{}, spec),
+            "o.box.half_extents.z: must be finite and in (0, 10], got -0.01");
   box.mutable_box()->mutable_half_extents()->set_z(0.01);
   ASSERT_EQ(to_object_spec(box, "o", SceneLimits{}, spec), "");
   EXPECT_TRUE(std::holds_alternative<engine::BoxSpec>(spec.shape));
@@ -210,8 +214,15 @@ TEST(Validation, NewFieldsNameWhatIsWrong) {
   khatib.mutable_potential()->set_kind(v1::PotentialField::KHATIB);
   khatib.mutable_potential()->set_gain(1.0);
   khatib.mutable_potential()->set_influence_distance(0.01);
+  khatib.mutable_potential()->set_min_distance(0.001);
+  // The protocol says 2 ... 8 and gives no default: an unset (0) order is refused, naming it.
+  EXPECT_EQ(to_field_spec(khatib, "f", SceneLimits{}, spec),
+            "f.potential.order: must be an integer in [2, 8], got 0");
+  khatib.mutable_potential()->set_order(9);
+  EXPECT_EQ(to_field_spec(khatib, "f", SceneLimits{}, spec).rfind("f.potential.order:", 0), 0u);
+  khatib.mutable_potential()->set_order(2);
   khatib.mutable_potential()->set_min_distance(0.02);  // must be below the influence distance
-  EXPECT_EQ(to_field_spec(khatib, "f", SceneLimits{}, spec).rfind("f.potential.", 0), 0u);
+  EXPECT_EQ(to_field_spec(khatib, "f", SceneLimits{}, spec).rfind("f.potential.min_distance", 0), 0u);
   khatib.mutable_potential()->set_min_distance(0.001);
   EXPECT_EQ(to_field_spec(khatib, "f", SceneLimits{}, spec), "");
 }
