@@ -56,6 +56,7 @@ ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
   const auto opened = call<v1::OpenSessionRequest, v1::OpenSessionResponse>(
       "OpenSession", &v1::Haptic::Stub::OpenSession, open);
   session_id_ = opened.session_id();
+  session_secret_ = opened.session_secret();
   device_info_ = from_proto(opened.device());
   lease_timeout_ = std::chrono::milliseconds(opened.lease_timeout_ms());
   if (opened.udp_key().size() != 16) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "haptic/client.hpp"
+#include "haptic/io/session_secret.hpp"
 #include "haptic/v1/service.grpc.pb.h"
 #include "udp_link.hpp"
 
@@ -25,6 +26,9 @@ class ClientCore {
   Response call(const char* name, Method method, Request request) {
     grpc::ClientContext context;
     context.set_deadline(std::chrono::system_clock::now() + config_.rpc_timeout);
+    if (!session_secret_.empty()) {
+      context.AddMetadata(io::kSessionSecretMetadataKey, session_secret_);
+    }
     Response response;
     throw_status(((*stub_).*method)(&context, request, &response), name);
     return response;
@@ -57,6 +61,7 @@ class ClientCore {
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::Haptic::Stub> stub_;
   std::uint64_t session_id_ = 0;
+  std::string session_secret_;  // OpenSession's; empty until then
   bool closed_ = false;
   DeviceInfo device_info_;
   std::chrono::milliseconds lease_timeout_{0};

@@ -7,6 +7,9 @@
 
 #include <cctype>
 #include <chrono>
+#include <span>
+
+#include "haptic/io/session_secret.hpp"
 
 namespace haptic::net {
 namespace {
@@ -90,13 +93,29 @@ std::string check_client_name(const std::string& name) {
 
 }  // namespace
 
-grpc::Status HapticService::check_session(std::uint64_t session_id) const {
-  if (session_id == 0 || !deps_.sessions.touch(session_id)) {
-    return {grpc::StatusCode::NOT_FOUND,
-            "session_id: no open session " + std::to_string(session_id) +
-                " (never opened, closed, or its lease expired)"};
+grpc::Status HapticService::check_session(const grpc::ServerContext* context,
+                                          std::uint64_t session_id) const {
+  std::span<const std::uint8_t> secret;
+  const auto& metadata = context->client_metadata();
+  if (const auto found = metadata.find(io::kSessionSecretMetadataKey); found != metadata.end()) {
+    secret = {reinterpret_cast<const std::uint8_t*>(found->second.data()), found->second.size()};
   }
-  return grpc::Status::OK;
+  switch (session_id == 0 ? Access::kNoSuchSession : deps_.sessions.authorize(session_id, secret)) {
+    case Access::kGranted:
+      return grpc::Status::OK;
+    case Access::kNoSuchSession:
+      return {grpc::StatusCode::NOT_FOUND,
+              "session_id: no open session " + std::to_string(session_id) +
+                  " (never opened, closed, or its lease expired)"};
+    case Access::kWrongSecret:
+      break;
+  }
+  return {grpc::StatusCode::PERMISSION_DENIED,
+          "session_id: session " + std::to_string(session_id) +
+              (secret.empty() ? " needs its session secret, and this call carries none"
+                              : " belongs to another client: this call's session secret is not its") +
+              " (only the client that opened a session may act for it; it sends the secret "
+              "OpenSession returned as metadata " + io::kSessionSecretMetadataKey + ")"};
 }
 
 const DevicePort& HapticService::port_of(std::uint64_t session_id) const {
@@ -144,7 +163,7 @@ v1::DeviceInfo HapticService::device_info(std::uint32_t port) const {
   return info;
 }
 
-grpc::Status HapticService::OpenSession(grpc::ServerContext*, const v1::OpenSessionRequest* request,
+grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::OpenSessionRequest* request,
                                         v1::OpenSessionResponse* response) {
   if (request->api_version() != kApiVersion) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
@@ -163,6 +182,7 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext*, const v1::OpenSess
   }
   response->set_session_id(session->id);
   response->set_udp_key(std::string(session->key.begin(), session->key.end()));
+  response->set_session_secret(std::string(session->secret.begin(), session->secret.end()));
   response->set_udp_port(deps_.udp_port);
   response->set_api_version(kApiVersion);
   *response->mutable_device() = device_info(request->device_index());
@@ -172,17 +192,17 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext*, const v1::OpenSess
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::CloseSession(grpc::ServerContext*, const v1::SessionRef* request,
+grpc::Status HapticService::CloseSession(grpc::ServerContext* context, const v1::SessionRef* request,
                                          v1::Empty*) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   deps_.sessions.close(request->session_id());
   end_session(request->session_id(), v1::Event::SESSION_CLOSED);
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::CreateObject(grpc::ServerContext*, const v1::CreateObjectRequest* request,
+grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1::CreateObjectRequest* request,
                                          v1::ItemRef* response) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   engine::ObjectSpec spec;
   if (auto error = to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -201,9 +221,9 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext*, const v1::CreateO
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::UpdateObject(grpc::ServerContext*, const v1::UpdateObjectRequest* request,
+grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1::UpdateObjectRequest* request,
                                          v1::ItemRef* response) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   engine::ObjectSpec spec;
   if (auto error = to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -222,15 +242,15 @@ grpc::Status HapticService::UpdateObject(grpc::ServerContext*, const v1::UpdateO
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::DeleteObject(grpc::ServerContext*, const v1::DeleteRequest* request,
+grpc::Status HapticService::DeleteObject(grpc::ServerContext* context, const v1::DeleteRequest* request,
                                          v1::Empty*) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   return deps_.scene.remove(request->session_id(), ItemKind::kObject, request->id());
 }
 
-grpc::Status HapticService::CreateField(grpc::ServerContext*, const v1::CreateFieldRequest* request,
+grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::CreateFieldRequest* request,
                                         v1::ItemRef* response) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   engine::FieldSpec spec;
   if (auto error = to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -244,9 +264,9 @@ grpc::Status HapticService::CreateField(grpc::ServerContext*, const v1::CreateFi
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::UpdateField(grpc::ServerContext*, const v1::UpdateFieldRequest* request,
+grpc::Status HapticService::UpdateField(grpc::ServerContext* context, const v1::UpdateFieldRequest* request,
                                         v1::Empty*) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   engine::FieldSpec spec;
   if (auto error = to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -254,15 +274,15 @@ grpc::Status HapticService::UpdateField(grpc::ServerContext*, const v1::UpdateFi
   return deps_.scene.update(request->session_id(), ItemKind::kField, request->field_id(), spec);
 }
 
-grpc::Status HapticService::DeleteField(grpc::ServerContext*, const v1::DeleteRequest* request,
+grpc::Status HapticService::DeleteField(grpc::ServerContext* context, const v1::DeleteRequest* request,
                                         v1::Empty*) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   return deps_.scene.remove(request->session_id(), ItemKind::kField, request->id());
 }
 
-grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext*, const v1::SessionRef* request,
+grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext* context, const v1::SessionRef* request,
                                            v1::SceneEnergy* response) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   for (const engine::ItemEnergyTotals& item : deps_.scene.energy()) {
     v1::ItemEnergy& out = *response->add_items();
     out.set_id(item.id);
@@ -274,9 +294,9 @@ grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext*, const v1::Sessi
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::GetObjectStates(grpc::ServerContext*, const v1::SessionRef* request,
+grpc::Status HapticService::GetObjectStates(grpc::ServerContext* context, const v1::SessionRef* request,
                                             v1::ObjectStates* response) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   for (const engine::ObjectMotion& motion : deps_.scene.motions()) {
     v1::ObjectState& out = *response->add_objects();
     out.set_id(motion.id);
@@ -286,9 +306,9 @@ grpc::Status HapticService::GetObjectStates(grpc::ServerContext*, const v1::Sess
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplySceneRequest* request,
+grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::ApplySceneRequest* request,
                                        v1::ApplySceneResponse* response) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   // Validate everything first: one bad item rejects the whole scene and changes nothing.
   std::vector<engine::ObjectSpec> objects(static_cast<std::size_t>(request->scene().objects_size()));
   for (int i = 0; i < request->scene().objects_size(); ++i) {
@@ -331,16 +351,16 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext*, const v1::ApplyScen
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::GetDeviceInfo(grpc::ServerContext*, const v1::SessionRef* request,
+grpc::Status HapticService::GetDeviceInfo(grpc::ServerContext* context, const v1::SessionRef* request,
                                           v1::DeviceInfo* response) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   *response = device_info(deps_.sessions.device_index_of(request->session_id()).value_or(0));
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::GetStats(grpc::ServerContext*, const v1::SessionRef* request,
+grpc::Status HapticService::GetStats(grpc::ServerContext* context, const v1::SessionRef* request,
                                      v1::Stats* response) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   *response = deps_.stats();
   return grpc::Status::OK;
 }
@@ -348,7 +368,7 @@ grpc::Status HapticService::GetStats(grpc::ServerContext*, const v1::SessionRef*
 grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
                                         const v1::WatchEventsRequest* request,
                                         grpc::ServerWriter<v1::Event>* writer) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   auto watcher = deps_.events.watch();
   // Tell the client the watch is live, so it can act knowing it will miss nothing from here on.
   v1::Event started;
@@ -365,10 +385,10 @@ grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::SubscribeState(grpc::ServerContext*,
+grpc::Status HapticService::SubscribeState(grpc::ServerContext* context,
                                            const v1::SubscribeStateRequest* request,
                                            v1::SubscribeStateResponse* response) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   if (request->decimation() > kMaxDecimation) {
     return invalid("decimation: must be 0 (stop) to " + std::to_string(kMaxDecimation) + ", got " +
                    std::to_string(request->decimation()));
@@ -381,9 +401,9 @@ grpc::Status HapticService::SubscribeState(grpc::ServerContext*,
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::SetOperator(grpc::ServerContext*, const v1::SetOperatorRequest* request,
+grpc::Status HapticService::SetOperator(grpc::ServerContext* context, const v1::SetOperatorRequest* request,
                                         v1::Empty*) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   const DevicePort& port = port_of(request->session_id());
   if (!port.set_hand) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
@@ -397,9 +417,9 @@ grpc::Status HapticService::SetOperator(grpc::ServerContext*, const v1::SetOpera
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::Step(grpc::ServerContext*, const v1::StepRequest* request,
+grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepRequest* request,
                                  v1::StepResponse* response) {
-  if (auto status = check_session(request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   if (deps_.loop.config().mode != runtime::TimeMode::kLockstep) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
             "Step: the server runs in REAL_TIME; start it with time_mode LOCKSTEP"};

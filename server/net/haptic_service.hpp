@@ -81,7 +81,9 @@ class HapticService final : public v1::Haptic::Service {
 
  private:
   double period_s() const { return 1.0 / deps_.loop.config().rate_hz; }
-  grpc::Status check_session(std::uint64_t session_id) const;
+  /// OK when the session exists and the call carries its secret (the lease is then renewed);
+  /// NOT_FOUND or PERMISSION_DENIED naming the session otherwise.
+  grpc::Status check_session(const grpc::ServerContext* context, std::uint64_t session_id) const;
   /// The device port an open session is bound to (port 0's if it has just gone).
   const DevicePort& port_of(std::uint64_t session_id) const;
 

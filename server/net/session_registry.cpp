@@ -32,6 +32,7 @@ std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
   session.info.client_name = client_name;
   session.info.device_index = device_index;
   for (auto& byte : session.info.key) byte = static_cast<std::uint8_t>(entropy());
+  for (auto& byte : session.info.secret) byte = static_cast<std::uint8_t>(entropy());
   session.last_seen = SteadyClock::now();
   SessionInfo info = session.info;
   sessions_.emplace(info.id, std::move(session));
@@ -43,6 +44,22 @@ bool SessionRegistry::close(std::uint64_t session_id) {
   if (sessions_.erase(session_id) == 0) return false;
   ++version_;
   return true;
+}
+
+Access SessionRegistry::authorize(std::uint64_t session_id, std::span<const std::uint8_t> secret) {
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(session_id);
+  if (it == sessions_.end()) return Access::kNoSuchSession;
+  const SessionSecret& own = it->second.info.secret;
+  // Every byte is compared whatever the first difference, so the time taken does not tell a
+  // guesser how much of a guess was right.
+  std::uint8_t difference = secret.size() == own.size() ? 0 : 1;
+  for (std::size_t i = 0; i < own.size(); ++i) {
+    difference |= static_cast<std::uint8_t>(own[i] ^ (i < secret.size() ? secret[i] : 0));
+  }
+  if (difference != 0) return Access::kWrongSecret;
+  it->second.last_seen = SteadyClock::now();
+  return Access::kGranted;
 }
 
 bool SessionRegistry::touch(std::uint64_t session_id) {

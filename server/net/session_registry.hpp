@@ -5,11 +5,13 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <map>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -25,11 +27,22 @@ struct UdpAddress {
   socklen_t length = 0;
 };
 
+/// The control plane's capability for a session (haptic/io/session_secret.hpp).
+using SessionSecret = std::array<std::uint8_t, 16>;
+
 struct SessionInfo {
-  std::uint64_t id = 0;
+  std::uint64_t id = 0;            // a handle: shown to others (events, energy), grants nothing
   std::string client_name;
-  wire::Key key{};
+  wire::Key key{};                 // the UDP datagrams' SipHash key
+  SessionSecret secret{};          // sent with every session-scoped call; never shown to others
   std::uint32_t device_index = 0;  // the device port the session is bound to
+};
+
+/// What a session-scoped call may do.
+enum class Access {
+  kGranted,        // the session exists and the secret is its own (the lease is renewed)
+  kNoSuchSession,  // never opened, closed, or its lease expired
+  kWrongSecret,    // the session exists, but the caller is not the client that opened it
 };
 
 /// What the data-plane sender needs per subscribed session.
@@ -51,6 +64,8 @@ class SessionRegistry {
   std::optional<SessionInfo> open(const std::string& client_name, std::uint32_t device_index = 0);
   /// Removes the session; false if it did not exist.
   bool close(std::uint64_t session_id);
+  /// Checks that `secret` is the session's own (in constant time) and, if so, renews the lease.
+  Access authorize(std::uint64_t session_id, std::span<const std::uint8_t> secret);
   /// Renews the lease; false if the session does not exist.
   bool touch(std::uint64_t session_id);
   std::optional<wire::Key> key_of(std::uint64_t session_id) const;

@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "haptic/io/session_secret.hpp"
 #include "haptic/v1/service.grpc.pb.h"
 #include "haptic/wire/datagram.hpp"
 #include "integration/server_process.hpp"
@@ -47,10 +48,14 @@ class WireLevel : public ::testing::Test {
     if (socket_ >= 0) ::close(socket_);
   }
 
+  /// One unary call carrying a session secret: by default this fixture's session's.
   template <typename Method, typename Request, typename Response>
-  grpc::Status call(Method method, const Request& request, Response& response) {
+  grpc::Status call(Method method, const Request& request, Response& response,
+                    const std::string* secret = nullptr) {
     grpc::ClientContext context;
     context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+    const std::string& own = secret ? *secret : session_.session_secret();
+    if (!own.empty()) context.AddMetadata(io::kSessionSecretMetadataKey, own);
     return ((*stub_).*method)(&context, request, &response);
   }
 
@@ -206,6 +211,7 @@ TEST_F(WireLevel, InvalidRequestsNameTheFieldAndChangeNothing) {
 TEST_F(WireLevel, EventsStreamReportsOtherSessionsOpeningAndClosing) {
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  context.AddMetadata(io::kSessionSecretMetadataKey, session_.session_secret());
   v1::WatchEventsRequest watch;
   watch.set_session_id(session_.session_id());
   auto reader = stub_->WatchEvents(&context, watch);
@@ -221,7 +227,7 @@ TEST_F(WireLevel, EventsStreamReportsOtherSessionsOpeningAndClosing) {
   v1::SessionRef close;
   close.set_session_id(second.session_id());
   v1::Empty empty;
-  ASSERT_TRUE(call(&v1::Haptic::Stub::CloseSession, close, empty).ok());
+  ASSERT_TRUE(call(&v1::Haptic::Stub::CloseSession, close, empty, &second.session_secret()).ok());
 
   ASSERT_TRUE(reader->Read(&event));
   EXPECT_EQ(event.kind(), v1::Event::SESSION_OPENED);
@@ -250,7 +256,8 @@ TEST_F(WireLevel, AnotherSessionsObjectIsPermissionDenied) {
   remove.set_session_id(intruder.session_id());
   remove.set_id(item.id());
   v1::Empty empty;
-  const grpc::Status status = call(&v1::Haptic::Stub::DeleteObject, remove, empty);
+  const grpc::Status status =
+      call(&v1::Haptic::Stub::DeleteObject, remove, empty, &intruder.session_secret());
   EXPECT_EQ(status.error_code(), grpc::StatusCode::PERMISSION_DENIED);
   EXPECT_EQ(stats().objects(), 1u);
 }

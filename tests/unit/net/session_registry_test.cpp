@@ -55,6 +55,26 @@ TEST(SessionRegistry, HeartbeatsSetTheAddressAndStaleOnesAreRejected) {
   EXPECT_FALSE(registry.on_heartbeat(12345, 9, loopback(4000)));  // unknown session
 }
 
+TEST(SessionRegistry, OnlyTheSessionsOwnSecretGrantsAccess) {
+  SessionRegistry registry(4, std::chrono::milliseconds(1000));
+  const auto alice = registry.open("alice");
+  const auto bob = registry.open("bob");
+  ASSERT_TRUE(alice && bob);
+  EXPECT_NE(alice->secret, bob->secret);
+  EXPECT_NE(alice->secret, SessionSecret{});
+  const std::span<const std::uint8_t> alices(alice->secret), bobs(bob->secret);
+  EXPECT_EQ(registry.authorize(alice->id, alices), Access::kGranted);
+  EXPECT_EQ(registry.authorize(alice->id, bobs), Access::kWrongSecret);
+  EXPECT_EQ(registry.authorize(alice->id, {}), Access::kWrongSecret);
+  EXPECT_EQ(registry.authorize(alice->id, alices.first(15)), Access::kWrongSecret);
+  SessionSecret flipped = alice->secret;
+  flipped[15] ^= 0x80;  // the last byte counts as much as the first
+  EXPECT_EQ(registry.authorize(alice->id, flipped), Access::kWrongSecret);
+  EXPECT_EQ(registry.authorize(12345, alices), Access::kNoSuchSession);
+  ASSERT_TRUE(registry.close(alice->id));
+  EXPECT_EQ(registry.authorize(alice->id, alices), Access::kNoSuchSession);
+}
+
 TEST(SessionRegistry, SilentSessionsExpire) {
   SessionRegistry registry(4, std::chrono::milliseconds(100));
   const auto quiet = registry.open("quiet");
