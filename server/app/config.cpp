@@ -85,6 +85,8 @@ void fill_defaults(v1::ServerConfig& config) {
   if (!config.has_status_period_s()) config.set_status_period_s(5);
   if (config.max_sessions() == 0) config.set_max_sessions(32);
   if (config.max_objects_per_session() == 0) config.set_max_objects_per_session(256);
+  if (config.max_event_streams() == 0) config.set_max_event_streams(32);
+  if (config.max_event_streams_per_session() == 0) config.set_max_event_streams_per_session(4);
 
   fill_point_mass_defaults(*config.mutable_simulated_point_mass());
   for (v1::DeviceConfig& extra : *config.mutable_extra_devices()) {
@@ -123,6 +125,15 @@ std::string validate(const v1::ServerConfig& config) {
     return "time_mode: must be REAL_TIME or LOCKSTEP";
   }
   if (auto e = check_exposure(config); !e.empty()) return e;
+  if (config.max_event_streams() > 1024) {
+    return "max_event_streams: must be 1 to 1024 (each holds a thread), got " +
+           std::to_string(config.max_event_streams());
+  }
+  if (config.max_event_streams_per_session() > config.max_event_streams()) {
+    return "max_event_streams_per_session: must be at most max_event_streams (" +
+           std::to_string(config.max_event_streams()) + "), got " +
+           std::to_string(config.max_event_streams_per_session());
+  }
   if (auto e = validate_point_mass(config.simulated_point_mass()); !e.empty()) return e;
   if (config.real_time().fifo_priority() < 1 || config.real_time().fifo_priority() > 99) {
     return "real_time.fifo_priority: must be 1 to 99";

@@ -1,5 +1,6 @@
 #include "app/server.hpp"
 
+#include <grpcpp/resource_quota.h>
 #include <grpcpp/server_builder.h>
 #include <spdlog/spdlog.h>
 
@@ -13,6 +14,9 @@
 
 namespace haptic::app {
 namespace {
+
+/// Control-plane threads for unary calls, beside those the event streams may hold.
+constexpr int kUnaryCallThreads = 32;
 
 std::int64_t ms_to_ticks(std::uint32_t ms, double rate_hz) {
   return std::max<std::int64_t>(1, std::llround(static_cast<double>(ms) * 1e-3 * rate_hz));
@@ -45,6 +49,7 @@ Server::Server(const v1::ServerConfig& config)
       scenes_(empty_scene(static_cast<std::uint32_t>(simulated_.size()))),
       samples_(make_rings(simulated_.size())),
       sessions_(config.max_sessions(), std::chrono::milliseconds(config.lease_timeout_ms())),
+      events_(net::WatchLimits{config.max_event_streams_per_session(), config.max_event_streams()}),
       udp_(sessions_, ring_pointers(samples_)) {
   const double rate = config.loop_rate_hz();
   const auto ports = static_cast<std::uint32_t>(simulated_.size());
@@ -119,6 +124,12 @@ Server::Server(const v1::ServerConfig& config)
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
       [this] { return stats(); }});
   grpc::ServerBuilder builder;
+  // Every call in progress holds a thread of gRPC's sync pool, an event stream for its whole life:
+  // cap the pool, so that a flood of calls is refused (RESOURCE_EXHAUSTED) instead of growing it
+  // without bound. Room for every allowed stream plus the unary calls of a busy server.
+  grpc::ResourceQuota quota("hapticd-control-plane");
+  quota.SetMaxThreads(static_cast<int>(config.max_event_streams()) + kUnaryCallThreads);
+  builder.SetResourceQuota(quota);
   int selected_port = 0;
   builder.AddListeningPort(config.grpc_address(), grpc::InsecureServerCredentials(), &selected_port);
   builder.RegisterService(service_.get());

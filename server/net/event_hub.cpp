@@ -13,14 +13,33 @@ std::optional<v1::Event> EventHub::Watcher::next(std::chrono::milliseconds timeo
   return event;
 }
 
-bool EventHub::Watcher::closed() const {
+bool EventHub::Watcher::finished() const {
   std::lock_guard lock(mutex_);
-  return closed_;
+  return closed_ && queue_.empty();
 }
 
-std::shared_ptr<EventHub::Watcher> EventHub::watch() {
-  auto watcher = std::make_shared<Watcher>();
+std::shared_ptr<EventHub::Watcher> EventHub::watch(std::uint64_t session_id, std::string& refusal) {
   std::lock_guard lock(mutex_);
+  if (closed_) {
+    refusal = "the server is shutting down";
+    return nullptr;
+  }
+  const auto held = static_cast<std::size_t>(std::count_if(
+      watchers_.begin(), watchers_.end(),
+      [&](const std::shared_ptr<Watcher>& w) { return w->session_id_ == session_id; }));
+  if (held >= limits_.per_session) {
+    refusal = "WatchEvents: session " + std::to_string(session_id) + " already holds " +
+              std::to_string(held) + " event streams, the most one session may (" +
+              std::to_string(limits_.per_session) + ")";
+    return nullptr;
+  }
+  if (watchers_.size() >= limits_.total) {
+    refusal = "WatchEvents: the server already serves " + std::to_string(watchers_.size()) +
+              " event streams, its most (max_event_streams = " + std::to_string(limits_.total) + ")";
+    return nullptr;
+  }
+  auto watcher = std::make_shared<Watcher>();
+  watcher->session_id_ = session_id;
   watchers_.push_back(watcher);
   return watcher;
 }
@@ -35,6 +54,7 @@ void EventHub::publish(const v1::Event& event) {
   for (const auto& watcher : watchers_) {
     {
       std::lock_guard watcher_lock(watcher->mutex_);
+      if (watcher->closed_) continue;
       if (watcher->queue_.size() >= kQueueLimit) {
         watcher->queue_.pop_front();
         ++watcher->lost_;
@@ -45,16 +65,30 @@ void EventHub::publish(const v1::Event& event) {
   }
 }
 
-void EventHub::close() {
+void EventHub::end(Watcher& watcher) {
+  {
+    std::lock_guard watcher_lock(watcher.mutex_);
+    watcher.closed_ = true;
+  }
+  watcher.ready_.notify_all();
+}
+
+void EventHub::end_session(std::uint64_t session_id) {
   std::lock_guard lock(mutex_);
   for (const auto& watcher : watchers_) {
-    {
-      std::lock_guard watcher_lock(watcher->mutex_);
-      watcher->closed_ = true;
-    }
-    watcher->ready_.notify_all();
+    if (watcher->session_id_ == session_id) end(*watcher);
   }
-  watchers_.clear();
+}
+
+void EventHub::close() {
+  std::lock_guard lock(mutex_);
+  closed_ = true;
+  for (const auto& watcher : watchers_) end(*watcher);
+}
+
+std::size_t EventHub::size() const {
+  std::lock_guard lock(mutex_);
+  return watchers_.size();
 }
 
 }  // namespace haptic::net

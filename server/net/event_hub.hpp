@@ -1,6 +1,8 @@
 #pragma once
 // Fan-out of server events to WatchEvents streams. Each watcher has a bounded queue; a watcher
 // that does not keep up loses its oldest events (counted) rather than slowing anyone else.
+// Watches are bounded per session and server-wide (every one holds a control-plane thread for its
+// lifetime), and a session's watches end with it.
 
 #include <chrono>
 #include <condition_variable>
@@ -9,22 +11,31 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "haptic/v1/service.pb.h"
 
 namespace haptic::net {
 
+struct WatchLimits {
+  std::size_t per_session = 4;  // WatchEvents streams one session may hold at once
+  std::size_t total = 32;       // ... and all sessions together
+};
+
 class EventHub {
  public:
   class Watcher {
    public:
-    /// Waits up to `timeout` for the next event; nullopt on timeout or when the hub closed.
+    /// Waits up to `timeout` for the next event; nullopt on timeout or when the watch has ended
+    /// and every event queued before the end has been taken.
     std::optional<v1::Event> next(std::chrono::milliseconds timeout);
-    bool closed() const;
+    /// The watch has ended (its session ended, or the hub closed) and its queue is drained.
+    bool finished() const;
 
    private:
     friend class EventHub;
+    std::uint64_t session_id_ = 0;
     mutable std::mutex mutex_;
     std::condition_variable ready_;
     std::deque<v1::Event> queue_;
@@ -34,15 +45,29 @@ class EventHub {
 
   static constexpr std::size_t kQueueLimit = 1024;
 
-  std::shared_ptr<Watcher> watch();
+  explicit EventHub(WatchLimits limits = {}) : limits_(limits) {}
+
+  /// A new watch for `session_id`; nullptr, with `refusal` naming the limit, when the session or
+  /// the server already holds its most.
+  std::shared_ptr<Watcher> watch(std::uint64_t session_id, std::string& refusal);
   void unwatch(const std::shared_ptr<Watcher>& watcher);
   void publish(const v1::Event& event);
+  /// Ends the session's watches once they have delivered what is queued (the session's own
+  /// closing event among it).
+  void end_session(std::uint64_t session_id);
   /// Ends every watch (shutdown).
   void close();
+  /// Watches open now.
+  std::size_t size() const;
+  const WatchLimits& limits() const { return limits_; }
 
  private:
-  std::mutex mutex_;
+  static void end(Watcher& watcher);
+
+  WatchLimits limits_;
+  mutable std::mutex mutex_;
   std::vector<std::shared_ptr<Watcher>> watchers_;
+  bool closed_ = false;
 };
 
 }  // namespace haptic::net

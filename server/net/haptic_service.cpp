@@ -137,6 +137,7 @@ void HapticService::end_session(std::uint64_t session_id, v1::Event::Kind why) {
   const std::size_t faded = deps_.scene.remove_session(session_id);
   publish_event(why, session_id,
                 std::to_string(faded) + " objects and fields ramping out");
+  deps_.events.end_session(session_id);
 }
 
 v1::DeviceInfo HapticService::device_info(std::uint32_t port) const {
@@ -369,14 +370,18 @@ grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
                                         const v1::WatchEventsRequest* request,
                                         grpc::ServerWriter<v1::Event>* writer) {
   if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
-  auto watcher = deps_.events.watch();
+  std::string refusal;
+  auto watcher = deps_.events.watch(request->session_id(), refusal);
+  if (!watcher) return {grpc::StatusCode::RESOURCE_EXHAUSTED, refusal};
   // Tell the client the watch is live, so it can act knowing it will miss nothing from here on.
   v1::Event started;
   started.set_kind(v1::Event::WATCH_STARTED);
   started.set_session_id(request->session_id());
   started.set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
   writer->Write(started);
-  while (!context->IsCancelled() && !watcher->closed()) {
+  // Until the client cancels, or the session (or the server) ends: a watch never outlives its
+  // session, so a client cannot keep threads by abandoning sessions.
+  while (!context->IsCancelled() && !watcher->finished()) {
     if (auto event = watcher->next(std::chrono::milliseconds(100))) {
       if (!writer->Write(*event)) break;
     }

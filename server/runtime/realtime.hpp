@@ -8,7 +8,7 @@ namespace haptic::runtime {
 
 struct RealtimeSetup {
   bool fifo = false;            // SCHED_FIFO granted to the calling thread
-  bool memory_locked = false;   // mlockall(MCL_CURRENT | MCL_FUTURE) succeeded
+  bool memory_locked = false;   // mlockall(MCL_CURRENT | MCL_FUTURE | MCL_ONFAULT) succeeded
   std::string fifo_error;       // why not, when not
   std::string mlock_error;
   int cpu = -1;                 // the CPU the loop is pinned to, -1 if none

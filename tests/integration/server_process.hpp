@@ -80,6 +80,7 @@ class ServerProcess {
   }
 
   std::string address() const { return "127.0.0.1:" + std::to_string(grpc_port_); }
+  pid_t pid() const { return pid_; }
   std::uint16_t udp_port() const { return udp_port_; }
 
  private:

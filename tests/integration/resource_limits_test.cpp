@@ -1,0 +1,181 @@
+// What one client can take from the server, tried from outside with bounded loops on loopback:
+// event streams are capped per session and in all (each holds a control-plane thread), refused
+// with RESOURCE_EXHAUSTED naming the cap, and end with their session; memory does not grow with
+// the attempts, locked memory included (the loop runs with SCHED_FIFO and mlockall where allowed).
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "haptic/io/session_secret.hpp"
+#include "haptic/v1/service.grpc.pb.h"
+#include "integration/server_process.hpp"
+
+namespace haptic {
+namespace {
+
+using Clock = std::chrono::system_clock;
+
+/// A field of /proc/<pid>/status in kB ("VmRSS", "VmLck"); -1 if absent.
+long status_kb(pid_t pid, const std::string& field) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind(field + ":", 0) == 0) return std::stol(line.substr(field.size() + 1));
+  }
+  return -1;
+}
+
+class ResourceLimits : public ::testing::Test {
+ protected:
+  // Real time, so that the loop asks for SCHED_FIFO and locks memory as a deployed server does.
+  test::ServerProcess server_{R"({"time_mode": "REAL_TIME", "udp_address": "127.0.0.1",
+    "status_period_s": 0, "real_time": {"use_fifo": true, "cpu": -1},
+    "max_event_streams": 8, "max_event_streams_per_session": 4})"};
+  std::unique_ptr<v1::Haptic::Stub> stub_ = v1::Haptic::NewStub(
+      grpc::CreateChannel(server_.address(), grpc::InsecureChannelCredentials()));
+
+  v1::OpenSessionResponse open(const std::string& name) {
+    v1::OpenSessionRequest request;
+    request.set_client_name(name);
+    request.set_api_version(v1::API_VERSION_CURRENT);
+    v1::OpenSessionResponse response;
+    grpc::ClientContext context;
+    context.set_deadline(Clock::now() + std::chrono::seconds(5));
+    EXPECT_TRUE(stub_->OpenSession(&context, request, &response).ok());
+    return response;
+  }
+
+  v1::Stats stats(const v1::OpenSessionResponse& session) {
+    v1::SessionRef ref;
+    ref.set_session_id(session.session_id());
+    v1::Stats out;
+    grpc::ClientContext context;
+    context.set_deadline(Clock::now() + std::chrono::seconds(5));
+    context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
+    EXPECT_TRUE(stub_->GetStats(&context, ref, &out).ok());
+    return out;
+  }
+
+  /// One WatchEvents call in flight.
+  struct Stream {
+    grpc::ClientContext context;
+    std::unique_ptr<grpc::ClientReader<v1::Event>> reader;
+  };
+
+  std::unique_ptr<Stream> watch(const v1::OpenSessionResponse& session) {
+    auto stream = std::make_unique<Stream>();
+    stream->context.set_deadline(Clock::now() + std::chrono::seconds(60));
+    stream->context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
+    v1::WatchEventsRequest request;
+    request.set_session_id(session.session_id());
+    stream->reader = stub_->WatchEvents(&stream->context, request);
+    return stream;
+  }
+
+  /// Starts `count` streams at once, then reads each one's first message: the ones the server
+  /// took say WATCH_STARTED (kept open in `open`); the others end RESOURCE_EXHAUSTED.
+  struct Outcome {
+    std::vector<std::unique_ptr<Stream>> open;
+    int refused = 0;
+    int refused_otherwise = 0;  // any other ending: none expected
+    std::string message;        // of one refusal by the cap (not by gRPC's thread quota)
+  };
+  Outcome attempt(const v1::OpenSessionResponse& session, int count) {
+    std::vector<std::unique_ptr<Stream>> streams;
+    for (int i = 0; i < count; ++i) streams.push_back(watch(session));
+    Outcome outcome;
+    for (auto& stream : streams) {
+      v1::Event first;
+      if (stream->reader->Read(&first) && first.kind() == v1::Event::WATCH_STARTED) {
+        outcome.open.push_back(std::move(stream));
+        continue;
+      }
+      const grpc::Status status = stream->reader->Finish();
+      if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
+        ++outcome.refused;
+        if (status.error_message().rfind("WatchEvents:", 0) == 0) outcome.message = status.error_message();
+      } else {
+        ++outcome.refused_otherwise;
+      }
+    }
+    return outcome;
+  }
+};
+
+TEST_F(ResourceLimits, TwoThousandStreamAttemptsAreRefusedPastTheCapsAndMemoryStaysPut) {
+  const v1::OpenSessionResponse first = open("flooder");
+  const v1::OpenSessionResponse second = open("second");
+  const v1::OpenSessionResponse third = open("third");
+  // Warm up one stream's worth of machinery before the baseline.
+  { auto warm = attempt(third, 1); ASSERT_EQ(warm.open.size(), 1u); warm.open.front()->context.TryCancel(); }
+  const long rss_before = status_kb(server_.pid(), "VmRSS");
+  const long locked_before = status_kb(server_.pid(), "VmLck");
+  const v1::Stats stats_before = stats(first);
+
+  Outcome flood = attempt(first, 2000);
+  EXPECT_EQ(flood.open.size(), 4u);  // max_event_streams_per_session
+  EXPECT_EQ(flood.refused, 1996);
+  EXPECT_EQ(flood.refused_otherwise, 0);
+  EXPECT_NE(flood.message.find("already holds 4 event streams, the most one session may (4)"),
+            std::string::npos)
+      << flood.message;
+
+  // The server-wide cap: 4 + 4 = 8 taken; the third session's are refused naming that cap.
+  Outcome more = attempt(second, 4);
+  EXPECT_EQ(more.open.size(), 4u);
+  Outcome over = attempt(third, 2);
+  EXPECT_EQ(over.open.size(), 0u);
+  EXPECT_EQ(over.refused, 2);
+  EXPECT_NE(over.message.find("its most (max_event_streams = 8)"), std::string::npos) << over.message;
+
+  const long rss_after = status_kb(server_.pid(), "VmRSS");
+  const long locked_after = status_kb(server_.pid(), "VmLck");
+  const v1::Stats stats_after = stats(first);
+  std::printf("  2,006 stream attempts: RSS %ld -> %ld kB, locked mappings %ld -> %ld kB, "
+              "loop overruns %llu -> %llu, ticks %llu -> %llu\n",
+              rss_before, rss_after, locked_before, locked_after,
+              static_cast<unsigned long long>(stats_before.overruns()),
+              static_cast<unsigned long long>(stats_after.overruns()),
+              static_cast<unsigned long long>(stats_before.ticks()),
+              static_cast<unsigned long long>(stats_after.ticks()));
+  // Before the caps each stream held a thread whose 8 MB stack mlockall made resident: 16 GB for
+  // 2,000. Now the attempts cost what a few calls cost. (VmLck counts the locked mappings' whole
+  // size; with MCL_ONFAULT only their resident pages are locked, and those are in VmRSS.)
+  EXPECT_LT(rss_after - rss_before, 64 * 1024);
+  EXPECT_GT(stats_after.ticks(), stats_before.ticks());  // the loop kept running
+
+  // A stream ends with its session: closing the flooder's session ends its four, cleanly.
+  {
+    v1::SessionRef ref;
+    ref.set_session_id(first.session_id());
+    v1::Empty empty;
+    grpc::ClientContext context;
+    context.set_deadline(Clock::now() + std::chrono::seconds(5));
+    context.AddMetadata(io::kSessionSecretMetadataKey, first.session_secret());
+    ASSERT_TRUE(stub_->CloseSession(&context, ref, &empty).ok());
+  }
+  for (auto& stream : flood.open) {
+    v1::Event event;
+    bool closed_seen = false;
+    while (stream->reader->Read(&event)) {
+      closed_seen = closed_seen || (event.kind() == v1::Event::SESSION_CLOSED &&
+                                    event.session_id() == first.session_id());
+    }
+    EXPECT_TRUE(closed_seen);  // its own ending was delivered before the stream ended
+    EXPECT_TRUE(stream->reader->Finish().ok());
+  }
+  // Their places are free again.
+  Outcome again = attempt(third, 4);
+  EXPECT_EQ(again.open.size(), 4u);
+  for (auto* outcome : {&more, &again}) {
+    for (auto& stream : outcome->open) stream->context.TryCancel();
+  }
+}
+
+}  // namespace
+}  // namespace haptic

@@ -1,0 +1,65 @@
+// WatchEvents fan-out: every watcher gets every event; watches are capped per session and in all;
+// a session's watches end with it, after what was queued for them.
+#include <gtest/gtest.h>
+
+#include <chrono>
+
+#include "net/event_hub.hpp"
+
+namespace haptic::net {
+namespace {
+
+using std::chrono::milliseconds;
+
+v1::Event event_of(v1::Event::Kind kind, std::uint64_t session_id) {
+  v1::Event event;
+  event.set_kind(kind);
+  event.set_session_id(session_id);
+  return event;
+}
+
+TEST(EventHub, WatchesAreCappedPerSessionAndInAllNamingTheLimit) {
+  EventHub hub(WatchLimits{2, 3});
+  std::string refusal;
+  auto a1 = hub.watch(1, refusal);
+  auto a2 = hub.watch(1, refusal);
+  ASSERT_TRUE(a1 && a2);
+  EXPECT_EQ(hub.watch(1, refusal), nullptr);
+  EXPECT_EQ(refusal, "WatchEvents: session 1 already holds 2 event streams, the most one session may (2)");
+  auto b1 = hub.watch(2, refusal);
+  ASSERT_TRUE(b1);
+  EXPECT_EQ(hub.watch(3, refusal), nullptr);
+  EXPECT_EQ(refusal,
+            "WatchEvents: the server already serves 3 event streams, its most (max_event_streams = 3)");
+  hub.unwatch(a1);
+  EXPECT_NE(hub.watch(3, refusal), nullptr);  // room again
+  EXPECT_EQ(hub.size(), 3u);
+}
+
+TEST(EventHub, ASessionsWatchesEndWithItAfterDeliveringWhatWasQueued) {
+  EventHub hub;
+  std::string refusal;
+  auto mine = hub.watch(7, refusal);
+  auto other = hub.watch(8, refusal);
+  hub.publish(event_of(v1::Event::SCENE_CHANGED, 7));
+  hub.publish(event_of(v1::Event::SESSION_CLOSED, 7));
+  hub.end_session(7);
+  hub.publish(event_of(v1::Event::SCENE_CHANGED, 8));  // after the end: not for the ended watch
+  EXPECT_FALSE(mine->finished());                      // two events still to deliver
+  ASSERT_EQ(mine->next(milliseconds(0))->kind(), v1::Event::SCENE_CHANGED);
+  ASSERT_EQ(mine->next(milliseconds(0))->kind(), v1::Event::SESSION_CLOSED);
+  EXPECT_FALSE(mine->next(milliseconds(0)));
+  EXPECT_TRUE(mine->finished());
+  // The other session's watch goes on and has seen all three.
+  EXPECT_FALSE(other->finished());
+  int seen = 0;
+  while (other->next(milliseconds(0))) ++seen;
+  EXPECT_EQ(seen, 3);
+  EXPECT_FALSE(other->finished());
+  hub.close();
+  EXPECT_TRUE(other->finished());
+  EXPECT_EQ(hub.watch(9, refusal), nullptr);  // no new watch during shutdown
+}
+
+}  // namespace
+}  // namespace haptic::net
