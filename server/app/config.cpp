@@ -4,6 +4,7 @@
 #include <google/protobuf/util/json_util.h>
 #include <netdb.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -87,6 +88,11 @@ void fill_defaults(v1::ServerConfig& config) {
   if (config.max_objects_per_session() == 0) config.set_max_objects_per_session(256);
   if (config.max_event_streams() == 0) config.set_max_event_streams(32);
   if (config.max_event_streams_per_session() == 0) config.set_max_event_streams_per_session(4);
+  if (config.max_sessions_per_peer() == 0) {
+    config.set_max_sessions_per_peer(std::min<std::uint32_t>(16, config.max_sessions()));
+  }
+  if (config.max_scene_triangles() == 0) config.set_max_scene_triangles(200'000);
+  if (config.max_scene_bytes() == 0) config.set_max_scene_bytes(64ull << 20);
 
   fill_point_mass_defaults(*config.mutable_simulated_point_mass());
   for (v1::DeviceConfig& extra : *config.mutable_extra_devices()) {
@@ -125,6 +131,11 @@ std::string validate(const v1::ServerConfig& config) {
     return "time_mode: must be REAL_TIME or LOCKSTEP";
   }
   if (auto e = check_exposure(config); !e.empty()) return e;
+  if (config.max_sessions_per_peer() > config.max_sessions()) {
+    return "max_sessions_per_peer: must be at most max_sessions (" +
+           std::to_string(config.max_sessions()) + "), got " +
+           std::to_string(config.max_sessions_per_peer());
+  }
   if (config.max_event_streams() > 1024) {
     return "max_event_streams: must be 1 to 1024 (each holds a thread), got " +
            std::to_string(config.max_event_streams());

@@ -48,7 +48,8 @@ Server::Server(const v1::ServerConfig& config)
       simulated_(make_devices(config)),
       scenes_(empty_scene(static_cast<std::uint32_t>(simulated_.size()))),
       samples_(make_rings(simulated_.size())),
-      sessions_(config.max_sessions(), std::chrono::milliseconds(config.lease_timeout_ms())),
+      sessions_(net::SessionLimits{config.max_sessions(), config.max_sessions_per_peer(),
+                                   std::chrono::milliseconds(config.lease_timeout_ms())}),
       events_(net::WatchLimits{config.max_event_streams_per_session(), config.max_event_streams()}),
       udp_(sessions_, ring_pointers(samples_)) {
   const double rate = config.loop_rate_hz();
@@ -74,7 +75,8 @@ Server::Server(const v1::ServerConfig& config)
   scene_ = std::make_unique<net::SceneStore>(
       scenes_, [this] { return static_cast<std::int64_t>(loop_->completed_ticks() + 1); },
       tick.output_ramp_ticks, config.max_objects_per_session(), tick.period_s,
-      config.session_force_budget(), ports);
+      config.session_force_budget(), ports,
+      net::SceneBudget{config.max_scene_triangles(), config.max_scene_bytes()});
 
   // The initial scene belongs to the server itself (session 0) and never expires.
   net::SceneLimits limits;
@@ -101,7 +103,11 @@ Server::Server(const v1::ServerConfig& config)
     }
   }
   std::vector<std::uint64_t> object_ids, field_ids;
-  (void)scene_->replace_session_scene(0, objects, fields, object_ids, field_ids);
+  if (const grpc::Status status =
+          scene_->replace_session_scene(0, objects, fields, object_ids, field_ids);
+      !status.ok()) {
+    throw std::runtime_error("initial_scene: " + status.error_message());
+  }
 
   engine::HandInput hand;
   if (auto e = net::to_hand_input(config.initial_operator(), "initial_operator", limits, hand);

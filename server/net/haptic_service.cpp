@@ -177,10 +177,10 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::
                    " (this server has " + std::to_string(deps_.ports.size()) +
                    " device ports), got " + std::to_string(request->device_index()));
   }
-  const auto session = deps_.sessions.open(request->client_name(), request->device_index());
-  if (!session) {
-    return {grpc::StatusCode::RESOURCE_EXHAUSTED, "too many sessions open (max_sessions)"};
-  }
+  std::string refusal;
+  const auto session = deps_.sessions.open(request->client_name(), request->device_index(),
+                                           peer_host(context->peer()), &refusal);
+  if (!session) return {grpc::StatusCode::RESOURCE_EXHAUSTED, refusal};
   response->set_session_id(session->id);
   response->set_udp_key(std::string(session->key.begin(), session->key.end()));
   response->set_session_secret(std::string(session->secret.begin(), session->secret.end()));

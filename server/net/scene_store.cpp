@@ -23,16 +23,59 @@ engine::ItemMeta appearing(std::uint64_t session_id, std::uint64_t id, std::int6
 
 }  // namespace
 
+ItemCost cost_of(const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec) {
+  ItemCost cost;
+  cost.bytes = sizeof(spec);
+  const auto* object = std::get_if<engine::ObjectSpec>(&spec);
+  const auto* mesh = object ? std::get_if<engine::MeshShapeSpec>(&object->shape) : nullptr;
+  if (mesh != nullptr && mesh->model) {
+    const engine::Mesh& m = mesh->model->mesh;
+    cost.triangles = m.triangles.size();
+    cost.bytes += sizeof(engine::MeshModel) + m.vertices_O.capacity() * sizeof(engine::Vec3) +
+                  m.triangles.capacity() * sizeof(m.triangles[0]) + mesh->model->bvh.memory_bytes();
+  }
+  return cost;
+}
+
+grpc::Status SceneStore::check_budget(const ItemCost& added, const std::string& what) const {
+  ItemCost held;
+  const auto add = [&held](const Item& item) {
+    const ItemCost cost = cost_of(item.spec);
+    held.triangles += cost.triangles;
+    held.bytes += cost.bytes;
+  };
+  for (const auto& [id, item] : items_) add(item);
+  for (const Item& item : superseded_) add(item);
+  if (budget_.max_triangles > 0 && added.triangles > 0 &&
+      held.triangles + added.triangles > budget_.max_triangles) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED,
+            what + ": " + std::to_string(added.triangles) + " more triangles would bring the scene "
+                "(every session's, fading items included) to " +
+                std::to_string(held.triangles + added.triangles) + ", over max_scene_triangles (" +
+                std::to_string(budget_.max_triangles) + ")"};
+  }
+  if (budget_.max_bytes > 0 && held.bytes + added.bytes > budget_.max_bytes) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED,
+            what + ": " + std::to_string(added.bytes) + " more bytes would bring the scene "
+                "(every session's, fading items included) to " +
+                std::to_string(held.bytes + added.bytes) + " bytes, over max_scene_bytes (" +
+                std::to_string(budget_.max_bytes) + ")"};
+  }
+  return grpc::Status::OK;
+}
+
 SceneStore::SceneStore(runtime::SceneExchange& exchange, std::function<std::int64_t()> next_tick,
                        std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session,
-                       double period_s, double session_force_budget, std::uint32_t ports)
+                       double period_s, double session_force_budget, std::uint32_t ports,
+                       SceneBudget budget)
     : exchange_(exchange),
       next_tick_(std::move(next_tick)),
       removal_ramp_ticks_(removal_ramp_ticks < 1 ? 1 : removal_ramp_ticks),
       max_items_per_session_(max_items_per_session),
       period_s_(period_s),
       session_force_budget_(session_force_budget),
-      ports_(ports < 1 ? 1 : ports) {}
+      ports_(ports < 1 ? 1 : ports),
+      budget_(budget) {}
 
 std::uint32_t SceneStore::live_items_of(std::uint64_t session_id) const {
   std::uint32_t count = 0;
@@ -70,6 +113,7 @@ grpc::Status SceneStore::create(std::uint64_t session_id, ItemKind kind,
             "session already has " + std::to_string(max_items_per_session_) +
                 " objects and fields (max_objects_per_session)"};
   }
+  if (auto status = check_budget(cost_of(spec), kind_name(kind)); !status.ok()) return status;
   id_out = next_id_++;
   items_.emplace(id_out, Item{appearing(session_id, id_out, next_tick_(), next_version_key_++),
                               kind, spec});
@@ -82,6 +126,8 @@ grpc::Status SceneStore::update(std::uint64_t session_id, ItemKind kind, std::ui
   std::lock_guard lock(mutex_);
   Item* item = nullptr;
   if (auto status = find_owned(session_id, kind, id, item, true); !status.ok()) return status;
+  // The old version stays held while it fades out: the new one comes on top.
+  if (auto status = check_budget(cost_of(spec), kind_name(kind)); !status.ok()) return status;
   if (item->meta.session_id != session_id) {
     // Another session updates a shared object: it stays shared, and its owner's.
     const auto* updated = std::get_if<engine::ObjectSpec>(&spec);
@@ -149,6 +195,14 @@ grpc::Status SceneStore::replace_session_scene(std::uint64_t session_id,
                 " objects and fields exceed max_objects_per_session (" +
                 std::to_string(max_items_per_session_) + ")"};
   }
+  ItemCost added;  // the session's old items stay held while they fade out
+  for (const auto& object : objects) {
+    const ItemCost cost = cost_of(object);
+    added.triangles += cost.triangles;
+    added.bytes += cost.bytes;
+  }
+  for (const auto& field : fields) added.bytes += cost_of(field).bytes;
+  if (auto status = check_budget(added, "scene"); !status.ok()) return status;
   const std::int64_t fade_begin = next_tick_();
   for (auto& [id, item] : items_) {
     if (item.meta.session_id == session_id && is_live(item.meta)) {

@@ -14,6 +14,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <string>
 #include <variant>
 #include <vector>
 
@@ -24,6 +25,19 @@
 namespace haptic::net {
 
 enum class ItemKind { kObject, kField };
+
+/// The whole scene's budget (every session's items, fading ones included): 0 means none.
+struct SceneBudget {
+  std::uint64_t max_triangles = 0;
+  std::uint64_t max_bytes = 0;  // Unit: bytes.
+};
+
+/// What an item holds in memory.
+struct ItemCost {
+  std::uint64_t triangles = 0;
+  std::uint64_t bytes = 0;  // Unit: bytes: the description, a mesh and its hierarchy.
+};
+ItemCost cost_of(const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec);
 
 struct SceneCounts {
   std::uint32_t objects = 0;  // live (not fading)
@@ -38,7 +52,8 @@ class SceneStore {
   /// the loop evaluates every compiled scene at (>= 1).
   SceneStore(runtime::SceneExchange& exchange, std::function<std::int64_t()> next_tick,
              std::int64_t removal_ramp_ticks, std::uint32_t max_items_per_session,
-             double period_s = 1e-3, double session_force_budget = 0.0, std::uint32_t ports = 1);
+             double period_s = 1e-3, double session_force_budget = 0.0, std::uint32_t ports = 1,
+             SceneBudget budget = {});
 
   grpc::Status create(std::uint64_t session_id, ItemKind kind,
                       const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec,
@@ -81,6 +96,9 @@ class SceneStore {
   grpc::Status find_owned(std::uint64_t session_id, ItemKind kind, std::uint64_t id,
                           Item*& item, bool to_update = false);
   std::uint32_t live_items_of(std::uint64_t session_id) const;
+  /// OK if the scene can take `added` more (besides what it holds), else RESOURCE_EXHAUSTED
+  /// naming the budget; `what` names the addition in the message.
+  grpc::Status check_budget(const ItemCost& added, const std::string& what) const;
   void publish_locked();
 
   runtime::SceneExchange& exchange_;
@@ -90,6 +108,7 @@ class SceneStore {
   double period_s_;
   double session_force_budget_;
   std::uint32_t ports_;  // device ports each compiled scene is evaluated at
+  SceneBudget budget_;
 
   mutable std::mutex mutex_;
   std::map<std::uint64_t, Item> items_;  // by id; ordered, so compilation is deterministic

@@ -1,7 +1,9 @@
 #include "net/session_registry.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <random>
+#include <string_view>
 
 namespace haptic::net {
 namespace {
@@ -12,11 +14,41 @@ bool same_address(const UdpAddress& a, const UdpAddress& b) {
 
 }  // namespace
 
+std::string peer_host(const std::string& grpc_peer) {
+  std::string rest = grpc_peer;
+  for (const char* scheme : {"ipv4:", "ipv6:"}) {
+    if (rest.rfind(scheme, 0) == 0) {
+      rest = rest.substr(std::string(scheme).size());
+      break;
+    }
+  }
+  if (rest.size() == grpc_peer.size()) return grpc_peer;  // unix:, fd:, ...
+  for (const auto& [escaped, plain] : {std::pair{"%5B", "["}, {"%5D", "]"}}) {
+    for (auto at = rest.find(escaped); at != std::string::npos; at = rest.find(escaped)) {
+      rest.replace(at, 3, plain);
+    }
+  }
+  std::string host;
+  if (!rest.empty() && rest.front() == '[') {
+    host = rest.substr(1, rest.find(']') - 1);
+  } else {
+    host = rest.substr(0, rest.rfind(':'));
+  }
+  constexpr std::string_view kMapped = "::ffff:";
+  if (host.rfind(kMapped, 0) == 0 && host.find('.') != std::string::npos) {
+    host = host.substr(kMapped.size());
+  }
+  return host;
+}
+
+SessionRegistry::SessionRegistry(const SessionLimits& limits) : limits_(limits) {}
+
 SessionRegistry::SessionRegistry(std::uint32_t max_sessions, std::chrono::milliseconds lease_timeout)
-    : max_sessions_(max_sessions), lease_timeout_(lease_timeout) {}
+    : limits_{max_sessions, max_sessions, lease_timeout} {}
 
 std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
-                                                 std::uint32_t device_index) {
+                                                 std::uint32_t device_index,
+                                                 const std::string& peer, std::string* refusal) {
   // Ids and keys come from the OS entropy source: a session id is also the capability that lets a
   // client change its own objects, so it must not be guessable.
   std::random_device entropy;
@@ -24,13 +56,30 @@ std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
     return (static_cast<std::uint64_t>(entropy()) << 32) ^ static_cast<std::uint64_t>(entropy());
   };
   std::lock_guard lock(mutex_);
-  if (sessions_.size() >= max_sessions_) return std::nullopt;
+  if (sessions_.size() >= limits_.max_sessions) {
+    if (refusal) {
+      *refusal = "too many sessions open: the server's most is " +
+                 std::to_string(limits_.max_sessions) + " (max_sessions)";
+    }
+    return std::nullopt;
+  }
+  const auto from_peer = static_cast<std::uint32_t>(std::count_if(
+      sessions_.begin(), sessions_.end(), [&](const auto& entry) { return entry.second.info.peer == peer; }));
+  if (from_peer >= limits_.max_sessions_per_peer) {
+    if (refusal) {
+      *refusal = "too many sessions open from " + (peer.empty() ? std::string("this host") : peer) +
+                 ": " + std::to_string(from_peer) + ", the most one host may hold (" +
+                 std::to_string(limits_.max_sessions_per_peer) + ", max_sessions_per_peer)";
+    }
+    return std::nullopt;
+  }
   Session session;
   do {
     session.info.id = random64();
   } while (session.info.id == 0 || sessions_.contains(session.info.id));
   session.info.client_name = client_name;
   session.info.device_index = device_index;
+  session.info.peer = peer;
   for (auto& byte : session.info.key) byte = static_cast<std::uint8_t>(entropy());
   for (auto& byte : session.info.secret) byte = static_cast<std::uint8_t>(entropy());
   session.last_seen = SteadyClock::now();
@@ -116,7 +165,7 @@ std::vector<std::uint64_t> SessionRegistry::expire(SteadyClock::time_point now) 
   std::vector<std::uint64_t> expired;
   std::lock_guard lock(mutex_);
   for (auto it = sessions_.begin(); it != sessions_.end();) {
-    if (now - it->second.last_seen > lease_timeout_) {
+    if (now - it->second.last_seen > limits_.lease_timeout) {
       expired.push_back(it->first);
       it = sessions_.erase(it);
       ++version_;

@@ -36,7 +36,18 @@ struct SessionInfo {
   wire::Key key{};                 // the UDP datagrams' SipHash key
   SessionSecret secret{};          // sent with every session-scoped call; never shown to others
   std::uint32_t device_index = 0;  // the device port the session is bound to
+  std::string peer;                // the host it was opened from (peer_host()); "" if unknown
 };
+
+struct SessionLimits {
+  std::uint32_t max_sessions = 32;
+  std::uint32_t max_sessions_per_peer = 16;  // from any one host, so one cannot take every slot
+  std::chrono::milliseconds lease_timeout{1000};
+};
+
+/// The host of a gRPC peer ("ipv4:10.0.0.7:5123" -> "10.0.0.7", "ipv6:[::1]:5123" -> "::1", an
+/// IPv4-mapped IPv6 address as its IPv4 form); the whole string when it has no host part.
+std::string peer_host(const std::string& grpc_peer);
 
 /// What a session-scoped call may do.
 enum class Access {
@@ -57,11 +68,15 @@ struct Subscriber {
 
 class SessionRegistry {
  public:
+  explicit SessionRegistry(const SessionLimits& limits);
+  /// Every host may open all max_sessions.
   SessionRegistry(std::uint32_t max_sessions, std::chrono::milliseconds lease_timeout);
 
-  /// Opens a session bound to device port `device_index` with a fresh random id and key; nullopt
-  /// when max_sessions are open.
-  std::optional<SessionInfo> open(const std::string& client_name, std::uint32_t device_index = 0);
+  /// Opens a session for a client on host `peer`, bound to device port `device_index`, with a
+  /// fresh random id, secret and key; nullopt when max_sessions are open, or max_sessions_per_peer
+  /// from that host (`refusal`, when given, then names the limit).
+  std::optional<SessionInfo> open(const std::string& client_name, std::uint32_t device_index = 0,
+                                  const std::string& peer = {}, std::string* refusal = nullptr);
   /// Removes the session; false if it did not exist.
   bool close(std::uint64_t session_id);
   /// Checks that `secret` is the session's own (in constant time) and, if so, renews the lease.
@@ -90,7 +105,7 @@ class SessionRegistry {
   std::vector<Subscriber> subscribers() const;
 
   std::size_t size() const;
-  std::chrono::milliseconds lease_timeout() const { return lease_timeout_; }
+  std::chrono::milliseconds lease_timeout() const { return limits_.lease_timeout; }
 
  private:
   struct Session {
@@ -104,8 +119,7 @@ class SessionRegistry {
 
   mutable std::mutex mutex_;
   std::map<std::uint64_t, Session> sessions_;
-  std::uint32_t max_sessions_;
-  std::chrono::milliseconds lease_timeout_;
+  SessionLimits limits_;
   std::uint64_t version_ = 0;
 };
 

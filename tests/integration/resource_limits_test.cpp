@@ -177,5 +177,52 @@ TEST_F(ResourceLimits, TwoThousandStreamAttemptsAreRefusedPastTheCapsAndMemorySt
   }
 }
 
+TEST(ResourceLimitsOfTheScene, OneHostsSessionsAndTheWholeScenesTrianglesAreBounded) {
+  test::ServerProcess server(test::lockstep_config(
+      R"("max_sessions_per_peer": 2, "max_scene_triangles": 3)"));
+  auto stub = v1::Haptic::NewStub(
+      grpc::CreateChannel(server.address(), grpc::InsecureChannelCredentials()));
+  const auto open = [&](v1::OpenSessionResponse& response) {
+    v1::OpenSessionRequest request;
+    request.set_client_name("one-host");
+    request.set_api_version(v1::API_VERSION_CURRENT);
+    grpc::ClientContext context;
+    context.set_deadline(Clock::now() + std::chrono::seconds(5));
+    return stub->OpenSession(&context, request, &response);
+  };
+  v1::OpenSessionResponse first, second, third;
+  ASSERT_TRUE(open(first).ok());
+  ASSERT_TRUE(open(second).ok());
+  const grpc::Status refused = open(third);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(refused.error_message(), "too many sessions open from 127.0.0.1: 2, the most one host "
+                                     "may hold (2, max_sessions_per_peer)");
+
+  // Two triangles from one session, two more from another: over the whole scene's three.
+  const auto add_plate = [&](const v1::OpenSessionResponse& session, double z) {
+    v1::CreateObjectRequest request;
+    request.set_session_id(session.session_id());
+    request.mutable_object()->mutable_impedance()->set_stiffness(1000.0);
+    auto* mesh = request.mutable_object()->mutable_mesh();
+    for (const auto& [x, y] : {std::pair{0.0, 0.0}, {0.01, 0.0}, {0.01, 0.01}, {0.0, 0.01}}) {
+      auto* vertex = mesh->add_vertices();
+      vertex->set_x(x);
+      vertex->set_y(y);
+      vertex->set_z(z);
+    }
+    for (const std::uint32_t index : {0u, 1u, 2u, 0u, 2u, 3u}) mesh->add_indices(index);
+    v1::ItemRef item;
+    grpc::ClientContext context;
+    context.set_deadline(Clock::now() + std::chrono::seconds(5));
+    context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
+    return stub->CreateObject(&context, request, &item);
+  };
+  ASSERT_TRUE(add_plate(first, 0.0).ok());
+  const grpc::Status over = add_plate(second, 0.01);
+  EXPECT_EQ(over.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_NE(over.error_message().find("over max_scene_triangles (3)"), std::string::npos)
+      << over.error_message();
+}
+
 }  // namespace
 }  // namespace haptic

@@ -112,6 +112,10 @@ class MeshBvh {
 
   std::size_t triangle_count() const { return triangles_.size(); }
   std::size_t node_count() const { return nodes_.size(); }
+  /// Heap memory the hierarchy holds. Unit: bytes.
+  std::size_t memory_bytes() const {
+    return nodes_.capacity() * sizeof(Node) + triangles_.capacity() * sizeof(Tri);
+  }
   /// Deepest leaf's depth (the root is at depth 1).
   std::uint32_t depth() const { return depth_; }
   /// Box around the whole mesh (padded by kBoxPadding). Unit: m, frame O.

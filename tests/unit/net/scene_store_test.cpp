@@ -14,6 +14,26 @@ engine::ObjectSpec wall(double z) {
   return spec;
 }
 
+/// A flat mesh of `triangles` triangles (a strip of quads) at height z.
+engine::ObjectSpec mesh(std::size_t triangles, double z) {
+  auto model = std::make_shared<engine::MeshModel>();
+  for (std::size_t i = 0; i <= triangles / 2; ++i) {
+    const double x = 0.001 * static_cast<double>(i);
+    model->mesh.vertices_O.push_back({x, 0.0, z});
+    model->mesh.vertices_O.push_back({x, 0.01, z});
+  }
+  for (std::uint32_t t = 0; t < triangles; ++t) {
+    const std::uint32_t base = 2 * (t / 2);
+    model->mesh.triangles.push_back(t % 2 == 0 ? std::array<std::uint32_t, 3>{base, base + 2, base + 3}
+                                               : std::array<std::uint32_t, 3>{base, base + 3, base + 1});
+  }
+  model->bvh = engine::MeshBvh::build(model->mesh);
+  engine::ObjectSpec spec;
+  spec.stiffness = 1000.0;
+  spec.shape = engine::MeshShapeSpec{model};
+  return spec;
+}
+
 struct StoreRig {
   runtime::SceneExchange exchange{std::make_unique<const engine::CompiledScene>()};
   std::int64_t next_tick = 1;
@@ -158,6 +178,61 @@ TEST(SceneStore, RemoveSessionFadesOnlyThatSession) {
   EXPECT_EQ(counts.objects, 1u);
   EXPECT_EQ(counts.fields, 0u);
   EXPECT_EQ(counts.fading, 2u);
+}
+
+}  // namespace
+}  // namespace haptic::net
+
+namespace haptic::net {
+namespace {
+
+TEST(SceneStore, TheWholeScenesTriangleAndMemoryBudgetsHoldAcrossSessions) {
+  runtime::SceneExchange exchange{std::make_unique<const engine::CompiledScene>()};
+  std::int64_t next_tick = 1;
+  SceneStore store{exchange, [&] { return next_tick; }, 50, 256, 1e-3, 0.0, 1,
+                   SceneBudget{1000, 0}};
+  std::uint64_t first = 0, second = 0, id = 0;
+  ASSERT_TRUE(store.create(1, ItemKind::kObject, mesh(600, 0.0), first).ok());
+  ASSERT_TRUE(store.create(2, ItemKind::kObject, mesh(400, 0.01), second).ok());  // exactly 1000
+  // A third session's mesh, however small, is over the whole scene's budget, named.
+  const grpc::Status over = store.create(3, ItemKind::kObject, mesh(2, 0.02), id);
+  EXPECT_EQ(over.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(over.error_message(),
+            "object: 2 more triangles would bring the scene (every session's, fading items "
+            "included) to 1002, over max_scene_triangles (1000)");
+  EXPECT_TRUE(store.create(3, ItemKind::kObject, wall(0.0), id).ok());  // no triangles: fine
+  // An update holds both versions while the old one fades: refused until there is room.
+  EXPECT_EQ(store.update(2, ItemKind::kObject, second, mesh(400, 0.02)).error_code(),
+            grpc::StatusCode::RESOURCE_EXHAUSTED);
+  ASSERT_TRUE(store.remove(1, ItemKind::kObject, first).ok());
+  EXPECT_EQ(store.create(3, ItemKind::kObject, mesh(2, 0.02), id).error_code(),
+            grpc::StatusCode::RESOURCE_EXHAUSTED);  // still fading: still held
+  next_tick = 100;
+  ASSERT_EQ(store.compact(), 1u);
+  EXPECT_TRUE(store.update(2, ItemKind::kObject, second, mesh(400, 0.02)).ok());
+  // The same rule for a whole scene at once: the session's old items fade, the new come on top.
+  std::vector<std::uint64_t> objects, fields;
+  const grpc::Status scene = store.replace_session_scene(2, {mesh(400, 0.03)}, {}, objects, fields);
+  EXPECT_EQ(scene.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(scene.error_message().rfind("scene: 400 more triangles", 0), 0u) << scene.error_message();
+}
+
+TEST(SceneStore, TheMemoryBudgetCountsAMeshAndItsHierarchy) {
+  const ItemCost small = cost_of(mesh(2, 0.0));
+  const ItemCost large = cost_of(mesh(2000, 0.0));
+  EXPECT_EQ(small.triangles, 2u);
+  EXPECT_EQ(large.triangles, 2000u);
+  // At least the triangles' vertices and indices, and the hierarchy's copy of every triangle.
+  EXPECT_GT(large.bytes, 2000u * (3 * 4 + 3 * 24));
+  EXPECT_EQ(cost_of(wall(0.0)).triangles, 0u);
+  runtime::SceneExchange exchange{std::make_unique<const engine::CompiledScene>()};
+  SceneStore store{exchange, [] { return std::int64_t{1}; }, 50, 256, 1e-3, 0.0, 1,
+                   SceneBudget{0, large.bytes + small.bytes}};
+  std::uint64_t id = 0;
+  ASSERT_TRUE(store.create(1, ItemKind::kObject, mesh(2000, 0.0), id).ok());
+  const grpc::Status over = store.create(2, ItemKind::kObject, mesh(20, 0.0), id);
+  EXPECT_EQ(over.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_NE(over.error_message().find("over max_scene_bytes"), std::string::npos) << over.error_message();
 }
 
 }  // namespace

@@ -55,6 +55,31 @@ TEST(SessionRegistry, HeartbeatsSetTheAddressAndStaleOnesAreRejected) {
   EXPECT_FALSE(registry.on_heartbeat(12345, 9, loopback(4000)));  // unknown session
 }
 
+TEST(SessionRegistry, OneHostCannotTakeEverySlot) {
+  SessionRegistry registry(SessionLimits{4, 2, std::chrono::milliseconds(1000)});
+  std::string refusal;
+  ASSERT_TRUE(registry.open("a", 0, "10.0.0.7"));
+  ASSERT_TRUE(registry.open("b", 0, "10.0.0.7"));
+  EXPECT_FALSE(registry.open("c", 0, "10.0.0.7", &refusal));
+  EXPECT_EQ(refusal, "too many sessions open from 10.0.0.7: 2, the most one host may hold (2, "
+                     "max_sessions_per_peer)");
+  ASSERT_TRUE(registry.open("d", 0, "10.0.0.8"));  // another host still gets in
+  const auto last = registry.open("e", 0, "10.0.0.9");
+  ASSERT_TRUE(last);
+  EXPECT_EQ(last->peer, "10.0.0.9");
+  EXPECT_FALSE(registry.open("f", 0, "10.0.0.10", &refusal));
+  EXPECT_EQ(refusal, "too many sessions open: the server's most is 4 (max_sessions)");
+}
+
+TEST(SessionRegistry, PeerHostIsTheAddressOfAGrpcPeer) {
+  EXPECT_EQ(peer_host("ipv4:10.0.0.7:5123"), "10.0.0.7");
+  EXPECT_EQ(peer_host("ipv6:[::1]:5123"), "::1");
+  EXPECT_EQ(peer_host("ipv6:%5B::1%5D:5123"), "::1");
+  EXPECT_EQ(peer_host("ipv6:[::ffff:127.0.0.1]:80"), "127.0.0.1");  // dual-stack socket
+  EXPECT_EQ(peer_host("ipv6:[fe80::1]:80"), "fe80::1");
+  EXPECT_EQ(peer_host("unix:/tmp/socket"), "unix:/tmp/socket");
+}
+
 TEST(SessionRegistry, OnlyTheSessionsOwnSecretGrantsAccess) {
   SessionRegistry registry(4, std::chrono::milliseconds(1000));
   const auto alice = registry.open("alice");
