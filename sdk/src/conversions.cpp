@@ -304,6 +304,11 @@ Stats from_proto(const v1::Stats& s) {
   out.passivity_active_ticks = s.passivity_active_ticks();
   out.leases_expired = s.leases_expired();
   out.device_faults = s.device_faults();
+  out.send_delay_p50_us = s.send_delay_p50_us();
+  out.send_delay_p99_us = s.send_delay_p99_us();
+  out.heartbeats_rate_limited = s.heartbeats_rate_limited();
+  out.datagrams_foreign_source = s.datagrams_foreign_source();
+  out.path_challenges_sent = s.path_challenges_sent();
   return out;
 }
 

@@ -93,9 +93,37 @@ void UdpLink::start_receive() {
                              });
 }
 
+void UdpLink::answer_challenge(std::span<const std::uint8_t> datagram) {
+  wire::Header header;
+  wire::PathChallengePayload challenge;
+  if (wire::decode_path_challenge(datagram, key_, header, challenge) != wire::DecodeError::kNone ||
+      header.session_id != session_id_) {
+    std::lock_guard lock(mutex_);
+    ++counters_.rejected;
+    return;
+  }
+  if (!heartbeats_enabled_.load()) return;  // a lost client answers nothing
+  // From this socket, so that the address the server saw is the one proven to receive.
+  std::array<std::uint8_t, wire::kPathDatagramSize> bytes{};
+  wire::Header reply;
+  reply.session_id = session_id_;
+  reply.sequence = ++heartbeat_sequence_;
+  reply.time_ns = steady_ns(std::chrono::steady_clock::now());
+  wire::encode_path_response(reply, {challenge.nonce, reply.time_ns}, key_, bytes);
+  asio::error_code ignored;  // lost: the next heartbeat draws another challenge
+  socket_.send_to(asio::buffer(bytes), server_, 0, ignored);
+  std::lock_guard lock(mutex_);
+  ++counters_.challenges_answered;
+}
+
 void UdpLink::handle_datagram(std::size_t size) {
   const auto received_at = std::chrono::steady_clock::now();
   wire::Header header;
+  if (wire::peek_header(std::span(receive_buffer_.data(), size), header) == wire::DecodeError::kNone &&
+      header.type == wire::DatagramType::kPathChallenge) {
+    answer_challenge(std::span(receive_buffer_.data(), size));
+    return;
+  }
   wire::StatePayload payload;
   const bool ok = wire::decode_state(std::span(receive_buffer_.data(), size), key_, header,
                                      payload) == wire::DecodeError::kNone &&

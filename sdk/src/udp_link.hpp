@@ -11,6 +11,7 @@
 #include <functional>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <thread>
 
@@ -46,6 +47,8 @@ class UdpLink {
   void schedule_heartbeat();
   void start_receive();
   void handle_datagram(std::size_t size);
+  /// Echoes a PathChallenge's nonce (the server sends state only where one was answered).
+  void answer_challenge(std::span<const std::uint8_t> datagram);
 
   asio::io_context io_;
   asio::ip::udp::socket socket_;

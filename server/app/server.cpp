@@ -49,7 +49,8 @@ Server::Server(const v1::ServerConfig& config)
       scenes_(empty_scene(static_cast<std::uint32_t>(simulated_.size()))),
       samples_(make_rings(simulated_.size())),
       sessions_(net::SessionLimits{config.max_sessions(), config.max_sessions_per_peer(),
-                                   std::chrono::milliseconds(config.lease_timeout_ms())}),
+                                   std::chrono::milliseconds(config.lease_timeout_ms()),
+                                   config.udp_any_source()}),
       events_(net::WatchLimits{config.max_event_streams_per_session(), config.max_event_streams()}),
       udp_(sessions_, ring_pointers(samples_)) {
   const double rate = config.loop_rate_hz();
@@ -235,6 +236,9 @@ v1::Stats Server::stats() const {
   stats.set_datagrams_sent(udp_.counters().sent.load(std::memory_order_relaxed));
   stats.set_datagrams_received(udp_.counters().received.load(std::memory_order_relaxed));
   stats.set_datagrams_dropped(udp_.counters().dropped.load(std::memory_order_relaxed));
+  stats.set_heartbeats_rate_limited(udp_.counters().rate_limited.load(std::memory_order_relaxed));
+  stats.set_datagrams_foreign_source(udp_.counters().foreign_source.load(std::memory_order_relaxed));
+  stats.set_path_challenges_sent(udp_.counters().challenges_sent.load(std::memory_order_relaxed));
   stats.set_force_faults(counters_.force_faults.load(std::memory_order_relaxed));
   stats.set_device_faults(counters_.device_errors.load(std::memory_order_relaxed));
   stats.set_force_saturations(counters_.force_saturations.load(std::memory_order_relaxed));

@@ -1,5 +1,7 @@
 #include "net/session_registry.hpp"
 
+#include <arpa/inet.h>
+
 #include <algorithm>
 #include <cstring>
 #include <random>
@@ -83,6 +85,7 @@ std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
   for (auto& byte : session.info.key) byte = static_cast<std::uint8_t>(entropy());
   for (auto& byte : session.info.secret) byte = static_cast<std::uint8_t>(entropy());
   session.last_seen = SteadyClock::now();
+  session.tokens_at = session.last_seen;
   SessionInfo info = session.info;
   sessions_.emplace(info.id, std::move(session));
   return info;
@@ -133,19 +136,80 @@ std::optional<std::uint32_t> SessionRegistry::device_index_of(std::uint64_t sess
   return it->second.info.device_index;
 }
 
-bool SessionRegistry::on_heartbeat(std::uint64_t session_id, std::uint64_t sequence,
-                                   const UdpAddress& from) {
+std::string host_of(const UdpAddress& address) {
+  char text[INET6_ADDRSTRLEN] = {};
+  const auto* storage = &address.storage;
+  if (storage->ss_family == AF_INET) {
+    ::inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(storage)->sin_addr, text, sizeof text);
+    return text;
+  }
+  if (storage->ss_family == AF_INET6) {
+    const in6_addr& v6 = reinterpret_cast<const sockaddr_in6*>(storage)->sin6_addr;
+    if (IN6_IS_ADDR_V4MAPPED(&v6)) {
+      ::inet_ntop(AF_INET, &v6.s6_addr[12], text, sizeof text);
+    } else {
+      ::inet_ntop(AF_INET6, &v6, text, sizeof text);
+    }
+    return text;
+  }
+  return {};
+}
+
+bool SessionRegistry::source_allowed(const Session& session, const UdpAddress& from) const {
+  return limits_.udp_any_source || session.info.peer.empty() || host_of(from) == session.info.peer;
+}
+
+HeartbeatOutcome SessionRegistry::on_heartbeat(std::uint64_t session_id, std::uint64_t sequence,
+                                               const UdpAddress& from, SteadyClock::time_point now) {
+  using Verdict = HeartbeatOutcome::Verdict;
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(session_id);
+  if (it == sessions_.end()) return {Verdict::kStale};
+  Session& session = it->second;
+  if (!source_allowed(session, from)) return {Verdict::kForeignSource};
+  if (sequence <= session.last_heartbeat_sequence) return {Verdict::kStale};
+  // The token bucket, refilled for the time since the last heartbeat.
+  const double elapsed_s = std::chrono::duration<double>(now - session.tokens_at).count();
+  session.heartbeat_tokens =
+      std::min(kHeartbeatBurst, session.heartbeat_tokens + std::max(0.0, elapsed_s) * kHeartbeatRateHz);
+  session.tokens_at = now;
+  if (session.heartbeat_tokens < 1.0) return {Verdict::kRateLimited};
+  session.heartbeat_tokens -= 1.0;
+  session.last_heartbeat_sequence = sequence;
+  session.last_seen = now;
+  if (session.address && same_address(*session.address, from)) return {Verdict::kAccepted};
+  // A new address (the first, or the client moved): state keeps going where it went, if
+  // anywhere, until this one answers a challenge. One challenge per address per interval.
+  if (session.candidate && same_address(*session.candidate, from) &&
+      now - session.challenged_at < kChallengeInterval) {
+    return {Verdict::kAccepted};
+  }
+  // The nonce must be unpredictable to the key holder itself: it is what a spoofer, who has the
+  // key but does not receive at the address it names, cannot echo.
+  std::random_device entropy;
+  session.candidate = from;
+  session.challenge_nonce =
+      (static_cast<std::uint64_t>(entropy()) << 32) ^ static_cast<std::uint64_t>(entropy());
+  session.challenged_at = now;
+  return {Verdict::kChallenge, session.challenge_nonce};
+}
+
+bool SessionRegistry::on_path_response(std::uint64_t session_id, std::uint64_t sequence,
+                                       std::uint64_t nonce, const UdpAddress& from) {
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(session_id);
   if (it == sessions_.end()) return false;
   Session& session = it->second;
-  if (sequence <= session.last_heartbeat_sequence) return false;
+  if (!source_allowed(session, from) || sequence <= session.last_heartbeat_sequence) return false;
+  if (!session.candidate || !same_address(*session.candidate, from) ||
+      nonce != session.challenge_nonce) {
+    return false;
+  }
   session.last_heartbeat_sequence = sequence;
   session.last_seen = SteadyClock::now();
-  if (!session.address || !same_address(*session.address, from)) {
-    session.address = from;
-    ++version_;
-  }
+  session.address = from;
+  session.candidate.reset();
+  ++version_;
   return true;
 }
 

@@ -43,6 +43,31 @@ struct SessionLimits {
   std::uint32_t max_sessions = 32;
   std::uint32_t max_sessions_per_peer = 16;  // from any one host, so one cannot take every slot
   std::chrono::milliseconds lease_timeout{1000};
+  /// False (default): a session's datagrams count only from the host that opened it over gRPC
+  /// (its peer), so no one can point a stream at another host at all. True: from anywhere that
+  /// passes the path challenge (NATs that give TCP and UDP different public addresses).
+  bool udp_any_source = false;
+};
+
+/// Heartbeats a session may send: a token bucket, refilled at kHeartbeatRateHz up to
+/// kHeartbeatBurst. The SDK sends 10 per second (and a few in a row while it subscribes); past
+/// the bucket a heartbeat is dropped unprocessed and counted.
+inline constexpr double kHeartbeatRateHz = 100.0;
+inline constexpr double kHeartbeatBurst = 20.0;
+/// A challenge goes to a new address at most this often per session. Unit: ms.
+inline constexpr std::chrono::milliseconds kChallengeInterval{50};
+
+/// What the data plane does with an authenticated heartbeat.
+struct HeartbeatOutcome {
+  enum class Verdict {
+    kAccepted,        // lease renewed; state goes (or will go) to a validated address
+    kChallenge,       // lease renewed; the address is new: send it a PathChallenge with `nonce`
+    kStale,           // unknown session, or a sequence not above the last (replayed): dropped
+    kRateLimited,     // over the session's heartbeat budget: dropped unprocessed
+    kForeignSource,   // from another host than the session's peer: dropped, nothing sent
+  };
+  Verdict verdict = Verdict::kStale;
+  std::uint64_t nonce = 0;
 };
 
 /// The host of a gRPC peer ("ipv4:10.0.0.7:5123" -> "10.0.0.7", "ipv6:[::1]:5123" -> "::1", an
@@ -87,13 +112,19 @@ class SessionRegistry {
   /// The device port the session is bound to; nullopt if the session does not exist.
   std::optional<std::uint32_t> device_index_of(std::uint64_t session_id) const;
 
-  /// A heartbeat authenticated with the session's key: renews the lease and records the address
-  /// state goes to. Rejects (false) a sequence not above the last one (stale or replayed).
-  bool on_heartbeat(std::uint64_t session_id, std::uint64_t sequence, const UdpAddress& from);
+  /// A heartbeat authenticated with the session's key, from `from`. Renews the lease unless it is
+  /// refused (see HeartbeatOutcome). State only ever goes to an address that has answered a
+  /// challenge: a heartbeat from any other asks for one to be sent there.
+  HeartbeatOutcome on_heartbeat(std::uint64_t session_id, std::uint64_t sequence,
+                                const UdpAddress& from, SteadyClock::time_point now = SteadyClock::now());
+  /// A PathResponse authenticated with the session's key: if it comes from the challenged
+  /// address with its nonce (and a fresh sequence), that address is where state goes from now on.
+  bool on_path_response(std::uint64_t session_id, std::uint64_t sequence, std::uint64_t nonce,
+                        const UdpAddress& from);
 
   /// Sets the state-stream decimation (0 stops it), streaming from tick `first_tick` on (the
   /// sender may still be catching up with older ticks; those are not this subscription's);
-  /// nullopt if the session does not exist, else whether its UDP address is known yet.
+  /// nullopt if the session does not exist, else whether its UDP address is validated yet.
   std::optional<bool> subscribe(std::uint64_t session_id, std::uint32_t decimation,
                                 std::uint64_t first_tick = 0);
 
@@ -111,8 +142,13 @@ class SessionRegistry {
   struct Session {
     SessionInfo info;
     SteadyClock::time_point last_seen;
-    std::optional<UdpAddress> address;
-    std::uint64_t last_heartbeat_sequence = 0;
+    std::optional<UdpAddress> address;    // validated: where state goes
+    std::optional<UdpAddress> candidate;  // heard from, challenged, not yet validated
+    std::uint64_t challenge_nonce = 0;
+    SteadyClock::time_point challenged_at;
+    double heartbeat_tokens = kHeartbeatBurst;
+    SteadyClock::time_point tokens_at;
+    std::uint64_t last_heartbeat_sequence = 0;  // heartbeats and path responses share it
     std::uint32_t decimation = 0;
     std::uint64_t first_tick = 0;
   };
@@ -121,6 +157,12 @@ class SessionRegistry {
   std::map<std::uint64_t, Session> sessions_;
   SessionLimits limits_;
   std::uint64_t version_ = 0;
+
+  /// False when the session only takes datagrams from its peer's host and `from` is another.
+  bool source_allowed(const Session& session, const UdpAddress& from) const;
 };
+
+/// The host of a UDP address in the form peer_host() gives ("10.0.0.7", "::1").
+std::string host_of(const UdpAddress& address);
 
 }  // namespace haptic::net

@@ -89,20 +89,69 @@ void UdpEndpoint::receive_loop() {
     if (n < 0) continue;
     const std::span<const std::uint8_t> datagram(buffer.data(), static_cast<std::size_t>(n));
     wire::Header header;
-    if (wire::peek_header(datagram, header) != wire::DecodeError::kNone ||
-        header.type != wire::DatagramType::kHeartbeat) {
-      counters_.dropped.fetch_add(1, std::memory_order_relaxed);
-      continue;
+    std::optional<wire::Key> key;
+    bool accepted = wire::peek_header(datagram, header) == wire::DecodeError::kNone &&
+                    (key = sessions_.key_of(header.session_id)).has_value();
+    if (accepted) {
+      switch (header.type) {
+        case wire::DatagramType::kHeartbeat:
+          accepted = handle_heartbeat(datagram, header, *key, from);
+          break;
+        case wire::DatagramType::kPathResponse:
+          accepted = handle_path_response(datagram, header, *key, from);
+          break;
+        default:  // State and PathChallenge go the other way
+          accepted = false;
+      }
     }
-    const auto key = sessions_.key_of(header.session_id);
-    wire::HeartbeatPayload heartbeat;
-    if (!key || wire::decode_heartbeat(datagram, *key, header, heartbeat) != wire::DecodeError::kNone ||
-        !sessions_.on_heartbeat(header.session_id, header.sequence, from)) {
-      counters_.dropped.fetch_add(1, std::memory_order_relaxed);
-      continue;
-    }
-    counters_.received.fetch_add(1, std::memory_order_relaxed);
+    (accepted ? counters_.received : counters_.dropped).fetch_add(1, std::memory_order_relaxed);
   }
+}
+
+bool UdpEndpoint::handle_heartbeat(std::span<const std::uint8_t> datagram,
+                                   const wire::Header& peeked, const wire::Key& key,
+                                   const UdpAddress& from) {
+  wire::Header header;
+  wire::HeartbeatPayload heartbeat;
+  if (wire::decode_heartbeat(datagram, key, header, heartbeat) != wire::DecodeError::kNone) {
+    return false;
+  }
+  using Verdict = HeartbeatOutcome::Verdict;
+  const HeartbeatOutcome outcome = sessions_.on_heartbeat(peeked.session_id, header.sequence, from);
+  switch (outcome.verdict) {
+    case Verdict::kAccepted:
+      return true;
+    case Verdict::kChallenge: {
+      std::array<std::uint8_t, wire::kPathDatagramSize> bytes{};
+      wire::Header reply;
+      reply.session_id = header.session_id;
+      reply.sequence = header.sequence;
+      wire::encode_path_challenge(reply, {outcome.nonce, header.sequence}, key, bytes);
+      if (::sendto(socket_, bytes.data(), bytes.size(), MSG_DONTWAIT,
+                   reinterpret_cast<const sockaddr*>(&from.storage), from.length) >= 0) {
+        counters_.challenges_sent.fetch_add(1, std::memory_order_relaxed);
+      }
+      return true;
+    }
+    case Verdict::kRateLimited:
+      counters_.rate_limited.fetch_add(1, std::memory_order_relaxed);
+      return false;
+    case Verdict::kForeignSource:
+      counters_.foreign_source.fetch_add(1, std::memory_order_relaxed);
+      return false;
+    case Verdict::kStale:
+      return false;
+  }
+  return false;
+}
+
+bool UdpEndpoint::handle_path_response(std::span<const std::uint8_t> datagram,
+                                       const wire::Header& peeked, const wire::Key& key,
+                                       const UdpAddress& from) {
+  wire::Header header;
+  wire::PathResponsePayload response;
+  return wire::decode_path_response(datagram, key, header, response) == wire::DecodeError::kNone &&
+         sessions_.on_path_response(peeked.session_id, header.sequence, response.nonce, from);
 }
 
 void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu) {

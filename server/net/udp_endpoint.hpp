@@ -2,13 +2,17 @@
 // The UDP data plane: one socket, one port (container- and NAT-friendly: clients are answered at
 // the address their heartbeats come from; the server never connects back).
 //
-// Two threads: the receiver authenticates heartbeats (unknown session, bad tag, wrong version,
-// stale sequence: dropped and counted); the sender wakes on each published tick sample and encodes
-// it only for the sessions subscribed at that decimation, each from its own device port's ring.
+// Two threads: the receiver authenticates heartbeats and path responses (unknown session, bad
+// tag, wrong version, stale sequence, another host, over the heartbeat budget: dropped and
+// counted) and challenges every address a heartbeat comes from before state may go there (a
+// challenge is as long as the heartbeat that drew it, at most one per address per 50 ms: no
+// reflection, no amplification); the sender wakes on each published tick sample and encodes it
+// only for the sessions subscribed at that decimation, each from its own device port's ring.
 
 #include <atomic>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -22,8 +26,11 @@ namespace haptic::net {
 struct UdpCounters {
   std::atomic<std::uint64_t> sent{0};
   std::atomic<std::uint64_t> send_errors{0};
-  std::atomic<std::uint64_t> received{0};      // accepted heartbeats
-  std::atomic<std::uint64_t> dropped{0};       // rejected datagrams of any kind
+  std::atomic<std::uint64_t> received{0};      // accepted heartbeats and path responses
+  std::atomic<std::uint64_t> dropped{0};       // rejected datagrams of any kind, the two below among them
+  std::atomic<std::uint64_t> rate_limited{0};  // heartbeats over their session's budget
+  std::atomic<std::uint64_t> foreign_source{0};  // from another host than the session's peer
+  std::atomic<std::uint64_t> challenges_sent{0};  // PathChallenges to addresses not yet validated
   std::atomic<std::uint64_t> samples_missed{0};  // samples overwritten before the sender read them
   /// Real time only: from a tick's time stamp to its first datagram leaving (sendto returned).
   runtime::LatenessHistogram send_delay;
@@ -53,6 +60,11 @@ class UdpEndpoint {
 
  private:
   void receive_loop();
+  /// One authenticated datagram from `from`; false when it is dropped.
+  bool handle_heartbeat(std::span<const std::uint8_t> datagram, const wire::Header& header,
+                        const wire::Key& key, const UdpAddress& from);
+  bool handle_path_response(std::span<const std::uint8_t> datagram, const wire::Header& header,
+                            const wire::Key& key, const UdpAddress& from);
   void send_loop(std::optional<std::int64_t> time_origin_ns, int cpu);
 
   SessionRegistry& sessions_;

@@ -32,7 +32,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   Header peeked;
   const DecodeError peek = peek_header(input, peeked);
   if (peek == DecodeError::kNone) {
-    require(size == kStateDatagramSize || size == kHeartbeatDatagramSize);
+    require(size == kStateDatagramSize || size == kHeartbeatDatagramSize ||
+            size == kPathDatagramSize);
   }
 
   Header header;
@@ -57,6 +58,30 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     require(header.type == DatagramType::kHeartbeat);
     std::uint8_t again[kMaxDatagramSize];
     require(encode_heartbeat(header, heartbeat, kKey, again) == size);
+    require(std::memcmp(again, data, size) == 0);
+  }
+
+  PathChallengePayload challenge;
+  const DecodeError challenge_result = decode_path_challenge(input, kKey, header, challenge);
+  if (challenge_result == DecodeError::kNone) {
+    require(state_result != DecodeError::kNone && heartbeat_result != DecodeError::kNone);
+    require(peek == DecodeError::kNone && same_header(header, peeked));
+    require(header.type == DatagramType::kPathChallenge);
+    std::uint8_t again[kMaxDatagramSize];
+    require(encode_path_challenge(header, challenge, kKey, again) == size);
+    require(std::memcmp(again, data, size) == 0);
+  } else if (peek != DecodeError::kNone && peek != DecodeError::kUnknownType) {
+    require(challenge_result == peek);
+  }
+
+  PathResponsePayload response;
+  const DecodeError response_result = decode_path_response(input, kKey, header, response);
+  if (response_result == DecodeError::kNone) {
+    require(challenge_result != DecodeError::kNone && heartbeat_result != DecodeError::kNone);
+    require(peek == DecodeError::kNone && same_header(header, peeked));
+    require(header.type == DatagramType::kPathResponse);
+    std::uint8_t again[kMaxDatagramSize];
+    require(encode_path_response(header, response, kKey, again) == size);
     require(std::memcmp(again, data, size) == 0);
   }
   return 0;

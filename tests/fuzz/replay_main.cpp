@@ -61,7 +61,23 @@ class Generator {
     return out;
   }
 
-  std::vector<std::uint8_t> valid_any() { return (bits() & 1) ? valid_state() : valid_heartbeat(); }
+  std::vector<std::uint8_t> valid_path() {
+    std::vector<std::uint8_t> out(kPathDatagramSize);
+    if (bits() & 1) {
+      encode_path_challenge(any_header(), {bits(), bits()}, kKey, out);
+    } else {
+      encode_path_response(any_header(), {bits(), static_cast<std::int64_t>(bits())}, kKey, out);
+    }
+    return out;
+  }
+
+  std::vector<std::uint8_t> valid_any() {
+    switch (below(3)) {
+      case 0: return valid_state();
+      case 1: return valid_heartbeat();
+      default: return valid_path();
+    }
+  }
 
  private:
   std::mt19937_64 random_;

@@ -65,6 +65,8 @@ std::size_t payload_size_of(std::uint16_t type) {
   switch (static_cast<DatagramType>(type)) {
     case DatagramType::kState: return kStatePayloadSize;
     case DatagramType::kHeartbeat: return kHeartbeatPayloadSize;
+    case DatagramType::kPathChallenge:
+    case DatagramType::kPathResponse: return kPathPayloadSize;
   }
   return 0;
 }
@@ -173,6 +175,30 @@ std::size_t encode_heartbeat(Header header, const HeartbeatPayload& heartbeat, c
   return kHeartbeatDatagramSize;
 }
 
+std::size_t encode_path_challenge(Header header, const PathChallengePayload& challenge,
+                                  const Key& key, std::span<std::uint8_t> out) {
+  if (out.size() < kPathDatagramSize) return 0;
+  header.type = DatagramType::kPathChallenge;
+  Writer w(out.data());
+  write_header(w, header, kPathPayloadSize);
+  w.u64(challenge.nonce);
+  w.u64(challenge.heartbeat_sequence);
+  append_tag(out, w.written(), key);
+  return kPathDatagramSize;
+}
+
+std::size_t encode_path_response(Header header, const PathResponsePayload& response,
+                                 const Key& key, std::span<std::uint8_t> out) {
+  if (out.size() < kPathDatagramSize) return 0;
+  header.type = DatagramType::kPathResponse;
+  Writer w(out.data());
+  write_header(w, header, kPathPayloadSize);
+  w.u64(response.nonce);
+  w.i64(response.client_time_ns);
+  append_tag(out, w.written(), key);
+  return kPathDatagramSize;
+}
+
 DecodeError decode_state(std::span<const std::uint8_t> datagram, const Key& key, Header& header,
                          StatePayload& state) {
   Header parsed;
@@ -209,6 +235,38 @@ DecodeError decode_heartbeat(std::span<const std::uint8_t> datagram, const Key& 
   decoded.last_state_sequence = r.u64();
   header = parsed;
   heartbeat = decoded;
+  return DecodeError::kNone;
+}
+
+DecodeError decode_path_challenge(std::span<const std::uint8_t> datagram, const Key& key,
+                                  Header& header, PathChallengePayload& challenge) {
+  Header parsed;
+  if (const DecodeError e = check_typed(datagram, key, DatagramType::kPathChallenge, parsed);
+      e != DecodeError::kNone) {
+    return e;
+  }
+  Reader r(datagram.data() + kHeaderSize);
+  PathChallengePayload decoded;
+  decoded.nonce = r.u64();
+  decoded.heartbeat_sequence = r.u64();
+  header = parsed;
+  challenge = decoded;
+  return DecodeError::kNone;
+}
+
+DecodeError decode_path_response(std::span<const std::uint8_t> datagram, const Key& key,
+                                 Header& header, PathResponsePayload& response) {
+  Header parsed;
+  if (const DecodeError e = check_typed(datagram, key, DatagramType::kPathResponse, parsed);
+      e != DecodeError::kNone) {
+    return e;
+  }
+  Reader r(datagram.data() + kHeaderSize);
+  PathResponsePayload decoded;
+  decoded.nonce = r.u64();
+  decoded.client_time_ns = r.i64();
+  header = parsed;
+  response = decoded;
   return DecodeError::kNone;
 }
 

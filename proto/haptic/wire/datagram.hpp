@@ -12,7 +12,8 @@
 //   6  u16 type           DatagramType
 //   8  u64 session_id
 //  16  u64 sequence       per sender, per session, starts at 1, +1 per datagram
-//  24  i64 time_ns        sender's clock: server time for State, client time for Heartbeat
+//  24  i64 time_ns        sender's clock: server time for State and PathChallenge, client time
+//                         for Heartbeat and PathResponse
 //  32  u32 payload_size   must equal the type's fixed payload size
 //  36  u32 reserved       zero
 
@@ -25,13 +26,17 @@
 namespace haptic::wire {
 
 inline constexpr std::uint32_t kMagic = 0x43545048u;  // bytes "HPTC"
-inline constexpr std::uint16_t kWireVersion = 1;
+inline constexpr std::uint16_t kWireVersion = 2;  // 2: path validation (PathChallenge/Response)
 inline constexpr std::size_t kHeaderSize = 40;
 inline constexpr std::size_t kTagSize = 8;
 
 enum class DatagramType : std::uint16_t {
   kState = 1,      // server -> client, one tick's sample
   kHeartbeat = 2,  // client -> server, keeps the lease and tells the server where to send state
+  // server -> the address a heartbeat came from, before any state goes there: prove you receive
+  // here by echoing the nonce (so a client cannot aim the stream at a bystander by spoofing).
+  kPathChallenge = 3,
+  kPathResponse = 4,  // client -> server, from the challenged address: the nonce echoed
 };
 
 /// A 128-bit SipHash key.
@@ -75,10 +80,25 @@ struct HeartbeatPayload {
   friend bool operator==(const HeartbeatPayload&, const HeartbeatPayload&) = default;
 };
 
+struct PathChallengePayload {
+  std::uint64_t nonce = 0;              // Random, fresh for each challenged address.
+  std::uint64_t heartbeat_sequence = 0; // The heartbeat this answers.
+  friend bool operator==(const PathChallengePayload&, const PathChallengePayload&) = default;
+};
+
+struct PathResponsePayload {
+  std::uint64_t nonce = 0;           // The challenge's, echoed.
+  std::int64_t client_time_ns = 0;   // Client clock when sent.
+  friend bool operator==(const PathResponsePayload&, const PathResponsePayload&) = default;
+};
+
 inline constexpr std::size_t kStatePayloadSize = 8 + 4 * 24 + 4 + 4;  // 112
 inline constexpr std::size_t kHeartbeatPayloadSize = 16;
+inline constexpr std::size_t kPathPayloadSize = 16;  // challenge and response alike
 inline constexpr std::size_t kStateDatagramSize = kHeaderSize + kStatePayloadSize + kTagSize;
 inline constexpr std::size_t kHeartbeatDatagramSize = kHeaderSize + kHeartbeatPayloadSize + kTagSize;
+/// A challenge is exactly as long as the heartbeat that draws it: no amplification.
+inline constexpr std::size_t kPathDatagramSize = kHeaderSize + kPathPayloadSize + kTagSize;
 inline constexpr std::size_t kMaxDatagramSize = kStateDatagramSize;
 
 /// Why a datagram was rejected. Every rejection is counted by the receiver, never thrown.
@@ -101,12 +121,17 @@ const char* to_string(DecodeError error);
 /// datagrams. `header` is written only on success.
 DecodeError peek_header(std::span<const std::uint8_t> datagram, Header& header);
 
-/// Encoders write exactly kStateDatagramSize / kHeartbeatDatagramSize bytes into `out` and return
-/// that size, or 0 (writing nothing) when `out` is too small. header.type is set by the encoder.
+/// Encoders write exactly their type's datagram size (kStateDatagramSize, kHeartbeatDatagramSize,
+/// kPathDatagramSize) into `out` and return it, or 0 (writing nothing) when `out` is too small.
+/// header.type is set by the encoder.
 std::size_t encode_state(Header header, const StatePayload& state, const Key& key,
                          std::span<std::uint8_t> out);
 std::size_t encode_heartbeat(Header header, const HeartbeatPayload& heartbeat, const Key& key,
                              std::span<std::uint8_t> out);
+std::size_t encode_path_challenge(Header header, const PathChallengePayload& challenge,
+                                  const Key& key, std::span<std::uint8_t> out);
+std::size_t encode_path_response(Header header, const PathResponsePayload& response,
+                                 const Key& key, std::span<std::uint8_t> out);
 
 /// Decoders check everything peek_header checks, the type, and the tag (compared in constant
 /// time). `header` and the payload are written only on success. Sequence numbers are not checked
@@ -115,5 +140,9 @@ DecodeError decode_state(std::span<const std::uint8_t> datagram, const Key& key,
                          StatePayload& state);
 DecodeError decode_heartbeat(std::span<const std::uint8_t> datagram, const Key& key,
                              Header& header, HeartbeatPayload& heartbeat);
+DecodeError decode_path_challenge(std::span<const std::uint8_t> datagram, const Key& key,
+                                  Header& header, PathChallengePayload& challenge);
+DecodeError decode_path_response(std::span<const std::uint8_t> datagram, const Key& key,
+                                 Header& header, PathResponsePayload& response);
 
 }  // namespace haptic::wire

@@ -291,6 +291,11 @@ struct Stats {
   std::uint64_t passivity_active_ticks = 0;  ///< ticks the passivity controller added damping
   std::uint64_t leases_expired = 0;
   std::uint64_t device_faults = 0;
+  double send_delay_p50_us = 0.0;  ///< real time: tick stamp to its first datagram sent
+  double send_delay_p99_us = 0.0;
+  std::uint64_t heartbeats_rate_limited = 0;   ///< of datagrams_dropped: over a session's budget
+  std::uint64_t datagrams_foreign_source = 0;  ///< of datagrams_dropped: from another host
+  std::uint64_t path_challenges_sent = 0;      ///< to UDP addresses not yet proven to receive
 };
 
 /// What the server's simulated operator (a hand holding the tool) does. Profiles and trajectories
@@ -389,6 +394,9 @@ struct OperatorInput {
 struct ReceiveCounters {
   std::uint64_t accepted = 0;  ///< State datagrams decoded and authenticated.
   std::uint64_t rejected = 0;  ///< Datagrams dropped: malformed, wrong session, bad tag.
+  /// Path challenges answered: the server asks each new UDP address to prove it receives before
+  /// it sends state there.
+  std::uint64_t challenges_answered = 0;
 };
 
 }  // namespace haptic

@@ -35,24 +35,94 @@ TEST(SessionRegistry, OpensDistinctSessionsUpToTheLimit) {
   EXPECT_TRUE(registry.open("room again"));
 }
 
-TEST(SessionRegistry, HeartbeatsSetTheAddressAndStaleOnesAreRejected) {
+UdpAddress host(const char* ip, std::uint16_t port) {
+  UdpAddress address = loopback(port);
+  ::inet_pton(AF_INET, ip, &reinterpret_cast<sockaddr_in*>(&address.storage)->sin_addr);
+  return address;
+}
+
+std::uint16_t port_of(const UdpAddress& address) {
+  return ntohs(reinterpret_cast<const sockaddr_in*>(&address.storage)->sin_port);
+}
+
+using Verdict = HeartbeatOutcome::Verdict;
+
+TEST(SessionRegistry, StateGoesOnlyToAnAddressThatAnsweredItsChallenge) {
   SessionRegistry registry(4, std::chrono::milliseconds(1000));
-  const auto session = registry.open("c");
+  const auto session = registry.open("c", 0, "127.0.0.1");
   ASSERT_TRUE(session);
+  const auto t0 = SteadyClock::now();
   EXPECT_EQ(registry.subscribe(session->id, 2), std::optional<bool>(false));
   EXPECT_TRUE(registry.subscribers().empty());  // no address yet
+  const HeartbeatOutcome first = registry.on_heartbeat(session->id, 1, loopback(4000), t0);
+  ASSERT_EQ(first.verdict, Verdict::kChallenge);
+  EXPECT_TRUE(registry.subscribers().empty());  // heard from, not yet proven
+  EXPECT_EQ(registry.subscribe(session->id, 2), std::optional<bool>(false));
+  // A wrong nonce, or the right one from elsewhere, proves nothing.
+  EXPECT_FALSE(registry.on_path_response(session->id, 2, first.nonce ^ 1, loopback(4000)));
+  EXPECT_FALSE(registry.on_path_response(session->id, 2, first.nonce, loopback(4001)));
   const auto version = registry.subscribers_version();
-  EXPECT_TRUE(registry.on_heartbeat(session->id, 1, loopback(4000)));
+  EXPECT_TRUE(registry.on_path_response(session->id, 2, first.nonce, loopback(4000)));
   EXPECT_NE(registry.subscribers_version(), version);
   EXPECT_EQ(registry.subscribe(session->id, 2), std::optional<bool>(true));
   ASSERT_EQ(registry.subscribers().size(), 1u);
   EXPECT_EQ(registry.subscribers()[0].decimation, 2u);
-  EXPECT_FALSE(registry.on_heartbeat(session->id, 1, loopback(4000)));  // replayed
-  EXPECT_TRUE(registry.on_heartbeat(session->id, 5, loopback(4001)));   // client moved
-  EXPECT_EQ(ntohs(reinterpret_cast<const sockaddr_in*>(&registry.subscribers()[0].address.storage)
-                      ->sin_port),
-            4001);
-  EXPECT_FALSE(registry.on_heartbeat(12345, 9, loopback(4000)));  // unknown session
+  EXPECT_EQ(port_of(registry.subscribers()[0].address), 4000);
+  EXPECT_FALSE(registry.on_path_response(session->id, 2, first.nonce, loopback(4000)));  // replayed
+  // Heartbeats and responses share one sequence: 2 is spent.
+  EXPECT_EQ(registry.on_heartbeat(session->id, 2, loopback(4000), t0).verdict, Verdict::kStale);
+  EXPECT_EQ(registry.on_heartbeat(session->id, 3, loopback(4000), t0).verdict, Verdict::kAccepted);
+
+  // The client moves: state stays where it was proven to arrive until the new address answers;
+  // one challenge per address per interval.
+  const HeartbeatOutcome moved = registry.on_heartbeat(session->id, 5, loopback(4001), t0);
+  ASSERT_EQ(moved.verdict, Verdict::kChallenge);
+  EXPECT_EQ(registry.on_heartbeat(session->id, 6, loopback(4001), t0 + kChallengeInterval / 2).verdict,
+            Verdict::kAccepted);
+  EXPECT_EQ(port_of(registry.subscribers()[0].address), 4000);
+  const HeartbeatOutcome again = registry.on_heartbeat(session->id, 7, loopback(4001), t0 + kChallengeInterval);
+  ASSERT_EQ(again.verdict, Verdict::kChallenge);
+  EXPECT_FALSE(registry.on_path_response(session->id, 8, moved.nonce, loopback(4001)));  // superseded
+  EXPECT_TRUE(registry.on_path_response(session->id, 9, again.nonce, loopback(4001)));
+  EXPECT_EQ(port_of(registry.subscribers()[0].address), 4001);
+
+  // Another host than the one that opened the session: dropped, nothing to send there.
+  EXPECT_EQ(registry.on_heartbeat(session->id, 10, host("127.0.0.2", 4000), t0).verdict,
+            Verdict::kForeignSource);
+  EXPECT_FALSE(registry.on_path_response(session->id, 11, again.nonce, host("10.1.1.1", 4001)));
+  EXPECT_EQ(registry.on_heartbeat(12345, 9, loopback(4000), t0).verdict, Verdict::kStale);  // unknown
+}
+
+TEST(SessionRegistry, AnySourceLetsAnotherHostAnswerTheChallenge) {
+  SessionRegistry registry(SessionLimits{4, 4, std::chrono::milliseconds(1000), true});
+  const auto session = registry.open("behind-nat", 0, "127.0.0.1");
+  const HeartbeatOutcome outcome = registry.on_heartbeat(session->id, 1, host("10.9.8.7", 5000));
+  ASSERT_EQ(outcome.verdict, Verdict::kChallenge);
+  EXPECT_TRUE(registry.on_path_response(session->id, 2, outcome.nonce, host("10.9.8.7", 5000)));
+}
+
+TEST(SessionRegistry, HeartbeatsPastTheBudgetAreDroppedUnprocessed) {
+  SessionRegistry registry(4, std::chrono::milliseconds(1000));
+  const auto session = registry.open("chatty", 0, "127.0.0.1");
+  const auto t0 = SteadyClock::now();
+  std::uint64_t sequence = 0;
+  int accepted = 0;
+  for (int i = 0; i < 100; ++i) {  // all at once: only the burst passes
+    const Verdict v = registry.on_heartbeat(session->id, ++sequence, loopback(4000), t0).verdict;
+    if (v == Verdict::kAccepted || v == Verdict::kChallenge) ++accepted;
+  }
+  EXPECT_EQ(accepted, static_cast<int>(kHeartbeatBurst));
+  // The bucket refills at kHeartbeatRateHz: one more every 10 ms.
+  const auto later = t0 + std::chrono::milliseconds(10);
+  EXPECT_EQ(registry.on_heartbeat(session->id, ++sequence, loopback(4000), later).verdict,
+            Verdict::kAccepted);
+  EXPECT_EQ(registry.on_heartbeat(session->id, ++sequence, loopback(4000), later).verdict,
+            Verdict::kRateLimited);
+  // A limited heartbeat renews nothing, but neither does it spend its sequence number (accepted
+  // later; as its address never answered, it is challenged anew).
+  EXPECT_EQ(registry.on_heartbeat(session->id, sequence, loopback(4000), later + std::chrono::seconds(1))
+                .verdict,
+            Verdict::kChallenge);
 }
 
 TEST(SessionRegistry, OneHostCannotTakeEverySlot) {

@@ -157,7 +157,7 @@ class FakeHaptic final : public v1::Haptic::Service {
     response->set_session_id(kSessionId);
     response->set_udp_key(std::string(kKey.begin(), kKey.end()));
     response->set_udp_port(data_plane_.port());
-    response->set_api_version(1);
+    response->set_api_version(kApiVersion);
     response->mutable_device()->set_name("fake");
     response->mutable_device()->set_dof(3);
     response->mutable_device()->set_loop_rate_hz(1000.0);
@@ -370,13 +370,14 @@ TEST_F(FakeServerTest, ApplySceneNamesTheBadSpecAndSendsNothing) {
 
 TEST_F(FakeServerTest, AnotherApiVersionIsAVersionMismatchCarryingBoth) {
   service_.refuse_open_with({grpc::StatusCode::FAILED_PRECONDITION,
-                             "api_version: client speaks 1, server speaks 2"});
+                             "api_version: client speaks 2, server speaks 3"});
   try {
     Client client(config_);
     FAIL() << "no exception";
   } catch (const VersionMismatchError& error) {
-    EXPECT_EQ(error.client_version(), 1u);
-    EXPECT_EQ(error.server_version(), 2u);
+    EXPECT_EQ(error.client_version(), kApiVersion);
+    EXPECT_EQ(error.client_version(), 2u);
+    EXPECT_EQ(error.server_version(), 3u);
   }
 }
 

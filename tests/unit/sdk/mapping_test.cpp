@@ -33,7 +33,7 @@ TEST(StatusMapping, EachCodeBecomesItsExceptionWithTheServersMessage) {
 TEST(StatusMapping, VersionMismatchCarriesBothVersions) {
   try {
     throw_if_failed(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                                 "api_version: client speaks 1, server speaks 3"),
+                                 "api_version: client speaks 2, server speaks 3"),
                     "OpenSession");
     FAIL();
   } catch (const VersionMismatchError& error) {

@@ -104,14 +104,14 @@ TEST(DatagramLayout, SizesMatchTheDocumentedLayout) {
 // implementation, so this pins layout and tag together.
 TEST(DatagramLayout, HeartbeatMatchesGoldenBytes) {
   constexpr std::array<std::uint8_t, kHeartbeatDatagramSize> kGolden = {
-      0x48, 0x50, 0x54, 0x43, 0x01, 0x00, 0x02, 0x00,  // "HPTC", version 1, type 2
+      0x48, 0x50, 0x54, 0x43, 0x02, 0x00, 0x02, 0x00,  // "HPTC", version 2, type 2
       0xef, 0xcd, 0xab, 0x89, 0x67, 0x45, 0x23, 0x01,  // session_id
       0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // sequence 1
       0xd6, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff,  // time_ns -42
       0x10, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // payload_size 16, reserved 0
       0x00, 0xca, 0x9a, 0x3b, 0x00, 0x00, 0x00, 0x00,  // client_time_ns 1e9
       0x07, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // last_state_sequence 7
-      0x5b, 0x70, 0xab, 0x41, 0xd5, 0x8c, 0x8c, 0xac,  // SipHash-2-4 tag
+      0x1e, 0x9b, 0xe6, 0xc1, 0x25, 0xfa, 0x9d, 0xc1,  // SipHash-2-4 tag
   };
   Key key;
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(i);
@@ -128,6 +128,47 @@ TEST(DatagramLayout, HeartbeatMatchesGoldenBytes) {
   HeartbeatPayload heartbeat;
   ASSERT_EQ(decode_heartbeat(kGolden, key, header, heartbeat), DecodeError::kNone);
   EXPECT_EQ(heartbeat, (HeartbeatPayload{1'000'000'000, 7}));
+}
+
+TEST(DatagramLayout, PathChallengeAndResponseAreAsLongAsAHeartbeat) {
+  // A challenge answers a heartbeat: equal lengths, so reflecting off the server amplifies nothing.
+  EXPECT_EQ(kPathPayloadSize, 16u);
+  EXPECT_EQ(kPathDatagramSize, kHeartbeatDatagramSize);
+}
+
+TEST(DatagramRoundTrip, PathChallengeAndResponseAreBitExactAndNotEachOther) {
+  Key key;
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(3 * i + 1);
+  Header h;
+  h.session_id = 0xfeedfacecafebeefull;
+  h.sequence = 41;
+  h.time_ns = 123;
+  std::array<std::uint8_t, kPathDatagramSize> challenge{}, response{};
+  ASSERT_EQ(encode_path_challenge(h, {0x8000000000000001ull, 40}, key, challenge), kPathDatagramSize);
+  ASSERT_EQ(encode_path_response(h, {0x8000000000000001ull, -7}, key, response), kPathDatagramSize);
+  EXPECT_EQ(challenge[6], 3);  // type at offset 6
+  EXPECT_EQ(response[6], 4);
+  EXPECT_EQ(challenge[40], 0x01);  // nonce, little-endian, first in the payload
+  EXPECT_EQ(challenge[47], 0x80);
+  Header header;
+  PathChallengePayload c;
+  PathResponsePayload r;
+  ASSERT_EQ(decode_path_challenge(challenge, key, header, c), DecodeError::kNone);
+  EXPECT_EQ(c, (PathChallengePayload{0x8000000000000001ull, 40}));
+  EXPECT_EQ(header.type, DatagramType::kPathChallenge);
+  EXPECT_EQ(header.sequence, 41u);
+  ASSERT_EQ(decode_path_response(response, key, header, r), DecodeError::kNone);
+  EXPECT_EQ(r, (PathResponsePayload{0x8000000000000001ull, -7}));
+  // Neither passes for the other, nor for a heartbeat; a flipped bit breaks the tag.
+  EXPECT_EQ(decode_path_response(challenge, key, header, r), DecodeError::kUnknownType);
+  EXPECT_EQ(decode_path_challenge(response, key, header, c), DecodeError::kUnknownType);
+  HeartbeatPayload hb;
+  EXPECT_EQ(decode_heartbeat(response, key, header, hb), DecodeError::kUnknownType);
+  for (std::size_t bit = 0; bit < 8 * kPathDatagramSize; ++bit) {
+    auto flipped = response;
+    flipped[bit / 8] ^= static_cast<std::uint8_t>(1u << (bit % 8));
+    EXPECT_NE(decode_path_response(flipped, key, header, r), DecodeError::kNone) << "bit " << bit;
+  }
 }
 
 TEST(DatagramLayout, StateFieldsAreLittleEndianAtDocumentedOffsets) {
@@ -269,7 +310,7 @@ TEST(DatagramReject, BadMagic) {
 }
 
 TEST(DatagramReject, BadVersion) {
-  for (const std::uint16_t version : {0, 2, 0x0100, 0xffff}) {
+  for (const std::uint16_t version : {0, 1, 3, 0x0100, 0xffff}) {  // 1: before path validation
     Bytes bytes = encoded_heartbeat();
     bytes[4] = static_cast<std::uint8_t>(version);
     bytes[5] = static_cast<std::uint8_t>(version >> 8);
@@ -281,7 +322,7 @@ TEST(DatagramReject, BadVersion) {
 }
 
 TEST(DatagramReject, UnknownType) {
-  for (const std::uint16_t type : {0, 3, 0x0101, 0xffff}) {
+  for (const std::uint16_t type : {0, 5, 0x0101, 0xffff}) {
     Bytes bytes = encoded_state();
     bytes[6] = static_cast<std::uint8_t>(type);
     bytes[7] = static_cast<std::uint8_t>(type >> 8);
