@@ -309,6 +309,7 @@ Stats from_proto(const v1::Stats& s) {
   out.heartbeats_rate_limited = s.heartbeats_rate_limited();
   out.datagrams_foreign_source = s.datagrams_foreign_source();
   out.path_challenges_sent = s.path_challenges_sent();
+  out.samples_skipped = s.samples_skipped();
   return out;
 }
 

@@ -16,6 +16,11 @@ Vec3 to_vec(const wire::Vec3d& v) { return {v.x, v.y, v.z}; }
 // The offset estimate restarts its window every this many samples, so it follows clock drift.
 constexpr std::uint32_t kOffsetWindow = 2000;
 
+// The socket's receive buffer (the kernel doubles it): about a hundred State datagrams. Unit: B.
+constexpr int kReceiveBufferBytes = 64 * 1024;
+// At most this many datagrams are taken in one wake-up before the newest is handed out.
+constexpr int kMaxDrain = 1024;
+
 }  // namespace
 
 UdpLink::UdpLink(const std::string& host, std::uint16_t port, std::uint64_t session_id,
@@ -43,8 +48,10 @@ UdpLink::UdpLink(const std::string& host, std::uint16_t port, std::uint64_t sess
   socket_.open(server_.protocol(), error);
   if (!error) socket_.bind(asio::ip::udp::endpoint(server_.protocol(), 0), error);
   if (error) throw ConnectionError("UDP: cannot open a socket: " + error.message());
-  // Room for bursts (a lockstep Step of many ticks); the kernel may cap it at net.core.rmem_max.
-  socket_.set_option(asio::socket_base::receive_buffer_size(1 << 20), error);
+  // Small: what waits here goes stale. Each wake-up drains the socket and hands out only the
+  // newest sample, so a backlog costs one read per datagram, never a queue of old states (a 1 MB
+  // buffer once held a second of them). A lockstep Step's reply carries its last state anyway.
+  socket_.set_option(asio::socket_base::receive_buffer_size(kReceiveBufferBytes), error);
 
   send_heartbeat();  // at once, so the server learns where to send state
   schedule_heartbeat();
@@ -88,9 +95,37 @@ void UdpLink::start_receive() {
   socket_.async_receive_from(asio::buffer(receive_buffer_), sender_,
                              [this](const asio::error_code& error, std::size_t size) {
                                if (error == asio::error::operation_aborted) return;
-                               if (!error) handle_datagram(size);
+                               if (!error) receive_batch(size);
                                start_receive();
                              });
+}
+
+void UdpLink::receive_batch(std::size_t first_size) {
+  const auto received_at = std::chrono::steady_clock::now();
+  std::optional<State> newest;
+  std::uint64_t accepted = 0;
+  take(first_size, received_at, newest, accepted);
+  // Whatever else has queued up meanwhile: read it all now, keep only the newest.
+  for (int i = 0; i < kMaxDrain; ++i) {
+    asio::error_code error;
+    if (socket_.available(error) == 0 || error) break;
+    const std::size_t size = socket_.receive_from(asio::buffer(receive_buffer_), sender_, 0, error);
+    if (error) break;
+    take(size, received_at, newest, accepted);
+  }
+  if (!newest) return;
+  {
+    std::lock_guard lock(mutex_);
+    counters_.skipped += accepted - 1;
+    // Older than what we have (reordered on the way): counted, but the newest stays latest.
+    if (!have_latest_ || newest->tick >= latest_.tick) {
+      latest_ = *newest;
+      have_latest_ = true;
+    }
+  }
+  arrived_.notify_all();
+  std::lock_guard lock(callback_mutex_);
+  if (callback_) callback_(*newest);
 }
 
 void UdpLink::answer_challenge(std::span<const std::uint8_t> datagram) {
@@ -116,53 +151,48 @@ void UdpLink::answer_challenge(std::span<const std::uint8_t> datagram) {
   ++counters_.challenges_answered;
 }
 
-void UdpLink::handle_datagram(std::size_t size) {
-  const auto received_at = std::chrono::steady_clock::now();
+void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point received_at,
+                   std::optional<State>& newest, std::uint64_t& accepted) {
+  const std::span<const std::uint8_t> datagram(receive_buffer_.data(), size);
   wire::Header header;
-  if (wire::peek_header(std::span(receive_buffer_.data(), size), header) == wire::DecodeError::kNone &&
+  if (wire::peek_header(datagram, header) == wire::DecodeError::kNone &&
       header.type == wire::DatagramType::kPathChallenge) {
-    answer_challenge(std::span(receive_buffer_.data(), size));
+    answer_challenge(datagram);
     return;
   }
   wire::StatePayload payload;
-  const bool ok = wire::decode_state(std::span(receive_buffer_.data(), size), key_, header,
-                                     payload) == wire::DecodeError::kNone &&
+  const bool ok = wire::decode_state(datagram, key_, header, payload) == wire::DecodeError::kNone &&
                   header.session_id == session_id_;
-  State state;
-  {
-    std::lock_guard lock(mutex_);
-    if (!ok) {
-      ++counters_.rejected;
-      return;
-    }
-    ++counters_.accepted;
-    state.tick = payload.tick;
-    state.sequence = header.sequence;
-    state.server_time = static_cast<double>(header.time_ns) * 1e-9;
-    state.position = to_vec(payload.p_WT);
-    state.velocity = to_vec(payload.v_WT);
-    state.force = to_vec(payload.F_T_W);
-    state.proxy = to_vec(payload.p_WP);
-    state.contact_count = payload.contact_count;
-    state.flags = payload.flags;
-    state.received_at = received_at;
-    // Older than what we have (reordered on the way): count it, but keep the newest as latest.
-    if (!have_latest_ || state.tick >= latest_.tick) {
-      latest_ = state;
-      have_latest_ = true;
-    }
-    last_sequence_ = std::max(last_sequence_, header.sequence);
-    offset_window_max_ns_ = std::max(offset_window_max_ns_, header.time_ns - steady_ns(received_at));
-    offset_estimate_ns_ = std::max(offset_estimate_ns_, offset_window_max_ns_);
-    if (++offset_window_count_ == kOffsetWindow) {
-      offset_estimate_ns_ = offset_window_max_ns_;
-      offset_window_max_ns_ = INT64_MIN;
-      offset_window_count_ = 0;
-    }
+  std::lock_guard lock(mutex_);
+  if (!ok) {
+    ++counters_.rejected;
+    return;
   }
-  arrived_.notify_all();
-  std::lock_guard lock(callback_mutex_);
-  if (callback_) callback_(state);
+  ++counters_.accepted;
+  ++accepted;
+  State state;
+  state.tick = payload.tick;
+  state.sequence = header.sequence;
+  state.server_time = static_cast<double>(header.time_ns) * 1e-9;
+  state.position = to_vec(payload.p_WT);
+  state.velocity = to_vec(payload.v_WT);
+  state.force = to_vec(payload.F_T_W);
+  state.proxy = to_vec(payload.p_WP);
+  state.contact_count = payload.contact_count;
+  state.flags = payload.flags;
+  state.received_at = received_at;
+  last_sequence_ = std::max(last_sequence_, header.sequence);
+  const std::int64_t server_minus_local = header.time_ns - steady_ns(received_at);
+  offset_window_max_ns_ = std::max(offset_window_max_ns_, server_minus_local);
+  offset_estimate_ns_ = std::max(offset_estimate_ns_, offset_window_max_ns_);
+  if (++offset_window_count_ == kOffsetWindow) {
+    offset_estimate_ns_ = offset_window_max_ns_;
+    offset_window_max_ns_ = INT64_MIN;
+    offset_window_count_ = 0;
+  }
+  // How much longer than the quickest recent sample this one took: time spent queued anywhere.
+  state.age = std::chrono::nanoseconds(std::max<std::int64_t>(0, offset_estimate_ns_ - server_minus_local));
+  if (!newest || state.tick >= newest->tick) newest = state;
 }
 
 void UdpLink::on_state(std::function<void(const State&)> callback) {

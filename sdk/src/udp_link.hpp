@@ -46,7 +46,13 @@ class UdpLink {
   void send_heartbeat();
   void schedule_heartbeat();
   void start_receive();
-  void handle_datagram(std::size_t size);
+  /// One wake-up: the datagram already in the buffer and every one queued behind it; only the
+  /// newest State is handed out (the others are counted as skipped).
+  void receive_batch(std::size_t first_size);
+  /// Decodes the datagram in the buffer: answers a challenge, or keeps a State if it is the
+  /// newest so far (`accepted` counts States taken).
+  void take(std::size_t size, std::chrono::steady_clock::time_point received_at,
+            std::optional<State>& newest, std::uint64_t& accepted);
   /// Echoes a PathChallenge's nonce (the server sends state only where one was answered).
   void answer_challenge(std::span<const std::uint8_t> datagram);
 

@@ -239,6 +239,7 @@ v1::Stats Server::stats() const {
   stats.set_heartbeats_rate_limited(udp_.counters().rate_limited.load(std::memory_order_relaxed));
   stats.set_datagrams_foreign_source(udp_.counters().foreign_source.load(std::memory_order_relaxed));
   stats.set_path_challenges_sent(udp_.counters().challenges_sent.load(std::memory_order_relaxed));
+  stats.set_samples_skipped(udp_.counters().samples_skipped.load(std::memory_order_relaxed));
   stats.set_force_faults(counters_.force_faults.load(std::memory_order_relaxed));
   stats.set_device_faults(counters_.device_errors.load(std::memory_order_relaxed));
   stats.set_force_saturations(counters_.force_saturations.load(std::memory_order_relaxed));

@@ -154,16 +154,39 @@ bool UdpEndpoint::handle_path_response(std::span<const std::uint8_t> datagram,
          sessions_.on_path_response(peeked.session_id, header.sequence, response.nonce, from);
 }
 
+void plan_sends(std::span<const Subscriber> subscribers, std::uint64_t last_tick,
+                std::uint64_t newest, bool conflate, std::vector<PlannedSend>& out,
+                std::uint64_t& skipped) {
+  out.clear();
+  for (std::uint64_t tick = last_tick + 1; tick <= newest; ++tick) {
+    for (std::size_t i = 0; i < subscribers.size(); ++i) {
+      const Subscriber& subscriber = subscribers[i];
+      if (tick % subscriber.decimation != 0 || tick < subscriber.first_tick) continue;
+      if (conflate && tick + subscriber.decimation <= newest) {
+        ++skipped;  // a newer sample is already due to this subscriber
+        continue;
+      }
+      out.push_back({i, tick});
+    }
+  }
+}
+
 void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu) {
   if (cpu >= 0) (void)runtime::pin_to_cpu(cpu);  // best effort; the loop reports pinning problems
+  // Real time conflates: when this thread has fallen behind (the host was busy), each subscriber
+  // gets only its newest due sample and the older ones are skipped and counted, never queued —
+  // for haptics and graphics a stale sample is worse than a lost one. Lockstep sends every due
+  // tick (time there is the client's to step; nothing goes stale).
+  const bool conflate = time_origin_ns.has_value();
   std::vector<Subscriber> subscribers;
+  std::vector<PlannedSend> plan;
   std::map<std::uint64_t, std::uint64_t> sequences;  // per session, last sequence sent
   std::uint64_t subscribers_version = ~0ull;
   // The loop publishes the ports in order, the last port last: once its ring holds a tick, every
   // port's ring does.
   const runtime::SampleRing& last_ring = *rings_.back();
   std::uint64_t last_tick = last_ring.newest();
-  std::vector<runtime::TickSample> samples(rings_.size());  // this tick's, per port
+  std::vector<runtime::TickSample> samples(rings_.size());  // one tick's, per port
   std::vector<bool> present(rings_.size());
   std::array<std::uint8_t, wire::kMaxDatagramSize> buffer{};
   while (!last_ring.stopping()) {
@@ -180,43 +203,47 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
                             [&](const Subscriber& s) { return s.session_id == entry.first; });
       });
     }
-    for (std::uint64_t tick = last_tick + 1; tick <= newest; ++tick) {
-      bool any = false;
-      for (std::size_t port = 0; port < rings_.size(); ++port) {
-        present[port] = rings_[port]->read(tick, samples[port]);
-        if (!present[port]) counters_.samples_missed.fetch_add(1, std::memory_order_relaxed);
-        any = any || present[port];
-      }
-      if (!any) continue;
-      bool first_send = true;
-      for (const Subscriber& subscriber : subscribers) {
-        if (tick % subscriber.decimation != 0 || tick < subscriber.first_tick) continue;
-        if (subscriber.device_index >= rings_.size() || !present[subscriber.device_index]) continue;
-        const runtime::TickSample& sample = samples[subscriber.device_index];
-        wire::Header header;
-        header.session_id = subscriber.session_id;
-        header.sequence = ++sequences[subscriber.session_id];
-        header.time_ns = sample.time_ns;
-        wire::StatePayload state;
-        state.tick = sample.tick;
-        state.p_WT = {sample.p_WT.x, sample.p_WT.y, sample.p_WT.z};
-        state.v_WT = {sample.v_WT.x, sample.v_WT.y, sample.v_WT.z};
-        state.F_T_W = {sample.F_T_W.x, sample.F_T_W.y, sample.F_T_W.z};
-        state.p_WP = {sample.p_WP.x, sample.p_WP.y, sample.p_WP.z};
-        state.contact_count = sample.contact_count;
-        state.flags = sample.flags;
-        const std::size_t size = wire::encode_state(header, state, subscriber.key, buffer);
-        const auto& to = subscriber.address;
-        if (::sendto(socket_, buffer.data(), size, MSG_DONTWAIT,
-                     reinterpret_cast<const sockaddr*>(&to.storage), to.length) < 0) {
-          counters_.send_errors.fetch_add(1, std::memory_order_relaxed);
-        } else {
-          counters_.sent.fetch_add(1, std::memory_order_relaxed);
-          if (first_send && time_origin_ns) {
-            counters_.send_delay.record(runtime::monotonic_now_ns() - (*time_origin_ns + sample.time_ns));
-          }
-          first_send = false;
+    std::uint64_t skipped = 0;
+    plan_sends(subscribers, last_tick, newest, conflate, plan, skipped);
+    counters_.samples_skipped.fetch_add(skipped, std::memory_order_relaxed);
+    std::uint64_t read_tick = 0;  // the tick whose samples are in `samples`
+    bool first_send = true;
+    for (const PlannedSend& send : plan) {
+      const Subscriber& subscriber = subscribers[send.subscriber];
+      if (subscriber.device_index >= rings_.size()) continue;
+      if (send.tick != read_tick) {  // each tick's samples read once, for whoever is sent them
+        for (std::size_t port = 0; port < rings_.size(); ++port) {
+          present[port] = rings_[port]->read(send.tick, samples[port]);
+          if (!present[port]) counters_.samples_missed.fetch_add(1, std::memory_order_relaxed);
         }
+        read_tick = send.tick;
+        first_send = true;
+      }
+      if (!present[subscriber.device_index]) continue;
+      const runtime::TickSample& sample = samples[subscriber.device_index];
+      wire::Header header;
+      header.session_id = subscriber.session_id;
+      header.sequence = ++sequences[subscriber.session_id];
+      header.time_ns = sample.time_ns;
+      wire::StatePayload state;
+      state.tick = sample.tick;
+      state.p_WT = {sample.p_WT.x, sample.p_WT.y, sample.p_WT.z};
+      state.v_WT = {sample.v_WT.x, sample.v_WT.y, sample.v_WT.z};
+      state.F_T_W = {sample.F_T_W.x, sample.F_T_W.y, sample.F_T_W.z};
+      state.p_WP = {sample.p_WP.x, sample.p_WP.y, sample.p_WP.z};
+      state.contact_count = sample.contact_count;
+      state.flags = sample.flags;
+      const std::size_t size = wire::encode_state(header, state, subscriber.key, buffer);
+      const auto& to = subscriber.address;
+      if (::sendto(socket_, buffer.data(), size, MSG_DONTWAIT,
+                   reinterpret_cast<const sockaddr*>(&to.storage), to.length) < 0) {
+        counters_.send_errors.fetch_add(1, std::memory_order_relaxed);
+      } else {
+        counters_.sent.fetch_add(1, std::memory_order_relaxed);
+        if (first_send && time_origin_ns) {
+          counters_.send_delay.record(runtime::monotonic_now_ns() - (*time_origin_ns + sample.time_ns));
+        }
+        first_send = false;
       }
     }
     last_tick = newest;

@@ -32,9 +32,25 @@ struct UdpCounters {
   std::atomic<std::uint64_t> foreign_source{0};  // from another host than the session's peer
   std::atomic<std::uint64_t> challenges_sent{0};  // PathChallenges to addresses not yet validated
   std::atomic<std::uint64_t> samples_missed{0};  // samples overwritten before the sender read them
+  /// Due samples not sent because a newer one was ready for the same subscriber (the sender had
+  /// fallen behind): conflated, never queued.
+  std::atomic<std::uint64_t> samples_skipped{0};
   /// Real time only: from a tick's time stamp to its first datagram leaving (sendto returned).
   runtime::LatenessHistogram send_delay;
 };
+
+/// One State datagram to send: subscribers[subscriber] gets tick `tick`.
+struct PlannedSend {
+  std::size_t subscriber = 0;
+  std::uint64_t tick = 0;
+};
+
+/// What the sender sends on a wake-up that finds ticks (last_tick, newest] published: each
+/// subscriber's due ticks (every decimation-th, from its first_tick), in tick order. Conflating,
+/// only each subscriber's newest due tick; the older due ones are added to `skipped`.
+void plan_sends(std::span<const Subscriber> subscribers, std::uint64_t last_tick,
+                std::uint64_t newest, bool conflate, std::vector<PlannedSend>& out,
+                std::uint64_t& skipped);
 
 class UdpEndpoint {
  public:

@@ -1,6 +1,7 @@
-// Loopback latency from a tick to the SDK's state callback, with 1, 8 and 32 clients on one
-// real-time server at 1 kHz. Prints p50/p99/p99.9 and each client's received rate, next to VRPN's
-// figures measured on a machine like this one (../shared/research/peers.md).
+// Loopback latency from a tick to the SDK's state callback — the age of each sample when the
+// application gets it — with 1, 8, 32 and 64 clients on one real-time server at 1 kHz. Prints
+// p50/p99/p99.9, each client's received rate and how many samples were skipped for a newer one,
+// next to VRPN's figures measured on a machine like this one (../shared/research/peers.md).
 //
 // Two ways to hold the clients:
 //   threads   (default) every client in this process beside the server: latency = server time at
@@ -158,6 +159,8 @@ int main(int argc, char** argv) {
   config.set_udp_address("127.0.0.1");
   config.set_udp_port(0);
   config.set_status_period_s(0);
+  config.set_max_sessions(64);  // every client on this one host
+  config.set_max_sessions_per_peer(64);
   if (argc > 2) config.mutable_real_time()->set_spin_us(static_cast<std::uint32_t>(std::atoi(argv[2])));
   if (argc > 3) config.mutable_real_time()->set_use_fifo(std::atoi(argv[3]) != 0);
   const bool processes = argc > 4 && std::strcmp(argv[4], "processes") == 0;
@@ -175,9 +178,9 @@ int main(int argc, char** argv) {
   std::printf("%8s  %9s  %8s  %8s  %10s   %s\n", "clients", "rate_Hz", "p50_us", "p99_us", "p99.9_us",
               "VRPN (median / p99, same kind of machine)");
   const char* vrpn[] = {"875 Hz, 24 us / 94 us", "750 Hz, 158-175 us / 356-412 us",
-                        "490 Hz, 509-540 us / 1.2-1.4 ms"};
+                        "490 Hz, 509-540 us / 1.2-1.4 ms", "132-265 Hz, 654 us / 4.4 ms (side by side)"};
   int row = 0;
-  for (const int count : {1, 8, 32}) {
+  for (const int count : {1, 8, 32, 64}) {
     std::vector<double> lat = processes ? record_in_processes(address, server_start_ns, count, seconds)
                                         : record_in_threads(address, server, count, seconds);
     const double rate = static_cast<double>(lat.size()) / count / seconds;

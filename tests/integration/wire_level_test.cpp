@@ -346,7 +346,11 @@ TEST_F(WireLevel, ASpoofedSourceGetsNoStateAndNothingLargerThanWhatWasSent) {
   // The client's own address answers its challenge and gets the stream; the bystander still none.
   send(heartbeat(++sequence, key_));
   answer_challenge(++sequence);
-  ASSERT_TRUE(call(&v1::Haptic::Stub::SubscribeState, subscribe, subscribed).ok());
+  // The response reaches the server's receiver on its own time: ask until it has (bounded).
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  do {
+    ASSERT_TRUE(call(&v1::Haptic::Stub::SubscribeState, subscribe, subscribed).ok());
+  } while (!subscribed.udp_endpoint_known() && std::chrono::steady_clock::now() < give_up);
   EXPECT_TRUE(subscribed.udp_endpoint_known());
   step.set_ticks(3);
   ASSERT_TRUE(call(&v1::Haptic::Stub::Step, step, stepped).ok());
@@ -360,7 +364,7 @@ TEST_F(WireLevel, ASpoofedSourceGetsNoStateAndNothingLargerThanWhatWasSent) {
 }
 
 TEST_F(WireLevel, HeartbeatsPastTheSessionsBudgetAreDroppedAndCounted) {
-  constexpr int kSent = 300;
+  constexpr int kSent = 100;  // well within the server socket's default receive buffer: none lost
   const auto start = std::chrono::steady_clock::now();
   for (int i = 1; i <= kSent; ++i) send(heartbeat(static_cast<std::uint64_t>(i), key_));
   // Everything is accounted for, and no more passed than the bucket allows in the time the

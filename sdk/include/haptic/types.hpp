@@ -211,6 +211,9 @@ struct State {
   std::uint32_t contact_count = 0;
   std::uint32_t flags = 0;       ///< StateFlag bits.
   std::chrono::steady_clock::time_point received_at;  ///< Local receipt time.
+  /// At receipt: how much longer this sample took to arrive than the quickest recent one
+  /// (receipt − stamp + clock_offset): the time it spent queued anywhere. 0 from a Step reply.
+  std::chrono::nanoseconds age{0};
 };
 
 /// What a device has (the server computes only those terms).
@@ -296,6 +299,7 @@ struct Stats {
   std::uint64_t heartbeats_rate_limited = 0;   ///< of datagrams_dropped: over a session's budget
   std::uint64_t datagrams_foreign_source = 0;  ///< of datagrams_dropped: from another host
   std::uint64_t path_challenges_sent = 0;      ///< to UDP addresses not yet proven to receive
+  std::uint64_t samples_skipped = 0;  ///< not sent: a newer one was ready (the sender fell behind)
 };
 
 /// What the server's simulated operator (a hand holding the tool) does. Profiles and trajectories
@@ -394,6 +398,9 @@ struct OperatorInput {
 struct ReceiveCounters {
   std::uint64_t accepted = 0;  ///< State datagrams decoded and authenticated.
   std::uint64_t rejected = 0;  ///< Datagrams dropped: malformed, wrong session, bad tag.
+  /// Accepted States never handed out: a newer one had arrived by the time the receive thread
+  /// read them (it hands out only the newest of what has queued up).
+  std::uint64_t skipped = 0;
   /// Path challenges answered: the server asks each new UDP address to prove it receives before
   /// it sends state there.
   std::uint64_t challenges_answered = 0;

@@ -11,10 +11,12 @@
 
 #include <array>
 #include <chrono>
+#include <condition_variable>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "haptic/haptic.hpp"
@@ -426,6 +428,59 @@ TEST_F(FakeServerTest, HeartbeatsTellTheServerWhereToSendStateAndBadDatagramsAre
   EXPECT_EQ(counters.accepted, 2u);
   EXPECT_EQ(counters.rejected, 3u);
   EXPECT_TRUE(client.clock_offset().has_value());
+}
+
+TEST_F(FakeServerTest, ABacklogIsDrainedAndOnlyItsNewestSampleIsHandedOut) {
+  config_.state_decimation = 1;
+  Client client(config_);
+  // The application's callback is slow: while it holds the first sample, 50 more arrive.
+  std::mutex mutex;
+  std::condition_variable changed;
+  bool release = false;
+  std::vector<State> delivered;
+  client.on_state([&](const State& state) {
+    std::unique_lock lock(mutex);
+    delivered.push_back(state);
+    changed.notify_all();
+    changed.wait_for(lock, seconds(5), [&] { return release; });
+  });
+  data_plane_.send_state(1, 0.0);
+  {
+    std::unique_lock lock(mutex);
+    ASSERT_TRUE(changed.wait_for(lock, seconds(5), [&] { return !delivered.empty(); }));
+  }
+  for (std::uint64_t tick = 2; tick <= 51; ++tick) data_plane_.send_state(tick, 0.001 * tick);
+  {
+    std::lock_guard lock(mutex);
+    release = true;
+  }
+  changed.notify_all();
+  State newest;
+  ASSERT_TRUE(client.wait_for_tick(51, newest, seconds(5)));
+  client.on_state({});
+  // One more call, with the newest: the 49 in between were read and dropped, not queued.
+  std::lock_guard lock(mutex);
+  ASSERT_EQ(delivered.size(), 2u);
+  EXPECT_EQ(delivered[1].tick, 51u);
+  EXPECT_DOUBLE_EQ(delivered[1].position.z, 0.051);
+  const ReceiveCounters counters = client.receive_counters();
+  EXPECT_EQ(counters.accepted, 51u);
+  EXPECT_EQ(counters.skipped, 49u);
+}
+
+TEST_F(FakeServerTest, ASamplesAgeIsHowMuchLongerItTookThanTheQuickestRecentOne) {
+  config_.state_decimation = 1;
+  Client client(config_);
+  data_plane_.send_state(100, 0.0);  // stamped 100 ms: the reference
+  State state;
+  ASSERT_TRUE(client.wait_for_tick(100, state, seconds(2)));
+  EXPECT_EQ(state.age, std::chrono::nanoseconds(0));
+  // Stamped 1 ms later, but held 30 ms on the way (as if queued): about 29 ms old.
+  std::this_thread::sleep_for(milliseconds(30));
+  data_plane_.send_state(101, 0.0);
+  ASSERT_TRUE(client.wait_for_tick(101, state, seconds(2)));
+  EXPECT_GE(state.age, milliseconds(29));
+  EXPECT_LT(state.age, seconds(2));
 }
 
 TEST_F(FakeServerTest, PollReturnsTheFirstSampleEvenAtTickZero) {
