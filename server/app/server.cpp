@@ -193,15 +193,24 @@ void Server::start() {
 void Server::shutdown() {
   if (shut_down_) return;
   shut_down_ = true;
-  // Control plane first: watchers end, in-flight requests (a lockstep Step among them) finish
-  // against a running loop, and no new request can change the scene during the ramp.
+  // The force first: the output ramps to zero from the next tick, while the control plane closes
+  // beside it. gRPC's shutdown may wait out its whole deadline (an idle client connection is
+  // enough), and the hand must not be pushed all that time. Requests still in flight (a lockstep
+  // Step among them) run against a loop whose output is ramping; the ramp is a gain on the
+  // output, so nothing they add can push.
   events_.close();
-  if (grpc_server_) grpc_server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(1));
+  std::thread control_plane_closer;
+  if (grpc_server_) {
+    control_plane_closer = std::thread([this] {
+      grpc_server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(1));
+    });
+  }
   if (started_) {
     loop_->ramp_out_and_stop();
   } else {
     loop_->stop();
   }
+  if (control_plane_closer.joinable()) control_plane_closer.join();
   // With the loop stopped, leave every device with zero force.
   for (const SimulatedDevice& simulated : simulated_) {
     simulated.device->write(runtime::DeviceCommand{}, 0.0);

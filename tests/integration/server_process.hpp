@@ -71,8 +71,16 @@ class ServerProcess {
 
   /// SIGTERM, then wait for a clean exit. Returns the exit status (or -1 if not running).
   int stop() {
+    signal_stop();
+    return wait();
+  }
+  /// SIGTERM without waiting (wait() collects the exit).
+  void signal_stop() {
+    if (pid_ > 0) ::kill(pid_, SIGTERM);
+  }
+  /// Waits for the process to end. Returns the exit status (or -1 if not running).
+  int wait() {
     if (pid_ <= 0) return -1;
-    ::kill(pid_, SIGTERM);
     int status = 0;
     ::waitpid(pid_, &status, 0);
     pid_ = -1;
