@@ -16,8 +16,8 @@ Vec3 to_vec(const wire::Vec3d& v) { return {v.x, v.y, v.z}; }
 // The offset estimate restarts its window every this many samples, so it follows clock drift.
 constexpr std::uint32_t kOffsetWindow = 2000;
 
-// The socket's receive buffer (the kernel doubles it): about a hundred State datagrams. Unit: B.
-constexpr int kReceiveBufferBytes = 64 * 1024;
+// The socket's receive buffer (the kernel doubles it). Unit: B.
+constexpr int kReceiveBufferBytes = 1 << 20;
 // At most this many datagrams are taken in one wake-up before the newest is handed out.
 constexpr int kMaxDrain = 1024;
 
@@ -48,9 +48,11 @@ UdpLink::UdpLink(const std::string& host, std::uint16_t port, std::uint64_t sess
   socket_.open(server_.protocol(), error);
   if (!error) socket_.bind(asio::ip::udp::endpoint(server_.protocol(), 0), error);
   if (error) throw ConnectionError("UDP: cannot open a socket: " + error.message());
-  // Small: what waits here goes stale. Each wake-up drains the socket and hands out only the
-  // newest sample, so a backlog costs one read per datagram, never a queue of old states (a 1 MB
-  // buffer once held a second of them). A lockstep Step's reply carries its last state anyway.
+  // Room for a lockstep Step's burst (another client's Step of many ticks sends them all at once;
+  // the tail of a burst that overflows is what is lost, and it holds the newest tick). What waits
+  // here does not go stale on its way to the application: each wake-up drains the socket and
+  // hands out only the newest sample. (Handing out every queued datagram in order is what once
+  // made samples a second old.) The kernel may cap the size at net.core.rmem_max.
   socket_.set_option(asio::socket_base::receive_buffer_size(kReceiveBufferBytes), error);
 
   send_heartbeat();  // at once, so the server learns where to send state

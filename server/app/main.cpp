@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "app/config.hpp"
+#include "app/health_check.hpp"
 #include "app/server.hpp"
 
 namespace {
@@ -53,7 +54,21 @@ int main(int argc, char** argv) {
   cli.add_option("--ready-file", ready_file,
                  "write {\"grpc_port\":..,\"udp_port\":..} here once listening");
   cli.add_flag("--print-config", print_config, "print the effective configuration and exit");
+  std::string health_address;
+  cli.add_option("--health-check", health_address,
+                 "ask the server at HOST:PORT over a fresh connection whether it serves; exit 0 if "
+                 "it answers SERVING within 2 s, else 1 (for container and systemd checks)");
   CLI11_PARSE(cli, argc, argv);
+
+  if (!health_address.empty()) {
+    std::string why;
+    if (!haptic::app::check_health(health_address, std::chrono::seconds(2), why)) {
+      std::cerr << "hapticd: " << why << "\n";
+      return 1;
+    }
+    std::cout << "hapticd at " << health_address << ": serving\n";
+    return 0;
+  }
 
   haptic::v1::ServerConfig config;
   try {

@@ -1,9 +1,13 @@
 #include "app/server.hpp"
 
+#include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/resource_quota.h>
 #include <grpcpp/server_builder.h>
+#include <grpcpp/server_posix.h>
+#include <sys/resource.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -14,6 +18,19 @@
 
 namespace haptic::app {
 namespace {
+
+/// Raises the soft limit on open files to the hard one (connections are capped below it); returns
+/// the soft limit now in force.
+std::uint32_t raise_fd_limit() {
+  rlimit limit{};
+  if (::getrlimit(RLIMIT_NOFILE, &limit) != 0) return 1024;
+  if (limit.rlim_cur < limit.rlim_max) {
+    limit.rlim_cur = limit.rlim_max;
+    (void)::setrlimit(RLIMIT_NOFILE, &limit);
+    (void)::getrlimit(RLIMIT_NOFILE, &limit);
+  }
+  return static_cast<std::uint32_t>(std::min<rlim_t>(limit.rlim_cur, 1u << 30));
+}
 
 /// Control-plane threads for unary calls, beside those the event streams may hold.
 constexpr int kUnaryCallThreads = 32;
@@ -130,6 +147,19 @@ Server::Server(const v1::ServerConfig& config)
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
       [this] { return stats(); }});
+  const std::uint32_t fd_limit = raise_fd_limit();
+  net::ConnectionLimits connection_limits;
+  connection_limits.max_connections =
+      config.max_connections() > 0 ? config.max_connections()
+                                   : std::clamp<std::uint32_t>(fd_limit > 256 ? fd_limit - 128 : 128, 16, 1024);
+  connection_limits.max_connections_per_peer =
+      config.max_connections_per_peer() > 0 ? config.max_connections_per_peer() : 64;
+  if (connection_limits.max_connections + 64 > fd_limit) {
+    spdlog::warn("hapticd: max_connections {} is close to the fd limit {}: expect connections "
+                 "refused for want of descriptors", connection_limits.max_connections, fd_limit);
+  }
+  listener_ = std::make_unique<net::ControlListener>(connection_limits);
+  listener_->bind(config.grpc_address());
   grpc::ServerBuilder builder;
   // Every call in progress holds a thread of gRPC's sync pool, an event stream for its whole life:
   // cap the pool, so that a flood of calls is refused (RESOURCE_EXHAUSTED) instead of growing it
@@ -137,14 +167,13 @@ Server::Server(const v1::ServerConfig& config)
   grpc::ResourceQuota quota("hapticd-control-plane");
   quota.SetMaxThreads(static_cast<int>(config.max_event_streams()) + kUnaryCallThreads);
   builder.SetResourceQuota(quota);
-  int selected_port = 0;
-  builder.AddListeningPort(config.grpc_address(), grpc::InsecureServerCredentials(), &selected_port);
+  // No listening port of gRPC's own: the ControlListener accepts and hands connections over.
+  grpc::EnableDefaultHealthCheckService(true);  // grpc.health.v1, for hapticd --health-check
   builder.RegisterService(service_.get());
   grpc_server_ = builder.BuildAndStart();
-  if (!grpc_server_ || selected_port == 0) {
-    throw std::runtime_error("cannot listen for gRPC on " + config.grpc_address());
-  }
-  grpc_port_ = static_cast<std::uint16_t>(selected_port);
+  if (!grpc_server_) throw std::runtime_error("cannot start the gRPC server");
+  grpc_port_ = listener_->port();
+  listener_->start([server = grpc_server_.get()](int fd) { grpc::AddInsecureChannelFromFd(server, fd); });
 }
 
 Server::~Server() { shutdown(); }
@@ -199,6 +228,7 @@ void Server::shutdown() {
   // Step among them) run against a loop whose output is ramping; the ramp is a gain on the
   // output, so nothing they add can push.
   events_.close();
+  if (listener_) listener_->stop();
   std::thread control_plane_closer;
   if (grpc_server_) {
     control_plane_closer = std::thread([this] {
@@ -249,6 +279,8 @@ v1::Stats Server::stats() const {
   stats.set_datagrams_foreign_source(udp_.counters().foreign_source.load(std::memory_order_relaxed));
   stats.set_path_challenges_sent(udp_.counters().challenges_sent.load(std::memory_order_relaxed));
   stats.set_samples_skipped(udp_.counters().samples_skipped.load(std::memory_order_relaxed));
+  stats.set_connections_open(listener_->counters().open.load(std::memory_order_relaxed));
+  stats.set_connections_refused(listener_->counters().refused.load(std::memory_order_relaxed));
   stats.set_force_faults(counters_.force_faults.load(std::memory_order_relaxed));
   stats.set_device_faults(counters_.device_errors.load(std::memory_order_relaxed));
   stats.set_force_saturations(counters_.force_saturations.load(std::memory_order_relaxed));

@@ -7,9 +7,11 @@
 
 #include <cctype>
 #include <chrono>
+#include <cstdlib>
 #include <span>
 
 #include "haptic/io/session_secret.hpp"
+#include "net/control_listener.hpp"
 
 namespace haptic::net {
 namespace {
@@ -74,6 +76,16 @@ void log_if_unstable(const v1::StabilityReport& report, std::uint64_t session_id
 constexpr std::uint32_t kApiVersion = v1::API_VERSION_CURRENT;
 constexpr std::uint32_t kMaxDecimation = 1000;
 constexpr std::uint32_t kMaxStepTicks = 1'000'000;
+
+/// The host a call comes from. Connections hapticd accepted itself (net::ControlListener) show
+/// as "fd:N" in gRPC's peer string: their address is the socket's own.
+std::string caller_host(const grpc::ServerContext* context) {
+  const std::string peer = context->peer();
+  if (peer.rfind("fd:", 0) == 0) {
+    return ControlListener::host_of_connection(static_cast<int>(std::strtol(peer.c_str() + 3, nullptr, 10)));
+  }
+  return peer_host(peer);
+}
 
 grpc::Status invalid(const std::string& message) {
   return {grpc::StatusCode::INVALID_ARGUMENT, message};
@@ -179,7 +191,7 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::
   }
   std::string refusal;
   const auto session = deps_.sessions.open(request->client_name(), request->device_index(),
-                                           peer_host(context->peer()), &refusal);
+                                           caller_host(context), &refusal);
   if (!session) return {grpc::StatusCode::RESOURCE_EXHAUSTED, refusal};
   response->set_session_id(session->id);
   response->set_udp_key(std::string(session->key.begin(), session->key.end()));

@@ -5,8 +5,14 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
+#include <thread>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -222,6 +228,124 @@ TEST(ResourceLimitsOfTheScene, OneHostsSessionsAndTheWholeScenesTrianglesAreBoun
   EXPECT_EQ(over.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   EXPECT_NE(over.error_message().find("over max_scene_triangles (3)"), std::string::npos)
       << over.error_message();
+}
+
+/// A client of the raw service on a connection of its own.
+struct RawClient {
+  explicit RawClient(const std::string& address) {
+    grpc::ChannelArguments arguments;
+    arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);  // never share another's connection
+    channel = grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), arguments);
+    stub = v1::Haptic::NewStub(channel);
+  }
+  grpc::Status open(v1::OpenSessionResponse& session, std::chrono::milliseconds deadline) {
+    v1::OpenSessionRequest request;
+    request.set_client_name("raw");
+    request.set_api_version(v1::API_VERSION_CURRENT);
+    grpc::ClientContext context;
+    context.set_deadline(Clock::now() + deadline);
+    return stub->OpenSession(&context, request, &session);
+  }
+  v1::Stats stats(const v1::OpenSessionResponse& session) {
+    v1::SessionRef ref;
+    ref.set_session_id(session.session_id());
+    v1::Stats out;
+    grpc::ClientContext context;
+    context.set_deadline(Clock::now() + std::chrono::seconds(5));
+    context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
+    EXPECT_TRUE(stub->GetStats(&context, ref, &out).ok());
+    return out;
+  }
+  std::shared_ptr<grpc::Channel> channel;
+  std::unique_ptr<v1::Haptic::Stub> stub;
+};
+
+/// `count` TCP connections to `port` on loopback that never say a word.
+std::vector<int> flood(std::uint16_t port, int count) {
+  std::vector<int> sockets;
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(port);
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  for (int i = 0; i < count; ++i) {
+    const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (fd < 0) break;
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to) != 0) {
+      ::close(fd);
+      continue;
+    }
+    sockets.push_back(fd);
+  }
+  return sockets;
+}
+
+/// Waits (bounded) until the server has dealt with `count` flood connections: each either held
+/// open or refused.
+v1::Stats wait_until_accounted(RawClient& client, const v1::OpenSessionResponse& session,
+                               std::uint64_t count) {
+  v1::Stats s = client.stats(session);
+  for (int i = 0; i < 1000 && s.connections_refused() + s.connections_open() < count; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    s = client.stats(session);
+  }
+  return s;
+}
+
+/// A new connection opens a session within `within` (retrying, as a client would).
+bool opens_again(const std::string& address, std::chrono::seconds within) {
+  const auto give_up = std::chrono::steady_clock::now() + within;
+  while (std::chrono::steady_clock::now() < give_up) {
+    RawClient fresh(address);
+    v1::OpenSessionResponse session;
+    if (fresh.open(session, std::chrono::milliseconds(500)).ok()) return true;
+  }
+  return false;
+}
+
+TEST(ConnectionFlood, TheControlPlaneAcceptsAgainAfterRunningOutOfDescriptors) {
+  // 128 descriptors and caps far above that: 400 idle connections exhaust the fds themselves.
+  // (gRPC's own listener stopped for good at the first failed accept: deaf until a restart.)
+  test::ServerProcess server(
+      test::lockstep_config(R"("max_connections": 1000, "max_connections_per_peer": 1000)"), {}, 128);
+  RawClient existing(server.address());
+  v1::OpenSessionResponse session;
+  ASSERT_TRUE(existing.open(session, std::chrono::seconds(5)).ok());
+
+  std::vector<int> sockets = flood(server.grpc_port(), 400);
+  ASSERT_EQ(sockets.size(), 400u);
+  // Every one is dealt with, held or closed at once (none left in the backlog), and the client
+  // already connected is served all along.
+  const v1::Stats during = wait_until_accounted(existing, session, 401);
+  std::printf("  flood of 400 with 128 fds: %u open, %llu refused for want of a descriptor\n",
+              during.connections_open(), static_cast<unsigned long long>(during.connections_refused()));
+  EXPECT_EQ(during.connections_open() + during.connections_refused(), 401u);
+  EXPECT_GE(during.connections_refused(), 400u - 128u);
+  for (const int fd : sockets) ::close(fd);
+
+  EXPECT_TRUE(opens_again(server.address(), std::chrono::seconds(5)));
+}
+
+TEST(ConnectionFlood, ConnectionsPastThePerHostCapAreClosedAtOnceAndOthersGoOn) {
+  test::ServerProcess server(test::lockstep_config(R"("max_connections_per_peer": 16)"));
+  RawClient existing(server.address());
+  v1::OpenSessionResponse session;
+  ASSERT_TRUE(existing.open(session, std::chrono::seconds(5)).ok());
+  std::vector<int> sockets = flood(server.grpc_port(), 100);
+  ASSERT_EQ(sockets.size(), 100u);
+  const v1::Stats during = wait_until_accounted(existing, session, 101);
+  EXPECT_EQ(during.connections_open(), 16u);  // the cap, the existing client's included
+  EXPECT_EQ(during.connections_refused(), 100u + 1u - 16u);
+  // A refused connection is closed by the server at once: reading it ends.
+  char byte = 0;
+  int ended = 0;
+  for (const int fd : sockets) {
+    timeval timeout{0, 1000};
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+    if (::recv(fd, &byte, 1, 0) == 0) ++ended;
+  }
+  EXPECT_GE(ended, 100 - 15);
+  for (const int fd : sockets) ::close(fd);
+  EXPECT_TRUE(opens_again(server.address(), std::chrono::seconds(5)));
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // temporary file, readiness from --ready-file (never a sleep), SIGTERM and a reaped child at the end.
 
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,7 +21,9 @@ namespace haptic::test {
 class ServerProcess {
  public:
   /// `config_json` is a haptic.v1.ServerConfig in JSON; ports are forced to ephemeral loopback.
-  explicit ServerProcess(const std::string& config_json, const std::string& extra_arg = {}) {
+  /// With `fd_limit` > 0 the server runs with at most that many open files (soft and hard).
+  explicit ServerProcess(const std::string& config_json, const std::string& extra_arg = {},
+                         rlim_t fd_limit = 0) {
     static int counter = 0;
     dir_ = std::filesystem::temp_directory_path() /
            ("hapticd-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
@@ -32,6 +35,10 @@ class ServerProcess {
     pid_ = ::fork();
     if (pid_ < 0) throw std::runtime_error("fork failed");
     if (pid_ == 0) {
+      if (fd_limit > 0) {
+        const rlimit limit{fd_limit, fd_limit};
+        ::setrlimit(RLIMIT_NOFILE, &limit);
+      }
       const std::string binary = HAPTICD_BINARY;
       const std::string config = config_path.string();
       const std::string ready = ready_path.string();
@@ -89,6 +96,7 @@ class ServerProcess {
 
   std::string address() const { return "127.0.0.1:" + std::to_string(grpc_port_); }
   pid_t pid() const { return pid_; }
+  std::uint16_t grpc_port() const { return grpc_port_; }
   std::uint16_t udp_port() const { return udp_port_; }
 
  private:

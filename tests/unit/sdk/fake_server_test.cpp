@@ -455,10 +455,14 @@ TEST_F(FakeServerTest, ABacklogIsDrainedAndOnlyItsNewestSampleIsHandedOut) {
     release = true;
   }
   changed.notify_all();
+  {
+    // One more call, with the newest: the 49 in between were read and dropped, not queued.
+    std::unique_lock lock(mutex);
+    ASSERT_TRUE(changed.wait_for(lock, seconds(5), [&] { return delivered.size() >= 2; }));
+  }
   State newest;
   ASSERT_TRUE(client.wait_for_tick(51, newest, seconds(5)));
   client.on_state({});
-  // One more call, with the newest: the 49 in between were read and dropped, not queued.
   std::lock_guard lock(mutex);
   ASSERT_EQ(delivered.size(), 2u);
   EXPECT_EQ(delivered[1].tick, 51u);

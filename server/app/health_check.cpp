@@ -1,0 +1,47 @@
+#include "app/health_check.hpp"
+
+#include <grpcpp/generic/generic_stub.h>
+#include <grpcpp/grpcpp.h>
+
+#include <future>
+#include <vector>
+
+namespace haptic::app {
+
+bool check_health(const std::string& address, std::chrono::milliseconds timeout, std::string& why) {
+  grpc::ChannelArguments arguments;
+  // A channel of its own: never a connection shared with (and kept alive by) anyone else.
+  arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+  const auto channel =
+      grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), arguments);
+  grpc::GenericStub stub(channel);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + timeout);
+  // HealthCheckRequest{service: ""} is the empty message; HealthCheckResponse{status: SERVING}
+  // is field 1 = 1, the two bytes 08 01 (grpc/health/v1/health.proto).
+  grpc::Slice empty;  // a buffer holding zero bytes (a default ByteBuffer holds none at all)
+  grpc::ByteBuffer request(&empty, 1);
+  grpc::ByteBuffer response;
+  std::promise<grpc::Status> done;
+  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
+                 [&done](grpc::Status status) { done.set_value(std::move(status)); });
+  const grpc::Status status = done.get_future().get();
+  if (!status.ok()) {
+    why = "no answer from " + address + ": " + status.error_message() + " (gRPC code " +
+          std::to_string(static_cast<int>(status.error_code())) + ")";
+    return false;
+  }
+  std::vector<grpc::Slice> slices;
+  (void)response.Dump(&slices);
+  std::string bytes;
+  for (const grpc::Slice& slice : slices) {
+    bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+  }
+  if (bytes != std::string("\x08\x01", 2)) {
+    why = address + " answers, but not SERVING";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace haptic::app
