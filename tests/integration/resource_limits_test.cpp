@@ -20,6 +20,7 @@
 
 #include "haptic/io/session_secret.hpp"
 #include "haptic/v1/service.grpc.pb.h"
+#include "integration/raw_client.hpp"
 #include "integration/server_process.hpp"
 
 namespace haptic {
@@ -42,30 +43,15 @@ class ResourceLimits : public ::testing::Test {
   test::ServerProcess server_{R"({"time_mode": "REAL_TIME", "udp_address": "127.0.0.1",
     "status_period_s": 0, "real_time": {"use_fifo": true, "cpu": -1},
     "max_event_streams": 8, "max_event_streams_per_session": 4})"};
-  std::unique_ptr<v1::Haptic::Stub> stub_ = v1::Haptic::NewStub(
-      grpc::CreateChannel(server_.address(), grpc::InsecureChannelCredentials()));
+  test::RawClient client_{server_.address()};
 
   v1::OpenSessionResponse open(const std::string& name) {
-    v1::OpenSessionRequest request;
-    request.set_client_name(name);
-    request.set_api_version(v1::API_VERSION_CURRENT);
     v1::OpenSessionResponse response;
-    grpc::ClientContext context;
-    context.set_deadline(Clock::now() + std::chrono::seconds(5));
-    EXPECT_TRUE(stub_->OpenSession(&context, request, &response).ok());
+    EXPECT_TRUE(client_.open(response, name).ok());
     return response;
   }
 
-  v1::Stats stats(const v1::OpenSessionResponse& session) {
-    v1::SessionRef ref;
-    ref.set_session_id(session.session_id());
-    v1::Stats out;
-    grpc::ClientContext context;
-    context.set_deadline(Clock::now() + std::chrono::seconds(5));
-    context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
-    EXPECT_TRUE(stub_->GetStats(&context, ref, &out).ok());
-    return out;
-  }
+  v1::Stats stats(const v1::OpenSessionResponse& session) { return client_.stats(session); }
 
   /// One WatchEvents call in flight.
   struct Stream {
@@ -79,7 +65,7 @@ class ResourceLimits : public ::testing::Test {
     stream->context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
     v1::WatchEventsRequest request;
     request.set_session_id(session.session_id());
-    stream->reader = stub_->WatchEvents(&stream->context, request);
+    stream->reader = client_.stub().WatchEvents(&stream->context, request);
     return stream;
   }
 
@@ -160,10 +146,7 @@ TEST_F(ResourceLimits, TwoThousandStreamAttemptsAreRefusedPastTheCapsAndMemorySt
     v1::SessionRef ref;
     ref.set_session_id(first.session_id());
     v1::Empty empty;
-    grpc::ClientContext context;
-    context.set_deadline(Clock::now() + std::chrono::seconds(5));
-    context.AddMetadata(io::kSessionSecretMetadataKey, first.session_secret());
-    ASSERT_TRUE(stub_->CloseSession(&context, ref, &empty).ok());
+    ASSERT_TRUE(client_.call(&v1::Haptic::Stub::CloseSession, ref, empty, first.session_secret()).ok());
   }
   for (auto& stream : flood.open) {
     v1::Event event;
@@ -186,16 +169,8 @@ TEST_F(ResourceLimits, TwoThousandStreamAttemptsAreRefusedPastTheCapsAndMemorySt
 TEST(ResourceLimitsOfTheScene, OneHostsSessionsAndTheWholeScenesTrianglesAreBounded) {
   test::ServerProcess server(test::lockstep_config(
       R"("max_sessions_per_peer": 2, "max_scene_triangles": 3)"));
-  auto stub = v1::Haptic::NewStub(
-      grpc::CreateChannel(server.address(), grpc::InsecureChannelCredentials()));
-  const auto open = [&](v1::OpenSessionResponse& response) {
-    v1::OpenSessionRequest request;
-    request.set_client_name("one-host");
-    request.set_api_version(v1::API_VERSION_CURRENT);
-    grpc::ClientContext context;
-    context.set_deadline(Clock::now() + std::chrono::seconds(5));
-    return stub->OpenSession(&context, request, &response);
-  };
+  test::RawClient client(server.address());
+  const auto open = [&](v1::OpenSessionResponse& response) { return client.open(response, "one-host"); };
   v1::OpenSessionResponse first, second, third;
   ASSERT_TRUE(open(first).ok());
   ASSERT_TRUE(open(second).ok());
@@ -218,10 +193,7 @@ TEST(ResourceLimitsOfTheScene, OneHostsSessionsAndTheWholeScenesTrianglesAreBoun
     }
     for (const std::uint32_t index : {0u, 1u, 2u, 0u, 2u, 3u}) mesh->add_indices(index);
     v1::ItemRef item;
-    grpc::ClientContext context;
-    context.set_deadline(Clock::now() + std::chrono::seconds(5));
-    context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
-    return stub->CreateObject(&context, request, &item);
+    return client.call(&v1::Haptic::Stub::CreateObject, request, item, session.session_secret());
   };
   ASSERT_TRUE(add_plate(first, 0.0).ok());
   const grpc::Status over = add_plate(second, 0.01);
@@ -229,36 +201,6 @@ TEST(ResourceLimitsOfTheScene, OneHostsSessionsAndTheWholeScenesTrianglesAreBoun
   EXPECT_NE(over.error_message().find("over max_scene_triangles (3)"), std::string::npos)
       << over.error_message();
 }
-
-/// A client of the raw service on a connection of its own.
-struct RawClient {
-  explicit RawClient(const std::string& address) {
-    grpc::ChannelArguments arguments;
-    arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);  // never share another's connection
-    channel = grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), arguments);
-    stub = v1::Haptic::NewStub(channel);
-  }
-  grpc::Status open(v1::OpenSessionResponse& session, std::chrono::milliseconds deadline) {
-    v1::OpenSessionRequest request;
-    request.set_client_name("raw");
-    request.set_api_version(v1::API_VERSION_CURRENT);
-    grpc::ClientContext context;
-    context.set_deadline(Clock::now() + deadline);
-    return stub->OpenSession(&context, request, &session);
-  }
-  v1::Stats stats(const v1::OpenSessionResponse& session) {
-    v1::SessionRef ref;
-    ref.set_session_id(session.session_id());
-    v1::Stats out;
-    grpc::ClientContext context;
-    context.set_deadline(Clock::now() + std::chrono::seconds(5));
-    context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
-    EXPECT_TRUE(stub->GetStats(&context, ref, &out).ok());
-    return out;
-  }
-  std::shared_ptr<grpc::Channel> channel;
-  std::unique_ptr<v1::Haptic::Stub> stub;
-};
 
 /// `count` TCP connections to `port` on loopback that never say a word.
 std::vector<int> flood(std::uint16_t port, int count) {
@@ -281,7 +223,7 @@ std::vector<int> flood(std::uint16_t port, int count) {
 
 /// Waits (bounded) until the server has dealt with `count` flood connections: each either held
 /// open or refused.
-v1::Stats wait_until_accounted(RawClient& client, const v1::OpenSessionResponse& session,
+v1::Stats wait_until_accounted(test::RawClient& client, const v1::OpenSessionResponse& session,
                                std::uint64_t count) {
   v1::Stats s = client.stats(session);
   for (int i = 0; i < 1000 && s.connections_refused() + s.connections_open() < count; ++i) {
@@ -295,9 +237,9 @@ v1::Stats wait_until_accounted(RawClient& client, const v1::OpenSessionResponse&
 bool opens_again(const std::string& address, std::chrono::seconds within) {
   const auto give_up = std::chrono::steady_clock::now() + within;
   while (std::chrono::steady_clock::now() < give_up) {
-    RawClient fresh(address);
+    test::RawClient fresh(address);
     v1::OpenSessionResponse session;
-    if (fresh.open(session, std::chrono::milliseconds(500)).ok()) return true;
+    if (fresh.open(session, "fresh", std::chrono::milliseconds(500)).ok()) return true;
   }
   return false;
 }
@@ -307,9 +249,9 @@ TEST(ConnectionFlood, TheControlPlaneAcceptsAgainAfterRunningOutOfDescriptors) {
   // (gRPC's own listener stopped for good at the first failed accept: deaf until a restart.)
   test::ServerProcess server(
       test::lockstep_config(R"("max_connections": 1000, "max_connections_per_peer": 1000)"), {}, 128);
-  RawClient existing(server.address());
+  test::RawClient existing(server.address());
   v1::OpenSessionResponse session;
-  ASSERT_TRUE(existing.open(session, std::chrono::seconds(5)).ok());
+  ASSERT_TRUE(existing.open(session, "existing").ok());
 
   std::vector<int> sockets = flood(server.grpc_port(), 400);
   ASSERT_EQ(sockets.size(), 400u);
@@ -327,9 +269,9 @@ TEST(ConnectionFlood, TheControlPlaneAcceptsAgainAfterRunningOutOfDescriptors) {
 
 TEST(ConnectionFlood, ConnectionsPastThePerHostCapAreClosedAtOnceAndOthersGoOn) {
   test::ServerProcess server(test::lockstep_config(R"("max_connections_per_peer": 16)"));
-  RawClient existing(server.address());
+  test::RawClient existing(server.address());
   v1::OpenSessionResponse session;
-  ASSERT_TRUE(existing.open(session, std::chrono::seconds(5)).ok());
+  ASSERT_TRUE(existing.open(session, "existing").ok());
   std::vector<int> sockets = flood(server.grpc_port(), 100);
   ASSERT_EQ(sockets.size(), 100u);
   const v1::Stats during = wait_until_accounted(existing, session, 101);

@@ -10,6 +10,7 @@
 
 #include "haptic/io/session_secret.hpp"
 #include "haptic/v1/service.grpc.pb.h"
+#include "integration/raw_client.hpp"
 #include "integration/server_process.hpp"
 
 namespace haptic {
@@ -17,17 +18,10 @@ namespace {
 
 class SessionCapability : public ::testing::Test {
  protected:
-  void SetUp() override {
-    stub_ = v1::Haptic::NewStub(
-        grpc::CreateChannel(server_.address(), grpc::InsecureChannelCredentials()));
-  }
-
   v1::OpenSessionResponse open(const std::string& name) {
-    v1::OpenSessionRequest request;
-    request.set_client_name(name);
-    request.set_api_version(v1::API_VERSION_CURRENT);
     v1::OpenSessionResponse response;
-    EXPECT_TRUE(call(&v1::Haptic::Stub::OpenSession, request, response, "").ok());
+    EXPECT_TRUE(client_.open(response, name).ok());
+    told_ += response.SerializeAsString();
     return response;
   }
 
@@ -36,16 +30,13 @@ class SessionCapability : public ::testing::Test {
   template <typename Method, typename Request, typename Response>
   grpc::Status call(Method method, const Request& request, Response& response,
                     const std::string& secret) {
-    grpc::ClientContext context;
-    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
-    if (!secret.empty()) context.AddMetadata(io::kSessionSecretMetadataKey, secret);
-    const grpc::Status status = ((*stub_).*method)(&context, request, &response);
+    const grpc::Status status = client_.call(method, request, response, secret);
     told_ += response.SerializeAsString() + status.error_message();
     return status;
   }
 
   test::ServerProcess server_{test::lockstep_config()};
-  std::unique_ptr<v1::Haptic::Stub> stub_;
+  test::RawClient client_{server_.address()};
   std::string told_;  // everything the server replied, to anyone, in this test
 };
 
@@ -60,7 +51,7 @@ TEST_F(SessionCapability, AnotherClientCannotActAsASessionWhoseIdItHasRead) {
   watch_context.AddMetadata(io::kSessionSecretMetadataKey, own);
   v1::WatchEventsRequest watch;
   watch.set_session_id(intruder.session_id());
-  auto events = stub_->WatchEvents(&watch_context, watch);
+  auto events = client_.stub().WatchEvents(&watch_context, watch);
   v1::Event event;
   ASSERT_TRUE(events->Read(&event));
   ASSERT_EQ(event.kind(), v1::Event::WATCH_STARTED);
@@ -163,7 +154,7 @@ TEST_F(SessionCapability, AnotherClientCannotActAsASessionWhoseIdItHasRead) {
     if (!secret.empty()) stream_context.AddMetadata(io::kSessionSecretMetadataKey, secret);
     v1::WatchEventsRequest watch_as_victim;
     watch_as_victim.set_session_id(victim_id);
-    auto stolen = stub_->WatchEvents(&stream_context, watch_as_victim);
+    auto stolen = client_.stub().WatchEvents(&stream_context, watch_as_victim);
     v1::Event none;
     EXPECT_FALSE(stolen->Read(&none));
     EXPECT_EQ(stolen->Finish().error_code(), grpc::StatusCode::PERMISSION_DENIED);

@@ -105,6 +105,35 @@ DecodeError check_typed(std::span<const std::uint8_t> datagram, const Key& key, 
   return DecodeError::kNone;
 }
 
+/// Writes a datagram of `type`: header, the payload `write` puts, tag. 0 if `out` is too small.
+template <typename Write>
+std::size_t encode_as(Header header, DatagramType type, std::size_t payload_size, const Key& key,
+                      std::span<std::uint8_t> out, Write write) {
+  const std::size_t size = kHeaderSize + payload_size + kTagSize;
+  if (out.size() < size) return 0;
+  header.type = type;
+  Writer w(out.data());
+  write_header(w, header, payload_size);
+  write(w);
+  append_tag(out, w.written(), key);
+  return size;
+}
+
+/// Checks a datagram of `type` (check_typed proves its exact size) and reads its payload with
+/// `read`; the outputs are written only on success.
+template <typename Payload, typename Read>
+DecodeError decode_as(std::span<const std::uint8_t> datagram, const Key& key, DatagramType type,
+                      Header& header, Payload& payload, Read read) {
+  Header parsed;
+  if (const DecodeError e = check_typed(datagram, key, type, parsed); e != DecodeError::kNone) {
+    return e;
+  }
+  Reader r(datagram.data() + kHeaderSize);
+  payload = read(r);
+  header = parsed;
+  return DecodeError::kNone;
+}
+
 }  // namespace
 
 const char* to_string(DecodeError error) {
@@ -148,126 +177,84 @@ DecodeError peek_header(std::span<const std::uint8_t> datagram, Header& header) 
 
 std::size_t encode_state(Header header, const StatePayload& state, const Key& key,
                          std::span<std::uint8_t> out) {
-  if (out.size() < kStateDatagramSize) return 0;
-  header.type = DatagramType::kState;
-  Writer w(out.data());
-  write_header(w, header, kStatePayloadSize);
-  w.u64(state.tick);
-  w.vec(state.p_WT);
-  w.vec(state.v_WT);
-  w.vec(state.F_T_W);
-  w.vec(state.p_WP);
-  w.u32(state.contact_count);
-  w.u32(state.flags);
-  append_tag(out, w.written(), key);
-  return kStateDatagramSize;
+  return encode_as(header, DatagramType::kState, kStatePayloadSize, key, out, [&](Writer& w) {
+    w.u64(state.tick);
+    w.vec(state.p_WT);
+    w.vec(state.v_WT);
+    w.vec(state.F_T_W);
+    w.vec(state.p_WP);
+    w.u32(state.contact_count);
+    w.u32(state.flags);
+  });
 }
 
 std::size_t encode_heartbeat(Header header, const HeartbeatPayload& heartbeat, const Key& key,
                              std::span<std::uint8_t> out) {
-  if (out.size() < kHeartbeatDatagramSize) return 0;
-  header.type = DatagramType::kHeartbeat;
-  Writer w(out.data());
-  write_header(w, header, kHeartbeatPayloadSize);
-  w.i64(heartbeat.client_time_ns);
-  w.u64(heartbeat.last_state_sequence);
-  append_tag(out, w.written(), key);
-  return kHeartbeatDatagramSize;
+  return encode_as(header, DatagramType::kHeartbeat, kHeartbeatPayloadSize, key, out, [&](Writer& w) {
+    w.i64(heartbeat.client_time_ns);
+    w.u64(heartbeat.last_state_sequence);
+  });
 }
 
 std::size_t encode_path_challenge(Header header, const PathChallengePayload& challenge,
                                   const Key& key, std::span<std::uint8_t> out) {
-  if (out.size() < kPathDatagramSize) return 0;
-  header.type = DatagramType::kPathChallenge;
-  Writer w(out.data());
-  write_header(w, header, kPathPayloadSize);
-  w.u64(challenge.nonce);
-  w.u64(challenge.heartbeat_sequence);
-  append_tag(out, w.written(), key);
-  return kPathDatagramSize;
+  return encode_as(header, DatagramType::kPathChallenge, kPathPayloadSize, key, out, [&](Writer& w) {
+    w.u64(challenge.nonce);
+    w.u64(challenge.heartbeat_sequence);
+  });
 }
 
 std::size_t encode_path_response(Header header, const PathResponsePayload& response,
                                  const Key& key, std::span<std::uint8_t> out) {
-  if (out.size() < kPathDatagramSize) return 0;
-  header.type = DatagramType::kPathResponse;
-  Writer w(out.data());
-  write_header(w, header, kPathPayloadSize);
-  w.u64(response.nonce);
-  w.i64(response.client_time_ns);
-  append_tag(out, w.written(), key);
-  return kPathDatagramSize;
+  return encode_as(header, DatagramType::kPathResponse, kPathPayloadSize, key, out, [&](Writer& w) {
+    w.u64(response.nonce);
+    w.i64(response.client_time_ns);
+  });
 }
 
 DecodeError decode_state(std::span<const std::uint8_t> datagram, const Key& key, Header& header,
                          StatePayload& state) {
-  Header parsed;
-  if (const DecodeError e = check_typed(datagram, key, DatagramType::kState, parsed);
-      e != DecodeError::kNone) {
-    return e;
-  }
-  // check_typed has proved datagram.size() == kStateDatagramSize.
-  Reader r(datagram.data() + kHeaderSize);
-  StatePayload decoded;
-  decoded.tick = r.u64();
-  decoded.p_WT = r.vec();
-  decoded.v_WT = r.vec();
-  decoded.F_T_W = r.vec();
-  decoded.p_WP = r.vec();
-  decoded.contact_count = r.u32();
-  decoded.flags = r.u32();
-  header = parsed;
-  state = decoded;
-  return DecodeError::kNone;
+  return decode_as(datagram, key, DatagramType::kState, header, state, [](Reader& r) {
+    StatePayload decoded;
+    decoded.tick = r.u64();
+    decoded.p_WT = r.vec();
+    decoded.v_WT = r.vec();
+    decoded.F_T_W = r.vec();
+    decoded.p_WP = r.vec();
+    decoded.contact_count = r.u32();
+    decoded.flags = r.u32();
+    return decoded;
+  });
 }
 
 DecodeError decode_heartbeat(std::span<const std::uint8_t> datagram, const Key& key,
                              Header& header, HeartbeatPayload& heartbeat) {
-  Header parsed;
-  if (const DecodeError e = check_typed(datagram, key, DatagramType::kHeartbeat, parsed);
-      e != DecodeError::kNone) {
-    return e;
-  }
-  // check_typed has proved datagram.size() == kHeartbeatDatagramSize.
-  Reader r(datagram.data() + kHeaderSize);
-  HeartbeatPayload decoded;
-  decoded.client_time_ns = r.i64();
-  decoded.last_state_sequence = r.u64();
-  header = parsed;
-  heartbeat = decoded;
-  return DecodeError::kNone;
+  return decode_as(datagram, key, DatagramType::kHeartbeat, header, heartbeat, [](Reader& r) {
+    HeartbeatPayload decoded;
+    decoded.client_time_ns = r.i64();
+    decoded.last_state_sequence = r.u64();
+    return decoded;
+  });
 }
 
 DecodeError decode_path_challenge(std::span<const std::uint8_t> datagram, const Key& key,
                                   Header& header, PathChallengePayload& challenge) {
-  Header parsed;
-  if (const DecodeError e = check_typed(datagram, key, DatagramType::kPathChallenge, parsed);
-      e != DecodeError::kNone) {
-    return e;
-  }
-  Reader r(datagram.data() + kHeaderSize);
-  PathChallengePayload decoded;
-  decoded.nonce = r.u64();
-  decoded.heartbeat_sequence = r.u64();
-  header = parsed;
-  challenge = decoded;
-  return DecodeError::kNone;
+  return decode_as(datagram, key, DatagramType::kPathChallenge, header, challenge, [](Reader& r) {
+    PathChallengePayload decoded;
+    decoded.nonce = r.u64();
+    decoded.heartbeat_sequence = r.u64();
+    return decoded;
+  });
 }
 
 DecodeError decode_path_response(std::span<const std::uint8_t> datagram, const Key& key,
                                  Header& header, PathResponsePayload& response) {
-  Header parsed;
-  if (const DecodeError e = check_typed(datagram, key, DatagramType::kPathResponse, parsed);
-      e != DecodeError::kNone) {
-    return e;
-  }
-  Reader r(datagram.data() + kHeaderSize);
-  PathResponsePayload decoded;
-  decoded.nonce = r.u64();
-  decoded.client_time_ns = r.i64();
-  header = parsed;
-  response = decoded;
-  return DecodeError::kNone;
+  return decode_as(datagram, key, DatagramType::kPathResponse, header, response, [](Reader& r) {
+    PathResponsePayload decoded;
+    decoded.nonce = r.u64();
+    decoded.client_time_ns = r.i64();
+    return decoded;
+  });
 }
 
 }  // namespace haptic::wire
