@@ -150,8 +150,9 @@ Server::Server(const v1::ServerConfig& config)
   const std::uint32_t fd_limit = raise_fd_limit();
   net::ConnectionLimits connection_limits;
   connection_limits.max_connections =
-      config.max_connections() > 0 ? config.max_connections()
-                                   : std::clamp<std::uint32_t>(fd_limit > 256 ? fd_limit - 128 : 128, 16, 1024);
+      config.max_connections() > 0
+          ? config.max_connections()
+          : std::clamp<std::uint32_t>(fd_limit > 256 ? fd_limit - 128 : fd_limit / 2, 16, 1024);
   connection_limits.max_connections_per_peer =
       config.max_connections_per_peer() > 0 ? config.max_connections_per_peer() : 64;
   if (connection_limits.max_connections + 64 > fd_limit) {
