@@ -3,6 +3,7 @@
 // temporary file, readiness from --ready-file (never a sleep), SIGTERM and a reaped child at the end.
 
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -32,9 +33,14 @@ class ServerProcess {
     const auto ready_path = dir_ / "ready.json";
     std::ofstream(config_path) << config_json;
 
+    const pid_t parent = ::getpid();
     pid_ = ::fork();
     if (pid_ < 0) throw std::runtime_error("fork failed");
     if (pid_ == 0) {
+      // The server dies with its test (killed, aborted, timed out): it must never live on holding
+      // ctest's output pipe. (The signal follows the forking thread: construct on the test's.)
+      ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (::getppid() != parent) ::_exit(127);  // the test died before the line above ran
       if (fd_limit > 0) {
         const rlimit limit{fd_limit, fd_limit};
         ::setrlimit(RLIMIT_NOFILE, &limit);
