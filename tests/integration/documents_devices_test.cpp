@@ -66,20 +66,26 @@ TEST(JoystickDevice, WatchdogTripIsADeviceFaultEveryClientSeesAndItReArms_L1930)
   State s = step_and_get(client, 200);
   EXPECT_EQ(s.flags & kDeviceFault, 0u);
   // The hand throws the handle sideways: θ̇ passes 8 rad/s, the watchdog trips, the brakes stop it.
+  // Stepped one tick at a time, so every faulted tick is seen and counted here.
   client.set_operator(OperatorInput::push({25.0, 0, 0}));
-  bool tripped = false;
-  for (int i = 0; i < 40 && !tripped; ++i) {
-    s = step_and_get(client, 10);
-    tripped = (s.flags & kDeviceFault) != 0;
+  std::uint64_t faulted_ticks = 0;
+  for (int i = 0; i < 400 && faulted_ticks == 0; ++i) {
+    s = step_and_get(client, 1);
+    if ((s.flags & kDeviceFault) != 0) ++faulted_ticks;
   }
-  ASSERT_TRUE(tripped);
+  ASSERT_EQ(faulted_ticks, 1u);
   EXPECT_EQ(s.force.x, 0.0);
   EXPECT_TRUE(finite(s.position));
   // Let go: still for 0.2 s, the device re-arms and the fault flag clears.
   client.set_operator(OperatorInput::release());
-  s = step_and_get(client, 600);
+  for (int i = 0; i < 1000 && (s.flags & kDeviceFault) != 0; ++i) {
+    s = step_and_get(client, 1);
+    if ((s.flags & kDeviceFault) != 0) ++faulted_ticks;
+  }
   EXPECT_EQ(s.flags & kDeviceFault, 0u);
-  EXPECT_GT(client.stats().device_faults, 0u);
+  EXPECT_GE(faulted_ticks, 200u);  // at least the 0.2 s of rest (rearm_after_s) at 1 kHz
+  // The server counted exactly the ticks every client saw flagged.
+  EXPECT_EQ(client.stats().device_faults, faulted_ticks);
 }
 
 TEST(ParallelDobDevice, WallWithTheOptimalDampingHoldsTheFiveNewtonPush_Fig9) {

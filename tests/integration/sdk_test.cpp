@@ -218,7 +218,19 @@ TEST(SdkIntegrationRealTime, StepIsRefusedOutsideLockstepAndStateStreams) {
   State next;
   ASSERT_TRUE(client.poll_state(next, seconds(5)));
   EXPECT_GT(next.sequence, state.sequence);
-  EXPECT_TRUE(client.clock_offset().has_value());
+  // Server time counts from the loop's start, on this host's CLOCK_MONOTONIC (which is this
+  // process's steady clock): so server − local lies between −(when it was ready) and −(when it
+  // was started), and the estimate is at most the true offset and at least what the newest
+  // sample shows (server time − receipt).
+  ASSERT_TRUE(client.clock_offset().has_value());
+  const auto offset = *client.clock_offset();
+  const auto since_epoch = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch());
+  };
+  EXPECT_LE(offset, -since_epoch(server.forked_at()));
+  EXPECT_GE(offset, -since_epoch(server.ready_at()) - std::chrono::milliseconds(50));
+  EXPECT_GE(offset, std::chrono::nanoseconds(std::llround(next.server_time * 1e9)) -
+                        since_epoch(next.received_at));
   EXPECT_EQ(client.receive_counters().rejected, 0u);
 }
 

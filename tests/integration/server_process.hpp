@@ -34,6 +34,7 @@ class ServerProcess {
     std::ofstream(config_path) << config_json;
 
     const pid_t parent = ::getpid();
+    forked_at_ = std::chrono::steady_clock::now();
     pid_ = ::fork();
     if (pid_ < 0) throw std::runtime_error("fork failed");
     if (pid_ == 0) {
@@ -69,6 +70,7 @@ class ServerProcess {
       if (std::chrono::steady_clock::now() > give_up) throw std::runtime_error("hapticd not ready");
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
+    ready_at_ = std::chrono::steady_clock::now();
     std::ifstream ready(ready_path);
     std::stringstream text;
     text << ready.rdbuf();
@@ -102,6 +104,10 @@ class ServerProcess {
 
   std::string address() const { return "127.0.0.1:" + std::to_string(grpc_port_); }
   pid_t pid() const { return pid_; }
+  /// This process's steady clock (CLOCK_MONOTONIC, which the server's time also counts from) just
+  /// before the server was started and once it was seen ready: its time 0 lies between the two.
+  std::chrono::steady_clock::time_point forked_at() const { return forked_at_; }
+  std::chrono::steady_clock::time_point ready_at() const { return ready_at_; }
   std::uint16_t grpc_port() const { return grpc_port_; }
   std::uint16_t udp_port() const { return udp_port_; }
 
@@ -114,6 +120,8 @@ class ServerProcess {
 
   std::filesystem::path dir_;
   pid_t pid_ = -1;
+  std::chrono::steady_clock::time_point forked_at_;
+  std::chrono::steady_clock::time_point ready_at_;
   std::uint16_t grpc_port_ = 0;
   std::uint16_t udp_port_ = 0;
 };

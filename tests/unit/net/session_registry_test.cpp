@@ -170,17 +170,23 @@ TEST(SessionRegistry, OnlyTheSessionsOwnSecretGrantsAccess) {
   EXPECT_EQ(registry.authorize(alice->id, alices), Access::kNoSuchSession);
 }
 
-TEST(SessionRegistry, SilentSessionsExpire) {
+TEST(SessionRegistry, SilentSessionsExpireAndRenewedOnesStay) {
   SessionRegistry registry(4, std::chrono::milliseconds(100));
-  const auto quiet = registry.open("quiet");
-  const auto chatty = registry.open("chatty");
-  const auto later = SteadyClock::now() + std::chrono::milliseconds(150);
-  // Only the lease clock matters; no sleeping: expire() takes the time to judge by.
-  auto expired = registry.expire(later);
-  EXPECT_EQ(expired.size(), 2u);
-  EXPECT_EQ(registry.size(), 0u);
+  const auto quiet = registry.open("quiet", 0, "127.0.0.1");
+  const auto chatty = registry.open("chatty", 0, "127.0.0.1");
+  ASSERT_TRUE(quiet && chatty);
+  // Only the lease clock matters; no sleeping: heartbeats and expire() take the time to judge by.
+  const auto t0 = SteadyClock::now();
+  ASSERT_NE(registry.on_heartbeat(chatty->id, 1, loopback(4000), t0 + std::chrono::milliseconds(80)).verdict,
+            HeartbeatOutcome::Verdict::kStale);  // renewed at t0 + 80 ms
+  const auto expired = registry.expire(t0 + std::chrono::milliseconds(150));
+  EXPECT_EQ(expired, std::vector<std::uint64_t>{quiet->id});  // silent for 150 ms > 100 ms
+  EXPECT_EQ(registry.size(), 1u);
   EXPECT_FALSE(registry.touch(quiet->id));
-  EXPECT_FALSE(registry.touch(chatty->id));
+  EXPECT_TRUE(registry.device_index_of(chatty->id).has_value());  // 70 ms silent: still held
+  // Without another word it goes too, once its own lease runs out.
+  EXPECT_EQ(registry.expire(t0 + std::chrono::milliseconds(181)), std::vector<std::uint64_t>{chatty->id});
+  EXPECT_EQ(registry.size(), 0u);
 }
 
 }  // namespace

@@ -430,6 +430,22 @@ TEST_F(FakeServerTest, HeartbeatsTellTheServerWhereToSendStateAndBadDatagramsAre
   EXPECT_TRUE(client.clock_offset().has_value());
 }
 
+TEST_F(FakeServerTest, TheClockOffsetLiesBetweenTheSendAndTheReceiptOfASample) {
+  config_.state_decimation = 1;
+  Client client(config_);
+  EXPECT_FALSE(client.clock_offset().has_value());  // nothing received yet
+  const auto sent_after = std::chrono::steady_clock::now();
+  data_plane_.send_state(1000, 0.0);  // stamped 1.000 s of server time
+  State state;
+  ASSERT_TRUE(client.wait_for_tick(1000, state, seconds(2)));
+  const auto received_before = std::chrono::steady_clock::now();
+  ASSERT_TRUE(client.clock_offset().has_value());
+  // server − local at receipt, the receipt falling between the two readings above.
+  const std::chrono::nanoseconds server = seconds(1);
+  EXPECT_LE(*client.clock_offset(), server - sent_after.time_since_epoch());
+  EXPECT_GE(*client.clock_offset(), server - received_before.time_since_epoch());
+}
+
 TEST_F(FakeServerTest, ABacklogIsDrainedAndOnlyItsNewestSampleIsHandedOut) {
   config_.state_decimation = 1;
   Client client(config_);
