@@ -310,6 +310,8 @@ Stats from_proto(const v1::Stats& s) {
   out.datagrams_foreign_source = s.datagrams_foreign_source();
   out.path_challenges_sent = s.path_challenges_sent();
   out.samples_skipped = s.samples_skipped();
+  out.connections_open = s.connections_open();
+  out.connections_refused = s.connections_refused();
   return out;
 }
 

@@ -570,6 +570,9 @@ TEST(SdkStats, EveryCounterMatchesWhatAKnownLockstepSequenceImplies) {
   EXPECT_EQ(s.device_faults, 0u);
   EXPECT_EQ(s.passivity_active_ticks, 0u);  // it watches contacts, and there were none
   EXPECT_EQ(s.leases_expired, 1u);
+  // One connection: the SDK's channels to one server share it (gRPC's subchannel pool).
+  EXPECT_EQ(s.connections_open, 1u);
+  EXPECT_EQ(s.connections_refused, 0u);
   lapsing.reset();  // closing a session that is gone does not throw
 }
 

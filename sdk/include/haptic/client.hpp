@@ -162,9 +162,12 @@ class Client {
   const std::vector<StabilityReport>& last_scene_stability() const noexcept {
     return last_scene_stability_;
   }
-  /// Energy every object and field has exchanged with the device (GetSceneEnergy).
+  /// Energy every object and field has exchanged with the device (GetSceneEnergy). Read from the
+  /// scene the loop runs: an item added since its last tick is listed from the next one on (in
+  /// lockstep, after the next step()).
   std::vector<ItemEnergy> scene_energy();
-  /// Every virtual mass in the scene and where it is now (GetObjectStates).
+  /// Every virtual mass in the scene and where it is now (GetObjectStates); as scene_energy(),
+  /// from the loop's last tick.
   std::vector<ObjectState> object_states();
   /// Replaces all of this session's objects and fields at once; if anything is refused, nothing
   /// changes. The server numbers the objects walls first, then spheres ("scene.objects[i]" in its
@@ -189,9 +192,11 @@ class Client {
   /// How long the server keeps a silent session (no heartbeat, no RPC) before dropping it.
   std::chrono::milliseconds lease_timeout() const;
 
-  /// Called on the SDK's receive thread for every accepted State datagram (not for the sample a
-  /// Step reply carries); keep it short and do not call back into the Client from it. Pass an
-  /// empty function to stop.
+  /// Called on the SDK's receive thread with the newest State datagram each time it wakes: when
+  /// several have queued up (a burst, or the callback was slow), only the newest is passed and
+  /// the others are counted in ReceiveCounters::skipped; never for the sample a Step reply
+  /// carries. Keep it short and do not call back into the Client from it. Pass an empty function
+  /// to stop.
   void on_state(std::function<void(const State&)> callback);
   /// Waits up to `timeout` for a sample newer (by tick) than the last one poll_state or
   /// wait_for_tick returned, and copies the newest into `out`. False on timeout. Samples are

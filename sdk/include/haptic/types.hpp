@@ -300,6 +300,8 @@ struct Stats {
   std::uint64_t datagrams_foreign_source = 0;  ///< of datagrams_dropped: from another host
   std::uint64_t path_challenges_sent = 0;      ///< to UDP addresses not yet proven to receive
   std::uint64_t samples_skipped = 0;  ///< not sent: a newer one was ready (the sender fell behind)
+  std::uint32_t connections_open = 0;     ///< control-plane connections held now
+  std::uint64_t connections_refused = 0;  ///< over a connection cap, or no descriptor left
 };
 
 /// What the server's simulated operator (a hand holding the tool) does. Profiles and trajectories
