@@ -138,7 +138,9 @@ DeviceStatus SimulatedJoystickDevice::write(const DeviceCommand& command, double
   double t = 0.0;
   const engine::HandInput& hand = hand_.begin_tick(t);
   const engine::GimbalJoystickParams& p = config_.params;
-  if (!safe_ && !engine::is_finite(command.F_T_W)) enter_safe_state();  // a NaN is a fault
+  // A NaN is a fault: brakes on at once, and the write reports the error like every device's.
+  const bool command_ok = engine::is_finite(command.F_T_W);
+  if (!safe_ && !command_ok) enter_safe_state();
   if (safe_) {
     fill_safe_command();
   } else {
@@ -174,7 +176,7 @@ DeviceStatus SimulatedJoystickDevice::write(const DeviceCommand& command, double
   }
   check_watchdog();
   rearm_when_at_rest(dt);
-  return DeviceStatus::kOk;
+  return command_ok ? DeviceStatus::kOk : DeviceStatus::kError;
 }
 
 }  // namespace haptic::runtime

@@ -1,6 +1,8 @@
 // haptic-lab zwidth: Colgate's bound, the sampled loop's eigenvalues and simulation on one grid.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <sstream>
 #include <stdexcept>
 
@@ -21,14 +23,21 @@ TEST(LabZWidth, TheBoundLiesInsideTheEigenvalueRegionAndSimulationAgreesWithIt_E
   const ZWidthReport report = zwidth(small_grid());
   ASSERT_EQ(report.cells.size(), 60u);
   EXPECT_TRUE(report.theory_applies);
-  std::size_t agree = 0, stable = 0, unstable = 0;
+  std::size_t agree = 0, stable = 0, unstable = 0, passive = 0;
+  const ZWidthParams p = small_grid();
   for (const ZWidthCell& c : report.cells) {
+    // Colgate's bound (Colgate & Schenkel), b > K T / 2 + |B|, from the cell's own numbers.
+    EXPECT_EQ(c.passive, p.damping > c.stiffness * p.period / 2.0 + std::abs(c.damping))
+        << c.stiffness << ", " << c.damping;
     if (c.passive) {
+      ++passive;
       EXPECT_TRUE(c.eigen_stable) << c.stiffness << ", " << c.damping;  // sufficient
     }
     agree += c.eigen_stable == c.simulation_stable;
     (c.eigen_stable ? stable : unstable) += 1;
   }
+  EXPECT_GT(passive, 0u);  // the bound's region is on the grid: the sufficiency check is not empty
+  EXPECT_GT(stable, passive);  // and it is strictly inside the stable region here
   EXPECT_GT(stable, 0u);  // the grid crosses the boundary
   EXPECT_GT(unstable, 0u);
   EXPECT_GE(agree, report.cells.size() - 2);  // at most a marginal cell or two on the boundary

@@ -112,18 +112,16 @@ TEST(EveryDevice, ANonFiniteCommandIsAnErrorAndNoReadingItCallsGoodHoldsANaN) {
     Made made = make();
     DeviceReading reading;
     ASSERT_EQ(made.device->read(reading), DeviceStatus::kOk) << name;
-    const DeviceStatus written = made.device->write(DeviceCommand{{nan, 0.0, 0.0}}, kT);
-    const DeviceStatus read = made.device->read(reading);
-    // Either the device refuses the command (an error) or it ignores it (zero force); whichever,
-    // a reading it calls good is finite.
-    if (read == DeviceStatus::kOk) {
-      EXPECT_TRUE(std::isfinite(reading.p_WT.x) && std::isfinite(reading.p_WT.y) &&
-                  std::isfinite(reading.p_WT.z) && std::isfinite(reading.v_WT.x) &&
-                  std::isfinite(reading.v_WT.y) && std::isfinite(reading.v_WT.z))
-          << name;
-    }
+    // The command is refused as an error (the loop then goes to its safe state)...
+    EXPECT_EQ(made.device->write(DeviceCommand{{nan, 0.0, 0.0}}, kT), DeviceStatus::kError) << name;
+    // ...and never reaches the plant: the next reading is good, and finite.
+    ASSERT_EQ(made.device->read(reading), DeviceStatus::kOk) << name;
+    EXPECT_TRUE(std::isfinite(reading.p_WT.x) && std::isfinite(reading.p_WT.y) &&
+                std::isfinite(reading.p_WT.z) && std::isfinite(reading.v_WT.x) &&
+                std::isfinite(reading.v_WT.y) && std::isfinite(reading.v_WT.z))
+        << name;
     made.device->enter_safe_state();  // must be callable at any time
-    (void)written;
+    EXPECT_EQ(made.device->write(DeviceCommand{}, kT), DeviceStatus::kOk) << name;
   }
 }
 

@@ -1,6 +1,9 @@
 // The SDK's translations: grpc::Status -> exception types, SDK values <-> haptic.v1 messages.
 #include <gtest/gtest.h>
 
+#include <utility>
+#include <vector>
+
 #include "conversions.hpp"
 #include "haptic/client.hpp"
 #include "status_mapping.hpp"
@@ -69,23 +72,81 @@ TEST(Conversions, SpecsBecomeTheSchemasMessages) {
 }
 
 TEST(Conversions, ToolStateAndStatsComeBackWhole) {
+  // Every field set to a value of its own: a field dropped or swapped in the conversion shows.
   v1::ToolState s;
   s.set_tick(42);
   s.set_server_time_s(0.041);
-  s.mutable_force()->set_z(5.0);
-  s.set_contact_count(1);
+  const auto vec = [](v1::Vec3* v, double x, double y, double z) {
+    v->set_x(x);
+    v->set_y(y);
+    v->set_z(z);
+  };
+  vec(s.mutable_position(), 1.0, 2.0, 3.0);
+  vec(s.mutable_velocity(), 4.0, 5.0, 6.0);
+  vec(s.mutable_force(), 7.0, 8.0, 9.0);
+  vec(s.mutable_proxy(), 10.0, 11.0, 12.0);
+  s.set_contact_count(13);
   s.set_flags(4);
   const State state = from_proto(s);
   EXPECT_EQ(state.tick, 42u);
-  EXPECT_EQ(state.sequence, 0u);
-  EXPECT_EQ(state.force.z, 5.0);
+  EXPECT_EQ(state.sequence, 0u);  // a Step reply's sample has no datagram sequence
+  EXPECT_EQ(state.server_time, 0.041);
+  EXPECT_EQ(state.position, (Vec3{1.0, 2.0, 3.0}));
+  EXPECT_EQ(state.velocity, (Vec3{4.0, 5.0, 6.0}));
+  EXPECT_EQ(state.force, (Vec3{7.0, 8.0, 9.0}));
+  EXPECT_EQ(state.proxy, (Vec3{10.0, 11.0, 12.0}));
+  EXPECT_EQ(state.contact_count, 13u);
   EXPECT_EQ(state.flags, static_cast<std::uint32_t>(kRampingOut));
 
   v1::Stats stats;
-  stats.set_leases_expired(3);
-  stats.set_lateness_p99_us(41.0);
-  EXPECT_EQ(from_proto(stats).leases_expired, 3u);
-  EXPECT_EQ(from_proto(stats).lateness_p99_us, 41.0);
+  const google::protobuf::Descriptor& descriptor = *v1::Stats::descriptor();
+  const google::protobuf::Reflection& reflection = *v1::Stats::GetReflection();
+  // Field number n gets the value 100 + n, whatever its type.
+  for (int i = 0; i < descriptor.field_count(); ++i) {
+    const google::protobuf::FieldDescriptor& field = *descriptor.field(i);
+    const int value = 100 + field.number();
+    switch (field.cpp_type()) {
+      case google::protobuf::FieldDescriptor::CPPTYPE_UINT64: reflection.SetUInt64(&stats, &field, value); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_UINT32: reflection.SetUInt32(&stats, &field, value); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE: reflection.SetDouble(&stats, &field, value); break;
+      default: ADD_FAILURE() << "Stats." << field.name() << " has a type this test does not set";
+    }
+  }
+  const Stats out = from_proto(stats);
+  // One line per proto field: a new one without its line here fails the count below.
+  const std::vector<std::pair<const char*, double>> seen = {
+      {"ticks", static_cast<double>(out.ticks)},
+      {"achieved_rate_hz", out.achieved_rate_hz},
+      {"lateness_p50_us", out.lateness_p50_us},
+      {"lateness_p99_us", out.lateness_p99_us},
+      {"lateness_max_us", out.lateness_max_us},
+      {"overruns", static_cast<double>(out.overruns)},
+      {"sessions", static_cast<double>(out.sessions)},
+      {"objects", static_cast<double>(out.objects)},
+      {"fields", static_cast<double>(out.fields)},
+      {"datagrams_sent", static_cast<double>(out.datagrams_sent)},
+      {"datagrams_received", static_cast<double>(out.datagrams_received)},
+      {"datagrams_dropped", static_cast<double>(out.datagrams_dropped)},
+      {"force_faults", static_cast<double>(out.force_faults)},
+      {"force_saturations", static_cast<double>(out.force_saturations)},
+      {"leases_expired", static_cast<double>(out.leases_expired)},
+      {"send_delay_p50_us", out.send_delay_p50_us},
+      {"send_delay_p99_us", out.send_delay_p99_us},
+      {"device_faults", static_cast<double>(out.device_faults)},
+      {"passivity_active_ticks", static_cast<double>(out.passivity_active_ticks)},
+      {"heartbeats_rate_limited", static_cast<double>(out.heartbeats_rate_limited)},
+      {"datagrams_foreign_source", static_cast<double>(out.datagrams_foreign_source)},
+      {"path_challenges_sent", static_cast<double>(out.path_challenges_sent)},
+      {"samples_skipped", static_cast<double>(out.samples_skipped)},
+      {"connections_open", static_cast<double>(out.connections_open)},
+      {"connections_refused", static_cast<double>(out.connections_refused)},
+  };
+  EXPECT_EQ(seen.size(), static_cast<std::size_t>(descriptor.field_count()));
+  for (const auto& [name, value] : seen) {
+    const google::protobuf::FieldDescriptor* field = descriptor.FindFieldByName(name);
+    ASSERT_NE(field, nullptr) << name;
+    EXPECT_EQ(value, 100.0 + field->number()) << name;
+  }
 }
 
 TEST(Client, BadConfigurationIsRefusedBeforeAnyConnection) {
