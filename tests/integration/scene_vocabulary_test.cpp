@@ -349,7 +349,8 @@ TEST_F(SceneVocabulary, AWallCanAskForTheTransparencyOptimalDamping_001Eq11) {
                                              .transparency_optimal_damping = true}});
   // Eom et al.'s device (0.01 kg, 0.022 N·s/m), K = 1000 N/m, w1 at 100 rad/s: B_c* ≈ 15.46 N·s/m
   // (docs/devices.md), robustly stable at ±50 %.
-  EXPECT_NEAR(wall.stability().chosen_damping, 15.46, 0.05);
+  EXPECT_NEAR(wall.stability().chosen_damping, 15.0, 0.5);   // 001 Fig. 8: 15 N·s/m
+  EXPECT_NEAR(wall.stability().chosen_damping, 15.46, 0.05);  // regression pin: this model's
   EXPECT_TRUE(wall.stability().robustly_stable);
 }
 

@@ -104,49 +104,54 @@ TEST(WallDesign, Eq11QuadratureHasConverged) {
   }
 }
 
-// Fig. 8: J(B_c) has a minimum inside [0.1, 100] N·s/m (document: B_c = 15 N·s/m; here
-// 15.46 N·s/m with ω_1 = 100 rad/s).
-TEST(WallDesign, Fig8TransparencyIndexHasAnInteriorMinimum) {
+// Fig. 8: J(B_c) has a minimum inside [0.1, 100] N·s/m, at B_c = 15 N·s/m in the document, which
+// states neither w1 nor its hold model; with ω_1 = 100 rad/s this model's optimum must round to it.
+TEST(WallDesign, Fig8TransparencyIndexHasAnInteriorMinimumWhereTheDocumentPutsIt) {
   const WallDesignParams p = document_params();
   const OptimalWallDesign opt = optimise_controller_damping(p, 0.1, 100.0);
-  EXPECT_GT(opt.controller_damping, 0.2);
-  EXPECT_LT(opt.controller_damping, 50.0);
   EXPECT_LT(opt.transparency_index, transparency_index(p, 0.1));
   EXPECT_LT(opt.transparency_index, transparency_index(p, 100.0));
   EXPECT_LT(opt.transparency_index, transparency_index(p, 0.9 * opt.controller_damping));
   EXPECT_LT(opt.transparency_index, transparency_index(p, 1.1 * opt.controller_damping));
-  EXPECT_NEAR(opt.controller_damping, 15.46, 0.05);
+  EXPECT_NEAR(opt.controller_damping, 15.0, 0.5);  // the document's figure, to its precision
   EXPECT_TRUE(opt.nominal_loop_stable);
 }
 
-// Eq. 17, Fig. 8: B_c = 1 N·s/m is not robustly stable for α = β = 0.5 (document: 4.5 dB; here
-// 10.0 dB, the hold's lag at the 316 rad/s resonance halving the loop's damping; with ZOH = 1 it
-// would be 3.9 dB), the transparency optimum is.
-TEST(WallDesign, Eq17Fig8RobustStabilityAtOneAndAtTheOptimum) {
+// Eq. 17, Fig. 8, as the document states them: with α = β = 0.5, B_c = 1 N·s/m is not robustly
+// stable (‖L‖∞ = 4.5 dB > 0) and the transparency optimum is (‖L‖∞ < 0 dB). The value at B_c = 1
+// depends on the hold model the document does not give (this model's: 10.0 dB; below).
+TEST(WallDesign, Eq17Fig8OneIsNotRobustlyStableAndTheOptimumIs) {
   const WallDesignParams p = document_params();
-  const double at_one = robust_stability_norm(p, 1.0);
-  EXPECT_GT(at_one, 1.0);
-  EXPECT_NEAR(to_db(at_one), 10.03, 0.05);
+  EXPECT_GT(robust_stability_norm(p, 1.0), 1.0);
   const OptimalWallDesign opt = optimise_controller_damping(p);
-  EXPECT_LE(opt.robust_stability_norm, 1.0);
-  EXPECT_NEAR(to_db(opt.robust_stability_norm), -0.33, 0.05);
+  EXPECT_LT(opt.robust_stability_norm, 1.0);
   EXPECT_TRUE(opt.robustly_stable);
 }
 
 // Eq. 11: the optimum rises with w1's cut-off. Above ω_1 the weight is ω_1/ω, so a higher cut-off
 // shifts J's weight towards the wall's resonance √(K/m) = 316 rad/s and beyond, where the mismatch
-// is the under-damped peak of Y_t that a larger B_c suppresses; below ω_1 ≈ 10 rad/s the
-// integrand's shape no longer changes and the optimum settles near 12.1 N·s/m.
+// is the under-damped peak of Y_t that a larger B_c suppresses. At ω_1 = 200 rad/s the optimum
+// lies past eq. 17's upper limit, about 16.3 N·s/m: the document's "the optimum's location depends
+// on w1" has a robust end.
 TEST(WallDesign, Eq11OptimumRisesWithTheWeightCutoff) {
   std::vector<double> optimum;
   for (const double cutoff : {10.0, 50.0, 100.0, 200.0}) {
     optimum.push_back(optimise_controller_damping(document_params(cutoff)).controller_damping);
   }
   for (std::size_t i = 1; i < optimum.size(); ++i) EXPECT_GT(optimum[i], optimum[i - 1]) << i;
-  EXPECT_NEAR(optimum.front(), 12.15, 0.05);
-  EXPECT_NEAR(optimum.back(), 18.64, 0.05);
-  // At ω_1 = 200 rad/s the optimum (18.6 N·s/m) lies past eq. 17's upper limit, about 16.3 N·s/m.
   EXPECT_FALSE(optimise_controller_damping(document_params(200.0)).robustly_stable);
+}
+
+// Regression pins: this model's own numbers (2nd-order hold approximation, ω_1 = 100 rad/s unless
+// named), not the document's. They change only when the model does, and then on purpose.
+TEST(WallDesign, RegressionPinsOfThisModelsDesignNumbers) {
+  const WallDesignParams p = document_params();
+  const OptimalWallDesign opt = optimise_controller_damping(p);
+  EXPECT_NEAR(opt.controller_damping, 15.46, 0.05);                   // document: 15
+  EXPECT_NEAR(to_db(robust_stability_norm(p, 1.0)), 10.03, 0.05);      // document: 4.5 dB
+  EXPECT_NEAR(to_db(opt.robust_stability_norm), -0.33, 0.05);          // document: < 0 dB
+  EXPECT_NEAR(optimise_controller_damping(document_params(10.0)).controller_damping, 12.15, 0.05);
+  EXPECT_NEAR(optimise_controller_damping(document_params(200.0)).controller_damping, 18.64, 0.05);
 }
 
 }  // namespace

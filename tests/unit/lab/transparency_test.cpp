@@ -14,7 +14,8 @@ TEST(LabTransparency, TheSweepHasAnInteriorMinimumAtTheOptimumWhichIsRobust_Eq11
   const engine::WallDesignParams params;  // Eom et al.'s experiment
   const TransparencyReport report = transparency_study(params);
   ASSERT_EQ(report.sweep.size(), 41u);
-  EXPECT_NEAR(report.optimum.controller_damping, 15.46, 0.01);
+  EXPECT_NEAR(report.optimum.controller_damping, 15.0, 0.5);     // 001 Fig. 8: 15 N·s/m
+  EXPECT_NEAR(report.optimum.controller_damping, 15.46, 0.01);    // regression pin: this model's
   EXPECT_TRUE(report.optimum.robustly_stable);
   EXPECT_FALSE(report.best_robust.has_value());  // the optimum itself is robust
   const auto best = std::min_element(report.sweep.begin(), report.sweep.end(),
