@@ -1,13 +1,15 @@
 // Deterministic driver for a fuzz entry point, so ctest runs it on every build without libFuzzer:
 // seeded random inputs and mutations of valid datagrams (bit flips, byte overwrites, truncation,
 // extension, valid datagrams with random field bits, re-signed random payloads).
-// Usage: <binary> [count]
+// Usage: <binary> [count]   |   <binary> --seeds DIR (one valid datagram per type, for libFuzzer)
 #include <bit>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
 #include <span>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "haptic/wire/datagram.hpp"
@@ -92,7 +94,25 @@ void resign(std::vector<std::uint8_t>& bytes) {
 
 }  // namespace
 
+/// Writes one valid datagram of each type into `dir` (a seed corpus for the libFuzzer binary).
+int write_seeds(const std::string& dir) {
+  Generator g(0x5eed);
+  const std::pair<const char*, std::vector<std::uint8_t>> seeds[] = {
+      {"state", g.valid_state()}, {"heartbeat", g.valid_heartbeat()}, {"path", g.valid_path()},
+      {"path2", g.valid_path()}};
+  for (const auto& [name, bytes] : seeds) {
+    std::FILE* out = std::fopen((dir + "/" + name).c_str(), "wb");
+    if (out == nullptr || std::fwrite(bytes.data(), 1, bytes.size(), out) != bytes.size()) {
+      std::perror(name);
+      return 1;
+    }
+    std::fclose(out);
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
+  if (argc == 3 && std::string(argv[1]) == "--seeds") return write_seeds(argv[2]);
   const long count = argc > 1 ? std::strtol(argv[1], nullptr, 10) : 100000;
   Generator g(0x5eed);
   std::vector<std::uint8_t> input;
