@@ -386,6 +386,37 @@ double peak_speed(Client& client, int ticks) {
   return peak;
 }
 
+// The report's max_stable_stiffness, checked against the server's own wall: a little under it a
+// pressed wall settles, a little over it the contact oscillates and keeps bouncing. The law is the
+// backward difference, the one the report models; the passivity controller is off, as it would
+// mask the difference.
+TEST(StabilityReport, TheStiffnessLimitItReportsIsWhereTheServersWallStopsBeingStable) {
+  const auto peak_after = [](double stiffness) {
+    test::ServerProcess server(test::lockstep_config(R"("passivity": {"enabled": false})"));
+    Client client(config_for(server));
+    const Impedance impedance{.stiffness = stiffness, .damping = 1.0,
+                              .law = ImpedanceLaw::kBackwardDifference};
+    auto wall = client.add_wall({.point = {0, 0, 0.02}, .normal = {0, 0, 1}, .impedance = impedance});
+    step_and_get(client, 100);  // ramped in, the tool resting on the surface
+    client.set_operator(OperatorInput::push({0, 0, -0.5}));
+    step_and_get(client, 3000);
+    return std::pair{peak_speed(client, 500), wall.stability()};
+  };
+  // The limit as the server reports it for this wall (any stiffness: it is the report's output).
+  const StabilityReport report = peak_after(1000.0).second;
+  ASSERT_TRUE(report.device_known);
+  const double k_max = report.max_stable_stiffness;
+  EXPECT_GT(k_max, 100.0);
+  const auto [below, report_below] = peak_after(0.9 * k_max);
+  const auto [above, report_above] = peak_after(1.1 * k_max);
+  std::printf("  K_max %.1f N/m: peak speed over the last 0.5 s %.3g m/s at 0.9 K_max, %.3g m/s at 1.1 K_max\n",
+              k_max, below, above);
+  EXPECT_TRUE(report_below.stable);
+  EXPECT_FALSE(report_above.stable);
+  EXPECT_LT(below, 1e-4);   // settled
+  EXPECT_GT(above, 1e-2);   // still bouncing
+}
+
 TEST(PassivityController, AStiffWallMadeActiveBySamplingIsCalmedAndAPassiveOneIsLeftAlone) {
   // K = 20 000 N/m on the 10 g point mass at 1 kHz: far beyond the sampled margin, the wall
   // gives back more energy at each bounce than it took (Hannaford & Ryu 2002, Fig. 6).
