@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -168,27 +169,85 @@ TEST_P(GravityCompensation, ReleasedAtRestTheLoadHoldsItsAngle_Eq6_7) {
   }
 }
 
+/// e^{M h} for a 4×4 matrix, by scaling and squaring a Taylor series (exact to round-off for the
+/// norms here, |M h| < 4): the sampled-data model below, independent of the plant's integrator.
+using Matrix4 = std::array<std::array<double, 4>, 4>;
+Matrix4 multiply(const Matrix4& a, const Matrix4& b) {
+  Matrix4 c{};
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      for (int k = 0; k < 4; ++k) c[i][j] += a[i][k] * b[k][j];
+  return c;
+}
+Matrix4 expm(Matrix4 m, double h) {
+  constexpr int kHalvings = 10;
+  for (auto& row : m)
+    for (double& x : row) x *= h / (1 << kHalvings);
+  Matrix4 sum{}, term{};
+  for (int i = 0; i < 4; ++i) sum[i][i] = term[i][i] = 1.0;
+  for (int n = 1; n <= 20; ++n) {
+    term = multiply(term, m);
+    for (auto& row : term)
+      for (double& x : row) x /= n;
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) sum[i][j] += term[i][j];
+  }
+  for (int k = 0; k < kHalvings; ++k) sum = multiply(sum, sum);
+  return sum;
+}
+
+/// The coast of eq. 6.7's sampled loop from motor speed ω0, gravity cancelled: the linear model of
+/// section 2-3 (deviations from the gravity-holding current), its input −K_D θ̇_m(t_k) held over
+/// each tick, stepped exactly with e^{A T}. State [θ_m, θ̇_m, i, u_m]; without inductance the
+/// current follows the voltage at once (eq. 2.6). Unit: rad (motor).
+double sampled_coast(const DcMotorParams& p, DcMotorModel model, double omega0) {
+  Matrix4 a{};  // d/dt [θ, ω, i, u]; u is held: its row stays zero
+  a[0][1] = 1.0;
+  if (model == DcMotorModel::kWithInductance) {
+    a[1][1] = -p.B_m / p.J_eff();
+    a[1][2] = p.k_m / p.J_eff();
+    a[2][1] = -p.k_b / p.L_m;
+    a[2][2] = -p.R_m / p.L_m;
+    a[2][3] = 1.0 / p.L_m;
+  } else {
+    a[1][1] = -p.B() / p.J_eff();
+    a[1][3] = p.k_m / p.R_m / p.J_eff();
+  }
+  const Matrix4 phi = expm(a, kT);
+  const double u_per_omega = -p.R_m / p.k_m * kGravityK_D;  // eq. 6.7's damping, as a voltage
+  std::array<double, 4> x{0.0, omega0, (u_per_omega * omega0 - p.k_b * omega0) / p.R_m, 0.0};
+  for (int k = 0; k < 100000 && std::abs(x[1]) > 1e-12 * std::abs(omega0); ++k) {
+    x[3] = u_per_omega * x[1];
+    std::array<double, 4> next{};
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) next[i] += phi[i][j] * x[j];
+    x = next;
+  }
+  return x[0];
+}
+
 // Let go while moving: with perfect cancellation eq. 6.5/6.6 leave J_eff θ̈_m = −(B + K_D) θ̇_m,
-// so the motor coasts ω0 J_eff / (B + K_D) and stops. The bound on the observed coast: the sampled
-// −K_D θ̇_m holds the velocity of the start of the tick, larger than its mean over the tick by
-// ≈ λT/2 with λ = (B + K_D) / J_eff ≈ 1 / 5.3 ms, so it brakes ≈ 9 % harder; it carries
-// K_D / (B + K_D) ≈ 61 % of the damping, so the coast shortens by ≈ 5.5 % (measured: 5.9 % without
-// inductance; 11 % with it, where the current also lags by t_e = 0.28 ms). The gravity term, held
-// over a tick while the link turns by at most r ω0 T = 0.5 mrad, adds far less. Allowed: 20 %.
-// Holding: over the last second the angle moves less than 1e-9 rad.
+// so the motor coasts ω0 J_eff / (B + K_D) and stops — in continuous time. The sampled loop holds
+// −K_D θ̇_m from the start of each tick, larger than its mean over the tick, so it brakes harder
+// and the coast is shorter; with inductance the current also lags the voltage by t_e = 0.28 ms.
+// Both are exact in sampled_coast(), which the plant must match to 0.1 % (what is left is the
+// gravity term, held over a tick while the link turns by at most r ω0 T = 0.5 mrad, and the
+// integrator's error). Holding: over the last second the angle moves less than 1e-9 rad.
 TEST_P(GravityCompensation, ReleasedMovingTheLoadComesToRestAndHolds_Eq6_7) {
   const DcMotorParams p;
   const double omega_L0 = 0.5;  // rad/s at the load
-  const double coast_m = omega_L0 / p.r * p.J_eff() / (p.B() + kGravityK_D);
+  const double continuous = omega_L0 / p.r * p.J_eff() / (p.B() + kGravityK_D);
+  const double sampled = sampled_coast(p, GetParam(), omega_L0 / p.r);
+  EXPECT_LT(sampled, continuous);  // the held damping brakes harder
   for (const double deg : {-60.0, 0.0, 30.0, 80.0}) {
     const double theta_L = deg * kPi / 180.0;
     DcMotorPlant plant(p, GetParam(), released_at(p, theta_L, omega_L0));
     const DcMotorState at_2s = run_gravity_compensation(plant, 2000);
     const DcMotorState at_3s = run_gravity_compensation(plant, 1000);
     const double coast = at_3s.theta_m - theta_L / p.r;
-    std::printf("  %5.1f deg: coast %.6f rad (motor), continuous-time %.6f, ratio %.4f\n", deg,
-                coast, coast_m, coast / coast_m);
-    EXPECT_NEAR(coast, coast_m, 0.2 * coast_m) << deg << " deg";
+    std::printf("  %5.1f deg: coast %.6f rad (motor), sampled-data model %.6f, continuous-time %.6f\n",
+                deg, coast, sampled, continuous);
+    EXPECT_NEAR(coast, sampled, 0.001 * sampled) << deg << " deg";
     EXPECT_NEAR(at_3s.omega_m, 0.0, 1e-9) << deg << " deg";
     EXPECT_NEAR(at_3s.theta_m, at_2s.theta_m, 1e-9) << deg << " deg";
   }
