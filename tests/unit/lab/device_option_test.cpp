@@ -61,11 +61,15 @@ TEST(LabDeviceModel, TheJoysticksLightestUndampedAxisIsAGimbalAxis) {
   EXPECT_LT(longer.mass, m.mass);  // a longer lever arm lightens the gimbal axes as 1/R²
 }
 
-TEST(LabDeviceModel, TheDcMotorGivesItsReflectedInertia) {
+// 000's link seen at the tool along its tangent (eq. 3.10): J_eff = J_m + r² J_L / η with the
+// maxon RE 40's J_m = 134 g·cm², r = 0.1, η = 0.9 and the 0.2 kg, 0.2 m rod (J_L = m l²/12 +
+// m l_c² = 2.667e-3 kg·m²) is 4.3030e-5 kg·m²; the tool moves r l = 0.02 m per motor radian, so
+// m = J_eff / (r l)² = 0.10757 kg. B = B_m + k_b k_m / R_m = 3.1470e-3 N·m·s/rad gives 7.8675 N·s/m.
+TEST(LabDeviceModel, TheDcMotorGivesItsReflectedInertia_Eq3_10) {
   const DeviceModel m = model_of(R"({"simulated_dc_motor": {}})");
   EXPECT_EQ(m.method, "description");
-  EXPECT_GT(m.mass, 0.0);
-  EXPECT_GT(m.damping, 0.0);
+  EXPECT_NEAR(m.mass, 0.107574, 1e-6);
+  EXPECT_NEAR(m.damping, 7.8675, 1e-4);
 }
 
 TEST(LabDeviceModel, AnInvalidConfigurationIsRefusedNamingTheFileAndField) {
