@@ -40,6 +40,12 @@ std::string validate_passivity(const PassivityControllerParams& params) {
 PassivityStep PassivityController::apply(const Vec3& F_T_W, const Vec3& v_WT, const Vec3& p_WT) {
   PassivityStep step;
   step.F_T_W = F_T_W;
+  if (!is_finite(F_T_W) || !is_finite(v_WT) || !is_finite(p_WT)) {
+    // A non-finite request is the force guard's to fault. Booked, it would leave the observed
+    // energy NaN for good (no comparison with NaN is true) and the controller off until restart.
+    reset();
+    return step;
+  }
   const double T = params_.period;
   const bool held = observer_.mode() == PassivityObserverMode::kHeldForceWork;
   if (held) observer_.complete_period(p_WT);  // E(n−1): exact through the last period

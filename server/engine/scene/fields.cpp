@@ -291,7 +291,15 @@ std::string validate_field(const PotentialFieldSpec& spec) {
     return bad_parameter("difference_step", "must be finite, > 0 and <= 0.01", spec.difference_step);
   }
   if (spec.kind == PotentialKind::kPolynomial) {
-    if (!std::isfinite(spec.offset)) return bad_parameter("offset", "must be finite", spec.offset);
+    if (!std::isfinite(spec.offset) || std::abs(spec.offset) > kMaxPotentialReach) {
+      return bad_parameter("offset", "must be finite and within ±100 m", spec.offset);
+    }
+    // The force grows as (c − f)ⁿ⁻¹ without bound: it must stay finite wherever a tool can be
+    // (every distance function here is within kMaxPotentialReach of any reachable point).
+    const PotentialProfile farthest = potential_profile(spec, -kMaxPotentialReach);
+    if (!std::isfinite(farthest.U) || !std::isfinite(farthest.dU_df)) {
+      return bad_parameter("gain", "too large: the force 100 m inside the surface overflows", spec.gain);
+    }
     return {};
   }
   // Khatib: U and its gradient are unbounded as f → 0 (eq. 5.7); admitted only with the cap.

@@ -493,6 +493,13 @@ TEST(Fields, ValidationNamesTheBadParameter) {
                      "gain: must be finite and >= 0"));
   EXPECT_TRUE(starts(validate_field(polynomial(point_distance({0, 0, 0}), 2, 10.0, kNaN)),
                      "offset: must be finite"));
+  EXPECT_TRUE(starts(validate_field(polynomial(point_distance({0, 0, 0}), 2, 10.0, 101.0)),
+                     "offset: must be finite and within ±100 m, got 101"));
+  // Finite numbers whose force is not: gain (c − f)⁷ overflows far from the surface. Refused, so
+  // that no client can make the loop's force non-finite (the guard would fault it every tick).
+  EXPECT_TRUE(starts(validate_field(polynomial(point_distance({0, 0, 0}), 8, 1e303, 10.0)),
+                     "gain: too large: the force 100 m inside the surface overflows"));
+  EXPECT_EQ(validate_field(polynomial(point_distance({0, 0, 0}), 8, 1e200, 10.0)), "");  // big, finite
   PotentialFieldSpec step = polynomial(point_distance({0, 0, 0}), 2, 10.0, 0.01);
   step.difference_step = 0.0;
   EXPECT_TRUE(starts(validate_field(step), "difference_step:"));

@@ -3,6 +3,8 @@
 // is left alone.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <algorithm>
 #include <cmath>
 
@@ -55,6 +57,28 @@ TEST(Passivity, ControllerAddsExactlyTheDampingThatCancelsTheDeficit) {
   EXPECT_LT(dot(added, v), 0.0);
   EXPECT_NEAR(step.energy, 0.0, 1e-15);
   EXPECT_NEAR(pc.dissipated(), -E_observed, 1e-15);
+}
+
+TEST(Passivity, ANonFiniteRequestDoesNotSwitchTheControllerOff) {
+  // A field whose force overflowed once (the guard faults it to zero) must not leave the port's
+  // controller holding a NaN energy, which no later deficit could ever exceed.
+  PassivityControllerParams params{kT, 100.0, 1e-4, PassivityObserverMode::kHeldForceWork};
+  PassivityController fresh(params), hit(params);
+  const double inf = std::numeric_limits<double>::infinity();
+  const PassivityStep faulted = hit.apply({0, 0, inf}, {0, 0, 0.1}, {0, 0, 0.01});
+  EXPECT_EQ(faulted.alpha, 0.0);
+  EXPECT_EQ(hit.energy(), 0.0);
+  // From here both see the same active contact (the scene returning energy, F·v > 0): both act,
+  // identically.
+  for (int k = 0; k < 20; ++k) {
+    const Vec3 p{0, 0, 0.01 + 1e-4 * k}, v{0, 0, 0.1}, F{0, 0, 2.0};
+    const PassivityStep a = fresh.apply(F, v, p);
+    const PassivityStep b = hit.apply(F, v, p);
+    EXPECT_EQ(a.alpha, b.alpha) << k;
+    EXPECT_EQ(a.F_T_W, b.F_T_W) << k;
+  }
+  EXPECT_GT(hit.dissipated(), 0.0);
+  EXPECT_EQ(hit.dissipated(), fresh.dissipated());
 }
 
 TEST(Passivity, ControllerClampsAlphaAndIgnoresSlowMotion) {
