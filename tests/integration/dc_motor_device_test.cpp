@@ -5,27 +5,17 @@
 
 #include <cmath>
 
+#include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
 
 namespace haptic {
 namespace {
 
+using test::config_for;
+using test::step_and_get;
+
 constexpr double kLength = 0.2;  // default link length, m
 constexpr double kAngle = 0.5;   // initial load angle, rad
-
-ClientConfig config_for(const test::ServerProcess& server) {
-  ClientConfig config;
-  config.server_address = server.address();
-  config.client_name = "dc-motor";
-  return config;
-}
-
-State step_and_get(Client& client, std::uint32_t ticks) {
-  const std::uint64_t tick = client.step(ticks);
-  State state;
-  EXPECT_TRUE(client.wait_for_tick(tick, state, std::chrono::seconds(5)));
-  return state;
-}
 
 class DcMotorDevice : public ::testing::Test {
  protected:

@@ -6,24 +6,14 @@
 
 #include <cmath>
 
+#include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
 
 namespace haptic {
 namespace {
 
-ClientConfig config_for(const test::ServerProcess& server) {
-  ClientConfig config;
-  config.server_address = server.address();
-  config.client_name = "documents-devices";
-  return config;
-}
-
-State step_and_get(Client& client, std::uint32_t ticks) {
-  const std::uint64_t tick = client.step(ticks);
-  State state;
-  EXPECT_TRUE(client.wait_for_tick(tick, state, std::chrono::seconds(10)));
-  return state;
-}
+using test::config_for;
+using test::step_and_get;
 
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 

@@ -9,10 +9,14 @@
 #include <chrono>
 #include <string>
 
+#include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
 
 namespace haptic {
 namespace {
+
+using test::config_for;
+using test::step_and_get;
 
 using std::chrono::seconds;
 
@@ -23,20 +27,11 @@ constexpr double kDamping1 = 0.05;   // Unit: N·s/m.
 const std::string kExtraDevice = R"("extra_devices": [{"simulated_point_mass": {
     "damping": 0.05, "max_force": 15, "initial_position": {"y": 0.02, "z": 0.02}}}])";
 
-ClientConfig config_for(const test::ServerProcess& server, std::uint32_t device_index,
-                        const char* name) {
-  ClientConfig config;
-  config.server_address = server.address();
-  config.client_name = name;
-  config.device_index = device_index;
-  return config;
-}
-
 TEST(MultiUser, TwoUsersPushOneVirtualMassAtTheSpeedEq7_1PredictsForBothForces) {
   test::ServerProcess server(test::lockstep_config(kExtraDevice));
-  Client user0(config_for(server, 0, "user-0"));
-  Client user1(config_for(server, 1, "user-1"));
-  Client watcher(config_for(server, 0, "watcher"));
+  Client user0(config_for(server, "user-0", 0));
+  Client user1(config_for(server, "user-1", 1));
+  Client watcher(config_for(server, "watcher", 0));
 
   // Each session is told about its own port's device.
   EXPECT_EQ(user0.device_info().max_force, 20.0);
@@ -93,15 +88,15 @@ TEST(MultiUser, TwoUsersPushOneVirtualMassAtTheSpeedEq7_1PredictsForBothForces) 
 TEST(MultiUser, ADeviceIndexTheServerLacksIsRefusedNamingTheField) {
   test::ServerProcess server(test::lockstep_config(kExtraDevice));
   try {
-    Client client(config_for(server, 2, "nowhere"));
+    Client client(config_for(server, "nowhere", 2));
     FAIL() << "device_index 2 was accepted by a server with two ports";
   } catch (const InvalidArgumentError& error) {
     EXPECT_NE(std::string(error.what()).find("device_index"), std::string::npos) << error.what();
   }
   // A one-device server has port 0 only.
   test::ServerProcess single(test::lockstep_config());
-  EXPECT_THROW(Client(config_for(single, 1, "nowhere")), InvalidArgumentError);
-  EXPECT_NO_THROW(Client(config_for(single, 0, "here")));
+  EXPECT_THROW(Client(config_for(single, "nowhere", 1)), InvalidArgumentError);
+  EXPECT_NO_THROW(Client(config_for(single, "here", 0)));
 }
 
 }  // namespace

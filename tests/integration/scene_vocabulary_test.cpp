@@ -13,26 +13,16 @@
 #include <string>
 #include <utility>
 
+#include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
 
 namespace haptic {
 namespace {
 
+using test::config_for;
+using test::step_and_get;
+
 using std::chrono::seconds;
-
-ClientConfig config_for(const test::ServerProcess& server) {
-  ClientConfig config;
-  config.server_address = server.address();
-  config.client_name = "scene-vocabulary";
-  return config;
-}
-
-State step_and_get(Client& client, std::uint32_t ticks) {
-  const std::uint64_t tick = client.step(ticks);
-  State state;
-  EXPECT_TRUE(client.wait_for_tick(tick, state, seconds(5))) << "no state for tick " << tick;
-  return state;
-}
 
 class SceneVocabulary : public ::testing::Test {
  protected:

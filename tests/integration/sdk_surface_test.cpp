@@ -28,10 +28,14 @@
 #include <type_traits>
 #include <vector>
 
+#include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
 
 namespace haptic {
 namespace {
+
+using test::config_for;
+using test::step_and_get;
 
 using std::chrono::milliseconds;
 using std::chrono::seconds;
@@ -42,23 +46,6 @@ constexpr double kDeviceDamping = 0.022;  // Unit: N·s/m.
 constexpr double kPeriod = 0.001;         // Unit: s.
 constexpr Vec3 kStart{0.0, 0.0, 0.02};    // Unit: m.
 constexpr std::uint32_t kRampTicks = 50;  // a new item ramps in over 50 ms
-
-ClientConfig config_for(const test::ServerProcess& server, const char* name) {
-  ClientConfig config;
-  config.server_address = server.address();
-  config.client_name = name;
-  config.heartbeat_period = milliseconds(20);
-  return config;
-}
-
-/// Steps the server and returns the sample of the last tick (which must arrive).
-State step_and_get(Client& client, std::uint32_t ticks) {
-  const std::uint64_t tick = client.step(ticks);
-  State state;
-  EXPECT_TRUE(client.wait_for_tick(tick, state, seconds(5))) << "no state for tick " << tick;
-  EXPECT_EQ(state.tick, tick);
-  return state;
-}
 
 /// Polls `done` until it holds or `timeout` passes; for counters the server or the SDK's receive
 /// thread update asynchronously. Returns whether it held.

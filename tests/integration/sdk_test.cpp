@@ -9,33 +9,20 @@
 #include <cmath>
 #include <thread>
 
+#include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
 
 namespace haptic {
 namespace {
+
+using test::config_for;
+using test::step_and_get;
 
 using std::chrono::seconds;
 
 constexpr double kK = 1000.0;  // wall stiffness, N/m
 constexpr double kB = 1.0;     // wall damping, N·s/m
 constexpr std::int64_t kRampTicks = 50;  // default removal ramp: 50 ms at 1 kHz
-
-ClientConfig config_for(const test::ServerProcess& server, const char* name) {
-  ClientConfig config;
-  config.server_address = server.address();
-  config.client_name = name;
-  config.heartbeat_period = std::chrono::milliseconds(20);
-  return config;
-}
-
-/// Steps the server and returns the sample of the last tick (which must arrive).
-State step_and_get(Client& client, std::uint32_t ticks) {
-  const std::uint64_t tick = client.step(ticks);
-  State state;
-  EXPECT_TRUE(client.wait_for_tick(tick, state, seconds(5))) << "no state for tick " << tick;
-  EXPECT_EQ(state.tick, tick);
-  return state;
-}
 
 double dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
