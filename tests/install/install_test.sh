@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Installs the build tree into a temporary prefix, then configures, builds and runs an outside
 # project (tests/install/consumer) that uses find_package(hapticd) and links haptic::sdk.
-# Usage: install_test.sh <build-dir> <source-dir>
+# Usage: install_test.sh <build-dir> <source-dir> [compiler and linker flags the SDK was built with,
+#        e.g. -fsanitize=address,undefined: a consumer must link what they need]
 set -euo pipefail
 build_dir="$1"
 source_dir="$2"
+flags="${3:-}"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cmake --install "$build_dir" --prefix "$work/prefix" >/dev/null
@@ -15,6 +17,7 @@ fi
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 cmake -S "$source_dir/tests/install/consumer" -B "$work/consumer" -G Ninja \
-  -DCMAKE_PREFIX_PATH="$work/prefix" "${launcher[@]}" >/dev/null
+  -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="$flags" \
+  "${launcher[@]}" >/dev/null
 cmake --build "$work/consumer" -j2 >/dev/null
 "$work/consumer/consumer"
