@@ -183,25 +183,8 @@ std::string validate(const v1::ServerConfig& config) {
 }
 
 std::string validate_scene(const v1::Scene& scene, const std::string& prefix) {
-  const net::SceneLimits limits;
-  const std::string dot = prefix.empty() ? "" : prefix + ".";
-  for (int i = 0; i < scene.objects_size(); ++i) {
-    engine::ObjectSpec spec;
-    if (auto e = net::to_object_spec(scene.objects(i), dot + "objects[" + std::to_string(i) + "]",
-                                     limits, spec);
-        !e.empty()) {
-      return e;
-    }
-  }
-  for (int i = 0; i < scene.fields_size(); ++i) {
-    engine::FieldSpec spec;
-    if (auto e = net::to_field_spec(scene.fields(i), dot + "fields[" + std::to_string(i) + "]",
-                                    limits, spec);
-        !e.empty()) {
-      return e;
-    }
-  }
-  return {};
+  net::SceneSpecs ignored;
+  return net::to_scene_specs(scene, prefix.empty() ? "" : prefix + ".", net::SceneLimits{}, ignored);
 }
 
 v1::ServerConfig parse_config(const std::string& json, const std::string& source_name) {

@@ -104,25 +104,13 @@ Server::Server(const v1::ServerConfig& config)
   limits.device_mass = design.mass;
   limits.device_damping = design.damping;
   limits.device_unknown_reason = design.unknown_reason;
-  std::vector<engine::ObjectSpec> objects(static_cast<std::size_t>(config.initial_scene().objects_size()));
-  for (int i = 0; i < config.initial_scene().objects_size(); ++i) {
-    if (auto e = net::to_object_spec(config.initial_scene().objects(i), "initial_scene.objects",
-                                     limits, objects[static_cast<std::size_t>(i)]);
-        !e.empty()) {
-      throw std::runtime_error(e);
-    }
-  }
-  std::vector<engine::FieldSpec> fields(static_cast<std::size_t>(config.initial_scene().fields_size()));
-  for (int i = 0; i < config.initial_scene().fields_size(); ++i) {
-    if (auto e = net::to_field_spec(config.initial_scene().fields(i), "initial_scene.fields", limits,
-                                    fields[static_cast<std::size_t>(i)]);
-        !e.empty()) {
-      throw std::runtime_error(e);
-    }
+  net::SceneSpecs initial;
+  if (auto e = net::to_scene_specs(config.initial_scene(), "initial_scene.", limits, initial); !e.empty()) {
+    throw std::runtime_error(e);
   }
   std::vector<std::uint64_t> object_ids, field_ids;
   if (const grpc::Status status =
-          scene_->replace_session_scene(0, objects, fields, object_ids, field_ids);
+          scene_->replace_session_scene(0, initial.objects, initial.fields, object_ids, field_ids);
       !status.ok()) {
     throw std::runtime_error("initial_scene: " + status.error_message());
   }

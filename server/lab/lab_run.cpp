@@ -23,24 +23,22 @@ namespace {
 /// The configuration's own scene, as the server's session 0 would hold it (always there: no
 /// ramp-in, so a run starts with the scene in place).
 engine::SceneDescription initial_scene(const v1::ServerConfig& config, const net::SceneLimits& limits) {
+  net::SceneSpecs specs;
+  if (auto e = net::to_scene_specs(config.initial_scene(), "initial_scene.", limits, specs); !e.empty()) {
+    throw std::invalid_argument(e);
+  }
   engine::SceneDescription description;
   std::uint64_t id = 1;
-  for (int i = 0; i < config.initial_scene().objects_size(); ++i) {
+  for (engine::ObjectSpec& spec : specs.objects) {
     engine::ObjectEntry entry;
     entry.meta.id = id++;
-    const std::string path = "initial_scene.objects[" + std::to_string(i) + "]";
-    if (auto e = net::to_object_spec(config.initial_scene().objects(i), path, limits, entry.spec); !e.empty()) {
-      throw std::invalid_argument(e);
-    }
+    entry.spec = std::move(spec);
     description.objects.push_back(std::move(entry));
   }
-  for (int i = 0; i < config.initial_scene().fields_size(); ++i) {
+  for (engine::FieldSpec& spec : specs.fields) {
     engine::FieldEntry entry;
     entry.meta.id = id++;
-    const std::string path = "initial_scene.fields[" + std::to_string(i) + "]";
-    if (auto e = net::to_field_spec(config.initial_scene().fields(i), path, limits, entry.spec); !e.empty()) {
-      throw std::invalid_argument(e);
-    }
+    entry.spec = std::move(spec);
     description.fields.push_back(std::move(entry));
   }
   return description;

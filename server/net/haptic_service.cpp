@@ -323,24 +323,12 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::A
                                        v1::ApplySceneResponse* response) {
   if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   // Validate everything first: one bad item rejects the whole scene and changes nothing.
-  std::vector<engine::ObjectSpec> objects(static_cast<std::size_t>(request->scene().objects_size()));
-  for (int i = 0; i < request->scene().objects_size(); ++i) {
-    const std::string path = "scene.objects[" + std::to_string(i) + "]";
-    if (auto error = to_object_spec(request->scene().objects(i), path, deps_.limits,
-                                    objects[static_cast<std::size_t>(i)]);
-        !error.empty()) {
-      return invalid(error);
-    }
+  SceneSpecs specs;
+  if (auto error = to_scene_specs(request->scene(), "scene.", deps_.limits, specs); !error.empty()) {
+    return invalid(error);
   }
-  std::vector<engine::FieldSpec> fields(static_cast<std::size_t>(request->scene().fields_size()));
-  for (int i = 0; i < request->scene().fields_size(); ++i) {
-    const std::string path = "scene.fields[" + std::to_string(i) + "]";
-    if (auto error = to_field_spec(request->scene().fields(i), path, deps_.limits,
-                                   fields[static_cast<std::size_t>(i)]);
-        !error.empty()) {
-      return invalid(error);
-    }
-  }
+  const std::vector<engine::ObjectSpec>& objects = specs.objects;
+  const std::vector<engine::FieldSpec>& fields = specs.fields;
   std::vector<std::uint64_t> object_ids, field_ids;
   if (auto status = deps_.scene.replace_session_scene(request->session_id(), objects, fields,
                                                       object_ids, field_ids);

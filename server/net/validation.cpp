@@ -474,6 +474,29 @@ std::string to_field_spec(const v1::Field& field, const std::string& path,
                 "required";
 }
 
+std::string to_scene_specs(const v1::Scene& scene, const std::string& prefix,
+                           const SceneLimits& limits, SceneSpecs& out) {
+  SceneSpecs specs;
+  specs.objects.resize(static_cast<std::size_t>(scene.objects_size()));
+  specs.fields.resize(static_cast<std::size_t>(scene.fields_size()));
+  for (int i = 0; i < scene.objects_size(); ++i) {
+    const std::string path = prefix + "objects[" + std::to_string(i) + "]";
+    if (auto e = to_object_spec(scene.objects(i), path, limits, specs.objects[static_cast<std::size_t>(i)]);
+        !e.empty()) {
+      return e;
+    }
+  }
+  for (int i = 0; i < scene.fields_size(); ++i) {
+    const std::string path = prefix + "fields[" + std::to_string(i) + "]";
+    if (auto e = to_field_spec(scene.fields(i), path, limits, specs.fields[static_cast<std::size_t>(i)]);
+        !e.empty()) {
+      return e;
+    }
+  }
+  out = std::move(specs);
+  return {};
+}
+
 std::string to_hand_input(const v1::OperatorInput& input, const std::string& path,
                           const SceneLimits& limits, engine::HandInput& out) {
   out = engine::HandInput{};

@@ -7,6 +7,8 @@
 #include <string>
 
 #include "engine/operator/simulated_hand.hpp"
+#include <vector>
+
 #include "engine/scene/scene_spec.hpp"
 #include "haptic/v1/device.pb.h"
 #include "haptic/v1/scene.pb.h"
@@ -39,6 +41,16 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
                            const SceneLimits& limits, engine::ObjectSpec& out);
 std::string to_field_spec(const v1::Field& field, const std::string& path,
                           const SceneLimits& limits, engine::FieldSpec& out);
+/// A whole scene's objects and fields, each converted and validated, in the scene's order.
+struct SceneSpecs {
+  std::vector<engine::ObjectSpec> objects;
+  std::vector<engine::FieldSpec> fields;
+};
+/// Empty on success, else the first error, "<prefix>objects[i]…: …" (prefix: "scene.",
+/// "initial_scene.", or "" for a scene file's own elements). All or nothing: `out` is written
+/// only on success.
+std::string to_scene_specs(const v1::Scene& scene, const std::string& prefix,
+                           const SceneLimits& limits, SceneSpecs& out);
 std::string to_hand_input(const v1::OperatorInput& input, const std::string& path,
                           const SceneLimits& limits, engine::HandInput& out);
 
