@@ -13,7 +13,7 @@
 
 #include "app/devices.hpp"
 #include "haptic/io/scene_file.hpp"
-#include "net/validation.hpp"
+#include "schema/scene_specs.hpp"
 
 namespace haptic::app {
 namespace {
@@ -173,9 +173,9 @@ std::string validate(const v1::ServerConfig& config) {
       passivity.velocity_threshold() > 1.0) {
     return "passivity.velocity_threshold: must be 0 (default) to 1 m/s";
   }
-  net::SceneLimits limits;
+  schema::SceneLimits limits;
   engine::HandInput hand;
-  if (auto e = net::to_hand_input(config.initial_operator(), "initial_operator", limits, hand);
+  if (auto e = schema::to_hand_input(config.initial_operator(), "initial_operator", limits, hand);
       !e.empty()) {
     return e;
   }
@@ -183,8 +183,8 @@ std::string validate(const v1::ServerConfig& config) {
 }
 
 std::string validate_scene(const v1::Scene& scene, const std::string& prefix) {
-  net::SceneSpecs ignored;
-  return net::to_scene_specs(scene, prefix.empty() ? "" : prefix + ".", net::SceneLimits{}, ignored);
+  schema::SceneSpecs ignored;
+  return schema::to_scene_specs(scene, prefix.empty() ? "" : prefix + ".", schema::SceneLimits{}, ignored);
 }
 
 v1::ServerConfig parse_config(const std::string& json, const std::string& source_name) {

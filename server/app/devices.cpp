@@ -6,7 +6,7 @@
 #include <sstream>
 #include <utility>
 
-#include "net/validation.hpp"
+#include "schema/scene_specs.hpp"
 #include "runtime/five_bar_estimator.hpp"
 #include "runtime/simulated_dc_motor_device.hpp"
 #include "runtime/simulated_device.hpp"
@@ -335,10 +335,10 @@ SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz)
   params.mass = mass.mass();
   params.damping = mass.damping();
   params.substeps = mass.substeps();
-  params.workspace_min = net::to_engine(mass.workspace_min());
-  params.workspace_max = net::to_engine(mass.workspace_max());
+  params.workspace_min = schema::to_engine(mass.workspace_min());
+  params.workspace_max = schema::to_engine(mass.workspace_max());
   return adopt(std::make_unique<runtime::SimulatedPointMassDevice>(
-      params, engine::PointMassState{net::to_engine(mass.initial_position()), {}}, mass.max_force()));
+      params, engine::PointMassState{schema::to_engine(mass.initial_position()), {}}, mass.max_force()));
 }
 
 SimulatedDevice make_device(const v1::ServerConfig& config) {

@@ -13,7 +13,7 @@
 #include <stdexcept>
 
 #include "app/config.hpp"
-#include "net/validation.hpp"
+#include "schema/scene_specs.hpp"
 #include "runtime/realtime.hpp"
 
 namespace haptic::app {
@@ -97,15 +97,15 @@ Server::Server(const v1::ServerConfig& config)
       net::SceneBudget{config.max_scene_triangles(), config.max_scene_bytes()});
 
   // The initial scene belongs to the server itself (session 0) and never expires.
-  net::SceneLimits limits;
+  schema::SceneLimits limits;
   limits.period_s = tick.period_s;
   // Objects are validated once for all ports: against the least damped port's device.
   const DesignDevice design = scene_design_device(simulated_);
   limits.device_mass = design.mass;
   limits.device_damping = design.damping;
   limits.device_unknown_reason = design.unknown_reason;
-  net::SceneSpecs initial;
-  if (auto e = net::to_scene_specs(config.initial_scene(), "initial_scene.", limits, initial); !e.empty()) {
+  schema::SceneSpecs initial;
+  if (auto e = schema::to_scene_specs(config.initial_scene(), "initial_scene.", limits, initial); !e.empty()) {
     throw std::runtime_error(e);
   }
   std::vector<std::uint64_t> object_ids, field_ids;
@@ -116,7 +116,7 @@ Server::Server(const v1::ServerConfig& config)
   }
 
   engine::HandInput hand;
-  if (auto e = net::to_hand_input(config.initial_operator(), "initial_operator", limits, hand);
+  if (auto e = schema::to_hand_input(config.initial_operator(), "initial_operator", limits, hand);
       !e.empty()) {
     throw std::runtime_error(e);
   }

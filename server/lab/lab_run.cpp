@@ -9,7 +9,7 @@
 #include "app/config.hpp"
 #include "app/devices.hpp"
 #include "haptic/wire/datagram.hpp"
-#include "net/validation.hpp"
+#include "schema/scene_specs.hpp"
 #include "runtime/loop_stats.hpp"
 #include "runtime/simulated_dc_motor_device.hpp"
 #include "runtime/simulated_dob_device.hpp"
@@ -22,9 +22,9 @@ namespace {
 
 /// The configuration's own scene, as the server's session 0 would hold it (always there: no
 /// ramp-in, so a run starts with the scene in place).
-engine::SceneDescription initial_scene(const v1::ServerConfig& config, const net::SceneLimits& limits) {
-  net::SceneSpecs specs;
-  if (auto e = net::to_scene_specs(config.initial_scene(), "initial_scene.", limits, specs); !e.empty()) {
+engine::SceneDescription initial_scene(const v1::ServerConfig& config, const schema::SceneLimits& limits) {
+  schema::SceneSpecs specs;
+  if (auto e = schema::to_scene_specs(config.initial_scene(), "initial_scene.", limits, specs); !e.empty()) {
     throw std::invalid_argument(e);
   }
   engine::SceneDescription description;
@@ -93,7 +93,7 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
     rings.push_back(std::make_unique<runtime::SampleRing>());
     ring_pointers.push_back(rings.back().get());
   }
-  net::SceneLimits limits;
+  schema::SceneLimits limits;
   limits.period_s = period_s;
   const app::DesignDevice design = app::scene_design_device(devices);  // as hapticd validates
   limits.device_mass = design.mass;
@@ -101,7 +101,7 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   limits.device_unknown_reason = design.unknown_reason;
   const engine::SceneDescription description = initial_scene(config, limits);
   engine::HandInput hand;
-  if (auto e = net::to_hand_input(config.initial_operator(), "initial_operator", limits, hand); !e.empty()) {
+  if (auto e = schema::to_hand_input(config.initial_operator(), "initial_operator", limits, hand); !e.empty()) {
     throw std::invalid_argument(e);
   }
   for (auto& device : devices) {

@@ -1,6 +1,5 @@
 #include "net/haptic_service.hpp"
 
-#include "engine/analysis/wall_design.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -12,56 +11,14 @@
 
 #include "haptic/io/session_secret.hpp"
 #include "net/control_listener.hpp"
+#include "schema/stability.hpp"
 
 namespace haptic::net {
 namespace {
 
-/// Colgate's bound and the sampled margin of an object's impedance on this device (docs/scene.md).
-/// The VELOCITY law uses the device's measured velocity; the margin models it by the backward
-/// difference, the discrete law closest to it.
-v1::StabilityReport stability_report(const engine::ObjectSpec& spec,
-                                     const runtime::DeviceDescription& device, double period_s,
-                                     bool optimal_damping = false, bool virtual_coupling = false) {
-  v1::StabilityReport report;
-  if (optimal_damping && device.apparent_mass > 0.0) {
-    engine::WallDesignParams design;
-    design.mass = device.apparent_mass;
-    design.damping = device.apparent_damping;
-    design.wall_stiffness = spec.stiffness;
-    design.wall_damping = spec.damping;
-    design.sample_period = period_s;
-    report.set_chosen_damping(spec.damping);
-    report.set_robustly_stable(engine::robust_stability_norm(design, spec.damping) <= 1.0);
-  }
-  if (virtual_coupling) {
-    report.set_chosen_stiffness(spec.stiffness);
-    report.set_chosen_damping(spec.damping);
-  }
-  report.set_colgate_min_damping(engine::colgate_bound(spec.stiffness, spec.damping, period_s));
-  report.set_device_mass(device.apparent_mass);
-  report.set_device_damping(device.apparent_damping);
-  report.set_passive(device.apparent_damping > report.colgate_min_damping());
-  report.set_device_known(device.apparent_mass > 0.0);
-  if (!report.device_known() || spec.stiffness <= 0.0) return report;
-  const auto discretization = spec.law == engine::ContactLaw::kExactZoh ? engine::ImpedanceDiscretization::kExactZoh
-                              : spec.law == engine::ContactLaw::kTustin
-                                  ? engine::ImpedanceDiscretization::kTustin
-                                  : engine::ImpedanceDiscretization::kBackwardDifference;
-  const engine::SampledWallMargin margin = engine::sampled_wall_margin(
-      engine::ImpedanceParams{spec.stiffness, spec.damping, spec.impedance_mass}, discretization,
-      engine::MassDamperDevice{device.apparent_mass, device.apparent_damping}, period_s);
-  report.set_stable(margin.stable);
-  report.set_max_stable_stiffness(margin.max_stable_stiffness);
-  report.set_max_pole_magnitude(margin.max_pole_magnitude);
-  if (!margin.stable) {
-    report.set_warning(fmt::format(
-        "not stable on this device: K = {:g} N/m with B = {:g} N*s/m at {:g} Hz exceeds the largest "
-        "stable stiffness, {:g} N/m (closed-loop pole {:.4f}); expect the contact to oscillate "
-        "unless the passivity controller damps it",
-        spec.stiffness, spec.damping, 1.0 / period_s, margin.max_stable_stiffness,
-        margin.max_pole_magnitude));
-  }
-  return report;
+/// The device as the stability report models it: its tool point as a mass-damper.
+schema::DeviceMassDamper mass_damper(const runtime::DeviceDescription& device) {
+  return {device.apparent_mass, device.apparent_damping};
 }
 
 /// An object accepted although its own report says it will not be stable: the client has the
@@ -157,8 +114,8 @@ v1::DeviceInfo HapticService::device_info(std::uint32_t port) const {
   v1::DeviceInfo info;
   info.set_name(device.name);
   info.set_dof(device.dof);
-  *info.mutable_workspace_min() = to_proto(device.workspace_min);
-  *info.mutable_workspace_max() = to_proto(device.workspace_max);
+  *info.mutable_workspace_min() = schema::to_proto(device.workspace_min);
+  *info.mutable_workspace_max() = schema::to_proto(device.workspace_max);
   info.set_max_force(device.max_force);
   info.set_loop_rate_hz(deps_.loop.config().rate_hz);
   info.set_simulated(device.simulated);
@@ -217,7 +174,7 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1:
                                          v1::ItemRef* response) {
   if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   engine::ObjectSpec spec;
-  if (auto error = to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
+  if (auto error = schema::to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
     return invalid(error);
   }
   std::uint64_t id = 0;
@@ -227,7 +184,7 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1:
   }
   response->set_id(id);
   *response->mutable_stability() =
-      stability_report(spec, *port_of(request->session_id()).device, period_s(),
+      schema::stability_report(spec, mass_damper(*port_of(request->session_id()).device), period_s(),
                        request->object().impedance().transparency_optimal_damping(),
                        request->object().impedance().virtual_coupling());
   log_if_unstable(response->stability(), request->session_id(), id);
@@ -238,7 +195,7 @@ grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1:
                                          v1::ItemRef* response) {
   if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   engine::ObjectSpec spec;
-  if (auto error = to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
+  if (auto error = schema::to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
     return invalid(error);
   }
   if (auto status =
@@ -248,7 +205,7 @@ grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1:
   }
   response->set_id(request->object_id());
   *response->mutable_stability() =
-      stability_report(spec, *port_of(request->session_id()).device, period_s(),
+      schema::stability_report(spec, mass_damper(*port_of(request->session_id()).device), period_s(),
                        request->object().impedance().transparency_optimal_damping(),
                        request->object().impedance().virtual_coupling());
   log_if_unstable(response->stability(), request->session_id(), request->object_id());
@@ -265,7 +222,7 @@ grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::
                                         v1::ItemRef* response) {
   if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   engine::FieldSpec spec;
-  if (auto error = to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
+  if (auto error = schema::to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
     return invalid(error);
   }
   std::uint64_t id = 0;
@@ -281,7 +238,7 @@ grpc::Status HapticService::UpdateField(grpc::ServerContext* context, const v1::
                                         v1::Empty*) {
   if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   engine::FieldSpec spec;
-  if (auto error = to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
+  if (auto error = schema::to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
     return invalid(error);
   }
   return deps_.scene.update(request->session_id(), ItemKind::kField, request->field_id(), spec);
@@ -313,8 +270,8 @@ grpc::Status HapticService::GetObjectStates(grpc::ServerContext* context, const 
   for (const engine::ObjectMotion& motion : deps_.scene.motions()) {
     v1::ObjectState& out = *response->add_objects();
     out.set_id(motion.id);
-    *out.mutable_position() = to_proto(motion.p_WO);
-    *out.mutable_velocity() = to_proto(motion.v_WO);
+    *out.mutable_position() = schema::to_proto(motion.p_WO);
+    *out.mutable_velocity() = schema::to_proto(motion.v_WO);
   }
   return grpc::Status::OK;
 }
@@ -323,8 +280,8 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::A
                                        v1::ApplySceneResponse* response) {
   if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
   // Validate everything first: one bad item rejects the whole scene and changes nothing.
-  SceneSpecs specs;
-  if (auto error = to_scene_specs(request->scene(), "scene.", deps_.limits, specs); !error.empty()) {
+  schema::SceneSpecs specs;
+  if (auto error = schema::to_scene_specs(request->scene(), "scene.", deps_.limits, specs); !error.empty()) {
     return invalid(error);
   }
   const std::vector<engine::ObjectSpec>& objects = specs.objects;
@@ -337,8 +294,8 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::A
   }
   const runtime::DeviceDescription& device = *port_of(request->session_id()).device;
   for (std::size_t i = 0; i < objects.size(); ++i) {
-    *response->add_object_stability() = stability_report(
-        objects[i], device, period_s(),
+    *response->add_object_stability() = schema::stability_report(
+        objects[i], mass_damper(device), period_s(),
         request->scene().objects(static_cast<int>(i)).impedance().transparency_optimal_damping(),
         request->scene().objects(static_cast<int>(i)).impedance().virtual_coupling());
     log_if_unstable(response->object_stability(static_cast<int>(i)), request->session_id(),
@@ -415,7 +372,7 @@ grpc::Status HapticService::SetOperator(grpc::ServerContext* context, const v1::
             "the device is real hardware: there is no simulated operator"};
   }
   engine::HandInput hand;
-  if (auto error = to_hand_input(request->input(), "input", deps_.limits, hand); !error.empty()) {
+  if (auto error = schema::to_hand_input(request->input(), "input", deps_.limits, hand); !error.empty()) {
     return invalid(error);
   }
   port.set_hand(hand);
@@ -441,10 +398,10 @@ grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepReq
     v1::ToolState* state = response->mutable_state();
     state->set_tick(sample.tick);
     state->set_server_time_s(static_cast<double>(sample.time_ns) * 1e-9);
-    *state->mutable_position() = to_proto(sample.p_WT);
-    *state->mutable_velocity() = to_proto(sample.v_WT);
-    *state->mutable_force() = to_proto(sample.F_T_W);
-    *state->mutable_proxy() = to_proto(sample.p_WP);
+    *state->mutable_position() = schema::to_proto(sample.p_WT);
+    *state->mutable_velocity() = schema::to_proto(sample.v_WT);
+    *state->mutable_force() = schema::to_proto(sample.F_T_W);
+    *state->mutable_proxy() = schema::to_proto(sample.p_WP);
     state->set_contact_count(sample.contact_count);
     state->set_flags(sample.flags);
   }

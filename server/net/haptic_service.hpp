@@ -11,7 +11,7 @@
 #include "net/event_hub.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
-#include "net/validation.hpp"
+#include "schema/scene_specs.hpp"
 #include "runtime/device.hpp"
 #include "runtime/loop_thread.hpp"
 #include "engine/operator/simulated_hand.hpp"
@@ -32,7 +32,7 @@ struct ServiceDependencies {
   runtime::LoopThread& loop;
   std::vector<DevicePort> ports;  // port 0 first; not empty
   std::uint16_t udp_port;
-  SceneLimits limits;
+  schema::SceneLimits limits;
   std::function<v1::Stats()> stats;
 };
 

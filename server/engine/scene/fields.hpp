@@ -110,7 +110,7 @@ enum class GradientMethod : std::uint8_t {
 
 inline constexpr int kMaxPotentialOrder = 8;
 /// Farther than any tool can be from a potential's surface: scene positions are within ±10 m
-/// (net::SceneLimits), so no distance function can exceed this. A polynomial potential's offset
+/// (schema::SceneLimits), so no distance function can exceed this. A polynomial potential's offset
 /// must be within it, and its force finite at it. Unit: m.
 inline constexpr double kMaxPotentialReach = 100.0;
 

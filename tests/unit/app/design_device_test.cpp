@@ -6,7 +6,7 @@
 #include "app/config.hpp"
 #include "app/devices.hpp"
 #include "engine/scene/impedance.hpp"
-#include "net/validation.hpp"
+#include "schema/scene_specs.hpp"
 
 namespace haptic::app {
 namespace {
@@ -17,19 +17,19 @@ std::vector<SimulatedDevice> devices_of(const std::string& json) {
   return make_devices(config);
 }
 
-net::SceneLimits limits_for(const DesignDevice& design) {
-  net::SceneLimits limits;
+schema::SceneLimits limits_for(const DesignDevice& design) {
+  schema::SceneLimits limits;
   limits.device_mass = design.mass;
   limits.device_damping = design.damping;
   limits.device_unknown_reason = design.unknown_reason;
   return limits;
 }
 
-std::string virtual_coupling_error(const net::SceneLimits& limits, engine::ObjectSpec& spec) {
+std::string virtual_coupling_error(const schema::SceneLimits& limits, engine::ObjectSpec& spec) {
   v1::Object object;
   object.mutable_half_space()->mutable_normal()->set_z(1.0);
   object.mutable_impedance()->set_virtual_coupling(true);
-  return net::to_object_spec(object, "object", limits, spec);
+  return schema::to_object_spec(object, "object", limits, spec);
 }
 
 TEST(DesignDevice, OnePortIsThatPortsDevice) {

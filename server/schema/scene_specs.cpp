@@ -1,4 +1,4 @@
-#include "net/validation.hpp"
+#include "schema/scene_specs.hpp"
 
 #include <cmath>
 #include <memory>
@@ -8,7 +8,7 @@
 #include "engine/scene/impedance.hpp"
 #include "engine/scene/shapes.hpp"
 
-namespace haptic::net {
+namespace haptic::schema {
 namespace {
 
 std::string describe(double value) {
@@ -632,4 +632,4 @@ std::string to_hand_input(const v1::OperatorInput& input, const std::string& pat
          std::to_string(static_cast<int>(input.mode()));
 }
 
-}  // namespace haptic::net
+}  // namespace haptic::schema

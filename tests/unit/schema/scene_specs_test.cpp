@@ -6,9 +6,9 @@
 #include <utility>
 #include <variant>
 
-#include "net/validation.hpp"
+#include "schema/scene_specs.hpp"
 
-namespace haptic::net {
+namespace haptic::schema {
 namespace {
 
 v1::Object good_wall() {
@@ -228,4 +228,4 @@ TEST(Validation, NewFieldsNameWhatIsWrong) {
 }
 
 }  // namespace
-}  // namespace haptic::net
+}  // namespace haptic::schema

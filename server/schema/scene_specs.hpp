@@ -13,7 +13,7 @@
 #include "haptic/v1/device.pb.h"
 #include "haptic/v1/scene.pb.h"
 
-namespace haptic::net {
+namespace haptic::schema {
 
 /// Ranges accepted for scene parameters. Generous, but they keep numbers physical.
 struct SceneLimits {
@@ -57,4 +57,4 @@ std::string to_hand_input(const v1::OperatorInput& input, const std::string& pat
 engine::Vec3 to_engine(const v1::Vec3& v);
 v1::Vec3 to_proto(const engine::Vec3& v);
 
-}  // namespace haptic::net
+}  // namespace haptic::schema
