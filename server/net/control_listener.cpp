@@ -152,10 +152,7 @@ void ControlListener::accept_one(int listening_fd) {
         // neither waits in the backlog nor keeps the listener readable forever; then re-reserve.
         if (reserve_fd_ >= 0) ::close(reserve_fd_);
         const int dropped = ::accept4(listening_fd, nullptr, nullptr, SOCK_CLOEXEC);
-        if (dropped >= 0) {
-          counters_.fd_exhausted.fetch_add(1, std::memory_order_relaxed);
-          refuse(dropped, "the process is out of file descriptors", {});  // closes it first
-        }
+        if (dropped >= 0) refuse(dropped, "the process is out of file descriptors", {});  // closes it
         reserve_fd_ = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
         if (dropped >= 0) continue;
         // Not even the reserve helped (another thread took the fd): back off rather than spin on

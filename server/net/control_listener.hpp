@@ -29,7 +29,6 @@ struct ConnectionLimits {
 struct ConnectionCounters {
   std::atomic<std::uint64_t> accepted{0};
   std::atomic<std::uint64_t> refused{0};       // over a cap, or no fd to hold them
-  std::atomic<std::uint64_t> fd_exhausted{0};  // of refused: accept() itself ran out of fds
   std::atomic<std::uint32_t> open{0};          // handed to gRPC and not yet closed by it
 };
 
@@ -56,7 +55,6 @@ class ControlListener {
   static std::string host_of_connection(int fd);
 
   const ConnectionCounters& counters() const { return counters_; }
-  const ConnectionLimits& limits() const { return limits_; }
 
  private:
   struct Connection {

@@ -59,7 +59,6 @@ class EventHub {
   void close();
   /// Watches open now.
   std::size_t size() const;
-  const WatchLimits& limits() const { return limits_; }
 
  private:
   static void end(Watcher& watcher);

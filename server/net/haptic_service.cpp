@@ -1,7 +1,6 @@
 #include "net/haptic_service.hpp"
 
 
-#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <cctype>

@@ -114,14 +114,6 @@ Access SessionRegistry::authorize(std::uint64_t session_id, std::span<const std:
   return Access::kGranted;
 }
 
-bool SessionRegistry::touch(std::uint64_t session_id) {
-  std::lock_guard lock(mutex_);
-  auto it = sessions_.find(session_id);
-  if (it == sessions_.end()) return false;
-  it->second.last_seen = SteadyClock::now();
-  return true;
-}
-
 std::optional<wire::Key> SessionRegistry::key_of(std::uint64_t session_id) const {
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(session_id);

@@ -106,8 +106,6 @@ class SessionRegistry {
   bool close(std::uint64_t session_id);
   /// Checks that `secret` is the session's own (in constant time) and, if so, renews the lease.
   Access authorize(std::uint64_t session_id, std::span<const std::uint8_t> secret);
-  /// Renews the lease; false if the session does not exist.
-  bool touch(std::uint64_t session_id);
   std::optional<wire::Key> key_of(std::uint64_t session_id) const;
   /// The device port the session is bound to; nullopt if the session does not exist.
   std::optional<std::uint32_t> device_index_of(std::uint64_t session_id) const;

@@ -182,7 +182,7 @@ TEST(SessionRegistry, SilentSessionsExpireAndRenewedOnesStay) {
   const auto expired = registry.expire(t0 + std::chrono::milliseconds(150));
   EXPECT_EQ(expired, std::vector<std::uint64_t>{quiet->id});  // silent for 150 ms > 100 ms
   EXPECT_EQ(registry.size(), 1u);
-  EXPECT_FALSE(registry.touch(quiet->id));
+  EXPECT_FALSE(registry.device_index_of(quiet->id).has_value());
   EXPECT_TRUE(registry.device_index_of(chatty->id).has_value());  // 70 ms silent: still held
   // Without another word it goes too, once its own lease runs out.
   EXPECT_EQ(registry.expire(t0 + std::chrono::milliseconds(181)), std::vector<std::uint64_t>{chatty->id});
