@@ -7,9 +7,14 @@
 #include <utility>
 
 #include "schema/scene_specs.hpp"
+#include "runtime/cartesian_model.hpp"
+#include "runtime/dc_motor_model.hpp"
 #include "runtime/five_bar_estimator.hpp"
+#include "runtime/five_bar_model.hpp"
+#include "runtime/joystick_model.hpp"
+#include "runtime/parallel_dob_model.hpp"
 #include "runtime/simulated_dc_motor_device.hpp"
-#include "runtime/simulated_device.hpp"
+#include "runtime/simulated_point_mass_device.hpp"
 #include "runtime/simulated_dob_device.hpp"
 #include "runtime/simulated_five_bar_device.hpp"
 #include "runtime/simulated_joystick_device.hpp"
@@ -281,23 +286,18 @@ std::string validate_device(const v1::ServerConfig& config) {
 }
 
 SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
-  SimulatedDevice out;
-  // Every simulated device takes its operator's input the same way.
-  auto adopt = [&out](auto device) {
-    auto* raw = device.get();
-    out.set_hand = [raw](const engine::HandInput& hand) { raw->set_hand(hand); };
-    out.device = std::move(device);
-    return std::move(out);
-  };
   switch (config.device_case()) {
     case v1::DeviceConfig::kSimulatedDcMotor: {
       const auto& motor = config.simulated_dc_motor();
-      return adopt(std::make_unique<runtime::SimulatedDcMotorDevice>(
-          dc_motor_params(motor),
+      const engine::DcMotorParams params = dc_motor_params(motor);
+      auto device = std::make_unique<runtime::SimulatedDcMotorDevice>(
+          params,
           motor.with_inductance() ? engine::DcMotorModel::kWithInductance
                                   : engine::DcMotorModel::kWithoutInductance,
           motor.initial_angle(), motor.max_force() > 0.0 ? motor.max_force() : 5.0,
-          integration_settings(motor.integrator(), motor.substeps(), 10)));
+          integration_settings(motor.integrator(), motor.substeps(), 10));
+      const bool gravity = device->description().capabilities.gravity;
+      return {std::move(device), std::make_unique<runtime::DcMotorModel>(params, gravity)};
     }
     case v1::DeviceConfig::kSimulatedFiveBar: {
       const auto& five_bar = config.simulated_five_bar();
@@ -307,23 +307,30 @@ SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz)
       options.plant.flexible_mode = five_bar.flexible_mode();  // FiveBarFlexibleMode's defaults
       options.quantized = !five_bar.has_quantized_encoders() || five_bar.quantized_encoders();
       if (five_bar.max_force() > 0.0) options.max_force = five_bar.max_force();
-      auto device = std::make_unique<runtime::SimulatedFiveBarDevice>(five_bar_params(five_bar),
-                                                                       engine::FiveBarState{}, options);
-      if (five_bar.velocity() == "estimator") {
-        device->set_velocity_estimator(
-            std::make_unique<runtime::FiveBarStateEstimators>(1.0 / loop_rate_hz));
+      options.state_estimator = five_bar.velocity() == "estimator";
+      const engine::FiveBarParams params = five_bar_params(five_bar);
+      auto model = std::make_unique<runtime::FiveBarModel>(params, options.velocity_cutoff);
+      if (options.state_estimator) {
+        model->set_velocity_estimator(std::make_unique<runtime::FiveBarStateEstimators>(1.0 / loop_rate_hz));
       }
-      return adopt(std::move(device));
+      return {std::make_unique<runtime::SimulatedFiveBarDevice>(params, engine::FiveBarState{}, options),
+              std::move(model)};
     }
-    case v1::DeviceConfig::kSimulatedJoystick:
-      return adopt(
-          std::make_unique<runtime::SimulatedJoystickDevice>(joystick_config(config.simulated_joystick())));
+    case v1::DeviceConfig::kSimulatedJoystick: {
+      const runtime::SimulatedJoystickConfig joystick = joystick_config(config.simulated_joystick());
+      return {std::make_unique<runtime::SimulatedJoystickDevice>(joystick),
+              std::make_unique<runtime::JoystickModel>(joystick.model())};
+    }
     case v1::DeviceConfig::kSimulatedParallelDob: {
       const auto& dob = config.simulated_parallel_dob();
-      return adopt(std::make_unique<runtime::SimulatedDobDevice>(
-          parallel_params(dob), observer_params(dob, loop_rate_hz), engine::Vec3{0.0, 0.25, 0.0},
-          dob.max_force() > 0.0 ? dob.max_force() : 10.0,
-          !dob.has_disturbance_observer() || dob.disturbance_observer()));
+      const engine::Parallel2DofParams plant = parallel_params(dob);
+      const engine::DisturbanceObserverParams observer = observer_params(dob, loop_rate_hz);
+      const engine::Vec3 initial{0.0, 0.25, 0.0};
+      const bool observer_enabled = !dob.has_disturbance_observer() || dob.disturbance_observer();
+      return {std::make_unique<runtime::SimulatedDobDevice>(
+                  plant, initial, dob.max_force() > 0.0 ? dob.max_force() : 10.0, observer_enabled,
+                  observer.nominal_mass, observer.nominal_damping),
+              std::make_unique<runtime::ParallelDobModel>(plant, observer, initial, observer_enabled)};
     }
     case v1::DeviceConfig::kSimulatedPointMass:
     case v1::DeviceConfig::DEVICE_NOT_SET:
@@ -337,8 +344,10 @@ SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz)
   params.substeps = mass.substeps();
   params.workspace_min = schema::to_engine(mass.workspace_min());
   params.workspace_max = schema::to_engine(mass.workspace_max());
-  return adopt(std::make_unique<runtime::SimulatedPointMassDevice>(
-      params, engine::PointMassState{schema::to_engine(mass.initial_position()), {}}, mass.max_force()));
+  return {std::make_unique<runtime::SimulatedPointMassDevice>(
+              params, engine::PointMassState{schema::to_engine(mass.initial_position()), {}},
+              mass.max_force()),
+          std::make_unique<runtime::CartesianModel>()};
 }
 
 SimulatedDevice make_device(const v1::ServerConfig& config) {
@@ -361,7 +370,7 @@ std::vector<runtime::TickPort> tick_ports(const v1::ServerConfig& config,
   std::vector<runtime::TickPort> ports;
   for (std::size_t i = 0; i < devices.size(); ++i) {
     runtime::Device& device = *devices[i].device;
-    runtime::TickPort port{&device, rings[i], {}, std::nullopt};
+    runtime::TickPort port{&device, devices[i].model.get(), rings[i], {}, std::nullopt};
     port.limits = engine::force_limits_for(device.description().max_force);
     const v1::PassivityConfig& passivity = config.passivity();
     const double device_mass = device.description().apparent_mass;

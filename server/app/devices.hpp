@@ -2,7 +2,6 @@
 // The simulated devices a configuration can ask for, built from their configuration messages:
 // port 0's from ServerConfig's top-level device fields, ports 1.. from extra_devices.
 
-#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -11,6 +10,8 @@
 #include "engine/operator/simulated_hand.hpp"
 #include "haptic/v1/config.pb.h"
 #include "runtime/device.hpp"
+#include "runtime/device_model.hpp"
+#include "runtime/simulated_device.hpp"
 #include "runtime/tick_runner.hpp"
 
 namespace haptic::app {
@@ -44,9 +45,10 @@ std::string validate_device(const v1::ServerConfig& config);
 /// simulated_five_bar, simulated_joystick or simulated_parallel_dob is present.
 v1::DeviceConfig primary_device(const v1::ServerConfig& config);
 
+/// A simulated device and the model the loop runs it with.
 struct SimulatedDevice {
-  std::unique_ptr<runtime::Device> device;
-  std::function<void(const engine::HandInput&)> set_hand;  // the simulated operator's input
+  std::unique_ptr<runtime::SimulatedDevice> device;
+  std::unique_ptr<runtime::DeviceModel> model;
 };
 
 /// The device `config` names (one must be set), for a loop at `loop_rate_hz` (Hz).

@@ -121,7 +121,7 @@ Server::Server(const v1::ServerConfig& config)
     throw std::runtime_error(e);
   }
   // Every simulated hand starts with the configured input.
-  for (const SimulatedDevice& simulated : simulated_) simulated.set_hand(hand);
+  for (const SimulatedDevice& simulated : simulated_) simulated.device->set_hand(hand);
 
   const std::uint32_t udp_port = config.udp_port();
   if (udp_port > 65535) throw std::runtime_error("udp_port: out of range");
@@ -130,7 +130,8 @@ Server::Server(const v1::ServerConfig& config)
   std::vector<net::DevicePort> service_ports;
   for (std::uint32_t i = 0; i < ports; ++i) {
     service_ports.push_back(net::DevicePort{samples_[i].get(), &simulated_[i].device->description(),
-                                            simulated_[i].set_hand});
+                                            [device = simulated_[i].device.get()](
+                                                const engine::HandInput& hand) { device->set_hand(hand); }});
   }
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,

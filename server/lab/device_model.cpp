@@ -8,10 +8,6 @@
 
 #include "app/config.hpp"
 #include "app/devices.hpp"
-#include "engine/device/five_bar.hpp"
-#include "engine/device/gimbal_joystick.hpp"
-#include "runtime/simulated_five_bar_device.hpp"
-#include "runtime/simulated_joystick_device.hpp"
 
 namespace haptic::lab {
 namespace {
@@ -76,37 +72,6 @@ void from_joint_space(const Matrix& jacobian, const Matrix& inertia, const Matri
   model.damping = model.axis_damping[best];
 }
 
-/// 003: D(q) of eq. 4.10 with the hub inertia (FiveBarPlant::mass_matrix), Table 5.4's viscous B
-/// per joint, J(q) of eq. 3.120, at the configured initial pose.
-void five_bar_model(const runtime::SimulatedFiveBarDevice& device, const std::string& where,
-                    DeviceModel& model) {
-  const engine::FiveBarPlant& plant = device.plant();
-  const engine::FiveBarJoints& q = plant.state().q;
-  Matrix damping{};
-  for (int i = 0; i < 3; ++i) damping[i][i] = plant.params().friction[i].viscous;
-  from_joint_space(engine::five_bar_jacobian(plant.params(), q), plant.mass_matrix(q), damping, where,
-                   model);
-}
-
-/// 004: eq. 3.27's diagonal inertia (I_θ, I_Φ) and the shaft's motor and load sides taken as one
-/// rigid body, M_m + M_s (L935; the sum that puts eq. 4.5's breakpoint at 41 rad/s, L940) — the
-/// cable's own mode, √(k_t (1/M_m + 1/M_s)) ≈ 1000 rad/s, is not modelled here — through
-/// ∂x/∂(θ, Φ, R) of eq. 3.13. The plant has no viscous friction (Coulomb friction and brakes only,
-/// which Colgate's bound does not credit), so B_q = 0.
-void joystick_model(const runtime::SimulatedJoystickDevice& device, const std::string& where,
-                    DeviceModel& model) {
-  namespace js = engine::joystick_state;
-  const engine::GimbalJoystickPlant& plant = device.plant();
-  const engine::GimbalJoystickParams& p = plant.params();
-  const engine::JoystickState& x = plant.state();
-  Matrix inertia{};
-  inertia[0][0] = p.I_theta;
-  inertia[1][1] = p.I_phi;
-  inertia[2][2] = p.M_m + p.M_s;
-  from_joint_space(engine::joystick_jacobian_R(x[js::kTheta], x[js::kPhi], x[js::kR]), inertia, Matrix{},
-                   where, model);
-}
-
 }  // namespace
 
 DeviceModel device_model(const v1::ServerConfig& given, const std::string& source) {
@@ -116,7 +81,7 @@ DeviceModel device_model(const v1::ServerConfig& given, const std::string& sourc
     throw std::invalid_argument(source + ": " + error);
   }
   std::vector<app::SimulatedDevice> devices = app::make_devices(config);
-  const runtime::Device& device = *devices.front().device;
+  const runtime::SimulatedDevice& device = *devices.front().device;
   const runtime::DeviceDescription& description = device.description();
   DeviceModel model;
   model.source = source;
@@ -128,10 +93,8 @@ DeviceModel device_model(const v1::ServerConfig& given, const std::string& sourc
     model.method = "description";
     model.mass = description.apparent_mass;
     model.damping = description.apparent_damping;
-  } else if (const auto* five_bar = dynamic_cast<const runtime::SimulatedFiveBarDevice*>(&device)) {
-    five_bar_model(*five_bar, where, model);
-  } else if (const auto* joystick = dynamic_cast<const runtime::SimulatedJoystickDevice*>(&device)) {
-    joystick_model(*joystick, where, model);
+  } else if (const auto dynamics = device.joint_space_dynamics()) {
+    from_joint_space(dynamics->jacobian, dynamics->inertia, dynamics->damping, where, model);
   } else {
     throw std::invalid_argument(where + " gives no apparent mass at its tool point; give --mass and "
                                 "--damping instead of --device");

@@ -1,5 +1,6 @@
 #include "lab/lab_run.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -11,10 +12,6 @@
 #include "haptic/wire/datagram.hpp"
 #include "schema/scene_specs.hpp"
 #include "runtime/loop_stats.hpp"
-#include "runtime/simulated_dc_motor_device.hpp"
-#include "runtime/simulated_dob_device.hpp"
-#include "runtime/simulated_five_bar_device.hpp"
-#include "runtime/simulated_joystick_device.hpp"
 #include "runtime/tick_runner.hpp"
 
 namespace haptic::lab {
@@ -45,30 +42,14 @@ engine::SceneDescription initial_scene(const v1::ServerConfig& config, const sch
 }
 
 /// The joint state of a document device's plant (JointState's table); count 0 for a device
-/// without one (the point mass: the caller fills in its Cartesian state from the sample).
-JointState plant_joints(const runtime::Device& device) {
+/// without one.
+JointState plant_joints(const runtime::SimulatedDevice& device) {
+  runtime::JointVector q{}, q_dot{};
   JointState out;
-  if (const auto* motor = dynamic_cast<const runtime::SimulatedDcMotorDevice*>(&device)) {
-    const double r = motor->plant().params().r;  // θ_L = r θ_m (000 eq. 3.1a)
-    out.count = 1;
-    out.q[0] = r * motor->plant().state().theta_m;
-    out.q_dot[0] = r * motor->plant().state().omega_m;
-  } else if (const auto* dob = dynamic_cast<const runtime::SimulatedDobDevice*>(&device)) {
-    const auto& s = dob->plant().state();
-    const engine::Parallel2DofKinematics k = dob->plant().kinematics({s[0], s[1]}, {s[2], s[3]});
-    out.count = 2;
-    out.q = {k.q.x, k.q.y, 0.0};
-    out.q_dot = {k.q_dot.x, k.q_dot.y, 0.0};
-  } else if (const auto* five_bar = dynamic_cast<const runtime::SimulatedFiveBarDevice*>(&device)) {
-    out.count = 3;
-    out.q = five_bar->plant().state().q;
-    out.q_dot = five_bar->plant().state().qdot;
-  } else if (const auto* joystick = dynamic_cast<const runtime::SimulatedJoystickDevice*>(&device)) {
-    namespace js = engine::joystick_state;
-    const auto& x = joystick->plant().state();
-    out.count = 3;
-    out.q = {x[js::kTheta], x[js::kPhi], x[js::kR]};
-    out.q_dot = {x[js::kThetaDot], x[js::kPhiDot], x[js::kRDot]};
+  out.count = std::min<std::uint32_t>(device.plant_joints(q, q_dot), 3);
+  for (std::uint32_t i = 0; i < out.count; ++i) {
+    out.q[i] = q[i];
+    out.q_dot[i] = q_dot[i];
   }
   return out;
 }
@@ -105,7 +86,7 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
     throw std::invalid_argument(e);
   }
   for (auto& device : devices) {
-    if (device.set_hand) device.set_hand(hand);
+    device.device->set_hand(hand);
   }
   runtime::SceneExchange scenes(std::make_unique<const engine::CompiledScene>(engine::compile_scene(
       description, 50, 1, period_s, config.session_force_budget(), ports)));
@@ -140,11 +121,6 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
       record.energy_to_device_j = given_j[p];
       record.energy_from_device_j = taken_j[p];
       record.joints = joints[p];
-      if (record.joints.count == 0) {  // the point mass: its Cartesian axes are its joints
-        record.joints.count = 3;
-        record.joints.q = {s.p_WT.x, s.p_WT.y, s.p_WT.z};
-        record.joints.q_dot = {s.v_WT.x, s.v_WT.y, s.v_WT.z};
-      }
       // The loop publishes the last good reading when a plant fails, so its joints tell.
       bool finite = engine::is_finite(s.p_WT) && engine::is_finite(s.v_WT) && engine::is_finite(s.F_T_W);
       for (std::uint32_t j = 0; j < record.joints.count; ++j) {

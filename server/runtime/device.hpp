@@ -3,6 +3,8 @@
 // interface (after ros2_control's hardware interface: a lifecycle, then real-time read/write that
 // return a status and never throw).
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -12,18 +14,53 @@ namespace haptic::runtime {
 
 enum class DeviceStatus : std::uint8_t { kOk, kError };
 
-/// What a device reports once per tick. Frames: W (device world), T (tool point).
+/// Most joints a device reads and commands (actuated, braked or only measured).
+inline constexpr std::size_t kMaxJoints = 6;
+
+/// One value per joint, in the device's joint order; entries past DeviceDescription::joints are 0.
+/// Units per joint: rad (revolute) or m (prismatic), and their rates and efforts (N·m or N).
+using JointVector = std::array<double, kMaxJoints>;
+
+/// What the device's sensors give once per tick, at the joints: encoders, tachometers, torque or
+/// force sensors, buttons. Nothing here is computed from a model; the DeviceModel turns it into
+/// the tool point's state.
 struct DeviceReading {
-  engine::Vec3 p_WT;  // Unit: m.
-  engine::Vec3 v_WT;  // Unit: m/s.
-  /// The device holds its safe state (a tripped watchdog: motors off, brakes on) although the
-  /// reading is good: the loop treats the tick as a device fault (zero force, DEVICE_FAULT flag
-  /// and event) but still publishes this reading.
+  JointVector q{};      // Joint positions as measured (encoder counts applied).
+  /// Joint rates where the device measures them (tachometers; capabilities.measured_rates), else 0
+  /// and the model estimates them from q.
+  JointVector q_dot{};
+  /// The operator's effort at each joint as joint-torque sensors (strain gauges) measure it; 0
+  /// without them.
+  JointVector tau_sensor{};
+  /// The operator's force on the handle as a handle load cell measures it, in W. Unit: N. 0
+  /// without one (capabilities.force_sensor).
+  engine::Vec3 F_sensor_W;
+  /// Pressed buttons, bit i for button i (DeviceDescription::buttons of them).
+  std::uint32_t buttons = 0;
+  /// The device holds its own safe state (a hardware watchdog or an emergency stop: motors off,
+  /// brakes on) although the reading is good: the loop treats the tick as a device fault (zero
+  /// force, DEVICE_FAULT flag and event) but still publishes where the device is.
   bool safe_state = false;
 };
 
-/// What the loop commands once per tick.
+/// What the loop commands once per tick, at the joints: held over the tick (zero-order hold).
 struct DeviceCommand {
+  JointVector tau{};    // Actuator effort per joint: N·m or N.
+  /// Brake effort limit per joint, >= 0 (devices with brakes; capabilities.brakes): N·m or N.
+  JointVector brake{};
+};
+
+/// The tool point's state the model computes from a reading. Frames: W (device world), T (tool).
+struct ToolReading {
+  engine::Vec3 p_WT;  // Unit: m.
+  engine::Vec3 v_WT;  // Unit: m/s.
+  /// A device or model safe state (see DeviceReading::safe_state and DeviceModel).
+  bool safe_state = false;
+  std::uint32_t buttons = 0;
+};
+
+/// The force the scene asks of the tool point.
+struct ToolCommand {
   engine::Vec3 F_T_W;  // Force on the tool, in W. Unit: N.
 };
 
@@ -39,6 +76,7 @@ struct DeviceCapabilities {
   bool quantized_position = false;  // Positions come from encoder counts.
   bool state_estimator = false; // Velocities come from an observer rather than differences.
   bool disturbance_observer = false;  // Axes are shaped to a nominal model by a DOB.
+  bool measured_rates = false;  // Joint rates come from tachometers (DeviceReading::q_dot).
 };
 
 struct DeviceDescription {
@@ -46,7 +84,9 @@ struct DeviceDescription {
   /// Configuration name of the model ("point_mass", "dc_motor_000", "five_bar_003", …).
   std::string model;
   DeviceCapabilities capabilities;
-  std::uint32_t dof = 3;
+  std::uint32_t dof = 3;     // Degrees of freedom of the tool point.
+  std::uint32_t joints = 3;  // Entries of the JointVectors read and written, <= kMaxJoints.
+  std::uint32_t buttons = 0; // Buttons reported in DeviceReading::buttons.
   engine::Vec3 workspace_min;  // Unit: m.
   engine::Vec3 workspace_max;  // Unit: m.
   double max_force = 0.0;      // Unit: N.
@@ -57,6 +97,9 @@ struct DeviceDescription {
   double apparent_damping = 0.0;
 };
 
+/// A device at its joints: a plant and its sensors and actuators, simulated or real. Everything
+/// that needs a model of the device (kinematics, Jᵀ, gravity compensation, brake rule, watchdog,
+/// estimators) is its DeviceModel's, run by the loop as stages of the tick.
 class Device {
  public:
   virtual ~Device() = default;
@@ -68,14 +111,15 @@ class Device {
   virtual DeviceStatus start() = 0;
   virtual void stop() = 0;
 
-  /// On the loop. `dt` is the tick period (s): a simulated device advances its plant by dt in
-  /// write(), so the next read() sees the state one period later (a zero-order hold of the command).
+  /// On the loop: the sensors now. Must not allocate, lock or throw.
   virtual DeviceStatus read(DeviceReading& reading) = 0;
+  /// On the loop: `command` held for the tick of `dt` seconds. A simulated device advances its
+  /// plant by dt here, so the next read() sees the state one period later. A non-finite effort is
+  /// an error: the device applies none that tick.
   virtual DeviceStatus write(const DeviceCommand& command, double dt) = 0;
 
-  /// On the loop, when a read or write has failed: motors to zero torque, brakes on where the
-  /// device has them. The loop goes on commanding zero force while the fault lasts; a device that
-  /// latches its safe state (a tripped watchdog) leaves it only when re-armed. Must not throw.
+  /// On the loop, when a read or write has failed: motors to zero, brakes on where the device
+  /// has them. Must not throw.
   virtual void enter_safe_state() {}
 };
 

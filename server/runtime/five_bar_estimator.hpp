@@ -1,6 +1,6 @@
 #pragma once
 // Madill's non-linear state estimator (1998, ch. 6.3; engine/control/state_estimator) on each joint
-// of the five-bar, as the five-bar device's velocity source (runtime/simulated_five_bar_device).
+// of the five-bar, as the five-bar model's velocity source (runtime/five_bar_model).
 //
 // The thesis designs it for the axial joint q1 only (L3061–3129: J, B of Table 5.4, Q = diag(1, 41.6),
 // R = 0.1, f0 = 0.061 N·m, v0 = 0.03 rad/s). At haptic speeds each joint is a decoupled SISO plant
@@ -10,7 +10,7 @@
 // joint torque and the operator's joint torque, as L3230 prescribes.
 
 #include "engine/control/state_estimator.hpp"
-#include "runtime/simulated_five_bar_device.hpp"
+#include "runtime/five_bar_model.hpp"
 
 namespace haptic::runtime {
 

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <utility>
 
 namespace haptic::runtime {
 namespace {
@@ -21,6 +20,7 @@ SimulatedFiveBarDevice::SimulatedFiveBarDevice(const engine::FiveBarParams& para
                                                const engine::FiveBarState& initial,
                                                const SimulatedFiveBarOptions& options)
     : options_(options), plant_(params, initial, options.plant) {
+  description_.joints = 3;
   description_.name = "simulated five-bar haptic device (003, Madill 1998, balanced, decoupled)";
   description_.model = "five_bar_003";
   description_.capabilities.gravity = false;  // counterbalanced (L2371–2380)
@@ -46,7 +46,7 @@ SimulatedFiveBarDevice::SimulatedFiveBarDevice(const engine::FiveBarParams& para
   }
   description_.workspace_min = lo;
   description_.workspace_max = hi;
-  difference_.cutoff = options.velocity_cutoff;
+  description_.capabilities.state_estimator = options.state_estimator;
   set_plant_state(initial);
 }
 
@@ -58,42 +58,49 @@ void SimulatedFiveBarDevice::set_plant_state(const engine::FiveBarState& state) 
   plant_.set_state(state);
   plant_.set_mode_state({});
   q_measured_ = measure(state.q);
-  qdot_estimate_ = {};
-  difference_.reset(q_measured_);
-  if (estimator_) estimator_->reset(q_measured_);
 }
 
-void SimulatedFiveBarDevice::set_velocity_estimator(
-    std::unique_ptr<FiveBarVelocityEstimator> estimator) {
-  estimator_ = std::move(estimator);
-  description_.capabilities.state_estimator = estimator_ != nullptr;
-  if (estimator_) estimator_->reset(q_measured_);
+bool SimulatedFiveBarDevice::state_finite() const {
+  const engine::FiveBarState& s = plant_.state();
+  const engine::FiveBarModeState& mode = plant_.mode_state();
+  return finite(s.q) && finite(s.qdot) && std::isfinite(mode.eta) && std::isfinite(mode.eta_dot);
+}
+
+std::uint32_t SimulatedFiveBarDevice::plant_joints(JointVector& q, JointVector& q_dot) const {
+  const engine::FiveBarState& s = plant_.state();
+  q = {s.q[0], s.q[1], s.q[2]};
+  q_dot = {s.qdot[0], s.qdot[1], s.qdot[2]};
+  return 3;
+}
+
+std::optional<JointSpaceDynamics> SimulatedFiveBarDevice::joint_space_dynamics() const {
+  const engine::FiveBarJoints& q = plant_.state().q;
+  JointSpaceDynamics out;
+  out.inertia = plant_.mass_matrix(q);
+  for (std::size_t i = 0; i < 3; ++i) out.damping[i][i] = plant_.params().friction[i].viscous;
+  out.jacobian = engine::five_bar_jacobian(plant_.params(), q);
+  return out;
 }
 
 DeviceStatus SimulatedFiveBarDevice::read(DeviceReading& reading) {
-  const engine::FiveBarParams& p = plant_.params();
-  // What the encoders give: the rigid tip of the measured joints, without link 5's deflection.
-  reading.p_WT = engine::five_bar_tip_position(p, q_measured_);
-  const engine::FiveBarMatrix J = engine::five_bar_jacobian(p, q_measured_);
-  const engine::FiveBarJoints& w = qdot_estimate_;
-  reading.v_WT = {J[0][0] * w[0] + J[0][1] * w[1] + J[0][2] * w[2],
-                  J[1][0] * w[0] + J[1][1] * w[1] + J[1][2] * w[2],
-                  J[2][0] * w[0] + J[2][1] * w[1] + J[2][2] * w[2]};
-  const engine::FiveBarState& s = plant_.state();
-  const engine::FiveBarModeState& mode = plant_.mode_state();
-  return finite(reading.p_WT) && finite(reading.v_WT) && finite(s.q) && finite(s.qdot) &&
-                 std::isfinite(mode.eta) && std::isfinite(mode.eta_dot)
-             ? DeviceStatus::kOk
-             : DeviceStatus::kError;
+  if (!state_finite()) return DeviceStatus::kError;
+  reading.q = {q_measured_[0], q_measured_[1], q_measured_[2]};
+  // The strain gauges: the operator's force where the hand holds the tip, through Jᵀ(q).
+  double t = 0.0;
+  const engine::HandInput& hand = hand_.begin_tick(t);
+  engine::Vec3 p_WT, v_WT;
+  plant_.physical_tip_state(p_WT, v_WT);
+  const engine::FiveBarJoints tau_user =
+      engine::five_bar_joint_torque(plant_.params(), plant_.state().q, engine::hand_force(hand, p_WT, v_WT, t));
+  reading.tau_sensor = {tau_user[0], tau_user[1], tau_user[2]};
+  return DeviceStatus::kOk;
 }
 
 DeviceStatus SimulatedFiveBarDevice::write(const DeviceCommand& command, double dt) {
-  const engine::FiveBarParams& p = plant_.params();
   // A non-finite command is a fault: the tick runs with zero motor torque.
-  const bool command_ok = finite(command.F_T_W);
-  const engine::FiveBarJoints tau =
-      command_ok ? engine::five_bar_joint_torque(p, q_measured_, command.F_T_W)
-                 : engine::FiveBarJoints{};
+  const engine::FiveBarJoints tau_command{command.tau[0], command.tau[1], command.tau[2]};
+  const bool command_ok = finite(tau_command);
+  const engine::FiveBarJoints tau = command_ok ? tau_command : engine::FiveBarJoints{};
   double t = 0.0;
   const engine::HandInput& hand = hand_.begin_tick(t);
   const auto hand_on_tip = [&](const engine::Vec3& p_WT, const engine::Vec3& v_WT) {
@@ -101,23 +108,9 @@ DeviceStatus SimulatedFiveBarDevice::write(const DeviceCommand& command, double 
   };
   plant_.step(tau, dt, hand_on_tip, engine::hand_mass(hand));
   hand_.end_tick(dt);
-
-  const engine::FiveBarState& s = plant_.state();
-  const engine::FiveBarModeState& mode = plant_.mode_state();
-  if (!finite(s.q) || !finite(s.qdot) || !std::isfinite(mode.eta) || !std::isfinite(mode.eta_dot)) {
-    return DeviceStatus::kError;
-  }
-  q_measured_ = measure(s.q);
-  if (estimator_) {
-    engine::Vec3 p_WT, v_WT;
-    plant_.physical_tip_state(p_WT, v_WT);  // where the hand holds it
-    const engine::FiveBarJoints tau_user =
-        engine::five_bar_joint_torque(p, s.q, engine::hand_force(hand, p_WT, v_WT, t + dt));
-    qdot_estimate_ = estimator_->update(q_measured_, plant_.applied_torque(), tau_user, dt);
-  } else {
-    qdot_estimate_ = difference_.update(q_measured_, dt);
-  }
-  return command_ok && finite(qdot_estimate_) ? DeviceStatus::kOk : DeviceStatus::kError;
+  if (!state_finite()) return DeviceStatus::kError;
+  q_measured_ = measure(plant_.state().q);
+  return command_ok ? DeviceStatus::kOk : DeviceStatus::kError;
 }
 
 }  // namespace haptic::runtime

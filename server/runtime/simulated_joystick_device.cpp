@@ -1,6 +1,7 @@
 #include "runtime/simulated_joystick_device.hpp"
 
 #include <cassert>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -43,8 +44,7 @@ std::string SimulatedJoystickConfig::validate() const {
 
 SimulatedJoystickDevice::SimulatedJoystickDevice(const SimulatedJoystickConfig& config)
     : config_(config),
-      plant_(config.params, config.integration, config.initial),
-      watchdog_(config.watchdog) {
+      plant_(config.params, config.integration, config.initial) {
   assert(config.validate().empty());
   const engine::GimbalJoystickParams& p = config.params;
   description_.name =
@@ -53,7 +53,9 @@ SimulatedJoystickDevice::SimulatedJoystickDevice(const SimulatedJoystickConfig& 
   description_.capabilities.gravity = false;
   description_.capabilities.brakes = true;
   description_.capabilities.friction = true;
+  description_.capabilities.measured_rates = true;
   description_.dof = 3;
+  description_.joints = 3;
   // The handle's bounding box over |θ|, |Φ| ≤ gimbal limit g and R in [R_min, R_max] (eq. 3.3):
   // |x|, |y| peak at the other angle zero (R_max sin g); z is least at both angles ±g.
   const double sg = std::sin(p.gimbal_limit), cg = std::cos(p.gimbal_limit);
@@ -86,82 +88,69 @@ void SimulatedJoystickDevice::fill_safe_command() {
   }
 }
 
-void SimulatedJoystickDevice::enter_safe_state() {
-  safe_ = true;
-  fill_safe_command();
+void SimulatedJoystickDevice::enter_safe_state() { fill_safe_command(); }
+
+std::uint32_t SimulatedJoystickDevice::plant_joints(JointVector& q, JointVector& q_dot) const {
+  namespace js = engine::joystick_state;
+  const engine::JoystickState& x = plant_.state();
+  q[0] = x[js::kTheta];
+  q[1] = x[js::kPhi];
+  q[2] = x[js::kR];
+  q_dot[0] = x[js::kThetaDot];
+  q_dot[1] = x[js::kPhiDot];
+  q_dot[2] = x[js::kRDot];
+  return 3;
 }
 
-bool SimulatedJoystickDevice::rearm() {
-  if (!state_finite()) return false;
-  watchdog_.rearm();
-  safe_ = false;
-  command_ = {};  // the original releases the brakes on the button press (L1955)
-  return true;
-}
-
-void SimulatedJoystickDevice::check_watchdog() {
-  const engine::Vec3 rates = plant_.measured_joint_rates();
-  // Tachometers: θ̇, Φ̇ in rad/s and the shaft in m/s (Ṙ = r Ψ̇).
-  if (watchdog_.check(rates.x, rates.y, config_.params.r * rates.z) && !safe_) enter_safe_state();
+std::optional<JointSpaceDynamics> SimulatedJoystickDevice::joint_space_dynamics() const {
+  namespace js = engine::joystick_state;
+  const engine::GimbalJoystickParams& p = plant_.params();
+  const engine::JoystickState& x = plant_.state();
+  JointSpaceDynamics out;
+  out.inertia[0][0] = p.I_theta;
+  out.inertia[1][1] = p.I_phi;
+  out.inertia[2][2] = p.M_m + p.M_s;
+  out.jacobian = engine::joystick_jacobian_R(x[js::kTheta], x[js::kPhi], x[js::kR]);
+  return out;
 }
 
 DeviceStatus SimulatedJoystickDevice::read(DeviceReading& reading) {
-  const engine::GimbalJoystickParams& p = config_.params;
-  const engine::Vec3 q = plant_.measured_joints();
-  const engine::Vec3 q_dot = plant_.measured_joint_rates();
-  reading.p_WT = engine::joystick_forward({q.x, q.y, p.r * q.z});
-  reading.v_WT = engine::joystick_multiply(engine::joystick_jacobian(q.x, q.y, q.z, p.r), q_dot);
-  if (!state_finite() || !engine::is_finite(reading.p_WT) || !engine::is_finite(reading.v_WT)) {
-    enter_safe_state();
+  if (!state_finite()) {
+    fill_safe_command();
     return DeviceStatus::kError;
   }
-  check_watchdog();
-  reading.safe_state = safe_;
+  const engine::Vec3 q = plant_.measured_joints();
+  const engine::Vec3 q_dot = plant_.measured_joint_rates();
+  reading.q[0] = q.x;
+  reading.q[1] = q.y;
+  reading.q[2] = q.z;
+  reading.q_dot[0] = q_dot.x;
+  reading.q_dot[1] = q_dot.y;
+  reading.q_dot[2] = q_dot.z;
+  // The load cell: the hand's force on the handle at the start of the tick.
+  double t = 0.0;
+  const engine::HandInput& hand = hand_.begin_tick(t);
+  engine::Vec3 p_WT, v_WT;
+  plant_.handle_state(plant_.state(), p_WT, v_WT);
+  reading.F_sensor_W = engine::hand_force(hand, p_WT, v_WT, t);
   return DeviceStatus::kOk;
-}
-
-void SimulatedJoystickDevice::rearm_when_at_rest(double dt) {
-  if (!safe_ || config_.rearm_after_s <= 0.0) {
-    at_rest_s_ = 0.0;
-    return;
-  }
-  const engine::Vec3 rates = plant_.measured_joint_rates();
-  const engine::JoystickWatchdogLimits& limits = config_.watchdog;
-  const bool still = std::abs(rates.x) < 0.1 * limits.gimbal_rate &&
-                     std::abs(rates.y) < 0.1 * limits.gimbal_rate &&
-                     std::abs(config_.params.r * rates.z) < 0.1 * limits.shaft_speed;
-  at_rest_s_ = still ? at_rest_s_ + dt : 0.0;
-  if (at_rest_s_ >= config_.rearm_after_s && rearm()) at_rest_s_ = 0.0;
 }
 
 DeviceStatus SimulatedJoystickDevice::write(const DeviceCommand& command, double dt) {
   double t = 0.0;
   const engine::HandInput& hand = hand_.begin_tick(t);
   const engine::GimbalJoystickParams& p = config_.params;
-  // A NaN is a fault: brakes on at once, and the write reports the error like every device's.
-  const bool command_ok = engine::is_finite(command.F_T_W);
-  if (!safe_ && !command_ok) enter_safe_state();
-  if (safe_) {
-    fill_safe_command();
-  } else {
-    const engine::Vec3 q = plant_.measured_joints();
-    const engine::Vec3 q_dot = plant_.measured_joint_rates();
-    const engine::JoystickMatrix J = engine::joystick_jacobian(q.x, q.y, q.z, p.r);
-    const engine::Vec3 tau = engine::joystick_multiply_transposed(J, command.F_T_W);  // eq. 3.18
-    // The load cell's view of the hand at the start of the tick, as joint torques (eq. 3.20).
-    engine::Vec3 p_WT, v_WT;
-    plant_.handle_state(plant_.state(), p_WT, v_WT);
-    const engine::Vec3 tau_user =
-        engine::joystick_multiply_transposed(J, engine::hand_force(hand, p_WT, v_WT, t));
-    const double taus[3] = {tau.x, tau.y, tau.z};
-    const double rates[3] = {q_dot.x, q_dot.y, q_dot.z};
-    const double users[3] = {tau_user.x, tau_user.y, tau_user.z};
+  bool command_ok = true;
+  for (std::size_t i = 0; i < 3; ++i) {
+    command_ok = command_ok && std::isfinite(command.tau[i]) && std::isfinite(command.brake[i]);
+  }
+  if (command_ok) {
     for (std::size_t i = 0; i < 3; ++i) {
-      const engine::HybridRuleParams rule{p.brake_limit(i), config_.rule_stick_velocity};
-      const engine::HybridSplit split = engine::split_hybrid(taus[i], rates[i], users[i], rule);
-      command_.motor[i] = engine::saturate(split.motor, p.motor_limit(i));
-      command_.brake[i] = split.brake;
+      command_.motor[i] = command.tau[i];
+      command_.brake[i] = std::clamp(command.brake[i], 0.0, p.brake_limit(i));
     }
+  } else {
+    fill_safe_command();  // a NaN is a fault: brakes on for this tick
   }
   plant_.step(
       command_, dt,
@@ -171,11 +160,9 @@ DeviceStatus SimulatedJoystickDevice::write(const DeviceCommand& command, double
       engine::hand_mass(hand));
   hand_.end_tick(dt);
   if (!state_finite()) {
-    enter_safe_state();
+    fill_safe_command();
     return DeviceStatus::kError;
   }
-  check_watchdog();
-  rearm_when_at_rest(dt);
   return command_ok ? DeviceStatus::kOk : DeviceStatus::kError;
 }
 

@@ -1,31 +1,23 @@
 #pragma once
-// Document 004's joystick (Russo 1990) as a hapticd device: two gimbal rings and a cable-driven
+// Document 004's joystick (Russo 1990) as a simulated device: two gimbal rings and a cable-driven
 // shaft, a motor and a magnetic-particle brake on every axis (engine/device/gimbal_joystick),
-// held at the handle by the simulated operator.
+// held at the handle by the simulated operator. JoystickModel (kinematics, Jᵀ, the brake rule and
+// the watchdog) is its model.
 //
-// Frames: W has its origin at the gimbal centre and z along the shaft at θ = Φ = 0 (eq. 3.1); the
-// tool point T is the handle, p_WT = R n_s(θ, Φ) (eq. 3.3). The reading is what the sensors give:
-// encoders and tachometers on the drive shafts (θ, Φ, Ψ), so R = r Ψ is the motor side of the
-// cable — the handle differs from it by the cable stretch (≤ 0.883 N·m / r / k_t ≈ 1.1 mm).
-//
-// A command F_T_W becomes joint torques τ = Jᵀ F (eq. 3.18, J at the measured joints), split per
-// axis by the hybrid power rule (engine/control/brake_rule: brakes take what flows in, motors
-// what flows out; near rest the hand's force on the handle, as the load cell would measure it,
-// decides). The hand's force for that decision is the one at the start of the tick.
-// Safety (L510, L1930): the watchdog checks the tachometers every tick; a trip, a non-finite state
-// or enter_safe_state() puts the device in its safe state — motors zero, brakes at their limits —
-// until rearm(). read() returns kError while the state is non-finite.
+// The reading is what the sensors give: encoders and tachometers on the drive shafts (θ, Φ, Ψ;
+// rad, rad/s) and the handle's load cell (the hand's force at the start of the tick, in W). The
+// command is the motors' torques and the brakes' clamping torques (N·m), held over the tick; a
+// non-finite command, or enter_safe_state(), gives that tick motors zero and brakes at their
+// limits. read() returns kError while the state is non-finite.
 
 #include <array>
 #include <cstdint>
 
-#include "engine/control/brake_rule.hpp"
-#include "engine/control/joystick_watchdog.hpp"
 #include "engine/core/integrator.hpp"
 #include "engine/device/gimbal_joystick.hpp"
 #include "engine/operator/simulated_hand.hpp"
-#include "runtime/device.hpp"
-#include "runtime/simulated_operator.hpp"
+#include "runtime/joystick_model.hpp"
+#include "runtime/simulated_device.hpp"
 
 namespace haptic::runtime {
 
@@ -34,63 +26,55 @@ struct SimulatedJoystickConfig {
   engine::IntegrationSettings integration{engine::Integrator::kRk4, 10};
   engine::JoystickPose initial{0.0, 0.0, 0.24};  // Unit: rad, rad, m (mid-stroke).
   engine::JoystickWatchdogLimits watchdog;
-  /// Below this joint speed the hand's force decides motor or brake. Unit: rad/s (Ψ: rad/s of the
-  /// drive pulley; 1e-3 rad/s there is ≈ 10 µm/s of shaft).
+  /// See JoystickModelParams. Unit: rad/s.
   double rule_stick_velocity = 1e-3;
   /// Force at the tool the scene may ask for. Unit: N. [I] the motors' limit at mid-stroke R:
   /// 1.78 N·m / 0.24 m ≈ 7.4 N.
   double max_force = 7.0;
-  /// After a trip, re-arm once every axis has stayed below a tenth of its watchdog limit for this
-  /// long — the simulated operator's press of the re-arm button (L1955). 0: never (re-arm()
-  /// only). Unit: s.
+  /// See JoystickModelParams. Unit: s.
   double rearm_after_s = 1.0;
 
   /// Empty when usable; otherwise one message naming the bad field ("params.M_s: …").
   std::string validate() const;
+  /// The model's part.
+  JoystickModelParams model() const {
+    return {params, watchdog, rule_stick_velocity, rearm_after_s};
+  }
 };
 
-class SimulatedJoystickDevice final : public Device {
+class SimulatedJoystickDevice final : public SimulatedDevice {
  public:
   /// `config` must validate.
   explicit SimulatedJoystickDevice(const SimulatedJoystickConfig& config);
 
-  const DeviceDescription& description() const override { return description_; }
   DeviceStatus start() override;
   void stop() override;
   DeviceStatus read(DeviceReading& reading) override;
+  /// tau: the motors' torques; brake: the brakes' (clamped into [0, limit]). Units: N·m.
   DeviceStatus write(const DeviceCommand& command, double dt) override;
-
-  /// Motors to zero and brakes to their limits, from now until rearm() (the server calls this on
-  /// any device fault). On the loop: no allocation.
+  /// Motors to zero and brakes to their limits until the next write. On the loop: no allocation.
   void enter_safe_state() override;
-  /// Leaves the safe state and clears the watchdog (the original's button press, L1951); refused
-  /// (returns false) while the state is non-finite.
-  bool rearm();
-  bool in_safe_state() const { return safe_; }
-  bool watchdog_tripped() const { return watchdog_.tripped(); }
 
-  /// Off the loop: what the simulated hand does from the next tick on.
-  void set_hand(const engine::HandInput& input) { hand_.set(input); }
+  /// θ, Φ (rad) and the shaft R (m), with their rates: the load side, not the encoders'.
+  std::uint32_t plant_joints(JointVector& q, JointVector& q_dot) const override;
+  /// Over (θ, Φ, R): eq. 3.27's diagonal inertia (I_θ, I_Φ) and the shaft's motor and load sides
+  /// taken as one rigid body, M_m + M_s (L935; the sum that puts eq. 4.5's breakpoint at 41 rad/s,
+  /// L940) — the cable's own mode, √(k_t (1/M_m + 1/M_s)) ≈ 1000 rad/s, is not modelled here —
+  /// through ∂x/∂(θ, Φ, R) of eq. 3.13. The plant has no viscous friction (Coulomb friction and
+  /// brakes only, which Colgate's bound does not credit), so the damping is 0.
+  std::optional<JointSpaceDynamics> joint_space_dynamics() const override;
 
-  /// The commands sent with the last write (after the rule and the safe state). Units: N·m.
+  /// The commands applied with the last write. Units: N·m.
   const engine::JoystickActuatorCommand& last_command() const { return command_; }
   const engine::GimbalJoystickPlant& plant() const { return plant_; }
 
  private:
   bool state_finite() const;
-  /// Runs the watchdog on the tachometers; trips into the safe state.
-  void check_watchdog();
   void fill_safe_command();
-  void rearm_when_at_rest(double dt);
 
   SimulatedJoystickConfig config_;
-  DeviceDescription description_;
   engine::GimbalJoystickPlant plant_;
-  engine::JoystickWatchdog watchdog_;
-  SimulatedOperator hand_;
   engine::JoystickActuatorCommand command_{};
-  bool safe_ = false;
-  double at_rest_s_ = 0.0;  // time in the safe state with every axis nearly still. Unit: s.
 };
 
 }  // namespace haptic::runtime

@@ -6,9 +6,9 @@
 
 namespace haptic::runtime {
 
-TickRunner::TickRunner(Device& device, SceneExchange& scenes, SampleRing& samples,
-                       LoopCounters& counters, const TickConfig& config)
-    : TickRunner(std::vector<TickPort>{TickPort{&device, &samples, config.limits, config.passivity}},
+TickRunner::TickRunner(Device& device, DeviceModel& model, SceneExchange& scenes,
+                       SampleRing& samples, LoopCounters& counters, const TickConfig& config)
+    : TickRunner(std::vector<TickPort>{TickPort{&device, &model, &samples, config.limits, config.passivity}},
                  scenes, counters, config) {}
 
 TickRunner::TickRunner(const std::vector<TickPort>& ports, SceneExchange& scenes,
@@ -17,8 +17,8 @@ TickRunner::TickRunner(const std::vector<TickPort>& ports, SceneExchange& scenes
   config_.output_ramp_ticks = std::max<std::int64_t>(1, config_.output_ramp_ticks);
   ports_.reserve(ports.size());
   for (const TickPort& port : ports) {
-    Port& out = ports_.emplace_back(Port{port.device, port.samples, std::nullopt,
-                                         engine::ForceGuard(port.limits), DeviceReading{}});
+    Port& out = ports_.emplace_back(Port{DevicePort(*port.device, *port.model), port.samples,
+                                         std::nullopt, engine::ForceGuard(port.limits), ToolReading{}});
     if (port.passivity) out.passivity.emplace(*port.passivity);
   }
 }
@@ -48,16 +48,17 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
 void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t index,
                           std::uint64_t tick, std::int64_t time_ns, double gain) {
   Port& port = ports_[index];
-  Device& device = *port.device;
+  DevicePort& device = port.device;
   TickSample sample;
   sample.tick = tick;
   sample.time_ns = time_ns;
 
-  DeviceReading reading;
-  const bool read_good = device.read(reading) == DeviceStatus::kOk &&
-                         engine::is_finite(reading.p_WT) && engine::is_finite(reading.v_WT);
+  // device.read -> estimate -> kinematics: the tool point's state.
+  const bool read_good = device.read_device() == DeviceStatus::kOk && (device.estimate(), device.kinematics());
+  ToolReading reading = device.tool();
   const bool read_ok = read_good && !reading.safe_state;
   engine::Vec3 F_command;
+  bool command_ok = false;
   if (read_ok) {
     port.last_good_reading = reading;
     const engine::SceneForce scene_force = engine::evaluate_scene_port(
@@ -87,6 +88,9 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
       counters_.force_saturations.fetch_add(1, std::memory_order_relaxed);
     }
     F_command = guarded.F_T_W;
+    // Jᵀ: the joint command for that force.
+    command_ok = device.joint_command(ToolCommand{F_command}, config_.period_s) == DeviceStatus::kOk;
+    if (!command_ok) counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
   } else {
     // A failed or non-finite reading is a device fault: command zero at once (no ramp: nothing
     // justifies any force), and publish the last good state, never a NaN.
@@ -99,10 +103,13 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
     }
     sample.p_WP = reading.p_WT;
     port.guard.reset();
+  }
+  if (!command_ok) {
+    F_command = {};
     device.enter_safe_state();
   }
 
-  if (device.write(DeviceCommand{F_command}, config_.period_s) != DeviceStatus::kOk) {
+  if (device.write_device(config_.period_s) != DeviceStatus::kOk) {
     counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
     device.enter_safe_state();
   }

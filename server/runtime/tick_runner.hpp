@@ -1,7 +1,8 @@
 #pragma once
 // One tick of the loop, in the order of docs/architecture.md:
-//   adopt scene -> per device port: device.read -> compiled scene at that port -> safety ->
-//   device.write -> publish that port's sample -> advance the virtual masses.
+//   adopt scene -> per device port: device.read -> estimate -> kinematics -> compiled scene at
+//   that port -> passivity -> force guard -> Jᵀ -> device.write -> publish that port's sample
+//   -> advance the virtual masses.
 // Separate from the thread that paces it so tests can run ticks directly (lockstep, allocation
 // counting) and both time modes share exactly this code.
 
@@ -13,6 +14,8 @@
 #include "engine/safety/force_guard.hpp"
 #include "engine/scene/compiled_scene.hpp"
 #include "runtime/device.hpp"
+#include "runtime/device_model.hpp"
+#include "runtime/device_port.hpp"
 #include "runtime/loop_stats.hpp"
 #include "runtime/sample_ring.hpp"
 #include "runtime/snapshot_exchange.hpp"
@@ -37,10 +40,11 @@ struct TickConfig {
   std::optional<engine::PassivityControllerParams> passivity;
 };
 
-/// One device port: a device (one user's tool) evaluated against the shared scene, with its own
-/// force limits, passivity controller and the ring its samples are published to.
+/// One device port: a device (one user's tool) and its model, evaluated against the shared scene,
+/// with its own force limits, passivity controller and the ring its samples are published to.
 struct TickPort {
   Device* device = nullptr;
+  DeviceModel* model = nullptr;
   SampleRing* samples = nullptr;
   engine::ForceLimits limits;
   std::optional<engine::PassivityControllerParams> passivity;  // absent: off
@@ -49,7 +53,7 @@ struct TickPort {
 class TickRunner {
  public:
   /// One device: port 0 with config.limits and config.passivity.
-  TickRunner(Device& device, SceneExchange& scenes, SampleRing& samples, LoopCounters& counters,
+  TickRunner(Device& device, DeviceModel& model, SceneExchange& scenes, SampleRing& samples, LoopCounters& counters,
              const TickConfig& config);
   /// Several device ports sharing one scene (compiled with at least ports.size() ports), run in
   /// order each tick; config.limits and config.passivity are not used. ports is not empty.
@@ -74,11 +78,11 @@ class TickRunner {
  private:
   /// What the loop keeps per port (sized at construction).
   struct Port {
-    Device* device;
+    DevicePort device;
     SampleRing* samples;
     std::optional<engine::PassivityController> passivity;
     engine::ForceGuard guard;
-    DeviceReading last_good_reading;  // what the samples show while the device is faulted
+    ToolReading last_good_reading;  // what the samples show while the device is faulted
   };
 
   double output_gain(std::uint64_t tick) const;

@@ -11,9 +11,15 @@
 #include "engine/control/disturbance_observer.hpp"
 #include "engine/control/joint_walls.hpp"
 #include "engine/control/state_estimator.hpp"
+#include "runtime/cartesian_model.hpp"
+#include "runtime/dc_motor_model.hpp"
+#include "runtime/device_port.hpp"
 #include "runtime/five_bar_estimator.hpp"
+#include "runtime/five_bar_model.hpp"
+#include "runtime/joystick_model.hpp"
+#include "runtime/parallel_dob_model.hpp"
 #include "runtime/simulated_dc_motor_device.hpp"
-#include "runtime/simulated_device.hpp"
+#include "runtime/simulated_point_mass_device.hpp"
 #include "runtime/simulated_dob_device.hpp"
 #include "runtime/simulated_five_bar_device.hpp"
 #include "runtime/simulated_joystick_device.hpp"
@@ -31,20 +37,23 @@ engine::HandInput light_push(engine::Vec3 force) {
   return hand;
 }
 
-/// One tick of a device: read, then write a small force (what the loop does around the scene).
-template <typename DeviceT>
-void run_device(benchmark::State& state, DeviceT& device, engine::Vec3 command) {
-  runtime::DeviceReading reading;
+/// One tick of a device with its model: read, estimate, kinematics, then Jᵀ and write a small
+/// force (what the loop does around the scene).
+void run_device(benchmark::State& state, runtime::Device& device, runtime::DeviceModel& model,
+                engine::Vec3 command) {
+  runtime::DevicePort port(device, model);
+  runtime::ToolReading reading;
   for (auto _ : state) {
-    device.read(reading);
+    port.read(reading);
     benchmark::DoNotOptimize(reading);
-    device.write(runtime::DeviceCommand{command}, kT);
+    port.write(runtime::ToolCommand{command}, kT);
   }
 }
 
 void BM_Device_PointMass(benchmark::State& state) {
   runtime::SimulatedPointMassDevice device(engine::PointMassParams{}, {{0, 0, 0}, {}}, 20.0);
-  run_device(state, device, {0, 0, 1e-4});
+  runtime::CartesianModel model;
+  run_device(state, device, model, {0, 0, 1e-4});
 }
 BENCHMARK(BM_Device_PointMass);
 
@@ -53,7 +62,8 @@ void BM_Device_DcMotor000(benchmark::State& state) {
       engine::DcMotorParams{},
       state.range(0) ? engine::DcMotorModel::kWithInductance : engine::DcMotorModel::kWithoutInductance,
       0.5, 5.0, engine::IntegrationSettings{});
-  run_device(state, device, {0, 0, 0});
+  runtime::DcMotorModel model(engine::DcMotorParams{}, true);
+  run_device(state, device, model, {0, 0, 0});
 }
 BENCHMARK(BM_Device_DcMotor000)->Arg(0)->Arg(1)->ArgName("with_inductance");
 
@@ -61,23 +71,27 @@ void BM_Device_FiveBar003(benchmark::State& state) {
   runtime::SimulatedFiveBarOptions options;
   options.plant.coriolis = state.range(0) != 0;
   runtime::SimulatedFiveBarDevice device(engine::FiveBarParams{}, {}, options);
-  if (state.range(1)) device.set_velocity_estimator(std::make_unique<runtime::FiveBarStateEstimators>(kT));
+  runtime::FiveBarModel model(engine::FiveBarParams{}, options.velocity_cutoff);
+  if (state.range(1)) model.set_velocity_estimator(std::make_unique<runtime::FiveBarStateEstimators>(kT));
   device.set_hand(light_push({0.0, 0.0, 0.5}));
-  run_device(state, device, {0.0, 0.0, -0.5});
+  run_device(state, device, model, {0.0, 0.0, -0.5});
 }
 BENCHMARK(BM_Device_FiveBar003)->ArgsProduct({{1, 0}, {0, 1}})->ArgNames({"coriolis", "estimator"});
 
 void BM_Device_Joystick004(benchmark::State& state) {
   runtime::SimulatedJoystickDevice device(runtime::SimulatedJoystickConfig{});
+  runtime::JoystickModel model(runtime::SimulatedJoystickConfig{}.model());
   device.set_hand(light_push({0.2, 0.0, 0.0}));
-  run_device(state, device, {-0.2, 0.0, 0.0});
+  run_device(state, device, model, {-0.2, 0.0, 0.0});
 }
 BENCHMARK(BM_Device_Joystick004);
 
 void BM_Device_ParallelDob001(benchmark::State& state) {
-  runtime::SimulatedDobDevice device(engine::Parallel2DofParams{}, engine::DisturbanceObserverParams{},
-                                     {0.0, 0.25, 0.0}, 10.0, state.range(0) != 0);
-  run_device(state, device, {0.0, 0.0, 0.0});
+  runtime::SimulatedDobDevice device(engine::Parallel2DofParams{}, {0.0, 0.25, 0.0}, 10.0,
+                                     state.range(0) != 0);
+  runtime::ParallelDobModel model(engine::Parallel2DofParams{}, engine::DisturbanceObserverParams{},
+                                  {0.0, 0.25, 0.0}, state.range(0) != 0);
+  run_device(state, device, model, {0.0, 0.0, 0.0});
 }
 BENCHMARK(BM_Device_ParallelDob001)->Arg(1)->Arg(0)->ArgName("observer");
 

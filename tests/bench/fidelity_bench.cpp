@@ -21,6 +21,11 @@
 #include <string>
 #include <vector>
 
+#include "runtime/dc_motor_model.hpp"
+#include "runtime/device_port.hpp"
+#include "runtime/five_bar_model.hpp"
+#include "runtime/joystick_model.hpp"
+#include "runtime/parallel_dob_model.hpp"
 #include "runtime/simulated_dc_motor_device.hpp"
 #include "runtime/simulated_dob_device.hpp"
 #include "runtime/simulated_five_bar_device.hpp"
@@ -50,7 +55,20 @@ engine::HandInput sine_push(engine::Vec3 amplitude) {
 }
 
 /// Builds the device a variant describes, with the scenario's hand already set.
-std::unique_ptr<runtime::Device> make(const Variant& v) {
+/// A device with its model, driven at its tool point.
+struct Modelled {
+  std::unique_ptr<runtime::SimulatedDevice> device;
+  std::unique_ptr<runtime::DeviceModel> model;
+  std::unique_ptr<runtime::DevicePort> port;
+};
+
+Modelled modelled(std::unique_ptr<runtime::SimulatedDevice> device,
+                  std::unique_ptr<runtime::DeviceModel> model) {
+  auto port = std::make_unique<runtime::DevicePort>(*device, *model);
+  return {std::move(device), std::move(model), std::move(port)};
+}
+
+Modelled make(const Variant& v) {
   if (v.device == "000 DC motor") {
     auto d = std::make_unique<runtime::SimulatedDcMotorDevice>(
         engine::DcMotorParams{},
@@ -58,7 +76,7 @@ std::unique_ptr<runtime::Device> make(const Variant& v) {
                                    : engine::DcMotorModel::kWithInductance,
         0.5, 5.0, v.integration);
     d->set_hand(sine_push({0.0, 0.5, 0.0}));
-    return d;
+    return modelled(std::move(d), std::make_unique<runtime::DcMotorModel>(engine::DcMotorParams{}, true));
   }
   if (v.device == "003 five-bar" || v.device == kFlexibleFiveBar) {
     runtime::SimulatedFiveBarOptions options;
@@ -69,21 +87,22 @@ std::unique_ptr<runtime::Device> make(const Variant& v) {
     auto d = std::make_unique<runtime::SimulatedFiveBarDevice>(engine::FiveBarParams{},
                                                                engine::FiveBarState{}, options);
     d->set_hand(sine_push({2.0, 2.0, 2.0}));
-    return d;
+    return modelled(std::move(d), std::make_unique<runtime::FiveBarModel>(engine::FiveBarParams{},
+                                                                          options.velocity_cutoff));
   }
   if (v.device == "004 joystick") {
     runtime::SimulatedJoystickConfig config;
     config.integration = v.integration;
     auto d = std::make_unique<runtime::SimulatedJoystickDevice>(config);
     d->set_hand(sine_push({3.0, 3.0, 0.0}));
-    return d;
+    return modelled(std::move(d), std::make_unique<runtime::JoystickModel>(config.model()));
   }
   engine::Parallel2DofParams params;
   params.integration = v.integration;
-  auto d = std::make_unique<runtime::SimulatedDobDevice>(
-      params, engine::DisturbanceObserverParams{}, engine::Vec3{0.0, 0.25, 0.0}, 10.0, true);
+  auto d = std::make_unique<runtime::SimulatedDobDevice>(params, engine::Vec3{0.0, 0.25, 0.0}, 10.0);
   d->set_hand(sine_push({0.02, 0.02, 0.0}));
-  return d;
+  return modelled(std::move(d), std::make_unique<runtime::ParallelDobModel>(
+                                    params, engine::DisturbanceObserverParams{}, engine::Vec3{0.0, 0.25, 0.0}));
 }
 
 struct Run {
@@ -94,19 +113,19 @@ struct Run {
 Run simulate(const Variant& v) {
   Run best;
   for (int repetition = 0; repetition < 3; ++repetition) {
-    auto device = make(v);
+    Modelled device = make(v);
     // The flexible entry compares the physical tip (see the header).
     const auto* five_bar = v.device == kFlexibleFiveBar
-                               ? static_cast<const runtime::SimulatedFiveBarDevice*>(device.get())
+                               ? static_cast<const runtime::SimulatedFiveBarDevice*>(device.device.get())
                                : nullptr;
     Run run;
     run.positions.reserve(kTicks);
-    runtime::DeviceReading reading;
+    runtime::ToolReading reading;
     engine::Vec3 p_WT, v_WT;
     const auto start = std::chrono::steady_clock::now();
     for (int k = 0; k < kTicks; ++k) {
-      device->write(runtime::DeviceCommand{}, kT);
-      device->read(reading);
+      device.port->write(runtime::ToolCommand{}, kT);
+      device.port->read(reading);
       if (five_bar != nullptr) {
         five_bar->plant().physical_tip_state(p_WT, v_WT);
         run.positions.push_back(p_WT);

@@ -9,7 +9,8 @@
 #include <thread>
 
 #include "runtime/loop_thread.hpp"
-#include "runtime/simulated_device.hpp"
+#include "runtime/cartesian_model.hpp"
+#include "runtime/simulated_point_mass_device.hpp"
 
 using namespace haptic;
 
@@ -40,7 +41,8 @@ Result run(double seconds, double rate_hz, std::int64_t spin_ns) {
   runtime::SampleRing samples;
   runtime::LoopCounters counters;
   runtime::LatenessHistogram lateness;
-  runtime::TickRunner runner(device, scenes, samples, counters,
+  runtime::CartesianModel model;
+  runtime::TickRunner runner(device, model, scenes, samples, counters,
                              runtime::TickConfig{1.0 / rate_hz, {}, 50, {}});
   runtime::LoopConfig config;
   config.rate_hz = rate_hz;

@@ -6,7 +6,8 @@
 #include <memory>
 
 #include "engine/device/dc_motor_plant.hpp"
-#include "runtime/simulated_device.hpp"
+#include "runtime/cartesian_model.hpp"
+#include "runtime/simulated_point_mass_device.hpp"
 #include "runtime/tick_runner.hpp"
 
 using namespace haptic;
@@ -43,7 +44,8 @@ void BM_TickDefaultScene(benchmark::State& state) {
   runtime::SceneExchange scenes(std::make_unique<const engine::CompiledScene>(scene_with(1, 0, 1)));
   runtime::SampleRing samples;
   runtime::LoopCounters counters;
-  runtime::TickRunner runner(device, scenes, samples, counters, runtime::TickConfig{});
+  runtime::CartesianModel model;
+  runtime::TickRunner runner(device, model, scenes, samples, counters, runtime::TickConfig{});
   engine::HandInput hand;
   hand.mode = engine::HandInput::Mode::kApplyForce;
   hand.force = {0.0, 0.0, -5.0};

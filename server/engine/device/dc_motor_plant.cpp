@@ -27,6 +27,14 @@ std::string DcMotorParams::validate() const {
   return {};
 }
 
+void dc_motor_end_point(const DcMotorParams& p, double theta_m, double omega_m, Vec3& p_WT,
+                        Vec3& v_WT) {
+  const double phi = p.r * theta_m + p.alpha_c;
+  const double omega_L = p.r * omega_m;
+  p_WT = {p.l * std::cos(phi), p.l * std::sin(phi), 0.0};
+  v_WT = {-p.l * std::sin(phi) * omega_L, p.l * std::cos(phi) * omega_L, 0.0};
+}
+
 double external_joint_torque(const DcMotorParams& params, double theta_L,
                              const ExternalWrench& F_e) {
   // Eq. 4.3: the rows of J for f_ez, n_ex and n_ey are zero.

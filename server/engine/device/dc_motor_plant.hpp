@@ -81,6 +81,11 @@ struct ExternalWrench {
 double external_joint_torque(const DcMotorParams& params, double theta_L,
                              const ExternalWrench& F_e);
 
+/// The end point E's position (m) and velocity (m/s) in W at motor angle θ_m (rad) and rate θ̇_m
+/// (rad/s): p = l (cos φ, sin φ, 0), φ = r θ_m + α_c (eqs. 3.1a, 4.2a).
+void dc_motor_end_point(const DcMotorParams& params, double theta_m, double omega_m, Vec3& p_WT,
+                        Vec3& v_WT);
+
 /// Plant state at the motor axis.
 struct DcMotorState {
   double theta_m = 0.0;  // Motor angle. Unit: rad.

@@ -10,9 +10,15 @@
 #include <string>
 #include <vector>
 
+#include "runtime/cartesian_model.hpp"
+#include "runtime/dc_motor_model.hpp"
+#include "runtime/device_port.hpp"
 #include "runtime/five_bar_estimator.hpp"
+#include "runtime/five_bar_model.hpp"
+#include "runtime/joystick_model.hpp"
+#include "runtime/parallel_dob_model.hpp"
 #include "runtime/simulated_dc_motor_device.hpp"
-#include "runtime/simulated_device.hpp"
+#include "runtime/simulated_point_mass_device.hpp"
 #include "runtime/simulated_dob_device.hpp"
 #include "runtime/simulated_five_bar_device.hpp"
 #include "runtime/simulated_joystick_device.hpp"
@@ -23,50 +29,60 @@ namespace {
 
 constexpr double kT = 1e-3;
 
+/// A device, its model and the port that drives both at the tool point.
 struct Made {
-  std::unique_ptr<Device> device;
-  std::function<void(const engine::HandInput&)> set_hand;
+  std::unique_ptr<SimulatedDevice> device;
+  std::unique_ptr<DeviceModel> model;
+  std::unique_ptr<DevicePort> port;
+  void set_hand(const engine::HandInput& hand) const { device->set_hand(hand); }
 };
 
-template <typename D>
-Made wrap(std::unique_ptr<D> device) {
-  D* raw = device.get();
-  return {std::move(device), [raw](const engine::HandInput& hand) { raw->set_hand(hand); }};
+Made made_of(std::unique_ptr<SimulatedDevice> device, std::unique_ptr<DeviceModel> model) {
+  auto port = std::make_unique<DevicePort>(*device, *model);
+  return {std::move(device), std::move(model), std::move(port)};
 }
 
 std::vector<std::pair<std::string, std::function<Made()>>> every_device() {
   return {
       {"point_mass",
        [] {
-         return wrap(std::make_unique<SimulatedPointMassDevice>(engine::PointMassParams{},
-                                                                engine::PointMassState{}, 20.0));
+         return made_of(std::make_unique<SimulatedPointMassDevice>(engine::PointMassParams{},
+                                                                   engine::PointMassState{}, 20.0),
+                        std::make_unique<CartesianModel>());
        }},
       {"dc_motor_000",
        [] {
-         return wrap(std::make_unique<SimulatedDcMotorDevice>(
-             engine::DcMotorParams{}, engine::DcMotorModel::kWithInductance, 0.5, 5.0,
-             engine::IntegrationSettings{}));
+         return made_of(std::make_unique<SimulatedDcMotorDevice>(
+                            engine::DcMotorParams{}, engine::DcMotorModel::kWithInductance, 0.5, 5.0,
+                            engine::IntegrationSettings{}),
+                        std::make_unique<DcMotorModel>(engine::DcMotorParams{}, true));
        }},
       {"five_bar_003",
        [] {
-         auto device = std::make_unique<SimulatedFiveBarDevice>(engine::FiveBarParams{});
-         device->set_velocity_estimator(std::make_unique<FiveBarStateEstimators>(kT));
-         return wrap(std::move(device));
+         auto model = std::make_unique<FiveBarModel>(engine::FiveBarParams{}, 20.0);
+         model->set_velocity_estimator(std::make_unique<FiveBarStateEstimators>(kT));
+         return made_of(std::make_unique<SimulatedFiveBarDevice>(engine::FiveBarParams{}),
+                        std::move(model));
        }},
       {"five_bar_003",  // with the flexible link (eq. 3.31) on
        [] {
          SimulatedFiveBarOptions options;
          options.plant.flexible_mode = true;
-         return wrap(std::make_unique<SimulatedFiveBarDevice>(engine::FiveBarParams{},
-                                                              engine::FiveBarState{}, options));
+         return made_of(std::make_unique<SimulatedFiveBarDevice>(engine::FiveBarParams{},
+                                                                 engine::FiveBarState{}, options),
+                        std::make_unique<FiveBarModel>(engine::FiveBarParams{}, 20.0));
        }},
       {"joystick_004",
-       [] { return wrap(std::make_unique<SimulatedJoystickDevice>(SimulatedJoystickConfig{})); }},
+       [] {
+         return made_of(std::make_unique<SimulatedJoystickDevice>(SimulatedJoystickConfig{}),
+                        std::make_unique<JoystickModel>(SimulatedJoystickConfig{}.model()));
+       }},
       {"parallel_2dof_001",
        [] {
-         return wrap(std::make_unique<SimulatedDobDevice>(engine::Parallel2DofParams{},
-                                                          engine::DisturbanceObserverParams{},
-                                                          engine::Vec3{0.0, 0.25, 0.0}, 10.0));
+         const engine::Vec3 start{0.0, 0.25, 0.0};
+         return made_of(std::make_unique<SimulatedDobDevice>(engine::Parallel2DofParams{}, start, 10.0),
+                        std::make_unique<ParallelDobModel>(engine::Parallel2DofParams{},
+                                                           engine::DisturbanceObserverParams{}, start));
        }},
   };
 }
@@ -90,15 +106,15 @@ TEST(EveryDevice, ATickAllocatesNothing) {
   for (const auto& [name, make] : every_device()) {
     Made made = make();
     made.set_hand(sine_push());
-    DeviceReading reading;
-    made.device->read(reading);
-    made.device->write({}, kT);  // the first tick adopts the hand input
+    ToolReading reading;
+    made.port->read(reading);
+    made.port->write({}, kT);  // the first tick adopts the hand input
     test::reset_allocations();
     {
       test::CountAllocations counting;
       for (int k = 0; k < 1000; ++k) {
-        made.device->read(reading);
-        made.device->write(DeviceCommand{{0.001, -0.001, 0.001}}, kT);
+        made.port->read(reading);
+        made.port->write(ToolCommand{{0.001, -0.001, 0.001}}, kT);
       }
     }
     EXPECT_EQ(test::allocations(), 0u) << name;
@@ -110,18 +126,18 @@ TEST(EveryDevice, ANonFiniteCommandIsAnErrorAndNoReadingItCallsGoodHoldsANaN) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const auto& [name, make] : every_device()) {
     Made made = make();
-    DeviceReading reading;
-    ASSERT_EQ(made.device->read(reading), DeviceStatus::kOk) << name;
+    ToolReading reading;
+    ASSERT_EQ(made.port->read(reading), DeviceStatus::kOk) << name;
     // The command is refused as an error (the loop then goes to its safe state)...
-    EXPECT_EQ(made.device->write(DeviceCommand{{nan, 0.0, 0.0}}, kT), DeviceStatus::kError) << name;
+    EXPECT_EQ(made.port->write(ToolCommand{{nan, 0.0, 0.0}}, kT), DeviceStatus::kError) << name;
     // ...and never reaches the plant: the next reading is good, and finite.
-    ASSERT_EQ(made.device->read(reading), DeviceStatus::kOk) << name;
+    ASSERT_EQ(made.port->read(reading), DeviceStatus::kOk) << name;
     EXPECT_TRUE(std::isfinite(reading.p_WT.x) && std::isfinite(reading.p_WT.y) &&
                 std::isfinite(reading.p_WT.z) && std::isfinite(reading.v_WT.x) &&
                 std::isfinite(reading.v_WT.y) && std::isfinite(reading.v_WT.z))
         << name;
-    made.device->enter_safe_state();  // must be callable at any time
-    EXPECT_EQ(made.device->write(DeviceCommand{}, kT), DeviceStatus::kOk) << name;
+    made.port->enter_safe_state();  // must be callable at any time
+    EXPECT_EQ(made.port->write(ToolCommand{}, kT), DeviceStatus::kOk) << name;
   }
 }
 

@@ -8,6 +8,8 @@
 #include <memory>
 
 #include "runtime/five_bar_estimator.hpp"
+#include "runtime/simulated_five_bar_device.hpp"
+#include "support/modelled_device.hpp"
 
 namespace haptic::runtime {
 namespace {
@@ -31,22 +33,23 @@ TEST(FiveBarStateEstimators, TheAxialJointIsTheThesisDesign_L3129) {
 /// hand pushing with a 1 Hz sine of `amplitude` (N per axis) through the quantized encoders.
 /// Unit: m/s.
 double velocity_rms_error(bool estimator, double amplitude) {
-  SimulatedFiveBarDevice device(engine::FiveBarParams{});
-  if (estimator) device.set_velocity_estimator(std::make_unique<FiveBarStateEstimators>(kT));
+  Modelled<SimulatedFiveBarDevice, FiveBarModel> device(FiveBarModel(engine::FiveBarParams{}, 20.0),
+                                                        engine::FiveBarParams{});
+  if (estimator) device.model.set_velocity_estimator(std::make_unique<FiveBarStateEstimators>(kT));
   engine::HandInput hand;
   hand.mode = engine::HandInput::Mode::kApplyForce;
   hand.force = {amplitude, amplitude, amplitude};
   hand.profile.shape = engine::ForceProfile::Shape::kSine;
   hand.profile.frequency_hz = 1.0;
-  device.set_hand(hand);
+  device->set_hand(hand);
   double sum = 0.0;
   int n = 0;
   for (int k = 0; k < 4000; ++k) {
     device.write({}, kT);
-    DeviceReading reading;
+    ToolReading reading;
     EXPECT_EQ(device.read(reading), DeviceStatus::kOk);
     engine::Vec3 p_true, v_true;
-    device.plant().tip_state(device.plant().state(), p_true, v_true);
+    device->plant().tip_state(device->plant().state(), p_true, v_true);
     if (k >= 500) {  // after the start-up transient
       sum += std::pow(engine::norm(reading.v_WT - v_true), 2);
       ++n;

@@ -6,7 +6,9 @@
 #include <numbers>
 
 #include "engine/operator/simulated_hand.hpp"
-#include "runtime/simulated_device.hpp"
+#include "runtime/cartesian_model.hpp"
+#include "runtime/simulated_point_mass_device.hpp"
+#include "support/modelled_device.hpp"
 
 namespace haptic::runtime {
 namespace {
@@ -91,15 +93,18 @@ TEST(TargetTrajectory, LineAndSineGivePositionAndVelocity) {
   EXPECT_NEAR(engine::hand_force(hand, {}, {}, 0.0).x, 10.0 * 0.01 * std::numbers::pi, 1e-12);
 }
 
-SimulatedPointMassDevice make_device(double z0) {
-  return SimulatedPointMassDevice(engine::PointMassParams{}, {{0.0, 0.0, z0}, {}}, 20.0);
-}
+/// The point mass with its model, driven at its tool point; starts at rest at z = z0 (m).
+struct PointMass : Modelled<SimulatedPointMassDevice, CartesianModel> {
+  explicit PointMass(double z0)
+      : Modelled(CartesianModel{}, engine::PointMassParams{},
+                 engine::PointMassState{{0.0, 0.0, z0}, {}}, 20.0) {}
+};
 
 /// Runs the device for `seconds` with zero device force; returns the final reading.
-DeviceReading run(SimulatedPointMassDevice& device, double seconds) {
-  DeviceReading reading;
+ToolReading run(PointMass& device, double seconds) {
+  ToolReading reading;
   for (int k = 0; k < static_cast<int>(std::lround(seconds * 1000.0)); ++k) {
-    device.write(DeviceCommand{}, 0.001);
+    device.write(ToolCommand{}, 0.001);
   }
   device.read(reading);
   return reading;
@@ -118,10 +123,10 @@ TEST(SimulatedOperator, TightGripTracksALineAndLooseGripLagsIt) {
     hand.damping = grip.damping;
     return hand;
   };
-  auto tight_device = make_device(0.02);
-  tight_device.set_hand(follow(engine::kTightGrip));
-  auto loose_device = make_device(0.02);
-  loose_device.set_hand(follow(engine::kLooseGrip));
+  PointMass tight_device(0.02);
+  tight_device->set_hand(follow(engine::kTightGrip));
+  PointMass loose_device(0.02);
+  loose_device->set_hand(follow(engine::kLooseGrip));
   // Halfway (0.5 s) the target is at 5 mm. The tight grip (ω = 20 rad/s, ζ = 0.19) is within a
   // millimetre of it; the loose one (overdamped, slow pole at −0.69 1/s) trails further behind.
   const double tight_error = std::abs(run(tight_device, 0.5).p_WT.z - 0.005);
@@ -135,17 +140,17 @@ TEST(SimulatedOperator, TightGripTracksALineAndLooseGripLagsIt) {
 
 TEST(SimulatedOperator, HandMassMovesWithTheToolOnlyWhileHolding) {
   // The same device force gives a 2.01 kg tool 201 times less acceleration than the bare 0.01 kg.
-  auto held = make_device(0.0);
+  PointMass held(0.0);
   HandInput hand;
   hand.mode = HandInput::Mode::kFollowTarget;
   hand.mass = 2.0;  // no spring, no damper: just the hand's inertia
-  held.set_hand(hand);
-  auto bare = make_device(0.0);
+  held->set_hand(hand);
+  PointMass bare(0.0);
   for (int k = 0; k < 10; ++k) {
-    held.write(DeviceCommand{{1.0, 0.0, 0.0}}, 0.001);
-    bare.write(DeviceCommand{{1.0, 0.0, 0.0}}, 0.001);
+    held.write(ToolCommand{{1.0, 0.0, 0.0}}, 0.001);
+    bare.write(ToolCommand{{1.0, 0.0, 0.0}}, 0.001);
   }
-  DeviceReading a, b;
+  ToolReading a, b;
   held.read(a);
   bare.read(b);
   // v(t) = (F/b)(1 − e^{−b t/m}) for each total mass (Eom et al. eq. 5 plant).
@@ -154,31 +159,31 @@ TEST(SimulatedOperator, HandMassMovesWithTheToolOnlyWhileHolding) {
   EXPECT_NEAR(a.v_WT.x, v(2.01), 1e-12);
   EXPECT_NEAR(b.v_WT.x, v(0.01), 1e-12);
   // Released, the hand's mass no longer counts.
-  held.set_hand(HandInput{});
-  held.write(DeviceCommand{}, 0.001);
+  held->set_hand(HandInput{});
+  held.write(ToolCommand{}, 0.001);
   EXPECT_NEAR(held.read(a) == DeviceStatus::kOk ? a.v_WT.x : 0.0,
               v(2.01) * std::exp(-b_device * 0.001 / 0.01), 1e-12);
 }
 
 TEST(SimulatedOperator, ProfileTimeStartsWhenTheInputArrives) {
-  auto device = make_device(0.0);
+  PointMass device(0.0);
   run(device, 1.0);  // time passes before the input is set
-  device.set_hand(push({0.0, 0.0, 1.0}, {ForceProfile::Shape::kStep, 0.1, 0.0, 0.0, {}, {}}));
+  device->set_hand(push({0.0, 0.0, 1.0}, {ForceProfile::Shape::kStep, 0.1, 0.0, 0.0, {}, {}}));
   EXPECT_EQ(run(device, 0.09).v_WT.z, 0.0);  // the step is 0.1 s after the input, not after start
   EXPECT_GT(run(device, 0.02).v_WT.z, 0.0);
 }
 
 TEST(SimulatedOperator, ARecordedPushDrivesTheToolAndANewInputReplacesIt) {
-  auto device = make_device(0.0);
+  PointMass device(0.0);
   ForceProfile profile;
   profile.shape = ForceProfile::Shape::kRecorded;
   profile.recorded.count = 2;
   profile.recorded.sample_period_s = 0.05;
   profile.recorded.samples[0] = {0.0, 0.0, 0.01};  // small: the 10 g mass stays in its workspace
   profile.recorded.samples[1] = {0.0, 0.0, 0.01};
-  device.set_hand(push({}, profile));
+  device->set_hand(push({}, profile));
   EXPECT_GT(run(device, 0.05).v_WT.z, 0.0);
-  device.set_hand(push({0.0, 0.0, -0.03}, {}));  // a constant push the other way
+  device->set_hand(push({0.0, 0.0, -0.03}, {}));  // a constant push the other way
   const double before = run(device, 0.0).v_WT.z;
   EXPECT_LT(run(device, 0.05).v_WT.z, before);
 }

@@ -10,7 +10,9 @@
 #include <vector>
 
 #include "engine/analysis/wall_design.hpp"
+#include "runtime/parallel_dob_model.hpp"
 #include "runtime/simulated_dob_device.hpp"
+#include "support/modelled_device.hpp"
 
 namespace haptic::runtime {
 namespace {
@@ -18,19 +20,24 @@ namespace {
 constexpr double kT = 1e-3;  // s (document §4)
 constexpr engine::Vec3 kCentre{0.0, 0.25, 0.0};  // m, the workspace centre
 
-SimulatedDobDevice make_device(bool observer = true, const engine::Vec3& start = kCentre) {
-  return SimulatedDobDevice(engine::Parallel2DofParams{}, engine::DisturbanceObserverParams{},
-                            start, 20.0, observer);
-}
+/// The device with its model (ParallelDobModel), driven at its tool point.
+struct DobDevice : Modelled<SimulatedDobDevice, ParallelDobModel> {
+  explicit DobDevice(bool observer = true, const engine::Vec3& start = kCentre)
+      : Modelled(ParallelDobModel(engine::Parallel2DofParams{}, engine::DisturbanceObserverParams{},
+                                  start, observer),
+                 engine::Parallel2DofParams{}, start, 20.0, observer,
+                 engine::DisturbanceObserverParams{}.nominal_mass,
+                 engine::DisturbanceObserverParams{}.nominal_damping) {}
+};
 
 TEST(SimulatedDobDevice, DescribesItself) {
-  const SimulatedDobDevice device = make_device();
-  EXPECT_EQ(device.description().model, "parallel_2dof_001");
-  EXPECT_TRUE(device.description().capabilities.disturbance_observer);
-  EXPECT_FALSE(device.description().capabilities.gravity);
-  EXPECT_EQ(device.description().dof, 2u);
-  EXPECT_TRUE(device.description().simulated);
-  EXPECT_FALSE(make_device(false).description().capabilities.disturbance_observer);
+  DobDevice device;
+  EXPECT_EQ(device->description().model, "parallel_2dof_001");
+  EXPECT_TRUE(device->description().capabilities.disturbance_observer);
+  EXPECT_FALSE(device->description().capabilities.gravity);
+  EXPECT_EQ(device->description().dof, 2u);
+  EXPECT_TRUE(device->description().simulated);
+  EXPECT_FALSE(DobDevice(false)->description().capabilities.disturbance_observer);
 }
 
 /// Penetration history of the wall y < y_w (y_w = the start height) rendered as
@@ -41,23 +48,23 @@ struct WallRun {
 };
 
 WallRun push_into_wall(double controller_damping, bool observer, double seconds) {
-  SimulatedDobDevice device = make_device(observer);
+  DobDevice device(observer);
   engine::HandInput hand;
   hand.mode = engine::HandInput::Mode::kApplyForce;
   hand.force = {0.0, -5.0, 0.0};  // document §4: "the force command of the human operator is −5 N"
-  device.set_hand(hand);
+  device->set_hand(hand);
   const double K = 1000.0;  // N/m (document §4)
   const double y_wall = kCentre.y;
   WallRun run;
   const int ticks = static_cast<int>(seconds / kT);
   for (int k = 0; k < ticks; ++k) {
-    DeviceReading r;
+    ToolReading r;
     EXPECT_EQ(device.read(r), DeviceStatus::kOk);
     const double depth = y_wall - r.p_WT.y;
     const double f = depth > 0.0 ? K * depth - controller_damping * r.v_WT.y : 0.0;
     run.penetration.push_back(depth);
     run.force.push_back(f);
-    EXPECT_EQ(device.write(DeviceCommand{{0.0, f, 0.0}}, kT), DeviceStatus::kOk);
+    EXPECT_EQ(device.write(ToolCommand{{0.0, f, 0.0}}, kT), DeviceStatus::kOk);
   }
   return run;
 }
@@ -96,18 +103,23 @@ StepMetrics metrics(const std::vector<double>& p, double reference) {
 
 TEST(SimulatedDobDevice, HoldsStillAtZeroForce) {
   for (const bool observer : {true, false}) {
-    SimulatedDobDevice device = make_device(observer, {0.05, 0.2, 0.0});
-    DeviceReading r;
+    DobDevice device(observer, {0.05, 0.2, 0.0});
+    ToolReading first, r;
+    ASSERT_EQ(device.read(first), DeviceStatus::kOk);
     for (int k = 0; k < 1000; ++k) {
-      ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+      ASSERT_EQ(device.write(ToolCommand{}, kT), DeviceStatus::kOk);
     }
     ASSERT_EQ(device.read(r), DeviceStatus::kOk);
-    EXPECT_EQ(r.p_WT.x, 0.05);
-    EXPECT_EQ(r.p_WT.y, 0.2);
+    // The plant has not moved at all; the reading (forward kinematics of the encoders' angles)
+    // is the first one bit for bit, and the start to rounding.
+    EXPECT_EQ(device->plant().p_WT(), (engine::Vec3{0.05, 0.2, 0.0}));
+    EXPECT_EQ(r.p_WT, first.p_WT);
+    EXPECT_NEAR(r.p_WT.x, 0.05, 1e-15);
+    EXPECT_NEAR(r.p_WT.y, 0.2, 1e-15);
     EXPECT_EQ(r.p_WT.z, 0.0);
     EXPECT_EQ(r.v_WT.x, 0.0);
     EXPECT_EQ(r.v_WT.y, 0.0);
-    EXPECT_EQ(device.disturbance_estimate().x, 0.0);
+    EXPECT_EQ(device.model.disturbance_estimate().x, 0.0);
   }
 }
 
@@ -120,11 +132,11 @@ TEST(SimulatedDobDevice, ConstantForceGivesTheNominalStepResponse_Eq5) {
   const double expected = F / B * (1.0 - std::exp(-B * t / M));
   double v[2] = {0.0, 0.0};
   for (const bool observer : {true, false}) {
-    SimulatedDobDevice device = make_device(observer);
+    DobDevice device(observer);
     for (int k = 0; k < 100; ++k) {
-      ASSERT_EQ(device.write(DeviceCommand{{F, 0.0, 0.0}}, kT), DeviceStatus::kOk);
+      ASSERT_EQ(device.write(ToolCommand{{F, 0.0, 0.0}}, kT), DeviceStatus::kOk);
     }
-    DeviceReading r;
+    ToolReading r;
     ASSERT_EQ(device.read(r), DeviceStatus::kOk);
     v[observer ? 0 : 1] = r.v_WT.x;
   }
@@ -135,29 +147,30 @@ TEST(SimulatedDobDevice, ConstantForceGivesTheNominalStepResponse_Eq5) {
 }
 
 TEST(SimulatedDobDevice, NonFiniteForceIsAnErrorAndDoesNotMove) {
-  SimulatedDobDevice device = make_device();
+  DobDevice device;
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(device.write(DeviceCommand{{nan, 0.0, 0.0}}, kT), DeviceStatus::kError);
-  EXPECT_EQ(device.write(DeviceCommand{{0.0, std::numeric_limits<double>::infinity(), 0.0}}, kT),
+  EXPECT_EQ(device.write(ToolCommand{{nan, 0.0, 0.0}}, kT), DeviceStatus::kError);
+  EXPECT_EQ(device.write(ToolCommand{{0.0, std::numeric_limits<double>::infinity(), 0.0}}, kT),
             DeviceStatus::kError);
-  DeviceReading r;
+  ToolReading r;
   EXPECT_EQ(device.read(r), DeviceStatus::kOk);
-  EXPECT_EQ(r.p_WT.y, kCentre.y);
+  EXPECT_EQ(device->plant().p_WT(), kCentre);  // not moved at all
+  EXPECT_NEAR(r.p_WT.y, kCentre.y, 1e-15);     // the encoders' angles through forward kinematics
   // A period the observer was not discretized for.
-  EXPECT_EQ(device.write(DeviceCommand{}, 2 * kT), DeviceStatus::kError);
-  EXPECT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+  EXPECT_EQ(device.write(ToolCommand{}, 2 * kT), DeviceStatus::kError);
+  EXPECT_EQ(device.write(ToolCommand{}, kT), DeviceStatus::kOk);
 }
 
 TEST(SimulatedDobDevice, NonFiniteHandForceMakesTheStateAnError) {
-  SimulatedDobDevice device = make_device();
+  DobDevice device;
   engine::HandInput hand;
   hand.mode = engine::HandInput::Mode::kApplyForce;
   hand.force = {std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0};
-  device.set_hand(hand);
-  EXPECT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kError);
-  DeviceReading r;
+  device->set_hand(hand);
+  EXPECT_EQ(device.write(ToolCommand{}, kT), DeviceStatus::kError);
+  ToolReading r;
   EXPECT_EQ(device.read(r), DeviceStatus::kError);
-  EXPECT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kError);
+  EXPECT_EQ(device.write(ToolCommand{}, kT), DeviceStatus::kError);
 }
 
 // Figs. 7 and 10: the operator pushes with −5 N into the wall K = 1000 N/m rendered as

@@ -8,7 +8,9 @@
 #include <memory>
 #include <numbers>
 
+#include "runtime/five_bar_model.hpp"
 #include "runtime/simulated_five_bar_device.hpp"
+#include "support/modelled_device.hpp"
 
 namespace haptic::runtime {
 namespace {
@@ -16,9 +18,21 @@ namespace {
 constexpr double kT = 1e-3;  // s, the thesis' 1 ms sampling period
 constexpr double kPi = std::numbers::pi;
 
+/// The five-bar with its model (FiveBarModel), driven at its tool point.
+struct FiveBar : Modelled<SimulatedFiveBarDevice, FiveBarModel> {
+  explicit FiveBar(const engine::FiveBarParams& params, const engine::FiveBarState& initial = {},
+                   const SimulatedFiveBarOptions& options = {})
+      : Modelled(FiveBarModel(params, options.velocity_cutoff), params, initial, options) {}
+  /// Puts the plant somewhere else; the estimation starts at rest there.
+  void set_plant_state(const engine::FiveBarState& state) {
+    device.set_plant_state(state);
+    port.restart_estimation();
+  }
+};
+
 TEST(SimulatedFiveBarDevice, DescribesItselfAsTheBalancedFiveBar_L2380) {
-  SimulatedFiveBarDevice device(engine::FiveBarParams{});
-  const DeviceDescription& d = device.description();
+  FiveBar device(engine::FiveBarParams{});
+  const DeviceDescription& d = device->description();
   EXPECT_EQ(d.model, "five_bar_003");
   EXPECT_EQ(d.dof, 3u);
   EXPECT_TRUE(d.simulated);
@@ -35,8 +49,8 @@ TEST(SimulatedFiveBarDevice, DescribesItselfAsTheBalancedFiveBar_L2380) {
 }
 
 TEST(SimulatedFiveBarDevice, HoldsStillWithZeroForce_L2380) {
-  SimulatedFiveBarDevice device(engine::FiveBarParams{});
-  DeviceReading reading;
+  FiveBar device(engine::FiveBarParams{});
+  ToolReading reading;
   ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
   EXPECT_NEAR(reading.p_WT.x, 0.6, 1e-15);
   EXPECT_NEAR(reading.p_WT.z, 0.3, 1e-15);
@@ -53,16 +67,16 @@ TEST(SimulatedFiveBarDevice, HoldsStillWithZeroForce_L2380) {
 // α1 q̈1 = −0.3 F + f1 (Table 5.4 friction opposing), i.e. x grows by ½ (0.3 F − f1)/α1 · 0.3 t².
 TEST(SimulatedFiveBarDevice, ForceAlongXMovesTheTipAsJacobianTransposeSays_Eq3_58) {
   const engine::FiveBarParams p;
-  SimulatedFiveBarDevice device(p);
+  FiveBar device(p);
   const double F = 2.0, t = 0.2;
   for (int k = 0; k < 200; ++k) ASSERT_EQ(device.write({{F, 0.0, 0.0}}, kT), DeviceStatus::kOk);
-  const engine::FiveBarState& s = device.plant().state();
+  const engine::FiveBarState& s = device->plant().state();
   const engine::FiveBarJoints home = engine::five_bar_home();
   EXPECT_EQ(s.q[0], home[0]);
   EXPECT_EQ(s.q[2], home[2]);
   const double dq1 = -0.5 * (p.l1 * F - p.friction[1].coulomb) / p.alpha1 * t * t;
   EXPECT_NEAR(s.q[1] - home[1], dq1, 0.02 * std::abs(dq1));  // viscous B t / α1 ≈ 1 %
-  DeviceReading reading;
+  ToolReading reading;
   ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
   const double count_at_tip = p.l1 * kPi / 6000.0;
   EXPECT_NEAR(reading.p_WT.x - 0.6, p.l1 * std::sin(-dq1), 0.02 * p.l1 * std::abs(dq1) + count_at_tip);
@@ -74,25 +88,25 @@ TEST(SimulatedFiveBarDevice, ForceAlongXMovesTheTipAsJacobianTransposeSays_Eq3_5
 // The operator pushing up at the tip drives only the vertical joint at home (Jᵀ (0, 0, F) =
 // (0, 0, 0.6 F)); a 1 N push is well above q2's 0.082 N·m Coulomb friction.
 TEST(SimulatedFiveBarDevice, OperatorForceActsAtTheTipThroughJacobianTranspose_Eq3_58) {
-  SimulatedFiveBarDevice device(engine::FiveBarParams{});
+  FiveBar device(engine::FiveBarParams{});
   engine::HandInput hand;
   hand.mode = engine::HandInput::Mode::kApplyForce;
   hand.force = {0.0, 0.0, 1.0};
-  device.set_hand(hand);
+  device->set_hand(hand);
   for (int k = 0; k < 100; ++k) ASSERT_EQ(device.write({}, kT), DeviceStatus::kOk);
-  const engine::FiveBarState& s = device.plant().state();
+  const engine::FiveBarState& s = device->plant().state();
   EXPECT_EQ(s.q[0], engine::five_bar_home()[0]);
   EXPECT_EQ(s.q[1], engine::five_bar_home()[1]);
   EXPECT_GT(s.qdot[2], 0.0);
-  DeviceReading reading;
+  ToolReading reading;
   ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
   EXPECT_GT(reading.p_WT.z, 0.3);
   // A push of 0.1 N (0.06 N·m at q2) stays under the friction: nothing moves.
-  SimulatedFiveBarDevice weak(engine::FiveBarParams{});
+  FiveBar weak(engine::FiveBarParams{});
   hand.force = {0.0, 0.0, 0.1};
-  weak.set_hand(hand);
+  weak->set_hand(hand);
   for (int k = 0; k < 100; ++k) ASSERT_EQ(weak.write({}, kT), DeviceStatus::kOk);
-  EXPECT_EQ(weak.plant().state().q[2], engine::five_bar_home()[2]);
+  EXPECT_EQ(weak->plant().state().q[2], engine::five_bar_home()[2]);
 }
 
 // Table 5.2: with the encoders on, a motion smaller than a count does not show; without them
@@ -100,12 +114,12 @@ TEST(SimulatedFiveBarDevice, OperatorForceActsAtTheTipThroughJacobianTranspose_E
 TEST(SimulatedFiveBarDevice, ReadsThroughTheEncodersWhenQuantized_Table5_2) {
   engine::FiveBarState moved;
   moved.q[1] -= 0.3 * kPi / 6000.0;  // a third of an axial count
-  SimulatedFiveBarDevice quantized(engine::FiveBarParams{}, moved);
+  FiveBar quantized(engine::FiveBarParams{}, moved);
   SimulatedFiveBarOptions options;
   options.quantized = false;
-  SimulatedFiveBarDevice exact(engine::FiveBarParams{}, moved, options);
-  EXPECT_FALSE(exact.description().capabilities.quantized_position);
-  DeviceReading a, b;
+  FiveBar exact(engine::FiveBarParams{}, moved, options);
+  EXPECT_FALSE(exact->description().capabilities.quantized_position);
+  ToolReading a, b;
   ASSERT_EQ(quantized.read(a), DeviceStatus::kOk);
   ASSERT_EQ(exact.read(b), DeviceStatus::kOk);
   EXPECT_NEAR(a.p_WT.x, 0.6, 1e-15);  // still the home count
@@ -114,10 +128,10 @@ TEST(SimulatedFiveBarDevice, ReadsThroughTheEncodersWhenQuantized_Table5_2) {
   // so in the positive one the reading rounds up: 1.01 counts read as 2, 0.99 as 1.
   moved.q[1] = engine::five_bar_home()[1] + 1.01 * kPi / 6000.0;
   quantized.set_plant_state(moved);
-  EXPECT_NEAR(quantized.measured_joints()[1] - engine::five_bar_home()[1], 2.0 * kPi / 6000.0, 1e-12);
+  EXPECT_NEAR(quantized->measured_joints()[1] - engine::five_bar_home()[1], 2.0 * kPi / 6000.0, 1e-12);
   moved.q[1] = engine::five_bar_home()[1] + 0.99 * kPi / 6000.0;
   quantized.set_plant_state(moved);
-  EXPECT_NEAR(quantized.measured_joints()[1] - engine::five_bar_home()[1], kPi / 6000.0, 1e-12);
+  EXPECT_NEAR(quantized->measured_joints()[1] - engine::five_bar_home()[1], kPi / 6000.0, 1e-12);
   ASSERT_EQ(quantized.read(a), DeviceStatus::kOk);
   EXPECT_NEAR(a.p_WT.x - 0.6, -0.3 * std::sin(kPi / 6000.0), 1e-12);
 }
@@ -127,22 +141,22 @@ TEST(SimulatedFiveBarDevice, ReadsThroughTheEncodersWhenQuantized_Table5_2) {
 TEST(SimulatedFiveBarDevice, FlexibleModeIsDeclaredAndTheReadingIsTheEncodersRigidTip_Eq3_31) {
   SimulatedFiveBarOptions options;
   options.plant.flexible_mode = true;
-  SimulatedFiveBarDevice device(engine::FiveBarParams{}, {}, options);
-  EXPECT_TRUE(device.description().capabilities.flexible_modes);
+  FiveBar device(engine::FiveBarParams{}, {}, options);
+  EXPECT_TRUE(device->description().capabilities.flexible_modes);
   engine::HandInput hand;
   hand.mode = engine::HandInput::Mode::kApplyForce;
   hand.force = {0.0, 2.0, 0.0};  // sideways at home: 1.2 N·m about q0, above its friction
-  device.set_hand(hand);
+  device->set_hand(hand);
   for (int k = 0; k < 100; ++k) ASSERT_EQ(device.write({}, kT), DeviceStatus::kOk);
-  DeviceReading reading;
+  ToolReading reading;
   ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
   const engine::FiveBarParams p;
-  EXPECT_EQ(reading.p_WT, engine::five_bar_tip_position(p, device.measured_joints()));
+  EXPECT_EQ(reading.p_WT, engine::five_bar_tip_position(p, device->measured_joints()));
   engine::Vec3 p_physical, v_physical;
-  device.plant().physical_tip_state(p_physical, v_physical);
-  const engine::Vec3 p_rigid = engine::five_bar_tip_position(p, device.plant().state().q);
-  const double q0 = device.plant().state().q[0];
-  const double deflection = options.plant.mode.tip_shape * device.plant().mode_state().eta;
+  device->plant().physical_tip_state(p_physical, v_physical);
+  const engine::Vec3 p_rigid = engine::five_bar_tip_position(p, device->plant().state().q);
+  const double q0 = device->plant().state().q[0];
+  const double deflection = options.plant.mode.tip_shape * device->plant().mode_state().eta;
   const engine::Vec3 bend = p_physical - p_rigid;
   EXPECT_NEAR(bend.x, -deflection * std::sin(q0), 1e-15);
   EXPECT_NEAR(bend.y, deflection * std::cos(q0), 1e-15);
@@ -152,8 +166,8 @@ TEST(SimulatedFiveBarDevice, FlexibleModeIsDeclaredAndTheReadingIsTheEncodersRig
   EXPECT_GT(q0, 0.0);
   // set_plant_state puts the mode at rest again.
   device.set_plant_state({});
-  EXPECT_EQ(device.plant().mode_state().eta, 0.0);
-  EXPECT_EQ(device.plant().mode_state().eta_dot, 0.0);
+  EXPECT_EQ(device->plant().mode_state().eta, 0.0);
+  EXPECT_EQ(device->plant().mode_state().eta_dot, 0.0);
 }
 
 // Mode off (the default) is the rigid device: the same readings, tick for tick, as one built with
@@ -162,15 +176,15 @@ TEST(SimulatedFiveBarDevice, FlexibleModeOffIsTheRigidDevice) {
   SimulatedFiveBarOptions off;
   off.plant.flexible_mode = false;
   off.plant.mode.omega = 100.0;
-  SimulatedFiveBarDevice rigid(engine::FiveBarParams{});
-  SimulatedFiveBarDevice explicit_off(engine::FiveBarParams{}, {}, off);
-  EXPECT_FALSE(explicit_off.description().capabilities.flexible_modes);
+  FiveBar rigid(engine::FiveBarParams{});
+  FiveBar explicit_off(engine::FiveBarParams{}, {}, off);
+  EXPECT_FALSE(explicit_off->description().capabilities.flexible_modes);
   engine::HandInput hand;
   hand.mode = engine::HandInput::Mode::kApplyForce;
   hand.force = {1.0, 2.0, 1.5};
-  rigid.set_hand(hand);
-  explicit_off.set_hand(hand);
-  DeviceReading a, b;
+  rigid->set_hand(hand);
+  explicit_off->set_hand(hand);
+  ToolReading a, b;
   for (int k = 0; k < 200; ++k) {
     ASSERT_EQ(rigid.write({{0.5, -0.5, 0.2}}, kT), DeviceStatus::kOk);
     ASSERT_EQ(explicit_off.write({{0.5, -0.5, 0.2}}, kT), DeviceStatus::kOk);
@@ -180,8 +194,8 @@ TEST(SimulatedFiveBarDevice, FlexibleModeOffIsTheRigidDevice) {
     ASSERT_EQ(a.v_WT, b.v_WT);
   }
   for (int i = 0; i < 3; ++i) {
-    EXPECT_EQ(rigid.plant().state().q[i], explicit_off.plant().state().q[i]);
-    EXPECT_EQ(rigid.plant().state().qdot[i], explicit_off.plant().state().qdot[i]);
+    EXPECT_EQ(rigid->plant().state().q[i], explicit_off->plant().state().q[i]);
+    EXPECT_EQ(rigid->plant().state().qdot[i], explicit_off->plant().state().qdot[i]);
   }
 }
 
@@ -198,31 +212,36 @@ class ConstantVelocity final : public FiveBarVelocityEstimator {
 };
 
 TEST(SimulatedFiveBarDevice, VelocityEstimatorHookReplacesTheDifference_Eq6_5) {
-  SimulatedFiveBarDevice device(engine::FiveBarParams{});
+  SimulatedFiveBarOptions options;
+  options.state_estimator = true;
+  FiveBar device(engine::FiveBarParams{}, {}, options);
+  EXPECT_TRUE(device->description().capabilities.state_estimator);
   auto owned = std::make_unique<ConstantVelocity>();
   ConstantVelocity* estimator = owned.get();
-  device.set_velocity_estimator(std::move(owned));
-  EXPECT_TRUE(device.description().capabilities.state_estimator);
+  device.model.set_velocity_estimator(std::move(owned));
+  ToolReading reading;
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);  // the first estimate starts it at rest
   EXPECT_EQ(estimator->resets, 1);
   ASSERT_EQ(device.write({{20.0, 0.0, 0.0}}, kT), DeviceStatus::kOk);
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
   // It is fed the saturated torque: Jᵀ (20, 0, 0) = (0, −6, 0), inside the 7.22 N·m limit…
   EXPECT_NEAR(estimator->last_tau[1], -6.0, 1e-12);
   ASSERT_EQ(device.write({{40.0, 0.0, 0.0}}, kT), DeviceStatus::kOk);
-  EXPECT_NEAR(estimator->last_tau[1], -0.373 * 3.87 * 5.0, 1e-12);  // …and clipped beyond (L3237)
-  DeviceReading reading;
   ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  EXPECT_NEAR(estimator->last_tau[1], -0.373 * 3.87 * 5.0, 1e-12);  // …and clipped beyond (L3237)
   // q̇ = (1, 0, 0) at (nearly) home: v = J col 0 = (−ρ S0, ρ C0, 0) ≈ (0, 0.6, 0).
   EXPECT_NEAR(reading.v_WT.y, 0.6, 1e-3);
-  device.set_velocity_estimator(nullptr);
-  EXPECT_FALSE(device.description().capabilities.state_estimator);
+  EXPECT_EQ(estimator->resets, 1);
+  device.model.set_velocity_estimator(nullptr);
+  EXPECT_FALSE(device.model.has_velocity_estimator());
 }
 
 TEST(SimulatedFiveBarDevice, NonFiniteCommandOrStateIsAnError) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  SimulatedFiveBarDevice device(engine::FiveBarParams{});
+  FiveBar device(engine::FiveBarParams{});
   EXPECT_EQ(device.write({{nan, 0.0, 0.0}}, kT), DeviceStatus::kError);
   // The bad command was not applied: the device is still at rest and reads fine.
-  DeviceReading reading;
+  ToolReading reading;
   EXPECT_EQ(device.read(reading), DeviceStatus::kOk);
   EXPECT_NEAR(reading.p_WT.x, 0.6, 1e-15);
   EXPECT_EQ(device.write({{0.0, std::numeric_limits<double>::infinity(), 0.0}}, kT),

@@ -8,13 +8,16 @@
 #include <limits>
 
 #include "engine/device/gimbal_joystick.hpp"
+#include "runtime/joystick_model.hpp"
 #include "runtime/simulated_joystick_device.hpp"
+#include "support/modelled_device.hpp"
 
 namespace haptic::runtime {
 namespace {
 
 constexpr double kT = 1e-3;  // s, a 1 kHz loop
 namespace js = engine::joystick_state;
+using Joystick = Modelled<SimulatedJoystickDevice, JoystickModel>;
 
 engine::HandInput push(const engine::Vec3& force) {
   engine::HandInput hand;
@@ -26,8 +29,8 @@ engine::HandInput push(const engine::Vec3& force) {
 TEST(SimulatedJoystickDevice, DescribesItselfAsJoystick004) {
   const SimulatedJoystickConfig config;
   ASSERT_EQ(config.validate(), "");
-  SimulatedJoystickDevice device(config);
-  const DeviceDescription& d = device.description();
+  Joystick device(JoystickModel(config.model()), config);
+  const DeviceDescription& d = device->description();
   EXPECT_EQ(d.model, "joystick_004");
   EXPECT_EQ(d.dof, 3u);
   EXPECT_TRUE(d.simulated);
@@ -67,9 +70,9 @@ TEST(SimulatedJoystickDevice, ConfigValidationNamesTheField) {
 TEST(SimulatedJoystickDevice, ReadingIsTheHandlePositionOfEq3_3) {
   SimulatedJoystickConfig config;
   config.initial = {0.3, -0.2, 0.25};
-  SimulatedJoystickDevice device(config);
-  ASSERT_EQ(device.start(), DeviceStatus::kOk);
-  DeviceReading reading;
+  Joystick device(JoystickModel(config.model()), config);
+  ASSERT_EQ(device->start(), DeviceStatus::kOk);
+  ToolReading reading;
   ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
   const engine::Vec3 x = engine::joystick_forward(config.initial);
   EXPECT_NEAR(reading.p_WT.x, x.x, 1e-15);
@@ -79,12 +82,12 @@ TEST(SimulatedJoystickDevice, ReadingIsTheHandlePositionOfEq3_3) {
   // Moving: v_WT agrees with the difference of successive positions (J q̇, eq. 3.14).
   // Above the gimbal friction and brake residual (≈ 0.28 N·m, 1.2 N at R = 0.25 m) and the
   // sleeve friction (5.66 N), so that every axis moves.
-  device.set_hand(push({6.0, -1.0, 8.0}));
-  DeviceReading before, after;
+  device->set_hand(push({6.0, -1.0, 8.0}));
+  ToolReading before, after;
   for (int k = 0; k < 30; ++k) ASSERT_EQ(device.write({}, kT), DeviceStatus::kOk);
-  const engine::Vec3 rates = device.plant().measured_joint_rates();
+  const engine::Vec3 rates = device->plant().measured_joint_rates();
   EXPECT_TRUE(rates.x != 0.0 && rates.y != 0.0 && rates.z != 0.0);
-  EXPECT_FALSE(device.watchdog_tripped());
+  EXPECT_FALSE(device.model.watchdog_tripped());
   device.read(before);
   const double h = 1e-5;
   device.write({}, h);
@@ -101,13 +104,13 @@ TEST(SimulatedJoystickDevice, ReadingIsTheHandlePositionOfEq3_3) {
 TEST(SimulatedJoystickDevice, FreeSpaceForceGoesToTheMotorsAsJtF_Eq3_18) {
   SimulatedJoystickConfig config;
   config.initial = {0.2, 0.1, 0.24};
-  SimulatedJoystickDevice device(config);
+  Joystick device(JoystickModel(config.model()), config);
   const engine::Vec3 F{2.0, -1.0, 3.0};
   const engine::GimbalJoystickParams& p = config.params;
   const engine::Vec3 tau = engine::joystick_multiply_transposed(
       engine::joystick_jacobian(config.initial.theta, config.initial.phi, config.initial.R / p.r, p.r), F);
   ASSERT_EQ(device.write({F}, kT), DeviceStatus::kOk);
-  const engine::JoystickActuatorCommand& c = device.last_command();
+  const engine::JoystickActuatorCommand& c = device->last_command();
   std::printf("  tau = (%.4f, %.4f, %.4f) N.m; motors (%.4f, %.4f, %.4f); brakes (%g, %g, %g)\n",
               tau.x, tau.y, tau.z, c.motor[0], c.motor[1], c.motor[2], c.brake[0], c.brake[1],
               c.brake[2]);
@@ -124,7 +127,7 @@ TEST(SimulatedJoystickDevice, FreeSpaceForceGoesToTheMotorsAsJtF_Eq3_18) {
 // and its motor is idle (eq. 4.7 through L1011's rule); the brakes only take power in.
 TEST(SimulatedJoystickDevice, ADamperSceneIsRenderedByTheBrakes_Eq4_7) {
   SimulatedJoystickConfig config;
-  SimulatedJoystickDevice device(config);
+  Joystick device(JoystickModel(config.model()), config);
   engine::HandInput hand;
   hand.mode = engine::HandInput::Mode::kFollowTarget;
   hand.target = engine::joystick_forward(config.initial);
@@ -134,16 +137,16 @@ TEST(SimulatedJoystickDevice, ADamperSceneIsRenderedByTheBrakes_Eq4_7) {
   hand.trajectory.shape = engine::TargetTrajectory::Shape::kSine;
   hand.trajectory.amplitude = {0.03, 0.0, 0.0};
   hand.trajectory.frequency_hz = 1.0;
-  device.set_hand(hand);
+  device->set_hand(hand);
   const double B = 5.0;  // N·s/m
   int moving = 0, braked = 0;
   double min_brake_power = 0.0;
   for (int k = 0; k < 2000; ++k) {
-    DeviceReading r;
+    ToolReading r;
     ASSERT_EQ(device.read(r), DeviceStatus::kOk);
-    const double theta_dot = device.plant().measured_joint_rates().x;
+    const double theta_dot = device->plant().measured_joint_rates().x;
     ASSERT_EQ(device.write({-B * r.v_WT}, kT), DeviceStatus::kOk);
-    const engine::JoystickActuatorCommand& c = device.last_command();
+    const engine::JoystickActuatorCommand& c = device->last_command();
     if (std::abs(theta_dot) >= config.rule_stick_velocity) {
       ++moving;
       if (c.brake[0] > 0.0 && c.motor[0] == 0.0) ++braked;
@@ -154,57 +157,62 @@ TEST(SimulatedJoystickDevice, ADamperSceneIsRenderedByTheBrakes_Eq4_7) {
   EXPECT_GT(moving, 1500);
   EXPECT_EQ(braked, moving);
   EXPECT_GE(min_brake_power, 0.0);
-  EXPECT_FALSE(device.watchdog_tripped());
+  EXPECT_FALSE(device.model.watchdog_tripped());
 }
 
-// L1930: the hand throws the handle; the tick in which |θ̇| passes 8 rad/s trips the watchdog,
+// L1930: the hand throws the handle; the first sample with |θ̇| past 8 rad/s trips the watchdog,
 // from then on the motors are zero and the brakes at their limits, and it stays so after the
 // joystick has stopped and the hand let go, until rearm().
 TEST(SimulatedJoystickDevice, WatchdogTripsWithinOnePeriodAndLatches_L1930) {
   SimulatedJoystickConfig config;
   config.initial = {-0.6, 0.0, 0.24};
-  SimulatedJoystickDevice device(config);
-  device.set_hand(push({25.0, 0.0, 0.0}));  // 6 N·m about θ: below the braked capacity 7.98 N·m
+  Joystick device(JoystickModel(config.model()), config);
+  device->set_hand(push({25.0, 0.0, 0.0}));  // 6 N·m about θ: below the braked capacity 7.98 N·m
   int tripped_at = -1;
   double rate_before = 0.0, rate_at = 0.0;
   for (int k = 0; k < 300; ++k) {
-    DeviceReading r;
+    ToolReading r;
     ASSERT_EQ(device.read(r), DeviceStatus::kOk);
-    const double before = device.plant().measured_joint_rates().x;
+    const double before = device->plant().measured_joint_rates().x;
     ASSERT_EQ(device.write({}, kT), DeviceStatus::kOk);
-    const double after = device.plant().measured_joint_rates().x;
+    const double after = device->plant().measured_joint_rates().x;
     if (tripped_at < 0 && std::abs(after) > 8.0) {
       tripped_at = k;
       rate_before = before;
       rate_at = after;
-      EXPECT_TRUE(device.watchdog_tripped());  // the same tick
-      EXPECT_TRUE(device.in_safe_state());
+      // The very next sample trips it, before any command is computed from it: the watchdog
+      // checks the tachometers every tick (the next loop pass reads the same sample).
+      ToolReading next;
+      ASSERT_EQ(device.read(next), DeviceStatus::kOk);
+      EXPECT_TRUE(device.model.watchdog_tripped());
+      EXPECT_TRUE(device.model.in_safe_state());
+      EXPECT_TRUE(next.safe_state);
     }
     if (tripped_at < 0) {
-      EXPECT_FALSE(device.watchdog_tripped()) << k;
+      EXPECT_FALSE(device.model.watchdog_tripped()) << k;
     }
   }
   std::printf("  tripped at tick %d: theta rate %.3f rad/s (%.3f at its start)\n", tripped_at,
               rate_at, rate_before);
   ASSERT_GE(tripped_at, 0);
   EXPECT_LE(std::abs(rate_before), 8.0);
-  const engine::JoystickActuatorCommand& c = device.last_command();
+  const engine::JoystickActuatorCommand& c = device->last_command();
   const engine::GimbalJoystickParams& p = config.params;
   EXPECT_EQ(c.motor, (std::array<double, 3>{0.0, 0.0, 0.0}));
   EXPECT_EQ(c.brake, (std::array<double, 3>{p.brake_limit_gimbal, p.brake_limit_gimbal,
                                              p.brake_limit_shaft}));
-  EXPECT_EQ(device.plant().measured_joint_rates().x, 0.0);  // the brakes hold against the hand
+  EXPECT_EQ(device->plant().measured_joint_rates().x, 0.0);  // the brakes hold against the hand
   // Let go and wait: still latched, and the scene's commands are ignored.
-  device.set_hand({});
+  device->set_hand({});
   for (int k = 0; k < 200; ++k) device.write({{5.0, 5.0, 5.0}}, kT);
-  EXPECT_TRUE(device.watchdog_tripped());
-  EXPECT_EQ(device.last_command().motor, (std::array<double, 3>{0.0, 0.0, 0.0}));
-  ASSERT_TRUE(device.rearm());
-  EXPECT_FALSE(device.watchdog_tripped());
-  EXPECT_FALSE(device.in_safe_state());
+  EXPECT_TRUE(device.model.watchdog_tripped());
+  EXPECT_EQ(device->last_command().motor, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  ASSERT_TRUE(device.model.rearm());
+  EXPECT_FALSE(device.model.watchdog_tripped());
+  EXPECT_FALSE(device.model.in_safe_state());
   device.write({{1.0, 0.0, 0.0}}, kT);
-  EXPECT_GT(device.last_command().motor[0], 0.0);
-  EXPECT_EQ(device.last_command().brake[0], 0.0);
+  EXPECT_GT(device->last_command().motor[0], 0.0);
+  EXPECT_EQ(device->last_command().brake[0], 0.0);
 }
 
 // A tripped device reports its safe state in every reading (so the loop flags a device fault and
@@ -213,19 +221,19 @@ TEST(SimulatedJoystickDevice, ReportsItsSafeStateAndReArmsAfterRest_L1955) {
   SimulatedJoystickConfig config;
   config.initial = {-0.6, 0.0, 0.24};
   config.rearm_after_s = 0.1;
-  SimulatedJoystickDevice device(config);
-  device.set_hand(push({25.0, 0.0, 0.0}));
-  DeviceReading r;
+  Joystick device(JoystickModel(config.model()), config);
+  device->set_hand(push({25.0, 0.0, 0.0}));
+  ToolReading r;
   int k = 0;
-  for (; k < 300 && !device.watchdog_tripped(); ++k) device.write({}, kT);
-  ASSERT_TRUE(device.watchdog_tripped());
+  for (; k < 300 && !device.model.watchdog_tripped(); ++k) device.write({}, kT);
+  ASSERT_TRUE(device.model.watchdog_tripped());
   ASSERT_EQ(device.read(r), DeviceStatus::kOk);
   EXPECT_TRUE(r.safe_state);
-  device.set_hand({});
+  device->set_hand({});
   int rearmed_after = -1;
   for (int n = 1; n <= 500 && rearmed_after < 0; ++n) {
     device.write({}, kT);
-    if (!device.in_safe_state()) rearmed_after = n;
+    if (!device.model.in_safe_state()) rearmed_after = n;
   }
   std::printf("  re-armed %d ticks after the hand let go\n", rearmed_after);
   ASSERT_GT(rearmed_after, 0);
@@ -240,43 +248,43 @@ TEST(SimulatedJoystickDevice, ReportsItsSafeStateAndReArmsAfterRest_L1955) {
 
 TEST(SimulatedJoystickDevice, EnterSafeStateZeroesMotorsAndSetsBrakes) {
   const SimulatedJoystickConfig config;
-  SimulatedJoystickDevice device(config);
-  device.enter_safe_state();
+  Joystick device(JoystickModel(config.model()), config);
+  device.port.enter_safe_state();
   ASSERT_EQ(device.write({{3.0, 3.0, 3.0}}, kT), DeviceStatus::kOk);
   const engine::GimbalJoystickParams& p = config.params;
-  EXPECT_EQ(device.last_command().motor, (std::array<double, 3>{0.0, 0.0, 0.0}));
-  EXPECT_EQ(device.last_command().brake,
+  EXPECT_EQ(device->last_command().motor, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  EXPECT_EQ(device->last_command().brake,
             (std::array<double, 3>{p.brake_limit_gimbal, p.brake_limit_gimbal, p.brake_limit_shaft}));
-  EXPECT_TRUE(device.in_safe_state());
-  EXPECT_FALSE(device.watchdog_tripped());
-  ASSERT_TRUE(device.rearm());
+  EXPECT_TRUE(device.model.in_safe_state());
+  EXPECT_FALSE(device.model.watchdog_tripped());
+  ASSERT_TRUE(device.model.rearm());
   // A non-finite command is a fault too.
   device.write({{std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0}}, kT);
-  EXPECT_TRUE(device.in_safe_state());
-  EXPECT_EQ(device.last_command().motor, (std::array<double, 3>{0.0, 0.0, 0.0}));
-  DeviceReading r;
+  EXPECT_TRUE(device.model.in_safe_state());
+  EXPECT_EQ(device->last_command().motor, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  ToolReading r;
   EXPECT_EQ(device.read(r), DeviceStatus::kOk);  // the state itself is fine
 }
 
 TEST(SimulatedJoystickDevice, ANonFiniteStateIsAnErrorAndCannotBeRearmed) {
   const SimulatedJoystickConfig config;
-  SimulatedJoystickDevice device(config);
-  device.set_hand(push({std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0}));
+  Joystick device(JoystickModel(config.model()), config);
+  device->set_hand(push({std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0}));
   EXPECT_EQ(device.write({}, kT), DeviceStatus::kError);
-  EXPECT_TRUE(device.in_safe_state());
-  DeviceReading r;
+  EXPECT_TRUE(device.model.in_safe_state());
+  ToolReading r;
   EXPECT_EQ(device.read(r), DeviceStatus::kError);
-  EXPECT_FALSE(device.rearm());
-  EXPECT_TRUE(device.in_safe_state());
+  EXPECT_FALSE(device.model.rearm());
+  EXPECT_TRUE(device.model.in_safe_state());
 }
 
 TEST(SimulatedJoystickDevice, RunsAreExactlyReproducible) {
   const SimulatedJoystickConfig config;
-  SimulatedJoystickDevice a(config), b(config);
+  Joystick a(JoystickModel(config.model()), config), b(JoystickModel(config.model()), config);
   const engine::HandInput hand = push({3.0, -2.0, 8.0});
-  a.set_hand(hand);
-  b.set_hand(hand);
-  DeviceReading ra, rb;
+  a->set_hand(hand);
+  b->set_hand(hand);
+  ToolReading ra, rb;
   for (int k = 0; k < 500; ++k) {
     a.read(ra);
     b.read(rb);

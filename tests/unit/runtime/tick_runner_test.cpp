@@ -8,8 +8,9 @@
 #include <vector>
 
 #include "haptic/wire/datagram.hpp"
+#include "runtime/cartesian_model.hpp"
 #include "runtime/loop_thread.hpp"
-#include "runtime/simulated_device.hpp"
+#include "runtime/simulated_point_mass_device.hpp"
 #include "runtime/tick_runner.hpp"
 #include "support/allocation_counter.hpp"
 
@@ -35,7 +36,7 @@ struct Rig {
   explicit Rig(engine::CompiledScene scene = {}, double z0 = 0.01)
       : device(engine::PointMassParams{}, engine::PointMassState{{0.0, 0.0, z0}, {}}, 20.0),
         scenes(std::make_unique<const engine::CompiledScene>(std::move(scene))),
-        runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}}) {}
+        runner(device, model, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}}) {}
 
   TickSample run(std::uint64_t ticks) {
     TickSample last;
@@ -48,6 +49,7 @@ struct Rig {
   }
 
   SimulatedPointMassDevice device;
+  CartesianModel model;
   SceneExchange scenes;
   SampleRing samples;
   LoopCounters counters;
@@ -125,12 +127,12 @@ class FailingDevice final : public Device {
   void stop() override {}
   DeviceStatus read(DeviceReading& reading) override {
     ++reads_;
-    reading.p_WT = {0.0, 0.0, -0.001};
-    if (reads_ >= fail_from_) reading.p_WT.z = std::numeric_limits<double>::quiet_NaN();
+    reading.q = {0.0, 0.0, -0.001};
+    if (reads_ >= fail_from_) reading.q[2] = std::numeric_limits<double>::quiet_NaN();
     return DeviceStatus::kOk;  // the device does not notice: the runner must
   }
   DeviceStatus write(const DeviceCommand& command, double) override {
-    last_command = command.F_T_W;
+    last_command = {command.tau[0], command.tau[1], command.tau[2]};
     ++writes;
     return DeviceStatus::kOk;
   }
@@ -150,7 +152,8 @@ TEST(TickRunner, NonFiniteReadingFaultsToZeroForceAndShowsTheLastGoodState) {
   SceneExchange scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0)));
   SampleRing samples;
   LoopCounters counters;
-  TickRunner runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}});
+  CartesianModel model;
+  TickRunner runner(device, model, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}});
   runner.run(1, 0);
   runner.run(2, 1'000'000);
   EXPECT_NEAR(device.last_command.z, 1.0, 1e-12);  // 1 mm into a 1000 N/m wall
@@ -177,12 +180,12 @@ class LatchedDevice final : public Device {
   void stop() override {}
   DeviceStatus read(DeviceReading& reading) override {
     ++reads_;
-    reading.p_WT = {0.0, 0.0, -0.001 * static_cast<double>(reads_)};
+    reading.q = {0.0, 0.0, -0.001 * static_cast<double>(reads_)};
     reading.safe_state = reads_ >= latch_from_;
     return DeviceStatus::kOk;
   }
   DeviceStatus write(const DeviceCommand& command, double) override {
-    last_command = command.F_T_W;
+    last_command = {command.tau[0], command.tau[1], command.tau[2]};
     return DeviceStatus::kOk;
   }
   engine::Vec3 last_command;
@@ -198,7 +201,8 @@ TEST(TickRunner, ADeviceInItsSafeStateIsAFaultThatStillShowsWhereItIs) {
   SceneExchange scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0)));
   SampleRing samples;
   LoopCounters counters;
-  TickRunner runner(device, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}});
+  CartesianModel model;
+  TickRunner runner(device, model, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}});
   runner.run(1, 0);
   EXPECT_GT(device.last_command.z, 0.0);
   runner.run(2, 1'000'000);
@@ -290,7 +294,8 @@ TEST(TickRunner, TwoPortsPushOneVirtualMassTogetherWithoutAllocating_Eq7_1) {
       engine::compile_scene(description, 50, 1, kPeriod, 0.0, 2)));
   SampleRing ring0, ring1;
   LoopCounters counters;
-  TickRunner runner({TickPort{&device0, &ring0, {}, {}}, TickPort{&device1, &ring1, {}, {}}}, scenes,
+  CartesianModel model0, model1;
+  TickRunner runner({TickPort{&device0, &model0, &ring0, {}, {}}, TickPort{&device1, &model1, &ring1, {}, {}}}, scenes,
                     counters, TickConfig{kPeriod, {}, 50, {}});
   engine::HandInput hand0 = push(0.0), hand1 = push(0.0);
   hand0.force = {0.2, 0.0, 0.0};
@@ -330,11 +335,12 @@ TEST(TickRunner, TwoPortsPushOneVirtualMassTogetherWithoutAllocating_Eq7_1) {
 struct LockstepRig {
   LockstepRig() { loop.start(); }
   SimulatedPointMassDevice device{engine::PointMassParams{}, {}, 20.0};
+  CartesianModel model;
   SceneExchange scenes{std::make_unique<const engine::CompiledScene>()};
   SampleRing samples;
   LoopCounters counters;
   LatenessHistogram lateness;
-  TickRunner runner{device, scenes, samples, counters, TickConfig{}};
+  TickRunner runner{device, model, scenes, samples, counters, TickConfig{}};
   LoopThread loop{runner, counters, lateness, LoopConfig{1000.0, TimeMode::kLockstep}};
 };
 

@@ -1,4 +1,4 @@
-#include "runtime/simulated_device.hpp"
+#include "runtime/simulated_point_mass_device.hpp"
 
 namespace haptic::runtime {
 
@@ -8,7 +8,9 @@ SimulatedPointMassDevice::SimulatedPointMassDevice(const engine::PointMassParams
     : plant_(params, initial) {
   description_.name = "simulated point mass (3-DOF mass-damper)";
   description_.model = "point_mass";
+  description_.capabilities.measured_rates = true;
   description_.dof = 3;
+  description_.joints = 3;
   description_.workspace_min = params.workspace_min;
   description_.workspace_max = params.workspace_max;
   description_.max_force = max_force;
@@ -18,16 +20,25 @@ SimulatedPointMassDevice::SimulatedPointMassDevice(const engine::PointMassParams
 }
 
 DeviceStatus SimulatedPointMassDevice::read(DeviceReading& reading) {
-  reading.p_WT = plant_.state().p_WT;
-  reading.v_WT = plant_.state().v_WT;
-  return engine::is_finite(reading.p_WT) && engine::is_finite(reading.v_WT) ? DeviceStatus::kOk
-                                                                            : DeviceStatus::kError;
+  const engine::PointMassState& s = plant_.state();
+  reading.q = {s.p_WT.x, s.p_WT.y, s.p_WT.z};
+  reading.q_dot = {s.v_WT.x, s.v_WT.y, s.v_WT.z};
+  return engine::is_finite(s.p_WT) && engine::is_finite(s.v_WT) ? DeviceStatus::kOk
+                                                                : DeviceStatus::kError;
+}
+
+std::uint32_t SimulatedPointMassDevice::plant_joints(JointVector& q, JointVector& q_dot) const {
+  const engine::PointMassState& s = plant_.state();
+  q = {s.p_WT.x, s.p_WT.y, s.p_WT.z};
+  q_dot = {s.v_WT.x, s.v_WT.y, s.v_WT.z};
+  return 3;
 }
 
 DeviceStatus SimulatedPointMassDevice::write(const DeviceCommand& command, double dt) {
   // A non-finite command is a fault: this tick runs with no device force.
-  const bool command_ok = engine::is_finite(command.F_T_W);
-  const engine::Vec3 F_device = command_ok ? command.F_T_W : engine::Vec3{};
+  const engine::Vec3 F_command{command.tau[0], command.tau[1], command.tau[2]};
+  const bool command_ok = engine::is_finite(F_command);
+  const engine::Vec3 F_device = command_ok ? F_command : engine::Vec3{};
   double t = 0.0;
   const engine::HandInput& hand = hand_.begin_tick(t);
   plant_.set_added_mass(engine::hand_mass(hand));
