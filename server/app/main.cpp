@@ -10,7 +10,7 @@
 #include <fstream>
 #include <iostream>
 
-#include "app/config.hpp"
+#include "config/server_config.hpp"
 #include "app/health_check.hpp"
 #include "app/server.hpp"
 
@@ -72,23 +72,23 @@ int main(int argc, char** argv) {
 
   haptic::v1::ServerConfig config;
   try {
-    config = config_path.empty() ? haptic::app::default_config()
-                                 : haptic::app::load_config_file(config_path);
+    config = config_path.empty() ? haptic::config::default_config()
+                                 : haptic::config::load_config_file(config_path);
     if (!grpc_address.empty()) config.set_grpc_address(grpc_address);
     if (!udp_address.empty()) config.set_udp_address(udp_address);
     if (insecure) config.set_insecure_remote_access(true);
     if (udp_port >= 0) config.set_udp_port(static_cast<std::uint32_t>(udp_port));
     if (lockstep) config.set_time_mode(haptic::v1::LOCKSTEP);
-    if (!scene_path.empty()) *config.mutable_initial_scene() = haptic::app::load_scene_file(scene_path);
-    if (auto error = haptic::app::validate(config); !error.empty()) {
-      throw haptic::app::ConfigError("configuration: " + error);
+    if (!scene_path.empty()) *config.mutable_initial_scene() = haptic::config::load_scene_file(scene_path);
+    if (auto error = haptic::config::validate(config); !error.empty()) {
+      throw haptic::config::ConfigError("configuration: " + error);
     }
-  } catch (const haptic::app::ConfigError& error) {
+  } catch (const haptic::config::ConfigError& error) {
     std::cerr << "hapticd: " << error.what() << "\n";
     return 2;
   }
   if (print_config) {
-    std::cout << haptic::app::to_json(config);
+    std::cout << haptic::config::to_json(config);
     return 0;
   }
 

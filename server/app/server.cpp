@@ -12,7 +12,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "app/config.hpp"
+#include "config/server_config.hpp"
 #include "schema/scene_specs.hpp"
 #include "runtime/realtime.hpp"
 
@@ -62,7 +62,7 @@ std::unique_ptr<const engine::CompiledScene> empty_scene(std::uint32_t ports) {
 
 Server::Server(const v1::ServerConfig& config)
     : config_(config),
-      simulated_(make_devices(config)),
+      simulated_(config::make_devices(config)),
       scenes_(empty_scene(static_cast<std::uint32_t>(simulated_.size()))),
       samples_(make_rings(simulated_.size())),
       sessions_(net::SessionLimits{config.max_sessions(), config.max_sessions_per_peer(),
@@ -77,7 +77,7 @@ Server::Server(const v1::ServerConfig& config)
   tick.output_ramp_ticks = ms_to_ticks(config.removal_ramp_ms(), rate);
   // Each port's force limit and passivity controller follow its own device.
   const std::vector<runtime::TickPort> tick_ports =
-      app::tick_ports(config, simulated_, ring_pointers(samples_), tick.period_s);
+      config::tick_ports(config, simulated_, ring_pointers(samples_), tick.period_s);
   runner_ = std::make_unique<runtime::TickRunner>(tick_ports, scenes_, counters_, tick);
 
   runtime::LoopConfig loop;
@@ -100,7 +100,7 @@ Server::Server(const v1::ServerConfig& config)
   schema::SceneLimits limits;
   limits.period_s = tick.period_s;
   // Objects are validated once for all ports: against the least damped port's device.
-  const DesignDevice design = scene_design_device(simulated_);
+  const config::DesignDevice design = config::scene_design_device(simulated_);
   limits.device_mass = design.mass;
   limits.device_damping = design.damping;
   limits.device_unknown_reason = design.unknown_reason;
@@ -121,7 +121,7 @@ Server::Server(const v1::ServerConfig& config)
     throw std::runtime_error(e);
   }
   // Every simulated hand starts with the configured input.
-  for (const SimulatedDevice& simulated : simulated_) simulated.device->set_hand(hand);
+  for (const config::SimulatedDevice& simulated : simulated_) simulated.device->set_hand(hand);
 
   const std::uint32_t udp_port = config.udp_port();
   if (udp_port > 65535) throw std::runtime_error("udp_port: out of range");
@@ -202,8 +202,8 @@ void Server::start() {
   spdlog::info("hapticd: {} at {} Hz ({}), gRPC {} (port {}), UDP {} (port {})", devices,
                config_.loop_rate_hz(), v1::TimeMode_Name(config_.time_mode()),
                config_.grpc_address(), grpc_port_, config_.udp_address(), udp_.port());
-  if (!is_loopback_host(host_of_address(config_.grpc_address())) ||
-      !is_loopback_host(config_.udp_address())) {
+  if (!config::is_loopback_host(config::host_of_address(config_.grpc_address())) ||
+      !config::is_loopback_host(config_.udp_address())) {
     spdlog::warn("hapticd: serving a non-loopback address without TLS or tokens "
                  "(insecure_remote_access): anyone who reaches it can command forces");
   }
@@ -232,7 +232,7 @@ void Server::shutdown() {
   }
   if (control_plane_closer.joinable()) control_plane_closer.join();
   // With the loop stopped, leave every device with zero force.
-  for (const SimulatedDevice& simulated : simulated_) {
+  for (const config::SimulatedDevice& simulated : simulated_) {
     simulated.device->write(runtime::DeviceCommand{}, 0.0);
     simulated.device->stop();
   }

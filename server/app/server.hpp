@@ -21,7 +21,7 @@
 #include "net/session_registry.hpp"
 #include "net/udp_endpoint.hpp"
 #include "runtime/loop_thread.hpp"
-#include "app/devices.hpp"
+#include "config/devices.hpp"
 #include "runtime/tick_runner.hpp"
 
 namespace haptic::app {
@@ -50,7 +50,7 @@ class Server {
   void log_status();
 
   v1::ServerConfig config_;
-  std::vector<SimulatedDevice> simulated_;  // per device port: the device and its operator's input
+  std::vector<config::SimulatedDevice> simulated_;  // per device port: the device and its operator's input
   runtime::SceneExchange scenes_;
   std::vector<std::unique_ptr<runtime::SampleRing>> samples_;  // per device port
   runtime::LoopCounters counters_;

@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "app/config.hpp"
-#include "app/devices.hpp"
+#include "config/server_config.hpp"
+#include "config/devices.hpp"
 
 namespace haptic::lab {
 namespace {
@@ -76,11 +76,11 @@ void from_joint_space(const Matrix& jacobian, const Matrix& inertia, const Matri
 
 DeviceModel device_model(const v1::ServerConfig& given, const std::string& source) {
   v1::ServerConfig config = given;
-  app::fill_defaults(config);
-  if (auto error = app::validate(config); !error.empty()) {
+  config::fill_defaults(config);
+  if (auto error = config::validate(config); !error.empty()) {
     throw std::invalid_argument(source + ": " + error);
   }
-  std::vector<app::SimulatedDevice> devices = app::make_devices(config);
+  std::vector<config::SimulatedDevice> devices = config::make_devices(config);
   const runtime::SimulatedDevice& device = *devices.front().device;
   const runtime::DeviceDescription& description = device.description();
   DeviceModel model;
@@ -113,8 +113,8 @@ DeviceModel device_model(const v1::ServerConfig& given, const std::string& sourc
 DeviceModel device_model_from_file(const std::string& path) {
   v1::ServerConfig config;
   try {
-    config = app::load_config_file(path);
-  } catch (const app::ConfigError& error) {
+    config = config::load_config_file(path);
+  } catch (const config::ConfigError& error) {
     throw std::invalid_argument(std::string("--device: ") + error.what());
   }
   return device_model(config, path);

@@ -7,8 +7,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "app/config.hpp"
-#include "app/devices.hpp"
+#include "config/server_config.hpp"
+#include "config/devices.hpp"
 #include "haptic/wire/datagram.hpp"
 #include "schema/scene_specs.hpp"
 #include "runtime/loop_stats.hpp"
@@ -62,11 +62,11 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   }
   if (!on_tick) throw std::invalid_argument("on_tick: must be a callable");
   v1::ServerConfig config = given;
-  app::fill_defaults(config);
-  if (auto e = app::validate(config); !e.empty()) throw std::invalid_argument(e);
+  config::fill_defaults(config);
+  if (auto e = config::validate(config); !e.empty()) throw std::invalid_argument(e);
   const double period_s = 1.0 / config.loop_rate_hz();
 
-  std::vector<app::SimulatedDevice> devices = app::make_devices(config);
+  std::vector<config::SimulatedDevice> devices = config::make_devices(config);
   const auto ports = static_cast<std::uint32_t>(devices.size());
   std::vector<std::unique_ptr<runtime::SampleRing>> rings;
   std::vector<runtime::SampleRing*> ring_pointers;
@@ -76,7 +76,7 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   }
   schema::SceneLimits limits;
   limits.period_s = period_s;
-  const app::DesignDevice design = app::scene_design_device(devices);  // as hapticd validates
+  const config::DesignDevice design = config::scene_design_device(devices);  // as hapticd validates
   limits.device_mass = design.mass;
   limits.device_damping = design.damping;
   limits.device_unknown_reason = design.unknown_reason;
@@ -93,7 +93,7 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   runtime::LoopCounters counters;
   runtime::TickConfig tick;
   tick.period_s = period_s;
-  runtime::TickRunner runner(app::tick_ports(config, devices, ring_pointers, period_s), scenes, counters,
+  runtime::TickRunner runner(config::tick_ports(config, devices, ring_pointers, period_s), scenes, counters,
                              tick);
 
   RunSummary summary;

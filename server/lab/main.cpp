@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "app/config.hpp"
+#include "config/server_config.hpp"
 #include "lab/device_model.hpp"
 #include "lab/lab_run.hpp"
 #include "lab/progress_bar.hpp"
@@ -108,7 +108,7 @@ Subcommand add_run(CLI::App& cli) {
   app->add_option("--duration", o->duration_s, "simulated time, s (default 1)");
   app->add_option("--out", o->out_path, "trace file (CSV); default: standard output");
   return {app, [o] {
-            const haptic::v1::ServerConfig config = haptic::app::load_config_file(o->scene_path);
+            const haptic::v1::ServerConfig config = haptic::config::load_config_file(o->scene_path);
             std::ofstream file;
             if (!o->out_path.empty()) {
               file.open(o->out_path);

@@ -17,7 +17,7 @@
 #include "engine/safety/force_guard.hpp"
 #include "engine/scene/fields.hpp"
 #include "engine/scene/impedance.hpp"
-#include "app/config.hpp"
+#include "config/server_config.hpp"
 #include "lab/lab_run.hpp"
 #include "haptic/wire/datagram.hpp"
 #include "lab/study.hpp"
@@ -382,7 +382,7 @@ Trajectory server_spring(Scheme scheme, double period, const StudyCase& c) {
   if (const std::string problem = tick_period_problem(period); !problem.empty()) {
     throw std::invalid_argument(c.name + ": " + problem);
   }
-  const v1::ServerConfig config = app::parse_config(server_spring_config(period), c.name);
+  const v1::ServerConfig config = config::parse_config(server_spring_config(period), c.name);
   const auto ticks_per_output = static_cast<std::uint64_t>(std::llround(c.output_period_s / period));
   Trajectory out;
   auto record = [&](const runtime::TickSample& s) {

@@ -25,8 +25,8 @@
 #include <utility>
 #include <vector>
 
-#include "app/config.hpp"
-#include "app/devices.hpp"
+#include "config/server_config.hpp"
+#include "config/devices.hpp"
 #include "engine/device/dc_motor_plant.hpp"
 #include "haptic/wire/datagram.hpp"
 #include "lab/lab_run.hpp"
@@ -174,7 +174,7 @@ Trajectory simulate_device(const DeviceScene& scene, Scheme scheme, double step_
   // method's stability interval (DcMotorPlant::substeps_for): the step actually taken is smaller.
   std::string step_note;
   if (config.has_simulated_dc_motor() && config.simulated_dc_motor().with_inductance()) {
-    const engine::DcMotorPlant plant(app::dc_motor_params(config.simulated_dc_motor()),
+    const engine::DcMotorPlant plant(config::dc_motor_params(config.simulated_dc_motor()),
                                      engine::DcMotorModel::kWithInductance, {},
                                      engine::IntegrationSettings{*method, substeps});
     const std::uint32_t taken = plant.substeps_for(period_s);
@@ -268,7 +268,7 @@ StudyCase make_case(DeviceScene scene, std::string title, std::string source, bo
 DeviceScene scene(std::string name, const char* json, const char* file, double duration_s) {
   DeviceScene s;
   s.name = std::move(name);
-  s.config = app::parse_config(json, file);
+  s.config = config::parse_config(json, file);
   s.duration_s = duration_s;
   s.energy = s.config.initial_scene().objects_size() + s.config.initial_scene().fields_size() > 0;
   return s;

@@ -30,7 +30,7 @@
 #include <thread>
 #include <vector>
 
-#include "app/config.hpp"
+#include "config/server_config.hpp"
 #include "app/server.hpp"
 
 extern char** environ;
@@ -154,7 +154,7 @@ std::vector<double> record_in_threads(const std::string& address, haptic::app::S
 int main(int argc, char** argv) {
   if (argc == 7 && std::strcmp(argv[1], "--client") == 0) return run_child(argv);
   const double seconds = argc > 1 ? std::atof(argv[1]) : 5.0;
-  haptic::v1::ServerConfig config = haptic::app::default_config();
+  haptic::v1::ServerConfig config = haptic::config::default_config();
   config.set_grpc_address("127.0.0.1:0");
   config.set_udp_address("127.0.0.1");
   config.set_udp_port(0);

@@ -6,14 +6,14 @@
 #include <stdexcept>
 #include <string>
 
-#include "app/config.hpp"
+#include "config/server_config.hpp"
 #include "lab/device_model.hpp"
 
 namespace haptic::lab {
 namespace {
 
 DeviceModel model_of(const std::string& json) {
-  return device_model(app::parse_config(json, "test.json"), "test.json");
+  return device_model(config::parse_config(json, "test.json"), "test.json");
 }
 
 std::string write_file(const std::string& name, const std::string& text) {
@@ -73,7 +73,7 @@ TEST(LabDeviceModel, TheDcMotorGivesItsReflectedInertia_Eq3_10) {
 }
 
 TEST(LabDeviceModel, AnInvalidConfigurationIsRefusedNamingTheFileAndField) {
-  v1::ServerConfig config = app::default_config();
+  v1::ServerConfig config = config::default_config();
   config.set_loop_rate_hz(50.0);  // below the 100 Hz the server accepts
   try {
     device_model(config, "slow.json");

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "app/config.hpp"
+#include "config/server_config.hpp"
 #include "lab/lab_run.hpp"
 
 namespace haptic::lab {
@@ -40,7 +40,7 @@ constexpr int kQ0 = 19, kQ1 = 20, kQ2 = 21, kQ0Dot = 22, kQ2Dot = 24;
 
 TEST(LabRun, AWallUnderAPushSettlesAtForceOverStiffnessAndTheTraceSaysSo) {
   // The default point mass at z = 20 mm, a 1000 N/m wall at z = 0, the hand pushing 2 N down.
-  const v1::ServerConfig config = app::parse_config(R"({
+  const v1::ServerConfig config = config::parse_config(R"({
     "simulated_point_mass": {"initial_position": {"z": 0.02}},
     "initial_scene": {"objects": [{"impedance": {"stiffness": 1000, "damping": 1},
                                    "half_space": {"normal": {"z": 1}}}]},
@@ -65,7 +65,7 @@ TEST(LabRun, AWallUnderAPushSettlesAtForceOverStiffnessAndTheTraceSaysSo) {
 }
 
 TEST(LabRun, BadInputIsRefusedBeforeAnyWork) {
-  const v1::ServerConfig config = app::default_config();
+  const v1::ServerConfig config = config::default_config();
   std::ostringstream trace;
   EXPECT_THROW(run_scene(config, 0.0, trace), std::invalid_argument);
   EXPECT_THROW(run_scene(config, -1.0, trace), std::invalid_argument);
@@ -81,7 +81,7 @@ TEST(LabRun, BadInputIsRefusedBeforeAnyWork) {
 }
 
 TEST(LabRun, TheSameSceneTwiceGivesTheSameTrace) {
-  const v1::ServerConfig config = app::parse_config(R"({
+  const v1::ServerConfig config = config::parse_config(R"({
     "simulated_dc_motor": {"initial_angle": 0.5},
     "initial_operator": {"mode": "APPLY_FORCE", "force": {"y": -1},
                          "profile": {"shape": "SINE", "frequency_hz": 2}}})", "test");
@@ -94,7 +94,7 @@ TEST(LabRun, TheSameSceneTwiceGivesTheSameTrace) {
 TEST(LabRun, TheTraceCarriesEachDocumentDevicesJointState) {
   // 000's link starts at θ_L = 0.5 rad: one joint, the load angle, the other cells empty.
   {
-    const v1::ServerConfig config = app::parse_config(R"({"simulated_dc_motor": {"initial_angle": 0.5}})", "test");
+    const v1::ServerConfig config = config::parse_config(R"({"simulated_dc_motor": {"initial_angle": 0.5}})", "test");
     std::ostringstream trace;
     run_scene(config, 0.01, trace);
     const std::string row = first_row(trace.str());
@@ -105,7 +105,7 @@ TEST(LabRun, TheTraceCarriesEachDocumentDevicesJointState) {
   }
   // 003's five-bar starts at home, q = (0, 90°, 180°) (docs/devices.md).
   {
-    const v1::ServerConfig config = app::parse_config(R"({"simulated_five_bar": {}})", "test");
+    const v1::ServerConfig config = config::parse_config(R"({"simulated_five_bar": {}})", "test");
     std::ostringstream trace;
     run_scene(config, 0.01, trace);
     const std::string row = first_row(trace.str());
@@ -116,7 +116,7 @@ TEST(LabRun, TheTraceCarriesEachDocumentDevicesJointState) {
   // 004's joystick: θ = Φ = 0 and the shaft at its configured 0.2 m, which is also the handle's z.
   {
     const v1::ServerConfig config =
-        app::parse_config(R"({"simulated_joystick": {"initial_shaft_length": 0.2}})", "test");
+        config::parse_config(R"({"simulated_joystick": {"initial_shaft_length": 0.2}})", "test");
     std::ostringstream trace;
     run_scene(config, 0.01, trace);
     const std::string row = first_row(trace.str());
@@ -130,7 +130,7 @@ TEST(LabRun, TheTraceCarriesEachDocumentDevicesJointState) {
 TEST(LabRun, JointStateIsTheSampledInstantsNotTheNextTicks) {
   // The hand pushes 000's link: q0 must move with the published tool position, tick for tick —
   // the tool on its circle of radius l = 0.2 m: p_WT = l (cos q0, sin q0, 0) (000 eq. 3.1a).
-  const v1::ServerConfig config = app::parse_config(R"({
+  const v1::ServerConfig config = config::parse_config(R"({
     "simulated_dc_motor": {"initial_angle": 0.5},
     "initial_operator": {"mode": "APPLY_FORCE", "force": {"x": -0.5, "y": 0.8}}})", "test");
   std::vector<TickRecord> records;
@@ -147,7 +147,7 @@ TEST(LabRun, JointStateIsTheSampledInstantsNotTheNextTicks) {
 }
 
 TEST(LabRun, TheCallbackCanStopTheRun) {
-  const v1::ServerConfig config = app::default_config();
+  const v1::ServerConfig config = config::default_config();
   int calls = 0;
   const RunSummary summary = simulate_scene(config, 1.0, [&](const TickRecord&) { return ++calls < 7; });
   EXPECT_EQ(calls, 7);
@@ -160,7 +160,7 @@ TEST(LabRun, APlantThatBlowsUpIsReportedNotFinite) {
   // unstable motion leaves the reach within 0.5 s depends on rounding): the end effector leaves
   // the mechanism's reach within 0.1 s and the state turns NaN. The
   // loop keeps publishing the last good reading; the joint state and the summary say what happened.
-  const v1::ServerConfig config = app::parse_config(R"({
+  const v1::ServerConfig config = config::parse_config(R"({
     "simulated_parallel_dob": {"integrator": "explicit_euler", "substeps": 1},
     "initial_scene": {"objects": [{"pose": {"position": {"y": 0.25}},
                                    "impedance": {"stiffness": 1000, "damping": 1},

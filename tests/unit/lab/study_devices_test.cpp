@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "app/config.hpp"
+#include "config/server_config.hpp"
 #include "lab/lab_run.hpp"
 #include "lab/study.hpp"
 
@@ -43,7 +43,7 @@ double motion(const Trajectory& t) {
 /// The tool positions a configuration file gives when run as `haptic-lab run` does, sampled
 /// every `every` ticks from t = 0 to t = duration.
 std::vector<engine::Vec3> run_file(const std::string& file, double duration_s, int every) {
-  const v1::ServerConfig config = app::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/" + file);
+  const v1::ServerConfig config = config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/" + file);
   std::vector<engine::Vec3> out;
   simulate_scene(config, duration_s + 1e-3, [&](const TickRecord& r) {
     if ((r.sample.tick - 1) % every == 0) out.push_back(r.sample.p_WT);

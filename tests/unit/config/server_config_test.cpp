@@ -3,9 +3,9 @@
 
 #include <fstream>
 
-#include "app/config.hpp"
+#include "config/server_config.hpp"
 
-namespace haptic::app {
+namespace haptic::config {
 namespace {
 
 std::string error_of(const std::string& json) {
@@ -223,4 +223,4 @@ TEST(Config, MalformedJsonAndUnknownFieldsAreErrorsNamingTheSource) {
 }
 
 }  // namespace
-}  // namespace haptic::app
+}  // namespace haptic::config

@@ -3,12 +3,12 @@
 // (Colgate: b > K_c T/2 + B_c only gets easier with more b).
 #include <gtest/gtest.h>
 
-#include "app/config.hpp"
-#include "app/devices.hpp"
+#include "config/server_config.hpp"
+#include "config/devices.hpp"
 #include "engine/scene/impedance.hpp"
 #include "schema/scene_specs.hpp"
 
-namespace haptic::app {
+namespace haptic::config {
 namespace {
 
 std::vector<SimulatedDevice> devices_of(const std::string& json) {
@@ -75,4 +75,4 @@ TEST(DesignDevice, APortWithoutAModelMakesItUnknownAndTheErrorNamesThatPort) {
 }
 
 }  // namespace
-}  // namespace haptic::app
+}  // namespace haptic::config

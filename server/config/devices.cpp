@@ -1,4 +1,4 @@
-#include "app/devices.hpp"
+#include "config/devices.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -19,7 +19,7 @@
 #include "runtime/simulated_five_bar_device.hpp"
 #include "runtime/simulated_joystick_device.hpp"
 
-namespace haptic::app {
+namespace haptic::config {
 
 std::string validate_integrator(const std::string& name) {
   if (name.empty() || engine::integrator_from_name(name)) return {};
@@ -414,4 +414,4 @@ DesignDevice scene_design_device(const std::vector<SimulatedDevice>& devices) {
   return design;
 }
 
-}  // namespace haptic::app
+}  // namespace haptic::config

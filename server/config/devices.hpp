@@ -14,7 +14,7 @@
 #include "runtime/simulated_device.hpp"
 #include "runtime/tick_runner.hpp"
 
-namespace haptic::app {
+namespace haptic::config {
 
 /// Empty when `name` is "" (the default, RK4) or an integrator's name, else what is wrong.
 std::string validate_integrator(const std::string& name);
@@ -85,4 +85,4 @@ std::vector<runtime::TickPort> tick_ports(const v1::ServerConfig& config,
                                           const std::vector<runtime::SampleRing*>& rings,
                                           double period_s);
 
-}  // namespace haptic::app
+}  // namespace haptic::config

@@ -7,7 +7,7 @@
 
 #include "haptic/v1/config.pb.h"
 
-namespace haptic::app {
+namespace haptic::config {
 
 class ConfigError : public std::runtime_error {
  public:
@@ -48,4 +48,4 @@ bool is_loopback_host(const std::string& host);
 /// The configuration as JSON, with defaults shown.
 std::string to_json(const v1::ServerConfig& config);
 
-}  // namespace haptic::app
+}  // namespace haptic::config

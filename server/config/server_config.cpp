@@ -1,4 +1,4 @@
-#include "app/config.hpp"
+#include "config/server_config.hpp"
 
 #include <arpa/inet.h>
 #include <google/protobuf/util/json_util.h>
@@ -11,11 +11,11 @@
 #include <sstream>
 #include <thread>
 
-#include "app/devices.hpp"
+#include "config/devices.hpp"
 #include "haptic/io/scene_file.hpp"
 #include "schema/scene_specs.hpp"
 
-namespace haptic::app {
+namespace haptic::config {
 namespace {
 
 bool is_loopback_sockaddr(const sockaddr* address) {
@@ -225,4 +225,4 @@ std::string to_json(const v1::ServerConfig& config) {
   return out;
 }
 
-}  // namespace haptic::app
+}  // namespace haptic::config

@@ -1,0 +1,45 @@
+#!/usr/bin/python3
+"""Fails naming every #include that goes against the server's layering (docs/architecture.md):
+each library under server/ may include only itself and the layers listed for it, so the graph
+stays one-way (no lab -> app/net, no runtime -> schema, nothing -> app).
+Usage: layers.py SERVER_DIR"""
+import pathlib
+import re
+import sys
+
+# Library -> the server libraries it may include besides itself. "haptic/..." (the wire, proto and
+# SDK headers) is allowed everywhere.
+ALLOWED = {
+    "engine": set(),
+    "runtime": {"engine"},
+    "schema": {"engine"},
+    "config": {"engine", "runtime", "schema"},
+    "net": {"engine", "runtime", "schema"},
+    "app": {"engine", "runtime", "schema", "config", "net"},
+    "lab": {"engine", "runtime", "schema", "config"},
+}
+INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/')
+
+server = pathlib.Path(sys.argv[1])
+bad, checked = [], 0
+for library, allowed in ALLOWED.items():
+    for path in sorted((server / library).rglob("*")):
+        if path.suffix not in (".hpp", ".cpp", ".h"):
+            continue
+        for number, line in enumerate(path.read_text().splitlines(), 1):
+            match = INCLUDE.match(line)
+            if not match:
+                continue
+            checked += 1
+            target = match.group(1)
+            if target in (library, "haptic") or target in allowed:
+                continue
+            bad.append(f"{path.relative_to(server)}:{number}: {library} includes {target}/ "
+                       f"(allowed: {', '.join(sorted(allowed | {library})) or 'itself'})")
+unknown = sorted(p.name for p in server.iterdir() if p.is_dir() and p.name not in ALLOWED)
+for line in bad:
+    print(line)
+for name in unknown:
+    print(f"server/{name}/: a library this check does not know; add it to ALLOWED")
+print(f"{checked} includes checked, {len(bad)} against the layering")
+sys.exit(1 if bad or unknown or checked == 0 else 0)
