@@ -62,22 +62,22 @@ std::unique_ptr<const engine::CompiledScene> empty_scene(std::uint32_t ports) {
 
 Server::Server(const v1::ServerConfig& config)
     : config_(config),
-      simulated_(config::make_devices(config)),
-      scenes_(empty_scene(static_cast<std::uint32_t>(simulated_.size()))),
-      samples_(make_rings(simulated_.size())),
+      devices_(config::make_devices(config)),
+      scenes_(empty_scene(static_cast<std::uint32_t>(devices_.size()))),
+      samples_(make_rings(devices_.size())),
       sessions_(net::SessionLimits{config.max_sessions(), config.max_sessions_per_peer(),
                                    std::chrono::milliseconds(config.lease_timeout_ms()),
                                    config.udp_any_source()}),
       events_(net::WatchLimits{config.max_event_streams_per_session(), config.max_event_streams()}),
       udp_(sessions_, ring_pointers(samples_)) {
   const double rate = config.loop_rate_hz();
-  const auto ports = static_cast<std::uint32_t>(simulated_.size());
+  const auto ports = static_cast<std::uint32_t>(devices_.size());
   runtime::TickConfig tick;
   tick.period_s = 1.0 / rate;
   tick.output_ramp_ticks = ms_to_ticks(config.removal_ramp_ms(), rate);
   // Each port's force limit and passivity controller follow its own device.
   const std::vector<runtime::TickPort> tick_ports =
-      config::tick_ports(config, simulated_, ring_pointers(samples_), tick.period_s);
+      config::tick_ports(config, devices_, ring_pointers(samples_), tick.period_s);
   runner_ = std::make_unique<runtime::TickRunner>(tick_ports, scenes_, counters_, tick);
 
   runtime::LoopConfig loop;
@@ -88,6 +88,15 @@ Server::Server(const v1::ServerConfig& config)
   loop.fifo_priority = config.real_time().fifo_priority();
   loop.spin_ns = static_cast<std::int64_t>(config.real_time().spin_us()) * 1000;
   loop.cpu = loop.mode == runtime::TimeMode::kRealTime ? config.real_time().cpu() : -1;
+  if (runtime::ServoClock* servo = devices_.front().servo) {
+    // Device-clocked: the driver's servo loop paces the ticks, at its own rate.
+    if (std::abs(servo->rate_hz() - rate) > 1e-9 * rate) {
+      throw std::runtime_error("driver.clock DEVICE: the driver's servo runs at " +
+                               std::to_string(servo->rate_hz()) + " Hz but loop_rate_hz is " +
+                               std::to_string(rate) + "; set loop_rate_hz to the servo rate");
+    }
+    loop.servo = servo;
+  }
   loop_ = std::make_unique<runtime::LoopThread>(*runner_, counters_, lateness_, loop);
 
   scene_ = std::make_unique<net::SceneStore>(
@@ -100,7 +109,7 @@ Server::Server(const v1::ServerConfig& config)
   schema::SceneLimits limits;
   limits.period_s = tick.period_s;
   // Objects are validated once for all ports: against the least damped port's device.
-  const config::DesignDevice design = config::scene_design_device(simulated_);
+  const config::DesignDevice design = config::scene_design_device(devices_);
   limits.device_mass = design.mass;
   limits.device_damping = design.damping;
   limits.device_unknown_reason = design.unknown_reason;
@@ -121,7 +130,9 @@ Server::Server(const v1::ServerConfig& config)
     throw std::runtime_error(e);
   }
   // Every simulated hand starts with the configured input.
-  for (const config::SimulatedDevice& simulated : simulated_) simulated.device->set_hand(hand);
+  for (const config::PortDevice& port : devices_) {
+    if (port.simulated != nullptr) port.simulated->set_hand(hand);
+  }
 
   const std::uint32_t udp_port = config.udp_port();
   if (udp_port > 65535) throw std::runtime_error("udp_port: out of range");
@@ -129,9 +140,12 @@ Server::Server(const v1::ServerConfig& config)
 
   std::vector<net::DevicePort> service_ports;
   for (std::uint32_t i = 0; i < ports; ++i) {
-    service_ports.push_back(net::DevicePort{samples_[i].get(), &simulated_[i].device->description(),
-                                            [device = simulated_[i].device.get()](
-                                                const engine::HandInput& hand) { device->set_hand(hand); }});
+    std::function<void(const engine::HandInput&)> set_hand;  // none for a device without one
+    if (runtime::SimulatedDevice* device = devices_[i].simulated) {
+      set_hand = [device](const engine::HandInput& input) { device->set_hand(input); };
+    }
+    service_ports.push_back(net::DevicePort{samples_[i].get(), &devices_[i].device->description(),
+                                            std::move(set_hand)});
   }
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
@@ -169,9 +183,10 @@ Server::Server(const v1::ServerConfig& config)
 Server::~Server() { shutdown(); }
 
 void Server::start() {
-  for (std::size_t i = 0; i < simulated_.size(); ++i) {
-    if (simulated_[i].device->start() != runtime::DeviceStatus::kOk) {
-      throw std::runtime_error("device " + std::to_string(i) + " failed to start");
+  for (std::size_t i = 0; i < devices_.size(); ++i) {
+    if (devices_[i].device->start() != runtime::DeviceStatus::kOk) {
+      throw std::runtime_error("device " + std::to_string(i) + " (" +
+                               devices_[i].device->description().name + ") failed to start");
     }
   }
   const runtime::RealtimeSetup setup = loop_->start();
@@ -195,9 +210,9 @@ void Server::start() {
   status_last_ns_ = runtime::monotonic_now_ns();
   housekeeping_ = std::thread([this] { housekeeping_loop(); });
   started_ = true;
-  std::string devices = simulated_.front().device->description().name;
-  for (std::size_t i = 1; i < simulated_.size(); ++i) {
-    devices += " + port " + std::to_string(i) + ": " + simulated_[i].device->description().name;
+  std::string devices = devices_.front().device->description().name;
+  for (std::size_t i = 1; i < devices_.size(); ++i) {
+    devices += " + port " + std::to_string(i) + ": " + devices_[i].device->description().name;
   }
   spdlog::info("hapticd: {} at {} Hz ({}), gRPC {} (port {}), UDP {} (port {})", devices,
                config_.loop_rate_hz(), v1::TimeMode_Name(config_.time_mode()),
@@ -231,10 +246,10 @@ void Server::shutdown() {
     loop_->stop();
   }
   if (control_plane_closer.joinable()) control_plane_closer.join();
-  // With the loop stopped, leave every device with zero force.
-  for (const config::SimulatedDevice& simulated : simulated_) {
-    simulated.device->write(runtime::DeviceCommand{}, 0.0);
-    simulated.device->stop();
+  // With the loop stopped, leave every device in its safe state (motors off, brakes on).
+  for (const config::PortDevice& port : devices_) {
+    port.device->enter_safe_state();
+    port.device->stop();
   }
   {
     std::lock_guard lock(housekeeping_mutex_);
@@ -305,6 +320,7 @@ void Server::housekeeping_loop() {
   auto next_status = steady_clock::now() + status_period;
   std::uint64_t faults_reported = 0;
   std::uint64_t device_faults_reported = 0;
+  bool servo_end_reported = false;
   std::unique_lock lock(housekeeping_mutex_);
   while (!housekeeping_wake_.wait_for(lock, kPeriod, [this] { return stopping_; })) {
     for (const std::uint64_t id : sessions_.expire(steady_clock::now())) {
@@ -329,6 +345,13 @@ void Server::housekeeping_loop() {
       spdlog::error("device: {} ticks with a failed or non-finite reading; zero force commanded",
                     faults - device_faults_reported);
       device_faults_reported = faults;
+    }
+    if (!servo_end_reported && loop_->servo_failed()) {
+      // Device-clocked: the driver's servo loop returned (or never ran), so no tick will come.
+      servo_end_reported = true;
+      service_->publish_event(v1::Event::DEVICE_FAULT, 0,
+                              "the driver's servo loop ended on its own: the loop has stopped");
+      spdlog::error("device 0: the driver's servo loop ended on its own; no more ticks");
     }
     if (status_period.count() > 0 && steady_clock::now() >= next_status) {
       next_status += status_period;

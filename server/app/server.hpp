@@ -50,7 +50,7 @@ class Server {
   void log_status();
 
   v1::ServerConfig config_;
-  std::vector<config::SimulatedDevice> simulated_;  // per device port: the device and its operator's input
+  std::vector<config::PortDevice> devices_;  // per device port: the device, its model, its operator
   runtime::SceneExchange scenes_;
   std::vector<std::unique_ptr<runtime::SampleRing>> samples_;  // per device port
   runtime::LoopCounters counters_;

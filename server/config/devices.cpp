@@ -6,9 +6,12 @@
 #include <sstream>
 #include <utility>
 
+#include <google/protobuf/util/json_util.h>
+
 #include "schema/scene_specs.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/dc_motor_model.hpp"
+#include "runtime/driver_device.hpp"
 #include "runtime/five_bar_estimator.hpp"
 #include "runtime/five_bar_model.hpp"
 #include "runtime/joystick_model.hpp"
@@ -188,6 +191,20 @@ std::string validate_parallel_dob(const v1::SimulatedParallelDobConfig& dob, dou
   return {};
 }
 
+std::string validate_driver(const v1::DriverConfig& driver) {
+  if (driver.library().empty()) return "driver.library: the path of the driver's shared library is required";
+  if (!driver.model().empty() && driver.model() != "cartesian") {
+    return "driver.model: unknown model \"" + driver.model() + "\"; expected cartesian";
+  }
+  if (driver.call_timeout_ms() > 10'000) {
+    return "driver.call_timeout_ms: must be 0 ... 10000, got " + std::to_string(driver.call_timeout_ms());
+  }
+  if (driver.stale_after() > 100'000) {
+    return "driver.stale_after: must be 0 ... 100000, got " + std::to_string(driver.stale_after());
+  }
+  return {};
+}
+
 /// One port's device; errors name the device's field ("simulated_joystick.substeps: ...").
 std::string validate_one(const v1::DeviceConfig& device, double rate) {
   switch (device.device_case()) {
@@ -201,11 +218,13 @@ std::string validate_one(const v1::DeviceConfig& device, double rate) {
       return validate_joystick(device.simulated_joystick());
     case v1::DeviceConfig::kSimulatedParallelDob:
       return validate_parallel_dob(device.simulated_parallel_dob(), rate);
+    case v1::DeviceConfig::kDriver:
+      return validate_driver(device.driver());
     case v1::DeviceConfig::DEVICE_NOT_SET:
       break;
   }
   return "device: must set one of simulated_point_mass, simulated_dc_motor, simulated_five_bar, "
-         "simulated_joystick, simulated_parallel_dob";
+         "simulated_joystick, simulated_parallel_dob, driver";
 }
 
 double loop_rate_of(const v1::ServerConfig& config) {
@@ -249,7 +268,9 @@ std::string validate_point_mass(const v1::SimulatedPointMassConfig& device) {
 
 v1::DeviceConfig primary_device(const v1::ServerConfig& config) {
   v1::DeviceConfig out;
-  if (config.has_simulated_dc_motor()) {
+  if (config.has_driver()) {
+    *out.mutable_driver() = config.driver();
+  } else if (config.has_simulated_dc_motor()) {
     *out.mutable_simulated_dc_motor() = config.simulated_dc_motor();
   } else if (config.has_simulated_five_bar()) {
     *out.mutable_simulated_five_bar() = config.simulated_five_bar();
@@ -266,10 +287,15 @@ v1::DeviceConfig primary_device(const v1::ServerConfig& config) {
 std::string validate_device(const v1::ServerConfig& config) {
   const int devices = int{config.has_simulated_dc_motor()} + int{config.has_simulated_five_bar()} +
                       int{config.has_simulated_joystick()} +
-                      int{config.has_simulated_parallel_dob()};
+                      int{config.has_simulated_parallel_dob()} + int{config.has_driver()};
   if (devices > 1) {
-    return "simulated_dc_motor, simulated_five_bar, simulated_joystick, simulated_parallel_dob: "
-           "at most one device may be configured, got " + std::to_string(devices);
+    return "simulated_dc_motor, simulated_five_bar, simulated_joystick, simulated_parallel_dob, "
+           "driver: at most one device may be configured, got " + std::to_string(devices);
+  }
+  if (config.has_driver() && config.driver().clock() == v1::DriverConfig::DEVICE &&
+      config.time_mode() == v1::LOCKSTEP) {
+    return "driver.clock: DEVICE (the driver's servo loop paces the ticks) needs time_mode "
+           "REAL_TIME; in LOCKSTEP the Step RPC paces them";
   }
   const double rate = loop_rate_of(config);
   if (auto error = validate_one(primary_device(config), rate); !error.empty()) return error;
@@ -281,12 +307,43 @@ std::string validate_device(const v1::ServerConfig& config) {
     if (auto error = validate_one(config.extra_devices(i), rate); !error.empty()) {
       return "extra_devices[" + std::to_string(i) + "]." + error;
     }
+    if (config.extra_devices(i).has_driver() &&
+        config.extra_devices(i).driver().clock() == v1::DriverConfig::DEVICE) {
+      return "extra_devices[" + std::to_string(i) + "].driver.clock: DEVICE is for port 0's "
+             "driver only (one device's servo loop paces every port)";
+    }
   }
   return {};
 }
 
-SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
+namespace {
+
+PortDevice simulated(std::unique_ptr<runtime::SimulatedDevice> device,
+                     std::unique_ptr<runtime::DeviceModel> model) {
+  runtime::SimulatedDevice* raw = device.get();
+  return {std::move(device), std::move(model), raw, nullptr};
+}
+
+PortDevice driver_device(const v1::DriverConfig& config) {
+  runtime::DriverOptions options;
+  options.library = config.library();
+  std::string params;
+  if (!google::protobuf::util::MessageToJsonString(config.params(), &params).ok()) params = "{}";
+  options.params_json = params;
+  options.call_timeout_s = (config.has_call_timeout_ms() ? config.call_timeout_ms() : 20) * 1e-3;
+  options.stale_after = config.has_stale_after() ? config.stale_after() : 3;
+  options.device_clocked = config.clock() == v1::DriverConfig::DEVICE;
+  auto device = std::make_unique<runtime::DriverDevice>(options);
+  runtime::ServoClock* servo = options.device_clocked ? device.get() : nullptr;
+  return {std::move(device), std::make_unique<runtime::CartesianModel>(), nullptr, servo};
+}
+
+}  // namespace
+
+PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
   switch (config.device_case()) {
+    case v1::DeviceConfig::kDriver:
+      return driver_device(config.driver());
     case v1::DeviceConfig::kSimulatedDcMotor: {
       const auto& motor = config.simulated_dc_motor();
       const engine::DcMotorParams params = dc_motor_params(motor);
@@ -297,7 +354,7 @@ SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz)
           motor.initial_angle(), motor.max_force() > 0.0 ? motor.max_force() : 5.0,
           integration_settings(motor.integrator(), motor.substeps(), 10));
       const bool gravity = device->description().capabilities.gravity;
-      return {std::move(device), std::make_unique<runtime::DcMotorModel>(params, gravity)};
+      return simulated(std::move(device), std::make_unique<runtime::DcMotorModel>(params, gravity));
     }
     case v1::DeviceConfig::kSimulatedFiveBar: {
       const auto& five_bar = config.simulated_five_bar();
@@ -313,13 +370,14 @@ SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz)
       if (options.state_estimator) {
         model->set_velocity_estimator(std::make_unique<runtime::FiveBarStateEstimators>(1.0 / loop_rate_hz));
       }
-      return {std::make_unique<runtime::SimulatedFiveBarDevice>(params, engine::FiveBarState{}, options),
-              std::move(model)};
+      return simulated(
+          std::make_unique<runtime::SimulatedFiveBarDevice>(params, engine::FiveBarState{}, options),
+          std::move(model));
     }
     case v1::DeviceConfig::kSimulatedJoystick: {
       const runtime::SimulatedJoystickConfig joystick = joystick_config(config.simulated_joystick());
-      return {std::make_unique<runtime::SimulatedJoystickDevice>(joystick),
-              std::make_unique<runtime::JoystickModel>(joystick.model())};
+      return simulated(std::make_unique<runtime::SimulatedJoystickDevice>(joystick),
+                       std::make_unique<runtime::JoystickModel>(joystick.model()));
     }
     case v1::DeviceConfig::kSimulatedParallelDob: {
       const auto& dob = config.simulated_parallel_dob();
@@ -327,10 +385,11 @@ SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz)
       const engine::DisturbanceObserverParams observer = observer_params(dob, loop_rate_hz);
       const engine::Vec3 initial{0.0, 0.25, 0.0};
       const bool observer_enabled = !dob.has_disturbance_observer() || dob.disturbance_observer();
-      return {std::make_unique<runtime::SimulatedDobDevice>(
-                  plant, initial, dob.max_force() > 0.0 ? dob.max_force() : 10.0, observer_enabled,
-                  observer.nominal_mass, observer.nominal_damping),
-              std::make_unique<runtime::ParallelDobModel>(plant, observer, initial, observer_enabled)};
+      return simulated(std::make_unique<runtime::SimulatedDobDevice>(
+                           plant, initial, dob.max_force() > 0.0 ? dob.max_force() : 10.0,
+                           observer_enabled, observer.nominal_mass, observer.nominal_damping),
+                       std::make_unique<runtime::ParallelDobModel>(plant, observer, initial,
+                                                                   observer_enabled));
     }
     case v1::DeviceConfig::kSimulatedPointMass:
     case v1::DeviceConfig::DEVICE_NOT_SET:
@@ -344,18 +403,18 @@ SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz)
   params.substeps = mass.substeps();
   params.workspace_min = schema::to_engine(mass.workspace_min());
   params.workspace_max = schema::to_engine(mass.workspace_max());
-  return {std::make_unique<runtime::SimulatedPointMassDevice>(
-              params, engine::PointMassState{schema::to_engine(mass.initial_position()), {}},
-              mass.max_force()),
-          std::make_unique<runtime::CartesianModel>()};
+  return simulated(std::make_unique<runtime::SimulatedPointMassDevice>(
+                       params, engine::PointMassState{schema::to_engine(mass.initial_position()), {}},
+                       mass.max_force()),
+                   std::make_unique<runtime::CartesianModel>());
 }
 
-SimulatedDevice make_device(const v1::ServerConfig& config) {
+PortDevice make_device(const v1::ServerConfig& config) {
   return make_device(primary_device(config), loop_rate_of(config));
 }
 
-std::vector<SimulatedDevice> make_devices(const v1::ServerConfig& config) {
-  std::vector<SimulatedDevice> out;
+std::vector<PortDevice> make_devices(const v1::ServerConfig& config) {
+  std::vector<PortDevice> out;
   out.push_back(make_device(config));
   for (const v1::DeviceConfig& extra : config.extra_devices()) {
     out.push_back(make_device(extra, loop_rate_of(config)));
@@ -364,7 +423,7 @@ std::vector<SimulatedDevice> make_devices(const v1::ServerConfig& config) {
 }
 
 std::vector<runtime::TickPort> tick_ports(const v1::ServerConfig& config,
-                                          const std::vector<SimulatedDevice>& devices,
+                                          const std::vector<PortDevice>& devices,
                                           const std::vector<runtime::SampleRing*>& rings,
                                           double period_s) {
   std::vector<runtime::TickPort> ports;
@@ -388,7 +447,7 @@ std::vector<runtime::TickPort> tick_ports(const v1::ServerConfig& config,
   return ports;
 }
 
-DesignDevice scene_design_device(const std::vector<SimulatedDevice>& devices) {
+DesignDevice scene_design_device(const std::vector<PortDevice>& devices) {
   DesignDevice design;
   for (std::size_t i = 0; i < devices.size(); ++i) {
     const runtime::DeviceDescription& d = devices[i].device->description();

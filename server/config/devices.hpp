@@ -11,6 +11,7 @@
 #include "haptic/v1/config.pb.h"
 #include "runtime/device.hpp"
 #include "runtime/device_model.hpp"
+#include "runtime/servo_clock.hpp"
 #include "runtime/simulated_device.hpp"
 #include "runtime/tick_runner.hpp"
 
@@ -45,20 +46,24 @@ std::string validate_device(const v1::ServerConfig& config);
 /// simulated_five_bar, simulated_joystick or simulated_parallel_dob is present.
 v1::DeviceConfig primary_device(const v1::ServerConfig& config);
 
-/// A simulated device and the model the loop runs it with.
-struct SimulatedDevice {
-  std::unique_ptr<runtime::SimulatedDevice> device;
+/// One port's device and the model the loop runs it with.
+struct PortDevice {
+  std::unique_ptr<runtime::Device> device;
   std::unique_ptr<runtime::DeviceModel> model;
+  /// The same device when it is simulated (its operator, its plant's true state), else nullptr.
+  runtime::SimulatedDevice* simulated = nullptr;
+  /// A driver whose servo loop paces the ticks (DriverConfig.clock DEVICE), else nullptr.
+  runtime::ServoClock* servo = nullptr;
 };
 
 /// The device `config` names (one must be set), for a loop at `loop_rate_hz` (Hz).
-SimulatedDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz);
+PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz);
 
 /// Port 0's device: make_device(primary_device(config), loop rate).
-SimulatedDevice make_device(const v1::ServerConfig& config);
+PortDevice make_device(const v1::ServerConfig& config);
 
 /// Every device port's device, port 0 first, then extra_devices in order.
-std::vector<SimulatedDevice> make_devices(const v1::ServerConfig& config);
+std::vector<PortDevice> make_devices(const v1::ServerConfig& config);
 
 /// The device model the scene's objects are designed and validated for (virtual coupling gains,
 /// transparency-optimal damping, the net layer's SceneLimits) when several ports render one scene:
@@ -75,13 +80,13 @@ struct DesignDevice {
   /// "port 2's device (<name>) does not" when another port's device lacks it.
   std::string unknown_reason = "this one does not";
 };
-DesignDevice scene_design_device(const std::vector<SimulatedDevice>& devices);
+DesignDevice scene_design_device(const std::vector<PortDevice>& devices);
 
 /// The loop's view of every port: its device, its sample ring, its force limit and, as the
 /// configuration's `passivity` asks (by default where the device gives its mass), its passivity
 /// controller. rings[i] belongs to devices[i]. Shared by hapticd and haptic-lab.
 std::vector<runtime::TickPort> tick_ports(const v1::ServerConfig& config,
-                                          const std::vector<SimulatedDevice>& devices,
+                                          const std::vector<PortDevice>& devices,
                                           const std::vector<runtime::SampleRing*>& rings,
                                           double period_s);
 

@@ -80,8 +80,9 @@ DeviceModel device_model(const v1::ServerConfig& given, const std::string& sourc
   if (auto error = config::validate(config); !error.empty()) {
     throw std::invalid_argument(source + ": " + error);
   }
-  std::vector<config::SimulatedDevice> devices = config::make_devices(config);
-  const runtime::SimulatedDevice& device = *devices.front().device;
+  std::vector<config::PortDevice> devices = config::make_devices(config);
+  const runtime::Device& device = *devices.front().device;
+  const runtime::SimulatedDevice* simulated = devices.front().simulated;
   const runtime::DeviceDescription& description = device.description();
   DeviceModel model;
   model.source = source;
@@ -93,7 +94,8 @@ DeviceModel device_model(const v1::ServerConfig& given, const std::string& sourc
     model.method = "description";
     model.mass = description.apparent_mass;
     model.damping = description.apparent_damping;
-  } else if (const auto dynamics = device.joint_space_dynamics()) {
+  } else if (const auto dynamics =
+                 simulated != nullptr ? simulated->joint_space_dynamics() : std::nullopt) {
     from_joint_space(dynamics->jacobian, dynamics->inertia, dynamics->damping, where, model);
   } else {
     throw std::invalid_argument(where + " gives no apparent mass at its tool point; give --mass and "

@@ -41,12 +41,13 @@ engine::SceneDescription initial_scene(const v1::ServerConfig& config, const sch
   return description;
 }
 
-/// The joint state of a document device's plant (JointState's table); count 0 for a device
-/// without one.
-JointState plant_joints(const runtime::SimulatedDevice& device) {
+/// The joint state of a simulated device's plant (JointState's table); count 0 for a device
+/// without one (a driver's: its plant is not ours to see).
+JointState plant_joints(const runtime::SimulatedDevice* device) {
   runtime::JointVector q{}, q_dot{};
   JointState out;
-  out.count = std::min<std::uint32_t>(device.plant_joints(q, q_dot), 3);
+  if (device == nullptr) return out;
+  out.count = std::min<std::uint32_t>(device->plant_joints(q, q_dot), 3);
   for (std::uint32_t i = 0; i < out.count; ++i) {
     out.q[i] = q[i];
     out.q_dot[i] = q_dot[i];
@@ -66,7 +67,7 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   if (auto e = config::validate(config); !e.empty()) throw std::invalid_argument(e);
   const double period_s = 1.0 / config.loop_rate_hz();
 
-  std::vector<config::SimulatedDevice> devices = config::make_devices(config);
+  std::vector<config::PortDevice> devices = config::make_devices(config);
   const auto ports = static_cast<std::uint32_t>(devices.size());
   std::vector<std::unique_ptr<runtime::SampleRing>> rings;
   std::vector<runtime::SampleRing*> ring_pointers;
@@ -86,7 +87,7 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
     throw std::invalid_argument(e);
   }
   for (auto& device : devices) {
-    device.device->set_hand(hand);
+    if (device.simulated != nullptr) device.simulated->set_hand(hand);
   }
   runtime::SceneExchange scenes(std::make_unique<const engine::CompiledScene>(engine::compile_scene(
       description, 50, 1, period_s, config.session_force_budget(), ports)));
@@ -103,7 +104,7 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   bool go_on = true;
   for (std::uint64_t k = 1; k <= ticks && go_on; ++k) {
     // The plants' state now is what this tick's reading sees (the tick advances them after).
-    for (std::uint32_t p = 0; p < ports; ++p) joints[p] = plant_joints(*devices[p].device);
+    for (std::uint32_t p = 0; p < ports; ++p) joints[p] = plant_joints(devices[p].simulated);
     const auto time_ns = static_cast<std::int64_t>(std::llround(static_cast<double>(k - 1) * period_s * 1e9));
     runner.run(k, time_ns);
     summary.ticks = k;

@@ -368,7 +368,7 @@ grpc::Status HapticService::SetOperator(grpc::ServerContext* context, const v1::
   const DevicePort& port = port_of(request->session_id());
   if (!port.set_hand) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
-            "the device is real hardware: there is no simulated operator"};
+            "this port's device is not simulated (it is behind a driver): there is no simulated operator to set"};
   }
   engine::HandInput hand;
   if (auto error = schema::to_hand_input(request->input(), "input", deps_.limits, hand); !error.empty()) {

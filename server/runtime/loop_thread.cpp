@@ -32,7 +32,11 @@ RealtimeSetup LoopThread::start() {
       if (setup.cpu_error.empty()) setup.cpu = config_.cpu;
     }
     setup_promise.set_value(setup);
-    run_real_time();
+    if (config_.servo != nullptr) {
+      run_device_clocked();
+    } else {
+      run_real_time();
+    }
   });
   return setup_future.get();
 }
@@ -61,6 +65,27 @@ void LoopThread::run_real_time() {
       counters_.overruns.fetch_add(static_cast<std::uint64_t>(missed), std::memory_order_relaxed);
       deadline += missed * period_ns_;
     }
+  }
+}
+
+void LoopThread::run_device_clocked() {
+  struct Context {
+    LoopThread* loop;
+    std::uint64_t tick = 0;
+  } context{this};
+  const bool ended_well = config_.servo->run(
+      [](void* self, std::int64_t monotonic_ns) {
+        auto& c = *static_cast<Context*>(self);
+        LoopThread& loop = *c.loop;
+        if (loop.stop_requested_.load(std::memory_order_acquire)) return true;
+        ++c.tick;
+        loop.runner_.run(c.tick, monotonic_ns - loop.start_ns_);
+        loop.completed_.store(c.tick, std::memory_order_release);
+        return false;
+      },
+      &context);
+  if (!ended_well || !stop_requested_.load(std::memory_order_acquire)) {
+    servo_failed_.store(true, std::memory_order_release);
   }
 }
 

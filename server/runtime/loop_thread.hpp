@@ -5,6 +5,8 @@
 // permitted; a tick that ends past the next deadline counts the missed periods as overruns and
 // skips them (never a burst of catch-up ticks). Lockstep: ticks run only when step() asks, as fast
 // as possible, and server time is tick × period, so every run is exactly reproducible.
+// Device-clocked (real time with a ServoClock): the loop thread hands itself to the device's servo
+// loop, which runs one tick per servo cycle; server time is the cycle's time since start.
 
 #include <atomic>
 #include <cstdint>
@@ -13,6 +15,7 @@
 
 #include "runtime/loop_stats.hpp"
 #include "runtime/realtime.hpp"
+#include "runtime/servo_clock.hpp"
 #include "runtime/tick_runner.hpp"
 
 namespace haptic::runtime {
@@ -26,6 +29,9 @@ struct LoopConfig {
   int fifo_priority = 80;
   std::int64_t spin_ns = 100'000;  // Unit: ns.
   int cpu = -1;                    // Pin the loop to this CPU; -1: no pinning.
+  /// Real time only: the device whose servo loop paces the ticks (rate_hz must be its rate);
+  /// nullptr: the loop's own clock. Not owned.
+  ServoClock* servo = nullptr;
 };
 
 class LoopThread {
@@ -58,10 +64,13 @@ class LoopThread {
   /// CLOCK_MONOTONIC time of server time 0 (real time only; set by start()). Unit: ns.
   std::int64_t start_ns() const { return start_ns_; }
   const LoopConfig& config() const { return config_; }
+  /// Device-clocked: the device's servo loop ended on its own or could not run (no more ticks).
+  bool servo_failed() const { return servo_failed_.load(std::memory_order_acquire); }
 
  private:
   void run_real_time();
   void run_lockstep();
+  void run_device_clocked();
 
   TickRunner& runner_;
   LoopCounters& counters_;
@@ -72,6 +81,7 @@ class LoopThread {
 
   std::thread thread_;
   std::atomic<bool> stop_requested_{false};
+  std::atomic<bool> servo_failed_{false};
   std::atomic<std::uint64_t> completed_{0};
   std::atomic<std::uint64_t> target_{0};  // lockstep: run until this tick
   // Lockstep: bumped after each batch of ticks and by stop(), so a waiting step() always wakes

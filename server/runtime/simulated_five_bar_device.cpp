@@ -10,9 +10,6 @@ namespace {
 bool finite(const engine::FiveBarJoints& v) {
   return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
 }
-bool finite(const engine::Vec3& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
 
 }  // namespace
 

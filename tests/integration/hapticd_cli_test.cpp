@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,48 @@ TEST(HapticdCli, TheBuiltInDefaultsListenOnLoopbackOnly) {
   EXPECT_NE(defaults.output.find(R"("grpc_address": "127.0.0.1:50051")"), std::string::npos);
   EXPECT_NE(defaults.output.find(R"("udp_address": "127.0.0.1")"), std::string::npos);
   EXPECT_NE(defaults.output.find(R"("insecure_remote_access": false)"), std::string::npos);
+}
+
+TEST(HapticdCli, ADriverBuiltForAnotherAbiIsRefusedAtStartNamingTheLibraryAndBothVersions) {
+  const std::string path = ::testing::TempDir() + "/wrong_abi_driver.json";
+  std::ofstream(path) << R"({"time_mode": "LOCKSTEP", "grpc_address": "127.0.0.1:0", "udp_port": 0,
+                             "driver": {"library": ")" WRONG_ABI_DRIVER R"("}})";
+  const Outcome refused = run_hapticd({"--config", path});
+  EXPECT_EQ(refused.exit_code, 1) << refused.output;
+  EXPECT_NE(refused.output.find(WRONG_ABI_DRIVER), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("built for driver ABI version 2, this hapticd speaks version 1"),
+            std::string::npos)
+      << refused.output;
+}
+
+TEST(HapticdCli, ADeviceClockedDriverMustRunAtTheLoopRateAndNotInLockstep) {
+  const std::string path = ::testing::TempDir() + "/device_clocked_driver.json";
+  std::ofstream(path) << R"({"grpc_address": "127.0.0.1:0", "udp_port": 0, "loop_rate_hz": 1000,
+                             "real_time": {"use_fifo": false},
+                             "driver": {"library": ")" POINT_MASS_DRIVER R"(", "clock": "DEVICE",
+                                        "params": {"servo_rate_hz": 2000}}})";
+  const Outcome rate = run_hapticd({"--config", path});
+  EXPECT_EQ(rate.exit_code, 1) << rate.output;
+  EXPECT_NE(rate.output.find("the driver's servo runs at 2000"), std::string::npos) << rate.output;
+  const Outcome lockstep = run_hapticd({"--config", path, "--lockstep", "--print-config"});
+  EXPECT_EQ(lockstep.exit_code, 2) << lockstep.output;
+  EXPECT_NE(lockstep.output.find("driver.clock: DEVICE"), std::string::npos) << lockstep.output;
+}
+
+TEST(HapticdCli, ADriverWithoutALibraryOrWithAnUnknownModelIsAConfigurationError) {
+  const std::string path = ::testing::TempDir() + "/driver_without_library.json";
+  std::ofstream(path) << R"({"driver": {"model": "cartesian"}})";
+  const Outcome missing = run_hapticd({"--config", path, "--print-config"});
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("driver.library: the path of the driver's shared library is required"),
+            std::string::npos)
+      << missing.output;
+  std::ofstream(path) << R"({"driver": {"library": "x.so", "model": "five_bar"}})";
+  const Outcome model = run_hapticd({"--config", path, "--print-config"});
+  EXPECT_EQ(model.exit_code, 2) << model.output;
+  EXPECT_NE(model.output.find("driver.model: unknown model \"five_bar\"; expected cartesian"),
+            std::string::npos)
+      << model.output;
 }
 
 }  // namespace

@@ -11,7 +11,7 @@
 namespace haptic::config {
 namespace {
 
-std::vector<SimulatedDevice> devices_of(const std::string& json) {
+std::vector<PortDevice> devices_of(const std::string& json) {
   v1::ServerConfig config = parse_config(json, "test.json");
   fill_defaults(config);
   return make_devices(config);
@@ -41,7 +41,7 @@ TEST(DesignDevice, OnePortIsThatPortsDevice) {
 }
 
 TEST(DesignDevice, TheLeastDampedPortIsTheOneObjectsAreDesignedFor) {
-  const std::vector<SimulatedDevice> devices = devices_of(
+  const std::vector<PortDevice> devices = devices_of(
       R"({"extra_devices": [{"simulated_point_mass": {"damping": 0.05}},
                             {"simulated_point_mass": {"mass": 0.02, "damping": 0.011}}]})");
   const DesignDevice design = scene_design_device(devices);

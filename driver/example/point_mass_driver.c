@@ -1,0 +1,254 @@
+/* An out-of-tree hapticd driver: a simulated 3-axis point mass (mass m, viscous damping b per
+ * axis) with a constant push of its own standing in for an operator, built against
+ * <haptic/driver.h> alone. Its joints are the tool point's x, y, z in W (m), read with their rates;
+ * the command is the force on the tool (N), held over the tick and integrated exactly:
+ *   v(t) = F/b + (v0 − F/b) e^(−b t / m),  x(t) = x0 + (F/b) t + (v0 − F/b)(m/b)(1 − e^(−b t / m))
+ * (b = 0: x0 + v0 t + F t² / 2m), F the command plus the push.
+ *
+ * params (all optional): {"mass": 0.01 kg, "damping": 0.02 N·s/m, "initial": [x, y, z] m,
+ *   "push": [fx, fy, fz] N, "max_force": 10 N, "button_period_s": 0 (0: no button; else button 0
+ *   is pressed for every other period), "servo_rate_hz": 0 (nonzero: device-clocked at that rate)
+ *   "fault": "none" | "nan" | "stale" | "hang" | "fail_start", "fault_after": 0 ticks}
+ * The faults are for hapticd's driver test kit: from tick fault_after on, "nan" reads NaN,
+ * "stale" stops the sample sequence, "hang" blocks read() until stop().
+ *
+ * Build: cc -shared -fPIC -I<hapticd>/driver/include point_mass_driver.c -lm -o point_mass_driver.so
+ */
+#include <haptic/driver.h>
+
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+typedef struct {
+  double mass, damping, max_force, button_period_s, servo_rate_hz;
+  double p[3], v[3], push[3];
+  char fault[16];
+  uint64_t fault_after;
+  uint64_t ticks;     /* writes so far */
+  uint64_t sequence;  /* samples taken */
+  double time_s;
+  int safe;           /* enter_safe_state was called: no force until the next start */
+  pthread_mutex_t lock;
+  pthread_cond_t released;
+  int stopping;
+} point_mass;
+
+/* A minimal reader for the flat JSON object hapticd passes: finds "key": and parses a number or
+ * a [a, b, c] triple or a "string" after it. Returns 1 when found. */
+static const char* find_key(const char* json, const char* key) {
+  char quoted[64];
+  snprintf(quoted, sizeof quoted, "\"%s\"", key);
+  const char* at = strstr(json, quoted);
+  if (at == NULL) return NULL;
+  at = strchr(at + strlen(quoted), ':');
+  return at == NULL ? NULL : at + 1;
+}
+static int number(const char* json, const char* key, double* out) {
+  const char* at = find_key(json, key);
+  if (at == NULL) return 0;
+  char* end = NULL;
+  const double value = strtod(at, &end);
+  if (end == at) return -1;
+  *out = value;
+  return 1;
+}
+static int triple(const char* json, const char* key, double out[3]) {
+  const char* at = find_key(json, key);
+  if (at == NULL) return 0;
+  at = strchr(at, '[');
+  if (at == NULL) return -1;
+  ++at;
+  for (int i = 0; i < 3; ++i) {
+    char* end = NULL;
+    out[i] = strtod(at, &end);
+    if (end == at) return -1;
+    at = end;
+    while (*at == ' ' || *at == ',') ++at;
+  }
+  return 1;
+}
+static int text(const char* json, const char* key, char* out, size_t size) {
+  const char* at = find_key(json, key);
+  if (at == NULL) return 0;
+  at = strchr(at, '"');
+  if (at == NULL) return -1;
+  const char* end = strchr(at + 1, '"');
+  if (end == NULL || (size_t)(end - at - 1) >= size) return -1;
+  memcpy(out, at + 1, (size_t)(end - at - 1));
+  out[end - at - 1] = '\0';
+  return 1;
+}
+
+static void* create(const char* params, char* error) {
+  point_mass* d = calloc(1, sizeof *d);
+  if (d == NULL) {
+    snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "out of memory");
+    return NULL;
+  }
+  d->mass = 0.01;
+  d->damping = 0.02;
+  d->max_force = 10.0;
+  strcpy(d->fault, "none");
+  double fault_after = 0.0;
+  if (number(params, "mass", &d->mass) < 0 || number(params, "damping", &d->damping) < 0 ||
+      number(params, "max_force", &d->max_force) < 0 ||
+      number(params, "button_period_s", &d->button_period_s) < 0 ||
+      number(params, "servo_rate_hz", &d->servo_rate_hz) < 0 ||
+      number(params, "fault_after", &fault_after) < 0 || triple(params, "initial", d->p) < 0 ||
+      triple(params, "push", d->push) < 0 || text(params, "fault", d->fault, sizeof d->fault) < 0) {
+    snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "params: cannot parse %s", params);
+    free(d);
+    return NULL;
+  }
+  if (!(d->mass > 0.0) || !(d->damping >= 0.0) || !(d->max_force > 0.0)) {
+    snprintf(error, HAPTIC_DRIVER_ERROR_SIZE,
+             "params.mass must be > 0, damping >= 0 and max_force > 0; got %g, %g, %g", d->mass,
+             d->damping, d->max_force);
+    free(d);
+    return NULL;
+  }
+  if (strcmp(d->fault, "none") != 0 && strcmp(d->fault, "nan") != 0 &&
+      strcmp(d->fault, "stale") != 0 && strcmp(d->fault, "hang") != 0 &&
+      strcmp(d->fault, "fail_start") != 0) {
+    snprintf(error, HAPTIC_DRIVER_ERROR_SIZE,
+             "params.fault: expected none, nan, stale, hang or fail_start, got \"%s\"", d->fault);
+    free(d);
+    return NULL;
+  }
+  d->fault_after = (uint64_t)fault_after;
+  pthread_mutex_init(&d->lock, NULL);
+  pthread_cond_init(&d->released, NULL);
+  return d;
+}
+
+static void destroy(void* driver) {
+  point_mass* d = driver;
+  pthread_cond_destroy(&d->released);
+  pthread_mutex_destroy(&d->lock);
+  free(d);
+}
+
+static int describe(void* driver, haptic_driver_info* info) {
+  const point_mass* d = driver;
+  memset(info, 0, sizeof *info);
+  snprintf(info->name, sizeof info->name, "point mass driver (example plugin, %g kg)", d->mass);
+  info->joints = 3;
+  info->dof = 3;
+  info->buttons = d->button_period_s > 0.0 ? 1u : 0u;
+  info->capabilities = HAPTIC_DRIVER_MEASURED_RATES;
+  info->max_force = d->max_force;
+  for (int i = 0; i < 3; ++i) {
+    info->workspace_min[i] = -0.1;
+    info->workspace_max[i] = 0.1;
+  }
+  info->servo_rate_hz = d->servo_rate_hz;
+  return HAPTIC_DRIVER_OK;
+}
+
+static int start(void* driver) {
+  point_mass* d = driver;
+  d->safe = 0;
+  pthread_mutex_lock(&d->lock);
+  d->stopping = 0;
+  pthread_mutex_unlock(&d->lock);
+  return strcmp(d->fault, "fail_start") == 0 ? HAPTIC_DRIVER_FAILED : HAPTIC_DRIVER_OK;
+}
+
+static void stop(void* driver) {
+  point_mass* d = driver;
+  pthread_mutex_lock(&d->lock);
+  d->stopping = 1;
+  pthread_cond_broadcast(&d->released);
+  pthread_mutex_unlock(&d->lock);
+}
+
+static int faulting(const point_mass* d, const char* kind) {
+  return strcmp(d->fault, kind) == 0 && d->ticks >= d->fault_after;
+}
+
+static int read_sensors(void* driver, haptic_driver_reading* reading) {
+  point_mass* d = driver;
+  if (faulting(d, "hang")) {  /* a vendor call that never returns, until stop() */
+    pthread_mutex_lock(&d->lock);
+    while (!d->stopping) pthread_cond_wait(&d->released, &d->lock);
+    pthread_mutex_unlock(&d->lock);
+    return HAPTIC_DRIVER_FAILED;
+  }
+  memset(reading, 0, sizeof *reading);
+  for (int i = 0; i < 3; ++i) {
+    reading->q[i] = d->p[i];
+    reading->q_dot[i] = d->v[i];
+  }
+  if (faulting(d, "nan")) reading->q[2] = NAN;
+  if (!faulting(d, "stale")) ++d->sequence;
+  reading->sequence = d->sequence;
+  if (d->button_period_s > 0.0 && ((uint64_t)floor(d->time_s / d->button_period_s)) % 2 == 1) {
+    reading->buttons = 1u;
+  }
+  reading->safe_state = (uint32_t)d->safe;
+  return HAPTIC_DRIVER_OK;
+}
+
+static int write_command(void* driver, const haptic_driver_command* command, double dt) {
+  point_mass* d = driver;
+  if (!(dt > 0.0)) return HAPTIC_DRIVER_FAILED;
+  int ok = 1;
+  for (int i = 0; i < 3; ++i) ok = ok && isfinite(command->tau[i]);
+  const double m = d->mass, b = d->damping;
+  for (int i = 0; i < 3; ++i) {
+    const double F = (ok && !d->safe ? command->tau[i] : 0.0) + d->push[i];
+    if (b > 0.0) {
+      const double v_inf = F / b, decay = exp(-b * dt / m);
+      d->p[i] += v_inf * dt + (d->v[i] - v_inf) * (m / b) * (1.0 - decay);
+      d->v[i] = v_inf + (d->v[i] - v_inf) * decay;
+    } else {
+      d->p[i] += d->v[i] * dt + 0.5 * F / m * dt * dt;
+      d->v[i] += F / m * dt;
+    }
+  }
+  d->time_s += dt;
+  ++d->ticks;
+  return ok ? HAPTIC_DRIVER_OK : HAPTIC_DRIVER_FAILED;
+}
+
+static void enter_safe_state(void* driver) { ((point_mass*)driver)->safe = 1; }
+
+static int run_servo(void* driver, haptic_driver_tick_fn tick, void* context) {
+  point_mass* d = driver;
+  if (!(d->servo_rate_hz > 0.0)) return HAPTIC_DRIVER_FAILED;
+  const long period_ns = (long)(1e9 / d->servo_rate_hz);
+  struct timespec next;
+  clock_gettime(CLOCK_MONOTONIC, &next);
+  for (;;) {
+    next.tv_nsec += period_ns;
+    while (next.tv_nsec >= 1000000000L) {
+      next.tv_nsec -= 1000000000L;
+      ++next.tv_sec;
+    }
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, NULL);
+    const int64_t now = (int64_t)next.tv_sec * 1000000000LL + next.tv_nsec;
+    if (tick(context, now) != 0) return HAPTIC_DRIVER_OK;
+  }
+}
+
+static const haptic_driver_api kApi = {
+    HAPTIC_DRIVER_ABI_VERSION,
+    sizeof(haptic_driver_info),
+    sizeof(haptic_driver_reading),
+    sizeof(haptic_driver_command),
+    create,
+    destroy,
+    describe,
+    start,
+    stop,
+    read_sensors,
+    write_command,
+    enter_safe_state,
+    run_servo,
+};
+
+const haptic_driver_api* haptic_driver_entry(void) { return &kApi; }

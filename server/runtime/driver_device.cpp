@@ -1,0 +1,295 @@
+#include "runtime/driver_device.hpp"
+
+#include <dlfcn.h>
+#include <linux/futex.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <cstring>
+#include <ctime>
+#include <stdexcept>
+
+#include "runtime/realtime.hpp"
+
+namespace haptic::runtime {
+namespace {
+
+/// Blocks while `word` holds `expected`, for at most timeout_ns (< 0: no limit).
+void futex_wait(std::atomic<std::uint32_t>& word, std::uint32_t expected, std::int64_t timeout_ns) {
+  timespec timeout{};
+  timespec* limit = nullptr;
+  if (timeout_ns >= 0) {
+    timeout.tv_sec = static_cast<time_t>(timeout_ns / 1'000'000'000);
+    timeout.tv_nsec = static_cast<long>(timeout_ns % 1'000'000'000);
+    limit = &timeout;
+  }
+  syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&word), FUTEX_WAIT_PRIVATE, expected, limit,
+          nullptr, 0);
+}
+
+void futex_wake(std::atomic<std::uint32_t>& word) {
+  syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&word), FUTEX_WAKE_PRIVATE, INT_MAX, nullptr,
+          nullptr, 0);
+}
+
+bool finite_box(const double lo[3], const double hi[3]) {
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(lo[i]) || !std::isfinite(hi[i]) || lo[i] > hi[i]) return false;
+  }
+  return true;
+}
+
+/// Empty when the description is usable, else what is wrong with it.
+std::string check_info(const haptic_driver_info& info, bool device_clocked, bool has_run_servo) {
+  if (info.joints < 1 || info.joints > HAPTIC_DRIVER_MAX_JOINTS) {
+    return "joints must be 1 ... " + std::to_string(HAPTIC_DRIVER_MAX_JOINTS) + ", got " +
+           std::to_string(info.joints);
+  }
+  if (info.dof < 1 || info.dof > 3) return "dof must be 1 ... 3, got " + std::to_string(info.dof);
+  if (info.buttons > 32) return "buttons must be 0 ... 32, got " + std::to_string(info.buttons);
+  if (!(std::isfinite(info.max_force) && info.max_force > 0.0)) {
+    return "max_force must be finite and > 0 N, got " + std::to_string(info.max_force);
+  }
+  if (!finite_box(info.workspace_min, info.workspace_max)) {
+    return "workspace_min/workspace_max must be finite with min <= max on every axis";
+  }
+  if (device_clocked) {
+    if (!has_run_servo) return "device-clocked (clock DEVICE) but the driver has no run_servo";
+    if (!(std::isfinite(info.servo_rate_hz) && info.servo_rate_hz >= 100.0 &&
+          info.servo_rate_hz <= 10000.0)) {
+      return "device-clocked: servo_rate_hz must be 100 ... 10000 Hz, got " +
+             std::to_string(info.servo_rate_hz);
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+DriverDevice::DriverDevice(const DriverOptions& options) : options_(options) {
+  const std::string where = "driver \"" + options.library + "\": ";
+  library_ = dlopen(options.library.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (library_ == nullptr) {
+    const char* reason = dlerror();
+    throw std::runtime_error(where + "cannot load: " + (reason != nullptr ? reason : "unknown"));
+  }
+  auto entry = reinterpret_cast<haptic_driver_entry_fn>(dlsym(library_, HAPTIC_DRIVER_ENTRY_SYMBOL));
+  if (entry == nullptr) {
+    dlclose(library_);
+    throw std::runtime_error(where + "exports no " HAPTIC_DRIVER_ENTRY_SYMBOL "(); is it a hapticd driver?");
+  }
+  api_ = entry();
+  std::string refused;
+  if (api_ == nullptr) {
+    refused = HAPTIC_DRIVER_ENTRY_SYMBOL "() returned NULL";
+  } else if (api_->abi_version != HAPTIC_DRIVER_ABI_VERSION) {
+    refused = "built for driver ABI version " + std::to_string(api_->abi_version) +
+              ", this hapticd speaks version " + std::to_string(HAPTIC_DRIVER_ABI_VERSION) +
+              "; rebuild the driver against this hapticd's haptic/driver.h";
+  } else if (api_->info_size != sizeof(haptic_driver_info) ||
+             api_->reading_size != sizeof(haptic_driver_reading) ||
+             api_->command_size != sizeof(haptic_driver_command)) {
+    refused = "its structs' sizes differ from this hapticd's haptic/driver.h (info " +
+              std::to_string(api_->info_size) + "/" + std::to_string(sizeof(haptic_driver_info)) +
+              ", reading " + std::to_string(api_->reading_size) + "/" +
+              std::to_string(sizeof(haptic_driver_reading)) + ", command " +
+              std::to_string(api_->command_size) + "/" + std::to_string(sizeof(haptic_driver_command)) +
+              " bytes); rebuild the driver against it";
+  } else if (api_->create == nullptr || api_->destroy == nullptr || api_->describe == nullptr ||
+             api_->start == nullptr || api_->stop == nullptr || api_->read == nullptr ||
+             api_->write == nullptr || api_->enter_safe_state == nullptr) {
+    refused = "its function table leaves a required function NULL (all but run_servo are required)";
+  }
+  if (refused.empty()) {
+    char error[HAPTIC_DRIVER_ERROR_SIZE] = {};
+    driver_ = api_->create(options.params_json.c_str(), error);
+    error[HAPTIC_DRIVER_ERROR_SIZE - 1] = '\0';
+    if (driver_ == nullptr) refused = std::string("create() refused: ") + (error[0] ? error : "no reason given");
+  }
+  if (refused.empty()) {
+    if (api_->describe(driver_, &info_) != HAPTIC_DRIVER_OK) {
+      refused = "describe() failed";
+    } else {
+      info_.name[sizeof(info_.name) - 1] = '\0';
+      if (auto e = check_info(info_, options.device_clocked, api_->run_servo != nullptr); !e.empty()) {
+        refused = "describe(): " + e;
+      }
+    }
+    if (!refused.empty()) api_->destroy(driver_);
+  }
+  if (!refused.empty()) {
+    dlclose(library_);
+    throw std::runtime_error(where + refused);
+  }
+  calls_->api = api_;
+  calls_->driver = driver_;
+  description_.name = info_.name;
+  description_.model = "driver";
+  description_.dof = info_.dof;
+  description_.joints = info_.joints;
+  description_.buttons = info_.buttons;
+  description_.max_force = info_.max_force;
+  description_.workspace_min = {info_.workspace_min[0], info_.workspace_min[1], info_.workspace_min[2]};
+  description_.workspace_max = {info_.workspace_max[0], info_.workspace_max[1], info_.workspace_max[2]};
+  DeviceCapabilities& c = description_.capabilities;
+  c.measured_rates = (info_.capabilities & HAPTIC_DRIVER_MEASURED_RATES) != 0;
+  c.force_sensor = (info_.capabilities & (HAPTIC_DRIVER_FORCE_SENSOR | HAPTIC_DRIVER_TORQUE_SENSORS)) != 0;
+  c.brakes = (info_.capabilities & HAPTIC_DRIVER_BRAKES) != 0;
+  c.gravity = (info_.capabilities & HAPTIC_DRIVER_GRAVITY) != 0;
+  description_.simulated = false;
+}
+
+DriverDevice::~DriverDevice() {
+  stop();
+  if (thread_.joinable()) {
+    // A call that never came back: its code may still run, so the thread keeps its state and
+    // the library stays loaded.
+    thread_.detach();
+    static_cast<void>(calls_.release());
+    return;
+  }
+  api_->destroy(driver_);
+  dlclose(library_);
+}
+
+DeviceStatus DriverDevice::start() {
+  if (api_->start(driver_) != HAPTIC_DRIVER_OK) return DeviceStatus::kError;
+  started_ = true;
+  if (!options_.device_clocked && options_.call_timeout_s > 0.0 && !thread_.joinable()) {
+    calls_->request.store(kNone, std::memory_order_relaxed);
+    thread_ = std::thread([state = calls_.get()] { state->serve(); });
+  }
+  return DeviceStatus::kOk;
+}
+
+void DriverDevice::stop() {
+  if (!started_) return;
+  started_ = false;
+  api_->stop(driver_);  // also what releases a call that hangs, in a driver that can
+  if (!thread_.joinable()) return;
+  CallState& calls = *calls_;
+  if (hung()) {
+    // Give the late call a moment to come back now that the driver was told to stop.
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+    while (calls.request.load(std::memory_order_acquire) != kNone &&
+           std::chrono::steady_clock::now() < give_up) {
+      futex_wait(calls.done, calls.done.load(std::memory_order_acquire), 10'000'000);
+    }
+    if (calls.request.load(std::memory_order_acquire) != kNone) return;  // still inside the driver
+  }
+  calls.request.store(kQuit, std::memory_order_release);
+  futex_wake(calls.request);
+  thread_.join();
+}
+
+void DriverDevice::CallState::serve() {
+  apply_realtime(80);  // as the loop, where permitted: the loop waits on this thread
+  for (;;) {
+    const std::uint32_t what = request.load(std::memory_order_acquire);
+    if (what == kNone) {
+      futex_wait(request, kNone, -1);
+      continue;
+    }
+    if (what == kQuit) return;
+    result = call_driver(static_cast<Call>(what));
+    request.store(kNone, std::memory_order_relaxed);
+    done.fetch_add(1, std::memory_order_release);
+    futex_wake(done);
+  }
+}
+
+int DriverDevice::CallState::call_driver(Call what) {
+  return what == kRead ? api->read(driver, &reading) : api->write(driver, &command, dt);
+}
+
+bool DriverDevice::call(Call what, int& result) {
+  CallState& calls = *calls_;
+  if (!thread_.joinable()) {
+    result = calls.call_driver(what);
+    return true;
+  }
+  const std::uint32_t seen = calls.done.load(std::memory_order_acquire);
+  calls.request.store(what, std::memory_order_release);
+  futex_wake(calls.request);
+  const std::int64_t deadline =
+      monotonic_now_ns() + static_cast<std::int64_t>(std::llround(options_.call_timeout_s * 1e9));
+  while (calls.done.load(std::memory_order_acquire) == seen) {
+    const std::int64_t left = deadline - monotonic_now_ns();
+    if (left <= 0) return false;
+    futex_wait(calls.done, seen, left);
+  }
+  result = calls.result;
+  return true;
+}
+
+DeviceStatus DriverDevice::read(DeviceReading& reading) {
+  if (hung()) return DeviceStatus::kError;
+  int result = HAPTIC_DRIVER_FAILED;
+  if (!call(kRead, result)) {
+    hung_.store(true, std::memory_order_release);
+    api_->enter_safe_state(driver_);
+    return DeviceStatus::kError;
+  }
+  if (result != HAPTIC_DRIVER_OK) return DeviceStatus::kError;
+  const haptic_driver_reading& sample = calls_->reading;
+  const std::uint32_t n = info_.joints;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    reading.q[i] = sample.q[i];
+    reading.q_dot[i] = sample.q_dot[i];
+    reading.tau_sensor[i] = sample.tau_sensor[i];
+  }
+  reading.F_sensor_W = {sample.force_sensor_W[0], sample.force_sensor_W[1], sample.force_sensor_W[2]};
+  reading.buttons = info_.buttons >= 32 ? sample.buttons
+                                        : sample.buttons & ((std::uint32_t{1} << info_.buttons) - 1);
+  reading.safe_state = sample.safe_state != 0;
+  // A device that stopped sampling repeats its last reading: after stale_after still ticks, a fault.
+  if (options_.stale_after > 0) {
+    if (have_sequence_ && sample.sequence == last_sequence_) {
+      if (++still_ticks_ >= options_.stale_after) {
+        ++stale_readings_;
+        return DeviceStatus::kError;
+      }
+    } else {
+      still_ticks_ = 0;
+    }
+    last_sequence_ = sample.sequence;
+    have_sequence_ = true;
+  }
+  return DeviceStatus::kOk;
+}
+
+DeviceStatus DriverDevice::write(const DeviceCommand& command, double dt) {
+  if (hung()) return DeviceStatus::kError;
+  for (std::uint32_t i = 0; i < HAPTIC_DRIVER_MAX_JOINTS; ++i) {
+    calls_->command.tau[i] = command.tau[i];
+    calls_->command.brake[i] = command.brake[i];
+  }
+  calls_->dt = dt;
+  int result = HAPTIC_DRIVER_FAILED;
+  if (!call(kWrite, result)) {
+    hung_.store(true, std::memory_order_release);
+    api_->enter_safe_state(driver_);
+    return DeviceStatus::kError;
+  }
+  return result == HAPTIC_DRIVER_OK ? DeviceStatus::kOk : DeviceStatus::kError;
+}
+
+void DriverDevice::enter_safe_state() { api_->enter_safe_state(driver_); }
+
+bool DriverDevice::run(Tick tick, void* context) {
+  struct Trampoline {
+    Tick tick;
+    void* context;
+    static int call(void* self, std::int64_t now_ns) {
+      auto* t = static_cast<Trampoline*>(self);
+      return t->tick(t->context, now_ns) ? 1 : 0;
+    }
+  } trampoline{tick, context};
+  if (api_->run_servo == nullptr) return false;
+  return api_->run_servo(driver_, &Trampoline::call, &trampoline) == HAPTIC_DRIVER_OK;
+}
+
+}  // namespace haptic::runtime

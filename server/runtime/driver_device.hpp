@@ -1,0 +1,109 @@
+#pragma once
+// A device behind a driver library (driver/include/haptic/driver.h), loaded with dlopen: real
+// hardware, or a plant of one's own. The library is checked before anything is called (the entry
+// symbol, the ABI version, the structs' sizes) and its description validated; every refusal names
+// the library and what was wrong.
+//
+// Server-clocked (the default), read() and write() are carried out on a driver thread of their
+// own while the loop waits for at most the call timeout: a call that takes longer — a vendor
+// library that hangs — is a device fault, the driver's enter_safe_state() is called at once from
+// the loop, and the device stays faulted (every later read and write is an error at once) so the
+// loop goes on publishing and commanding nothing. With a timeout of 0 the calls are made on the
+// loop itself (no thread hop, no protection). A reading whose sequence number has not moved for
+// stale_after ticks is a fault too (a device that stopped sampling).
+// Device-clocked (the driver's run_servo() owns the servo loop), the loop's ticks run inside the
+// driver's callback (ServoClock) and read() and write() call the driver directly.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "haptic/driver.h"
+#include "runtime/device.hpp"
+#include "runtime/servo_clock.hpp"
+
+namespace haptic::runtime {
+
+struct DriverOptions {
+  std::string library;             // path of the shared library
+  std::string params_json = "{}";  // handed to the driver's create()
+  /// Longest a read or write may take before it is a device fault; 0: call on the loop. Unit: s.
+  double call_timeout_s = 0.02;
+  /// Ticks a reading's sequence may stay still before it is a fault; 0: not checked.
+  std::uint32_t stale_after = 3;
+  bool device_clocked = false;     // the driver's run_servo() paces the loop
+};
+
+class DriverDevice final : public Device, public ServoClock {
+ public:
+  /// Loads, checks and creates the driver. Throws std::runtime_error naming the library and the
+  /// reason (cannot load, no entry symbol, ABI or struct size mismatch, create() refused, a bad
+  /// description, device-clocked without run_servo or a servo rate).
+  explicit DriverDevice(const DriverOptions& options);
+  ~DriverDevice() override;
+  DriverDevice(const DriverDevice&) = delete;
+  DriverDevice& operator=(const DriverDevice&) = delete;
+
+  const DeviceDescription& description() const override { return description_; }
+  DeviceStatus start() override;
+  void stop() override;
+  DeviceStatus read(DeviceReading& reading) override;
+  DeviceStatus write(const DeviceCommand& command, double dt) override;
+  void enter_safe_state() override;
+
+  /// Device-clocked: the driver's servo rate. Unit: Hz.
+  double rate_hz() const override { return info_.servo_rate_hz; }
+  bool run(Tick tick, void* context) override;
+
+  /// True once a call has outlasted the timeout (latched until the server restarts).
+  bool hung() const { return hung_.load(std::memory_order_acquire); }
+  /// The driver thread is running (between start() and a stop() that could join it; a call
+  /// that never came back keeps it).
+  bool driver_thread_running() const { return thread_.joinable(); }
+  /// Readings refused as stale so far.
+  std::uint64_t stale_readings() const { return stale_readings_; }
+
+ private:
+  enum Call : std::uint32_t { kNone = 0, kRead = 1, kWrite = 2, kQuit = 3 };
+  /// What the loop and the driver thread share. On the heap: when a call never comes back the
+  /// thread is left running with it, and it must outlive this device.
+  struct CallState {
+    const haptic_driver_api* api = nullptr;
+    void* driver = nullptr;
+    // The call in flight: written by the loop before the request, by the thread before done.
+    haptic_driver_reading reading{};
+    haptic_driver_command command{};
+    double dt = 0.0;
+    int result = 0;
+    std::atomic<std::uint32_t> request{kNone};
+    std::atomic<std::uint32_t> done{0};  // bumped when a call completes (a futex word)
+
+    int call_driver(Call what);
+    void serve();  // the driver thread
+  };
+
+  /// Runs `what` on the driver thread (or here, without a timeout or device-clocked); false when
+  /// it timed out.
+  bool call(Call what, int& result);
+
+  DriverOptions options_;
+  void* library_ = nullptr;
+  const haptic_driver_api* api_ = nullptr;
+  void* driver_ = nullptr;
+  haptic_driver_info info_{};
+  DeviceDescription description_;
+
+  std::unique_ptr<CallState> calls_ = std::make_unique<CallState>();
+  std::atomic<bool> hung_{false};
+  bool started_ = false;
+  std::thread thread_;
+
+  std::uint64_t last_sequence_ = 0;
+  std::uint32_t still_ticks_ = 0;
+  std::uint64_t stale_readings_ = 0;
+  bool have_sequence_ = false;
+};
+
+}  // namespace haptic::runtime

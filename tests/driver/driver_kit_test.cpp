@@ -1,0 +1,242 @@
+// The driver test kit. DriverKit.* checks what any driver owes hapticd (it loads, its description
+// is sane, readings are finite and fresh, commands are taken, the safe state can be entered, the
+// axes of a Cartesian driver point the way W says); run it against your own driver with
+//   HAPTIC_DRIVER=/path/to/driver.so HAPTIC_DRIVER_PARAMS='{...}' driver_kit_test --gtest_filter='DriverKit.*'
+// (HAPTIC_DRIVER_MODEL=other skips the Cartesian checks). By default it runs the example driver
+// (driver/example/point_mass_driver.c). DriverFaults.* checks hapticd's side with the example's
+// injected faults: NaN readings, stale readings, a read that hangs, an ABI mismatch, a library
+// that is not a driver.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "runtime/cartesian_model.hpp"
+#include "runtime/device_port.hpp"
+#include "runtime/driver_device.hpp"
+
+namespace haptic::runtime {
+namespace {
+
+constexpr double kT = 1e-3;  // s
+
+std::string env_or(const char* name, const std::string& fallback) {
+  const char* value = std::getenv(name);
+  return value != nullptr && *value != '\0' ? value : fallback;
+}
+
+DriverOptions kit_options() {
+  DriverOptions options;
+  options.library = env_or("HAPTIC_DRIVER", POINT_MASS_DRIVER);
+  options.params_json = env_or("HAPTIC_DRIVER_PARAMS", "{}");
+  return options;
+}
+
+bool cartesian() { return env_or("HAPTIC_DRIVER_MODEL", "cartesian") == "cartesian"; }
+
+DriverOptions example(const std::string& params) {
+  DriverOptions options;
+  options.library = POINT_MASS_DRIVER;
+  options.params_json = params;
+  return options;
+}
+
+/// The message DriverDevice's constructor throws, or "" when it does not.
+std::string refusal(const DriverOptions& options) {
+  try {
+    DriverDevice device(options);
+  } catch (const std::runtime_error& error) {
+    return error.what();
+  }
+  return {};
+}
+
+// ---- What any driver owes hapticd ----
+
+TEST(DriverKit, LoadsAndDescribesItselfSanely) {
+  DriverDevice device(kit_options());
+  const DeviceDescription& d = device.description();
+  std::printf("  %s: %u joints, %u DOF, %u buttons, max force %g N\n", d.name.c_str(), d.joints,
+              d.dof, d.buttons, d.max_force);
+  EXPECT_FALSE(d.name.empty());
+  EXPECT_EQ(d.model, "driver");
+  EXPECT_FALSE(d.simulated);
+  EXPECT_GE(d.joints, 1u);
+  EXPECT_LE(d.joints, kMaxJoints);
+  EXPECT_GT(d.max_force, 0.0);
+  EXPECT_LE(d.workspace_min.x, d.workspace_max.x);
+  EXPECT_LE(d.workspace_min.y, d.workspace_max.y);
+  EXPECT_LE(d.workspace_min.z, d.workspace_max.z);
+  if (cartesian()) {
+    EXPECT_GE(d.joints, 3u) << "a Cartesian driver's joints 0..2 are x, y, z";
+  }
+}
+
+TEST(DriverKit, ReadingsAreFiniteAndFreshAndZeroCommandsAreTaken) {
+  DriverDevice device(kit_options());
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  for (int k = 0; k < 200; ++k) {
+    ASSERT_EQ(device.read(reading), DeviceStatus::kOk) << "tick " << k;
+    for (std::uint32_t j = 0; j < device.description().joints; ++j) {
+      ASSERT_TRUE(std::isfinite(reading.q[j]) && std::isfinite(reading.q_dot[j])) << "joint " << j;
+    }
+    ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk) << "tick " << k;
+  }
+  EXPECT_EQ(device.stale_readings(), 0u) << "the sequence number must move with every new sample";
+  device.enter_safe_state();  // callable at any time
+  device.stop();
+}
+
+TEST(DriverKit, ACartesianDriversAxesAreThoseOfW) {
+  if (!cartesian()) GTEST_SKIP() << "not a Cartesian driver";
+  // A small force along each axis of W in turn moves the tool point along that axis, positively:
+  // a swapped or negated axis, or a force read as something else, shows here.
+  for (int axis = 0; axis < 3; ++axis) {
+    DriverDevice device(kit_options());
+    CartesianModel model;
+    DevicePort port(device, model);
+    ASSERT_EQ(device.start(), DeviceStatus::kOk);
+    ToolReading start, end;
+    ASSERT_EQ(port.read(start), DeviceStatus::kOk);
+    engine::Vec3 F;
+    (axis == 0 ? F.x : axis == 1 ? F.y : F.z) = 0.05 * device.description().max_force;
+    for (int k = 0; k < 20; ++k) {
+      ASSERT_EQ(port.write(ToolCommand{F}, kT), DeviceStatus::kOk);
+      ASSERT_EQ(port.read(end), DeviceStatus::kOk);
+    }
+    const engine::Vec3 moved = end.p_WT - start.p_WT;
+    const double along = axis == 0 ? moved.x : axis == 1 ? moved.y : moved.z;
+    EXPECT_GT(along, 0.0) << "axis " << axis;
+    EXPECT_GT(along, 0.9 * engine::norm(moved)) << "axis " << axis << " moved off its axis";
+    device.stop();
+  }
+}
+
+// ---- The example driver's physics: units ----
+
+TEST(DriverKit, TheExampleIsTheExactPointMass) {
+  // 2 N on a 0.5 kg, 1 N·s/m mass from rest for 0.2 s: x = (F/b)(t − (m/b)(1 − e^(−b t/m))).
+  DriverDevice device(example(R"({"mass": 0.5, "damping": 1.0, "initial": [0.01, 0, 0]})"));
+  CartesianModel model;
+  DevicePort port(device, model);
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  ToolReading reading;
+  for (int k = 0; k < 200; ++k) ASSERT_EQ(port.write(ToolCommand{{2.0, 0.0, 0.0}}, kT), DeviceStatus::kOk);
+  ASSERT_EQ(port.read(reading), DeviceStatus::kOk);
+  const double m = 0.5, b = 1.0, F = 2.0, t = 0.2;
+  EXPECT_NEAR(reading.p_WT.x, 0.01 + F / b * (t - m / b * -std::expm1(-b * t / m)), 1e-12);
+  EXPECT_NEAR(reading.v_WT.x, F / b * -std::expm1(-b * t / m), 1e-12);
+}
+
+TEST(DriverKit, ButtonsComeThroughMaskedToTheDeclaredCount) {
+  DriverDevice device(example(R"({"button_period_s": 0.01})"));
+  ASSERT_EQ(device.description().buttons, 1u);
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  int pressed = 0, released = 0;
+  for (int k = 0; k < 40; ++k) {
+    ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+    EXPECT_EQ(reading.buttons & ~1u, 0u);
+    (reading.buttons & 1u ? pressed : released)++;
+    ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+  }
+  EXPECT_EQ(pressed, 20);  // 10 ms pressed, 10 ms released, twice
+  EXPECT_EQ(released, 20);
+}
+
+// ---- hapticd's side: faults ----
+
+TEST(DriverFaults, ANaNReadingIsADeviceFaultAndNeverReachesTheModel) {
+  DriverDevice device(example(R"({"fault": "nan", "fault_after": 5})"));
+  CartesianModel model;
+  DevicePort port(device, model);
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  ToolReading reading;
+  for (int k = 0; k < 5; ++k) {
+    ASSERT_EQ(port.read(reading), DeviceStatus::kOk) << k;
+    ASSERT_EQ(port.write(ToolCommand{}, kT), DeviceStatus::kOk);
+  }
+  EXPECT_EQ(port.read(reading), DeviceStatus::kError);
+  EXPECT_TRUE(std::isfinite(port.tool().p_WT.z));  // the last good state, not the NaN
+}
+
+TEST(DriverFaults, AReadingThatStopsChangingIsStaleAfterTheConfiguredTicks) {
+  DriverOptions options = example(R"({"fault": "stale", "fault_after": 10})");
+  options.stale_after = 3;
+  DriverDevice device(options);
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  int first_error = -1;
+  for (int k = 0; k < 30 && first_error < 0; ++k) {
+    if (device.read(reading) != DeviceStatus::kOk) first_error = k;
+    device.write(DeviceCommand{}, kT);
+  }
+  // Ticks 0..9 sample; from tick 10 the sequence stands still: 10, 11, 12 repeat it 3 times.
+  EXPECT_EQ(first_error, 12);
+  EXPECT_EQ(device.stale_readings(), 1u);
+}
+
+TEST(DriverFaults, AReadThatHangsTimesOutGoesSafeAndStaysFaulted) {
+  DriverOptions options = example(R"({"fault": "hang", "fault_after": 3})");
+  options.call_timeout_s = 0.05;
+  auto device = std::make_unique<DriverDevice>(options);
+  ASSERT_EQ(device->start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_EQ(device->read(reading), DeviceStatus::kOk);
+    ASSERT_EQ(device->write(DeviceCommand{}, kT), DeviceStatus::kOk);
+  }
+  const auto before = std::chrono::steady_clock::now();
+  EXPECT_EQ(device->read(reading), DeviceStatus::kError);  // the driver never answers
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
+  EXPECT_TRUE(device->hung());
+  EXPECT_GE(waited, 0.05);
+  EXPECT_LT(waited, 5.0);  // bounded: the loop goes on (generous: a loaded machine)
+  // Faulted for good: later calls are errors at once, without waiting on the driver again.
+  EXPECT_EQ(device->write(DeviceCommand{}, kT), DeviceStatus::kError);
+  EXPECT_EQ(device->read(reading), DeviceStatus::kError);
+  EXPECT_TRUE(device->driver_thread_running());
+  device->stop();  // the example's stop() releases the hung read, so its thread can be joined
+  EXPECT_FALSE(device->driver_thread_running());
+  device.reset();
+}
+
+TEST(DriverFaults, AnAbiMismatchIsRefusedNamingBothVersions) {
+  DriverOptions options;
+  options.library = WRONG_ABI_DRIVER;
+  const std::string message = refusal(options);
+  EXPECT_NE(message.find(WRONG_ABI_DRIVER), std::string::npos) << message;
+  EXPECT_NE(message.find("ABI version 2"), std::string::npos) << message;
+  EXPECT_NE(message.find("speaks version 1"), std::string::npos) << message;
+}
+
+TEST(DriverFaults, WhatIsNotADriverIsRefusedNamingWhy) {
+  DriverOptions missing;
+  missing.library = "/nonexistent/libnothing.so";
+  EXPECT_NE(refusal(missing).find("cannot load"), std::string::npos) << refusal(missing);
+  DriverOptions not_a_driver;
+  not_a_driver.library = "libm.so.6";
+  EXPECT_NE(refusal(not_a_driver).find("exports no haptic_driver_entry()"), std::string::npos)
+      << refusal(not_a_driver);
+  EXPECT_NE(refusal(example(R"({"mass": -1})")).find("create() refused: params.mass must be > 0"),
+            std::string::npos)
+      << refusal(example(R"({"mass": -1})"));
+  EXPECT_NE(refusal(example(R"({"fault": "sometimes"})")).find("params.fault"), std::string::npos);
+  DriverOptions clocked = example("{}");
+  clocked.device_clocked = true;  // the example's servo rate is 0 unless asked for
+  EXPECT_NE(refusal(clocked).find("servo_rate_hz must be 100 ... 10000 Hz"), std::string::npos)
+      << refusal(clocked);
+}
+
+TEST(DriverFaults, AStartThatFailsIsAnError) {
+  DriverDevice device(example(R"({"fault": "fail_start"})"));
+  EXPECT_EQ(device.start(), DeviceStatus::kError);
+}
+
+}  // namespace
+}  // namespace haptic::runtime

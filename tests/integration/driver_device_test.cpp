@@ -1,0 +1,113 @@
+// A device behind a driver library running hapticd end to end: the example driver
+// (driver/example/point_mass_driver.c, a plugin built against <haptic/driver.h> alone) loaded from
+// the configuration, in lockstep, driven through the SDK; and its faults as every client sees them.
+#include <gtest/gtest.h>
+
+#include <haptic/haptic.hpp>
+
+#include <cmath>
+#include <string>
+
+#include "integration/sdk_harness.hpp"
+#include "integration/server_process.hpp"
+
+namespace haptic {
+namespace {
+
+using test::config_for;
+using test::step_and_get;
+
+/// A lockstep configuration whose port 0 is the example driver with `params` (JSON object body).
+std::string driver_config(const std::string& params, const std::string& driver_extra = {}) {
+  return R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
+             "real_time": {"use_fifo": false},
+             "driver": {"library": ")" POINT_MASS_DRIVER R"(", "params": {)" + params + "}" +
+         (driver_extra.empty() ? "" : ", " + driver_extra) + "}}";
+}
+
+bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+TEST(DriverDevice, APluginRunsHapticdEndToEndAndRestsOnAWall) {
+  // The driver's own push (−1 N along z) stands in for the operator; the wall 10 mm below the
+  // tool (500 N/m) must carry it: at rest the force is 1 N and the penetration 1/500 m.
+  test::ServerProcess server(driver_config(R"("initial": [0, 0, 0.01], "push": [0, 0, -1],
+                                              "mass": 0.05, "damping": 0.5)"));
+  Client client(config_for(server));
+  const DeviceInfo& info = client.device_info();
+  EXPECT_EQ(info.model, "driver");
+  EXPECT_FALSE(info.simulated);
+  EXPECT_NE(info.name.find("point mass driver"), std::string::npos) << info.name;
+  EXPECT_EQ(info.dof, 3u);
+  EXPECT_EQ(info.max_force, 10.0);
+  State s = step_and_get(client, 1);
+  EXPECT_NEAR(s.position.z, 0.01, 1e-12);  // the driver's initial pose, through the Cartesian model
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {500.0, 2.0}});
+  s = step_and_get(client, 3000);
+  EXPECT_EQ(s.contact_count, 1u);
+  EXPECT_EQ(s.flags & kDeviceFault, 0u);
+  EXPECT_NEAR(s.force.z, 1.0, 1e-3);
+  EXPECT_NEAR(s.position.z, -1.0 / 500.0, 1e-5);
+  // There is no simulated operator behind a driver: SetOperator says so.
+  try {
+    client.set_operator(OperatorInput::push({0, 0, -2.0}));
+    ADD_FAILURE() << "SetOperator was accepted on a driver's port";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.code(), ErrorCode::kFailedPrecondition);
+    EXPECT_NE(std::string(error.what()).find("not simulated"), std::string::npos) << error.what();
+  }
+}
+
+TEST(DriverDevice, ANaNFromTheDriverIsADeviceFaultWithZeroForceAndTheLastGoodState) {
+  test::ServerProcess server(driver_config(R"("initial": [0, 0, -0.001], "push": [0, 0, -1],
+                                              "fault": "nan", "fault_after": 100)"));
+  Client client(config_for(server));
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {500.0, 2.0}});
+  State s = step_and_get(client, 50);
+  EXPECT_EQ(s.flags & kDeviceFault, 0u);
+  EXPECT_GT(s.force.z, 0.0);
+  s = step_and_get(client, 100);
+  EXPECT_NE(s.flags & kDeviceFault, 0u);
+  EXPECT_EQ(s.force, (Vec3{0, 0, 0}));
+  EXPECT_TRUE(finite(s.position));
+  EXPECT_GE(client.stats().device_faults, 49u);
+}
+
+TEST(DriverDevice, ADriverThatHangsTimesOutTheLoopGoesOnSafeAndTheServerStopsCleanly) {
+  test::ServerProcess server(driver_config(R"("initial": [0, 0, -0.001], "fault": "hang",
+                                              "fault_after": 100)",
+                                           R"("call_timeout_ms": 50)"));
+  Client client(config_for(server));
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {500.0, 2.0}});
+  State s = step_and_get(client, 100);
+  EXPECT_EQ(s.flags & kDeviceFault, 0u);
+  // Tick 101's read never returns: the loop waits the 50 ms, faults the device for good and goes
+  // on; the steps after it do not wait on the driver again.
+  s = step_and_get(client, 200);
+  EXPECT_NE(s.flags & kDeviceFault, 0u);
+  EXPECT_EQ(s.force, (Vec3{0, 0, 0}));
+  EXPECT_TRUE(finite(s.position));
+  EXPECT_EQ(client.stats().ticks, 300u);
+  // The server still serves, and it stops cleanly (checked by ServerProcess's destructor: the
+  // driver's stop() releases its hung read).
+  auto sphere = client.add_sphere({.center = {0, 0.05, 0}, .radius = 0.01, .impedance = {200.0, 1.0}});
+}
+
+TEST(DriverDevice, DeviceClockedTheDriversServoLoopPacesTheTicks) {
+  // Real time, paced by the example driver's own 1 kHz servo thread (its run_servo): hapticd's
+  // loop thread only answers its callbacks. Behaviour, not timing: ticks advance and the state
+  // stream carries the driver's pose; the server stops cleanly, ending the servo loop.
+  test::ServerProcess server(
+      R"({"udp_address": "127.0.0.1", "status_period_s": 0, "real_time": {"use_fifo": false},
+          "driver": {"library": ")" POINT_MASS_DRIVER R"(", "clock": "DEVICE",
+                     "params": {"servo_rate_hz": 1000, "initial": [0.02, 0, 0]}}})");
+  Client client(config_for(server));
+  EXPECT_EQ(client.device_info().loop_rate_hz, 1000.0);
+  State s;
+  ASSERT_TRUE(client.wait_for_tick(100, s, std::chrono::seconds(10)))
+      << "no ticks from the driver's servo loop";
+  EXPECT_NEAR(s.position.x, 0.02, 1e-12);
+  EXPECT_EQ(s.flags & kDeviceFault, 0u);
+}
+
+}  // namespace
+}  // namespace haptic
