@@ -7,7 +7,8 @@
  *
  * params (all optional): {"mass": 0.01 kg, "damping": 0.02 N·s/m, "initial": [x, y, z] m,
  *   "push": [fx, fy, fz] N, "max_force": 10 N, "button_period_s": 0 (0: no button; else button 0
- *   is pressed for every other period), "servo_rate_hz": 0 (nonzero: device-clocked at that rate)
+ *   is pressed for every other period), "servo_rate_hz": 0 (nonzero: device-clocked at that rate),
+ *   "turn_rate": 0 rad/s (nonzero: the tool reports an orientation turning about z at this rate)
  *   "fault": "none" | "nan" | "stale" | "hang" | "fail_start", "fault_after": 0 ticks}
  * The faults are for hapticd's driver test kit: from tick fault_after on, "nan" reads NaN,
  * "stale" stops the sample sequence, "hang" blocks read() until stop().
@@ -24,7 +25,7 @@
 #include <time.h>
 
 typedef struct {
-  double mass, damping, max_force, button_period_s, servo_rate_hz;
+  double mass, damping, max_force, button_period_s, servo_rate_hz, turn_rate;
   double p[3], v[3], push[3];
   char fault[16];
   uint64_t fault_after;
@@ -98,6 +99,7 @@ static void* create(const char* params, char* error) {
       number(params, "max_force", &d->max_force) < 0 ||
       number(params, "button_period_s", &d->button_period_s) < 0 ||
       number(params, "servo_rate_hz", &d->servo_rate_hz) < 0 ||
+      number(params, "turn_rate", &d->turn_rate) < 0 ||
       number(params, "fault_after", &fault_after) < 0 || triple(params, "initial", d->p) < 0 ||
       triple(params, "push", d->push) < 0 || text(params, "fault", d->fault, sizeof d->fault) < 0) {
     snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "params: cannot parse %s", params);
@@ -140,6 +142,7 @@ static int describe(void* driver, haptic_driver_info* info) {
   info->dof = 3;
   info->buttons = d->button_period_s > 0.0 ? 1u : 0u;
   info->capabilities = HAPTIC_DRIVER_MEASURED_RATES;
+  if (d->turn_rate != 0.0) info->capabilities |= HAPTIC_DRIVER_ORIENTATION;
   info->max_force = d->max_force;
   for (int i = 0; i < 3; ++i) {
     info->workspace_min[i] = -0.1;
@@ -190,6 +193,9 @@ static int read_sensors(void* driver, haptic_driver_reading* reading) {
     reading->buttons = 1u;
   }
   reading->safe_state = (uint32_t)d->safe;
+  /* A handle turning about z: R_WT = (cos(a/2), 0, 0, sin(a/2)), a = turn_rate t. */
+  reading->orientation_W[0] = cos(0.5 * d->turn_rate * d->time_s);
+  reading->orientation_W[3] = sin(0.5 * d->turn_rate * d->time_s);
   return HAPTIC_DRIVER_OK;
 }
 

@@ -258,7 +258,9 @@ DeviceInfo from_proto(const v1::DeviceInfo& info) {
   out.capabilities = {caps.gravity(),        caps.brakes(),
                       caps.flexible_modes(), caps.friction(),
                       caps.force_sensor(),   caps.quantized_position(),
-                      caps.state_estimator(), caps.disturbance_observer()};
+                      caps.state_estimator(), caps.disturbance_observer(),
+                      caps.orientation()};
+  out.buttons = info.buttons();
   return out;
 }
 
@@ -325,6 +327,11 @@ State from_proto(const v1::ToolState& s) {
   out.proxy = from_proto(s.proxy());
   out.contact_count = s.contact_count();
   out.flags = s.flags();
+  out.buttons = s.buttons();
+  if (s.has_orientation()) {
+    const v1::Quaternion& q = s.orientation();
+    out.orientation = Quaternion{q.w(), q.x(), q.y(), q.z()};
+  }
   out.received_at = std::chrono::steady_clock::now();
   return out;
 }

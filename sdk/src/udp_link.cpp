@@ -182,6 +182,10 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
   state.proxy = to_vec(payload.p_WP);
   state.contact_count = payload.contact_count;
   state.flags = payload.flags;
+  state.buttons = payload.buttons;
+  if (payload.has_orientation) {
+    state.orientation = Quaternion{payload.R_WT.w, payload.R_WT.x, payload.R_WT.y, payload.R_WT.z};
+  }
   state.received_at = received_at;
   last_sequence_ = std::max(last_sequence_, header.sequence);
   const std::int64_t server_minus_local = header.time_ns - steady_ns(received_at);

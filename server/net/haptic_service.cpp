@@ -129,6 +129,8 @@ v1::DeviceInfo HapticService::device_info(std::uint32_t port) const {
   caps.set_quantized_position(has.quantized_position);
   caps.set_state_estimator(has.state_estimator);
   caps.set_disturbance_observer(has.disturbance_observer);
+  caps.set_orientation(has.orientation);
+  info.set_buttons(device.buttons);
   return info;
 }
 
@@ -403,6 +405,8 @@ grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepReq
     *state->mutable_proxy() = schema::to_proto(sample.p_WP);
     state->set_contact_count(sample.contact_count);
     state->set_flags(sample.flags);
+    state->set_buttons(sample.buttons);
+    if (sample.has_orientation) *state->mutable_orientation() = schema::to_proto(sample.R_WT);
   }
   return grpc::Status::OK;
 }

@@ -233,6 +233,9 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
       state.p_WP = {sample.p_WP.x, sample.p_WP.y, sample.p_WP.z};
       state.contact_count = sample.contact_count;
       state.flags = sample.flags;
+      state.buttons = sample.buttons;
+      state.has_orientation = sample.has_orientation;  // only then the 32 bytes go out
+      state.R_WT = {sample.R_WT.w, sample.R_WT.x, sample.R_WT.y, sample.R_WT.z};
       const std::size_t size = wire::encode_state(header, state, subscriber.key, buffer);
       const auto& to = subscriber.address;
       if (::sendto(socket_, buffer.data(), size, MSG_DONTWAIT,

@@ -35,6 +35,9 @@ struct DeviceReading {
   /// The operator's force on the handle as a handle load cell measures it, in W. Unit: N. 0
   /// without one (capabilities.force_sensor).
   engine::Vec3 F_sensor_W;
+  /// The tool's orientation in W as the device's gimbal measures it (capabilities.orientation),
+  /// a unit quaternion; identity without one.
+  engine::Quat R_WT;
   /// Pressed buttons, bit i for button i (DeviceDescription::buttons of them).
   std::uint32_t buttons = 0;
   /// The device holds its own safe state (a hardware watchdog or an emergency stop: motors off,
@@ -54,6 +57,7 @@ struct DeviceCommand {
 struct ToolReading {
   engine::Vec3 p_WT;  // Unit: m.
   engine::Vec3 v_WT;  // Unit: m/s.
+  engine::Quat R_WT;  // The tool's orientation (capabilities.orientation), else identity.
   /// A device or model safe state (see DeviceReading::safe_state and DeviceModel).
   bool safe_state = false;
   std::uint32_t buttons = 0;
@@ -77,6 +81,7 @@ struct DeviceCapabilities {
   bool state_estimator = false; // Velocities come from an observer rather than differences.
   bool disturbance_observer = false;  // Axes are shaped to a nominal model by a DOB.
   bool measured_rates = false;  // Joint rates come from tachometers (DeviceReading::q_dot).
+  bool orientation = false;     // The tool's orientation is measured (DeviceReading::R_WT).
 };
 
 struct DeviceDescription {

@@ -24,8 +24,10 @@ DevicePort::DevicePort(Device& device, DeviceModel& model)
 DeviceStatus DevicePort::read_device() {
   if (device_->read(reading_) != DeviceStatus::kOk) return DeviceStatus::kError;
   const std::size_t n = joints_count_;
+  const engine::Quat& R = reading_.R_WT;
   return finite(reading_.q, n) && finite(reading_.q_dot, n) && finite(reading_.tau_sensor, n) &&
-                 engine::is_finite(reading_.F_sensor_W)
+                 engine::is_finite(reading_.F_sensor_W) && std::isfinite(R.w) &&
+                 std::isfinite(R.x) && std::isfinite(R.y) && std::isfinite(R.z)
              ? DeviceStatus::kOk
              : DeviceStatus::kError;
 }
@@ -37,6 +39,8 @@ void DevicePort::estimate() {
 }
 
 bool DevicePort::kinematics() {
+  // What the sensors give directly; a model that computes the orientation from joints overwrites it.
+  tool_.R_WT = reading_.R_WT;
   model_->kinematics(joints_, tool_);
   tool_.buttons = reading_.buttons;
   tool_.safe_state = reading_.safe_state || model_->holds_safe_state();

@@ -139,6 +139,7 @@ DriverDevice::DriverDevice(const DriverOptions& options) : options_(options) {
   c.force_sensor = (info_.capabilities & (HAPTIC_DRIVER_FORCE_SENSOR | HAPTIC_DRIVER_TORQUE_SENSORS)) != 0;
   c.brakes = (info_.capabilities & HAPTIC_DRIVER_BRAKES) != 0;
   c.gravity = (info_.capabilities & HAPTIC_DRIVER_GRAVITY) != 0;
+  c.orientation = (info_.capabilities & HAPTIC_DRIVER_ORIENTATION) != 0;
   description_.simulated = false;
 }
 
@@ -245,6 +246,12 @@ DeviceStatus DriverDevice::read(DeviceReading& reading) {
   reading.buttons = info_.buttons >= 32 ? sample.buttons
                                         : sample.buttons & ((std::uint32_t{1} << info_.buttons) - 1);
   reading.safe_state = sample.safe_state != 0;
+  if (description_.capabilities.orientation) {
+    const double* q = sample.orientation_W;
+    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(norm >= 0.5 && norm <= 2.0)) return DeviceStatus::kError;  // NaN lands here too
+    reading.R_WT = {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
+  }
   // A device that stopped sampling repeats its last reading: after stale_after still ticks, a fault.
   if (options_.stale_after > 0) {
     if (have_sequence_ && sample.sequence == last_sequence_) {

@@ -18,7 +18,8 @@ TickRunner::TickRunner(const std::vector<TickPort>& ports, SceneExchange& scenes
   ports_.reserve(ports.size());
   for (const TickPort& port : ports) {
     Port& out = ports_.emplace_back(Port{DevicePort(*port.device, *port.model), port.samples,
-                                         std::nullopt, engine::ForceGuard(port.limits), ToolReading{}});
+                                         std::nullopt, engine::ForceGuard(port.limits), ToolReading{},
+                                         port.device->description().capabilities.orientation});
     if (port.passivity) out.passivity.emplace(*port.passivity);
   }
 }
@@ -116,6 +117,9 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
 
   sample.p_WT = reading.p_WT;
   sample.v_WT = reading.v_WT;
+  sample.R_WT = reading.R_WT;
+  sample.has_orientation = port.oriented;
+  sample.buttons = reading.buttons;
   sample.F_T_W = F_command;
   port.samples->publish(sample);
 }

@@ -83,6 +83,7 @@ class TickRunner {
     std::optional<engine::PassivityController> passivity;
     engine::ForceGuard guard;
     ToolReading last_good_reading;  // what the samples show while the device is faulted
+    bool oriented;                  // the device measures the tool's orientation
   };
 
   double output_gain(std::uint64_t tick) const;

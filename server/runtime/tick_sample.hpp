@@ -14,8 +14,11 @@ struct TickSample {
   engine::Vec3 v_WT;            // Unit: m/s.
   engine::Vec3 F_T_W;           // Commanded force after the safety stage. Unit: N.
   engine::Vec3 p_WP;            // Proxy point. Unit: m.
+  engine::Quat R_WT;            // Tool orientation (devices that measure one), else identity.
+  bool has_orientation = false; // The port's device measures the orientation.
   std::uint32_t contact_count = 0;
   std::uint32_t flags = 0;      // haptic::wire::StateFlags bits.
+  std::uint32_t buttons = 0;    // The device's buttons, bit i for button i.
 };
 
 }  // namespace haptic::runtime

@@ -165,6 +165,15 @@ v1::Vec3 to_proto(const engine::Vec3& v) {
   return out;
 }
 
+v1::Quaternion to_proto(const engine::Quat& q) {
+  v1::Quaternion out;
+  out.set_w(q.w);
+  out.set_x(q.x);
+  out.set_y(q.y);
+  out.set_z(q.z);
+  return out;
+}
+
 std::string to_object_spec(const v1::Object& object, const std::string& path,
                            const SceneLimits& limits, engine::ObjectSpec& out) {
   if (auto e = check_vec(object.pose().position(), limits.max_abs_position, path + ".pose.position");

@@ -56,5 +56,6 @@ std::string to_hand_input(const v1::OperatorInput& input, const std::string& pat
 
 engine::Vec3 to_engine(const v1::Vec3& v);
 v1::Vec3 to_proto(const engine::Vec3& v);
+v1::Quaternion to_proto(const engine::Quat& q);
 
 }  // namespace haptic::schema

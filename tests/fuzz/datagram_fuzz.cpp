@@ -34,8 +34,8 @@ void check_datagram(std::span<const std::uint8_t> input) {
   Header peeked;
   const DecodeError peek = peek_header(input, peeked);
   if (peek == DecodeError::kNone) {
-    require(size == kStateDatagramSize || size == kHeartbeatDatagramSize ||
-            size == kPathDatagramSize);
+    require(size == kStateDatagramSize || size == kStateOrientedDatagramSize ||
+            size == kHeartbeatDatagramSize || size == kPathDatagramSize);
   }
 
   Header header;
@@ -43,7 +43,7 @@ void check_datagram(std::span<const std::uint8_t> input) {
   const DecodeError state_result = decode_state(input, kKey, header, state);
   if (state_result == DecodeError::kNone) {
     require(peek == DecodeError::kNone && same_header(header, peeked));
-    require(header.type == DatagramType::kState);
+    require(header.type == (state.has_orientation ? DatagramType::kStateOriented : DatagramType::kState));
     std::uint8_t again[kMaxDatagramSize];
     require(encode_state(header, state, kKey, again) == size);
     require(std::memcmp(again, data, size) == 0);

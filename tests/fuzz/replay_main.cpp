@@ -42,7 +42,8 @@ class Generator {
     return h;
   }
 
-  std::vector<std::uint8_t> valid_state() {
+  /// oriented: 0 State, 1 StateOriented, -1 either at random.
+  std::vector<std::uint8_t> valid_state(int oriented = -1) {
     StatePayload s;
     s.tick = bits();
     s.p_WT = any_vec();
@@ -51,7 +52,10 @@ class Generator {
     s.p_WP = any_vec();
     s.contact_count = static_cast<std::uint32_t>(bits());
     s.flags = static_cast<std::uint32_t>(bits());
-    std::vector<std::uint8_t> out(kStateDatagramSize);
+    s.buttons = static_cast<std::uint32_t>(bits());
+    s.has_orientation = oriented < 0 ? (bits() & 1) != 0 : oriented == 1;
+    if (s.has_orientation) s.R_WT = {any_vec().x, any_vec().y, any_vec().z, any_vec().x};
+    std::vector<std::uint8_t> out(s.has_orientation ? kStateOrientedDatagramSize : kStateDatagramSize);
     encode_state(any_header(), s, kKey, out);
     return out;
   }
@@ -98,7 +102,7 @@ void resign(std::vector<std::uint8_t>& bytes) {
 int write_seeds(const std::string& dir) {
   Generator g(0x5eed);
   const std::pair<const char*, std::vector<std::uint8_t>> seeds[] = {
-      {"state", g.valid_state()}, {"heartbeat", g.valid_heartbeat()}, {"path", g.valid_path()},
+      {"state", g.valid_state(0)}, {"state_oriented", g.valid_state(1)}, {"heartbeat", g.valid_heartbeat()}, {"path", g.valid_path()},
       {"path2", g.valid_path()}};
   for (const auto& [name, bytes] : seeds) {
     std::FILE* out = std::fopen((dir + "/" + name).c_str(), "wb");

@@ -6,6 +6,8 @@
 #include <haptic/haptic.hpp>
 
 #include <cmath>
+#include <mutex>
+#include <optional>
 #include <string>
 
 #include "integration/sdk_harness.hpp"
@@ -90,6 +92,56 @@ TEST(DriverDevice, ADriverThatHangsTimesOutTheLoopGoesOnSafeAndTheServerStopsCle
   // The server still serves, and it stops cleanly (checked by ServerProcess's destructor: the
   // driver's stop() releases its hung read).
   auto sphere = client.add_sphere({.center = {0, 0.05, 0}, .radius = 0.01, .impedance = {200.0, 1.0}});
+}
+
+TEST(DriverDevice, ButtonsAndOrientationReachTheStepReplyAndTheUdpStream) {
+  // The example's button 0 is pressed during every other 10 ms, and its handle turns about z at
+  // 1 rad/s: R_WT = (cos(t/2), 0, 0, sin(t/2)) with t the driver's time at the reading.
+  test::ServerProcess server(driver_config(R"("button_period_s": 0.01, "turn_rate": 1.0)"));
+  Client client(config_for(server));
+  EXPECT_TRUE(client.device_info().capabilities.orientation);
+  EXPECT_EQ(client.device_info().buttons, 1u);
+  State s = step_and_get(client, 5);  // tick 5 reads at t = 4 ms: released
+  EXPECT_EQ(s.buttons, 0u);
+  ASSERT_TRUE(s.orientation.has_value());
+  EXPECT_NEAR(s.orientation->w, std::cos(0.002), 1e-12);
+  EXPECT_NEAR(s.orientation->z, std::sin(0.002), 1e-12);
+  s = step_and_get(client, 10);  // tick 15 reads at t = 14 ms: pressed
+  EXPECT_EQ(s.buttons, 1u);
+  EXPECT_NEAR(s.orientation->z, std::sin(0.007), 1e-12);
+  // The same over UDP (on_state sees datagrams only; the Step reply's state is not passed there).
+  std::mutex mutex;
+  std::optional<State> streamed;
+  client.on_state([&](const State& state) {
+    std::lock_guard lock(mutex);
+    streamed = state;
+  });
+  for (int i = 0; i < 100; ++i) {
+    step_and_get(client, 1);
+    std::lock_guard lock(mutex);
+    if (streamed) break;
+  }
+  client.on_state({});
+  std::lock_guard lock(mutex);
+  ASSERT_TRUE(streamed.has_value()) << "no State datagram arrived";
+  ASSERT_TRUE(streamed->orientation.has_value());
+  const double t = static_cast<double>(streamed->tick - 1) * 1e-3;
+  EXPECT_NEAR(streamed->orientation->w, std::cos(0.5 * t), 1e-12);
+  EXPECT_NEAR(streamed->orientation->z, std::sin(0.5 * t), 1e-12);
+  const double periods = t / 0.01;  // the button's half-periods elapsed; on a boundary either is right
+  if (std::abs(periods - std::round(periods)) > 1e-6) {
+    EXPECT_EQ(streamed->buttons, static_cast<std::uint64_t>(periods) % 2 == 1 ? 1u : 0u);
+  }
+}
+
+TEST(DriverDevice, ADeviceWithoutOrientationSendsNone) {
+  test::ServerProcess server(driver_config(""));
+  Client client(config_for(server));
+  EXPECT_FALSE(client.device_info().capabilities.orientation);
+  EXPECT_EQ(client.device_info().buttons, 0u);
+  const State s = step_and_get(client, 3);
+  EXPECT_FALSE(s.orientation.has_value());
+  EXPECT_EQ(s.buttons, 0u);
 }
 
 TEST(DriverDevice, DeviceClockedTheDriversServoLoopPacesTheTicks) {

@@ -47,6 +47,7 @@ extern "C" {
 #define HAPTIC_DRIVER_TORQUE_SENSORS 0x04u /* tau_sensor holds joint torque sensors' readings */
 #define HAPTIC_DRIVER_BRAKES 0x08u         /* brake[] is applied */
 #define HAPTIC_DRIVER_GRAVITY 0x10u        /* the plant carries a gravity load */
+#define HAPTIC_DRIVER_ORIENTATION 0x20u    /* orientation_W is measured (a gimbal's encoders) */
 
 /* What the device is, filled in by describe(). */
 typedef struct haptic_driver_info {
@@ -68,6 +69,9 @@ typedef struct haptic_driver_reading {
   double q_dot[HAPTIC_DRIVER_MAX_JOINTS];      /* joint rates (MEASURED_RATES), else 0 */
   double tau_sensor[HAPTIC_DRIVER_MAX_JOINTS]; /* operator's joint torques (TORQUE_SENSORS) */
   double force_sensor_W[3];                    /* operator's force on the handle (FORCE_SENSOR) */
+  /* The tool's orientation in W as a unit quaternion (w, x, y, z) (ORIENTATION); normalized by
+   * hapticd, and a norm far from 1 (outside 0.5 ... 2) is a fault. Ignored without the bit. */
+  double orientation_W[4];
   uint32_t buttons;                            /* bit i: button i pressed */
   uint32_t safe_state;                         /* nonzero: the device holds its own safe state */
   /* Increases with every new sample the device takes. A reading whose sequence has not moved for

@@ -64,6 +64,7 @@ class Reader {
 std::size_t payload_size_of(std::uint16_t type) {
   switch (static_cast<DatagramType>(type)) {
     case DatagramType::kState: return kStatePayloadSize;
+    case DatagramType::kStateOriented: return kStateOrientedPayloadSize;
     case DatagramType::kHeartbeat: return kHeartbeatPayloadSize;
     case DatagramType::kPathChallenge:
     case DatagramType::kPathResponse: return kPathPayloadSize;
@@ -177,7 +178,9 @@ DecodeError peek_header(std::span<const std::uint8_t> datagram, Header& header) 
 
 std::size_t encode_state(Header header, const StatePayload& state, const Key& key,
                          std::span<std::uint8_t> out) {
-  return encode_as(header, DatagramType::kState, kStatePayloadSize, key, out, [&](Writer& w) {
+  const DatagramType type = state.has_orientation ? DatagramType::kStateOriented : DatagramType::kState;
+  const std::size_t size = state.has_orientation ? kStateOrientedPayloadSize : kStatePayloadSize;
+  return encode_as(header, type, size, key, out, [&](Writer& w) {
     w.u64(state.tick);
     w.vec(state.p_WT);
     w.vec(state.v_WT);
@@ -185,6 +188,13 @@ std::size_t encode_state(Header header, const StatePayload& state, const Key& ke
     w.vec(state.p_WP);
     w.u32(state.contact_count);
     w.u32(state.flags);
+    w.u32(state.buttons);
+    if (state.has_orientation) {
+      w.f64(state.R_WT.w);
+      w.f64(state.R_WT.x);
+      w.f64(state.R_WT.y);
+      w.f64(state.R_WT.z);
+    }
   });
 }
 
@@ -214,7 +224,13 @@ std::size_t encode_path_response(Header header, const PathResponsePayload& respo
 
 DecodeError decode_state(std::span<const std::uint8_t> datagram, const Key& key, Header& header,
                          StatePayload& state) {
-  return decode_as(datagram, key, DatagramType::kState, header, state, [](Reader& r) {
+  // Either state type: the header says which (and peek_header has checked its exact length).
+  Header peeked;
+  const DatagramType type =
+      peek_header(datagram, peeked) == DecodeError::kNone && peeked.type == DatagramType::kStateOriented
+          ? DatagramType::kStateOriented
+          : DatagramType::kState;
+  return decode_as(datagram, key, type, header, state, [type](Reader& r) {
     StatePayload decoded;
     decoded.tick = r.u64();
     decoded.p_WT = r.vec();
@@ -223,6 +239,14 @@ DecodeError decode_state(std::span<const std::uint8_t> datagram, const Key& key,
     decoded.p_WP = r.vec();
     decoded.contact_count = r.u32();
     decoded.flags = r.u32();
+    decoded.buttons = r.u32();
+    if (type == DatagramType::kStateOriented) {
+      decoded.has_orientation = true;
+      decoded.R_WT.w = r.f64();
+      decoded.R_WT.x = r.f64();
+      decoded.R_WT.y = r.f64();
+      decoded.R_WT.z = r.f64();
+    }
     return decoded;
   });
 }

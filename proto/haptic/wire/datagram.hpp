@@ -26,7 +26,8 @@
 namespace haptic::wire {
 
 inline constexpr std::uint32_t kMagic = 0x43545048u;  // bytes "HPTC"
-inline constexpr std::uint16_t kWireVersion = 2;  // 2: path validation (PathChallenge/Response)
+// 2: path validation (PathChallenge/Response); 3: buttons in State, StateOriented.
+inline constexpr std::uint16_t kWireVersion = 3;
 inline constexpr std::size_t kHeaderSize = 40;
 inline constexpr std::size_t kTagSize = 8;
 
@@ -37,6 +38,9 @@ enum class DatagramType : std::uint16_t {
   // here by echoing the nonce (so a client cannot aim the stream at a bystander by spoofing).
   kPathChallenge = 3,
   kPathResponse = 4,  // client -> server, from the challenged address: the nonce echoed
+  // server -> client, one tick's sample of a device that reports the tool's orientation: State
+  // and the orientation after it (a device without one sends State, 32 bytes shorter).
+  kStateOriented = 5,
 };
 
 /// A 128-bit SipHash key.
@@ -54,6 +58,12 @@ struct Vec3d {
   friend bool operator==(const Vec3d&, const Vec3d&) = default;
 };
 
+/// A unit quaternion (w, x, y, z).
+struct Quatd {
+  double w = 1.0, x = 0.0, y = 0.0, z = 0.0;
+  friend bool operator==(const Quatd&, const Quatd&) = default;
+};
+
 /// One tick's sample of the device and the scene. Frames: W (world), T (tool point).
 struct StatePayload {
   std::uint64_t tick = 0;      // Loop tick index.
@@ -63,6 +73,11 @@ struct StatePayload {
   Vec3d p_WP;                  // Proxy (contact) point; equals p_WT when not in contact. Unit: m.
   std::uint32_t contact_count = 0;  // Objects in contact this tick.
   std::uint32_t flags = 0;          // StateFlags bits.
+  std::uint32_t buttons = 0;        // The device's buttons, bit i for button i.
+  /// Sent as kStateOriented when true: the tool's orientation R_WT; else kState, and R_WT is
+  /// identity.
+  bool has_orientation = false;
+  Quatd R_WT;
   friend bool operator==(const StatePayload&, const StatePayload&) = default;
 };
 
@@ -92,14 +107,17 @@ struct PathResponsePayload {
   friend bool operator==(const PathResponsePayload&, const PathResponsePayload&) = default;
 };
 
-inline constexpr std::size_t kStatePayloadSize = 8 + 4 * 24 + 4 + 4;  // 112
+inline constexpr std::size_t kStatePayloadSize = 8 + 4 * 24 + 4 + 4 + 4;  // 116
+inline constexpr std::size_t kStateOrientedPayloadSize = kStatePayloadSize + 32;  // 148
 inline constexpr std::size_t kHeartbeatPayloadSize = 16;
 inline constexpr std::size_t kPathPayloadSize = 16;  // challenge and response alike
 inline constexpr std::size_t kStateDatagramSize = kHeaderSize + kStatePayloadSize + kTagSize;
+inline constexpr std::size_t kStateOrientedDatagramSize =
+    kHeaderSize + kStateOrientedPayloadSize + kTagSize;
 inline constexpr std::size_t kHeartbeatDatagramSize = kHeaderSize + kHeartbeatPayloadSize + kTagSize;
 /// A challenge is exactly as long as the heartbeat that draws it: no amplification.
 inline constexpr std::size_t kPathDatagramSize = kHeaderSize + kPathPayloadSize + kTagSize;
-inline constexpr std::size_t kMaxDatagramSize = kStateDatagramSize;
+inline constexpr std::size_t kMaxDatagramSize = kStateOrientedDatagramSize;
 
 /// Why a datagram was rejected. Every rejection is counted by the receiver, never thrown.
 /// Checks run in the order listed; the first that fails is reported.

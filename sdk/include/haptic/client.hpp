@@ -28,7 +28,7 @@ struct WireField;
 }
 
 /// The API version this SDK speaks (haptic.v1.API_VERSION_CURRENT).
-inline constexpr std::uint32_t kApiVersion = 2;
+inline constexpr std::uint32_t kApiVersion = 3;
 
 struct ClientConfig {
   std::string server_address = "127.0.0.1:50051";  ///< gRPC host:port of hapticd.

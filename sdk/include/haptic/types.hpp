@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -210,6 +211,9 @@ struct State {
   Vec3 proxy;                    ///< Contact (proxy) point; equals position out of contact. Unit: m.
   std::uint32_t contact_count = 0;
   std::uint32_t flags = 0;       ///< StateFlag bits.
+  std::uint32_t buttons = 0;     ///< The device's buttons, bit i for button i (DeviceInfo::buttons).
+  /// The tool's orientation R_WT, for a device that measures one (capabilities.orientation).
+  std::optional<Quaternion> orientation;
   std::chrono::steady_clock::time_point received_at;  ///< Local receipt time.
   /// At receipt: how much longer this sample took to arrive than the quickest recent one
   /// (receipt − stamp + clock_offset): the time it spent queued anywhere. 0 from a Step reply.
@@ -226,6 +230,7 @@ struct DeviceCapabilities {
   bool quantized_position = false;    ///< Positions from encoder counts.
   bool state_estimator = false;       ///< Velocities from an observer.
   bool disturbance_observer = false;  ///< Axes shaped to a nominal mass-damper.
+  bool orientation = false;           ///< The tool's orientation is measured (State::orientation).
 };
 
 struct DeviceInfo {
@@ -238,6 +243,7 @@ struct DeviceInfo {
   double max_force = 0.0;    ///< Unit: N.
   double loop_rate_hz = 0.0; ///< Unit: Hz.
   bool simulated = false;
+  std::uint32_t buttons = 0; ///< Buttons reported in State::buttons.
 };
 
 /// What the server can say about an object's impedance on its device (docs/scene.md): Colgate's

@@ -372,14 +372,14 @@ TEST_F(FakeServerTest, ApplySceneNamesTheBadSpecAndSendsNothing) {
 
 TEST_F(FakeServerTest, AnotherApiVersionIsAVersionMismatchCarryingBoth) {
   service_.refuse_open_with({grpc::StatusCode::FAILED_PRECONDITION,
-                             "api_version: client speaks 2, server speaks 3"});
+                             "api_version: client speaks 3, server speaks 4"});
   try {
     Client client(config_);
     FAIL() << "no exception";
   } catch (const VersionMismatchError& error) {
     EXPECT_EQ(error.client_version(), kApiVersion);
-    EXPECT_EQ(error.client_version(), 2u);
-    EXPECT_EQ(error.server_version(), 3u);
+    EXPECT_EQ(error.client_version(), 3u);
+    EXPECT_EQ(error.server_version(), 4u);
   }
 }
 

@@ -36,12 +36,12 @@ TEST(StatusMapping, EachCodeBecomesItsExceptionWithTheServersMessage) {
 TEST(StatusMapping, VersionMismatchCarriesBothVersions) {
   try {
     throw_if_failed(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                                 "api_version: client speaks 2, server speaks 3"),
+                                 "api_version: client speaks 3, server speaks 4"),
                     "OpenSession");
     FAIL();
   } catch (const VersionMismatchError& error) {
     EXPECT_EQ(error.client_version(), kApiVersion);
-    EXPECT_EQ(error.server_version(), 3u);
+    EXPECT_EQ(error.server_version(), 4u);
     EXPECT_EQ(error.code(), ErrorCode::kVersionMismatch);
   }
 }

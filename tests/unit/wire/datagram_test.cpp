@@ -40,6 +40,7 @@ StatePayload sample_state() {
             from_bits(0xfff8'0000'0000'0000ull)};
   s.contact_count = std::numeric_limits<std::uint32_t>::max();
   s.flags = kFlagForceSaturated | kFlagRampingOut | (1u << 31);  // unknown bits pass through
+  s.buttons = 0xdeadbeefu;
   return s;
 }
 
@@ -93,25 +94,27 @@ void resign(Bytes& bytes) {
 
 TEST(DatagramLayout, SizesMatchTheDocumentedLayout) {
   EXPECT_EQ(kHeaderSize, 40u);
-  EXPECT_EQ(kStatePayloadSize, 112u);
+  EXPECT_EQ(kStatePayloadSize, 116u);
+  EXPECT_EQ(kStateOrientedPayloadSize, 148u);
   EXPECT_EQ(kHeartbeatPayloadSize, 16u);
-  EXPECT_EQ(kStateDatagramSize, 160u);
+  EXPECT_EQ(kStateDatagramSize, 164u);
+  EXPECT_EQ(kStateOrientedDatagramSize, 196u);
   EXPECT_EQ(kHeartbeatDatagramSize, 64u);
-  EXPECT_EQ(kMaxDatagramSize, 160u);
+  EXPECT_EQ(kMaxDatagramSize, 196u);
 }
 
 // A complete heartbeat under key 00 01 .. 0f; the tag was computed by an independent SipHash-2-4
 // implementation, so this pins layout and tag together.
 TEST(DatagramLayout, HeartbeatMatchesGoldenBytes) {
   constexpr std::array<std::uint8_t, kHeartbeatDatagramSize> kGolden = {
-      0x48, 0x50, 0x54, 0x43, 0x02, 0x00, 0x02, 0x00,  // "HPTC", version 2, type 2
+      0x48, 0x50, 0x54, 0x43, 0x03, 0x00, 0x02, 0x00,  // "HPTC", version 3, type 2
       0xef, 0xcd, 0xab, 0x89, 0x67, 0x45, 0x23, 0x01,  // session_id
       0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // sequence 1
       0xd6, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff,  // time_ns -42
       0x10, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // payload_size 16, reserved 0
       0x00, 0xca, 0x9a, 0x3b, 0x00, 0x00, 0x00, 0x00,  // client_time_ns 1e9
       0x07, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // last_state_sequence 7
-      0x1e, 0x9b, 0xe6, 0xc1, 0x25, 0xfa, 0x9d, 0xc1,  // SipHash-2-4 tag
+      0x9f, 0xa5, 0x37, 0x5d, 0x2d, 0x9b, 0xf0, 0x9c,  // SipHash-2-4 tag
   };
   Key key;
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(i);
@@ -182,6 +185,7 @@ TEST(DatagramLayout, StateFieldsAreLittleEndianAtDocumentedOffsets) {
   s.p_WP.z = -2.0;  // 0xc000000000000000
   s.contact_count = 0xa1b2c3d4u;
   s.flags = kFlagForceFault;
+  s.buttons = 0x00000005u;
   Bytes b(kStateDatagramSize);
   ASSERT_EQ(encode_state(h, s, test_key(), b), kStateDatagramSize);
 
@@ -207,10 +211,12 @@ TEST(DatagramLayout, StateFieldsAreLittleEndianAtDocumentedOffsets) {
   EXPECT_EQ(b[144], 0xd4);  // contact_count
   EXPECT_EQ(b[147], 0xa1);
   EXPECT_EQ(b[148], kFlagForceFault);  // flags
+  EXPECT_EQ(b[152], 0x05);             // buttons
+  EXPECT_EQ(b[155], 0x00);
 
-  const std::uint64_t tag = siphash24(test_key(), std::span(b).first(152));
+  const std::uint64_t tag = siphash24(test_key(), std::span(b).first(156));
   for (std::size_t i = 0; i < 8; ++i) {
-    EXPECT_EQ(b[152 + i], static_cast<std::uint8_t>(tag >> (8 * i))) << "tag byte " << i;
+    EXPECT_EQ(b[156 + i], static_cast<std::uint8_t>(tag >> (8 * i))) << "tag byte " << i;
   }
 }
 
@@ -231,6 +237,42 @@ TEST(DatagramRoundTrip, StateIsBitExact) {
   expect_same_bits(state.p_WP, expected.p_WP);
   EXPECT_EQ(state.contact_count, expected.contact_count);
   EXPECT_EQ(state.flags, expected.flags);
+  EXPECT_EQ(state.buttons, expected.buttons);
+  EXPECT_FALSE(state.has_orientation);  // a device without one: 32 bytes shorter, identity
+  EXPECT_EQ(state.R_WT, Quatd{});
+}
+
+// A device that measures the tool's orientation: StateOriented, State's fields at the same
+// offsets, then R_WT (w, x, y, z) at 156, then the tag.
+TEST(DatagramLayout, StateOrientedAppendsTheOrientation) {
+  StatePayload s = sample_state();
+  s.has_orientation = true;
+  s.R_WT = {0.5, -0.5, from_bits(0x7ff8'0000'0000'0abcull), -0.0};
+  Bytes b(kStateOrientedDatagramSize);
+  ASSERT_EQ(encode_state(sample_header(), s, test_key(), b), kStateOrientedDatagramSize);
+  EXPECT_EQ(b[6], 5);  // type StateOriented
+  EXPECT_EQ(b[32], kStateOrientedPayloadSize);
+  EXPECT_EQ(b[152], 0xef);  // buttons, as in State
+  EXPECT_EQ(b[156 + 7], 0x3f);  // w = 0.5: 0x3fe0000000000000
+  EXPECT_EQ(b[156 + 6], 0xe0);
+  EXPECT_EQ(b[164 + 7], 0xbf);  // x = -0.5
+  EXPECT_EQ(b[180 + 7], 0x80);  // z = -0.0
+  Header header;
+  StatePayload state;
+  ASSERT_EQ(decode_state(b, test_key(), header, state), DecodeError::kNone);
+  EXPECT_EQ(header.type, DatagramType::kStateOriented);
+  EXPECT_TRUE(state.has_orientation);
+  EXPECT_EQ(bits_of(state.R_WT.w), bits_of(s.R_WT.w));
+  EXPECT_EQ(bits_of(state.R_WT.x), bits_of(s.R_WT.x));
+  EXPECT_EQ(bits_of(state.R_WT.y), bits_of(s.R_WT.y));
+  EXPECT_EQ(bits_of(state.R_WT.z), bits_of(s.R_WT.z));
+  EXPECT_EQ(state.buttons, s.buttons);
+  // Too small a buffer for the oriented form writes nothing.
+  Bytes small(kStateDatagramSize);
+  EXPECT_EQ(encode_state(sample_header(), s, test_key(), small), 0u);
+  // The oriented header on State's length (or the reverse) is refused.
+  Bytes cut(b.begin(), b.begin() + kStateDatagramSize);
+  EXPECT_EQ(decode_as_state(cut), DecodeError::kBadPayloadSize);
 }
 
 TEST(DatagramRoundTrip, HeartbeatWithExtremeValues) {
@@ -310,7 +352,8 @@ TEST(DatagramReject, BadMagic) {
 }
 
 TEST(DatagramReject, BadVersion) {
-  for (const std::uint16_t version : {0, 1, 3, 0x0100, 0xffff}) {  // 1: before path validation
+  // 1: before path validation; 2: before buttons and StateOriented.
+  for (const std::uint16_t version : {0, 1, 2, 4, 0x0100, 0xffff}) {
     Bytes bytes = encoded_heartbeat();
     bytes[4] = static_cast<std::uint8_t>(version);
     bytes[5] = static_cast<std::uint8_t>(version >> 8);
@@ -322,7 +365,7 @@ TEST(DatagramReject, BadVersion) {
 }
 
 TEST(DatagramReject, UnknownType) {
-  for (const std::uint16_t type : {0, 5, 0x0101, 0xffff}) {
+  for (const std::uint16_t type : {0, 6, 0x0101, 0xffff}) {
     Bytes bytes = encoded_state();
     bytes[6] = static_cast<std::uint8_t>(type);
     bytes[7] = static_cast<std::uint8_t>(type >> 8);
@@ -339,11 +382,11 @@ TEST(DatagramReject, PayloadSizeThatDoesNotMatchTheType) {
   resign(bytes);
   EXPECT_EQ(decode_as_state(bytes), DecodeError::kBadPayloadSize);
   bytes[32] = kStatePayloadSize;
-  bytes[34] = 1;  // 112 + 65536
+  bytes[34] = 1;  // 116 + 65536
   resign(bytes);
   EXPECT_EQ(decode_as_state(bytes), DecodeError::kBadPayloadSize);
 
-  // A heartbeat header stretched to a state's length, its payload_size claiming 112.
+  // A heartbeat header stretched to a state's length, its payload_size claiming 116.
   Bytes stretched = encoded_heartbeat();
   stretched.resize(kStateDatagramSize);
   stretched[32] = kStatePayloadSize;
