@@ -4,7 +4,9 @@
 // one run. Every device is driven by the same push of the simulated hand; costs are per 1 ms tick.
 #include <benchmark/benchmark.h>
 
+#include <chrono>
 #include <memory>
+#include <thread>
 
 #include "engine/control/brake_rule.hpp"
 #include "engine/control/dc_motor_control.hpp"
@@ -14,6 +16,7 @@
 #include "runtime/cartesian_model.hpp"
 #include "runtime/dc_motor_model.hpp"
 #include "runtime/device_port.hpp"
+#include "runtime/driver_device.hpp"
 #include "runtime/five_bar_estimator.hpp"
 #include "runtime/five_bar_model.hpp"
 #include "runtime/joystick_model.hpp"
@@ -94,6 +97,38 @@ void BM_Device_ParallelDob001(benchmark::State& state) {
   run_device(state, device, model, {0.0, 0.0, 0.0});
 }
 BENCHMARK(BM_Device_ParallelDob001)->Arg(1)->Arg(0)->ArgName("observer");
+
+// The example driver (a point mass behind the driver ABI): called on the loop itself
+// (call_timeout 0) against through the driver thread that guards against a hang (the default),
+// so the thread hop's cost per tick (two calls, each a futex wake and wait) is measured.
+// driver_thread 2: with 1 ms between ticks, as in the loop at 1 kHz, so the driver thread is
+// asleep when the tick's read comes (its write then finds it still spinning); 3: the same gaps
+// with the calls on the loop (what the pauses themselves cost).
+void BM_Device_DriverPointMass(benchmark::State& state) {
+  runtime::DriverOptions options;
+  options.library = POINT_MASS_DRIVER;
+  options.call_timeout_s = state.range(0) == 1 || state.range(0) == 2 ? 0.02 : 0.0;
+  runtime::DriverDevice device(options);
+  runtime::CartesianModel model;
+  device.start();
+  if (state.range(0) >= 2) {
+    runtime::DevicePort port(device, model);
+    runtime::ToolReading reading;
+    for (auto _ : state) {
+      state.PauseTiming();
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      state.ResumeTiming();
+      port.read(reading);
+      benchmark::DoNotOptimize(reading);
+      port.write(runtime::ToolCommand{{0, 0, 1e-4}}, kT);
+    }
+  } else {
+    run_device(state, device, model, {0, 0, 1e-4});
+  }
+  device.stop();
+}
+BENCHMARK(BM_Device_DriverPointMass)->Arg(0)->Arg(1)->ArgName("driver_thread");
+BENCHMARK(BM_Device_DriverPointMass)->Arg(2)->Arg(3)->ArgName("driver_thread")->Iterations(1000);
 
 // ---- Controllers on their own: one tick's computation each.
 

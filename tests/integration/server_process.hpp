@@ -28,6 +28,9 @@ class ServerProcess {
     static int counter = 0;
     dir_ = std::filesystem::temp_directory_path() /
            ("hapticd-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+    // A test that died leaves its folder, and a later process may get its pid: a stale
+    // ready.json there would name a port nobody listens on.
+    std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
     const auto config_path = dir_ / "config.json";
     const auto ready_path = dir_ / "ready.json";

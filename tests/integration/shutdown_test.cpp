@@ -70,7 +70,9 @@ TEST(Shutdown, SigtermRampsTheForceToZeroAtOnceWithAnIdleClientConnected) {
       continue;
     }
     if (ramp_begin_s < 0.0 && force < 0.9 * full) ramp_begin_s = time_s;
-    if (ramp_begin_s >= 0.0) EXPECT_LE(force, previous + 1e-3) << "at " << time_s << " s";  // only down
+    if (ramp_begin_s >= 0.0) {
+      EXPECT_LE(force, previous + 1e-3) << "at " << time_s << " s";  // only down
+    }
     previous = force;
     if (force == 0.0) {
       zero_s = time_s;
