@@ -128,83 +128,94 @@ double ramp_gain(const ItemRamp& ramp, std::int64_t tick, std::int64_t ramp_tick
   return gain;
 }
 
-CompiledScene compile_scene(const SceneDescription& description, std::int64_t removal_ramp_ticks,
-                            std::uint64_t generation, double period_s,
-                            double session_force_budget, std::uint32_t ports) {
-  assert(ports >= 1);
-  ports = std::max<std::uint32_t>(1, ports);
-  CompiledScene scene;
-  scene.session_force_budget = session_force_budget;
-  scene.removal_ramp_ticks = std::max<std::int64_t>(1, removal_ramp_ticks);
-  scene.generation = generation;
-  scene.period_s = period_s;
-  SceneState& state = *scene.state;
-  const std::size_t items = description.objects.size() + description.fields.size();
-  state.ports = ports;
-  state.meters.resize(items * ports);
-  state.meter_keys.reserve(items);
-  state.meter_ids.reserve(items);
-  state.meter_sessions.reserve(items);
-  state.meter_is_object.reserve(items);
-  state.work_out = std::make_unique<std::atomic<double>[]>(items * ports);
-  state.work_in = std::make_unique<std::atomic<double>[]>(items * ports);
-  const auto slot_of = [&](std::uint64_t session_id) {
+namespace {
+
+/// The radius of a sphere about the object's origin that holds the whole shape (a cheap early-out
+/// for a far tool); infinite for an unbounded shape (a half-space or tangent plane).
+double bounding_radius_of(const ObjectSpec& object) {
+  return std::visit(
+      [](const auto& shape) {
+        using S = std::decay_t<decltype(shape)>;
+        if constexpr (std::is_same_v<S, SphereSpec>) return shape.radius;
+        if constexpr (std::is_same_v<S, BoxSpec>) return norm(shape.half_extents);
+        if constexpr (std::is_same_v<S, CapsuleSpec>) return shape.radius + shape.half_length;
+        return std::numeric_limits<double>::infinity();
+      },
+      object.shape);
+}
+
+/// compile_scene's work in progress: the scene it fills item by item, in the description's order
+/// (the order carry_state's matching relies on), and what every item needs whatever its kind —
+/// an energy meter and its owner's budget slot.
+struct SceneBuilder {
+  CompiledScene& scene;
+  SceneState& state;
+
+  /// Sizes the meters of `items` item versions on each of `ports` ports.
+  void size_meters(std::size_t items, std::uint32_t ports) {
+    state.ports = ports;
+    state.meters.resize(items * ports);
+    state.meter_keys.reserve(items);
+    state.meter_ids.reserve(items);
+    state.meter_sessions.reserve(items);
+    state.meter_is_object.reserve(items);
+    state.work_out = std::make_unique<std::atomic<double>[]>(items * ports);
+    state.work_in = std::make_unique<std::atomic<double>[]>(items * ports);
+  }
+
+  /// The budget slot of a session's items, the session's first item opening it.
+  std::uint32_t slot_of(std::uint64_t session_id) {
     auto& sessions = state.slot_sessions;
     const auto it = std::find(sessions.begin(), sessions.end(), session_id);
     if (it != sessions.end()) return static_cast<std::uint32_t>(it - sessions.begin());
     sessions.push_back(session_id);
     return static_cast<std::uint32_t>(sessions.size() - 1);
-  };
-  const auto new_meter = [&](const ItemMeta& meta, bool is_object) {
+  }
+
+  /// The next item's meter (port 0's index; every port has its own, meters_per_port apart).
+  std::uint32_t new_meter(const ItemMeta& meta, bool is_object) {
     state.meter_keys.push_back(meta.state_key());
     state.meter_ids.push_back(meta.id);
     state.meter_sessions.push_back(meta.session_id);
     state.meter_is_object.push_back(is_object ? 1 : 0);
     return static_cast<std::uint32_t>(state.meter_keys.size() - 1);
-  };
+  }
 
-  for (const ObjectEntry& entry : description.objects) {
+  /// An object goes to the cheapest stage that can render it.
+  void add_object(const ObjectEntry& entry) {
+    const std::uint32_t meter = new_meter(entry.meta, true);
+    if (is_fast(entry.spec)) {
+      add_fast_object(entry, meter);
+    } else if (const auto* mesh = std::get_if<MeshShapeSpec>(&entry.spec.shape)) {
+      add_mesh(entry, *mesh, meter);
+    } else {
+      add_contact(entry, meter);
+    }
+  }
+
+  /// Stages 1 and 2: a frictionless half-space or sphere with the velocity law (no state).
+  void add_fast_object(const ObjectEntry& entry, std::uint32_t meter) {
     const ObjectSpec& object = entry.spec;
-    const std::uint32_t meter_index = new_meter(entry.meta, true);
-    if (is_fast(object)) {
-      if (const auto* half_space = std::get_if<HalfSpaceSpec>(&object.shape)) {
-        // Normalised after the rotation so a slightly non-unit quaternion cannot scale the force.
-        const Vec3 n_W = rotate(object.R_WO, half_space->normal_O);
-        assert(norm(n_W) > 0.0);
-        scene.half_spaces.push_back(CompiledHalfSpace{object.p_WO, n_W * (1.0 / norm(n_W)),
-                                                      object.stiffness, object.damping,
-                                                      entry.meta.ramp(), meter_index,
-                                                      slot_of(entry.meta.session_id)});
-      } else {
-        const auto& sphere = std::get<SphereSpec>(object.shape);
-        scene.spheres.push_back(CompiledSphere{object.p_WO, sphere.radius, object.stiffness,
-                                               object.damping, entry.meta.ramp(), meter_index,
-                                               slot_of(entry.meta.session_id)});
-      }
-      continue;
+    if (const auto* half_space = std::get_if<HalfSpaceSpec>(&object.shape)) {
+      // Normalised after the rotation so a slightly non-unit quaternion cannot scale the force.
+      const Vec3 n_W = rotate(object.R_WO, half_space->normal_O);
+      assert(norm(n_W) > 0.0);
+      scene.half_spaces.push_back(CompiledHalfSpace{object.p_WO, n_W * (1.0 / norm(n_W)),
+                                                    object.stiffness, object.damping,
+                                                    entry.meta.ramp(), meter,
+                                                    slot_of(entry.meta.session_id)});
+    } else {
+      const auto& sphere = std::get<SphereSpec>(object.shape);
+      scene.spheres.push_back(CompiledSphere{object.p_WO, sphere.radius, object.stiffness,
+                                             object.damping, entry.meta.ramp(), meter,
+                                             slot_of(entry.meta.session_id)});
     }
-    if (const auto* mesh = std::get_if<MeshShapeSpec>(&object.shape)) {
-      CompiledMesh compiled;
-      compiled.model = mesh->model;
-      compiled.pose = MeshPose{object.p_WO, object.R_WO, {}, {}};
-      compiled.params.stiffness = object.stiffness;
-      compiled.params.damping = object.damping;
-      compiled.static_friction = object.static_friction;
-      compiled.dynamic_friction = object.dynamic_friction;
-      compiled.object_mass = object.object_mass;
-      compiled.object_damping = object.object_damping;
-      if (object.object_mass > 0.0) scene.mesh_masses.push_back(static_cast<std::uint32_t>(scene.meshes.size()));
-      compiled.ramp = entry.meta.ramp();
-      compiled.state = static_cast<std::uint32_t>(state.meshes.size());
-      compiled.meter = meter_index;
-      compiled.slot = slot_of(entry.meta.session_id);
-      MeshState mesh_state;
-      mesh_state.key = entry.meta.state_key();
-      mesh_state.id = entry.meta.id;
-      state.meshes.push_back(mesh_state);
-      scene.meshes.push_back(std::move(compiled));
-      continue;
-    }
+  }
+
+  /// Stage 3: a primitive with state — a box, capsule or tangent plane, friction, a discrete
+  /// impedance law or a virtual mass — and port 0's fresh ContactState for it.
+  void add_contact(const ObjectEntry& entry, std::uint32_t meter) {
+    const ObjectSpec& object = entry.spec;
     CompiledContact compiled;
     std::visit(
         [&](const auto& shape) {
@@ -221,29 +232,21 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
         },
         object.shape);
     compiled.X_WO = ObjectPose{object.p_WO, object.R_WO};
-    compiled.bounding_radius = std::visit(
-        [](const auto& shape) {
-          using S = std::decay_t<decltype(shape)>;
-          if constexpr (std::is_same_v<S, SphereSpec>) return shape.radius;
-          if constexpr (std::is_same_v<S, BoxSpec>) return norm(shape.half_extents);
-          if constexpr (std::is_same_v<S, CapsuleSpec>) return shape.radius + shape.half_length;
-          return std::numeric_limits<double>::infinity();
-        },
-        object.shape);
+    compiled.bounding_radius = bounding_radius_of(object);
     compiled.material = ContactMaterial{object.stiffness, object.damping, object.static_friction,
                                         object.dynamic_friction};
     compiled.law = object.law;
     if (object.law != ContactLaw::kVelocity) {
       compiled.weights = impedance_weights(
           ImpedanceParams{object.stiffness, object.damping, object.impedance_mass},
-          discretization_of(object.law), period_s);
+          discretization_of(object.law), scene.period_s);
     }
     compiled.object_mass = object.object_mass;
     if (object.object_mass > 0.0) scene.masses.push_back(static_cast<std::uint32_t>(scene.contacts.size()));
     compiled.object_damping = object.object_damping;
     compiled.ramp = entry.meta.ramp();
     compiled.state = static_cast<std::uint32_t>(state.contacts.size());
-    compiled.meter = meter_index;
+    compiled.meter = meter;
     compiled.slot = slot_of(entry.meta.session_id);
     ContactState contact_state;
     contact_state.key = entry.meta.state_key();
@@ -253,13 +256,40 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
     scene.contacts.push_back(std::move(compiled));
   }
 
-  for (const FieldEntry& entry : description.fields) {
-    const std::uint32_t meter_index = new_meter(entry.meta, false);
+  /// Stage 4: a triangle mesh and port 0's fresh god object for it (placed at its first tick).
+  void add_mesh(const ObjectEntry& entry, const MeshShapeSpec& mesh, std::uint32_t meter) {
+    const ObjectSpec& object = entry.spec;
+    CompiledMesh compiled;
+    compiled.model = mesh.model;
+    compiled.pose = MeshPose{object.p_WO, object.R_WO, {}, {}};
+    compiled.params.stiffness = object.stiffness;
+    compiled.params.damping = object.damping;
+    compiled.static_friction = object.static_friction;
+    compiled.dynamic_friction = object.dynamic_friction;
+    compiled.object_mass = object.object_mass;
+    compiled.object_damping = object.object_damping;
+    if (object.object_mass > 0.0) {
+      scene.mesh_masses.push_back(static_cast<std::uint32_t>(scene.meshes.size()));
+    }
+    compiled.ramp = entry.meta.ramp();
+    compiled.state = static_cast<std::uint32_t>(state.meshes.size());
+    compiled.meter = meter;
+    compiled.slot = slot_of(entry.meta.session_id);
+    MeshState mesh_state;
+    mesh_state.key = entry.meta.state_key();
+    mesh_state.id = entry.meta.id;
+    state.meshes.push_back(mesh_state);
+    scene.meshes.push_back(std::move(compiled));
+  }
+
+  /// Stage 5 for a spring to a point, stage 6 for every other field.
+  void add_field(const FieldEntry& entry) {
+    const std::uint32_t meter = new_meter(entry.meta, false);
     if (const auto* spring = std::get_if<SpringToPointSpec>(&entry.spec.kind)) {
       scene.springs.push_back(CompiledSpring{spring->anchor_W, spring->stiffness, spring->damping,
-                                             spring->max_force, entry.meta.ramp(), meter_index,
+                                             spring->max_force, entry.meta.ramp(), meter,
                                              slot_of(entry.meta.session_id)});
-      continue;
+      return;
     }
     CompiledField compiled;
     std::visit(
@@ -269,200 +299,266 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
         },
         entry.spec.kind);
     compiled.ramp = entry.meta.ramp();
-    compiled.meter = meter_index;
+    compiled.meter = meter;
     compiled.slot = slot_of(entry.meta.session_id);
     scene.fields.push_back(std::move(compiled));
   }
 
-  state.meter_source.assign(state.meter_keys.size(), SceneState::kNoMeter);
-  state.meter_taken.assign(state.meter_keys.size(), 0);
-  state.slot_force.assign(state.slot_sessions.size(), Vec3{});
-  state.slot_fields.assign(state.slot_sessions.size(), Vec3{});
-  // Every further port starts with port 0's fresh state.
-  state.contacts_per_port = static_cast<std::uint32_t>(state.contacts.size());
-  state.meshes_per_port = static_cast<std::uint32_t>(state.meshes.size());
-  state.meters_per_port = static_cast<std::uint32_t>(items);
-  state.contacts.reserve(state.contacts.size() * ports);
-  state.meshes.reserve(state.meshes.size() * ports);
-  for (std::uint32_t port = 1; port < ports; ++port) {
-    for (std::uint32_t i = 0; i < state.contacts_per_port; ++i) state.contacts.push_back(state.contacts[i]);
-    for (std::uint32_t i = 0; i < state.meshes_per_port; ++i) state.meshes.push_back(state.meshes[i]);
+  /// Once every item is in: carry_state's scratch and the budget's per-slot sums, sized here so
+  /// the loop allocates nothing, and every further port's state, a copy of port 0's fresh one.
+  void size_per_port_state(std::size_t items) {
+    state.meter_source.assign(state.meter_keys.size(), SceneState::kNoMeter);
+    state.meter_taken.assign(state.meter_keys.size(), 0);
+    state.slot_force.assign(state.slot_sessions.size(), Vec3{});
+    state.slot_fields.assign(state.slot_sessions.size(), Vec3{});
+    state.contacts_per_port = static_cast<std::uint32_t>(state.contacts.size());
+    state.meshes_per_port = static_cast<std::uint32_t>(state.meshes.size());
+    state.meters_per_port = static_cast<std::uint32_t>(items);
+    state.contacts.reserve(state.contacts.size() * state.ports);
+    state.meshes.reserve(state.meshes.size() * state.ports);
+    for (std::uint32_t port = 1; port < state.ports; ++port) {
+      for (std::uint32_t i = 0; i < state.contacts_per_port; ++i) state.contacts.push_back(state.contacts[i]);
+      for (std::uint32_t i = 0; i < state.meshes_per_port; ++i) state.meshes.push_back(state.meshes[i]);
+    }
   }
-  state.motions.assign(state.contacts_per_port, ContactMotion{});
-  state.mesh_motions.assign(state.meshes_per_port, ContactMotion{});
-  state.mesh_motion = std::make_unique<std::atomic<double>[]>(6 * state.meshes_per_port);
-  for (const CompiledMesh& mesh : scene.meshes) {
-    const Vec3& p = mesh.pose.p_WO;
-    const double start[6] = {p.x, p.y, p.z, 0.0, 0.0, 0.0};
-    for (int k = 0; k < 6; ++k) state.mesh_motion[6 * mesh.state + k].store(start[k], std::memory_order_relaxed);
+
+  /// Every contact's and mesh's motion (one each, shared by the ports) starts at rest at its pose,
+  /// which is what ObjectStates reads until the loop moves a virtual mass.
+  void start_motions() {
+    state.motions.assign(state.contacts_per_port, ContactMotion{});
+    state.mesh_motions.assign(state.meshes_per_port, ContactMotion{});
+    state.mesh_motion = std::make_unique<std::atomic<double>[]>(6 * state.meshes_per_port);
+    for (const CompiledMesh& mesh : scene.meshes) {
+      const Vec3& p = mesh.pose.p_WO;
+      const double start[6] = {p.x, p.y, p.z, 0.0, 0.0, 0.0};
+      for (int k = 0; k < 6; ++k) {
+        state.mesh_motion[6 * mesh.state + k].store(start[k], std::memory_order_relaxed);
+      }
+    }
+    state.motion = std::make_unique<std::atomic<double>[]>(6 * state.contacts_per_port);
+    for (const CompiledContact& contact : scene.contacts) {
+      const Vec3& p = contact.X_WO.p_WO;
+      const double start[6] = {p.x, p.y, p.z, 0.0, 0.0, 0.0};
+      for (int k = 0; k < 6; ++k) {
+        state.motion[6 * contact.state + k].store(start[k], std::memory_order_relaxed);
+      }
+    }
   }
-  state.motion = std::make_unique<std::atomic<double>[]>(6 * state.contacts_per_port);
-  for (const CompiledContact& contact : scene.contacts) {
-    const Vec3& p = contact.X_WO.p_WO;
-    const double start[6] = {p.x, p.y, p.z, 0.0, 0.0, 0.0};
-    for (int k = 0; k < 6; ++k) state.motion[6 * contact.state + k].store(start[k], std::memory_order_relaxed);
+
+  /// The non-empty stages, so the loop skips an empty one with one branch.
+  void mark_stages() {
+    scene.stages = (scene.half_spaces.empty() ? 0u : kStageHalfSpaces) |
+                   (scene.spheres.empty() ? 0u : kStageSpheres) |
+                   (scene.contacts.empty() ? 0u : kStageContacts) |
+                   (scene.meshes.empty() ? 0u : kStageMeshes) |
+                   (scene.springs.empty() ? 0u : kStageSprings) |
+                   (scene.fields.empty() ? 0u : kStageFields);
   }
-  scene.stages = (scene.half_spaces.empty() ? 0u : kStageHalfSpaces) |
-                 (scene.spheres.empty() ? 0u : kStageSpheres) |
-                 (scene.contacts.empty() ? 0u : kStageContacts) |
-                 (scene.meshes.empty() ? 0u : kStageMeshes) |
-                 (scene.springs.empty() ? 0u : kStageSprings) |
-                 (scene.fields.empty() ? 0u : kStageFields);
+};
+
+}  // namespace
+
+CompiledScene compile_scene(const SceneDescription& description, std::int64_t removal_ramp_ticks,
+                            std::uint64_t generation, double period_s,
+                            double session_force_budget, std::uint32_t ports) {
+  assert(ports >= 1);
+  ports = std::max<std::uint32_t>(1, ports);
+  CompiledScene scene;
+  scene.session_force_budget = session_force_budget;
+  scene.removal_ramp_ticks = std::max<std::int64_t>(1, removal_ramp_ticks);
+  scene.generation = generation;
+  scene.period_s = period_s;
+  SceneBuilder builder{scene, *scene.state};
+  const std::size_t items = description.objects.size() + description.fields.size();
+  builder.size_meters(items, ports);
+  for (const ObjectEntry& entry : description.objects) builder.add_object(entry);
+  for (const FieldEntry& entry : description.fields) builder.add_field(entry);
+  builder.size_per_port_state(items);
+  builder.start_motions();
+  builder.mark_stages();
   return scene;
 }
+
+namespace {
+
+/// One port's part of a per-port array (port-major, per_port entries a port).
+template <class T>
+std::span<T> port_slice(std::vector<T>& items, std::uint32_t port, std::uint32_t per_port) {
+  return {items.data() + std::size_t{port} * per_port, per_port};
+}
+
+/// Copies the state of every item version both sides hold, matched by key. Both sides are short
+/// and compiled in item order, in which keys ascend except where a newer version (a larger key)
+/// follows; a merge over key-sorted views would need scratch space, so match by a forward scan
+/// with a moving start (linear when the orders agree, which is the rule).
+template <class State, class Copy>
+void carry_by_key(std::span<const State> old_items, std::span<State> new_items, Copy copy) {
+  std::size_t start = 0;
+  for (State& item : new_items) {
+    for (std::size_t probe = 0; probe < old_items.size(); ++probe) {
+      const std::size_t i = (start + probe) % old_items.size();
+      if (old_items[i].key == item.key) {
+        copy(old_items[i], item);
+        start = i + 1;
+        break;
+      }
+    }
+  }
+}
+
+/// A virtual mass moves once, whichever tools push it: its motion carries once, by port 0's keys
+/// (every port holds the same item versions in the same order), from the same version or else
+/// from the item's newest old version.
+template <class State>
+void carry_motions(std::span<const State> old_keys, std::span<const State> new_keys,
+                   const std::vector<ContactMotion>& old_motions,
+                   std::vector<ContactMotion>& new_motions) {
+  for (std::size_t j = 0; j < new_keys.size(); ++j) {
+    std::size_t source = old_keys.size();
+    std::size_t newest = old_keys.size();
+    for (std::size_t i = 0; i < old_keys.size(); ++i) {
+      if (old_keys[i].key == new_keys[j].key) {
+        source = i;
+        break;
+      }
+      if (old_keys[i].id == new_keys[j].id &&
+          (newest == old_keys.size() || old_keys[i].key > old_keys[newest].key)) {
+        newest = i;
+      }
+    }
+    if (source == old_keys.size()) source = newest;
+    if (source == old_keys.size()) continue;
+    new_motions[j].displacement_W = old_motions[source].displacement_W;
+    new_motions[j].velocity_W = old_motions[source].velocity_W;
+  }
+}
+
+/// One port's stateful contacts: each version's proxy, filter history and touching flag.
+void carry_contacts(std::span<const ContactState> old_contacts, std::span<ContactState> new_contacts) {
+  carry_by_key(old_contacts, new_contacts, [](const ContactState& a, ContactState& b) {
+    b.proxy = a.proxy;
+    b.touching = a.touching;
+    // The filter's weights are the new version's own; only its past samples carry over.
+    b.filter.copy_history_from(a.filter);
+  });
+  // A new version of a contact (a client changed its pose or impedance) continues from its
+  // item's newest old version: a discrete law its past samples (no damper spike from a
+  // restarted difference), a friction proxy its place on the surface (in the object frame).
+  for (ContactState& fresh : new_contacts) {
+    const ContactState* newest = nullptr;
+    for (const ContactState& old : old_contacts) {
+      if (old.key == fresh.key) {
+        newest = nullptr;
+        break;
+      }
+      if (old.id == fresh.id && (!newest || old.key > newest->key)) newest = &old;
+    }
+    if (newest) {
+      fresh.proxy = newest->proxy;
+      fresh.touching = newest->touching;
+      fresh.filter.copy_history_from(newest->filter);
+    }
+  }
+}
+
+/// One port's meshes: each version's god object and friction anchor.
+void carry_meshes(std::span<const MeshState> old_meshes, std::span<MeshState> new_meshes) {
+  carry_by_key(old_meshes, new_meshes, [](const MeshState& a, MeshState& b) {
+    b.god = a.god;
+    b.needs_rebase = a.needs_rebase;
+    b.anchor_O = a.anchor_O;
+    b.anchored = a.anchored;
+    b.sliding = a.sliding;
+  });
+  // A mesh version new to this snapshot takes over the god object of its item's newest old version.
+  for (MeshState& fresh : new_meshes) {
+    if (fresh.god.initialized) continue;
+    const MeshState* newest = nullptr;
+    for (const MeshState& old : old_meshes) {
+      if (old.id == fresh.id && old.key != fresh.key && (!newest || old.key > newest->key)) newest = &old;
+    }
+    if (newest && newest->god.initialized) {
+      fresh.god = newest->god;
+      fresh.needs_rebase = true;
+    }
+  }
+}
+
+/// Energy meters, matched once by key for every port (a forward scan with a moving start: linear
+/// when the two snapshots list their items in the same order, the rule): for each new meter the
+/// old one it continues, and which old meters were taken.
+void match_meters(SceneState& old_state, SceneState& new_state) {
+  std::fill(old_state.meter_taken.begin(), old_state.meter_taken.end(), std::uint8_t{0});
+  std::size_t start = 0;
+  const std::size_t old_count = old_state.meter_keys.size();
+  for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
+    new_state.meter_source[j] = SceneState::kNoMeter;
+    for (std::size_t probe = 0; probe < old_count; ++probe) {
+      const std::size_t i = (start + probe) % old_count;
+      if (old_state.meter_keys[i] == new_state.meter_keys[j]) {
+        new_state.meter_source[j] = static_cast<std::uint32_t>(i);
+        old_state.meter_taken[i] = 1;
+        start = i + 1;
+        break;
+      }
+    }
+  }
+}
+
+/// One port's meters, as match_meters paired them.
+void carry_meters(const SceneState& old_state, SceneState& new_state, std::uint32_t port) {
+  const std::size_t old_base = std::size_t{port} * old_state.meters_per_port;
+  const std::size_t new_base = std::size_t{port} * new_state.meters_per_port;
+  for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
+    if (new_state.meter_source[j] != SceneState::kNoMeter) {
+      new_state.meters[new_base + j] = old_state.meters[old_base + new_state.meter_source[j]];
+    }
+  }
+  // A version that is gone leaves its totals to a remaining version of the same item.
+  for (std::size_t i = 0; i < old_state.meter_keys.size(); ++i) {
+    if (old_state.meter_taken[i]) continue;
+    for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
+      if (new_state.meter_ids[j] == old_state.meter_ids[i]) {
+        EnergyMeter& heir = new_state.meters[new_base + j];
+        const EnergyMeter& gone = old_state.meters[old_base + i];
+        heir.work += gone.work;
+        heir.work_out += gone.work_out;
+        heir.work_in += gone.work_in;
+        break;
+      }
+    }
+  }
+}
+
+/// Publishes every carried meter's totals for GetSceneEnergy.
+void publish_meters(SceneState& state) {
+  for (std::size_t j = 0; j < state.meters.size(); ++j) {
+    state.work_out[j].store(state.meters[j].work_out, std::memory_order_relaxed);
+    state.work_in[j].store(state.meters[j].work_in, std::memory_order_relaxed);
+  }
+}
+
+}  // namespace
 
 void carry_state(const CompiledScene& from, const CompiledScene& to) {
   SceneState& old_state = *from.state;  // the loop owns both states; meter_taken is scratch
   SceneState& new_state = *to.state;
-  // Both sides are short and compiled in item order, in which keys ascend except where a newer
-  // version (a larger key) follows; a merge over key-sorted views would need scratch space, so
-  // match by a forward scan with a moving start (linear when the orders agree, which is the rule).
-  const auto carry = [](const auto& old_items, auto&& new_items, auto key_of, auto copy) {
-    std::size_t start = 0;
-    for (auto& item : new_items) {
-      const std::uint64_t key = key_of(item);
-      for (std::size_t probe = 0; probe < old_items.size(); ++probe) {
-        const std::size_t i = (start + probe) % old_items.size();
-        if (key_of(old_items[i]) == key) {
-          copy(old_items[i], item);
-          start = i + 1;
-          break;
-        }
-      }
-    }
-  };
-  // A virtual mass moves once, whichever tools push it: its motion carries once, by port 0's keys
-  // (every port holds the same item versions in the same order), from the same version or else
-  // from the item's newest old version.
-  const auto carry_motion = [](const auto& old_keys, const auto& new_keys,
-                               const std::vector<ContactMotion>& old_motions,
-                               std::vector<ContactMotion>& new_motions) {
-    for (std::size_t j = 0; j < new_keys.size(); ++j) {
-      std::size_t source = old_keys.size();
-      std::size_t newest = old_keys.size();
-      for (std::size_t i = 0; i < old_keys.size(); ++i) {
-        if (old_keys[i].key == new_keys[j].key) {
-          source = i;
-          break;
-        }
-        if (old_keys[i].id == new_keys[j].id &&
-            (newest == old_keys.size() || old_keys[i].key > old_keys[newest].key)) {
-          newest = i;
-        }
-      }
-      if (source == old_keys.size()) source = newest;
-      if (source == old_keys.size()) continue;
-      new_motions[j].displacement_W = old_motions[source].displacement_W;
-      new_motions[j].velocity_W = old_motions[source].velocity_W;
-    }
-  };
-  carry_motion(std::span<const ContactState>(old_state.contacts.data(), old_state.contacts_per_port),
-               std::span<const ContactState>(new_state.contacts.data(), new_state.contacts_per_port),
-               old_state.motions, new_state.motions);
-  carry_motion(std::span<const MeshState>(old_state.meshes.data(), old_state.meshes_per_port),
-               std::span<const MeshState>(new_state.meshes.data(), new_state.meshes_per_port),
-               old_state.mesh_motions, new_state.mesh_motions);
+  carry_motions<ContactState>(port_slice(old_state.contacts, 0, old_state.contacts_per_port),
+                              port_slice(new_state.contacts, 0, new_state.contacts_per_port),
+                              old_state.motions, new_state.motions);
+  carry_motions<MeshState>(port_slice(old_state.meshes, 0, old_state.meshes_per_port),
+                           port_slice(new_state.meshes, 0, new_state.meshes_per_port),
+                           old_state.mesh_motions, new_state.mesh_motions);
+  match_meters(old_state, new_state);
   const std::uint32_t ports = std::min(old_state.ports, new_state.ports);
-  // Energy meters, matched once by key for every port (a forward scan with a moving start: linear
-  // when the two snapshots list their items in the same order, the rule).
-  std::fill(old_state.meter_taken.begin(), old_state.meter_taken.end(), std::uint8_t{0});
-  {
-    std::size_t start = 0;
-    const std::size_t old_count = old_state.meter_keys.size();
-    for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
-      new_state.meter_source[j] = SceneState::kNoMeter;
-      for (std::size_t probe = 0; probe < old_count; ++probe) {
-        const std::size_t i = (start + probe) % old_count;
-        if (old_state.meter_keys[i] == new_state.meter_keys[j]) {
-          new_state.meter_source[j] = static_cast<std::uint32_t>(i);
-          old_state.meter_taken[i] = 1;
-          start = i + 1;
-          break;
-        }
-      }
-    }
-  }
   for (std::uint32_t port = 0; port < ports; ++port) {
-    const std::span<const ContactState> old_contacts(
-        old_state.contacts.data() + std::size_t{port} * old_state.contacts_per_port, old_state.contacts_per_port);
-    const std::span<ContactState> new_contacts(
-        new_state.contacts.data() + std::size_t{port} * new_state.contacts_per_port, new_state.contacts_per_port);
-    carry(old_contacts, new_contacts, [](const ContactState& s) { return s.key; },
-          [](const ContactState& a, ContactState& b) {
-            b.proxy = a.proxy;
-            b.touching = a.touching;
-            // The filter's weights are the new version's own; only its past samples carry over.
-            b.filter.copy_history_from(a.filter);
-          });
-    // A new version of a contact (a client changed its pose or impedance) continues from its
-    // item's newest old version: a discrete law its past samples (no damper spike from a
-    // restarted difference), a friction proxy its place on the surface (in the object frame).
-    for (ContactState& fresh : new_contacts) {
-      const ContactState* newest = nullptr;
-      for (const ContactState& old : old_contacts) {
-        if (old.key == fresh.key) {
-          newest = nullptr;
-          break;
-        }
-        if (old.id == fresh.id && (!newest || old.key > newest->key)) newest = &old;
-      }
-      if (newest) {
-        fresh.proxy = newest->proxy;
-        fresh.touching = newest->touching;
-        fresh.filter.copy_history_from(newest->filter);
-      }
-    }
-    const std::span<const MeshState> old_meshes(
-        old_state.meshes.data() + std::size_t{port} * old_state.meshes_per_port, old_state.meshes_per_port);
-    const std::span<MeshState> new_meshes(
-        new_state.meshes.data() + std::size_t{port} * new_state.meshes_per_port, new_state.meshes_per_port);
-    carry(old_meshes, new_meshes, [](const MeshState& s) { return s.key; },
-          [](const MeshState& a, MeshState& b) {
-            b.god = a.god;
-            b.needs_rebase = a.needs_rebase;
-            b.anchor_O = a.anchor_O;
-            b.anchored = a.anchored;
-            b.sliding = a.sliding;
-          });
-    // A mesh version new to `to` takes over the god object of its item's newest old version.
-    for (MeshState& fresh : new_meshes) {
-      if (fresh.god.initialized) continue;
-      const MeshState* newest = nullptr;
-      for (const MeshState& old : old_meshes) {
-        if (old.id == fresh.id && old.key != fresh.key && (!newest || old.key > newest->key)) newest = &old;
-      }
-      if (newest && newest->god.initialized) {
-        fresh.god = newest->god;
-        fresh.needs_rebase = true;
-      }
-    }
-    // Energy meters, by key.
-    const std::size_t old_base = std::size_t{port} * old_state.meters_per_port;
-    const std::size_t new_base = std::size_t{port} * new_state.meters_per_port;
-    for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
-      if (new_state.meter_source[j] != SceneState::kNoMeter) {
-        new_state.meters[new_base + j] = old_state.meters[old_base + new_state.meter_source[j]];
-      }
-    }
-    // A version that is gone leaves its totals to a remaining version of the same item.
-    for (std::size_t i = 0; i < old_state.meter_keys.size(); ++i) {
-      if (old_state.meter_taken[i]) continue;
-      for (std::size_t j = 0; j < new_state.meter_keys.size(); ++j) {
-        if (new_state.meter_ids[j] == old_state.meter_ids[i]) {
-          EnergyMeter& heir = new_state.meters[new_base + j];
-          const EnergyMeter& gone = old_state.meters[old_base + i];
-          heir.work += gone.work;
-          heir.work_out += gone.work_out;
-          heir.work_in += gone.work_in;
-          break;
-        }
-      }
-    }
+    carry_contacts(port_slice(old_state.contacts, port, old_state.contacts_per_port),
+                   port_slice(new_state.contacts, port, new_state.contacts_per_port));
+    carry_meshes(port_slice(old_state.meshes, port, old_state.meshes_per_port),
+                 port_slice(new_state.meshes, port, new_state.meshes_per_port));
+    carry_meters(old_state, new_state, port);
   }
-  for (std::size_t j = 0; j < new_state.meters.size(); ++j) {
-    new_state.work_out[j].store(new_state.meters[j].work_out, std::memory_order_relaxed);
-    new_state.work_in[j].store(new_state.meters[j].work_in, std::memory_order_relaxed);
-  }
+  publish_meters(new_state);
 }
 
 std::vector<ObjectMotion> object_motions(const CompiledScene& scene) {
@@ -514,204 +610,250 @@ std::vector<ItemEnergyTotals> energy_totals(const CompiledScene& scene) {
 
 namespace {
 
-/// evaluate_scene_port's body, inlined into both entry points so that evaluate_scene's port 0
-/// costs nothing over a scene with one port.
-[[gnu::always_inline]] inline SceneForce evaluate_port(const CompiledScene& scene, std::uint32_t port,
-                                                       const Vec3& p_WT, const Vec3& v_WT,
-                                                       std::int64_t tick, double dt) {
-  SceneForce out;
-  out.p_WP = p_WT;
-  double deepest = 0.0;
-  const std::int64_t ramp = scene.removal_ramp_ticks;
-  SceneState& state = *scene.state;
-  assert(port < state.ports);
-  // This port's slices of the per-port state.
-  ContactState* const contacts = state.contacts.data() + std::size_t{port} * state.contacts_per_port;
-  MeshState* const meshes = state.meshes.data() + std::size_t{port} * state.meshes_per_port;
-  const std::uint32_t meters = port * state.meters_per_port;
-  // With a per-session budget each session's items add up apart first (clipped at the end).
-  const bool budgeted = scene.session_force_budget > 0.0;
-  if (budgeted) {
-    std::fill(state.slot_force.begin(), state.slot_force.end(), Vec3{});
-    std::fill(state.slot_fields.begin(), state.slot_fields.end(), Vec3{});
-  }
-  const auto contribute = [&](std::uint32_t slot, const Vec3& F, bool field) {
+/// What the stages of one port's evaluation share: the tool, this port's slices of the per-port
+/// state, and the force being built. Each stage reads its compiled items, updates their state and
+/// meters and adds their forces here, in a fixed order (docs/scene.md), MuJoCo-pipeline style.
+struct PortPass {
+  const CompiledScene& scene;
+  SceneState& state;
+  ContactState* contacts;   // this port's contact states
+  MeshState* meshes;        // this port's mesh states
+  std::uint32_t meters;     // this port's first meter
+  const Vec3& p_WT;
+  const Vec3& v_WT;
+  std::int64_t tick;
+  std::int64_t ramp_ticks;  // how long an item ramps in or out (removal_ramp_ticks)
+  double dt;                // Unit: s.
+  /// With a per-session budget each session's items add up apart first (clipped at the end).
+  bool budgeted;
+  SceneForce& out;          // p_WP: the surface point of the deepest contact so far, else p_WT
+  double deepest = 0.0;     // that contact's penetration. Unit: m.
+
+  /// Adds one item's force: to its owner's sums with a budget, else straight to the total.
+  void contribute(std::uint32_t slot, const Vec3& F, bool field) {
     Vec3& total = budgeted ? state.slot_force[slot] : out.F_T_W;
     Vec3& fields = budgeted ? state.slot_fields[slot] : out.F_fields_W;
     total += F;
     if (field) fields += F;
-  };
+  }
+};
 
-  if (scene.stages & kStageHalfSpaces) {
-    for (const CompiledHalfSpace& wall : scene.half_spaces) {
-      if (is_fading_out(wall.ramp)) out.ramping = true;
-      const double d = dot(wall.point_W - p_WT, wall.normal_W);
-      const double gain = d > 0.0 ? ramp_gain(wall.ramp, tick, ramp) : 0.0;
-      const Vec3 F =
-          gain > 0.0
-              ? (gain * contact_magnitude(wall.stiffness, wall.damping, d, wall.normal_W, v_WT)) *
-                    wall.normal_W
-              : Vec3{};
-      meter(state, meters + wall.meter, F, v_WT, dt);
-      if (gain == 0.0) continue;
-      contribute(wall.slot, F, false);
-      ++out.contact_count;
-      if (d > deepest) {
-        deepest = d;
-        out.p_WP = p_WT + d * wall.normal_W;
-      }
+/// Stage 1: half-spaces, d = dot(point − p, n) the penetration (see contact_magnitude).
+[[gnu::always_inline]] inline void add_half_spaces(PortPass& pass) {
+  for (const CompiledHalfSpace& wall : pass.scene.half_spaces) {
+    if (is_fading_out(wall.ramp)) pass.out.ramping = true;
+    const double d = dot(wall.point_W - pass.p_WT, wall.normal_W);
+    const double gain = d > 0.0 ? ramp_gain(wall.ramp, pass.tick, pass.ramp_ticks) : 0.0;
+    const Vec3 F =
+        gain > 0.0
+            ? (gain * contact_magnitude(wall.stiffness, wall.damping, d, wall.normal_W, pass.v_WT)) *
+                  wall.normal_W
+            : Vec3{};
+    meter(pass.state, pass.meters + wall.meter, F, pass.v_WT, pass.dt);
+    if (gain == 0.0) continue;
+    pass.contribute(wall.slot, F, false);
+    ++pass.out.contact_count;
+    if (d > pass.deepest) {
+      pass.deepest = d;
+      pass.out.p_WP = pass.p_WT + d * wall.normal_W;
     }
   }
+}
 
-  if (scene.stages & kStageSpheres) {
-    for (const CompiledSphere& sphere : scene.spheres) {
-      if (is_fading_out(sphere.ramp)) out.ramping = true;
-      const Vec3 r = p_WT - sphere.center_W;
-      const double distance = norm(r);
-      const double d = sphere.radius - distance;
-      const double gain = d > 0.0 ? ramp_gain(sphere.ramp, tick, ramp) : 0.0;
-      // At the exact centre the direction is undefined; push along +z.
-      const Vec3 n = distance > 0.0 ? r * (1.0 / distance) : Vec3{0.0, 0.0, 1.0};
-      const Vec3 F =
-          gain > 0.0 ? (gain * contact_magnitude(sphere.stiffness, sphere.damping, d, n, v_WT)) * n
-                     : Vec3{};
-      meter(state, meters + sphere.meter, F, v_WT, dt);
-      if (gain == 0.0) continue;
-      contribute(sphere.slot, F, false);
-      ++out.contact_count;
-      if (d > deepest) {
-        deepest = d;
-        out.p_WP = sphere.center_W + sphere.radius * n;
-      }
+/// Stage 2: spheres, the same law along the radial direction.
+[[gnu::always_inline]] inline void add_spheres(PortPass& pass) {
+  for (const CompiledSphere& sphere : pass.scene.spheres) {
+    if (is_fading_out(sphere.ramp)) pass.out.ramping = true;
+    const Vec3 r = pass.p_WT - sphere.center_W;
+    const double distance = norm(r);
+    const double d = sphere.radius - distance;
+    const double gain = d > 0.0 ? ramp_gain(sphere.ramp, pass.tick, pass.ramp_ticks) : 0.0;
+    // At the exact centre the direction is undefined; push along +z.
+    const Vec3 n = distance > 0.0 ? r * (1.0 / distance) : Vec3{0.0, 0.0, 1.0};
+    const Vec3 F =
+        gain > 0.0 ? (gain * contact_magnitude(sphere.stiffness, sphere.damping, d, n, pass.v_WT)) * n
+                   : Vec3{};
+    meter(pass.state, pass.meters + sphere.meter, F, pass.v_WT, pass.dt);
+    if (gain == 0.0) continue;
+    pass.contribute(sphere.slot, F, false);
+    ++pass.out.contact_count;
+    if (d > pass.deepest) {
+      pass.deepest = d;
+      pass.out.p_WP = sphere.center_W + sphere.radius * n;
     }
   }
+}
 
-  if (scene.stages & kStageContacts) {
-    for (const CompiledContact& contact : scene.contacts) {
-      if (is_fading_out(contact.ramp)) out.ramping = true;
-      ContactState& s = contacts[contact.state];
-      const double gain = ramp_gain(contact.ramp, tick, ramp);
-      const bool moves = contact.object_mass > 0.0;
-      ContactMotion& motion = state.motions[contact.state];
-      const ObjectPose X_WO = moves ? ObjectPose{contact.X_WO.p_WO + motion.displacement_W, contact.X_WO.R_WO}
-                                    : contact.X_WO;
-      const Vec3 v_rel = moves ? v_WT - motion.velocity_W : v_WT;  // the tool relative to the object
-      ContactForce force;
-      const Vec3 from_centre = p_WT - X_WO.p_WO;
-      if (dot(from_centre, from_centre) > contact.bounding_radius * contact.bounding_radius) {
-        // The tool is outside the shape's bounding sphere: no contact, and no shape query.
-        s.proxy.reset();
-        s.touching = false;
-        force.p_WP = p_WT;
-      } else if (contact.law == ContactLaw::kVelocity) {
-        force = s.proxy.update(contact.shape, X_WO, contact.material, p_WT, v_rel);
-      } else {
-        // A discrete impedance on the sampled penetration along the closest point's normal.
-        const ShapeQuery q = query(contact.shape, X_WO, p_WT);
-        if (q.signed_distance < 0.0) {
-          if (!s.touching) {
-            s.filter.reset();
-            s.touching = true;
-          }
-          force.penetration = -q.signed_distance;
-          force.n_W = q.n_W;
-          force.p_WP = q.p_WS;
-          force.in_contact = true;
-          force.F_T_W = std::max(0.0, s.filter.update(force.penetration)) * q.n_W;
-        } else {
-          s.touching = false;
-          force.p_WP = p_WT;
+/// Stage 3: stateful contacts, each through its proxy (the velocity law, friction) or its
+/// impedance filter; a virtual mass is met where it has moved to, and takes −F.
+[[gnu::always_inline]] inline void add_contacts(PortPass& pass) {
+  for (const CompiledContact& contact : pass.scene.contacts) {
+    if (is_fading_out(contact.ramp)) pass.out.ramping = true;
+    ContactState& s = pass.contacts[contact.state];
+    const double gain = ramp_gain(contact.ramp, pass.tick, pass.ramp_ticks);
+    const bool moves = contact.object_mass > 0.0;
+    ContactMotion& motion = pass.state.motions[contact.state];
+    const ObjectPose X_WO = moves ? ObjectPose{contact.X_WO.p_WO + motion.displacement_W, contact.X_WO.R_WO}
+                                  : contact.X_WO;
+    const Vec3 v_rel = moves ? pass.v_WT - motion.velocity_W : pass.v_WT;  // the tool relative to the object
+    ContactForce force;
+    const Vec3 from_centre = pass.p_WT - X_WO.p_WO;
+    if (dot(from_centre, from_centre) > contact.bounding_radius * contact.bounding_radius) {
+      // The tool is outside the shape's bounding sphere: no contact, and no shape query.
+      s.proxy.reset();
+      s.touching = false;
+      force.p_WP = pass.p_WT;
+    } else if (contact.law == ContactLaw::kVelocity) {
+      force = s.proxy.update(contact.shape, X_WO, contact.material, pass.p_WT, v_rel);
+    } else {
+      // A discrete impedance on the sampled penetration along the closest point's normal.
+      const ShapeQuery q = query(contact.shape, X_WO, pass.p_WT);
+      if (q.signed_distance < 0.0) {
+        if (!s.touching) {
+          s.filter.reset();
+          s.touching = true;
         }
-      }
-      if (contact.tangent_plane && force.in_contact) {
-        // Russo ch. 5: within the plane, a spring-damper about the surface reference point.
-        const Vec3& n = force.n_W;
-        const Vec3 offset = p_WT - contact.reference_W;
-        const Vec3 offset_t = offset - dot(offset, n) * n;
-        const Vec3 v_t = v_rel - dot(v_rel, n) * n;
-        force.F_T_W += -contact.tangential_stiffness * offset_t - contact.tangential_damping * v_t;
-      }
-      const Vec3 F = gain * force.F_T_W;
-      meter(state, meters + contact.meter, F, v_WT, dt);
-      // The mass moves in advance_scene, under every port's reaction.
-      if (moves) motion.reaction_W += -1.0 * F;
-      if (!force.in_contact || gain == 0.0) continue;
-      contribute(contact.slot, F, false);
-      ++out.contact_count;
-      if (force.penetration > deepest) {
-        deepest = force.penetration;
-        out.p_WP = force.p_WP;
+        force.penetration = -q.signed_distance;
+        force.n_W = q.n_W;
+        force.p_WP = q.p_WS;
+        force.in_contact = true;
+        force.F_T_W = std::max(0.0, s.filter.update(force.penetration)) * q.n_W;
+      } else {
+        s.touching = false;
+        force.p_WP = pass.p_WT;
       }
     }
-  }
-
-  if (scene.stages & kStageMeshes) {
-    for (const CompiledMesh& mesh : scene.meshes) {
-      if (is_fading_out(mesh.ramp)) out.ramping = true;
-      MeshState& s = meshes[mesh.state];
-      const bool moves = mesh.object_mass > 0.0;
-      ContactMotion& motion = state.mesh_motions[mesh.state];
-      const MeshPose pose = moves ? MeshPose{mesh.pose.p_WO + motion.displacement_W, mesh.pose.R_WO,
-                                             motion.velocity_W, {}}
-                                  : mesh.pose;
-      if (!s.god.initialized) reset_god_object(s.god, pose, p_WT);
-      if (s.needs_rebase) {
-        rebase_god_object(s.god, mesh.model->bvh, pose, mesh.params);
-        s.needs_rebase = false;
-      }
-      GodObjectOutput g = update_god_object(s.god, mesh.model->bvh, pose, mesh.params, p_WT, v_WT);
-      if (mesh.static_friction > 0.0) apply_mesh_friction(mesh, pose, s, g, p_WT);
-      const double gain = ramp_gain(mesh.ramp, tick, ramp);
-      const Vec3 F = gain * g.F_T_W;
-      meter(state, meters + mesh.meter, F, v_WT, dt);
-      if (moves) motion.reaction_W += -1.0 * F;  // moved once per tick by advance_scene
-      if (!g.in_contact || gain == 0.0) continue;
-      contribute(mesh.slot, F, false);
-      ++out.contact_count;
-      const double depth = norm(g.p_WP - p_WT);
-      if (depth > deepest) {
-        deepest = depth;
-        out.p_WP = g.p_WP;
-      }
+    if (contact.tangent_plane && force.in_contact) {
+      // Russo ch. 5: within the plane, a spring-damper about the surface reference point.
+      const Vec3& n = force.n_W;
+      const Vec3 offset = pass.p_WT - contact.reference_W;
+      const Vec3 offset_t = offset - dot(offset, n) * n;
+      const Vec3 v_t = v_rel - dot(v_rel, n) * n;
+      force.F_T_W += -contact.tangential_stiffness * offset_t - contact.tangential_damping * v_t;
+    }
+    const Vec3 F = gain * force.F_T_W;
+    meter(pass.state, pass.meters + contact.meter, F, pass.v_WT, pass.dt);
+    // The mass moves in advance_scene, under every port's reaction.
+    if (moves) motion.reaction_W += -1.0 * F;
+    if (!force.in_contact || gain == 0.0) continue;
+    pass.contribute(contact.slot, F, false);
+    ++pass.out.contact_count;
+    if (force.penetration > pass.deepest) {
+      pass.deepest = force.penetration;
+      pass.out.p_WP = force.p_WP;
     }
   }
+}
 
-  if (scene.stages & kStageSprings) {
-    for (const CompiledSpring& spring : scene.springs) {
-      if (is_fading_out(spring.ramp)) out.ramping = true;
-      const double gain = ramp_gain(spring.ramp, tick, ramp);
-      // F = −∇U − b v with U = ½ k |p − anchor|².
-      Vec3 F = -spring.stiffness * (p_WT - spring.anchor_W) - spring.damping * v_WT;
-      if (spring.max_force > 0.0) {
-        const double magnitude = norm(F);
-        if (magnitude > spring.max_force) F *= spring.max_force / magnitude;
-      }
-      F *= gain;
-      meter(state, meters + spring.meter, F, v_WT, dt);
-      contribute(spring.slot, F, true);
+/// Stage 4: meshes, each through its god object (rebased first after a change of version), with
+/// friction on top where the material has it.
+[[gnu::always_inline]] inline void add_meshes(PortPass& pass) {
+  for (const CompiledMesh& mesh : pass.scene.meshes) {
+    if (is_fading_out(mesh.ramp)) pass.out.ramping = true;
+    MeshState& s = pass.meshes[mesh.state];
+    const bool moves = mesh.object_mass > 0.0;
+    ContactMotion& motion = pass.state.mesh_motions[mesh.state];
+    const MeshPose pose = moves ? MeshPose{mesh.pose.p_WO + motion.displacement_W, mesh.pose.R_WO,
+                                           motion.velocity_W, {}}
+                                : mesh.pose;
+    if (!s.god.initialized) reset_god_object(s.god, pose, pass.p_WT);
+    if (s.needs_rebase) {
+      rebase_god_object(s.god, mesh.model->bvh, pose, mesh.params);
+      s.needs_rebase = false;
+    }
+    GodObjectOutput g = update_god_object(s.god, mesh.model->bvh, pose, mesh.params, pass.p_WT, pass.v_WT);
+    if (mesh.static_friction > 0.0) apply_mesh_friction(mesh, pose, s, g, pass.p_WT);
+    const double gain = ramp_gain(mesh.ramp, pass.tick, pass.ramp_ticks);
+    const Vec3 F = gain * g.F_T_W;
+    meter(pass.state, pass.meters + mesh.meter, F, pass.v_WT, pass.dt);
+    if (moves) motion.reaction_W += -1.0 * F;  // moved once per tick by advance_scene
+    if (!g.in_contact || gain == 0.0) continue;
+    pass.contribute(mesh.slot, F, false);
+    ++pass.out.contact_count;
+    const double depth = norm(g.p_WP - pass.p_WT);
+    if (depth > pass.deepest) {
+      pass.deepest = depth;
+      pass.out.p_WP = g.p_WP;
     }
   }
+}
 
-  if (scene.stages & kStageFields) {
-    for (const CompiledField& field : scene.fields) {
-      if (is_fading_out(field.ramp)) out.ramping = true;
-      const double gain = ramp_gain(field.ramp, tick, ramp);
-      const Vec3 F = gain * evaluate_field(field.spec, p_WT, v_WT).F_T_W;
-      meter(state, meters + field.meter, F, v_WT, dt);
-      contribute(field.slot, F, true);
-    }
-  }
-
-  if (budgeted) {
-    for (std::size_t slot = 0; slot < state.slot_force.size(); ++slot) {
-      const Vec3& F = state.slot_force[slot];
+/// Stage 5: springs to a point.
+[[gnu::always_inline]] inline void add_springs(PortPass& pass) {
+  for (const CompiledSpring& spring : pass.scene.springs) {
+    if (is_fading_out(spring.ramp)) pass.out.ramping = true;
+    const double gain = ramp_gain(spring.ramp, pass.tick, pass.ramp_ticks);
+    // F = −∇U − b v with U = ½ k |p − anchor|².
+    Vec3 F = -spring.stiffness * (pass.p_WT - spring.anchor_W) - spring.damping * pass.v_WT;
+    if (spring.max_force > 0.0) {
       const double magnitude = norm(F);
-      const bool clip = state.slot_sessions[slot] != 0 && magnitude > scene.session_force_budget;
-      const double scale = clip ? scene.session_force_budget / magnitude : 1.0;
-      out.F_T_W += scale * F;
-      out.F_fields_W += scale * state.slot_fields[slot];
+      if (magnitude > spring.max_force) F *= spring.max_force / magnitude;
     }
+    F *= gain;
+    meter(pass.state, pass.meters + spring.meter, F, pass.v_WT, pass.dt);
+    pass.contribute(spring.slot, F, true);
   }
+}
+
+/// Stage 6: every other energy field.
+[[gnu::always_inline]] inline void add_fields(PortPass& pass) {
+  for (const CompiledField& field : pass.scene.fields) {
+    if (is_fading_out(field.ramp)) pass.out.ramping = true;
+    const double gain = ramp_gain(field.ramp, pass.tick, pass.ramp_ticks);
+    const Vec3 F = gain * evaluate_field(field.spec, pass.p_WT, pass.v_WT).F_T_W;
+    meter(pass.state, pass.meters + field.meter, F, pass.v_WT, pass.dt);
+    pass.contribute(field.slot, F, true);
+  }
+}
+
+/// Each session's force (its fields' part scaled alike) is clipped to the budget before the
+/// sessions add up; the server's own items (session 0) are exempt.
+[[gnu::always_inline]] inline void clip_to_session_budgets(PortPass& pass) {
+  const SceneState& state = pass.state;
+  const double budget = pass.scene.session_force_budget;
+  for (std::size_t slot = 0; slot < state.slot_force.size(); ++slot) {
+    const Vec3& F = state.slot_force[slot];
+    const double magnitude = norm(F);
+    const bool clip = state.slot_sessions[slot] != 0 && magnitude > budget;
+    const double scale = clip ? budget / magnitude : 1.0;
+    pass.out.F_T_W += scale * F;
+    pass.out.F_fields_W += scale * state.slot_fields[slot];
+  }
+}
+
+/// evaluate_scene_port's body, inlined into both entry points so that evaluate_scene's port 0
+/// costs nothing over a scene with one port. The stages run in a fixed order; an empty one costs
+/// a branch.
+[[gnu::always_inline]] inline SceneForce evaluate_port(const CompiledScene& scene, std::uint32_t port,
+                                                       const Vec3& p_WT, const Vec3& v_WT,
+                                                       std::int64_t tick, double dt) {
+  SceneState& state = *scene.state;
+  assert(port < state.ports);
+  SceneForce out;
+  out.p_WP = p_WT;
+  PortPass pass{.scene = scene,
+                .state = state,
+                .contacts = state.contacts.data() + std::size_t{port} * state.contacts_per_port,
+                .meshes = state.meshes.data() + std::size_t{port} * state.meshes_per_port,
+                .meters = port * state.meters_per_port,
+                .p_WT = p_WT,
+                .v_WT = v_WT,
+                .tick = tick,
+                .ramp_ticks = scene.removal_ramp_ticks,
+                .dt = dt,
+                .budgeted = scene.session_force_budget > 0.0,
+                .out = out};
+  if (pass.budgeted) {
+    std::fill(state.slot_force.begin(), state.slot_force.end(), Vec3{});
+    std::fill(state.slot_fields.begin(), state.slot_fields.end(), Vec3{});
+  }
+  if (scene.stages & kStageHalfSpaces) add_half_spaces(pass);
+  if (scene.stages & kStageSpheres) add_spheres(pass);
+  if (scene.stages & kStageContacts) add_contacts(pass);
+  if (scene.stages & kStageMeshes) add_meshes(pass);
+  if (scene.stages & kStageSprings) add_springs(pass);
+  if (scene.stages & kStageFields) add_fields(pass);
+  if (pass.budgeted) clip_to_session_budgets(pass);
   return out;
 }
 
