@@ -630,6 +630,9 @@ struct PortPass {
   double deepest = 0.0;     // that contact's penetration. Unit: m.
 
   /// Adds one item's force: to its owner's sums with a budget, else straight to the total.
+  /// Keep the target chosen by reference as here: written as if/else, the compiler stores the
+  /// running total to memory inside every stage's loop (same instructions, TickDefault 4–6 %
+  /// slower on these machines).
   void contribute(std::uint32_t slot, const Vec3& F, bool field) {
     Vec3& total = budgeted ? state.slot_force[slot] : out.F_T_W;
     Vec3& fields = budgeted ? state.slot_fields[slot] : out.F_fields_W;
