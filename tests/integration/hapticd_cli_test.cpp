@@ -5,10 +5,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <fstream>
 #include <string>
 #include <vector>
+
+#include "integration/server_process.hpp"
 
 namespace haptic {
 namespace {
@@ -80,6 +83,31 @@ TEST(HapticdCli, TheBuiltInDefaultsListenOnLoopbackOnly) {
   EXPECT_NE(defaults.output.find(R"("grpc_address": "127.0.0.1:50051")"), std::string::npos);
   EXPECT_NE(defaults.output.find(R"("udp_address": "127.0.0.1")"), std::string::npos);
   EXPECT_NE(defaults.output.find(R"("insecure_remote_access": false)"), std::string::npos);
+}
+
+// Two servers never share a port (no SO_REUSEPORT): clients would be split between them. The
+// second one stops at start with one line naming the address and why.
+TEST(HapticdCli, ASecondServerOnABusyGrpcOrUdpPortFailsAtStartWithOneClearLine) {
+  test::ServerProcess first(test::lockstep_config());
+  const std::string grpc = "127.0.0.1:" + std::to_string(first.grpc_port());
+  const Outcome same_grpc = run_hapticd({"--lockstep", "--grpc-address", grpc, "--udp-port", "0"});
+  EXPECT_EQ(same_grpc.exit_code, 1) << same_grpc.output;
+  EXPECT_NE(same_grpc.output.find("cannot listen for gRPC on " + grpc + ": Address already in use"),
+            std::string::npos)
+      << same_grpc.output;
+  const std::string udp = std::to_string(first.udp_port());
+  const Outcome same_udp =
+      run_hapticd({"--lockstep", "--grpc-address", "127.0.0.1:0", "--udp-port", udp});
+  EXPECT_EQ(same_udp.exit_code, 1) << same_udp.output;
+  EXPECT_NE(same_udp.output.find("cannot bind UDP 127.0.0.1:" + udp + ": Address already in use"),
+            std::string::npos)
+      << same_udp.output;
+  // One line: the refusal, nothing else after the start was abandoned.
+  for (const Outcome* outcome : {&same_grpc, &same_udp}) {
+    EXPECT_EQ(std::count(outcome->output.begin(), outcome->output.end(), '\n'), 1) << outcome->output;
+  }
+  // The first server is untouched and still serves.
+  EXPECT_EQ(run_hapticd({"--health-check", "127.0.0.1:" + std::to_string(first.grpc_port())}).exit_code, 0);
 }
 
 TEST(HapticdCli, ADriverBuiltForAnotherAbiIsRefusedAtStartNamingTheLibraryAndBothVersions) {
