@@ -283,6 +283,15 @@ void Client::on_state(std::function<void(const State&)> callback) {
   require(core_).udp().on_state(std::move(callback));
 }
 
+void Client::on_event(std::function<void(const Event&)> callback) {
+  if (!callback) {
+    require(core_).watch_events({});
+    return;
+  }
+  require(core_).watch_events(
+      [callback = std::move(callback)](const v1::Event& event) { callback(detail::from_proto(event)); });
+}
+
 bool Client::poll_state(State& out, std::chrono::milliseconds timeout) {
   return require(core_).udp().poll(out, timeout);
 }

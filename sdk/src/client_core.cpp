@@ -80,11 +80,48 @@ ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
 }
 
 ClientCore::~ClientCore() {
+  stop_events();
   try {
     close_session();
   } catch (...) {
     // Destructors never throw; the server's lease cleans up what a failed close leaves.
   }
+}
+
+void ClientCore::stop_events() {
+  {
+    std::lock_guard lock(events_mutex_);
+    if (events_context_) events_context_->TryCancel();
+  }
+  if (events_thread_.joinable()) events_thread_.join();
+  std::lock_guard lock(events_mutex_);
+  events_context_.reset();
+}
+
+void ClientCore::watch_events(std::function<void(const v1::Event&)> callback) {
+  stop_events();
+  if (!callback) return;
+  auto context = std::make_unique<grpc::ClientContext>();
+  if (!session_secret_.empty()) context->AddMetadata(io::kSessionSecretMetadataKey, session_secret_);
+  v1::WatchEventsRequest request;
+  request.set_session_id(session_id_);
+  // Opened here, so that a refusal the server gives at once (no session, too many streams)
+  // reaches the caller as an error rather than a silent end.
+  std::unique_ptr<grpc::ClientReader<v1::Event>> reader = stub_->WatchEvents(context.get(), request);
+  v1::Event first;
+  if (!reader->Read(&first)) throw_status(reader->Finish(), "WatchEvents");
+  {
+    std::lock_guard lock(events_mutex_);
+    events_context_ = std::move(context);
+  }
+  events_thread_ = std::thread(
+      [reader = std::move(reader), first = std::move(first), callback = std::move(callback)]() mutable {
+        v1::Event event = std::move(first);
+        do {
+          callback(event);
+        } while (reader->Read(&event));
+        reader->Finish();  // cancelled, or the session ended: the stream is over either way
+      });
 }
 
 void ClientCore::subscribe(std::uint32_t decimation) {

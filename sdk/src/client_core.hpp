@@ -5,8 +5,11 @@
 #include <grpcpp/grpcpp.h>
 
 #include <atomic>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "haptic/client.hpp"
@@ -47,6 +50,9 @@ class ClientCore {
   /// Sets the state decimation; for n > 0 waits until the server knows our UDP address.
   void subscribe(std::uint32_t decimation);
   void close_session();
+  /// Streams WatchEvents on a thread of its own and calls `callback` with each event (the first
+  /// is WATCH_STARTED); a new callback replaces the stream, an empty one ends it.
+  void watch_events(std::function<void(const v1::Event&)> callback);
 
   std::uint64_t session_id() const { return session_id_; }
   const DeviceInfo& device_info() const { return device_info_; }
@@ -67,6 +73,11 @@ class ClientCore {
   std::chrono::milliseconds lease_timeout_{0};
   std::atomic<std::uint64_t> scene_generation_{0};
   std::unique_ptr<UdpLink> udp_;
+  // The event stream: its thread, and its context (cancelled from here to end it).
+  std::mutex events_mutex_;
+  std::unique_ptr<grpc::ClientContext> events_context_;
+  std::thread events_thread_;
+  void stop_events();
 };
 
 }  // namespace haptic::detail

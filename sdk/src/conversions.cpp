@@ -336,4 +336,22 @@ State from_proto(const v1::ToolState& s) {
   return out;
 }
 
+Event from_proto(const v1::Event& e) {
+  Event out;
+  switch (e.kind()) {
+    case v1::Event::SESSION_OPENED: out.kind = Event::Kind::kSessionOpened; break;
+    case v1::Event::SESSION_CLOSED: out.kind = Event::Kind::kSessionClosed; break;
+    case v1::Event::LEASE_EXPIRED: out.kind = Event::Kind::kLeaseExpired; break;
+    case v1::Event::SCENE_CHANGED: out.kind = Event::Kind::kSceneChanged; break;
+    case v1::Event::FORCE_FAULT: out.kind = Event::Kind::kForceFault; break;
+    case v1::Event::WATCH_STARTED: out.kind = Event::Kind::kWatchStarted; break;
+    case v1::Event::DEVICE_FAULT: out.kind = Event::Kind::kDeviceFault; break;
+    default: out.kind = Event::Kind::kUnknown; break;
+  }
+  out.session_id = e.session_id();
+  out.server_time = e.server_time_s();
+  out.message = e.message();
+  return out;
+}
+
 }  // namespace haptic::detail

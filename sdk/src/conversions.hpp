@@ -41,5 +41,6 @@ struct WireField {
 };
 /// A sample from a Step reply (sequence 0: it came by no datagram; received_at: now).
 State from_proto(const v1::ToolState& state);
+Event from_proto(const v1::Event& event);
 
 }  // namespace haptic::detail

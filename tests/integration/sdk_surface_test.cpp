@@ -261,6 +261,102 @@ TEST_F(SdkSurface, OnStateSeesEachStreamedTickUntilClearedWithAnEmptyFunction) {
   EXPECT_EQ(seen.size(), first_phase.size());
 }
 
+/// Collects what on_event delivers, for a test to wait on.
+class EventLog {
+ public:
+  std::function<void(const Event&)> sink() {
+    return [this](const Event& event) {
+      std::lock_guard lock(mutex_);
+      events_.push_back(event);
+      changed_.notify_all();
+    };
+  }
+  /// Waits (at most 5 s) until an event of `kind` about `session` has arrived; false if none did.
+  bool wait_for(Event::Kind kind, std::uint64_t session) {
+    std::unique_lock lock(mutex_);
+    return changed_.wait_for(lock, std::chrono::seconds(5),
+                             [&] { return count_locked(kind, session) > 0; });
+  }
+  std::size_t count(Event::Kind kind, std::uint64_t session) const {
+    std::lock_guard lock(mutex_);
+    return count_locked(kind, session);
+  }
+  std::vector<Event> snapshot() {
+    std::lock_guard lock(mutex_);
+    return events_;
+  }
+
+ private:
+  std::size_t count_locked(Event::Kind kind, std::uint64_t session) const {
+    return static_cast<std::size_t>(std::count_if(events_.begin(), events_.end(), [&](const Event& e) {
+      return e.kind == kind && e.session_id == session;
+    }));
+  }
+
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<Event> events_;
+};
+
+TEST_F(SdkSurface, OnEventReportsOtherSessionsComingAndGoingUntilStopped) {
+  EventLog log;  // outlives the client whose thread calls into it
+  Client watcher(config_for(server_, "watcher"));
+  watcher.on_event(log.sink());
+  std::uint64_t other_id = 0;
+  {
+    Client other(config_for(server_, "other"));
+    other_id = other.session_id();
+    EXPECT_TRUE(log.wait_for(Event::Kind::kSessionOpened, other_id));
+  }  // closed as it goes out of scope
+  EXPECT_TRUE(log.wait_for(Event::Kind::kSessionClosed, other_id));
+  const std::vector<Event> events = log.snapshot();
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events.front().kind, Event::Kind::kWatchStarted);  // the stream's first, always
+  EXPECT_FALSE(events.back().message.empty());
+  // Stopped: nothing more arrives (a session opened and closed after it shows up nowhere).
+  watcher.on_event({});
+  std::uint64_t later_id = 0;
+  {
+    Client later(config_for(server_, "later"));
+    later_id = later.session_id();
+  }
+  EventLog probe_log;
+  Client probe(config_for(server_, "probe"));  // a second watcher proves the events happened
+  probe.on_event(probe_log.sink());
+  {
+    Client last(config_for(server_, "last"));
+    EXPECT_TRUE(probe_log.wait_for(Event::Kind::kSessionOpened, last.session_id()));
+  }
+  EXPECT_EQ(log.count(Event::Kind::kSessionOpened, later_id), 0u);
+  EXPECT_EQ(log.snapshot().size(), events.size());
+}
+
+TEST(SdkEvents, OnEventBeyondTheServersStreamLimitIsRefusedNamingItAndTheOthersGoOn) {
+  test::ServerProcess server(
+      test::lockstep_config(R"("max_event_streams": 3, "max_event_streams_per_session": 1)"));
+  EventLog log;  // outlives the clients whose threads call into it
+  std::vector<std::unique_ptr<Client>> clients;
+  for (int i = 0; i < 3; ++i) {
+    clients.push_back(std::make_unique<Client>(config_for(server, "watcher")));
+    clients.back()->on_event(log.sink());
+  }
+  Client fourth(config_for(server, "fourth"));
+  try {
+    fourth.on_event(log.sink());
+    ADD_FAILURE() << "a fourth stream was accepted past max_event_streams 3";
+  } catch (const ResourceExhaustedError& error) {
+    EXPECT_NE(std::string(error.what()).find("max_event_streams"), std::string::npos) << error.what();
+  }
+  // The three streams still deliver: each sees a new session open.
+  Client newcomer(config_for(server, "newcomer"));
+  EXPECT_TRUE(log.wait_for(Event::Kind::kSessionOpened, newcomer.session_id()));
+  for (int attempt = 0; attempt < 500 && log.count(Event::Kind::kSessionOpened, newcomer.session_id()) < 3;
+       ++attempt) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(log.count(Event::Kind::kSessionOpened, newcomer.session_id()), 3u);
+}
+
 TEST_F(SdkSurface, CloseEndsTheSessionAndLeavesItsHandlesInert) {
   Client watcher(config_for(server_, "watcher"));
   Client closing(config_for(server_, "closing"));

@@ -198,6 +198,13 @@ class Client {
   /// carries. Keep it short and do not call back into the Client from it. Pass an empty function
   /// to stop.
   void on_state(std::function<void(const State&)> callback);
+  /// Calls `callback` on a thread of the SDK's with each server event from now on (sessions
+  /// opening and closing, leases expiring, scene changes, force and device faults), starting
+  /// with kWatchStarted; another call replaces it, an empty function stops it. Throws the
+  /// server's refusal (e.g. ResourceExhaustedError past its stream limits). It may run until
+  /// on_event({}) or the Client's destruction returns: keep what it uses alive that long. Keep it
+  /// short, and do not call on_event from inside it.
+  void on_event(std::function<void(const Event&)> callback);
   /// Waits up to `timeout` for a sample newer (by tick) than the last one poll_state or
   /// wait_for_tick returned, and copies the newest into `out`. False on timeout. Samples are
   /// State datagrams and the state a Step reply carries.

@@ -220,6 +220,24 @@ struct State {
   std::chrono::nanoseconds age{0};
 };
 
+/// Something that happened on the server, as WatchEvents reports it (Client::on_event).
+struct Event {
+  enum class Kind {
+    kUnknown,
+    kSessionOpened,
+    kSessionClosed,
+    kLeaseExpired,
+    kSceneChanged,
+    kForceFault,    ///< non-finite forces were replaced by zero
+    kWatchStarted,  ///< the first event of every stream: later events will arrive
+    kDeviceFault,   ///< the device's reading failed or was not finite; zero force commanded
+  };
+  Kind kind = Kind::kUnknown;
+  std::uint64_t session_id = 0;  ///< The session it concerns (0: the server's own).
+  double server_time = 0.0;      ///< Unit: s.
+  std::string message;
+};
+
 /// What a device has (the server computes only those terms).
 struct DeviceCapabilities {
   bool gravity = false;               ///< A gravity load the device compensates.
