@@ -384,6 +384,9 @@ void ObjectHandle::update(const SphereSpec& sphere) {
 }
 
 void ObjectHandle::update(const TangentPlaneSpec& plane) { replace({detail::to_proto(plane)}); }
+void ObjectHandle::update(const BoxSpec& box) { replace({detail::to_proto(box)}); }
+void ObjectHandle::update(const CapsuleSpec& capsule) { replace({detail::to_proto(capsule)}); }
+void ObjectHandle::update(const MeshSpec& mesh) { replace({detail::to_proto(mesh)}); }
 
 void ObjectHandle::replace(const detail::WireObject& object) {
   stability_ =
@@ -392,7 +395,16 @@ void ObjectHandle::replace(const detail::WireObject& object) {
 
 void FieldHandle::update(const SpringFieldSpec& spring) {
   check(spring);
-  current("UpdateField").update_field(id(), detail::to_proto(spring));
+  replace({detail::to_proto(spring)});
+}
+void FieldHandle::update(const DistanceSpringSpec& spring) { replace({detail::to_proto(spring)}); }
+void FieldHandle::update(const PotentialFieldSpec& potential) { replace({detail::to_proto(potential)}); }
+void FieldHandle::update(const LinearFieldSpec& linear) { replace({detail::to_proto(linear)}); }
+void FieldHandle::update(const ViscousFieldSpec& viscous) { replace({detail::to_proto(viscous)}); }
+void FieldHandle::update(const DetentFieldSpec& detent) { replace({detail::to_proto(detent)}); }
+
+void FieldHandle::replace(const detail::WireField& field) {
+  current("UpdateField").update_field(id(), field.message);
 }
 
 }  // namespace haptic

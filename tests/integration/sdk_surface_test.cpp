@@ -357,6 +357,49 @@ TEST(SdkEvents, OnEventBeyondTheServersStreamLimitIsRefusedNamingItAndTheOthersG
   EXPECT_EQ(log.count(Event::Kind::kSessionOpened, newcomer.session_id()), 3u);
 }
 
+// Every kind can replace an item in place through its handle: a box grown by 1 mm pushes with K
+// times the new penetration, a box turned into a capsule pushes along the capsule's radius, and a
+// viscous field turned into a linear one exerts its constant force.
+TEST_F(SdkSurface, EveryObjectAndFieldKindCanReplaceAnItemThroughItsHandle) {
+  Client client(config_for(server_, "update"));
+  constexpr double kWall = 1000.0;  // Unit: N/m.
+  client.set_operator(OperatorInput::follow(kStart, 2000.0, 20.0));  // holds the tool near kStart
+  // The box's top face 1 mm above the tool.
+  BoxSpec box{.pose = {.position = kStart - Vec3{0, 0, 0.009}},
+              .half_extents = {0.05, 0.05, 0.01},
+              .impedance = {kWall, 0.0}};
+  auto handle = client.add_box(box);
+  State s = step_and_get(client, 3 * kRampTicks);
+  const auto top = [&](const BoxSpec& b) { return b.pose.position.z + b.half_extents.z; };
+  EXPECT_EQ(s.contact_count, 1u);
+  EXPECT_NEAR(s.force.z, kWall * (top(box) - s.position.z), 1e-9);
+  box.half_extents.z = 0.011;  // 1 mm taller
+  handle.update(box);
+  s = step_and_get(client, 3 * kRampTicks);
+  EXPECT_NEAR(s.force.z, kWall * (top(box) - s.position.z), 1e-9);
+  EXPECT_NEAR(s.force.z, 2000.0 * kWall / (2000.0 + kWall) * 0.002, 1e-3);  // hand and wall in series
+  // The same handle, now a capsule along z whose axis lies 10 mm along +x: 2 mm deep, pushing −x.
+  const CapsuleSpec capsule{.pose = {.position = kStart + Vec3{0.01, 0, 0}},
+                            .radius = 0.012,
+                            .half_length = 0.02,
+                            .impedance = {kWall, 0.0}};
+  handle.update(capsule);
+  s = step_and_get(client, 3 * kRampTicks);
+  const Vec3 from_axis = s.position - Vec3{capsule.pose.position.x, capsule.pose.position.y, s.position.z};
+  const double depth = capsule.radius - norm(from_axis);
+  ASSERT_GT(depth, 0.0);
+  expect_near(s.force, kWall * depth * (1.0 / norm(from_axis)) * from_axis, 1e-9, "capsule");
+  EXPECT_LT(s.force.x, -1.0);
+  handle.remove();
+  // A viscous field replaced by a constant linear one: F = F0 wherever the tool is.
+  auto field = client.add_field(ViscousFieldSpec{.damping = 0.5});
+  step_and_get(client, 3 * kRampTicks);
+  field.update(LinearFieldSpec{.origin = kStart, .force = {0.3, -0.2, 0.1}, .radius = 1.0, .fade_width = 0.1});
+  s = step_and_get(client, 3 * kRampTicks);
+  EXPECT_EQ(s.contact_count, 0u);
+  expect_near(s.force, Vec3{0.3, -0.2, 0.1}, 1e-12, "F0");
+}
+
 TEST_F(SdkSurface, CloseEndsTheSessionAndLeavesItsHandlesInert) {
   Client watcher(config_for(server_, "watcher"));
   Client closing(config_for(server_, "closing"));

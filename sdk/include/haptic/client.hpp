@@ -81,14 +81,19 @@ class ItemHandle {
 
 }  // namespace detail
 
-/// A registered object (wall or sphere); see detail::ItemHandle for ownership.
+/// A registered object of any kind; see detail::ItemHandle for ownership.
 class ObjectHandle : public detail::ItemHandle {
  public:
   ObjectHandle() : ItemHandle(Kind::kObject) {}
-  /// Replaces the object (a wall stays a wall only if you pass a WallSpec). Throws haptic::Error.
+  /// Replaces the object with the one given, of any kind (a wall stays a wall only if you pass a
+  /// WallSpec); the new one takes over the old one's contact state where the kinds match. Throws
+  /// haptic::Error naming the bad field; the old object then stays as it was.
   void update(const WallSpec& wall);
   void update(const SphereSpec& sphere);
   void update(const TangentPlaneSpec& plane);
+  void update(const BoxSpec& box);
+  void update(const CapsuleSpec& capsule);
+  void update(const MeshSpec& mesh);
   /// The server's stability report for the impedance as registered or last updated (empty after
   /// apply_scene, which reports in Client::last_scene_stability()).
   const StabilityReport& stability() const noexcept { return stability_; }
@@ -106,11 +111,18 @@ class ObjectHandle : public detail::ItemHandle {
 class FieldHandle : public detail::ItemHandle {
  public:
   FieldHandle() : ItemHandle(Kind::kField) {}
-  /// Replaces the field. Throws haptic::Error.
+  /// Replaces the field with the one given, of any kind. Throws haptic::Error naming the bad
+  /// field; the old field then stays as it was.
   void update(const SpringFieldSpec& spring);
+  void update(const DistanceSpringSpec& spring);
+  void update(const PotentialFieldSpec& potential);
+  void update(const LinearFieldSpec& linear);
+  void update(const ViscousFieldSpec& viscous);
+  void update(const DetentFieldSpec& detent);
 
  private:
   friend class Client;
+  void replace(const detail::WireField& field);
   FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation)
       : ItemHandle(Kind::kField, std::move(core), id, generation) {}
 };
