@@ -177,11 +177,48 @@ Client::FileScene Client::apply_scene_file(const std::string& path) {
   if (const std::string error = io::read_scene_file(path, scene); !error.empty()) {
     throw InvalidArgumentError(error);
   }
+  return apply_wire_scene({scene});
+}
+
+AppliedScene Client::apply_scene(const SceneSpec& spec) {
+  v1::Scene scene;
+  for (std::size_t i = 0; i < spec.objects.size(); ++i) {
+    std::visit(
+        [&](const auto& object) {
+          if constexpr (requires { check(object); }) {
+            try {
+              check(object);
+            } catch (const InvalidArgumentError& error) {
+              throw InvalidArgumentError("scene.objects[" + std::to_string(i) + "]: " + error.what());
+            }
+          }
+          *scene.add_objects() = detail::to_proto(object);
+        },
+        spec.objects[i]);
+  }
+  for (std::size_t i = 0; i < spec.fields.size(); ++i) {
+    std::visit(
+        [&](const auto& field) {
+          if constexpr (requires { check(field); }) {
+            try {
+              check(field);
+            } catch (const InvalidArgumentError& error) {
+              throw InvalidArgumentError("scene.fields[" + std::to_string(i) + "]: " + error.what());
+            }
+          }
+          *scene.add_fields() = detail::to_proto(field);
+        },
+        spec.fields[i]);
+  }
+  return apply_wire_scene({scene});
+}
+
+AppliedScene Client::apply_wire_scene(const detail::WireScene& scene) {
   detail::ClientCore& core = require(core_);
-  const v1::ApplySceneResponse reply = core.apply_scene(scene);
+  const v1::ApplySceneResponse reply = core.apply_scene(scene.message);
   const std::uint64_t generation = core.scene_generation();
   last_scene_stability_ = detail::stability_reports(reply);
-  FileScene handles;
+  AppliedScene handles;
   for (int i = 0; i < reply.object_ids_size(); ++i) {
     handles.objects.push_back(ObjectHandle(core_, reply.object_ids(i), generation));
   }
@@ -222,25 +259,16 @@ SceneHandles Client::apply_scene(const std::vector<WallSpec>& walls,
   check_each(walls, "walls");
   check_each(spheres, "spheres");
   check_each(springs, "springs");
-  v1::Scene scene;
-  for (const auto& wall : walls) *scene.add_objects() = detail::to_proto(wall);
-  for (const auto& sphere : spheres) *scene.add_objects() = detail::to_proto(sphere);
-  for (const auto& spring : springs) *scene.add_fields() = detail::to_proto(spring);
-  detail::ClientCore& core = require(core_);
-  const v1::ApplySceneResponse reply = core.apply_scene(scene);
-  const std::uint64_t generation = core.scene_generation();
-  last_scene_stability_ = detail::stability_reports(reply);
+  SceneSpec scene;
+  scene.objects.insert(scene.objects.end(), walls.begin(), walls.end());
+  scene.objects.insert(scene.objects.end(), spheres.begin(), spheres.end());
+  scene.fields.insert(scene.fields.end(), springs.begin(), springs.end());
+  AppliedScene applied = apply_scene(scene);
   SceneHandles handles;
-  int next_object = 0;
-  for (std::size_t i = 0; i < walls.size(); ++i) {
-    handles.walls.push_back(ObjectHandle(core_, reply.object_ids(next_object++), generation));
+  for (std::size_t i = 0; i < applied.objects.size(); ++i) {
+    (i < walls.size() ? handles.walls : handles.spheres).push_back(std::move(applied.objects[i]));
   }
-  for (std::size_t i = 0; i < spheres.size(); ++i) {
-    handles.spheres.push_back(ObjectHandle(core_, reply.object_ids(next_object++), generation));
-  }
-  for (int i = 0; i < reply.field_ids_size(); ++i) {
-    handles.springs.push_back(FieldHandle(core_, reply.field_ids(i), generation));
-  }
+  handles.springs = std::move(applied.fields);
   return handles;
 }
 

@@ -39,6 +39,9 @@ struct WireObject {
 struct WireField {
   v1::Field message;
 };
+struct WireScene {
+  v1::Scene message;
+};
 /// A sample from a Step reply (sequence 0: it came by no datagram; received_at: now).
 State from_proto(const v1::ToolState& state);
 Event from_proto(const v1::Event& event);

@@ -400,6 +400,79 @@ TEST_F(SdkSurface, EveryObjectAndFieldKindCanReplaceAnItemThroughItsHandle) {
   expect_near(s.force, Vec3{0.3, -0.2, 0.1}, 1e-12, "F0");
 }
 
+// apply_scene takes every object and field kind, all or nothing: the handles come back in the
+// scene's order and each is its item (the energy report lists exactly their ids); a scene with one
+// bad element is refused naming it and leaves the scene applied before untouched.
+TEST_F(SdkSurface, ApplySceneTakesEveryKindAllOrNothingNamingTheBadElement) {
+  Client client(config_for(server_, "scene"));
+  SceneSpec scene;
+  scene.objects = {
+      WallSpec{.point = {0, 0, -0.05}, .normal = {0, 0, 1}, .impedance = {500.0, 1.0}},
+      SphereSpec{.center = {0.1, 0, 0}, .radius = 0.01, .impedance = {500.0, 1.0}},
+      BoxSpec{.pose = {.position = {0, 0.1, 0}}, .half_extents = {0.01, 0.01, 0.01}, .impedance = {500.0, 1.0}},
+      CapsuleSpec{.pose = {.position = {0, -0.1, 0}}, .radius = 0.01, .half_length = 0.02,
+                  .impedance = {500.0, 1.0}},
+      TangentPlaneSpec{.pose = {.position = {0, 0, -0.06}}, .normal = {0, 0, 1},
+                       .impedance = {.stiffness = 500.0, .damping = 1.0}},
+      MeshSpec{.pose = {.position = {0, 0, -0.07}},
+               .vertices = {{-0.05, -0.05, 0}, {0.05, -0.05, 0}, {0.05, 0.05, 0}, {-0.05, 0.05, 0}},
+               .indices = {0, 1, 2, 0, 2, 3},
+               .impedance = {.stiffness = 500.0, .damping = 1.0}}};
+  scene.fields = {
+      SpringFieldSpec{.anchor = kStart, .stiffness = 10.0, .damping = 0.1},
+      DistanceSpringSpec{.anchor = {.kind = Distance::Kind::kPlane, .origin = {0, 0, 0.02}, .axis = {0, 0, 1}},
+                         .stiffness = 5.0},
+      PotentialFieldSpec{.distance = {.kind = Distance::Kind::kPoint, .origin = {0.2, 0, 0}},
+                         .order = 2, .gain = 0.5, .offset = 0.01},
+      LinearFieldSpec{.origin = kStart, .radius = 0.05, .fade_width = 0.01},
+      ViscousFieldSpec{.damping = 0.1},
+      DetentFieldSpec{.distance = {.kind = Distance::Kind::kPoint, .origin = {-0.2, 0, 0}},
+                      .depth = 0.001, .radius = 0.02, .rim_height = 0.0002, .rim_width = 0.005}};
+  const AppliedScene applied = client.apply_scene(scene);
+  ASSERT_EQ(applied.objects.size(), 6u);
+  ASSERT_EQ(applied.fields.size(), 6u);
+  EXPECT_EQ(client.last_scene_stability().size(), 6u);
+  step_and_get(client, 2);
+  const auto ids_now = [&] {
+    std::vector<std::uint64_t> ids;
+    for (const ItemEnergy& item : client.scene_energy()) {
+      if (item.session_id == client.session_id()) ids.push_back(item.id);
+    }
+    std::sort(ids.begin(), ids.end());
+    return ids;
+  };
+  std::vector<std::uint64_t> expected;
+  for (const ObjectHandle& h : applied.objects) expected.push_back(h.id());
+  for (const FieldHandle& h : applied.fields) expected.push_back(h.id());
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(ids_now(), expected);
+  // The third object made bad: refused naming it, and the scene above stays.
+  SceneSpec bad = scene;
+  bad.objects[2] = BoxSpec{.half_extents = {0.01, 0.0, 0.01}, .impedance = {500.0, 1.0}};
+  try {
+    client.apply_scene(bad);
+    ADD_FAILURE() << "a box with a zero half extent was accepted";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("scene.objects[2].box.half_extents.y"), std::string::npos)
+        << error.what();
+  }
+  step_and_get(client, 2);
+  EXPECT_EQ(ids_now(), expected);
+  // A client-side check names the element the same way.
+  SceneSpec negative = scene;
+  negative.objects[0] = WallSpec{.normal = {0, 0, 1}, .impedance = {-1.0, 0.0}};
+  EXPECT_THROW(
+      {
+        try {
+          client.apply_scene(negative);
+        } catch (const InvalidArgumentError& error) {
+          EXPECT_EQ(std::string(error.what()).rfind("scene.objects[0]: ", 0), 0u) << error.what();
+          throw;
+        }
+      },
+      InvalidArgumentError);
+}
+
 TEST_F(SdkSurface, CloseEndsTheSessionAndLeavesItsHandlesInert) {
   Client watcher(config_for(server_, "watcher"));
   Client closing(config_for(server_, "closing"));

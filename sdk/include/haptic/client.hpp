@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "haptic/error.hpp"
@@ -25,6 +26,7 @@ namespace detail {
 class ClientCore;
 struct WireObject;  // an object converted for the wire (sdk/src/conversions.hpp)
 struct WireField;
+struct WireScene;
 }
 
 /// The API version this SDK speaks (haptic.v1.API_VERSION_CURRENT).
@@ -127,6 +129,22 @@ class FieldHandle : public detail::ItemHandle {
       : ItemHandle(Kind::kField, std::move(core), id, generation) {}
 };
 
+/// A whole scene of any objects and fields, for Client::apply_scene; the server numbers them in
+/// this order ("scene.objects[i]", "scene.fields[j]" in its messages).
+struct SceneSpec {
+  using Object = std::variant<WallSpec, SphereSpec, BoxSpec, CapsuleSpec, TangentPlaneSpec, MeshSpec>;
+  using Field = std::variant<SpringFieldSpec, DistanceSpringSpec, PotentialFieldSpec, LinearFieldSpec,
+                             ViscousFieldSpec, DetentFieldSpec>;
+  std::vector<Object> objects;
+  std::vector<Field> fields;
+};
+
+/// The handles of a scene applied whole (Client::apply_scene, apply_scene_file), in order.
+struct AppliedScene {
+  std::vector<ObjectHandle> objects;
+  std::vector<FieldHandle> fields;
+};
+
 /// The handles of a scene applied by Client::apply_scene, each list in the order given.
 struct SceneHandles {
   std::vector<ObjectHandle> walls;
@@ -165,10 +183,7 @@ class Client {
   /// Replaces this session's scene with a scene file (protobuf's JSON mapping of haptic.v1.Scene,
   /// as hapticd --scene reads); all or nothing, like apply_scene. InvalidArgumentError names the
   /// file, or the server's path ("scene.objects[2].box.half_extents.y: …").
-  struct FileScene {
-    std::vector<ObjectHandle> objects;  ///< in file order
-    std::vector<FieldHandle> fields;
-  };
+  using FileScene = AppliedScene;  ///< in file order
   FileScene apply_scene_file(const std::string& path);
   /// Stability reports of the objects of the last apply_scene or apply_scene_file, in order.
   const std::vector<StabilityReport>& last_scene_stability() const noexcept {
@@ -188,6 +203,9 @@ class Client {
   SceneHandles apply_scene(const std::vector<WallSpec>& walls,
                            const std::vector<SphereSpec>& spheres,
                            const std::vector<SpringFieldSpec>& springs);
+  /// The same for a scene of every object and field kind; the handles come in the scene's order.
+  /// InvalidArgumentError names the item ("scene.objects[3].box.half_extents.y: …").
+  AppliedScene apply_scene(const SceneSpec& scene);
 
   /// Sets what the server's simulated operator does (FailedPreconditionError on real hardware).
   void set_operator(const OperatorInput& input);
@@ -241,6 +259,8 @@ class Client {
   /// Registers one object or field, already converted for the wire, and hands back its handle.
   ObjectHandle register_object(const detail::WireObject& object);
   FieldHandle register_field(const detail::WireField& field);
+  /// Applies a whole scene, already converted for the wire; the handles in its order.
+  AppliedScene apply_wire_scene(const detail::WireScene& scene);
 
   std::vector<StabilityReport> last_scene_stability_;
   std::shared_ptr<detail::ClientCore> core_;
