@@ -59,11 +59,33 @@ UdpLink::UdpLink(const std::string& host, std::uint16_t port, std::uint64_t sess
   schedule_heartbeat();
   start_receive();
   thread_ = std::thread([this] { io_.run(); });
+  dispatcher_ = std::thread([this] { dispatch_loop(); });
 }
 
 UdpLink::~UdpLink() {
   io_.stop();
   if (thread_.joinable()) thread_.join();
+  {
+    std::lock_guard lock(dispatch_mutex_);
+    stopping_dispatch_ = true;
+  }
+  dispatch_ready_.notify_all();
+  if (dispatcher_.joinable()) dispatcher_.join();
+}
+
+void UdpLink::dispatch_loop() {
+  for (;;) {
+    State state;
+    {
+      std::unique_lock lock(dispatch_mutex_);
+      dispatch_ready_.wait(lock, [this] { return stopping_dispatch_ || pending_.has_value(); });
+      if (stopping_dispatch_) return;
+      state = *pending_;
+      pending_.reset();
+    }
+    std::lock_guard lock(callback_mutex_);
+    if (callback_) callback_(state);
+  }
 }
 
 void UdpLink::send_heartbeat() {
@@ -126,8 +148,13 @@ void UdpLink::receive_batch(std::size_t first_size) {
     }
   }
   arrived_.notify_all();
-  std::lock_guard lock(callback_mutex_);
-  if (callback_) callback_(*newest);
+  if (!has_callback_.load(std::memory_order_acquire)) return;
+  {
+    std::lock_guard lock(dispatch_mutex_);
+    if (pending_) ++callback_skipped_;  // the callback is still busy with an older one
+    pending_ = *newest;
+  }
+  dispatch_ready_.notify_one();
 }
 
 void UdpLink::answer_challenge(std::span<const std::uint8_t> datagram) {
@@ -202,8 +229,13 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
 }
 
 void UdpLink::on_state(std::function<void(const State&)> callback) {
-  std::lock_guard lock(callback_mutex_);
+  std::lock_guard lock(callback_mutex_);  // waits for a callback in progress to return
+  has_callback_.store(static_cast<bool>(callback), std::memory_order_release);
   callback_ = std::move(callback);
+  if (!callback_) {
+    std::lock_guard pending(dispatch_mutex_);
+    pending_.reset();
+  }
 }
 
 void UdpLink::offer(const State& state) {
@@ -247,8 +279,14 @@ std::optional<std::chrono::nanoseconds> UdpLink::clock_offset() const {
 }
 
 ReceiveCounters UdpLink::counters() const {
-  std::lock_guard lock(mutex_);
-  return counters_;
+  ReceiveCounters out;
+  {
+    std::lock_guard lock(mutex_);
+    out = counters_;
+  }
+  std::lock_guard lock(dispatch_mutex_);
+  out.callback_skipped = callback_skipped_;
+  return out;
 }
 
 }  // namespace haptic::detail

@@ -79,10 +79,21 @@ class UdpLink {
   std::uint32_t offset_window_count_ = 0;          // guarded by mutex_
   ReceiveCounters counters_;           // guarded by mutex_
 
-  std::mutex callback_mutex_;
+  /// The callback's own thread: a slow callback must not hold up the io thread, which sends
+  /// the heartbeats that keep the lease. It is handed the newest State (conflated).
+  void dispatch_loop();
+
+  std::mutex callback_mutex_;  // held while the callback runs, so on_state({}) waits it out
   std::function<void(const State&)> callback_;  // guarded by callback_mutex_
+  std::atomic<bool> has_callback_{false};
+  mutable std::mutex dispatch_mutex_;
+  std::condition_variable dispatch_ready_;
+  std::optional<State> pending_;       // guarded by dispatch_mutex_: the next State for the callback
+  bool stopping_dispatch_ = false;     // guarded by dispatch_mutex_
+  std::uint64_t callback_skipped_ = 0; // guarded by dispatch_mutex_
 
   std::thread thread_;
+  std::thread dispatcher_;
 };
 
 }  // namespace haptic::detail

@@ -473,6 +473,53 @@ TEST_F(SdkSurface, ApplySceneTakesEveryKindAllOrNothingNamingTheBadElement) {
       InvalidArgumentError);
 }
 
+// A callback that takes far longer than the lease does not lose the session: it runs on a thread
+// of its own while the receive thread goes on heartbeating, and the samples it was too busy to
+// see are counted. (On the receive thread, as before, this session's lease ran out.)
+TEST(SdkCallback, ASlowStateCallbackDoesNotLoseTheLeaseAndItsMissedSamplesAreCounted) {
+  test::ServerProcess server(test::lockstep_config(R"("lease_timeout_ms": 300)"));
+  Client client(config_for(server, "slow"));
+  std::mutex mutex;
+  std::condition_variable changed;
+  int calls = 0;
+  bool release = false;
+  client.on_state([&](const State&) {
+    std::unique_lock lock(mutex);
+    ++calls;
+    changed.notify_all();
+    // The first call blocks for 1 s, more than three leases.
+    if (calls == 1) changed.wait_for(lock, seconds(1), [&] { return release; });
+  });
+  client.step(1);
+  {
+    std::unique_lock lock(mutex);
+    ASSERT_TRUE(changed.wait_for(lock, seconds(5), [&] { return calls == 1; }));
+  }
+  for (int i = 0; i < 5; ++i) {  // samples arrive while the callback is stuck
+    client.step(1);
+    std::this_thread::sleep_for(milliseconds(20));
+  }
+  std::this_thread::sleep_for(milliseconds(900));  // past 3 leases from the callback's start
+  // The session is alive: calls work and the server has not expired it.
+  EXPECT_NO_THROW(client.stats());
+  EXPECT_EQ(client.stats().leases_expired, 0u);
+  {
+    std::unique_lock lock(mutex);
+    release = true;
+    changed.notify_all();
+    ASSERT_TRUE(changed.wait_for(lock, seconds(5), [&] { return calls >= 2; }));  // the newest next
+  }
+  // 5 arrived while it was busy and the newest was handed on: 4 missed, counted where they were
+  // passed over (by the callback's hand-off, or on the socket when two queued up together).
+  const auto missed = [&] {
+    const ReceiveCounters c = client.receive_counters();
+    return c.callback_skipped + c.skipped;
+  };
+  ASSERT_TRUE(wait_until([&] { return missed() == 4; })) << missed();
+  EXPECT_GE(client.receive_counters().callback_skipped, 1u);
+  client.on_state({});
+}
+
 TEST_F(SdkSurface, CloseEndsTheSessionAndLeavesItsHandlesInert) {
   Client watcher(config_for(server_, "watcher"));
   Client closing(config_for(server_, "closing"));

@@ -222,11 +222,12 @@ class Client {
   /// How long the server keeps a silent session (no heartbeat, no RPC) before dropping it.
   std::chrono::milliseconds lease_timeout() const;
 
-  /// Called on the SDK's receive thread with the newest State datagram each time it wakes: when
-  /// several have queued up (a burst, or the callback was slow), only the newest is passed and
-  /// the others are counted in ReceiveCounters::skipped; never for the sample a Step reply
-  /// carries. Keep it short and do not call back into the Client from it. Pass an empty function
-  /// to stop.
+  /// Called on a thread of the SDK's own (not the receive thread, which keeps sending the
+  /// heartbeats that hold the lease however long the callback takes) with the newest State
+  /// datagram: when several arrive while it runs, only the newest is passed next and the others
+  /// are counted in ReceiveCounters::callback_skipped (and in ::skipped when they queued up on
+  /// the socket); never for the sample a Step reply carries. Do not call on_state from inside it.
+  /// Pass an empty function to stop; on_state returns once a callback in progress has.
   void on_state(std::function<void(const State&)> callback);
   /// Calls `callback` on a thread of the SDK's with each server event from now on (sessions
   /// opening and closing, leases expiring, scene changes, force and device faults), starting

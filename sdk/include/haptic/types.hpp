@@ -430,6 +430,9 @@ struct ReceiveCounters {
   /// Path challenges answered: the server asks each new UDP address to prove it receives before
   /// it sends state there.
   std::uint64_t challenges_answered = 0;
+  /// States the on_state callback never saw because it was still busy with an older one (it runs
+  /// on a thread of its own and is always handed the newest).
+  std::uint64_t callback_skipped = 0;
 };
 
 }  // namespace haptic

@@ -485,7 +485,9 @@ TEST_F(FakeServerTest, ABacklogIsDrainedAndOnlyItsNewestSampleIsHandedOut) {
   EXPECT_DOUBLE_EQ(delivered[1].position.z, 0.051);
   const ReceiveCounters counters = client.receive_counters();
   EXPECT_EQ(counters.accepted, 51u);
-  EXPECT_EQ(counters.skipped, 49u);
+  // The receive thread is not held up by the callback any more: the 49 are passed over partly on
+  // the socket (skipped) and partly at the hand-off to the callback's thread (callback_skipped).
+  EXPECT_EQ(counters.skipped + counters.callback_skipped, 49u);
 }
 
 TEST_F(FakeServerTest, ASamplesAgeIsHowMuchLongerItTookThanTheQuickestRecentOne) {
