@@ -520,6 +520,43 @@ TEST(SdkCallback, ASlowStateCallbackDoesNotLoseTheLeaseAndItsMissedSamplesAreCou
   client.on_state({});
 }
 
+// The graphics helpers against the lockstep truth: the tool swings on a soft spring (ω = 10 rad/s)
+// and every tick's sample is kept. Between samples h = 10 ms apart, Hermite interpolation is within
+// its error bound h^4/384 max|d4x/dt4| = h^4/384 w^4 A (about 3 nm for the swing's amplitude
+// A <= 11 mm) of the tick in the middle, where linear interpolation is off by um; predicting 5 ms
+// past the newest sample with its acceleration beats holding its velocity.
+TEST_F(SdkSurface, InterpolationAndPredictionMatchTheLockstepTruth) {
+  Client client(config_for(server_, "graphics"));
+  auto spring = client.add_spring_field({.anchor = kStart + Vec3{0.01, 0.0, 0.005}, .stiffness = 1.0});
+  std::vector<State> truth;
+  for (int k = 0; k < 200; ++k) truth.push_back(step_and_get(client, 1));
+  double worst_hermite = 0.0, worst_linear = 0.0, worst_predicted = 0.0, worst_held = 0.0;
+  for (std::size_t k = 100; k + 10 < truth.size(); k += 7) {  // after the spring's ramp-in
+    const State& a = truth[k];
+    const State& b = truth[k + 10];
+    const State& middle = truth[k + 5];
+    worst_hermite = std::max(worst_hermite,
+                             norm(interpolate_position(a, b, middle.server_time) - middle.position));
+    worst_linear = std::max(worst_linear, norm(0.5 * (a.position + b.position) - middle.position));
+    const State& ahead = truth[k + 5];  // 5 ms past truth[k]
+    worst_predicted = std::max(
+        worst_predicted, norm(predict_position(truth[k - 1], a, ahead.server_time) - ahead.position));
+    worst_held = std::max(worst_held, norm(a.position + 0.005 * a.velocity - ahead.position));
+  }
+  std::printf("  interpolation: Hermite %.3g m, linear %.3g m; 5 ms ahead: predicted %.3g m, "
+              "constant velocity %.3g m\n",
+              worst_hermite, worst_linear, worst_predicted, worst_held);
+  EXPECT_GT(worst_linear, 1e-6);  // the motion really curves
+  const double h = 0.01, omega = 10.0, amplitude = norm(Vec3{0.01, 0.0, 0.005});
+  EXPECT_LT(worst_hermite, std::pow(h, 4) / 384.0 * std::pow(omega, 4) * amplitude);
+  EXPECT_LT(worst_hermite, 1e-3 * worst_linear);
+  EXPECT_LT(worst_predicted, 0.2 * worst_held);
+  // Equal times: no division by zero.
+  EXPECT_EQ(interpolate_position(truth[5], truth[5], truth[5].server_time), truth[5].position);
+  const Vec3 held = predict_position(truth[5], truth[5], truth[5].server_time + 0.001);
+  expect_near(held, truth[5].position + 0.001 * truth[5].velocity, 1e-15, "same sample");
+}
+
 TEST_F(SdkSurface, CloseEndsTheSessionAndLeavesItsHandlesInert) {
   Client watcher(config_for(server_, "watcher"));
   Client closing(config_for(server_, "closing"));
