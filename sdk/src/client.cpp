@@ -100,6 +100,26 @@ void check_each(const std::vector<Spec>& specs, const char* list) {
   }
 }
 
+// Checks (where the SDK has a check for the kind) and converts each item of a list of spec
+// variants, naming the offending one ("scene.objects[2]: ..."); `add` takes each message.
+template <typename Variant, typename Add>
+void convert_each(const std::vector<Variant>& items, const char* list, Add add) {
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    std::visit(
+        [&](const auto& item) {
+          if constexpr (requires { check(item); }) {
+            try {
+              check(item);
+            } catch (const InvalidArgumentError& error) {
+              throw InvalidArgumentError(std::string(list) + "[" + std::to_string(i) + "]: " + error.what());
+            }
+          }
+          add(detail::to_proto(item));
+        },
+        items[i]);
+  }
+}
+
 }  // namespace
 
 // ---- Client ----
@@ -182,34 +202,8 @@ Client::FileScene Client::apply_scene_file(const std::string& path) {
 
 AppliedScene Client::apply_scene(const SceneSpec& spec) {
   v1::Scene scene;
-  for (std::size_t i = 0; i < spec.objects.size(); ++i) {
-    std::visit(
-        [&](const auto& object) {
-          if constexpr (requires { check(object); }) {
-            try {
-              check(object);
-            } catch (const InvalidArgumentError& error) {
-              throw InvalidArgumentError("scene.objects[" + std::to_string(i) + "]: " + error.what());
-            }
-          }
-          *scene.add_objects() = detail::to_proto(object);
-        },
-        spec.objects[i]);
-  }
-  for (std::size_t i = 0; i < spec.fields.size(); ++i) {
-    std::visit(
-        [&](const auto& field) {
-          if constexpr (requires { check(field); }) {
-            try {
-              check(field);
-            } catch (const InvalidArgumentError& error) {
-              throw InvalidArgumentError("scene.fields[" + std::to_string(i) + "]: " + error.what());
-            }
-          }
-          *scene.add_fields() = detail::to_proto(field);
-        },
-        spec.fields[i]);
-  }
+  convert_each(spec.objects, "scene.objects", [&](auto message) { *scene.add_objects() = std::move(message); });
+  convert_each(spec.fields, "scene.fields", [&](auto message) { *scene.add_fields() = std::move(message); });
   return apply_wire_scene({scene});
 }
 
