@@ -326,6 +326,12 @@ std::optional<std::chrono::nanoseconds> Client::clock_offset() const {
   return require(core_).udp().clock_offset();
 }
 
+std::optional<double> Client::clock_drift() const { return require(core_).udp().clock_drift(); }
+
+std::optional<double> Client::server_time_at(std::chrono::steady_clock::time_point local) const {
+  return require(core_).udp().server_time_at(local);
+}
+
 void Client::set_heartbeats_enabled(bool enabled) {
   require(core_).udp().set_heartbeats_enabled(enabled);
 }

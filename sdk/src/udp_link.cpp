@@ -13,9 +13,6 @@ std::int64_t steady_ns(std::chrono::steady_clock::time_point t) {
 
 Vec3 to_vec(const wire::Vec3d& v) { return {v.x, v.y, v.z}; }
 
-// The offset estimate restarts its window every this many samples, so it follows clock drift.
-constexpr std::uint32_t kOffsetWindow = 2000;
-
 // The socket's receive buffer (the kernel doubles it). Unit: B.
 constexpr int kReceiveBufferBytes = 1 << 20;
 // At most this many datagrams are taken in one wake-up before the newest is handed out.
@@ -215,16 +212,8 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
   }
   state.received_at = received_at;
   last_sequence_ = std::max(last_sequence_, header.sequence);
-  const std::int64_t server_minus_local = header.time_ns - steady_ns(received_at);
-  offset_window_max_ns_ = std::max(offset_window_max_ns_, server_minus_local);
-  offset_estimate_ns_ = std::max(offset_estimate_ns_, offset_window_max_ns_);
-  if (++offset_window_count_ == kOffsetWindow) {
-    offset_estimate_ns_ = offset_window_max_ns_;
-    offset_window_max_ns_ = INT64_MIN;
-    offset_window_count_ = 0;
-  }
   // How much longer than the quickest recent sample this one took: time spent queued anywhere.
-  state.age = std::chrono::nanoseconds(std::max<std::int64_t>(0, offset_estimate_ns_ - server_minus_local));
+  state.age = std::chrono::nanoseconds(clock_.add(header.time_ns, steady_ns(received_at)));
   if (!newest || state.tick >= newest->tick) newest = state;
 }
 
@@ -274,8 +263,21 @@ bool UdpLink::wait_for_tick(std::uint64_t tick, State& out, std::chrono::millise
 
 std::optional<std::chrono::nanoseconds> UdpLink::clock_offset() const {
   std::lock_guard lock(mutex_);
-  if (offset_estimate_ns_ == INT64_MIN) return std::nullopt;
-  return std::chrono::nanoseconds(offset_estimate_ns_);
+  const std::optional<std::int64_t> offset = clock_.offset_ns();
+  if (!offset) return std::nullopt;
+  return std::chrono::nanoseconds(*offset);
+}
+
+std::optional<double> UdpLink::clock_drift() const {
+  std::lock_guard lock(mutex_);
+  return clock_.drift();
+}
+
+std::optional<double> UdpLink::server_time_at(std::chrono::steady_clock::time_point local) const {
+  std::lock_guard lock(mutex_);
+  const std::optional<std::int64_t> server = clock_.server_ns_at(steady_ns(local));
+  if (!server) return std::nullopt;
+  return static_cast<double>(*server) * 1e-9;
 }
 
 ReceiveCounters UdpLink::counters() const {

@@ -15,6 +15,7 @@
 #include <string>
 #include <thread>
 
+#include "clock_sync.hpp"
 #include "haptic/types.hpp"
 #include "haptic/wire/datagram.hpp"
 
@@ -40,6 +41,8 @@ class UdpLink {
   bool poll(State& out, std::chrono::milliseconds timeout);
   bool wait_for_tick(std::uint64_t tick, State& out, std::chrono::milliseconds timeout);
   std::optional<std::chrono::nanoseconds> clock_offset() const;
+  std::optional<double> clock_drift() const;
+  std::optional<double> server_time_at(std::chrono::steady_clock::time_point local) const;
   ReceiveCounters counters() const;
 
  private:
@@ -74,9 +77,7 @@ class UdpLink {
   bool have_latest_ = false;           // guarded by mutex_
   std::optional<std::uint64_t> last_polled_tick_;  // guarded by mutex_; none before the first
   std::uint64_t last_sequence_ = 0;    // guarded by mutex_
-  std::int64_t offset_window_max_ns_ = INT64_MIN;  // guarded by mutex_
-  std::int64_t offset_estimate_ns_ = INT64_MIN;    // guarded by mutex_
-  std::uint32_t offset_window_count_ = 0;          // guarded by mutex_
+  ClockSync clock_;                    // guarded by mutex_
   ReceiveCounters counters_;           // guarded by mutex_
 
   /// The callback's own thread: a slow callback must not hold up the io thread, which sends

@@ -248,6 +248,14 @@ class Client {
   /// the least-delayed recent sample: max over samples of (server_time − receipt time). It is
   /// biased low by the smallest one-way delay (tens of µs on a LAN). nullopt before any sample.
   std::optional<std::chrono::nanoseconds> clock_offset() const;
+  /// How much faster the server's clock runs than this one (dimensionless: 5e-5 is 50 ppm), fitted
+  /// by least squares to the least-delayed sample of each window of 2000 (2 s at 1 kHz, up to the
+  /// last 16); nullopt before two windows have closed.
+  std::optional<double> clock_drift() const;
+  /// The server's time at local time `local` (s): the offset carried forward with the drift (the
+  /// offset alone until the drift is known), e.g. a frame's display time for predict/interpolate
+  /// (haptic/motion.hpp). nullopt before any sample.
+  std::optional<double> server_time_at(std::chrono::steady_clock::time_point local) const;
 
   /// Stops or resumes UDP heartbeats; stopping simulates a lost client (its lease runs out).
   void set_heartbeats_enabled(bool enabled);

@@ -444,6 +444,13 @@ TEST_F(FakeServerTest, TheClockOffsetLiesBetweenTheSendAndTheReceiptOfASample) {
   const std::chrono::nanoseconds server = seconds(1);
   EXPECT_LE(*client.clock_offset(), server - sent_after.time_since_epoch());
   EXPECT_GE(*client.clock_offset(), server - received_before.time_since_epoch());
+  // With no drift known yet, the server's time at a local moment is that moment plus the offset:
+  // at the receipt it reads the sample's stamp, 1 s, to within the receipt's uncertainty.
+  EXPECT_FALSE(client.clock_drift().has_value());
+  const std::optional<double> at_receipt = client.server_time_at(received_before);
+  ASSERT_TRUE(at_receipt.has_value());
+  EXPECT_GE(*at_receipt, 1.0);
+  EXPECT_LE(*at_receipt, 1.0 + std::chrono::duration<double>(received_before - sent_after).count());
 }
 
 TEST_F(FakeServerTest, ABacklogIsDrainedAndOnlyItsNewestSampleIsHandedOut) {
