@@ -91,6 +91,8 @@ void fill_defaults(v1::ServerConfig& config) {
   if (config.max_sessions_per_peer() == 0) {
     config.set_max_sessions_per_peer(std::min<std::uint32_t>(16, config.max_sessions()));
   }
+  if (config.session_open_rate_per_peer() == 0.0) config.set_session_open_rate_per_peer(10.0);
+  if (config.session_open_burst_per_peer() == 0) config.set_session_open_burst_per_peer(32);
   if (config.max_scene_triangles() == 0) config.set_max_scene_triangles(200'000);
   if (config.max_scene_bytes() == 0) config.set_max_scene_bytes(64ull << 20);
 
@@ -135,6 +137,15 @@ std::string validate(const v1::ServerConfig& config) {
     return "max_sessions_per_peer: must be at most max_sessions (" +
            std::to_string(config.max_sessions()) + "), got " +
            std::to_string(config.max_sessions_per_peer());
+  }
+  if (!(std::isfinite(config.session_open_rate_per_peer()) && config.session_open_rate_per_peer() > 0.0 &&
+        config.session_open_rate_per_peer() <= 1000.0)) {
+    return "session_open_rate_per_peer: must be in (0, 1000] a second, got " +
+           std::to_string(config.session_open_rate_per_peer());
+  }
+  if (config.session_open_burst_per_peer() > 100'000) {
+    return "session_open_burst_per_peer: must be 1 to 100000, got " +
+           std::to_string(config.session_open_burst_per_peer());
   }
   if (config.max_event_streams() > 1024) {
     return "max_event_streams: must be 1 to 1024 (each holds a thread), got " +

@@ -58,6 +58,21 @@ std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
     return (static_cast<std::uint64_t>(entropy()) << 32) ^ static_cast<std::uint64_t>(entropy());
   };
   std::lock_guard lock(mutex_);
+  const SteadyClock::time_point now = SteadyClock::now();
+  if (opens_by_peer_.size() > 4096) {  // forget hosts idle for a minute (their buckets are full)
+    std::erase_if(opens_by_peer_, [&](const auto& entry) { return now - entry.second.at > std::chrono::minutes(1); });
+  }
+  const double burst = limits_.session_open_burst;
+  auto [budget, added] = opens_by_peer_.try_emplace(peer, TokenBucket{burst, now});
+  if (!budget->second.take(limits_.session_open_rate_hz, burst, now)) {
+    if (refusal) {
+      *refusal = "too many sessions opened from " + (peer.empty() ? std::string("this host") : peer) +
+                 ": at most " + std::to_string(limits_.session_open_rate_hz) + " a second after a burst of " +
+                 std::to_string(limits_.session_open_burst) +
+                 " (session_open_rate_per_peer, session_open_burst_per_peer)";
+    }
+    return std::nullopt;
+  }
   if (sessions_.size() >= limits_.max_sessions) {
     if (refusal) {
       *refusal = "too many sessions open: the server's most is " +
@@ -85,7 +100,7 @@ std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
   for (auto& byte : session.info.key) byte = static_cast<std::uint8_t>(entropy());
   for (auto& byte : session.info.secret) byte = static_cast<std::uint8_t>(entropy());
   session.last_seen = SteadyClock::now();
-  session.tokens_at = session.last_seen;
+  session.heartbeats.at = session.last_seen;
   SessionInfo info = session.info;
   sessions_.emplace(info.id, std::move(session));
   return info;
@@ -160,13 +175,7 @@ HeartbeatOutcome SessionRegistry::on_heartbeat(std::uint64_t session_id, std::ui
   Session& session = it->second;
   if (!source_allowed(session, from)) return {Verdict::kForeignSource};
   if (sequence <= session.last_heartbeat_sequence) return {Verdict::kStale};
-  // The token bucket, refilled for the time since the last heartbeat.
-  const double elapsed_s = std::chrono::duration<double>(now - session.tokens_at).count();
-  session.heartbeat_tokens =
-      std::min(kHeartbeatBurst, session.heartbeat_tokens + std::max(0.0, elapsed_s) * kHeartbeatRateHz);
-  session.tokens_at = now;
-  if (session.heartbeat_tokens < 1.0) return {Verdict::kRateLimited};
-  session.heartbeat_tokens -= 1.0;
+  if (!session.heartbeats.take(kHeartbeatRateHz, kHeartbeatBurst, now)) return {Verdict::kRateLimited};
   session.last_heartbeat_sequence = sequence;
   session.last_seen = now;
   if (session.address && same_address(*session.address, from)) return {Verdict::kAccepted};

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "haptic/wire/datagram.hpp"
+#include "net/token_bucket.hpp"
 
 namespace haptic::net {
 
@@ -47,6 +48,10 @@ struct SessionLimits {
   /// (its peer), so no one can point a stream at another host at all. True: from anywhere that
   /// passes the path challenge (NATs that give TCP and UDP different public addresses).
   bool udp_any_source = false;
+  /// Sessions one host may open: a token bucket of this many a second after a burst of
+  /// session_open_burst (a client that opens and closes in a loop cannot churn the server).
+  double session_open_rate_hz = 10.0;
+  std::uint32_t session_open_burst = 32;
 };
 
 /// Heartbeats a session may send: a token bucket, refilled at kHeartbeatRateHz up to
@@ -144,8 +149,7 @@ class SessionRegistry {
     std::optional<UdpAddress> candidate;  // heard from, challenged, not yet validated
     std::uint64_t challenge_nonce = 0;
     SteadyClock::time_point challenged_at;
-    double heartbeat_tokens = kHeartbeatBurst;
-    SteadyClock::time_point tokens_at;
+    TokenBucket heartbeats{kHeartbeatBurst};
     std::uint64_t last_heartbeat_sequence = 0;  // heartbeats and path responses share it
     std::uint32_t decimation = 0;
     std::uint64_t first_tick = 0;
@@ -153,6 +157,7 @@ class SessionRegistry {
 
   mutable std::mutex mutex_;
   std::map<std::uint64_t, Session> sessions_;
+  std::map<std::string, TokenBucket> opens_by_peer_;  // each host's session-opening budget
   SessionLimits limits_;
   std::uint64_t version_ = 0;
 

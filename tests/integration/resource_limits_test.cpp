@@ -173,6 +173,35 @@ TEST_F(ResourceLimits, TwoThousandStreamAttemptsAreRefusedPastTheCapsAndMemorySt
   }
 }
 
+// A host that opens and closes sessions in a loop is held to a rate: past the burst, OpenSession
+// is refused naming the limits (and nothing is opened), while the bucket refills at its rate.
+TEST(ResourceLimitsOfSessions, OneHostsSessionOpeningsAreRateLimitedAfterABurst) {
+  test::ServerProcess server(test::lockstep_config(
+      R"("session_open_rate_per_peer": 0.5, "session_open_burst_per_peer": 3)"));
+  test::RawClient client(server.address());
+  const auto open_and_close = [&] {
+    v1::OpenSessionResponse session;
+    const grpc::Status status = client.open(session, "churn");
+    if (status.ok()) {
+      v1::SessionRef ref;
+      ref.set_session_id(session.session_id());
+      v1::Empty empty;
+      EXPECT_TRUE(client.call(&v1::Haptic::Stub::CloseSession, ref, empty, session.session_secret()).ok());
+    }
+    return status;
+  };
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(open_and_close().ok()) << i;  // the burst
+  const grpc::Status refused = open_and_close();
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_NE(refused.error_message().find("too many sessions opened from 127.0.0.1"), std::string::npos)
+      << refused.error_message();
+  EXPECT_NE(refused.error_message().find("session_open_burst_per_peer"), std::string::npos);
+  // One every 2 s (slow, so a loaded machine's slow calls above cannot refill a token early):
+  // after 2.1 s one more.
+  std::this_thread::sleep_for(std::chrono::milliseconds(2100));
+  EXPECT_TRUE(open_and_close().ok());
+}
+
 TEST(ResourceLimitsOfTheScene, OneHostsSessionsAndTheWholeScenesTrianglesAreBounded) {
   test::ServerProcess server(test::lockstep_config(
       R"("max_sessions_per_peer": 2, "max_scene_triangles": 3)"));
