@@ -62,7 +62,7 @@ DeviceStatus DevicePort::write_device(double dt) {
 DeviceStatus DevicePort::read(ToolReading& tool) {
   if (!read_since_write_) {
     // As the loop does: a failed reading is not estimated from, and puts the device safe.
-    const bool ok = read_device() == DeviceStatus::kOk && (estimate(), kinematics());
+    const bool ok = sense();
     last_read_ = ok ? DeviceStatus::kOk : DeviceStatus::kError;
     if (!ok) enter_safe_state();
     read_since_write_ = true;

@@ -34,6 +34,9 @@ class DevicePort {
   DeviceStatus joint_command(const ToolCommand& command, double dt) {
     return model_->joint_command(command, reading_, joints_, dt, command_);
   }
+  /// read_device, then (when it succeeded) estimate and kinematics: the tool point's state in
+  /// tool(). False when the device reports an error or a state is not finite.
+  bool sense() { return read_device() == DeviceStatus::kOk && (estimate(), kinematics()); }
   /// A device fault: the model's and the device's safe states; command() becomes the safe one.
   void enter_safe_state();
   /// Writes command() for `dt` seconds.

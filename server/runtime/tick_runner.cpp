@@ -55,7 +55,7 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
   sample.time_ns = time_ns;
 
   // device.read -> estimate -> kinematics: the tool point's state.
-  const bool read_good = device.read_device() == DeviceStatus::kOk && (device.estimate(), device.kinematics());
+  const bool read_good = device.sense();
   ToolReading reading = device.tool();
   const bool read_ok = read_good && !reading.safe_state;
   engine::Vec3 F_command;
