@@ -297,6 +297,26 @@ Stats Client::stats() {
       require(core_).call<v1::SessionRef, v1::Stats>("GetStats", &v1::Haptic::Stub::GetStats, ref));
 }
 
+std::vector<SessionSummary> Client::sessions() {
+  v1::SessionRef ref;
+  ref.set_session_id(session_id());
+  const auto list = require(core_).call<v1::SessionRef, v1::SessionList>(
+      "ListSessions", &v1::Haptic::Stub::ListSessions, ref);
+  std::vector<SessionSummary> out;
+  out.reserve(static_cast<std::size_t>(list.sessions_size()));
+  for (const v1::SessionSummary& session : list.sessions()) out.push_back(detail::from_proto(session));
+  return out;
+}
+
+void Client::kick_session(std::uint64_t target, const std::string& reason) {
+  v1::KickSessionRequest request;
+  request.set_session_id(session_id());
+  request.set_target_session_id(target);
+  request.set_reason(reason);
+  require(core_).call<v1::KickSessionRequest, v1::Empty>("KickSession",
+                                                        &v1::Haptic::Stub::KickSession, request);
+}
+
 std::uint64_t Client::session_id() const { return require(core_).session_id(); }
 
 std::chrono::milliseconds Client::lease_timeout() const { return require(core_).lease_timeout(); }

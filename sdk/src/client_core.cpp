@@ -1,6 +1,10 @@
 #include "client_core.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "conversions.hpp"
@@ -38,7 +42,43 @@ void check_config(const ClientConfig& config) {
   }
 }
 
+std::string read_pem(const char* field, const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    throw InvalidArgumentError(std::string("tls.") + field + ": cannot read '" + path + "': " +
+                               std::strerror(errno));
+  }
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+std::shared_ptr<grpc::Channel> make_channel(const ClientConfig& config) {
+  if (!config.tls) {
+    return grpc::CreateChannel(config.server_address, grpc::InsecureChannelCredentials());
+  }
+  const TlsOptions& tls = *config.tls;
+  if (tls.ca_file.empty()) throw InvalidArgumentError("tls.ca_file: required with tls");
+  if (tls.cert_file.empty() != tls.key_file.empty()) {
+    throw InvalidArgumentError("tls.cert_file, tls.key_file: give both (mTLS) or neither");
+  }
+  grpc::SslCredentialsOptions options;
+  options.pem_root_certs = read_pem("ca_file", tls.ca_file);
+  if (!tls.cert_file.empty()) {
+    options.pem_cert_chain = read_pem("cert_file", tls.cert_file);
+    options.pem_private_key = read_pem("key_file", tls.key_file);
+  }
+  grpc::ChannelArguments arguments;
+  if (!tls.server_name.empty()) arguments.SetSslTargetNameOverride(tls.server_name);
+  return grpc::CreateCustomChannel(config.server_address, grpc::SslCredentials(options), arguments);
+}
+
 }  // namespace
+
+void ClientCore::authenticate(grpc::ClientContext& context) const {
+  if (!config_.token.empty()) context.AddMetadata("authorization", "Bearer " + config_.token);
+  if (!session_secret_.empty()) context.AddMetadata(io::kSessionSecretMetadataKey, session_secret_);
+}
 
 void ClientCore::throw_status(const grpc::Status& status, const char* name) {
   throw_if_failed(status, name);
@@ -46,7 +86,7 @@ void ClientCore::throw_status(const grpc::Status& status, const char* name) {
 
 ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
   check_config(config_);
-  channel_ = grpc::CreateChannel(config_.server_address, grpc::InsecureChannelCredentials());
+  channel_ = make_channel(config_);
   stub_ = v1::Haptic::NewStub(channel_);
 
   v1::OpenSessionRequest open;
@@ -102,7 +142,7 @@ void ClientCore::watch_events(std::function<void(const v1::Event&)> callback) {
   stop_events();
   if (!callback) return;
   auto context = std::make_unique<grpc::ClientContext>();
-  if (!session_secret_.empty()) context->AddMetadata(io::kSessionSecretMetadataKey, session_secret_);
+  authenticate(*context);
   v1::WatchEventsRequest request;
   request.set_session_id(session_id_);
   // Opened here, so that a refusal the server gives at once (no session, too many streams)

@@ -29,9 +29,7 @@ class ClientCore {
   Response call(const char* name, Method method, Request request) {
     grpc::ClientContext context;
     context.set_deadline(std::chrono::system_clock::now() + config_.rpc_timeout);
-    if (!session_secret_.empty()) {
-      context.AddMetadata(io::kSessionSecretMetadataKey, session_secret_);
-    }
+    authenticate(context);
     Response response;
     throw_status(((*stub_).*method)(&context, request, &response), name);
     return response;
@@ -62,6 +60,8 @@ class ClientCore {
 
  private:
   static void throw_status(const grpc::Status& status, const char* name);
+  /// Adds what every call carries: the bearer token (if any) and the session secret (once open).
+  void authenticate(grpc::ClientContext& context) const;
 
   ClientConfig config_;
   std::shared_ptr<grpc::Channel> channel_;

@@ -354,4 +354,21 @@ Event from_proto(const v1::Event& e) {
   return out;
 }
 
+SessionSummary from_proto(const v1::SessionSummary& session) {
+  SessionSummary out;
+  out.session_id = session.session_id();
+  out.client_name = session.client_name();
+  out.device_index = session.device_index();
+  out.peer = session.peer();
+  out.token_name = session.token_name();
+  switch (session.role()) {
+    case v1::OBSERVER: out.role = Role::kObserver; break;
+    case v1::CONTROLLER: out.role = Role::kController; break;
+    case v1::ADMIN: out.role = Role::kAdmin; break;
+    default: out.role = Role::kNone; break;
+  }
+  out.opened_time = session.opened_s();
+  return out;
+}
+
 }  // namespace haptic::detail

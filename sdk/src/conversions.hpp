@@ -45,5 +45,6 @@ struct WireScene {
 /// A sample from a Step reply (sequence 0: it came by no datagram; received_at: now).
 State from_proto(const v1::ToolState& state);
 Event from_proto(const v1::Event& event);
+SessionSummary from_proto(const v1::SessionSummary& session);
 
 }  // namespace haptic::detail

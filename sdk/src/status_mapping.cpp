@@ -32,8 +32,9 @@ void throw_if_failed(const grpc::Status& status, const std::string& call) {
     case grpc::StatusCode::NOT_FOUND:
       throw NotFoundError(message);
     case grpc::StatusCode::PERMISSION_DENIED:
-    case grpc::StatusCode::UNAUTHENTICATED:
       throw PermissionDeniedError(message);
+    case grpc::StatusCode::UNAUTHENTICATED:
+      throw UnauthenticatedError(message);
     case grpc::StatusCode::RESOURCE_EXHAUSTED:
       throw ResourceExhaustedError(message);
     case grpc::StatusCode::FAILED_PRECONDITION:

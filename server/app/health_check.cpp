@@ -3,17 +3,28 @@
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
 
+#include <fstream>
 #include <future>
+#include <sstream>
 #include <vector>
 
 namespace haptic::app {
 
-bool check_health(const std::string& address, std::chrono::milliseconds timeout, std::string& why) {
+bool check_health(const std::string& address, std::chrono::milliseconds timeout, std::string& why,
+                  const std::string& ca_file) {
   grpc::ChannelArguments arguments;
   // A channel of its own: never a connection shared with (and kept alive by) anyone else.
   arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
-  const auto channel =
-      grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), arguments);
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (!ca_file.empty()) {
+    std::ifstream file(ca_file, std::ios::binary);
+    std::stringstream pem;
+    pem << file.rdbuf();
+    grpc::SslCredentialsOptions options;
+    options.pem_root_certs = pem.str();
+    credentials = grpc::SslCredentials(options);
+  }
+  const auto channel = grpc::CreateCustomChannel(address, credentials, arguments);
   grpc::GenericStub stub(channel);
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + timeout);

@@ -10,7 +10,8 @@
 namespace haptic::app {
 
 /// True when the server at `address` ("host:port") answers SERVING within `timeout`; otherwise
-/// false with `why` saying what happened.
-bool check_health(const std::string& address, std::chrono::milliseconds timeout, std::string& why);
+/// false with `why` saying what happened. With `ca_file` (PEM), over TLS trusting that CA.
+bool check_health(const std::string& address, std::chrono::milliseconds timeout, std::string& why,
+                  const std::string& ca_file = {});
 
 }  // namespace haptic::app

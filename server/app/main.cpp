@@ -58,11 +58,16 @@ int main(int argc, char** argv) {
   cli.add_option("--health-check", health_address,
                  "ask the server at HOST:PORT over a fresh connection whether it serves; exit 0 if "
                  "it answers SERVING within 2 s, else 1 (for container and systemd checks)");
+  std::string health_ca;
+  cli.add_option("--health-ca", health_ca,
+                 "with --health-check: speak TLS, trusting this PEM CA (a server with security.tls "
+                 "that asks for no client certificate)")
+      ->check(CLI::ExistingFile);
   CLI11_PARSE(cli, argc, argv);
 
   if (!health_address.empty()) {
     std::string why;
-    if (!haptic::app::check_health(health_address, std::chrono::seconds(2), why)) {
+    if (!haptic::app::check_health(health_address, std::chrono::seconds(2), why, health_ca)) {
       std::cerr << "hapticd: " << why << "\n";
       return 1;
     }
@@ -88,6 +93,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (print_config) {
+    // The configuration may hold secrets: they are never printed.
+    for (haptic::v1::AccessToken& token : *config.mutable_security()->mutable_tokens()) {
+      token.set_token("<redacted>");
+    }
     std::cout << haptic::config::to_json(config);
     return 0;
   }

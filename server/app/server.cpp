@@ -2,6 +2,7 @@
 
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/resource_quota.h>
+#include <grpcpp/security/server_credentials.h>
 #include <grpcpp/server_builder.h>
 #include <grpcpp/server_posix.h>
 #include <sys/resource.h>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "config/security.hpp"
 #include "config/server_config.hpp"
 #include "schema/scene_specs.hpp"
 #include "runtime/realtime.hpp"
@@ -30,6 +32,32 @@ std::uint32_t raise_fd_limit() {
     (void)::getrlimit(RLIMIT_NOFILE, &limit);
   }
   return static_cast<std::uint32_t>(std::min<rlim_t>(limit.rlim_cur, 1u << 30));
+}
+
+/// The configured tokens as the control plane checks them.
+std::vector<net::Credential> credentials(const v1::AccessTokens& tokens) {
+  std::vector<net::Credential> out;
+  for (const v1::AccessToken& token : tokens.tokens()) {
+    net::Credential credential{token.name(), token.token(), token.role(), std::nullopt};
+    if (token.has_expires()) {
+      credential.expires = std::chrono::system_clock::time_point(
+          std::chrono::duration_cast<std::chrono::system_clock::duration>(
+              std::chrono::seconds(token.expires().seconds()) +
+              std::chrono::nanoseconds(token.expires().nanos())));
+    }
+    out.push_back(std::move(credential));
+  }
+  return out;
+}
+
+/// TLS for the control plane; with a client CA, clients must present a certificate it signed.
+std::shared_ptr<grpc::ServerCredentials> tls_credentials(const config::SecurityMaterial& security) {
+  grpc::SslServerCredentialsOptions options(
+      security.client_ca_pem.empty() ? GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE
+                                     : GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY);
+  options.pem_root_certs = security.client_ca_pem;
+  options.pem_key_cert_pairs.push_back({security.key_pem, security.cert_pem});
+  return grpc::SslServerCredentials(options);
 }
 
 /// Control-plane threads for unary calls, beside those the event streams may hold.
@@ -148,9 +176,10 @@ Server::Server(const v1::ServerConfig& config)
     service_ports.push_back(net::DevicePort{samples_[i].get(), &devices_[i].device->description(),
                                             std::move(set_hand)});
   }
+  const config::SecurityMaterial security = config::load_security(config.security());
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
-      [this] { return stats(); }});
+      [this] { return stats(); }, net::AccessControl(credentials(security.tokens))});
   const std::uint32_t fd_limit = raise_fd_limit();
   net::ConnectionLimits connection_limits;
   connection_limits.max_connections =
@@ -163,20 +192,43 @@ Server::Server(const v1::ServerConfig& config)
     spdlog::warn("hapticd: max_connections {} is close to the fd limit {}: expect connections "
                  "refused for want of descriptors", connection_limits.max_connections, fd_limit);
   }
-  listener_ = std::make_unique<net::ControlListener>(connection_limits);
-  listener_->bind(config.grpc_address());
   grpc::ServerBuilder builder;
+  int tls_port = 0;  // the port gRPC bound, with TLS
+  if (security.tls) {
+    // gRPC 1.51 takes only plaintext connections from a descriptor (grpc_server_add_channel_from_fd),
+    // so with TLS gRPC listens itself: the connection caps and the recovery from running out of
+    // descriptors (ControlListener) do not apply; the port is still bound exclusively.
+    builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
+    // A trial bind first, for the one clear line a busy port deserves (gRPC logs only its own).
+    if (config::host_of_address(config.grpc_address()) != config.grpc_address() &&
+        !config.grpc_address().ends_with(":0")) {
+      net::ControlListener(connection_limits).bind(config.grpc_address());
+    }
+    builder.AddListeningPort(config.grpc_address(), tls_credentials(security), &tls_port);
+  } else {
+    listener_ = std::make_unique<net::ControlListener>(connection_limits);
+    listener_->bind(config.grpc_address());
+  }
   // Every call in progress holds a thread of gRPC's sync pool, an event stream for its whole life:
   // cap the pool, so that a flood of calls is refused (RESOURCE_EXHAUSTED) instead of growing it
   // without bound. Room for every allowed stream plus the unary calls of a busy server.
   grpc::ResourceQuota quota("hapticd-control-plane");
   quota.SetMaxThreads(static_cast<int>(config.max_event_streams()) + kUnaryCallThreads);
   builder.SetResourceQuota(quota);
-  // No listening port of gRPC's own: the ControlListener accepts and hands connections over.
+  // Without TLS, no listening port of gRPC's own: the ControlListener accepts and hands over.
   grpc::EnableDefaultHealthCheckService(true);  // grpc.health.v1, for hapticd --health-check
   builder.RegisterService(service_.get());
   grpc_server_ = builder.BuildAndStart();
+  if (security.tls && (!grpc_server_ || tls_port == 0)) {
+    throw std::runtime_error("grpc_address: cannot listen on '" + config.grpc_address() +
+                             "' with TLS: the port is in use, or the address is not this host's "
+                             "(or the certificate and key do not match)");
+  }
   if (!grpc_server_) throw std::runtime_error("cannot start the gRPC server");
+  if (security.tls) {
+    grpc_port_ = static_cast<std::uint16_t>(tls_port);
+    return;
+  }
   grpc_port_ = listener_->port();
   listener_->start([server = grpc_server_.get()](int fd) { grpc::AddInsecureChannelFromFd(server, fd); });
 }
@@ -218,10 +270,14 @@ void Server::start() {
   spdlog::info("hapticd: {} at {} Hz ({}), gRPC {} (port {}), UDP {} (port {})", devices,
                config_.loop_rate_hz(), v1::TimeMode_Name(config_.time_mode()),
                config_.grpc_address(), grpc_port_, config_.udp_address(), udp_.port());
-  if (!config::is_loopback_host(config::host_of_address(config_.grpc_address())) ||
-      !config::is_loopback_host(config_.udp_address())) {
-    spdlog::warn("hapticd: serving a non-loopback address without TLS or tokens "
-                 "(insecure_remote_access): anyone who reaches it can command forces");
+  const bool remote = !config::is_loopback_host(config::host_of_address(config_.grpc_address())) ||
+                     !config::is_loopback_host(config_.udp_address());
+  if (remote && !config::secured_for_remote_access(config_.security())) {
+    spdlog::warn("hapticd: serving a non-loopback address without {} (insecure_remote_access): "
+                 "anyone who reaches it can {}",
+                 config_.security().has_tls() ? "tokens" : "TLS",
+                 config_.security().has_tls() ? "command forces"
+                                              : "read the session keys and tokens on the wire");
   }
 }
 
@@ -285,8 +341,10 @@ v1::Stats Server::stats() const {
   stats.set_datagrams_foreign_source(udp_.counters().foreign_source.load(std::memory_order_relaxed));
   stats.set_path_challenges_sent(udp_.counters().challenges_sent.load(std::memory_order_relaxed));
   stats.set_samples_skipped(udp_.counters().samples_skipped.load(std::memory_order_relaxed));
-  stats.set_connections_open(listener_->counters().open.load(std::memory_order_relaxed));
-  stats.set_connections_refused(listener_->counters().refused.load(std::memory_order_relaxed));
+  if (listener_) {  // none with TLS: gRPC accepts those connections itself
+    stats.set_connections_open(listener_->counters().open.load(std::memory_order_relaxed));
+    stats.set_connections_refused(listener_->counters().refused.load(std::memory_order_relaxed));
+  }
   stats.set_force_faults(counters_.force_faults.load(std::memory_order_relaxed));
   stats.set_device_faults(counters_.device_errors.load(std::memory_order_relaxed));
   stats.set_force_saturations(counters_.force_saturations.load(std::memory_order_relaxed));

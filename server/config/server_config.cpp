@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "config/devices.hpp"
+#include "config/security.hpp"
 #include "haptic/io/scene_file.hpp"
 #include "schema/scene_specs.hpp"
 
@@ -31,14 +32,20 @@ bool is_loopback_sockaddr(const sockaddr* address) {
   return false;
 }
 
-/// Refuses a non-loopback bind address unless remote access was accepted (insecure for now).
+/// Refuses a non-loopback bind address unless the control plane has TLS and tokens, or remote
+/// access without them was accepted.
 std::string check_exposure(const v1::ServerConfig& config) {
-  if (config.insecure_remote_access()) return {};
-  const auto refuse = [](const char* field, const std::string& address) {
-    return std::string(field) + ": '" + address +
-           "' is not a loopback address. hapticd has no TLS or tokens yet, so anyone who reaches "
-           "it could open a session and command forces on the device. Bind 127.0.0.1 (the "
-           "default), or accept that with --insecure (insecure_remote_access: true)";
+  if (config.insecure_remote_access() || secured_for_remote_access(config.security())) return {};
+  const auto refuse = [&config](const char* field, const std::string& address) {
+    const v1::SecurityConfig& security = config.security();
+    const bool tokens = security.tokens_size() > 0 || !security.tokens_file().empty();
+    const std::string missing = !security.has_tls() && !tokens ? "neither TLS nor tokens"
+                                : !security.has_tls()          ? "tokens but no TLS"
+                                                               : "TLS but no tokens";
+    return std::string(field) + ": '" + address + "' is not a loopback address, and security has " +
+           missing + ", so anyone who reaches it could open a session and command forces on the "
+           "device. Configure security.tls and security.tokens (docs/deployment.md), bind "
+           "127.0.0.1 (the default), or accept the risk with --insecure (insecure_remote_access: true)";
   };
   if (!is_loopback_host(host_of_address(config.grpc_address()))) {
     return refuse("grpc_address", config.grpc_address());
@@ -132,6 +139,7 @@ std::string validate(const v1::ServerConfig& config) {
   if (config.time_mode() != v1::REAL_TIME && config.time_mode() != v1::LOCKSTEP) {
     return "time_mode: must be REAL_TIME or LOCKSTEP";
   }
+  if (auto e = validate_security(config.security()); !e.empty()) return e;
   if (auto e = check_exposure(config); !e.empty()) return e;
   if (config.max_sessions_per_peer() > config.max_sessions()) {
     return "max_sessions_per_peer: must be at most max_sessions (" +

@@ -62,7 +62,11 @@ std::string check_client_name(const std::string& name) {
 }  // namespace
 
 grpc::Status HapticService::check_session(const grpc::ServerContext* context,
-                                          std::uint64_t session_id) const {
+                                          std::uint64_t session_id, Permission permission,
+                                          const char* call) const {
+  if (auto status = deps_.access.authorize(*context, permission, call, nullptr); !status.ok()) {
+    return status;
+  }
   std::span<const std::uint8_t> secret;
   const auto& metadata = context->client_metadata();
   if (const auto found = metadata.find(io::kSessionSecretMetadataKey); found != metadata.end()) {
@@ -101,10 +105,12 @@ void HapticService::publish_event(v1::Event::Kind kind, std::uint64_t session_id
   deps_.events.publish(event);
 }
 
-void HapticService::end_session(std::uint64_t session_id, v1::Event::Kind why) {
+void HapticService::end_session(std::uint64_t session_id, v1::Event::Kind why,
+                                const std::string& reason) {
   const std::size_t faded = deps_.scene.remove_session(session_id);
   publish_event(why, session_id,
-                std::to_string(faded) + " objects and fields ramping out");
+                (reason.empty() ? std::string() : reason + "; ") + std::to_string(faded) +
+                    " objects and fields ramping out");
   deps_.events.end_session(session_id);
 }
 
@@ -136,6 +142,11 @@ v1::DeviceInfo HapticService::device_info(std::uint32_t port) const {
 
 grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::OpenSessionRequest* request,
                                         v1::OpenSessionResponse* response) {
+  Caller caller;
+  if (auto status = deps_.access.authorize(*context, Permission::kObserve, "OpenSession", &caller);
+      !status.ok()) {
+    return status;
+  }
   if (request->api_version() != kApiVersion) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
             "api_version: client speaks " + std::to_string(request->api_version()) +
@@ -149,7 +160,7 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::
   }
   std::string refusal;
   const auto session = deps_.sessions.open(request->client_name(), request->device_index(),
-                                           caller_host(context), &refusal);
+                                           caller_host(context), &refusal, caller);
   if (!session) return {grpc::StatusCode::RESOURCE_EXHAUSTED, refusal};
   response->set_session_id(session->id);
   response->set_udp_key(std::string(session->key.begin(), session->key.end()));
@@ -159,13 +170,17 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::
   *response->mutable_device() = device_info(request->device_index());
   response->set_lease_timeout_ms(static_cast<std::uint32_t>(deps_.sessions.lease_timeout().count()));
   response->set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
-  publish_event(v1::Event::SESSION_OPENED, session->id, "client '" + request->client_name() + "'");
+  publish_event(v1::Event::SESSION_OPENED, session->id,
+                "client '" + request->client_name() + "'" +
+                    (caller.token_name.empty() ? std::string()
+                                               : " with token '" + caller.token_name + "' (" +
+                                                     role_name(caller.role) + ")"));
   return grpc::Status::OK;
 }
 
 grpc::Status HapticService::CloseSession(grpc::ServerContext* context, const v1::SessionRef* request,
                                          v1::Empty*) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kObserve, "CloseSession"); !status.ok()) return status;
   deps_.sessions.close(request->session_id());
   end_session(request->session_id(), v1::Event::SESSION_CLOSED);
   return grpc::Status::OK;
@@ -173,7 +188,7 @@ grpc::Status HapticService::CloseSession(grpc::ServerContext* context, const v1:
 
 grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1::CreateObjectRequest* request,
                                          v1::ItemRef* response) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kControl, "CreateObject"); !status.ok()) return status;
   engine::ObjectSpec spec;
   if (auto error = schema::to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -194,7 +209,7 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1:
 
 grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1::UpdateObjectRequest* request,
                                          v1::ItemRef* response) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kControl, "UpdateObject"); !status.ok()) return status;
   engine::ObjectSpec spec;
   if (auto error = schema::to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -215,13 +230,13 @@ grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1:
 
 grpc::Status HapticService::DeleteObject(grpc::ServerContext* context, const v1::DeleteRequest* request,
                                          v1::Empty*) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kControl, "DeleteObject"); !status.ok()) return status;
   return deps_.scene.remove(request->session_id(), ItemKind::kObject, request->id());
 }
 
 grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::CreateFieldRequest* request,
                                         v1::ItemRef* response) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kControl, "CreateField"); !status.ok()) return status;
   engine::FieldSpec spec;
   if (auto error = schema::to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -237,7 +252,7 @@ grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::
 
 grpc::Status HapticService::UpdateField(grpc::ServerContext* context, const v1::UpdateFieldRequest* request,
                                         v1::Empty*) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kControl, "UpdateField"); !status.ok()) return status;
   engine::FieldSpec spec;
   if (auto error = schema::to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -247,13 +262,13 @@ grpc::Status HapticService::UpdateField(grpc::ServerContext* context, const v1::
 
 grpc::Status HapticService::DeleteField(grpc::ServerContext* context, const v1::DeleteRequest* request,
                                         v1::Empty*) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kControl, "DeleteField"); !status.ok()) return status;
   return deps_.scene.remove(request->session_id(), ItemKind::kField, request->id());
 }
 
 grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext* context, const v1::SessionRef* request,
                                            v1::SceneEnergy* response) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kObserve, "GetSceneEnergy"); !status.ok()) return status;
   for (const engine::ItemEnergyTotals& item : deps_.scene.energy()) {
     v1::ItemEnergy& out = *response->add_items();
     out.set_id(item.id);
@@ -267,7 +282,7 @@ grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext* context, const v
 
 grpc::Status HapticService::GetObjectStates(grpc::ServerContext* context, const v1::SessionRef* request,
                                             v1::ObjectStates* response) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kObserve, "GetObjectStates"); !status.ok()) return status;
   for (const engine::ObjectMotion& motion : deps_.scene.motions()) {
     v1::ObjectState& out = *response->add_objects();
     out.set_id(motion.id);
@@ -279,7 +294,7 @@ grpc::Status HapticService::GetObjectStates(grpc::ServerContext* context, const 
 
 grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::ApplySceneRequest* request,
                                        v1::ApplySceneResponse* response) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kControl, "ApplyScene"); !status.ok()) return status;
   // Validate everything first: one bad item rejects the whole scene and changes nothing.
   schema::SceneSpecs specs;
   if (auto error = schema::to_scene_specs(request->scene(), "scene.", deps_.limits, specs); !error.empty()) {
@@ -312,14 +327,14 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::A
 
 grpc::Status HapticService::GetDeviceInfo(grpc::ServerContext* context, const v1::SessionRef* request,
                                           v1::DeviceInfo* response) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kObserve, "GetDeviceInfo"); !status.ok()) return status;
   *response = device_info(deps_.sessions.device_index_of(request->session_id()).value_or(0));
   return grpc::Status::OK;
 }
 
 grpc::Status HapticService::GetStats(grpc::ServerContext* context, const v1::SessionRef* request,
                                      v1::Stats* response) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kAdmin, "GetStats"); !status.ok()) return status;
   *response = deps_.stats();
   return grpc::Status::OK;
 }
@@ -327,7 +342,7 @@ grpc::Status HapticService::GetStats(grpc::ServerContext* context, const v1::Ses
 grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
                                         const v1::WatchEventsRequest* request,
                                         grpc::ServerWriter<v1::Event>* writer) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kObserve, "WatchEvents"); !status.ok()) return status;
   std::string refusal;
   auto watcher = deps_.events.watch(request->session_id(), refusal);
   if (!watcher) return {grpc::StatusCode::RESOURCE_EXHAUSTED, refusal};
@@ -348,10 +363,59 @@ grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
+grpc::Status HapticService::ListSessions(grpc::ServerContext* context, const v1::SessionRef* request,
+                                         v1::SessionList* response) {
+  if (auto status = check_session(context, request->session_id(), Permission::kAdmin, "ListSessions");
+      !status.ok()) {
+    return status;
+  }
+  const double now_s = static_cast<double>(deps_.loop.server_time_ns()) * 1e-9;
+  const SteadyClock::time_point now = SteadyClock::now();
+  for (const SessionInfo& session : deps_.sessions.list()) {
+    v1::SessionSummary& out = *response->add_sessions();
+    out.set_session_id(session.id);
+    out.set_client_name(session.client_name);
+    out.set_device_index(session.device_index);
+    out.set_peer(session.peer);
+    out.set_token_name(session.caller.token_name);
+    out.set_role(session.caller.role);
+    out.set_opened_s(now_s - std::chrono::duration<double>(now - session.opened).count());
+  }
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::KickSession(grpc::ServerContext* context,
+                                        const v1::KickSessionRequest* request, v1::Empty*) {
+  Caller caller;
+  if (auto status = deps_.access.authorize(*context, Permission::kAdmin, "KickSession", &caller);
+      !status.ok()) {
+    return status;
+  }
+  if (auto status = check_session(context, request->session_id(), Permission::kAdmin, "KickSession");
+      !status.ok()) {
+    return status;
+  }
+  constexpr std::size_t kMaxReason = 256;
+  if (request->reason().size() > kMaxReason) {
+    return invalid("reason: at most " + std::to_string(kMaxReason) + " characters, got " +
+                   std::to_string(request->reason().size()));
+  }
+  if (!deps_.sessions.close(request->target_session_id())) {
+    return {grpc::StatusCode::NOT_FOUND, "target_session_id: no open session " +
+                                             std::to_string(request->target_session_id())};
+  }
+  const std::string by = caller.token_name.empty() ? "an admin" : "'" + caller.token_name + "'";
+  spdlog::info("session {:016x} ended by {} ({})", request->target_session_id(), by,
+               request->reason().empty() ? "no reason given" : request->reason());
+  end_session(request->target_session_id(), v1::Event::SESSION_CLOSED,
+              "ended by " + by + (request->reason().empty() ? "" : ": " + request->reason()));
+  return grpc::Status::OK;
+}
+
 grpc::Status HapticService::SubscribeState(grpc::ServerContext* context,
                                            const v1::SubscribeStateRequest* request,
                                            v1::SubscribeStateResponse* response) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kObserve, "SubscribeState"); !status.ok()) return status;
   if (request->decimation() > kMaxDecimation) {
     return invalid("decimation: must be 0 (stop) to " + std::to_string(kMaxDecimation) + ", got " +
                    std::to_string(request->decimation()));
@@ -366,7 +430,7 @@ grpc::Status HapticService::SubscribeState(grpc::ServerContext* context,
 
 grpc::Status HapticService::SetOperator(grpc::ServerContext* context, const v1::SetOperatorRequest* request,
                                         v1::Empty*) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kControl, "SetOperator"); !status.ok()) return status;
   const DevicePort& port = port_of(request->session_id());
   if (!port.set_hand) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
@@ -382,7 +446,7 @@ grpc::Status HapticService::SetOperator(grpc::ServerContext* context, const v1::
 
 grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepRequest* request,
                                  v1::StepResponse* response) {
-  if (auto status = check_session(context, request->session_id()); !status.ok()) return status;
+  if (auto status = check_session(context, request->session_id(), Permission::kControl, "Step"); !status.ok()) return status;
   if (deps_.loop.config().mode != runtime::TimeMode::kLockstep) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
             "Step: the server runs in REAL_TIME; start it with time_mode LOCKSTEP"};

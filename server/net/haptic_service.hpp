@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "haptic/v1/service.grpc.pb.h"
+#include "net/access_control.hpp"
 #include "net/event_hub.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
@@ -34,6 +35,7 @@ struct ServiceDependencies {
   std::uint16_t udp_port;
   schema::SceneLimits limits;
   std::function<v1::Stats()> stats;
+  AccessControl access;  // no tokens: every caller may do everything
 };
 
 class HapticService final : public v1::Haptic::Service {
@@ -43,8 +45,9 @@ class HapticService final : public v1::Haptic::Service {
   /// Publishes an event stamped with server time.
   void publish_event(v1::Event::Kind kind, std::uint64_t session_id, const std::string& message);
 
-  /// Ends the session: its items fade out. Used by CloseSession and by lease expiry.
-  void end_session(std::uint64_t session_id, v1::Event::Kind why);
+  /// Ends the session: its items fade out. Used by CloseSession, KickSession and lease expiry;
+  /// `reason` (if any) goes into the event.
+  void end_session(std::uint64_t session_id, v1::Event::Kind why, const std::string& reason = {});
 
   grpc::Status OpenSession(grpc::ServerContext*, const v1::OpenSessionRequest*,
                            v1::OpenSessionResponse*) override;
@@ -70,6 +73,8 @@ class HapticService final : public v1::Haptic::Service {
   grpc::Status GetStats(grpc::ServerContext*, const v1::SessionRef*, v1::Stats*) override;
   grpc::Status WatchEvents(grpc::ServerContext*, const v1::WatchEventsRequest*,
                            grpc::ServerWriter<v1::Event>*) override;
+  grpc::Status ListSessions(grpc::ServerContext*, const v1::SessionRef*, v1::SessionList*) override;
+  grpc::Status KickSession(grpc::ServerContext*, const v1::KickSessionRequest*, v1::Empty*) override;
   grpc::Status SubscribeState(grpc::ServerContext*, const v1::SubscribeStateRequest*,
                               v1::SubscribeStateResponse*) override;
   grpc::Status SetOperator(grpc::ServerContext*, const v1::SetOperatorRequest*,
@@ -81,9 +86,11 @@ class HapticService final : public v1::Haptic::Service {
 
  private:
   double period_s() const { return 1.0 / deps_.loop.config().rate_hz; }
-  /// OK when the session exists and the call carries its secret (the lease is then renewed);
-  /// NOT_FOUND or PERMISSION_DENIED naming the session otherwise.
-  grpc::Status check_session(const grpc::ServerContext* context, std::uint64_t session_id) const;
+  /// OK when the call's token allows `permission` (AccessControl: UNAUTHENTICATED or
+  /// PERMISSION_DENIED naming `call` otherwise), the session exists and the call carries its
+  /// secret (the lease is then renewed); NOT_FOUND or PERMISSION_DENIED naming the session otherwise.
+  grpc::Status check_session(const grpc::ServerContext* context, std::uint64_t session_id,
+                             Permission permission, const char* call) const;
   /// The device port an open session is bound to (port 0's if it has just gone).
   const DevicePort& port_of(std::uint64_t session_id) const;
 

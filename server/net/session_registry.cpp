@@ -50,7 +50,8 @@ SessionRegistry::SessionRegistry(std::uint32_t max_sessions, std::chrono::millis
 
 std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
                                                  std::uint32_t device_index,
-                                                 const std::string& peer, std::string* refusal) {
+                                                 const std::string& peer, std::string* refusal,
+                                                 const Caller& caller) {
   // Ids and keys come from the OS entropy source: a session id is also the capability that lets a
   // client change its own objects, so it must not be guessable.
   std::random_device entropy;
@@ -97,13 +98,23 @@ std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
   session.info.client_name = client_name;
   session.info.device_index = device_index;
   session.info.peer = peer;
+  session.info.caller = caller;
   for (auto& byte : session.info.key) byte = static_cast<std::uint8_t>(entropy());
   for (auto& byte : session.info.secret) byte = static_cast<std::uint8_t>(entropy());
   session.last_seen = SteadyClock::now();
+  session.info.opened = session.last_seen;
   session.heartbeats.at = session.last_seen;
   SessionInfo info = session.info;
   sessions_.emplace(info.id, std::move(session));
   return info;
+}
+
+std::vector<SessionInfo> SessionRegistry::list() const {
+  std::lock_guard lock(mutex_);
+  std::vector<SessionInfo> out;
+  out.reserve(sessions_.size());
+  for (const auto& [id, session] : sessions_) out.push_back(session.info);
+  return out;
 }
 
 bool SessionRegistry::close(std::uint64_t session_id) {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "haptic/wire/datagram.hpp"
+#include "net/access_control.hpp"
 #include "net/token_bucket.hpp"
 
 namespace haptic::net {
@@ -38,6 +39,8 @@ struct SessionInfo {
   SessionSecret secret{};          // sent with every session-scoped call; never shown to others
   std::uint32_t device_index = 0;  // the device port the session is bound to
   std::string peer;                // the host it was opened from (peer_host()); "" if unknown
+  Caller caller;                   // the token it was opened with (none without tokens)
+  SteadyClock::time_point opened{};
 };
 
 struct SessionLimits {
@@ -106,7 +109,8 @@ class SessionRegistry {
   /// fresh random id, secret and key; nullopt when max_sessions are open, or max_sessions_per_peer
   /// from that host (`refusal`, when given, then names the limit).
   std::optional<SessionInfo> open(const std::string& client_name, std::uint32_t device_index = 0,
-                                  const std::string& peer = {}, std::string* refusal = nullptr);
+                                  const std::string& peer = {}, std::string* refusal = nullptr,
+                                  const Caller& caller = {});
   /// Removes the session; false if it did not exist.
   bool close(std::uint64_t session_id);
   /// Checks that `secret` is the session's own (in constant time) and, if so, renews the lease.
@@ -139,6 +143,8 @@ class SessionRegistry {
   std::vector<Subscriber> subscribers() const;
 
   std::size_t size() const;
+  /// Every open session (ListSessions), in id order.
+  std::vector<SessionInfo> list() const;
   std::chrono::milliseconds lease_timeout() const { return limits_.lease_timeout; }
 
  private:

@@ -110,6 +110,36 @@ TEST(HapticdCli, ASecondServerOnABusyGrpcOrUdpPortFailsAtStartWithOneClearLine) 
   EXPECT_EQ(run_hapticd({"--health-check", "127.0.0.1:" + std::to_string(first.grpc_port())}).exit_code, 0);
 }
 
+TEST(HapticdCli, WithTlsTooASecondServerOnTheBusyPortFailsWithOneClearLine) {
+  const std::string certs = TEST_CERTS_DIR;
+  const std::string security = R"("security": {"tls": {"cert_file": ")" + certs +
+                               R"(/server.pem", "key_file": ")" + certs + R"(/server.key"}})";
+  test::ServerProcess first(R"({"time_mode": "LOCKSTEP", )" + security + "}");
+  const std::string grpc = "127.0.0.1:" + std::to_string(first.grpc_port());
+  const std::string path = ::testing::TempDir() + "/tls_second.json";
+  std::ofstream(path) << R"({"time_mode": "LOCKSTEP", "udp_port": 0, )" + security + "}";
+  const Outcome second = run_hapticd({"--config", path, "--grpc-address", grpc});
+  EXPECT_EQ(second.exit_code, 1) << second.output;
+  EXPECT_NE(second.output.find("cannot listen for gRPC on " + grpc + ": Address already in use"),
+            std::string::npos)
+      << second.output;
+  EXPECT_EQ(std::count(second.output.begin(), second.output.end(), '\n'), 1) << second.output;
+  // The first still serves, over TLS: a plaintext check fails, one trusting the CA passes.
+  EXPECT_EQ(run_hapticd({"--health-check", grpc}).exit_code, 1);
+  const Outcome check = run_hapticd({"--health-check", grpc, "--health-ca", certs + "/ca.pem"});
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+}
+
+TEST(HapticdCli, PrintConfigNeverShowsATokensSecret) {
+  const std::string path = ::testing::TempDir() + "/tokens_config.json";
+  std::ofstream(path) << R"({"security": {"tokens": [{"name": "alice", "token": "do-not-print-this-0123",
+                                                       "role": "ADMIN"}]}})";
+  const Outcome printed = run_hapticd({"--config", path, "--print-config"});
+  EXPECT_EQ(printed.exit_code, 0) << printed.output;
+  EXPECT_EQ(printed.output.find("do-not-print-this-0123"), std::string::npos) << printed.output;
+  EXPECT_NE(printed.output.find("\"alice\""), std::string::npos) << printed.output;
+}
+
 TEST(HapticdCli, ADriverBuiltForAnotherAbiIsRefusedAtStartNamingTheLibraryAndBothVersions) {
   const std::string path = ::testing::TempDir() + "/wrong_abi_driver.json";
   std::ofstream(path) << R"({"time_mode": "LOCKSTEP", "grpc_address": "127.0.0.1:0", "udp_port": 0,

@@ -32,8 +32,23 @@ struct WireScene;
 /// The API version this SDK speaks (haptic.v1.API_VERSION_CURRENT).
 inline constexpr std::uint32_t kApiVersion = 3;
 
+/// TLS for the control plane (the server's security.tls; docs/deployment.md). The UDP session
+/// key then reaches the client encrypted.
+struct TlsOptions {
+  std::string ca_file;      ///< PEM: the CA that signed the server's certificate. Required.
+  std::string cert_file;    ///< PEM: this client's certificate, for a server asking for one (mTLS).
+  std::string key_file;     ///< PEM: its private key; with cert_file.
+  /// The name the server's certificate must carry; default: the host of server_address.
+  std::string server_name;
+};
+
 struct ClientConfig {
   std::string server_address = "127.0.0.1:50051";  ///< gRPC host:port of hapticd.
+  /// Present: TLS (needed when the server has security.tls). Absent: plaintext.
+  std::optional<TlsOptions> tls;
+  /// The bearer token the server gave this client (its security.tokens); sent with every call.
+  /// Empty: none (a server without tokens).
+  std::string token;
   std::string client_name = "haptic-client";       ///< 1..64 printable characters; shown in logs.
   std::chrono::milliseconds rpc_timeout{2000};     ///< Deadline of every control-plane call.
   std::chrono::milliseconds heartbeat_period{100}; ///< UDP heartbeat period; keep well under the lease.
@@ -216,8 +231,14 @@ class Client {
 
   /// The device, as reported when the session opened.
   const DeviceInfo& device_info() const;
-  /// The server's counters (GetStats).
+  /// The server's counters (GetStats). With tokens on the server: an ADMIN token only.
   Stats stats();
+  /// Every open session (ListSessions). With tokens on the server: an ADMIN token only.
+  std::vector<SessionSummary> sessions();
+  /// Ends another session (KickSession): its objects and fields ramp out, its client's next call
+  /// is NotFoundError, and every watcher sees kSessionClosed with `reason` (at most 256
+  /// characters). With tokens on the server: an ADMIN token only.
+  void kick_session(std::uint64_t session_id, const std::string& reason = {});
   std::uint64_t session_id() const;
   /// How long the server keeps a silent session (no heartbeat, no RPC) before dropping it.
   std::chrono::milliseconds lease_timeout() const;

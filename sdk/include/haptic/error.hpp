@@ -11,11 +11,12 @@ enum class ErrorCode {
   kConnection,          ///< server unreachable or too slow (UNAVAILABLE, DEADLINE_EXCEEDED)
   kInvalidArgument,     ///< a field was wrong; the message names it
   kNotFound,            ///< no such session or item (a lost lease shows up here)
-  kPermissionDenied,    ///< the item belongs to another client
+  kPermissionDenied,    ///< the item belongs to another client, or the token's role forbids it
   kResourceExhausted,   ///< a server limit (sessions, objects per session)
   kFailedPrecondition,  ///< not possible in the server's state (e.g. Step in real time)
   kVersionMismatch,     ///< client and server speak different API versions
   kInternal,            ///< anything else
+  kUnauthenticated,     ///< no token, or one the server does not know or that has expired
 };
 
 class Error : public std::runtime_error {
@@ -42,6 +43,10 @@ class NotFoundError : public Error {
 class PermissionDeniedError : public Error {
  public:
   explicit PermissionDeniedError(const std::string& m) : Error(ErrorCode::kPermissionDenied, m) {}
+};
+class UnauthenticatedError : public Error {
+ public:
+  explicit UnauthenticatedError(const std::string& m) : Error(ErrorCode::kUnauthenticated, m) {}
 };
 class ResourceExhaustedError : public Error {
  public:

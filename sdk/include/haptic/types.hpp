@@ -238,6 +238,25 @@ struct Event {
   std::string message;
 };
 
+/// What a server's bearer token lets its holder do (ClientConfig::token; docs/deployment.md).
+enum class Role {
+  kNone,        ///< the server has no tokens
+  kObserver,    ///< sessions, state, events, reading the device and the scene
+  kController,  ///< also changing the scene, the simulated operator, lockstep steps
+  kAdmin,       ///< also statistics, every session, ending one
+};
+
+/// One open session, as an admin sees it (Client::sessions).
+struct SessionSummary {
+  std::uint64_t session_id = 0;
+  std::string client_name;
+  std::uint32_t device_index = 0;
+  std::string peer;        ///< the host it was opened from
+  std::string token_name;  ///< the token it was opened with; empty without tokens
+  Role role = Role::kNone;
+  double opened_time = 0.0;  ///< server time at its opening. Unit: s.
+};
+
 /// What a device has (the server computes only those terms).
 struct DeviceCapabilities {
   bool gravity = false;               ///< A gravity load the device compensates.

@@ -28,6 +28,7 @@ TEST(StatusMapping, EachCodeBecomesItsExceptionWithTheServersMessage) {
   expect_maps_to<InvalidArgumentError>(grpc::StatusCode::INVALID_ARGUMENT);
   expect_maps_to<NotFoundError>(grpc::StatusCode::NOT_FOUND);
   expect_maps_to<PermissionDeniedError>(grpc::StatusCode::PERMISSION_DENIED);
+  expect_maps_to<UnauthenticatedError>(grpc::StatusCode::UNAUTHENTICATED);
   expect_maps_to<ResourceExhaustedError>(grpc::StatusCode::RESOURCE_EXHAUSTED);
   expect_maps_to<FailedPreconditionError>(grpc::StatusCode::FAILED_PRECONDITION);
   expect_maps_to<Error>(grpc::StatusCode::INTERNAL);

@@ -1,0 +1,68 @@
+#pragma once
+// Bearer tokens with roles (docs/deployment.md). Without tokens every caller may do everything
+// (loopback, lockstep, CI). With tokens, every call carries one as metadata
+// "authorization: Bearer <token>", and each RPC needs a role: OBSERVER < CONTROLLER < ADMIN, each
+// including the ones before it.
+
+#include <grpcpp/server_context.h>
+
+#include <chrono>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "haptic/v1/types.pb.h"
+
+namespace haptic::net {
+
+inline constexpr const char* kAuthorizationMetadataKey = "authorization";
+
+/// What a call asks to do; each RPC names one (haptic_service.cpp).
+enum class Permission {
+  kObserve,  // OBSERVER: sessions, state, events, reading the device and the scene
+  kControl,  // CONTROLLER: changing the scene, the simulated operator, lockstep steps
+  kAdmin,    // ADMIN: statistics, every session, ending one
+};
+
+/// One configured token.
+struct Credential {
+  std::string name;   // who holds it: shown in logs, events and ListSessions
+  std::string token;  // the secret
+  v1::Role role = v1::ROLE_UNSPECIFIED;
+  std::optional<std::chrono::system_clock::time_point> expires;  // none: never
+};
+
+/// Who made a call: the token's holder and role; empty and ROLE_UNSPECIFIED without tokens.
+struct Caller {
+  std::string token_name;
+  v1::Role role = v1::ROLE_UNSPECIFIED;
+};
+
+class AccessControl {
+ public:
+  /// No tokens: every call is allowed.
+  explicit AccessControl(std::vector<Credential> credentials = {})
+      : credentials_(std::move(credentials)) {}
+
+  bool enabled() const { return !credentials_.empty(); }
+
+  /// OK (and *caller filled in) when the call may do `permission`. UNAUTHENTICATED when the call
+  /// carries no token, a malformed one, an unknown one or an expired one; PERMISSION_DENIED when
+  /// its role does not allow `call` (the RPC's name). Each message names what was wrong.
+  grpc::Status authorize(const grpc::ServerContext& context, Permission permission,
+                         const char* call, Caller* caller,
+                         std::chrono::system_clock::time_point now =
+                             std::chrono::system_clock::now()) const;
+
+  /// The same decision over the metadata value alone (nullptr: none sent); for tests.
+  grpc::Status authorize_header(const std::string* header, Permission permission, const char* call,
+                                Caller* caller, std::chrono::system_clock::time_point now) const;
+
+ private:
+  std::vector<Credential> credentials_;
+};
+
+/// "OBSERVER", "CONTROLLER", "ADMIN".
+std::string role_name(v1::Role role);
+
+}  // namespace haptic::net

@@ -1,0 +1,177 @@
+// The control plane's security end to end (issue 11 item 1): TLS from the configuration, optional
+// mutual TLS, bearer tokens with roles. Every refusal carries the right gRPC code (as the SDK's
+// error class) and a message naming what was wrong, and no refused call changes anything.
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "haptic/client.hpp"
+#include "integration/sdk_harness.hpp"
+#include "integration/server_process.hpp"
+
+namespace haptic::test {
+namespace {
+
+const std::string kCerts = TEST_CERTS_DIR;
+constexpr const char* kObserverToken = "observer-token-0123456789";
+constexpr const char* kControllerToken = "controller-token-0123456789";
+constexpr const char* kAdminToken = "admin-token-0123456789abcdef";
+constexpr const char* kExpiredToken = "expired-token-0123456789abc";
+
+std::string tokens_json() {
+  return R"("tokens": [
+      {"name": "watcher", "token": ")" + std::string(kObserverToken) + R"(", "role": "OBSERVER"},
+      {"name": "operator", "token": ")" + std::string(kControllerToken) + R"(", "role": "CONTROLLER"},
+      {"name": "root", "token": ")" + std::string(kAdminToken) + R"(", "role": "ADMIN"},
+      {"name": "former", "token": ")" + std::string(kExpiredToken) +
+         R"(", "role": "CONTROLLER", "expires": "2020-01-01T00:00:00Z"}])";
+}
+
+/// A lockstep server with TLS and the four tokens above; `client_ca` adds mutual TLS.
+std::string secured_config(bool client_ca = false) {
+  std::string tls = R"("tls": {"cert_file": ")" + kCerts + R"(/server.pem", "key_file": ")" +
+                    kCerts + "/server.key\"";
+  if (client_ca) tls += R"(, "client_ca_file": ")" + kCerts + "/ca.pem\"";
+  return R"({"time_mode": "LOCKSTEP", "security": {)" + tls + "}, " + tokens_json() + "}}";
+}
+
+ClientConfig tls_client(const ServerProcess& server, const char* name, const char* token,
+                        const std::string& ca = kCerts + "/ca.pem") {
+  ClientConfig config = config_for(server, name);
+  config.tls = TlsOptions{};
+  config.tls->ca_file = ca;
+  if (token != nullptr) config.token = token;
+  config.rpc_timeout = std::chrono::milliseconds(3000);
+  return config;
+}
+
+/// Runs `body`, which must throw an `ErrorType`; returns its message.
+template <typename ErrorType, typename Body>
+std::string refusal(Body&& body) {
+  try {
+    body();
+  } catch (const ErrorType& error) {
+    return error.what();
+  } catch (const std::exception& error) {
+    ADD_FAILURE() << "wrong error: " << error.what();
+    return {};
+  }
+  ADD_FAILURE() << "no error";
+  return {};
+}
+
+TEST(Security, TheRightTokenOverTlsOpensASessionThatWorks) {
+  ServerProcess server(secured_config());
+  Client controller(tls_client(server, "controller", kControllerToken));
+  ObjectHandle wall = controller.add_wall({.normal = {0, 0, 1}, .impedance = {800.0, 1.0}});
+  EXPECT_GT(wall.id(), 0u);
+  EXPECT_EQ(controller.step(10), 10u);  // ticks count from 1
+}
+
+TEST(Security, MissingWrongAndExpiredTokensAreUnauthenticated) {
+  ServerProcess server(secured_config());
+  const std::string none =
+      refusal<UnauthenticatedError>([&] { Client client(tls_client(server, "no-token", nullptr)); });
+  EXPECT_NE(none.find("OpenSession: authorization: OpenSession: this server needs a bearer token"),
+            std::string::npos) << none;
+  const std::string wrong = refusal<UnauthenticatedError>(
+      [&] { Client client(tls_client(server, "wrong", "not-a-token-anyone-was-given")); });
+  EXPECT_NE(wrong.find("the token is not one this server knows"), std::string::npos) << wrong;
+  const std::string expired =
+      refusal<UnauthenticatedError>([&] { Client client(tls_client(server, "late", kExpiredToken)); });
+  EXPECT_NE(expired.find("token 'former' expired at 2020-01-01T00:00:00Z"), std::string::npos)
+      << expired;
+}
+
+TEST(Security, AnObserverWatchesButCannotChangeAnything) {
+  ServerProcess server(secured_config());
+  Client admin(tls_client(server, "admin", kAdminToken));
+  Client controller(tls_client(server, "controller", kControllerToken));
+  ObjectHandle wall = controller.add_wall({.normal = {0, 0, 1}, .impedance = {800.0, 1.0}});
+  Client observer(tls_client(server, "observer", kObserverToken));  // subscribes to state: allowed
+
+  const std::string create = refusal<PermissionDeniedError>(
+      [&] { (void)observer.add_wall({.normal = {1, 0, 0}, .impedance = {500.0, 1.0}}); });
+  EXPECT_NE(create.find("CreateObject needs role CONTROLLER or above; token 'watcher' has role OBSERVER"),
+            std::string::npos) << create;
+  refusal<PermissionDeniedError>([&] { (void)observer.apply_scene(SceneSpec{}); });
+  refusal<PermissionDeniedError>([&] { (void)observer.step(1); });
+  refusal<PermissionDeniedError>([&] { observer.set_operator({}); });
+  refusal<PermissionDeniedError>([&] { (void)observer.stats(); });
+  refusal<PermissionDeniedError>([&] { (void)controller.stats(); });
+  refusal<PermissionDeniedError>([&] { (void)controller.sessions(); });
+  const std::string kick = refusal<PermissionDeniedError>(
+      [&] { controller.kick_session(observer.session_id()); });
+  EXPECT_NE(kick.find("KickSession needs role ADMIN"), std::string::npos) << kick;
+
+  // Reading is allowed, and state reaches the observer once the controller steps.
+  EXPECT_NO_THROW((void)observer.scene_energy());
+  const std::uint64_t tick = controller.step(5);
+  State state;
+  EXPECT_TRUE(observer.wait_for_tick(tick, state, std::chrono::seconds(5)));
+
+  // 0 cross-session changes: the scene holds the controller's one wall, nothing else.
+  const Stats stats = admin.stats();
+  EXPECT_EQ(stats.objects, 1u);
+  EXPECT_EQ(stats.fields, 0u);
+  EXPECT_EQ(stats.sessions, 3u);
+}
+
+TEST(Security, AnAdminListsSessionsWithTheirTokensAndEndsOne) {
+  ServerProcess server(secured_config());
+  Client admin(tls_client(server, "admin", kAdminToken));
+  Client controller(tls_client(server, "controller", kControllerToken));
+  ObjectHandle wall = controller.add_wall({.normal = {0, 0, 1}, .impedance = {800.0, 1.0}});
+
+  const std::vector<SessionSummary> sessions = admin.sessions();
+  ASSERT_EQ(sessions.size(), 2u);
+  bool found = false;
+  for (const SessionSummary& session : sessions) {
+    if (session.session_id != controller.session_id()) continue;
+    found = true;
+    EXPECT_EQ(session.client_name, "controller");
+    EXPECT_EQ(session.token_name, "operator");
+    EXPECT_EQ(session.role, Role::kController);
+    EXPECT_EQ(session.peer, "127.0.0.1");
+  }
+  EXPECT_TRUE(found);
+
+  admin.kick_session(controller.session_id(), "demo over");
+  refusal<NotFoundError>([&] { (void)controller.step(1); });
+  (void)admin.step(1);  // the removal ramps out over the next ticks
+  EXPECT_EQ(admin.sessions().size(), 1u);
+  refusal<NotFoundError>([&] { admin.kick_session(controller.session_id()); });
+}
+
+TEST(Security, AClientThatDoesNotTrustTheServersCaIsRefused) {
+  ServerProcess server(secured_config());
+  refusal<ConnectionError>(
+      [&] { Client client(tls_client(server, "other-ca", kAdminToken, kCerts + "/other_ca.pem")); });
+  ClientConfig plaintext = config_for(server, "plaintext");  // no TLS at all
+  plaintext.token = kAdminToken;
+  refusal<ConnectionError>([&] { Client client(plaintext); });
+}
+
+TEST(Security, MutualTlsRefusesAClientWithoutACertificate) {
+  ServerProcess server(secured_config(/*client_ca=*/true));
+  refusal<ConnectionError>([&] { Client client(tls_client(server, "no-cert", kControllerToken)); });
+  ClientConfig with_cert = tls_client(server, "with-cert", kControllerToken);
+  with_cert.tls->cert_file = kCerts + "/client.pem";
+  with_cert.tls->key_file = kCerts + "/client.key";
+  Client client(with_cert);
+  EXPECT_EQ(client.step(1), 1u);
+}
+
+TEST(Security, TokensAlsoWorkOverPlaintextOnLoopback) {
+  ServerProcess server(R"({"time_mode": "LOCKSTEP", "security": {)" + tokens_json() + "}}");
+  ClientConfig config = config_for(server, "plain");
+  config.token = kObserverToken;
+  Client observer(config);
+  refusal<PermissionDeniedError>([&] { (void)observer.step(1); });
+  config.token = {};
+  refusal<UnauthenticatedError>([&] { Client client(config); });
+}
+
+}  // namespace
+}  // namespace haptic::test
