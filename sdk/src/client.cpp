@@ -131,14 +131,15 @@ Client& Client::operator=(Client&&) noexcept = default;
 
 ObjectHandle Client::register_object(const detail::WireObject& object) {
   detail::ClientCore& core = require(core_);
-  const v1::ItemRef made = core.create_object(object.message);
-  return ObjectHandle(core_, made.id(), core.scene_generation(), detail::from_proto(made.stability()));
+  const detail::ClientCore::Created made = core.create_object(object.message);
+  return ObjectHandle(core_, made.key, made.ref.id(), core.scene_generation(),
+                      detail::from_proto(made.ref.stability()));
 }
 
 FieldHandle Client::register_field(const detail::WireField& field) {
   detail::ClientCore& core = require(core_);
-  const std::uint64_t id = core.create_field(field.message);
-  return FieldHandle(core_, id, core.scene_generation());
+  const detail::ClientCore::Created made = core.create_field(field.message);
+  return FieldHandle(core_, made.key, made.ref.id(), core.scene_generation());
 }
 
 ObjectHandle Client::add_wall(const WallSpec& wall) {
@@ -209,15 +210,18 @@ AppliedScene Client::apply_scene(const SceneSpec& spec) {
 
 AppliedScene Client::apply_wire_scene(const detail::WireScene& scene) {
   detail::ClientCore& core = require(core_);
-  const v1::ApplySceneResponse reply = core.apply_scene(scene.message);
+  const detail::ClientCore::Applied applied = core.apply_scene(scene.message);
+  const v1::ApplySceneResponse& reply = applied.reply;
   const std::uint64_t generation = core.scene_generation();
   last_scene_stability_ = detail::stability_reports(reply);
   AppliedScene handles;
   for (int i = 0; i < reply.object_ids_size(); ++i) {
-    handles.objects.push_back(ObjectHandle(core_, reply.object_ids(i), generation));
+    handles.objects.push_back(ObjectHandle(core_, applied.object_keys[static_cast<std::size_t>(i)],
+                                           reply.object_ids(i), generation));
   }
   for (int i = 0; i < reply.field_ids_size(); ++i) {
-    handles.fields.push_back(FieldHandle(core_, reply.field_ids(i), generation));
+    handles.fields.push_back(FieldHandle(core_, applied.field_keys[static_cast<std::size_t>(i)],
+                                         reply.field_ids(i), generation));
   }
   return handles;
 }
@@ -352,11 +356,15 @@ std::optional<double> Client::server_time_at(std::chrono::steady_clock::time_poi
   return require(core_).udp().server_time_at(local);
 }
 
-void Client::set_heartbeats_enabled(bool enabled) {
-  require(core_).udp().set_heartbeats_enabled(enabled);
+void Client::set_heartbeats_enabled(bool enabled) { require(core_).set_heartbeats_enabled(enabled); }
+
+void Client::on_connection(std::function<void(const ConnectionChange&)> callback) {
+  require(core_).on_connection(std::move(callback));
 }
 
-ReceiveCounters Client::receive_counters() const { return require(core_).udp().counters(); }
+ConnectionChange::State Client::connection_state() const { return require(core_).connection_state(); }
+
+ReceiveCounters Client::receive_counters() const { return require(core_).counters(); }
 
 void Client::close() {
   if (core_) {
@@ -369,13 +377,14 @@ void Client::close() {
 
 namespace detail {
 
-ItemHandle::ItemHandle(Kind kind, std::weak_ptr<ClientCore> core, std::uint64_t id,
-                       std::uint64_t generation)
-    : kind_(kind), core_(std::move(core)), id_(id), generation_(generation) {}
+ItemHandle::ItemHandle(Kind kind, std::weak_ptr<ClientCore> core, std::uint64_t key,
+                       std::uint64_t id, std::uint64_t generation)
+    : kind_(kind), core_(std::move(core)), key_(key), id_(id), generation_(generation) {}
 
 ItemHandle::ItemHandle(ItemHandle&& other) noexcept
     : kind_(other.kind_),
       core_(std::move(other.core_)),
+      key_(std::exchange(other.key_, 0)),
       id_(std::exchange(other.id_, 0)),
       generation_(other.generation_) {}
 
@@ -384,6 +393,7 @@ ItemHandle& ItemHandle::operator=(ItemHandle&& other) noexcept {
     drop();
     kind_ = other.kind_;
     core_ = std::move(other.core_);
+    key_ = std::exchange(other.key_, 0);
     id_ = std::exchange(other.id_, 0);
     generation_ = other.generation_;
   }
@@ -392,8 +402,16 @@ ItemHandle& ItemHandle::operator=(ItemHandle&& other) noexcept {
 
 ItemHandle::~ItemHandle() { drop(); }
 
+std::uint64_t ItemHandle::id() const noexcept {
+  if (key_ == 0) return 0;
+  if (auto core = core_.lock()) {
+    if (const std::uint64_t now = core->server_id(key_); now != 0) return now;
+  }
+  return id_;
+}
+
 void ItemHandle::drop() noexcept {
-  if (id_ == 0) return;
+  if (key_ == 0) return;
   try {
     remove();
   } catch (...) {
@@ -406,18 +424,24 @@ ClientCore& ItemHandle::current(const char* call) const {
 }
 
 void ItemHandle::remove() {
-  const std::uint64_t id = std::exchange(id_, 0);
-  if (id == 0) return;
+  const std::uint64_t key = std::exchange(key_, 0);
+  id_ = 0;
+  if (key == 0) return;
   if (auto core = current_core(core_, generation_)) {
     if (kind_ == Kind::kObject) {
-      core->delete_object(id);
+      core->delete_object(key);
     } else {
-      core->delete_field(id);
+      core->delete_field(key);
     }
   }
 }
 
-std::uint64_t ItemHandle::release() noexcept { return std::exchange(id_, 0); }
+std::uint64_t ItemHandle::release() noexcept {
+  const std::uint64_t id = this->id();
+  key_ = 0;
+  id_ = 0;
+  return id;
+}
 
 }  // namespace detail
 
@@ -438,7 +462,7 @@ void ObjectHandle::update(const MeshSpec& mesh) { replace({detail::to_proto(mesh
 
 void ObjectHandle::replace(const detail::WireObject& object) {
   stability_ =
-      detail::from_proto(current("UpdateObject").update_object(id(), object.message).stability());
+      detail::from_proto(current("UpdateObject").update_object(key(), object.message).stability());
 }
 
 void FieldHandle::update(const SpringFieldSpec& spring) {
@@ -452,7 +476,7 @@ void FieldHandle::update(const ViscousFieldSpec& viscous) { replace({detail::to_
 void FieldHandle::update(const DetentFieldSpec& detent) { replace({detail::to_proto(detent)}); }
 
 void FieldHandle::replace(const detail::WireField& field) {
-  current("UpdateField").update_field(id(), field.message);
+  current("UpdateField").update_field(key(), field.message);
 }
 
 }  // namespace haptic

@@ -40,6 +40,11 @@ void check_config(const ClientConfig& config) {
   if (config.heartbeat_period.count() <= 0) {
     throw InvalidArgumentError("heartbeat_period: must be positive");
   }
+  if (config.reconnect_backoff_min.count() <= 0 ||
+      config.reconnect_backoff_max < config.reconnect_backoff_min) {
+    throw InvalidArgumentError(
+        "reconnect_backoff_min, reconnect_backoff_max: must be positive, the max at least the min");
+  }
 }
 
 std::string read_pem(const char* field, const std::string& path) {
@@ -54,8 +59,10 @@ std::string read_pem(const char* field, const std::string& path) {
 }
 
 std::shared_ptr<grpc::Channel> make_channel(const ClientConfig& config) {
+  grpc::ChannelArguments arguments;
   if (!config.tls) {
-    return grpc::CreateChannel(config.server_address, grpc::InsecureChannelCredentials());
+    return grpc::CreateCustomChannel(config.server_address, grpc::InsecureChannelCredentials(),
+                                     arguments);
   }
   const TlsOptions& tls = *config.tls;
   if (tls.ca_file.empty()) throw InvalidArgumentError("tls.ca_file: required with tls");
@@ -68,7 +75,6 @@ std::shared_ptr<grpc::Channel> make_channel(const ClientConfig& config) {
     options.pem_cert_chain = read_pem("cert_file", tls.cert_file);
     options.pem_private_key = read_pem("key_file", tls.key_file);
   }
-  grpc::ChannelArguments arguments;
   if (!tls.server_name.empty()) arguments.SetSslTargetNameOverride(tls.server_name);
   return grpc::CreateCustomChannel(config.server_address, grpc::SslCredentials(options), arguments);
 }
@@ -77,6 +83,7 @@ std::shared_ptr<grpc::Channel> make_channel(const ClientConfig& config) {
 
 void ClientCore::authenticate(grpc::ClientContext& context) const {
   if (!config_.token.empty()) context.AddMetadata("authorization", "Bearer " + config_.token);
+  std::lock_guard lock(identity_mutex_);
   if (!session_secret_.empty()) context.AddMetadata(io::kSessionSecretMetadataKey, session_secret_);
 }
 
@@ -84,30 +91,43 @@ void ClientCore::throw_status(const grpc::Status& status, const char* name) {
   throw_if_failed(status, name);
 }
 
-ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
-  check_config(config_);
-  channel_ = make_channel(config_);
-  stub_ = v1::Haptic::NewStub(channel_);
-
+v1::OpenSessionResponse ClientCore::open_session() {
   v1::OpenSessionRequest open;
   open.set_client_name(config_.client_name);
   open.set_api_version(kApiVersion);
   open.set_device_index(config_.device_index);
-  const auto opened = call<v1::OpenSessionRequest, v1::OpenSessionResponse>(
+  auto opened = call<v1::OpenSessionRequest, v1::OpenSessionResponse>(
       "OpenSession", &v1::Haptic::Stub::OpenSession, open);
-  session_id_ = opened.session_id();
-  session_secret_ = opened.session_secret();
-  device_info_ = from_proto(opened.device());
-  lease_timeout_ = std::chrono::milliseconds(opened.lease_timeout_ms());
   if (opened.udp_key().size() != 16) {
     throw Error(ErrorCode::kInternal, "OpenSession: server sent a udp_key that is not 16 bytes");
   }
+  return opened;
+}
+
+namespace {
+wire::Key key_of(const v1::OpenSessionResponse& opened) {
   wire::Key key{};
   std::copy(opened.udp_key().begin(), opened.udp_key().end(), key.begin());
+  return key;
+}
+}  // namespace
+
+ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
+  check_config(config_);
+  stub_ = v1::Haptic::NewStub(make_channel(config_));
+
+  const v1::OpenSessionResponse opened = open_session();
+  session_id_ = opened.session_id();
+  {
+    std::lock_guard lock(identity_mutex_);
+    session_secret_ = opened.session_secret();
+  }
+  device_info_ = from_proto(opened.device());
+  lease_timeout_ = std::chrono::milliseconds(opened.lease_timeout_ms());
   try {
     udp_ = std::make_unique<UdpLink>(host_of(config_.server_address),
-                                     static_cast<std::uint16_t>(opened.udp_port()), session_id_, key,
-                                     config_.heartbeat_period);
+                                     static_cast<std::uint16_t>(opened.udp_port()), session_id_,
+                                     key_of(opened), config_.heartbeat_period);
     if (config_.state_decimation > 0) subscribe(config_.state_decimation);
   } catch (...) {
     // Do not leave a half-open session holding a lease; report the first failure, not this one.
@@ -117,9 +137,11 @@ ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
     }
     throw;
   }
+  if (config_.reconnect) supervisor_ = std::thread([this] { supervise(); });
 }
 
 ClientCore::~ClientCore() {
+  stop_supervisor();
   stop_events();
   try {
     close_session();
@@ -140,6 +162,10 @@ void ClientCore::stop_events() {
 
 void ClientCore::watch_events(std::function<void(const v1::Event&)> callback) {
   stop_events();
+  {
+    std::lock_guard lock(events_mutex_);
+    events_callback_ = callback;  // resumed after a reconnection
+  }
   if (!callback) return;
   auto context = std::make_unique<grpc::ClientContext>();
   authenticate(*context);
@@ -147,7 +173,7 @@ void ClientCore::watch_events(std::function<void(const v1::Event&)> callback) {
   request.set_session_id(session_id_);
   // Opened here, so that a refusal the server gives at once (no session, too many streams)
   // reaches the caller as an error rather than a silent end.
-  std::unique_ptr<grpc::ClientReader<v1::Event>> reader = stub_->WatchEvents(context.get(), request);
+  std::unique_ptr<grpc::ClientReader<v1::Event>> reader = stub()->WatchEvents(context.get(), request);
   v1::Event first;
   if (!reader->Read(&first)) throw_status(reader->Finish(), "WatchEvents");
   {
@@ -165,6 +191,7 @@ void ClientCore::watch_events(std::function<void(const v1::Event&)> callback) {
 }
 
 void ClientCore::subscribe(std::uint32_t decimation) {
+  decimation_ = decimation;
   v1::SubscribeStateRequest request;
   request.set_session_id(session_id_);
   request.set_decimation(decimation);
@@ -186,6 +213,7 @@ void ClientCore::subscribe(std::uint32_t decimation) {
 }
 
 void ClientCore::close_session() {
+  stop_supervisor();
   if (closed_) return;
   closed_ = true;
   udp_.reset();
@@ -194,60 +222,105 @@ void ClientCore::close_session() {
   call<v1::SessionRef, v1::Empty>("CloseSession", &v1::Haptic::Stub::CloseSession, ref);
 }
 
-v1::ItemRef ClientCore::create_object(const v1::Object& object) {
+std::uint64_t ClientCore::remember(std::uint64_t id, const v1::Object* object, const v1::Field* field) {
+  Item item;
+  item.is_object = object != nullptr;
+  if (object != nullptr) item.object = *object;
+  if (field != nullptr) item.field = *field;
+  item.server_id = id;
+  std::lock_guard lock(items_mutex_);
+  const std::uint64_t key = next_key_++;
+  items_.emplace(key, std::move(item));
+  return key;
+}
+
+std::uint64_t ClientCore::server_id(std::uint64_t key) const {
+  std::lock_guard lock(items_mutex_);
+  const auto found = items_.find(key);
+  return found == items_.end() ? 0 : found->second.server_id;
+}
+
+std::uint64_t ClientCore::require_server_id(std::uint64_t key, const char* call) const {
+  std::lock_guard lock(items_mutex_);
+  const auto found = items_.find(key);
+  if (found == items_.end()) throw NotFoundError(std::string(call) + ": the client no longer holds this item");
+  if (found->second.server_id == 0) {
+    throw NotFoundError(std::string(call) + ": the item was not restored when the session was reopened: " +
+                        found->second.lost_reason);
+  }
+  return found->second.server_id;
+}
+
+ClientCore::Created ClientCore::create_object(const v1::Object& object) {
   v1::CreateObjectRequest request;
   request.set_session_id(session_id_);
   *request.mutable_object() = object;
-  return call<v1::CreateObjectRequest, v1::ItemRef>("CreateObject", &v1::Haptic::Stub::CreateObject,
-                                                    request);
+  Created made;
+  made.ref = call<v1::CreateObjectRequest, v1::ItemRef>("CreateObject", &v1::Haptic::Stub::CreateObject,
+                                                        request);
+  made.key = remember(made.ref.id(), &object, nullptr);
+  return made;
 }
 
-v1::ItemRef ClientCore::update_object(std::uint64_t id, const v1::Object& object) {
+v1::ItemRef ClientCore::update_object(std::uint64_t key, const v1::Object& object) {
   v1::UpdateObjectRequest request;
   request.set_session_id(session_id_);
-  request.set_object_id(id);
+  request.set_object_id(require_server_id(key, "UpdateObject"));
   *request.mutable_object() = object;
-  return call<v1::UpdateObjectRequest, v1::ItemRef>("UpdateObject",
-                                                    &v1::Haptic::Stub::UpdateObject, request);
+  auto reply = call<v1::UpdateObjectRequest, v1::ItemRef>("UpdateObject",
+                                                          &v1::Haptic::Stub::UpdateObject, request);
+  std::lock_guard lock(items_mutex_);
+  if (const auto found = items_.find(key); found != items_.end()) found->second.object = object;
+  return reply;
 }
 
-void ClientCore::delete_object(std::uint64_t id) {
+void ClientCore::delete_object(std::uint64_t key) {
   v1::DeleteRequest request;
   request.set_session_id(session_id_);
-  request.set_id(id);
+  request.set_id(require_server_id(key, "DeleteObject"));
   call<v1::DeleteRequest, v1::Empty>("DeleteObject", &v1::Haptic::Stub::DeleteObject, request);
+  std::lock_guard lock(items_mutex_);
+  items_.erase(key);
 }
 
-std::uint64_t ClientCore::create_field(const v1::Field& field) {
+ClientCore::Created ClientCore::create_field(const v1::Field& field) {
   v1::CreateFieldRequest request;
   request.set_session_id(session_id_);
   *request.mutable_field() = field;
-  return call<v1::CreateFieldRequest, v1::ItemRef>("CreateField", &v1::Haptic::Stub::CreateField,
-                                                   request)
-      .id();
+  Created made;
+  made.ref = call<v1::CreateFieldRequest, v1::ItemRef>("CreateField", &v1::Haptic::Stub::CreateField,
+                                                       request);
+  made.key = remember(made.ref.id(), nullptr, &field);
+  return made;
 }
 
-void ClientCore::update_field(std::uint64_t id, const v1::Field& field) {
+void ClientCore::update_field(std::uint64_t key, const v1::Field& field) {
   v1::UpdateFieldRequest request;
   request.set_session_id(session_id_);
-  request.set_field_id(id);
+  request.set_field_id(require_server_id(key, "UpdateField"));
   *request.mutable_field() = field;
   call<v1::UpdateFieldRequest, v1::Empty>("UpdateField", &v1::Haptic::Stub::UpdateField, request);
+  std::lock_guard lock(items_mutex_);
+  if (const auto found = items_.find(key); found != items_.end()) found->second.field = field;
 }
 
-void ClientCore::delete_field(std::uint64_t id) {
+void ClientCore::delete_field(std::uint64_t key) {
   v1::DeleteRequest request;
   request.set_session_id(session_id_);
-  request.set_id(id);
+  request.set_id(require_server_id(key, "DeleteField"));
   call<v1::DeleteRequest, v1::Empty>("DeleteField", &v1::Haptic::Stub::DeleteField, request);
+  std::lock_guard lock(items_mutex_);
+  items_.erase(key);
 }
 
-v1::ApplySceneResponse ClientCore::apply_scene(const v1::Scene& scene) {
+ClientCore::Applied ClientCore::apply_scene(const v1::Scene& scene) {
   v1::ApplySceneRequest request;
   request.set_session_id(session_id_);
   *request.mutable_scene() = scene;
-  auto reply = call<v1::ApplySceneRequest, v1::ApplySceneResponse>(
+  Applied applied;
+  applied.reply = call<v1::ApplySceneRequest, v1::ApplySceneResponse>(
       "ApplyScene", &v1::Haptic::Stub::ApplyScene, request);
+  const v1::ApplySceneResponse& reply = applied.reply;
   if (reply.object_ids_size() != scene.objects_size() ||
       reply.field_ids_size() != scene.fields_size()) {
     throw Error(ErrorCode::kInternal, "ApplyScene: the server returned " +
@@ -257,8 +330,201 @@ v1::ApplySceneResponse ClientCore::apply_scene(const v1::Scene& scene) {
                                           " objects and " + std::to_string(scene.fields_size()) +
                                           " fields");
   }
+  {
+    std::lock_guard lock(items_mutex_);
+    items_.clear();  // the server replaced every item of the session, released ones included
+  }
+  for (int i = 0; i < scene.objects_size(); ++i) {
+    applied.object_keys.push_back(remember(reply.object_ids(i), &scene.objects(i), nullptr));
+  }
+  for (int i = 0; i < scene.fields_size(); ++i) {
+    applied.field_keys.push_back(remember(reply.field_ids(i), nullptr, &scene.fields(i)));
+  }
   ++scene_generation_;
-  return reply;
+  return applied;
+}
+
+// ---- connection supervision ----
+
+void ClientCore::set_heartbeats_enabled(bool enabled) {
+  heartbeats_enabled_ = enabled;
+  udp_->set_heartbeats_enabled(enabled);
+}
+
+ReceiveCounters ClientCore::counters() const {
+  ReceiveCounters out = udp_->counters();
+  out.reconnects = reconnects_.load();
+  return out;
+}
+
+void ClientCore::on_connection(std::function<void(const ConnectionChange&)> callback) {
+  std::lock_guard lock(connection_mutex_);
+  connection_callback_ = std::move(callback);
+}
+
+void ClientCore::announce(ConnectionChange change) {
+  connection_state_ = change.state;
+  std::lock_guard lock(connection_mutex_);
+  if (connection_callback_) connection_callback_(change);
+}
+
+void ClientCore::stop_supervisor() {
+  {
+    std::lock_guard lock(supervisor_mutex_);
+    supervisor_stop_ = true;
+  }
+  supervisor_wake_.notify_all();
+  if (supervisor_.joinable()) supervisor_.join();
+}
+
+bool ClientCore::supervisor_wait(std::chrono::milliseconds duration) {
+  std::unique_lock lock(supervisor_mutex_);
+  return !supervisor_wake_.wait_for(lock, duration, [this] { return supervisor_stop_; });
+}
+
+void ClientCore::supervise() {
+  const auto period = std::clamp(lease_timeout_ / 4, std::chrono::milliseconds(20),
+                                 std::chrono::milliseconds(500));
+  while (supervisor_wait(period)) {
+    if (!heartbeats_enabled_) continue;  // playing a vanished client: let the lease run out
+    std::string why;
+    if (probe(why) != Probe::kAlive) recover(std::move(why));
+  }
+}
+
+ClientCore::Probe ClientCore::probe(std::string& why) {
+  // Datagrams within half a lease: the server holds the session and reaches us.
+  if (const auto heard = udp_->last_heard();
+      heard && std::chrono::steady_clock::now() - *heard < lease_timeout_ / 2) {
+    return Probe::kAlive;
+  }
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() +
+                       std::min<std::chrono::milliseconds>(config_.rpc_timeout, lease_timeout_ / 2));
+  authenticate(context);
+  v1::SessionRef ref;
+  ref.set_session_id(session_id_);
+  v1::DeviceInfo ignored;
+  const grpc::Status status = stub()->GetDeviceInfo(&context, ref, &ignored);
+  switch (status.error_code()) {
+    case grpc::StatusCode::NOT_FOUND:
+      why = "the server no longer knows session " + std::to_string(session_id_) + ": " +
+            status.error_message();
+      return Probe::kSessionGone;
+    case grpc::StatusCode::UNAVAILABLE:
+    case grpc::StatusCode::DEADLINE_EXCEEDED:
+    case grpc::StatusCode::CANCELLED:
+      why = "the server does not answer: " + status.error_message();
+      return Probe::kUnreachable;
+    default:
+      return Probe::kAlive;  // answering (a refusal a reconnection would not change counts too)
+  }
+}
+
+void ClientCore::recover(std::string why) {
+  const auto lost_at = std::chrono::steady_clock::now();
+  announce({ConnectionChange::State::kLost, session_id_, false, 0, why, {}});
+  auto backoff = config_.reconnect_backoff_min;
+  bool gone = false;
+  for (;;) {
+    std::string now_why;
+    // A fresh channel for each try: gRPC's own reconnection backs off from 1 s up to minutes
+    // (and a channel that saw the server go kept failing for 4.5 s after it was back here).
+    {
+      auto fresh = v1::Haptic::NewStub(make_channel(config_));
+      std::lock_guard lock(identity_mutex_);
+      stub_ = std::move(fresh);
+    }
+    const Probe state = gone ? Probe::kSessionGone : probe(now_why);
+    ConnectionChange resumed{ConnectionChange::State::kResumed, 0, false, 0, {}, {}};
+    bool done = state == Probe::kAlive;
+    if (state == Probe::kSessionGone) {
+      gone = true;  // from here on only a new session helps
+      try {
+        reopen();
+        done = true;
+        resumed.new_session = true;
+        std::lock_guard lock(items_mutex_);
+        for (const auto& [key, item] : items_) resumed.items_not_restored += item.server_id == 0 ? 1 : 0;
+      } catch (const std::exception& error) {
+        now_why = error.what();
+      }
+    }
+    if (done) {
+      resumed.session_id = session_id_;
+      resumed.outage = std::chrono::duration_cast<std::chrono::milliseconds>(
+          std::chrono::steady_clock::now() - lost_at);
+      resumed.reason = "after " + std::to_string(resumed.outage.count()) + " ms";
+      // What the stream would have carried meanwhile (an estimate: the session's own gaps are
+      // counted from its sequence numbers).
+      if (const std::uint32_t decimation = decimation_.load(); decimation > 0 && resumed.new_session) {
+        udp_->count_lost(static_cast<std::uint64_t>(
+            std::chrono::duration<double>(resumed.outage).count() * device_info_.loop_rate_hz /
+            decimation));
+      }
+      ++reconnects_;
+      announce(resumed);
+      return;
+    }
+    if (!supervisor_wait(backoff)) return;
+    backoff = std::min(backoff * 2, config_.reconnect_backoff_max);
+  }
+}
+
+void ClientCore::reopen() {
+  const v1::OpenSessionResponse opened = open_session();
+  session_id_ = opened.session_id();
+  {
+    std::lock_guard lock(identity_mutex_);
+    session_secret_ = opened.session_secret();
+  }
+  udp_->rebind(static_cast<std::uint16_t>(opened.udp_port()), opened.session_id(), key_of(opened));
+  {
+    // Every item again, in the order they were made; one the new server refuses is kept with
+    // the reason (its handle's calls say it), the others go on.
+    std::lock_guard lock(items_mutex_);
+    for (auto& [key, item] : items_) {
+      try {
+        if (item.is_object) {
+          v1::CreateObjectRequest request;
+          request.set_session_id(session_id_);
+          *request.mutable_object() = item.object;
+          item.server_id = call<v1::CreateObjectRequest, v1::ItemRef>(
+                               "CreateObject", &v1::Haptic::Stub::CreateObject, request)
+                               .id();
+        } else {
+          v1::CreateFieldRequest request;
+          request.set_session_id(session_id_);
+          *request.mutable_field() = item.field;
+          item.server_id = call<v1::CreateFieldRequest, v1::ItemRef>(
+                               "CreateField", &v1::Haptic::Stub::CreateField, request)
+                               .id();
+        }
+      } catch (const Error& error) {
+        item.server_id = 0;
+        item.lost_reason = error.what();
+      }
+    }
+  }
+  if (const std::uint32_t decimation = decimation_.load(); decimation > 0) {
+    try {
+      subscribe(decimation);
+    } catch (const Error&) {
+      // The session is open and holds its items; the stream stays off until subscribe() is
+      // called again (a quiet stream alone is no loss: a lockstep server sends nothing unstepped).
+    }
+  }
+  std::function<void(const v1::Event&)> events;
+  {
+    std::lock_guard lock(events_mutex_);
+    events = events_callback_;
+  }
+  if (events) {
+    try {
+      watch_events(std::move(events));
+    } catch (const Error&) {
+    }
+  }
 }
 
 }  // namespace haptic::detail

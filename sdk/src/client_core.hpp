@@ -5,7 +5,9 @@
 #include <grpcpp/grpcpp.h>
 
 #include <atomic>
+#include <condition_variable>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -31,28 +33,48 @@ class ClientCore {
     context.set_deadline(std::chrono::system_clock::now() + config_.rpc_timeout);
     authenticate(context);
     Response response;
-    throw_status(((*stub_).*method)(&context, request, &response), name);
+    throw_status(((*stub()).*method)(&context, request, &response), name);
     return response;
   }
 
-  v1::ItemRef create_object(const v1::Object& object);
+  // Items are known by a key of the client's own, stable across reconnections (the server's id
+  // changes when a restarted server is given the item again); server_id() translates.
+  struct Created {
+    std::uint64_t key = 0;
+    v1::ItemRef ref;
+  };
+  Created create_object(const v1::Object& object);
   /// Replaces the object; returns the stability report of its new impedance.
-  v1::ItemRef update_object(std::uint64_t id, const v1::Object& object);
-  void delete_object(std::uint64_t id);
-  std::uint64_t create_field(const v1::Field& field);
-  void update_field(std::uint64_t id, const v1::Field& field);
-  void delete_field(std::uint64_t id);
+  v1::ItemRef update_object(std::uint64_t key, const v1::Object& object);
+  void delete_object(std::uint64_t key);
+  Created create_field(const v1::Field& field);
+  void update_field(std::uint64_t key, const v1::Field& field);
+  void delete_field(std::uint64_t key);
+  struct Applied {
+    v1::ApplySceneResponse reply;
+    std::vector<std::uint64_t> object_keys, field_keys;
+  };
   /// Replaces the session's scene; on success bumps the scene generation, staling older handles.
-  v1::ApplySceneResponse apply_scene(const v1::Scene& scene);
+  Applied apply_scene(const v1::Scene& scene);
   std::uint64_t scene_generation() const { return scene_generation_.load(); }
+  /// The item's id on the server now; 0 if the client no longer holds it.
+  std::uint64_t server_id(std::uint64_t key) const;
   /// Sets the state decimation; for n > 0 waits until the server knows our UDP address.
   void subscribe(std::uint32_t decimation);
   void close_session();
   /// Streams WatchEvents on a thread of its own and calls `callback` with each event (the first
-  /// is WATCH_STARTED); a new callback replaces the stream, an empty one ends it.
+  /// is WATCH_STARTED); a new callback replaces the stream, an empty one ends it. Resumed after a
+  /// reconnection.
   void watch_events(std::function<void(const v1::Event&)> callback);
 
-  std::uint64_t session_id() const { return session_id_; }
+  /// Called on the supervisor's thread with each change of the connection.
+  void on_connection(std::function<void(const ConnectionChange&)> callback);
+  ConnectionChange::State connection_state() const { return connection_state_.load(); }
+  /// Heartbeats off: the client plays a vanished one, and the supervisor looks away meanwhile.
+  void set_heartbeats_enabled(bool enabled);
+  ReceiveCounters counters() const;
+
+  std::uint64_t session_id() const { return session_id_.load(); }
   const DeviceInfo& device_info() const { return device_info_; }
   std::chrono::milliseconds lease_timeout() const { return lease_timeout_; }
   const ClientConfig& config() const { return config_; }
@@ -60,24 +82,72 @@ class ClientCore {
 
  private:
   static void throw_status(const grpc::Status& status, const char* name);
+  std::shared_ptr<v1::Haptic::Stub> stub() const {
+    std::lock_guard lock(identity_mutex_);
+    return stub_;
+  }
   /// Adds what every call carries: the bearer token (if any) and the session secret (once open).
   void authenticate(grpc::ClientContext& context) const;
+  v1::OpenSessionResponse open_session();
+  /// Keeps `key` under the server's `id` with the message that made it.
+  std::uint64_t remember(std::uint64_t id, const v1::Object* object, const v1::Field* field);
+  /// The item's server id, or NotFoundError naming `call` (an item a reconnection could not
+  /// register again says why).
+  std::uint64_t require_server_id(std::uint64_t key, const char* call) const;
+
+  // Connection supervision (a thread of its own): a quiet connection is probed; a failed probe is
+  // a loss, recovered with backoff: the same session if it still exists, else a new one with the
+  // items registered again, the state stream and the event watch resumed.
+  enum class Probe { kAlive, kUnreachable, kSessionGone };
+  void supervise();
+  Probe probe(std::string& why);
+  void recover(std::string why);
+  /// Opens a new session and gives it everything the old one held. Throws if the opening fails.
+  void reopen();
+  void announce(ConnectionChange change);
+  void stop_supervisor();
+  /// Waits `duration` unless the supervisor is told to stop; false when it is.
+  bool supervisor_wait(std::chrono::milliseconds duration);
 
   ClientConfig config_;
-  std::shared_ptr<grpc::Channel> channel_;
-  std::unique_ptr<v1::Haptic::Stub> stub_;
-  std::uint64_t session_id_ = 0;
-  std::string session_secret_;  // OpenSession's; empty until then
+  std::shared_ptr<v1::Haptic::Stub> stub_;  // guarded by identity_mutex_: renewed on a loss
+  std::atomic<std::uint64_t> session_id_{0};
+  mutable std::mutex identity_mutex_;
+  std::string session_secret_;  // guarded by identity_mutex_; OpenSession's, empty until then
   bool closed_ = false;
   DeviceInfo device_info_;
   std::chrono::milliseconds lease_timeout_{0};
   std::atomic<std::uint64_t> scene_generation_{0};
+  std::atomic<std::uint32_t> decimation_{0};  // the state stream asked for, resumed after a loss
   std::unique_ptr<UdpLink> udp_;
-  // The event stream: its thread, and its context (cancelled from here to end it).
+
+  struct Item {
+    bool is_object = true;
+    v1::Object object;
+    v1::Field field;
+    std::uint64_t server_id = 0;  // 0: a reconnection could not register it again
+    std::string lost_reason;
+  };
+  mutable std::mutex items_mutex_;
+  std::map<std::uint64_t, Item> items_;  // by key, so in the order they were made
+  std::uint64_t next_key_ = 1;           // guarded by items_mutex_
+
+  // The event stream: its thread, its context (cancelled from here to end it), its callback.
   std::mutex events_mutex_;
   std::unique_ptr<grpc::ClientContext> events_context_;
+  std::function<void(const v1::Event&)> events_callback_;  // guarded by events_mutex_
   std::thread events_thread_;
   void stop_events();
+
+  std::mutex connection_mutex_;
+  std::function<void(const ConnectionChange&)> connection_callback_;  // guarded by connection_mutex_
+  std::atomic<ConnectionChange::State> connection_state_{ConnectionChange::State::kConnected};
+  std::atomic<bool> heartbeats_enabled_{true};
+  std::atomic<std::uint64_t> reconnects_{0};
+  std::mutex supervisor_mutex_;
+  std::condition_variable supervisor_wake_;
+  bool supervisor_stop_ = false;  // guarded by supervisor_mutex_
+  std::thread supervisor_;
 };
 
 }  // namespace haptic::detail

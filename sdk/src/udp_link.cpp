@@ -1,6 +1,7 @@
 #include "udp_link.hpp"
 
 #include <algorithm>
+#include <future>
 
 #include "haptic/error.hpp"
 
@@ -175,6 +176,7 @@ void UdpLink::answer_challenge(std::span<const std::uint8_t> datagram) {
   socket_.send_to(asio::buffer(bytes), server_, 0, ignored);
   std::lock_guard lock(mutex_);
   ++counters_.challenges_answered;
+  last_heard_ = std::chrono::steady_clock::now();
 }
 
 void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point received_at,
@@ -211,10 +213,55 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
     state.orientation = Quaternion{payload.R_WT.w, payload.R_WT.x, payload.R_WT.y, payload.R_WT.z};
   }
   state.received_at = received_at;
-  last_sequence_ = std::max(last_sequence_, header.sequence);
+  last_heard_ = received_at;
+  // The server numbers each subscription's States without gaps: a jump is datagrams lost on the
+  // way, and one arriving late (an older tick too) was not lost after all. A lower sequence with
+  // a newer tick is a new subscription, numbered from 1 again.
+  if (header.sequence > last_sequence_) {
+    counters_.lost += header.sequence - last_sequence_ - 1;
+    last_sequence_ = header.sequence;
+  } else if (payload.tick < newest_tick_) {
+    if (counters_.lost > 0) --counters_.lost;
+    ++counters_.reordered;
+  } else {
+    last_sequence_ = header.sequence;
+  }
+  newest_tick_ = std::max(newest_tick_, payload.tick);
   // How much longer than the quickest recent sample this one took: time spent queued anywhere.
   state.age = std::chrono::nanoseconds(clock_.add(header.time_ns, steady_ns(received_at)));
   if (!newest || state.tick >= newest->tick) newest = state;
+}
+
+void UdpLink::rebind(std::uint16_t port, std::uint64_t session_id, const wire::Key& key) {
+  std::promise<void> switched;
+  asio::post(io_, [&] {
+    server_.port(port);
+    session_id_ = session_id;
+    key_ = key;
+    heartbeat_sequence_ = 0;
+    {
+      std::lock_guard lock(mutex_);
+      // The new session's ticks, sequences and server clock start again from zero.
+      last_sequence_ = 0;
+      newest_tick_ = 0;
+      have_latest_ = false;
+      last_polled_tick_.reset();
+      clock_ = ClockSync{};
+    }
+    send_heartbeat();
+    switched.set_value();
+  });
+  switched.get_future().wait();
+}
+
+std::optional<std::chrono::steady_clock::time_point> UdpLink::last_heard() const {
+  std::lock_guard lock(mutex_);
+  return last_heard_;
+}
+
+void UdpLink::count_lost(std::uint64_t samples) {
+  std::lock_guard lock(mutex_);
+  counters_.lost += samples;
 }
 
 void UdpLink::on_state(std::function<void(const State&)> callback) {

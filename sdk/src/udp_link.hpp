@@ -35,6 +35,15 @@ class UdpLink {
   void send_heartbeat_soon() {
     asio::post(io_, [this] { send_heartbeat(); });
   }
+  /// Points the link at a new session (the server restarted and the session was reopened):
+  /// heartbeats go to `port` with the new id and key, and what belonged to the old session's
+  /// stream (the newest sample, the clock estimate, the sequence) starts afresh; the socket, the
+  /// callback and the counters stay. Blocks until the UDP thread has switched.
+  void rebind(std::uint16_t port, std::uint64_t session_id, const wire::Key& key);
+  /// When the last authenticated datagram arrived (a State or a path challenge); none before one.
+  std::optional<std::chrono::steady_clock::time_point> last_heard() const;
+  /// Adds `samples` to ReceiveCounters::lost (the samples an outage cost, estimated by its owner).
+  void count_lost(std::uint64_t samples);
   void on_state(std::function<void(const State&)> callback);
   /// Offers a sample that came another way (the Step reply); kept if it is the newest.
   void offer(const State& state);
@@ -77,7 +86,9 @@ class UdpLink {
   bool have_latest_ = false;           // guarded by mutex_
   std::optional<std::uint64_t> last_polled_tick_;  // guarded by mutex_; none before the first
   std::uint64_t last_sequence_ = 0;    // guarded by mutex_
+  std::uint64_t newest_tick_ = 0;      // guarded by mutex_: of the States taken
   ClockSync clock_;                    // guarded by mutex_
+  std::optional<std::chrono::steady_clock::time_point> last_heard_;  // guarded by mutex_
   ReceiveCounters counters_;           // guarded by mutex_
 
   /// The callback's own thread: a slow callback must not hold up the io thread, which sends

@@ -768,6 +768,7 @@ TEST(SdkStats, EveryCounterMatchesWhatAKnownLockstepSequenceImplies) {
     ClientConfig config = config_for(server, name);
     config.state_decimation = 0;
     config.heartbeat_period = std::chrono::hours(1);
+    config.reconnect = false;  // a supervising client probes a quiet connection: not silent
     return config;
   };
   Client a(quiet("stats-a"));

@@ -23,8 +23,9 @@ class ServerProcess {
  public:
   /// `config_json` is a haptic.v1.ServerConfig in JSON; ports are forced to ephemeral loopback.
   /// With `fd_limit` > 0 the server runs with at most that many open files (soft and hard).
+  /// With `grpc_port` and `udp_port` (not 0) the server binds those: a restart on the same ports.
   explicit ServerProcess(const std::string& config_json, const std::string& extra_arg = {},
-                         rlim_t fd_limit = 0) {
+                         rlim_t fd_limit = 0, std::uint16_t grpc_port = 0, std::uint16_t udp_port = 0) {
     static int counter = 0;
     dir_ = std::filesystem::temp_directory_path() /
            ("hapticd-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
@@ -52,13 +53,15 @@ class ServerProcess {
       const std::string binary = HAPTICD_BINARY;
       const std::string config = config_path.string();
       const std::string ready = ready_path.string();
+      const std::string grpc = "127.0.0.1:" + std::to_string(grpc_port);
+      const std::string udp = std::to_string(udp_port);
       if (extra_arg.empty()) {
         ::execl(binary.c_str(), binary.c_str(), "--config", config.c_str(), "--grpc-address",
-                "127.0.0.1:0", "--udp-port", "0", "--ready-file", ready.c_str(), nullptr);
+                grpc.c_str(), "--udp-port", udp.c_str(), "--ready-file", ready.c_str(), nullptr);
       } else {
         ::execl(binary.c_str(), binary.c_str(), "--config", config.c_str(), "--grpc-address",
-                "127.0.0.1:0", "--udp-port", "0", "--ready-file", ready.c_str(), extra_arg.c_str(),
-                nullptr);
+                grpc.c_str(), "--udp-port", udp.c_str(), "--ready-file", ready.c_str(),
+                extra_arg.c_str(), nullptr);
       }
       ::_exit(127);
     }

@@ -56,6 +56,12 @@ struct ClientConfig {
   /// The server's device port this client uses (its device info, simulated operator, state):
   /// 0 is the configured device, 1.. the server's extra_devices (several users, one scene).
   std::uint32_t device_index = 0;
+  /// Reconnect on its own when the server stops answering or forgets the session (a restart):
+  /// probes a quiet connection every lease_timeout / 4 (at most 500 ms), retries after
+  /// reconnect_backoff_min, doubling to reconnect_backoff_max. Client::on_connection tells.
+  bool reconnect = true;
+  std::chrono::milliseconds reconnect_backoff_min{50};
+  std::chrono::milliseconds reconnect_backoff_max{1000};
 };
 
 namespace detail {
@@ -71,9 +77,11 @@ class ItemHandle {
   ItemHandle& operator=(const ItemHandle&) = delete;
   ~ItemHandle();
 
-  std::uint64_t id() const noexcept { return id_; }
+  /// The item's id on the server now (a reconnection that registered it again changes it), or
+  /// the last one known if the Client is gone; 0 when the handle owns nothing.
+  std::uint64_t id() const noexcept;
   /// True while this handle will remove the item.
-  bool owned() const noexcept { return id_ != 0; }
+  bool owned() const noexcept { return key_ != 0; }
   /// Removes the item now; its force ramps out on the server. Throws haptic::Error. Does
   /// nothing if the handle owns nothing, its Client is gone, or Client::apply_scene replaced it.
   void remove();
@@ -83,16 +91,19 @@ class ItemHandle {
  protected:
   enum class Kind { kObject, kField };
   explicit ItemHandle(Kind kind) : kind_(kind) {}
-  ItemHandle(Kind kind, std::weak_ptr<ClientCore> core, std::uint64_t id, std::uint64_t generation);
+  ItemHandle(Kind kind, std::weak_ptr<ClientCore> core, std::uint64_t key, std::uint64_t id,
+             std::uint64_t generation);
   /// The client, if it still exists and the item is still in its scene; else throws (`call`
   /// names the operation in the error).
   ClientCore& current(const char* call) const;
+  std::uint64_t key() const noexcept { return key_; }
 
  private:
   void drop() noexcept;  // removes the item if owned, swallowing errors
   Kind kind_;
   std::weak_ptr<ClientCore> core_;
-  std::uint64_t id_ = 0;
+  std::uint64_t key_ = 0;         // the client's own name for the item (ClientCore), 0: none
+  std::uint64_t id_ = 0;          // its server id when last looked up
   std::uint64_t generation_ = 0;  // the client's scene generation when the item was made
 };
 
@@ -118,9 +129,9 @@ class ObjectHandle : public detail::ItemHandle {
  private:
   friend class Client;
   void replace(const detail::WireObject& object);
-  ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation,
-               StabilityReport stability = {})
-      : ItemHandle(Kind::kObject, std::move(core), id, generation), stability_(stability) {}
+  ObjectHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t key, std::uint64_t id,
+               std::uint64_t generation, StabilityReport stability = {})
+      : ItemHandle(Kind::kObject, std::move(core), key, id, generation), stability_(stability) {}
   StabilityReport stability_;
 };
 
@@ -140,8 +151,9 @@ class FieldHandle : public detail::ItemHandle {
  private:
   friend class Client;
   void replace(const detail::WireField& field);
-  FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id, std::uint64_t generation)
-      : ItemHandle(Kind::kField, std::move(core), id, generation) {}
+  FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t key, std::uint64_t id,
+              std::uint64_t generation)
+      : ItemHandle(Kind::kField, std::move(core), key, id, generation) {}
 };
 
 /// A whole scene of any objects and fields, for Client::apply_scene; the server numbers them in
@@ -239,6 +251,7 @@ class Client {
   /// is NotFoundError, and every watcher sees kSessionClosed with `reason` (at most 256
   /// characters). With tokens on the server: an ADMIN token only.
   void kick_session(std::uint64_t session_id, const std::string& reason = {});
+  /// The session's id now (a reconnection after a server restart opens a new one).
   std::uint64_t session_id() const;
   /// How long the server keeps a silent session (no heartbeat, no RPC) before dropping it.
   std::chrono::milliseconds lease_timeout() const;
@@ -278,7 +291,14 @@ class Client {
   /// (haptic/motion.hpp). nullopt before any sample.
   std::optional<double> server_time_at(std::chrono::steady_clock::time_point local) const;
 
-  /// Stops or resumes UDP heartbeats; stopping simulates a lost client (its lease runs out).
+  /// Calls `callback` on the SDK's supervisor thread when the connection is lost and when it
+  /// resumes (ConnectionChange; with ClientConfig::reconnect). Another call replaces it, an empty
+  /// function stops it. Keep it short: recovery waits for it.
+  void on_connection(std::function<void(const ConnectionChange&)> callback);
+  ConnectionChange::State connection_state() const;
+
+  /// Stops or resumes UDP heartbeats; stopping simulates a lost client (its lease runs out, and
+  /// the client does not reconnect while they are off).
   void set_heartbeats_enabled(bool enabled);
   ReceiveCounters receive_counters() const;
 

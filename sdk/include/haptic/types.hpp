@@ -238,6 +238,27 @@ struct Event {
   std::string message;
 };
 
+/// A change of a Client's connection (Client::on_connection).
+struct ConnectionChange {
+  enum class State {
+    kConnected,  ///< as opened (never announced: the state before any change)
+    kLost,       ///< the server stopped answering, or no longer knows the session
+    kResumed,    ///< answering again; see new_session
+  };
+  State state = State::kConnected;
+  /// The session now: after a server restart, a new one (Client::session_id() changes with it).
+  std::uint64_t session_id = 0;
+  /// kResumed: the session had gone (the server restarted, or its lease ran out), so a new one
+  /// was opened, every item the client held registered again (their handles keep working; id()
+  /// gives the new ids), and the state stream and event watch resumed.
+  bool new_session = false;
+  /// kResumed with new_session: items the new session refused (their handles' calls then throw
+  /// NotFoundError saying why).
+  std::uint32_t items_not_restored = 0;
+  std::string reason;  ///< kLost: what failed. kResumed: how long the outage lasted.
+  std::chrono::milliseconds outage{0};  ///< kResumed: from the loss to the resumption
+};
+
 /// What a server's bearer token lets its holder do (ClientConfig::token; docs/deployment.md).
 enum class Role {
   kNone,        ///< the server has no tokens
@@ -452,6 +473,14 @@ struct ReceiveCounters {
   /// States the on_state callback never saw because it was still busy with an older one (it runs
   /// on a thread of its own and is always handed the newest).
   std::uint64_t callback_skipped = 0;
+  /// States the server sent that never arrived: gaps in each session's sequence (net of late
+  /// arrivals), plus, for each outage the client reconnected after, the samples the stream
+  /// would have carried meanwhile (its length × loop rate ÷ decimation: an estimate).
+  std::uint64_t lost = 0;
+  /// States that arrived after a newer one (reordered on the way); not counted as lost.
+  std::uint64_t reordered = 0;
+  /// Times the connection was lost and resumed (Client::on_connection).
+  std::uint64_t reconnects = 0;
 };
 
 }  // namespace haptic

@@ -1,0 +1,142 @@
+// The SDK's connection life (issue 11 item 3): a server restart on the same address is a loss,
+// then a new session holding every item again, the state stream and its counters carried on; a
+// server that stops answering for a while but keeps the session is resumed as it was.
+
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "haptic/client.hpp"
+#include "integration/sdk_harness.hpp"
+#include "integration/server_process.hpp"
+
+namespace haptic::test {
+namespace {
+
+/// The changes a client announces, with the time each arrived.
+class ConnectionLog {
+ public:
+  void attach(Client& client) {
+    client.on_connection([this](const ConnectionChange& change) {
+      std::lock_guard lock(mutex_);
+      changes_.push_back({change, std::chrono::steady_clock::now()});
+      arrived_.notify_all();
+    });
+  }
+  /// Waits up to `timeout` for the `n`-th change (1-based); its copy, or none.
+  std::optional<std::pair<ConnectionChange, std::chrono::steady_clock::time_point>> wait(
+      std::size_t n, std::chrono::milliseconds timeout) {
+    std::unique_lock lock(mutex_);
+    if (!arrived_.wait_for(lock, timeout, [&] { return changes_.size() >= n; })) return std::nullopt;
+    return changes_[n - 1];
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::vector<std::pair<ConnectionChange, std::chrono::steady_clock::time_point>> changes_;
+};
+
+constexpr const char* kConfig = R"({"time_mode": "LOCKSTEP"})";
+
+TEST(Reconnect, AfterAServerRestartTheClientHasANewSessionWithEveryItemWithinTwoSeconds) {
+  auto first = std::make_unique<ServerProcess>(kConfig);
+  const std::uint16_t grpc_port = first->grpc_port();
+  const std::uint16_t udp_port = first->udp_port();
+  Client client(config_for(*first, "survivor"));
+  ConnectionLog log;
+  log.attach(client);
+  ObjectHandle wall = client.add_wall({.normal = {0, 0, 1}, .impedance = {800.0, 1.0}});
+  FieldHandle spring = client.add_spring_field({.anchor = {0, 0, 0.05}, .stiffness = 50.0});
+  ObjectHandle removed = client.add_wall({.normal = {1, 0, 0}, .impedance = {500.0, 1.0}});
+  removed.remove();  // gone before the restart: not given to the new server
+  wall.update(WallSpec{.point = {0, 0, -0.01}, .normal = {0, 0, 1}, .impedance = {900.0, 1.0}});
+  State state;
+  ASSERT_TRUE(client.wait_for_tick(client.step(20), state, std::chrono::seconds(5)));
+  const std::uint64_t old_session = client.session_id();
+  const std::uint64_t old_wall_id = wall.id();
+
+  first.reset();  // SIGTERM: the server ramps down and exits; every session with it
+  const auto lost = log.wait(1, std::chrono::seconds(5));
+  ASSERT_TRUE(lost);
+  EXPECT_EQ(lost->first.state, ConnectionChange::State::kLost);
+  EXPECT_EQ(client.connection_state(), ConnectionChange::State::kLost);
+
+  ServerProcess second(kConfig, {}, 0, grpc_port, udp_port);
+  const auto resumed = log.wait(2, std::chrono::seconds(10));
+  ASSERT_TRUE(resumed);
+  const ConnectionChange& change = resumed->first;
+  EXPECT_EQ(change.state, ConnectionChange::State::kResumed);
+  EXPECT_TRUE(change.new_session);
+  EXPECT_EQ(change.items_not_restored, 0u);
+  const auto reconnect_ms =
+      std::chrono::duration_cast<std::chrono::milliseconds>(resumed->second - second.ready_at()).count();
+  std::printf("reconnect: %lld ms after the new server was ready (outage %lld ms)\n",
+              static_cast<long long>(reconnect_ms), static_cast<long long>(change.outage.count()));
+  EXPECT_LT(reconnect_ms, 2000);
+
+  EXPECT_NE(client.session_id(), old_session);
+  EXPECT_EQ(change.session_id, client.session_id());
+  // The new server holds the wall as last updated and the spring; the handles follow their items.
+  const Stats stats = client.stats();
+  EXPECT_EQ(stats.sessions, 1u);
+  EXPECT_EQ(stats.objects, 1u);
+  EXPECT_EQ(stats.fields, 1u);
+  EXPECT_NE(wall.id(), 0u);
+  (void)old_wall_id;  // the new server may or may not hand out the same number
+  EXPECT_NO_THROW(wall.update(WallSpec{.normal = {0, 0, 1}, .impedance = {1000.0, 1.0}}));
+  EXPECT_NO_THROW(spring.update(SpringFieldSpec{.anchor = {0, 0, 0.04}, .stiffness = 60.0}));
+  // The stream carries on from the new server's first ticks (the old ticks were higher).
+  ASSERT_TRUE(client.wait_for_tick(client.step(3), state, std::chrono::seconds(5)));
+  EXPECT_EQ(state.tick, 3u);
+  State streamed;
+  ASSERT_TRUE(client.wait_for_tick(3, streamed, std::chrono::seconds(5)));
+  const ReceiveCounters counters = client.receive_counters();
+  EXPECT_EQ(counters.reconnects, 1u);
+  wall.remove();
+  spring.remove();
+  EXPECT_EQ(client.stats().objects, 0u);
+}
+
+TEST(Reconnect, AServerThatPausesButKeepsTheSessionIsResumedAsItWas) {
+  // A lease long enough to outlive the pause; the probe's deadline is half of it at most.
+  ServerProcess server(R"({"time_mode": "LOCKSTEP", "lease_timeout_ms": 5000})");
+  Client client(config_for(server, "patient"));
+  ConnectionLog log;
+  log.attach(client);
+  ObjectHandle wall = client.add_wall({.normal = {0, 0, 1}, .impedance = {800.0, 1.0}});
+  const std::uint64_t session = client.session_id();
+
+  ::kill(server.pid(), SIGSTOP);  // answers nothing, forgets nothing
+  const auto lost = log.wait(1, std::chrono::seconds(6));
+  ::kill(server.pid(), SIGCONT);
+  ASSERT_TRUE(lost);
+  EXPECT_EQ(lost->first.state, ConnectionChange::State::kLost);
+  const auto resumed = log.wait(2, std::chrono::seconds(6));
+  ASSERT_TRUE(resumed);
+  EXPECT_EQ(resumed->first.state, ConnectionChange::State::kResumed);
+  EXPECT_FALSE(resumed->first.new_session);
+  EXPECT_EQ(client.session_id(), session);
+  EXPECT_EQ(client.stats().objects, 1u);  // not registered twice
+  EXPECT_EQ(client.receive_counters().reconnects, 1u);
+}
+
+TEST(Reconnect, WithReconnectOffALostServerStaysLost) {
+  auto server = std::make_unique<ServerProcess>(kConfig);
+  ClientConfig config = config_for(*server, "no-reconnect");
+  config.reconnect = false;
+  Client client(config);
+  ConnectionLog log;
+  log.attach(client);
+  server.reset();
+  EXPECT_FALSE(log.wait(1, std::chrono::milliseconds(800)));
+  EXPECT_THROW((void)client.step(1), ConnectionError);
+}
+
+}  // namespace
+}  // namespace haptic::test
