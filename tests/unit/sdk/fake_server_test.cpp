@@ -99,6 +99,9 @@ class FakeDataPlane {
               static_cast<ssize_t>(bytes.size()));
   }
 
+  /// The next State datagram's sequence number (then counting on from it).
+  void set_next_sequence(std::uint64_t sequence) { sequence_ = sequence - 1; }
+
   /// A State datagram for `tick` with tool height `z` (m), tagged with `key`.
   void send_state(std::uint64_t tick, double z, std::uint64_t session_id = kSessionId,
                   const wire::Key& key = kKey) {
@@ -428,6 +431,30 @@ TEST_F(FakeServerTest, HeartbeatsTellTheServerWhereToSendStateAndBadDatagramsAre
   EXPECT_EQ(counters.accepted, 2u);
   EXPECT_EQ(counters.rejected, 3u);
   EXPECT_TRUE(client.clock_offset().has_value());
+}
+
+TEST_F(FakeServerTest, GapsInTheSequenceAreLostSamplesAndLateOnesAreReordered) {
+  config_.state_decimation = 1;
+  Client client(config_);
+  ASSERT_TRUE(data_plane_.receive_heartbeat());
+  State state;
+  data_plane_.send_state(1, 0.0);  // sequences 1, 2
+  data_plane_.send_state(2, 0.0);
+  data_plane_.set_next_sequence(6);  // 3, 4 and 5 lost on the way
+  data_plane_.send_state(6, 0.0);
+  ASSERT_TRUE(client.wait_for_tick(6, state, seconds(2)));
+  EXPECT_EQ(client.receive_counters().lost, 3u);
+  data_plane_.set_next_sequence(4);  // 4 was late, not lost
+  data_plane_.send_state(4, 0.0);
+  data_plane_.set_next_sequence(1);  // a new subscription numbers from 1 again, with newer ticks
+  data_plane_.send_state(10, 0.0);
+  data_plane_.send_state(11, 0.0);
+  ASSERT_TRUE(client.wait_for_tick(11, state, seconds(2)));
+  const ReceiveCounters counters = client.receive_counters();
+  EXPECT_EQ(counters.lost, 2u);
+  EXPECT_EQ(counters.reordered, 1u);
+  EXPECT_EQ(counters.accepted, 6u);
+  EXPECT_EQ(counters.reconnects, 0u);
 }
 
 TEST_F(FakeServerTest, TheClockOffsetLiesBetweenTheSendAndTheReceiptOfASample) {
