@@ -380,6 +380,7 @@ void Server::housekeeping_loop() {
   std::uint64_t faults_reported = 0;
   std::uint64_t device_faults_reported = 0;
   bool servo_end_reported = false;
+  std::uint64_t housekeeping_rounds = 0;
   std::unique_lock lock(housekeeping_mutex_);
   while (!housekeeping_wake_.wait_for(lock, kPeriod, [this] { return stopping_; })) {
     for (const std::uint64_t id : sessions_.expire(steady_clock::now())) {
@@ -387,6 +388,7 @@ void Server::housekeeping_loop() {
       service_->end_session(id, v1::Event::LEASE_EXPIRED);
       spdlog::info("session {:016x}: lease expired, its objects ramp out", id);
     }
+    if (++housekeeping_rounds % 100 == 0) service_->end_sessions_of_expired_tokens();  // each second
     scene_->compact();
     if (const auto faults = counters_.force_faults.load(std::memory_order_relaxed);
         faults != faults_reported) {

@@ -53,6 +53,14 @@ std::string role_name(v1::Role role) {
   }
 }
 
+bool AccessControl::expired(const std::string& token_name,
+                            std::chrono::system_clock::time_point now) const {
+  for (const Credential& credential : credentials_) {
+    if (credential.name == token_name) return credential.expires && now >= *credential.expires;
+  }
+  return false;
+}
+
 grpc::Status AccessControl::authorize(const grpc::ServerContext& context, Permission permission,
                                       const char* call, Caller* caller,
                                       std::chrono::system_clock::time_point now) const {

@@ -54,6 +54,9 @@ class AccessControl {
                          std::chrono::system_clock::time_point now =
                              std::chrono::system_clock::now()) const;
 
+  /// True when the token named `token_name` has an expiry at or before `now`.
+  bool expired(const std::string& token_name, std::chrono::system_clock::time_point now) const;
+
   /// The same decision over the metadata value alone (nullptr: none sent); for tests.
   grpc::Status authorize_header(const std::string* header, Permission permission, const char* call,
                                 Caller* caller, std::chrono::system_clock::time_point now) const;

@@ -114,6 +114,23 @@ void HapticService::end_session(std::uint64_t session_id, v1::Event::Kind why,
   deps_.events.end_session(session_id);
 }
 
+std::size_t HapticService::end_sessions_of_expired_tokens(std::chrono::system_clock::time_point now) {
+  if (!deps_.access.enabled()) return 0;
+  std::size_t ended = 0;
+  for (const SessionInfo& session : deps_.sessions.list()) {
+    if (session.caller.token_name.empty() || !deps_.access.expired(session.caller.token_name, now)) {
+      continue;
+    }
+    if (!deps_.sessions.close(session.id)) continue;  // closed meanwhile
+    spdlog::info("session {:016x}: token '{}' expired, its objects ramp out", session.id,
+                 session.caller.token_name);
+    end_session(session.id, v1::Event::SESSION_CLOSED,
+                "token '" + session.caller.token_name + "' expired");
+    ++ended;
+  }
+  return ended;
+}
+
 v1::DeviceInfo HapticService::device_info(std::uint32_t port) const {
   const runtime::DeviceDescription& device = *deps_.ports[port].device;
   v1::DeviceInfo info;

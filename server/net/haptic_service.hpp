@@ -81,6 +81,12 @@ class HapticService final : public v1::Haptic::Service {
                            v1::Empty*) override;
   grpc::Status Step(grpc::ServerContext*, const v1::StepRequest*, v1::StepResponse*) override;
 
+  /// Ends every session opened with a token that has expired since (a session's heartbeats would
+  /// otherwise keep its items in the scene after its holder lost the right to them). Returns how
+  /// many it ended.
+  std::size_t end_sessions_of_expired_tokens(
+      std::chrono::system_clock::time_point now = std::chrono::system_clock::now());
+
   /// What OpenSession and GetDeviceInfo tell a session bound to device port `port`.
   v1::DeviceInfo device_info(std::uint32_t port = 0) const;
 

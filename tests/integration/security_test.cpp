@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <ctime>
 #include <string>
+#include <thread>
 
 #include "haptic/client.hpp"
 #include "integration/sdk_harness.hpp"
@@ -161,6 +163,38 @@ TEST(Security, MutualTlsRefusesAClientWithoutACertificate) {
   with_cert.tls->key_file = kCerts + "/client.key";
   Client client(with_cert);
   EXPECT_EQ(client.step(1), 1u);
+}
+
+TEST(Security, ASessionEndsWhenItsTokenExpiresAndItsItemsGoWithIt) {
+  // A token that expires three seconds from now (whole seconds, as RFC 3339 writes them): time
+  // enough to open the session on a loaded machine.
+  const std::time_t expiry = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now()) + 3;
+  std::tm utc{};
+  gmtime_r(&expiry, &utc);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  ServerProcess server(R"({"time_mode": "LOCKSTEP", "security": {"tokens": [
+      {"name": "root", "token": ")" + std::string(kAdminToken) + R"(", "role": "ADMIN"},
+      {"name": "visitor", "token": "visitor-token-0123456789", "role": "CONTROLLER",
+       "expires": ")" + std::string(stamp) + R"("}]}})");
+  ClientConfig admin_config = config_for(server, "admin");
+  admin_config.token = kAdminToken;
+  Client admin(admin_config);
+  ClientConfig visitor_config = config_for(server, "visitor");
+  visitor_config.token = "visitor-token-0123456789";
+  Client visitor(visitor_config);
+  ObjectHandle wall = visitor.add_wall({.normal = {0, 0, 1}, .impedance = {800.0, 1.0}});
+  ASSERT_EQ(admin.stats().objects, 1u);
+
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(8);
+  while (admin.sessions().size() > 1 && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(admin.sessions().size(), 1u);  // the visitor's heartbeats no longer hold it
+  (void)admin.step(1);                     // its wall ramps out
+  EXPECT_EQ(admin.stats().objects, 0u);
+  const std::string late = refusal<UnauthenticatedError>([&] { (void)visitor.step(1); });
+  EXPECT_NE(late.find("token 'visitor' expired at " + std::string(stamp)), std::string::npos) << late;
 }
 
 TEST(Security, TokensAlsoWorkOverPlaintextOnLoopback) {
