@@ -7,18 +7,10 @@
 
 #include "config/security.hpp"
 #include "config/server_config.hpp"
+#include "parse_error.hpp"
 
 namespace haptic::config {
 namespace {
-
-std::string error_of(const std::string& json) {
-  try {
-    parse_config(json, "test.json");
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  return {};
-}
 
 constexpr const char* kTls = R"("tls": {"cert_file": "server.pem", "key_file": "server.key"})";
 constexpr const char* kToken =

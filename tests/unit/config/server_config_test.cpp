@@ -4,18 +4,10 @@
 #include <fstream>
 
 #include "config/server_config.hpp"
+#include "parse_error.hpp"
 
 namespace haptic::config {
 namespace {
-
-std::string error_of(const std::string& json) {
-  try {
-    parse_config(json, "test.json");
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  return {};
-}
 
 TEST(Config, DefaultsAreTheDocumentedOnes) {
   const v1::ServerConfig config = default_config();
