@@ -388,7 +388,12 @@ void ClientCore::supervise() {
   while (supervisor_wait(period)) {
     if (!heartbeats_enabled_) continue;  // playing a vanished client: let the lease run out
     std::string why;
-    if (probe(why) != Probe::kAlive) recover(std::move(why));
+    const Probe state = probe(why);
+    if (state == Probe::kEnded) {
+      announce({ConnectionChange::State::kEnded, session_id_, false, 0, why, {}});
+      return;
+    }
+    if (state != Probe::kAlive && !recover(std::move(why))) return;
   }
 }
 
@@ -416,12 +421,15 @@ ClientCore::Probe ClientCore::probe(std::string& why) {
     case grpc::StatusCode::CANCELLED:
       why = "the server does not answer: " + status.error_message();
       return Probe::kUnreachable;
+    case grpc::StatusCode::PERMISSION_DENIED:  // every role may ask this: the session was ended
+      why = status.error_message();
+      return Probe::kEnded;
     default:
       return Probe::kAlive;  // answering (a refusal a reconnection would not change counts too)
   }
 }
 
-void ClientCore::recover(std::string why) {
+bool ClientCore::recover(std::string why) {
   const auto lost_at = std::chrono::steady_clock::now();
   announce({ConnectionChange::State::kLost, session_id_, false, 0, why, {}});
   auto backoff = config_.reconnect_backoff_min;
@@ -436,6 +444,10 @@ void ClientCore::recover(std::string why) {
       stub_ = std::move(fresh);
     }
     const Probe state = gone ? Probe::kSessionGone : probe(now_why);
+    if (state == Probe::kEnded) {
+      announce({ConnectionChange::State::kEnded, session_id_, false, 0, now_why, {}});
+      return false;
+    }
     ConnectionChange resumed{ConnectionChange::State::kResumed, 0, false, 0, {}, {}};
     bool done = state == Probe::kAlive;
     if (state == Probe::kSessionGone) {
@@ -464,9 +476,9 @@ void ClientCore::recover(std::string why) {
       }
       ++reconnects_;
       announce(resumed);
-      return;
+      return true;
     }
-    if (!supervisor_wait(backoff)) return;
+    if (!supervisor_wait(backoff)) return false;
     backoff = std::min(backoff * 2, config_.reconnect_backoff_max);
   }
 }

@@ -98,10 +98,11 @@ class ClientCore {
   // Connection supervision (a thread of its own): a quiet connection is probed; a failed probe is
   // a loss, recovered with backoff: the same session if it still exists, else a new one with the
   // items registered again, the state stream and the event watch resumed.
-  enum class Probe { kAlive, kUnreachable, kSessionGone };
+  enum class Probe { kAlive, kUnreachable, kSessionGone, kEnded };
   void supervise();
   Probe probe(std::string& why);
-  void recover(std::string why);
+  /// False when the session was ended for good (announced): supervision stops.
+  bool recover(std::string why);
   /// Opens a new session and gives it everything the old one held. Throws if the opening fails.
   void reopen();
   void announce(ConnectionChange change);

@@ -76,6 +76,11 @@ grpc::Status HapticService::check_session(const grpc::ServerContext* context,
     case Access::kGranted:
       return grpc::Status::OK;
     case Access::kNoSuchSession:
+      if (auto reason = deps_.sessions.ended_reason(session_id)) {
+        return {grpc::StatusCode::PERMISSION_DENIED,
+                "session_id: session " + std::to_string(session_id) + " was " + *reason +
+                    "; open a new one only if you may"};
+      }
       return {grpc::StatusCode::NOT_FOUND,
               "session_id: no open session " + std::to_string(session_id) +
                   " (never opened, closed, or its lease expired)"};
@@ -121,11 +126,11 @@ std::size_t HapticService::end_sessions_of_expired_tokens(std::chrono::system_cl
     if (session.caller.token_name.empty() || !deps_.access.expired(session.caller.token_name, now)) {
       continue;
     }
-    if (!deps_.sessions.close(session.id)) continue;  // closed meanwhile
+    const std::string reason = "ended: token '" + session.caller.token_name + "' expired";
+    if (!deps_.sessions.end(session.id, reason)) continue;  // closed meanwhile
     spdlog::info("session {:016x}: token '{}' expired, its objects ramp out", session.id,
                  session.caller.token_name);
-    end_session(session.id, v1::Event::SESSION_CLOSED,
-                "token '" + session.caller.token_name + "' expired");
+    end_session(session.id, v1::Event::SESSION_CLOSED, reason);
     ++ended;
   }
   return ended;
@@ -417,15 +422,16 @@ grpc::Status HapticService::KickSession(grpc::ServerContext* context,
     return invalid("reason: at most " + std::to_string(kMaxReason) + " characters, got " +
                    std::to_string(request->reason().size()));
   }
-  if (!deps_.sessions.close(request->target_session_id())) {
+  const std::string by = caller.token_name.empty() ? "an admin" : "'" + caller.token_name + "'";
+  const std::string reason =
+      "ended by " + by + (request->reason().empty() ? "" : ": " + request->reason());
+  if (!deps_.sessions.end(request->target_session_id(), reason)) {
     return {grpc::StatusCode::NOT_FOUND, "target_session_id: no open session " +
                                              std::to_string(request->target_session_id())};
   }
-  const std::string by = caller.token_name.empty() ? "an admin" : "'" + caller.token_name + "'";
   spdlog::info("session {:016x} ended by {} ({})", request->target_session_id(), by,
                request->reason().empty() ? "no reason given" : request->reason());
-  end_session(request->target_session_id(), v1::Event::SESSION_CLOSED,
-              "ended by " + by + (request->reason().empty() ? "" : ": " + request->reason()));
+  end_session(request->target_session_id(), v1::Event::SESSION_CLOSED, reason);
   return grpc::Status::OK;
 }
 

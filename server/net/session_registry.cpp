@@ -117,6 +117,27 @@ std::vector<SessionInfo> SessionRegistry::list() const {
   return out;
 }
 
+bool SessionRegistry::end(std::uint64_t session_id, const std::string& reason) {
+  std::lock_guard lock(mutex_);
+  if (sessions_.erase(session_id) == 0) return false;
+  ++version_;
+  constexpr std::size_t kRemembered = 1024;
+  if (ended_order_.size() >= kRemembered) {
+    ended_.erase(ended_order_.front());
+    ended_order_.erase(ended_order_.begin());
+  }
+  ended_[session_id] = reason;
+  ended_order_.push_back(session_id);
+  return true;
+}
+
+std::optional<std::string> SessionRegistry::ended_reason(std::uint64_t session_id) const {
+  std::lock_guard lock(mutex_);
+  const auto found = ended_.find(session_id);
+  if (found == ended_.end()) return std::nullopt;
+  return found->second;
+}
+
 bool SessionRegistry::close(std::uint64_t session_id) {
   std::lock_guard lock(mutex_);
   if (sessions_.erase(session_id) == 0) return false;

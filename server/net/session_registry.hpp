@@ -113,6 +113,12 @@ class SessionRegistry {
                                   const Caller& caller = {});
   /// Removes the session; false if it did not exist.
   bool close(std::uint64_t session_id);
+  /// Closes the session for good: its client is told why (ended_reason) instead of "no such
+  /// session", so that it does not open another (KickSession, an expired token). The last 1024
+  /// such endings are remembered.
+  bool end(std::uint64_t session_id, const std::string& reason);
+  /// Why a session was ended for good; nullopt if it was not (or long ago).
+  std::optional<std::string> ended_reason(std::uint64_t session_id) const;
   /// Checks that `secret` is the session's own (in constant time) and, if so, renews the lease.
   Access authorize(std::uint64_t session_id, std::span<const std::uint8_t> secret);
   std::optional<wire::Key> key_of(std::uint64_t session_id) const;
@@ -163,7 +169,9 @@ class SessionRegistry {
 
   mutable std::mutex mutex_;
   std::map<std::uint64_t, Session> sessions_;
-  std::map<std::string, TokenBucket> opens_by_peer_;  // each host's session-opening budget
+  std::map<std::string, TokenBucket> opens_by_peer_;
+  std::map<std::uint64_t, std::string> ended_;  // sessions ended for good, and why
+  std::vector<std::uint64_t> ended_order_;      // oldest first, to forget past 1024  // each host's session-opening budget
   SessionLimits limits_;
   std::uint64_t version_ = 0;
 

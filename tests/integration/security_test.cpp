@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <condition_variable>
 #include <ctime>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -139,10 +142,27 @@ TEST(Security, AnAdminListsSessionsWithTheirTokensAndEndsOne) {
   }
   EXPECT_TRUE(found);
 
+  std::mutex mutex;
+  std::condition_variable told;
+  std::optional<ConnectionChange> ended;
+  controller.on_connection([&](const ConnectionChange& change) {
+    std::lock_guard lock(mutex);
+    ended = change;
+    told.notify_all();
+  });
   admin.kick_session(controller.session_id(), "demo over");
-  refusal<NotFoundError>([&] { (void)controller.step(1); });
+  const std::string kicked = refusal<PermissionDeniedError>([&] { (void)controller.step(1); });
+  EXPECT_NE(kicked.find("was ended by 'root': demo over"), std::string::npos) << kicked;
+  {
+    // The kicked client learns it for good and does not come back with its wall.
+    std::unique_lock lock(mutex);
+    ASSERT_TRUE(told.wait_for(lock, std::chrono::seconds(5), [&] { return ended.has_value(); }));
+    EXPECT_EQ(ended->state, ConnectionChange::State::kEnded);
+    EXPECT_NE(ended->reason.find("ended by 'root': demo over"), std::string::npos) << ended->reason;
+  }
   (void)admin.step(1);  // the removal ramps out over the next ticks
   EXPECT_EQ(admin.sessions().size(), 1u);
+  EXPECT_EQ(admin.stats().objects, 0u);
   refusal<NotFoundError>([&] { admin.kick_session(controller.session_id()); });
 }
 

@@ -244,6 +244,9 @@ struct ConnectionChange {
     kConnected,  ///< as opened (never announced: the state before any change)
     kLost,       ///< the server stopped answering, or no longer knows the session
     kResumed,    ///< answering again; see new_session
+    /// the server ended the session for good (an admin's KickSession, or its token expired):
+    /// the client does not reconnect; reason says why
+    kEnded,
   };
   State state = State::kConnected;
   /// The session now: after a server restart, a new one (Client::session_id() changes with it).
