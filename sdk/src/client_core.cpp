@@ -251,13 +251,24 @@ std::uint64_t ClientCore::require_server_id(std::uint64_t key, const char* call)
   return found->second.server_id;
 }
 
-ClientCore::Created ClientCore::create_object(const v1::Object& object) {
-  v1::CreateObjectRequest request;
+v1::ItemRef ClientCore::send_create(const v1::Object* object, const v1::Field* field) {
+  if (object != nullptr) {
+    v1::CreateObjectRequest request;
+    request.set_session_id(session_id_);
+    *request.mutable_object() = *object;
+    return call<v1::CreateObjectRequest, v1::ItemRef>("CreateObject",
+                                                      &v1::Haptic::Stub::CreateObject, request);
+  }
+  v1::CreateFieldRequest request;
   request.set_session_id(session_id_);
-  *request.mutable_object() = object;
+  *request.mutable_field() = *field;
+  return call<v1::CreateFieldRequest, v1::ItemRef>("CreateField", &v1::Haptic::Stub::CreateField,
+                                                   request);
+}
+
+ClientCore::Created ClientCore::create_object(const v1::Object& object) {
   Created made;
-  made.ref = call<v1::CreateObjectRequest, v1::ItemRef>("CreateObject", &v1::Haptic::Stub::CreateObject,
-                                                        request);
+  made.ref = send_create(&object, nullptr);
   made.key = remember(made.ref.id(), &object, nullptr);
   return made;
 }
@@ -284,12 +295,8 @@ void ClientCore::delete_object(std::uint64_t key) {
 }
 
 ClientCore::Created ClientCore::create_field(const v1::Field& field) {
-  v1::CreateFieldRequest request;
-  request.set_session_id(session_id_);
-  *request.mutable_field() = field;
   Created made;
-  made.ref = call<v1::CreateFieldRequest, v1::ItemRef>("CreateField", &v1::Haptic::Stub::CreateField,
-                                                       request);
+  made.ref = send_create(nullptr, &field);
   made.key = remember(made.ref.id(), nullptr, &field);
   return made;
 }
@@ -497,21 +504,9 @@ void ClientCore::reopen() {
     std::lock_guard lock(items_mutex_);
     for (auto& [key, item] : items_) {
       try {
-        if (item.is_object) {
-          v1::CreateObjectRequest request;
-          request.set_session_id(session_id_);
-          *request.mutable_object() = item.object;
-          item.server_id = call<v1::CreateObjectRequest, v1::ItemRef>(
-                               "CreateObject", &v1::Haptic::Stub::CreateObject, request)
-                               .id();
-        } else {
-          v1::CreateFieldRequest request;
-          request.set_session_id(session_id_);
-          *request.mutable_field() = item.field;
-          item.server_id = call<v1::CreateFieldRequest, v1::ItemRef>(
-                               "CreateField", &v1::Haptic::Stub::CreateField, request)
-                               .id();
-        }
+        item.server_id = send_create(item.is_object ? &item.object : nullptr,
+                                     item.is_object ? nullptr : &item.field)
+                             .id();
       } catch (const Error& error) {
         item.server_id = 0;
         item.lost_reason = error.what();

@@ -89,6 +89,8 @@ class ClientCore {
   /// Adds what every call carries: the bearer token (if any) and the session secret (once open).
   void authenticate(grpc::ClientContext& context) const;
   v1::OpenSessionResponse open_session();
+  /// CreateObject (object given) or CreateField (field given) in the current session.
+  v1::ItemRef send_create(const v1::Object* object, const v1::Field* field);
   /// Keeps `key` under the server's `id` with the message that made it.
   std::uint64_t remember(std::uint64_t id, const v1::Object* object, const v1::Field* field);
   /// The item's server id, or NotFoundError naming `call` (an item a reconnection could not

@@ -63,8 +63,8 @@ std::string check_client_name(const std::string& name) {
 
 grpc::Status HapticService::check_session(const grpc::ServerContext* context,
                                           std::uint64_t session_id, Permission permission,
-                                          const char* call) const {
-  if (auto status = deps_.access.authorize(*context, permission, call, nullptr); !status.ok()) {
+                                          const char* call, Caller* caller) const {
+  if (auto status = deps_.access.authorize(*context, permission, call, caller); !status.ok()) {
     return status;
   }
   std::span<const std::uint8_t> secret;
@@ -409,11 +409,8 @@ grpc::Status HapticService::ListSessions(grpc::ServerContext* context, const v1:
 grpc::Status HapticService::KickSession(grpc::ServerContext* context,
                                         const v1::KickSessionRequest* request, v1::Empty*) {
   Caller caller;
-  if (auto status = deps_.access.authorize(*context, Permission::kAdmin, "KickSession", &caller);
-      !status.ok()) {
-    return status;
-  }
-  if (auto status = check_session(context, request->session_id(), Permission::kAdmin, "KickSession");
+  if (auto status =
+          check_session(context, request->session_id(), Permission::kAdmin, "KickSession", &caller);
       !status.ok()) {
     return status;
   }

@@ -95,8 +95,9 @@ class HapticService final : public v1::Haptic::Service {
   /// OK when the call's token allows `permission` (AccessControl: UNAUTHENTICATED or
   /// PERMISSION_DENIED naming `call` otherwise), the session exists and the call carries its
   /// secret (the lease is then renewed); NOT_FOUND or PERMISSION_DENIED naming the session otherwise.
+  /// `caller` (if given) receives the token's holder and role.
   grpc::Status check_session(const grpc::ServerContext* context, std::uint64_t session_id,
-                             Permission permission, const char* call) const;
+                             Permission permission, const char* call, Caller* caller = nullptr) const;
   /// The device port an open session is bound to (port 0's if it has just gone).
   const DevicePort& port_of(std::uint64_t session_id) const;
 
