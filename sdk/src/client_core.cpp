@@ -31,6 +31,19 @@ std::string host_of(std::string address) {
   return colon == std::string::npos ? address : address.substr(0, colon);
 }
 
+/// The port of ClientConfig::udp_address ("host:port" or "[v6]:port").
+std::uint16_t udp_port_of(const std::string& address) {
+  const auto colon = address.rfind(':');
+  const std::string digits = colon == std::string::npos ? "" : address.substr(colon + 1);
+  const bool numeric = !digits.empty() && digits.size() <= 5 &&
+                       std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
+  const unsigned long port = numeric ? std::stoul(digits) : 0;
+  if (!numeric || port == 0 || port > 65535 || colon == 0) {
+    throw InvalidArgumentError("udp_address: '" + address + "' is not host:port with a port 1 to 65535");
+  }
+  return static_cast<std::uint16_t>(port);
+}
+
 void check_config(const ClientConfig& config) {
   if (config.server_address.empty()) throw InvalidArgumentError("server_address: must not be empty");
   if (config.client_name.empty() || config.client_name.size() > 64) {
@@ -40,6 +53,7 @@ void check_config(const ClientConfig& config) {
   if (config.heartbeat_period.count() <= 0) {
     throw InvalidArgumentError("heartbeat_period: must be positive");
   }
+  if (!config.udp_address.empty()) udp_port_of(config.udp_address);  // throws if it names none
   if (config.reconnect_backoff_min.count() <= 0 ||
       config.reconnect_backoff_max < config.reconnect_backoff_min) {
     throw InvalidArgumentError(
@@ -112,6 +126,15 @@ wire::Key key_of(const v1::OpenSessionResponse& opened) {
 }
 }  // namespace
 
+std::string ClientCore::udp_host() const {
+  return host_of(config_.udp_address.empty() ? config_.server_address : config_.udp_address);
+}
+
+std::uint16_t ClientCore::udp_port(const v1::OpenSessionResponse& opened) const {
+  return config_.udp_address.empty() ? static_cast<std::uint16_t>(opened.udp_port())
+                                     : udp_port_of(config_.udp_address);
+}
+
 ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
   check_config(config_);
   stub_ = v1::Haptic::NewStub(make_channel(config_));
@@ -125,9 +148,8 @@ ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
   device_info_ = from_proto(opened.device());
   lease_timeout_ = std::chrono::milliseconds(opened.lease_timeout_ms());
   try {
-    udp_ = std::make_unique<UdpLink>(host_of(config_.server_address),
-                                     static_cast<std::uint16_t>(opened.udp_port()), session_id_,
-                                     key_of(opened), config_.heartbeat_period);
+    udp_ = std::make_unique<UdpLink>(udp_host(), udp_port(opened), session_id_, key_of(opened),
+                                     config_.heartbeat_period);
     if (config_.state_decimation > 0) subscribe(config_.state_decimation);
   } catch (...) {
     // Do not leave a half-open session holding a lease; report the first failure, not this one.
@@ -497,7 +519,7 @@ void ClientCore::reopen() {
     std::lock_guard lock(identity_mutex_);
     session_secret_ = opened.session_secret();
   }
-  udp_->rebind(static_cast<std::uint16_t>(opened.udp_port()), opened.session_id(), key_of(opened));
+  udp_->rebind(udp_port(opened), opened.session_id(), key_of(opened));
   {
     // Every item again, in the order they were made; one the new server refuses is kept with
     // the reason (its handle's calls say it), the others go on.

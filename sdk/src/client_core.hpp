@@ -89,6 +89,10 @@ class ClientCore {
   /// Adds what every call carries: the bearer token (if any) and the session secret (once open).
   void authenticate(grpc::ClientContext& context) const;
   v1::OpenSessionResponse open_session();
+  /// Where datagrams go: ClientConfig::udp_address if given, else the server's host and the port
+  /// OpenSession named.
+  std::string udp_host() const;
+  std::uint16_t udp_port(const v1::OpenSessionResponse& opened) const;
   /// CreateObject (object given) or CreateField (field given) in the current session.
   v1::ItemRef send_create(const v1::Object* object, const v1::Field* field);
   /// Keeps `key` under the server's `id` with the message that made it.

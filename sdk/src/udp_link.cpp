@@ -196,6 +196,29 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
     ++counters_.rejected;
     return;
   }
+  // The server numbers each subscription's States without gaps: a jump is datagrams lost on the
+  // way, and one arriving late (an older tick too) was not lost after all. A datagram seen before
+  // (the network duplicated it) is dropped. A lower sequence with a newer tick is a new
+  // subscription, numbered from 1 again.
+  if (header.sequence > last_sequence_) {
+    counters_.lost += header.sequence - last_sequence_ - 1;
+    const std::uint64_t shift = header.sequence - last_sequence_;
+    seen_window_ = (shift >= 64 ? 0 : seen_window_ << shift) | 1u;
+    last_sequence_ = header.sequence;
+  } else if (payload.tick > newest_tick_) {
+    last_sequence_ = header.sequence;
+    seen_window_ = 1;
+  } else {
+    const std::uint64_t behind = last_sequence_ - header.sequence;
+    const std::uint64_t bit = behind < 64 ? std::uint64_t{1} << behind : 0;
+    if (bit != 0 && (seen_window_ & bit) != 0) {
+      ++counters_.duplicates;
+      return;
+    }
+    seen_window_ |= bit;
+    if (counters_.lost > 0) --counters_.lost;
+    ++counters_.reordered;
+  }
   ++counters_.accepted;
   ++accepted;
   State state;
@@ -214,18 +237,6 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
   }
   state.received_at = received_at;
   last_heard_ = received_at;
-  // The server numbers each subscription's States without gaps: a jump is datagrams lost on the
-  // way, and one arriving late (an older tick too) was not lost after all. A lower sequence with
-  // a newer tick is a new subscription, numbered from 1 again.
-  if (header.sequence > last_sequence_) {
-    counters_.lost += header.sequence - last_sequence_ - 1;
-    last_sequence_ = header.sequence;
-  } else if (payload.tick < newest_tick_) {
-    if (counters_.lost > 0) --counters_.lost;
-    ++counters_.reordered;
-  } else {
-    last_sequence_ = header.sequence;
-  }
   newest_tick_ = std::max(newest_tick_, payload.tick);
   // How much longer than the quickest recent sample this one took: time spent queued anywhere.
   state.age = std::chrono::nanoseconds(clock_.add(header.time_ns, steady_ns(received_at)));
@@ -243,6 +254,7 @@ void UdpLink::rebind(std::uint16_t port, std::uint64_t session_id, const wire::K
       std::lock_guard lock(mutex_);
       // The new session's ticks, sequences and server clock start again from zero.
       last_sequence_ = 0;
+      seen_window_ = 0;
       newest_tick_ = 0;
       have_latest_ = false;
       last_polled_tick_.reset();

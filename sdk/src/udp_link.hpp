@@ -86,6 +86,7 @@ class UdpLink {
   bool have_latest_ = false;           // guarded by mutex_
   std::optional<std::uint64_t> last_polled_tick_;  // guarded by mutex_; none before the first
   std::uint64_t last_sequence_ = 0;    // guarded by mutex_
+  std::uint64_t seen_window_ = 0;      // guarded by mutex_: bit i set: last_sequence_ - i arrived
   std::uint64_t newest_tick_ = 0;      // guarded by mutex_: of the States taken
   ClockSync clock_;                    // guarded by mutex_
   std::optional<std::chrono::steady_clock::time_point> last_heard_;  // guarded by mutex_

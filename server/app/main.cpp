@@ -17,12 +17,16 @@
 namespace {
 
 // Written once the ports are bound, so a script or test can find ephemeral ports without parsing
-// logs. Written to a temporary name and renamed, so a reader never sees half a file.
-void write_ready_file(const std::string& path, std::uint16_t grpc_port, std::uint16_t udp_port) {
+// logs. Written to a temporary name and renamed, so a reader never sees half a file. In real time
+// it also names the CLOCK_MONOTONIC instant of server time 0 (ns), so a process on the same host
+// can tell how old a sample's stamp is.
+void write_ready_file(const std::string& path, const haptic::app::Server& server) {
   const std::string temporary = path + ".tmp";
   {
     std::ofstream out(temporary);
-    out << "{\"grpc_port\": " << grpc_port << ", \"udp_port\": " << udp_port << "}\n";
+    out << "{\"grpc_port\": " << server.grpc_port() << ", \"udp_port\": " << server.udp_port();
+    if (const auto origin = server.time_origin_ns()) out << ", \"time_origin_ns\": " << *origin;
+    out << "}\n";
   }
   std::filesystem::rename(temporary, path);
 }
@@ -52,7 +56,7 @@ int main(int argc, char** argv) {
                "serve non-loopback addresses without TLS or tokens (insecure_remote_access)");
   cli.add_flag("--lockstep", lockstep, "run in LOCKSTEP time: ticks advance only by the Step RPC");
   cli.add_option("--ready-file", ready_file,
-                 "write {\"grpc_port\":..,\"udp_port\":..} here once listening");
+                 "write {\"grpc_port\":..,\"udp_port\":..,\"time_origin_ns\":..} here once listening");
   cli.add_flag("--print-config", print_config, "print the effective configuration and exit");
   std::string health_address;
   cli.add_option("--health-check", health_address,
@@ -111,7 +115,7 @@ int main(int argc, char** argv) {
   try {
     haptic::app::Server server(config);
     server.start();
-    if (!ready_file.empty()) write_ready_file(ready_file, server.grpc_port(), server.udp_port());
+    if (!ready_file.empty()) write_ready_file(ready_file, server);
     int signal_number = 0;
     sigwait(&stop_signals, &signal_number);
     spdlog::info("hapticd: {} received, ramping forces to zero", strsignal(signal_number));

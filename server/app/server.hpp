@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -44,6 +45,11 @@ class Server {
   v1::Stats stats() const;
   /// Server time now (what samples are stamped with). Unit: ns.
   std::int64_t server_time_ns() const { return loop_->server_time_ns(); }
+  /// CLOCK_MONOTONIC time of server time 0, in real time; none in lockstep. Unit: ns.
+  std::optional<std::int64_t> time_origin_ns() const {
+    if (loop_->config().mode != runtime::TimeMode::kRealTime) return std::nullopt;
+    return loop_->start_ns();
+  }
 
  private:
   void housekeeping_loop();

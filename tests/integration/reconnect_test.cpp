@@ -5,11 +5,8 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
-#include <condition_variable>
 #include <memory>
-#include <mutex>
 #include <thread>
-#include <vector>
 
 #include "haptic/client.hpp"
 #include "integration/sdk_harness.hpp"
@@ -18,38 +15,14 @@
 namespace haptic::test {
 namespace {
 
-/// The changes a client announces, with the time each arrived.
-class ConnectionLog {
- public:
-  void attach(Client& client) {
-    client.on_connection([this](const ConnectionChange& change) {
-      std::lock_guard lock(mutex_);
-      changes_.push_back({change, std::chrono::steady_clock::now()});
-      arrived_.notify_all();
-    });
-  }
-  /// Waits up to `timeout` for the `n`-th change (1-based); its copy, or none.
-  std::optional<std::pair<ConnectionChange, std::chrono::steady_clock::time_point>> wait(
-      std::size_t n, std::chrono::milliseconds timeout) {
-    std::unique_lock lock(mutex_);
-    if (!arrived_.wait_for(lock, timeout, [&] { return changes_.size() >= n; })) return std::nullopt;
-    return changes_[n - 1];
-  }
-
- private:
-  std::mutex mutex_;
-  std::condition_variable arrived_;
-  std::vector<std::pair<ConnectionChange, std::chrono::steady_clock::time_point>> changes_;
-};
-
 constexpr const char* kConfig = R"({"time_mode": "LOCKSTEP"})";
 
 TEST(Reconnect, AfterAServerRestartTheClientHasANewSessionWithEveryItemWithinTwoSeconds) {
   auto first = std::make_unique<ServerProcess>(kConfig);
   const std::uint16_t grpc_port = first->grpc_port();
   const std::uint16_t udp_port = first->udp_port();
+  ConnectionLog log;  // outlives the client that calls it
   Client client(config_for(*first, "survivor"));
-  ConnectionLog log;
   log.attach(client);
   ObjectHandle wall = client.add_wall({.normal = {0, 0, 1}, .impedance = {800.0, 1.0}});
   FieldHandle spring = client.add_spring_field({.anchor = {0, 0, 0.05}, .stiffness = 50.0});
@@ -106,8 +79,8 @@ TEST(Reconnect, AfterAServerRestartTheClientHasANewSessionWithEveryItemWithinTwo
 TEST(Reconnect, AServerThatPausesButKeepsTheSessionIsResumedAsItWas) {
   // A lease long enough to outlive the pause; the probe's deadline is half of it at most.
   ServerProcess server(R"({"time_mode": "LOCKSTEP", "lease_timeout_ms": 5000})");
+  ConnectionLog log;  // outlives the client that calls it
   Client client(config_for(server, "patient"));
-  ConnectionLog log;
   log.attach(client);
   ObjectHandle wall = client.add_wall({.normal = {0, 0, 1}, .impedance = {800.0, 1.0}});
   const std::uint64_t session = client.session_id();
@@ -130,8 +103,8 @@ TEST(Reconnect, WithReconnectOffALostServerStaysLost) {
   auto server = std::make_unique<ServerProcess>(kConfig);
   ClientConfig config = config_for(*server, "no-reconnect");
   config.reconnect = false;
+  ConnectionLog log;  // outlives the client that calls it
   Client client(config);
-  ConnectionLog log;
   log.attach(client);
   server.reset();
   EXPECT_FALSE(log.wait(1, std::chrono::milliseconds(800)));

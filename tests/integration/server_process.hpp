@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -82,6 +83,11 @@ class ServerProcess {
     text << ready.rdbuf();
     grpc_port_ = read_port(text.str(), "\"grpc_port\":");
     udp_port_ = read_port(text.str(), "\"udp_port\":");
+    const std::string origin_key = "\"time_origin_ns\":";
+    if (const auto at = text.str().find(origin_key); at != std::string::npos) {
+      time_origin_ = std::chrono::steady_clock::time_point(
+          std::chrono::nanoseconds(std::stoll(text.str().substr(at + origin_key.size()))));
+    }
   }
 
   ~ServerProcess() {
@@ -116,6 +122,9 @@ class ServerProcess {
   std::chrono::steady_clock::time_point ready_at() const { return ready_at_; }
   std::uint16_t grpc_port() const { return grpc_port_; }
   std::uint16_t udp_port() const { return udp_port_; }
+  /// Real time: this host's steady clock at server time 0 (so a sample stamped t was made at
+  /// time_origin() + t). None in lockstep.
+  std::optional<std::chrono::steady_clock::time_point> time_origin() const { return time_origin_; }
 
  private:
   static std::uint16_t read_port(const std::string& text, const std::string& key) {
@@ -130,6 +139,7 @@ class ServerProcess {
   std::chrono::steady_clock::time_point ready_at_;
   std::uint16_t grpc_port_ = 0;
   std::uint16_t udp_port_ = 0;
+  std::optional<std::chrono::steady_clock::time_point> time_origin_;
 };
 
 /// A lockstep configuration for tests; `extra` is spliced into the JSON object.

@@ -53,6 +53,10 @@ struct ClientConfig {
   std::chrono::milliseconds rpc_timeout{2000};     ///< Deadline of every control-plane call.
   std::chrono::milliseconds heartbeat_period{100}; ///< UDP heartbeat period; keep well under the lease.
   std::uint32_t state_decimation = 1;              ///< State every n-th tick; 0: no state stream.
+  /// "host:port" to send datagrams to instead of server_address's host and the UDP port the
+  /// server names: a port forward or a relay between client and server. Empty: the server's.
+  /// (The server still answers the address the datagrams arrive from.)
+  std::string udp_address;
   /// The server's device port this client uses (its device info, simulated operator, state):
   /// 0 is the configured device, 1.. the server's extra_devices (several users, one scene).
   std::uint32_t device_index = 0;

@@ -482,6 +482,9 @@ struct ReceiveCounters {
   std::uint64_t lost = 0;
   /// States that arrived after a newer one (reordered on the way); not counted as lost.
   std::uint64_t reordered = 0;
+  /// States that arrived a second time (duplicated on the way, within the last 64 sequence
+  /// numbers): dropped, neither accepted nor handed out.
+  std::uint64_t duplicates = 0;
   /// Times the connection was lost and resumed (Client::on_connection).
   std::uint64_t reconnects = 0;
 };

@@ -457,6 +457,32 @@ TEST_F(FakeServerTest, GapsInTheSequenceAreLostSamplesAndLateOnesAreReordered) {
   EXPECT_EQ(counters.reconnects, 0u);
 }
 
+TEST_F(FakeServerTest, ADuplicatedStateIsDroppedNotCountedAsLateOrLost) {
+  config_.state_decimation = 1;
+  Client client(config_);
+  ASSERT_TRUE(data_plane_.receive_heartbeat());
+  State state;
+  data_plane_.send_state(1, 0.0);
+  data_plane_.set_next_sequence(3);  // 2 lost
+  data_plane_.send_state(3, 0.0);
+  data_plane_.set_next_sequence(3);  // 3 again, at once
+  data_plane_.send_state(3, 0.0);
+  data_plane_.set_next_sequence(2);  // 2 late: not lost after all
+  data_plane_.send_state(2, 0.0);
+  data_plane_.set_next_sequence(2);  // and 2 again, later still
+  data_plane_.send_state(2, 0.0);
+  data_plane_.set_next_sequence(1);  // 1 again, after newer ones
+  data_plane_.send_state(1, 0.0);
+  data_plane_.set_next_sequence(4);
+  data_plane_.send_state(4, 0.0);
+  ASSERT_TRUE(client.wait_for_tick(4, state, seconds(2)));
+  const ReceiveCounters counters = client.receive_counters();
+  EXPECT_EQ(counters.duplicates, 3u);
+  EXPECT_EQ(counters.accepted, 4u);  // 1, 3, 2, 4
+  EXPECT_EQ(counters.reordered, 1u);
+  EXPECT_EQ(counters.lost, 0u);
+}
+
 TEST_F(FakeServerTest, TheClockOffsetLiesBetweenTheSendAndTheReceiptOfASample) {
   config_.state_decimation = 1;
   Client client(config_);
@@ -500,6 +526,12 @@ TEST_F(FakeServerTest, ABacklogIsDrainedAndOnlyItsNewestSampleIsHandedOut) {
     ASSERT_TRUE(changed.wait_for(lock, seconds(5), [&] { return !delivered.empty(); }));
   }
   for (std::uint64_t tick = 2; tick <= 51; ++tick) data_plane_.send_state(tick, 0.001 * tick);
+  // The receive thread takes them all while the callback is held (sent is not yet read: releasing
+  // earlier would hand the callback one from the middle too).
+  const auto give_up = std::chrono::steady_clock::now() + seconds(5);
+  while (client.receive_counters().accepted < 51 && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(milliseconds(1));
+  }
   {
     std::lock_guard lock(mutex);
     release = true;
