@@ -81,13 +81,21 @@ int main(int argc, char** argv) {
 
   haptic::v1::ServerConfig config;
   try {
-    config = config_path.empty() ? haptic::config::default_config()
-                                 : haptic::config::load_config_file(config_path);
-    if (!grpc_address.empty()) config.set_grpc_address(grpc_address);
-    if (!udp_address.empty()) config.set_udp_address(udp_address);
-    if (insecure) config.set_insecure_remote_access(true);
-    if (udp_port >= 0) config.set_udp_port(static_cast<std::uint32_t>(udp_port));
-    if (lockstep) config.set_time_mode(haptic::v1::LOCKSTEP);
+    // The command line's overrides go in before the file is validated: together they are the
+    // configuration (a file's remote address with --insecure, say).
+    const auto apply_overrides = [&](haptic::v1::ServerConfig& edited) {
+      if (!grpc_address.empty()) edited.set_grpc_address(grpc_address);
+      if (!udp_address.empty()) edited.set_udp_address(udp_address);
+      if (insecure) edited.set_insecure_remote_access(true);
+      if (udp_port >= 0) edited.set_udp_port(static_cast<std::uint32_t>(udp_port));
+      if (lockstep) edited.set_time_mode(haptic::v1::LOCKSTEP);
+    };
+    if (config_path.empty()) {
+      config = haptic::config::default_config();
+      apply_overrides(config);
+    } else {
+      config = haptic::config::load_config_file(config_path, apply_overrides);
+    }
     if (!scene_path.empty()) *config.mutable_initial_scene() = haptic::config::load_scene_file(scene_path);
     if (auto error = haptic::config::validate(config); !error.empty()) {
       throw haptic::config::ConfigError("configuration: " + error);

@@ -206,7 +206,8 @@ std::string validate_scene(const v1::Scene& scene, const std::string& prefix) {
   return schema::to_scene_specs(scene, prefix.empty() ? "" : prefix + ".", schema::SceneLimits{}, ignored);
 }
 
-v1::ServerConfig parse_config(const std::string& json, const std::string& source_name) {
+v1::ServerConfig parse_config(const std::string& json, const std::string& source_name,
+                              const ConfigEdit& edit) {
   v1::ServerConfig config;
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;
@@ -215,16 +216,17 @@ v1::ServerConfig parse_config(const std::string& json, const std::string& source
     throw ConfigError(source_name + ": not a valid ServerConfig: " + std::string(status.message()));
   }
   fill_defaults(config);
+  if (edit) edit(config);
   if (auto error = validate(config); !error.empty()) throw ConfigError(source_name + ": " + error);
   return config;
 }
 
-v1::ServerConfig load_config_file(const std::string& path) {
+v1::ServerConfig load_config_file(const std::string& path, const ConfigEdit& edit) {
   std::ifstream file(path);
   if (!file) throw ConfigError(path + ": cannot open");
   std::stringstream text;
   text << file.rdbuf();
-  return parse_config(text.str(), path);
+  return parse_config(text.str(), path, edit);
 }
 
 v1::Scene load_scene_file(const std::string& path) {

@@ -2,6 +2,7 @@
 // hapticd's configuration: protobuf's JSON mapping of haptic.v1.ServerConfig, defaults filled in,
 // every value checked with an error that names the field.
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -18,11 +19,17 @@ class ConfigError : public std::runtime_error {
 /// 127.0.0.1:50051, UDP on 127.0.0.1:50052 (loopback only).
 v1::ServerConfig default_config();
 
-/// Parses JSON text (unknown fields are errors), fills defaults, validates. Throws ConfigError.
-v1::ServerConfig parse_config(const std::string& json, const std::string& source_name);
+/// Changes made to a configuration after its defaults are filled and before it is validated (the
+/// command line's overrides: a file's udp_address with --insecure is one valid configuration).
+using ConfigEdit = std::function<void(v1::ServerConfig&)>;
+
+/// Parses JSON text (unknown fields are errors), fills defaults, applies `edit`, validates.
+/// Throws ConfigError.
+v1::ServerConfig parse_config(const std::string& json, const std::string& source_name,
+                              const ConfigEdit& edit = {});
 
 /// Reads and parses a file. Throws ConfigError naming the file.
-v1::ServerConfig load_config_file(const std::string& path);
+v1::ServerConfig load_config_file(const std::string& path, const ConfigEdit& edit = {});
 
 /// Reads a scene file: protobuf's JSON mapping of haptic.v1.Scene (unknown fields are errors),
 /// every object and field validated. Throws ConfigError naming the file and the element

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -75,6 +76,21 @@ TEST(HapticdCli, InsecureAcceptsRemoteAddressesAndTheOverridesReachTheConfigurat
   EXPECT_NE(accepted.output.find(R"("grpc_address": "0.0.0.0:0")"), std::string::npos);
   EXPECT_NE(accepted.output.find(R"("udp_address": "0.0.0.0")"), std::string::npos);
   EXPECT_NE(accepted.output.find(R"("insecure_remote_access": true)"), std::string::npos);
+}
+
+TEST(HapticdCli, InsecureOnTheCommandLineCoversARemoteAddressInTheConfigurationFile) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("hapticd-cli-remote-" + std::to_string(::getpid()) + ".json");
+  std::ofstream(path) << R"({"udp_address": "0.0.0.0"})";
+  const Outcome refused = run_hapticd({"--config", path.string(), "--print-config"});
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find(path.string() + ": udp_address: '0.0.0.0' is not a loopback address"),
+            std::string::npos)
+      << refused.output;
+  const Outcome accepted = run_hapticd({"--config", path.string(), "--insecure", "--print-config"});
+  EXPECT_EQ(accepted.exit_code, 0) << accepted.output;
+  EXPECT_NE(accepted.output.find(R"("udp_address": "0.0.0.0")"), std::string::npos);
+  std::filesystem::remove(path);
 }
 
 TEST(HapticdCli, TheBuiltInDefaultsListenOnLoopbackOnly) {

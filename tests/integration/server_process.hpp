@@ -17,16 +17,27 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace haptic::test {
 
+/// Where a test's server runs: by default on loopback in this network namespace; or behind a
+/// launcher (`ip netns exec NAME`) on an address of that namespace.
+struct ServerHost {
+  std::vector<std::string> launcher;  ///< run before the binary, e.g. {"ip", "netns", "exec", "srv"}
+  std::string address = "127.0.0.1";  ///< the gRPC address's host, and what clients connect to
+};
+
 class ServerProcess {
  public:
-  /// `config_json` is a haptic.v1.ServerConfig in JSON; ports are forced to ephemeral loopback.
+  /// `config_json` is a haptic.v1.ServerConfig in JSON; ports are forced to ephemeral loopback
+  /// (or to `host.address`).
   /// With `fd_limit` > 0 the server runs with at most that many open files (soft and hard).
   /// With `grpc_port` and `udp_port` (not 0) the server binds those: a restart on the same ports.
   explicit ServerProcess(const std::string& config_json, const std::string& extra_arg = {},
-                         rlim_t fd_limit = 0, std::uint16_t grpc_port = 0, std::uint16_t udp_port = 0) {
+                         rlim_t fd_limit = 0, std::uint16_t grpc_port = 0, std::uint16_t udp_port = 0,
+                         const ServerHost& host = {})
+      : host_address_(host.address) {
     static int counter = 0;
     dir_ = std::filesystem::temp_directory_path() /
            ("hapticd-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
@@ -37,6 +48,20 @@ class ServerProcess {
     const auto config_path = dir_ / "config.json";
     const auto ready_path = dir_ / "ready.json";
     std::ofstream(config_path) << config_json;
+
+    // The command line, made before fork: the child of a threaded process must not allocate.
+    std::vector<std::string> words = host.launcher;
+    for (const std::string& word :
+         {std::string(HAPTICD_BINARY), std::string("--config"), config_path.string(),
+          std::string("--grpc-address"), host.address + ":" + std::to_string(grpc_port),
+          std::string("--udp-port"), std::to_string(udp_port), std::string("--ready-file"),
+          ready_path.string()}) {
+      words.push_back(word);
+    }
+    if (!extra_arg.empty()) words.push_back(extra_arg);
+    std::vector<char*> argv;
+    for (std::string& word : words) argv.push_back(word.data());
+    argv.push_back(nullptr);
 
     const pid_t parent = ::getpid();
     forked_at_ = std::chrono::steady_clock::now();
@@ -51,19 +76,7 @@ class ServerProcess {
         const rlimit limit{fd_limit, fd_limit};
         ::setrlimit(RLIMIT_NOFILE, &limit);
       }
-      const std::string binary = HAPTICD_BINARY;
-      const std::string config = config_path.string();
-      const std::string ready = ready_path.string();
-      const std::string grpc = "127.0.0.1:" + std::to_string(grpc_port);
-      const std::string udp = std::to_string(udp_port);
-      if (extra_arg.empty()) {
-        ::execl(binary.c_str(), binary.c_str(), "--config", config.c_str(), "--grpc-address",
-                grpc.c_str(), "--udp-port", udp.c_str(), "--ready-file", ready.c_str(), nullptr);
-      } else {
-        ::execl(binary.c_str(), binary.c_str(), "--config", config.c_str(), "--grpc-address",
-                grpc.c_str(), "--udp-port", udp.c_str(), "--ready-file", ready.c_str(),
-                extra_arg.c_str(), nullptr);
-      }
+      ::execvp(argv[0], argv.data());  // a launcher (ip netns exec) execs the binary in turn
       ::_exit(127);
     }
     // Readiness: the server writes the file only after both ports are bound.
@@ -114,7 +127,7 @@ class ServerProcess {
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   }
 
-  std::string address() const { return "127.0.0.1:" + std::to_string(grpc_port_); }
+  std::string address() const { return host_address_ + ":" + std::to_string(grpc_port_); }
   pid_t pid() const { return pid_; }
   /// This process's steady clock (CLOCK_MONOTONIC, which the server's time also counts from) just
   /// before the server was started and once it was seen ready: its time 0 lies between the two.
@@ -134,6 +147,7 @@ class ServerProcess {
   }
 
   std::filesystem::path dir_;
+  std::string host_address_;
   pid_t pid_ = -1;
   std::chrono::steady_clock::time_point forked_at_;
   std::chrono::steady_clock::time_point ready_at_;

@@ -29,7 +29,7 @@ namespace haptic::test {
 class TcpDelayRelay {
  public:
   TcpDelayRelay(std::uint16_t server_port, std::chrono::microseconds one_way_delay)
-      : delay_(one_way_delay) {
+      : delay_us_(one_way_delay.count()) {
     server_.sin_family = AF_INET;
     server_.sin_port = htons(server_port);
     server_.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
@@ -59,6 +59,8 @@ class TcpDelayRelay {
   TcpDelayRelay& operator=(const TcpDelayRelay&) = delete;
 
   std::string address() const { return "127.0.0.1:" + std::to_string(port_); }
+  /// The one-way delay of bytes read from now on.
+  void set_delay(std::chrono::microseconds one_way_delay) { delay_us_ = one_way_delay.count(); }
   /// While set, bytes either way wait (connections stay open); cleared, they flow again.
   void set_partitioned(bool partitioned) { partitioned_ = partitioned; }
 
@@ -82,7 +84,8 @@ class TcpDelayRelay {
     for (;;) {
       const ssize_t size = ::recv(from, buffer, sizeof(buffer), 0);
       if (size > 0) {
-        queue.push_back({std::chrono::steady_clock::now() + delay_, {buffer, buffer + size}, 0});
+        queue.push_back({std::chrono::steady_clock::now() + std::chrono::microseconds(delay_us_.load()),
+                          {buffer, buffer + size}, 0});
         continue;
       }
       if (size == 0) return false;
@@ -157,7 +160,7 @@ class TcpDelayRelay {
   }
 
   sockaddr_in server_{};
-  std::chrono::microseconds delay_;
+  std::atomic<std::int64_t> delay_us_;
   int listener_ = -1;
   std::uint16_t port_ = 0;
   std::vector<std::unique_ptr<Pair>> pairs_;  // relay thread only
