@@ -251,6 +251,22 @@ std::vector<ObjectState> Client::object_states() {
   return out;
 }
 
+RegisteredScene Client::scene(bool all_sessions) {
+  v1::GetSceneRequest request;
+  request.set_session_id(session_id());
+  request.set_all_sessions(all_sessions);
+  const auto reply = require(core_).call<v1::GetSceneRequest, v1::SceneContents>(
+      "GetScene", &v1::Haptic::Stub::GetScene, request);
+  RegisteredScene out;
+  for (const auto& object : reply.scene().objects()) out.scene.objects.push_back(detail::from_proto(object));
+  for (const auto& field : reply.scene().fields()) out.scene.fields.push_back(detail::from_proto(field));
+  out.object_ids.assign(reply.object_ids().begin(), reply.object_ids().end());
+  out.field_ids.assign(reply.field_ids().begin(), reply.field_ids().end());
+  out.object_sessions.assign(reply.object_sessions().begin(), reply.object_sessions().end());
+  out.field_sessions.assign(reply.field_sessions().begin(), reply.field_sessions().end());
+  return out;
+}
+
 SceneHandles Client::apply_scene(const std::vector<WallSpec>& walls,
                                  const std::vector<SphereSpec>& spheres,
                                  const std::vector<SpringFieldSpec>& springs) {

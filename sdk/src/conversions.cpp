@@ -191,6 +191,145 @@ v1::Field to_proto(const SpringFieldSpec& spring) {
   return field;
 }
 
+namespace {
+Impedance impedance_from_proto(const v1::Impedance& in) {
+  Impedance out;
+  out.stiffness = in.stiffness();
+  out.damping = in.damping();
+  out.static_friction = in.static_friction();
+  out.dynamic_friction = in.dynamic_friction();
+  out.mass = in.mass();
+  out.transparency_optimal_damping = in.transparency_optimal_damping();
+  out.virtual_coupling = in.virtual_coupling();
+  switch (in.law()) {
+    case v1::Impedance::BACKWARD_DIFFERENCE: out.law = ImpedanceLaw::kBackwardDifference; break;
+    case v1::Impedance::EXACT_ZOH: out.law = ImpedanceLaw::kExactZoh; break;
+    case v1::Impedance::TUSTIN: out.law = ImpedanceLaw::kTustin; break;
+    default: out.law = ImpedanceLaw::kVelocity; break;
+  }
+  return out;
+}
+
+Dynamics dynamics_from_proto(const v1::Object& object) {
+  if (!object.has_dynamics()) return {};
+  return {object.dynamics().mass(), object.dynamics().damping()};
+}
+
+Pose pose_from_proto(const v1::Object& object) {
+  Pose pose;
+  pose.position = from_proto(object.pose().position());
+  if (object.pose().has_orientation()) {
+    const auto& q = object.pose().orientation();
+    pose.orientation = {q.w(), q.x(), q.y(), q.z()};
+  }
+  return pose;
+}
+
+/// v rotated by the unit quaternion q (v' = q v q*).
+Vec3 rotate(const Quaternion& q, const Vec3& v) {
+  // t = 2 (q_v × v); v' = v + w t + q_v × t
+  const Vec3 t{2.0 * (q.y * v.z - q.z * v.y), 2.0 * (q.z * v.x - q.x * v.z), 2.0 * (q.x * v.y - q.y * v.x)};
+  return {v.x + q.w * t.x + (q.y * t.z - q.z * t.y), v.y + q.w * t.y + (q.z * t.x - q.x * t.z),
+          v.z + q.w * t.z + (q.x * t.y - q.y * t.x)};
+}
+
+Distance distance_from_proto(const v1::Distance& in) {
+  Distance out;
+  switch (in.kind()) {
+    case v1::Distance::LINE: out.kind = Distance::Kind::kLine; break;
+    case v1::Distance::PLANE: out.kind = Distance::Kind::kPlane; break;
+    case v1::Distance::SPHERE: out.kind = Distance::Kind::kSphere; break;
+    default: out.kind = Distance::Kind::kPoint; break;
+  }
+  out.origin = from_proto(in.origin());
+  out.axis = from_proto(in.axis());
+  out.radius = in.radius();
+  return out;
+}
+}  // namespace
+
+SceneSpec::Object from_proto(const v1::Object& object) {
+  const Impedance impedance = impedance_from_proto(object.impedance());
+  switch (object.shape_case()) {
+    case v1::Object::kSphere:
+      return SphereSpec{from_proto(object.pose().position()), object.sphere().radius(), impedance,
+                        dynamics_from_proto(object), object.shared()};
+    case v1::Object::kBox:
+      return BoxSpec{pose_from_proto(object), from_proto(object.box().half_extents()), impedance,
+                     dynamics_from_proto(object), object.shared()};
+    case v1::Object::kCapsule:
+      return CapsuleSpec{pose_from_proto(object), object.capsule().radius(),
+                         object.capsule().half_length(), impedance, dynamics_from_proto(object),
+                         object.shared()};
+    case v1::Object::kMesh: {
+      MeshSpec mesh;
+      mesh.pose = pose_from_proto(object);
+      for (const auto& v : object.mesh().vertices()) mesh.vertices.push_back(from_proto(v));
+      mesh.indices.assign(object.mesh().indices().begin(), object.mesh().indices().end());
+      mesh.impedance = impedance;
+      mesh.shared = object.shared();
+      return mesh;
+    }
+    case v1::Object::kTangentPlane: {
+      TangentPlaneSpec plane;
+      plane.pose = pose_from_proto(object);
+      plane.normal = from_proto(object.tangent_plane().normal());
+      plane.reference = from_proto(object.tangent_plane().reference());
+      plane.tangential_stiffness = object.tangent_plane().tangential_stiffness();
+      plane.tangential_damping = object.tangent_plane().tangential_damping();
+      plane.impedance = impedance;
+      return plane;
+    }
+    default: {  // a half-space: its normal is in the object frame
+      const Pose pose = pose_from_proto(object);
+      return WallSpec{pose.position, rotate(pose.orientation, from_proto(object.half_space().normal())),
+                      impedance, object.shared()};
+    }
+  }
+}
+
+SceneSpec::Field from_proto(const v1::Field& field) {
+  switch (field.kind_case()) {
+    case v1::Field::kSpring:
+      return DistanceSpringSpec{distance_from_proto(field.spring().anchor()), field.spring().stiffness(),
+                                field.spring().damping(), field.spring().max_force()};
+    case v1::Field::kPotential: {
+      const auto& in = field.potential();
+      PotentialFieldSpec out;
+      out.distance = distance_from_proto(in.distance());
+      out.kind = in.kind() == v1::PotentialField::KHATIB ? PotentialFieldSpec::Kind::kKhatib
+                                                         : PotentialFieldSpec::Kind::kPolynomial;
+      out.order = in.order();
+      out.gain = in.gain();
+      out.offset = in.offset();
+      out.influence_distance = in.influence_distance();
+      out.min_distance = in.min_distance();
+      out.central_differences = in.gradient() == v1::PotentialField::CENTRAL_DIFFERENCE;
+      return out;
+    }
+    case v1::Field::kLinear: {
+      const auto& in = field.linear();
+      LinearFieldSpec out;
+      out.origin = from_proto(in.origin());
+      out.force = from_proto(in.force());
+      for (int row = 0; row < in.jacobian_size() && row < 3; ++row) out.jacobian[row] = from_proto(in.jacobian(row));
+      out.radius = in.radius();
+      out.fade_width = in.fade_width();
+      return out;
+    }
+    case v1::Field::kViscous:
+      return ViscousFieldSpec{field.viscous().damping(), from_proto(field.viscous().center()),
+                              field.viscous().radius(), field.viscous().fade_width()};
+    case v1::Field::kDetent:
+      return DetentFieldSpec{distance_from_proto(field.detent().distance()), field.detent().depth(),
+                             field.detent().radius(), field.detent().rim_height(),
+                             field.detent().rim_width()};
+    default:  // spring_to_point
+      return SpringFieldSpec{from_proto(field.spring_to_point().anchor()), field.spring_to_point().stiffness(),
+                             field.spring_to_point().damping(), field.spring_to_point().max_force()};
+  }
+}
+
 v1::OperatorInput to_proto(const OperatorInput& input) {
   v1::OperatorInput out;
   switch (input.mode) {

@@ -3,6 +3,7 @@
 
 #include <vector>
 
+#include "haptic/client.hpp"
 #include "haptic/types.hpp"
 #include "haptic/v1/device.pb.h"
 #include "haptic/v1/scene.pb.h"
@@ -25,6 +26,12 @@ v1::Field to_proto(const LinearFieldSpec& field);
 v1::Field to_proto(const ViscousFieldSpec& field);
 v1::Field to_proto(const DetentFieldSpec& field);
 v1::OperatorInput to_proto(const OperatorInput& input);
+/// The inverses, for reading a scene back (GetScene): an object or field the server holds as the
+/// SDK spec that would make it. A wall's or a sphere's pose orientation is folded into its
+/// normal (walls) or dropped (spheres, where it changes nothing); a potential field's
+/// difference_step has no SDK counterpart (the server's default is used).
+SceneSpec::Object from_proto(const v1::Object& object);
+SceneSpec::Field from_proto(const v1::Field& field);
 DeviceInfo from_proto(const v1::DeviceInfo& info);
 Stats from_proto(const v1::Stats& stats);
 StabilityReport from_proto(const v1::StabilityReport& report);

@@ -148,7 +148,8 @@ Server::Server(const v1::ServerConfig& config)
   }
   std::vector<std::uint64_t> object_ids, field_ids;
   if (const grpc::Status status =
-          scene_->replace_session_scene(0, initial.objects, initial.fields, object_ids, field_ids);
+          scene_->replace_session_scene(0, initial.objects, initial.fields, object_ids, field_ids,
+                                        &config.initial_scene());
       !status.ok()) {
     throw std::runtime_error("initial_scene: " + status.error_message());
   }

@@ -216,7 +216,8 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1:
     return invalid(error);
   }
   std::uint64_t id = 0;
-  if (auto status = deps_.scene.create(request->session_id(), ItemKind::kObject, spec, id);
+  if (auto status = deps_.scene.create(request->session_id(), ItemKind::kObject, spec, id,
+                                      {std::make_shared<const v1::Object>(request->object()), {}});
       !status.ok()) {
     return status;
   }
@@ -237,7 +238,8 @@ grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1:
     return invalid(error);
   }
   if (auto status =
-          deps_.scene.update(request->session_id(), ItemKind::kObject, request->object_id(), spec);
+          deps_.scene.update(request->session_id(), ItemKind::kObject, request->object_id(), spec,
+                             {std::make_shared<const v1::Object>(request->object()), {}});
       !status.ok()) {
     return status;
   }
@@ -264,7 +266,8 @@ grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::
     return invalid(error);
   }
   std::uint64_t id = 0;
-  if (auto status = deps_.scene.create(request->session_id(), ItemKind::kField, spec, id);
+  if (auto status = deps_.scene.create(request->session_id(), ItemKind::kField, spec, id,
+                                      {{}, std::make_shared<const v1::Field>(request->field())});
       !status.ok()) {
     return status;
   }
@@ -279,7 +282,8 @@ grpc::Status HapticService::UpdateField(grpc::ServerContext* context, const v1::
   if (auto error = schema::to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
     return invalid(error);
   }
-  return deps_.scene.update(request->session_id(), ItemKind::kField, request->field_id(), spec);
+  return deps_.scene.update(request->session_id(), ItemKind::kField, request->field_id(), spec,
+                            {{}, std::make_shared<const v1::Field>(request->field())});
 }
 
 grpc::Status HapticService::DeleteField(grpc::ServerContext* context, const v1::DeleteRequest* request,
@@ -314,6 +318,23 @@ grpc::Status HapticService::GetObjectStates(grpc::ServerContext* context, const 
   return grpc::Status::OK;
 }
 
+grpc::Status HapticService::GetScene(grpc::ServerContext* context, const v1::GetSceneRequest* request,
+                                     v1::SceneContents* response) {
+  if (auto status = check_session(context, request->session_id(), Permission::kObserve, "GetScene"); !status.ok()) return status;
+  for (const SceneEntry& entry : deps_.scene.read(request->session_id(), request->all_sessions())) {
+    if (entry.source.object) {
+      *response->mutable_scene()->add_objects() = *entry.source.object;
+      response->add_object_ids(entry.id);
+      response->add_object_sessions(entry.session_id);
+    } else if (entry.source.field) {
+      *response->mutable_scene()->add_fields() = *entry.source.field;
+      response->add_field_ids(entry.id);
+      response->add_field_sessions(entry.session_id);
+    }
+  }
+  return grpc::Status::OK;
+}
+
 grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::ApplySceneRequest* request,
                                        v1::ApplySceneResponse* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "ApplyScene"); !status.ok()) return status;
@@ -326,7 +347,7 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::A
   const std::vector<engine::FieldSpec>& fields = specs.fields;
   std::vector<std::uint64_t> object_ids, field_ids;
   if (auto status = deps_.scene.replace_session_scene(request->session_id(), objects, fields,
-                                                      object_ids, field_ids);
+                                                      object_ids, field_ids, &request->scene());
       !status.ok()) {
     return status;
   }

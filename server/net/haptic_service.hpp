@@ -70,6 +70,8 @@ class HapticService final : public v1::Haptic::Service {
                               v1::SceneEnergy* response) override;
   grpc::Status GetObjectStates(grpc::ServerContext*, const v1::SessionRef* request,
                                v1::ObjectStates* response) override;
+  grpc::Status GetScene(grpc::ServerContext*, const v1::GetSceneRequest* request,
+                        v1::SceneContents* response) override;
   grpc::Status GetStats(grpc::ServerContext*, const v1::SessionRef*, v1::Stats*) override;
   grpc::Status WatchEvents(grpc::ServerContext*, const v1::WatchEventsRequest*,
                            grpc::ServerWriter<v1::Event>*) override;

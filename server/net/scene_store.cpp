@@ -106,7 +106,7 @@ grpc::Status SceneStore::find_owned(std::uint64_t session_id, ItemKind kind, std
 
 grpc::Status SceneStore::create(std::uint64_t session_id, ItemKind kind,
                                 const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec,
-                                std::uint64_t& id_out) {
+                                std::uint64_t& id_out, ItemSource source) {
   std::lock_guard lock(mutex_);
   if (live_items_of(session_id) >= max_items_per_session_) {
     return {grpc::StatusCode::RESOURCE_EXHAUSTED,
@@ -116,13 +116,14 @@ grpc::Status SceneStore::create(std::uint64_t session_id, ItemKind kind,
   if (auto status = check_budget(cost_of(spec), kind_name(kind)); !status.ok()) return status;
   id_out = next_id_++;
   items_.emplace(id_out, Item{appearing(session_id, id_out, next_tick_(), next_version_key_++),
-                              kind, spec});
+                              kind, spec, std::move(source)});
   publish_locked();
   return grpc::Status::OK;
 }
 
 grpc::Status SceneStore::update(std::uint64_t session_id, ItemKind kind, std::uint64_t id,
-                                const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec) {
+                                const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec,
+                                ItemSource source) {
   std::lock_guard lock(mutex_);
   Item* item = nullptr;
   if (auto status = find_owned(session_id, kind, id, item, true); !status.ok()) return status;
@@ -167,6 +168,7 @@ grpc::Status SceneStore::update(std::uint64_t session_id, ItemKind kind, std::ui
     }
   }
   item->spec = spec;
+  item->source = std::move(source);
   item->meta.ramps = engine::ItemRamp{};
   item->meta.ramps.appear_tick = now;
   item->meta.version_key = next_version_key_++;
@@ -187,7 +189,8 @@ grpc::Status SceneStore::replace_session_scene(std::uint64_t session_id,
                                                const std::vector<engine::ObjectSpec>& objects,
                                                const std::vector<engine::FieldSpec>& fields,
                                                std::vector<std::uint64_t>& object_ids,
-                                               std::vector<std::uint64_t>& field_ids) {
+                                               std::vector<std::uint64_t>& field_ids,
+                                               const v1::Scene* source) {
   std::lock_guard lock(mutex_);
   if (objects.size() + fields.size() > max_items_per_session_) {
     return {grpc::StatusCode::RESOURCE_EXHAUSTED,
@@ -211,16 +214,20 @@ grpc::Status SceneStore::replace_session_scene(std::uint64_t session_id,
   }
   object_ids.clear();
   field_ids.clear();
-  for (const auto& object : objects) {
+  for (std::size_t i = 0; i < objects.size(); ++i) {
     const std::uint64_t id = next_id_++;
+    ItemSource described;
+    if (source != nullptr) described.object = std::make_shared<const v1::Object>(source->objects(static_cast<int>(i)));
     items_.emplace(id, Item{appearing(session_id, id, fade_begin, next_version_key_++),
-                            ItemKind::kObject, object});
+                            ItemKind::kObject, objects[i], std::move(described)});
     object_ids.push_back(id);
   }
-  for (const auto& field : fields) {
+  for (std::size_t i = 0; i < fields.size(); ++i) {
     const std::uint64_t id = next_id_++;
+    ItemSource described;
+    if (source != nullptr) described.field = std::make_shared<const v1::Field>(source->fields(static_cast<int>(i)));
     items_.emplace(id, Item{appearing(session_id, id, fade_begin, next_version_key_++),
-                            ItemKind::kField, field});
+                            ItemKind::kField, fields[i], std::move(described)});
     field_ids.push_back(id);
   }
   publish_locked();
@@ -269,6 +276,16 @@ std::size_t SceneStore::compact() {
   if (removed > 0) publish_locked();
   exchange_.reclaim();
   return removed;
+}
+
+std::vector<SceneEntry> SceneStore::read(std::uint64_t session_id, bool all_sessions) const {
+  std::lock_guard lock(mutex_);
+  std::vector<SceneEntry> entries;
+  for (const auto& [id, item] : items_) {
+    if (!is_live(item.meta) || (!all_sessions && item.meta.session_id != session_id)) continue;
+    entries.push_back(SceneEntry{id, item.meta.session_id, item.source});
+  }
+  return entries;
 }
 
 SceneCounts SceneStore::counts() const {

@@ -13,12 +13,14 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <variant>
 #include <vector>
 
 #include "engine/scene/compiled_scene.hpp"
+#include "haptic/v1/scene.pb.h"
 #include "engine/scene/scene_spec.hpp"
 #include "runtime/tick_runner.hpp"
 
@@ -39,6 +41,20 @@ struct ItemCost {
 };
 ItemCost cost_of(const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec);
 
+/// An item as its client described it (the request's message, defaults not filled in): what
+/// GetScene reads back. Exactly one is set. Shared, so an update's fading copy costs nothing.
+struct ItemSource {
+  std::shared_ptr<const v1::Object> object;
+  std::shared_ptr<const v1::Field> field;
+};
+
+/// A live item for read-back, in id order.
+struct SceneEntry {
+  std::uint64_t id = 0;
+  std::uint64_t session_id = 0;  // 0: the server's own scene
+  ItemSource source;
+};
+
 struct SceneCounts {
   std::uint32_t objects = 0;  // live (not fading)
   std::uint32_t fields = 0;
@@ -55,19 +71,27 @@ class SceneStore {
              double period_s = 1e-3, double session_force_budget = 0.0, std::uint32_t ports = 1,
              SceneBudget budget = {});
 
+  /// `source` is the message `spec` was made from (kept for read()).
   grpc::Status create(std::uint64_t session_id, ItemKind kind,
                       const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec,
-                      std::uint64_t& id_out);
+                      std::uint64_t& id_out, ItemSource source = {});
   grpc::Status update(std::uint64_t session_id, ItemKind kind, std::uint64_t id,
-                      const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec);
+                      const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec,
+                      ItemSource source = {});
   grpc::Status remove(std::uint64_t session_id, ItemKind kind, std::uint64_t id);
 
   /// Replaces all of the session's items (the old ones fade out). Ids in request order.
+  /// `source` is the scene the specs were made from, item for item (kept for read()).
   grpc::Status replace_session_scene(std::uint64_t session_id,
                                      const std::vector<engine::ObjectSpec>& objects,
                                      const std::vector<engine::FieldSpec>& fields,
                                      std::vector<std::uint64_t>& object_ids,
-                                     std::vector<std::uint64_t>& field_ids);
+                                     std::vector<std::uint64_t>& field_ids,
+                                     const v1::Scene* source = nullptr);
+
+  /// The live items (not fading out) as their clients described them, in id order: the
+  /// session's own, or every session's (and the server's) with `all_sessions`.
+  std::vector<SceneEntry> read(std::uint64_t session_id, bool all_sessions) const;
 
   /// Starts the fade-out of everything the session owns (lease lost, session closed).
   std::size_t remove_session(std::uint64_t session_id);
@@ -89,6 +113,7 @@ class SceneStore {
     engine::ItemMeta meta;
     ItemKind kind;
     std::variant<engine::ObjectSpec, engine::FieldSpec> spec;
+    ItemSource source;
   };
 
   /// The live item `id` of `kind` that `session_id` may change: its own, or (to update) another

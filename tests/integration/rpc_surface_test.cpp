@@ -477,11 +477,12 @@ TEST(RpcSurface, EveryUnaryRpcWithAnUnknownSessionIsNotFoundAndDoesNothing) {
     expect_not_found("GetStats", &Stub::GetStats, v1::SessionRef{}, v1::Stats{});
     expect_not_found("GetSceneEnergy", &Stub::GetSceneEnergy, v1::SessionRef{}, v1::SceneEnergy{});
     expect_not_found("GetObjectStates", &Stub::GetObjectStates, v1::SessionRef{}, v1::ObjectStates{});
+    expect_not_found("GetScene", &Stub::GetScene, v1::GetSceneRequest{}, v1::SceneContents{});
     expect_not_found("SubscribeState", &Stub::SubscribeState, subscribe, v1::SubscribeStateResponse{});
     expect_not_found("SetOperator", &Stub::SetOperator, set_operator, v1::Empty{});
     expect_not_found("Step", &Stub::Step, step, v1::StepResponse{});
   }
-  EXPECT_EQ(calls, 2 * 15);  // every session-scoped unary RPC of haptic.v1.Haptic, twice
+  EXPECT_EQ(calls, 2 * 16);  // every session-scoped unary RPC of haptic.v1.Haptic, twice
 
   // Nothing was created, stepped or set: no ticks ran, and the tool has not been pushed.
   const v1::Stats after = h.stats(session);

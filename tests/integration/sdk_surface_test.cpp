@@ -26,6 +26,7 @@
 #include <string>
 #include <thread>
 #include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "integration/sdk_harness.hpp"
@@ -400,11 +401,8 @@ TEST_F(SdkSurface, EveryObjectAndFieldKindCanReplaceAnItemThroughItsHandle) {
   expect_near(s.force, Vec3{0.3, -0.2, 0.1}, 1e-12, "F0");
 }
 
-// apply_scene takes every object and field kind, all or nothing: the handles come back in the
-// scene's order and each is its item (the energy report lists exactly their ids); a scene with one
-// bad element is refused naming it and leaves the scene applied before untouched.
-TEST_F(SdkSurface, ApplySceneTakesEveryKindAllOrNothingNamingTheBadElement) {
-  Client client(config_for(server_, "scene"));
+/// One object and one field of every kind, each valid and out of the tool's way.
+SceneSpec every_kind_scene() {
   SceneSpec scene;
   scene.objects = {
       WallSpec{.point = {0, 0, -0.05}, .normal = {0, 0, 1}, .impedance = {500.0, 1.0}},
@@ -428,6 +426,15 @@ TEST_F(SdkSurface, ApplySceneTakesEveryKindAllOrNothingNamingTheBadElement) {
       ViscousFieldSpec{.damping = 0.1},
       DetentFieldSpec{.distance = {.kind = Distance::Kind::kPoint, .origin = {-0.2, 0, 0}},
                       .depth = 0.001, .radius = 0.02, .rim_height = 0.0002, .rim_width = 0.005}};
+  return scene;
+}
+
+// apply_scene takes every object and field kind, all or nothing: the handles come back in the
+// scene's order and each is its item (the energy report lists exactly their ids); a scene with one
+// bad element is refused naming it and leaves the scene applied before untouched.
+TEST_F(SdkSurface, ApplySceneTakesEveryKindAllOrNothingNamingTheBadElement) {
+  Client client(config_for(server_, "scene"));
+  const SceneSpec scene = every_kind_scene();
   const AppliedScene applied = client.apply_scene(scene);
   ASSERT_EQ(applied.objects.size(), 6u);
   ASSERT_EQ(applied.fields.size(), 6u);
@@ -471,6 +478,68 @@ TEST_F(SdkSurface, ApplySceneTakesEveryKindAllOrNothingNamingTheBadElement) {
         }
       },
       InvalidArgumentError);
+}
+
+// The scene reads back as it was given, item for item (every kind, an update, a removal), in id
+// order with owners; another session's items only when asked for every session's; and what is
+// read back, applied by another client, makes the same scene.
+TEST(SdkScene, TheSceneReadsBackAsGivenInIdOrderWithOwnersAndWithoutRemovedItems) {
+  // The server's own scene: a floor turned 90 degrees about x, so its normal points along -y.
+  test::ServerProcess server(test::lockstep_config(R"("initial_scene": {"objects": [{
+      "pose": {"position": {"z": -0.5}, "orientation": {"w": 0.7071067811865476, "x": 0.7071067811865476}},
+      "impedance": {"stiffness": 100}, "half_space": {"normal": {"z": 1}}}]})"));
+  Client client(config_for(server, "reader"));
+  const SceneSpec scene = every_kind_scene();
+  AppliedScene applied = client.apply_scene(scene);
+  RegisteredScene read = client.scene();
+  EXPECT_EQ(read.scene.objects, scene.objects);
+  EXPECT_EQ(read.scene.fields, scene.fields);
+  for (std::size_t i = 0; i < applied.objects.size(); ++i) EXPECT_EQ(read.object_ids[i], applied.objects[i].id());
+  for (std::size_t i = 0; i < applied.fields.size(); ++i) EXPECT_EQ(read.field_ids[i], applied.fields[i].id());
+  EXPECT_EQ(read.object_sessions, std::vector<std::uint64_t>(6, client.session_id()));
+
+  // An update keeps its place (its id), a removed field is gone at once (though ramping out), a
+  // new wall comes last.
+  const SphereSpec moved{.center = {0.12, 0, 0}, .radius = 0.015, .impedance = {600.0, 2.0}, .shared = true};
+  applied.objects[1].update(moved);
+  applied.fields[0].remove();
+  const WallSpec extra{.point = {0, 0, -0.08}, .normal = {0, 1, 1}, .impedance = {700.0, 1.0}};
+  ObjectHandle extra_handle = client.add_wall(extra);
+  read = client.scene();
+  SceneSpec expected = scene;
+  expected.objects[1] = moved;
+  expected.objects.push_back(extra);
+  expected.fields.erase(expected.fields.begin());
+  EXPECT_EQ(read.scene.objects, expected.objects);
+  EXPECT_EQ(read.scene.fields, expected.fields);
+  EXPECT_EQ(read.object_ids[1], applied.objects[1].id());
+  EXPECT_EQ(read.object_ids.back(), extra_handle.id());
+
+  // Another session's items are its own; every session's shows them all with their owners,
+  // the server's initial scene (session 0) first, its pose folded into the wall's normal.
+  Client other(config_for(server, "other"));
+  ObjectHandle theirs = other.add_wall({.point = {0, 0, -0.09}, .normal = {0, 0, 1}, .impedance = {800.0, 1.0}});
+  EXPECT_EQ(client.scene().scene.objects.size(), 7u);
+  const RegisteredScene everything = other.scene(true);
+  ASSERT_EQ(everything.scene.objects.size(), 9u);
+  EXPECT_EQ(everything.object_sessions.front(), 0u);
+  const auto* floor = std::get_if<WallSpec>(&everything.scene.objects.front());
+  ASSERT_NE(floor, nullptr);
+  EXPECT_NEAR(floor->normal.x, 0.0, 1e-12);
+  EXPECT_NEAR(floor->normal.y, -1.0, 1e-12);
+  EXPECT_NEAR(floor->normal.z, 0.0, 1e-12);
+  EXPECT_EQ(everything.object_sessions.back(), other.session_id());
+  EXPECT_EQ(everything.object_ids.back(), theirs.id());
+  EXPECT_TRUE(std::is_sorted(everything.object_ids.begin(), everything.object_ids.end()));
+  EXPECT_EQ(std::count(everything.object_sessions.begin(), everything.object_sessions.end(), client.session_id()), 7);
+  EXPECT_EQ(everything.field_sessions, std::vector<std::uint64_t>(5, client.session_id()));
+
+  // Read back and applied by a third client: the same scene.
+  Client copy(config_for(server, "copy"));
+  const AppliedScene copied = copy.apply_scene(client.scene().scene);
+  EXPECT_EQ(copied.objects.size(), 7u);
+  EXPECT_EQ(copy.scene().scene.objects, client.scene().scene.objects);
+  EXPECT_EQ(copy.scene().scene.fields, client.scene().scene.fields);
 }
 
 // A callback that takes far longer than the lease does not lose the session: it runs on a thread

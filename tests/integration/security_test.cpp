@@ -112,6 +112,7 @@ TEST(Security, AnObserverWatchesButCannotChangeAnything) {
 
   // Reading is allowed, and state reaches the observer once the controller steps.
   EXPECT_NO_THROW((void)observer.scene_energy());
+  EXPECT_NO_THROW((void)observer.scene(true));  // reading the scene is observing it
   const std::uint64_t tick = controller.step(5);
   State state;
   EXPECT_TRUE(observer.wait_for_tick(tick, state, std::chrono::seconds(5)));

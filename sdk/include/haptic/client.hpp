@@ -170,6 +170,16 @@ struct SceneSpec {
   std::vector<Field> fields;
 };
 
+/// A scene read back from the server (Client::scene): the objects and fields as each was last
+/// given, in id order, with its id and its session (0: the server's own initial scene).
+struct RegisteredScene {
+  SceneSpec scene;
+  std::vector<std::uint64_t> object_ids;
+  std::vector<std::uint64_t> field_ids;
+  std::vector<std::uint64_t> object_sessions;
+  std::vector<std::uint64_t> field_sessions;
+};
+
 /// The handles of a scene applied whole (Client::apply_scene, apply_scene_file), in order.
 struct AppliedScene {
   std::vector<ObjectHandle> objects;
@@ -227,6 +237,10 @@ class Client {
   /// Every virtual mass in the scene and where it is now (GetObjectStates); as scene_energy(),
   /// from the loop's last tick.
   std::vector<ObjectState> object_states();
+  /// This session's objects and fields as the server holds them (GetScene), each as last given;
+  /// with `all_sessions`, every session's and the server's own (a shared scene, to draw it).
+  /// Items ramping out are not listed. `scene(false).scene` applied elsewhere makes the same.
+  RegisteredScene scene(bool all_sessions = false);
   /// Replaces all of this session's objects and fields at once; if anything is refused, nothing
   /// changes. The server numbers the objects walls first, then spheres ("scene.objects[i]" in its
   /// messages). Handles from earlier calls go stale: their remove() and destructor do nothing and

@@ -101,6 +101,7 @@ struct BoxSpec {
   Impedance impedance{};
   Dynamics dynamics{};      ///< mass > 0: the box can be pushed around
   bool shared = false;      ///< any session may update it; only its owner deletes it
+  friend bool operator==(const BoxSpec&, const BoxSpec&) = default;
 };
 
 /// A solid capsule along its pose's z axis: radius around the segment ±half_length.
@@ -111,6 +112,7 @@ struct CapsuleSpec {
   Impedance impedance{};
   Dynamics dynamics{};
   bool shared = false;      ///< any session may update it; only its owner deletes it
+  friend bool operator==(const CapsuleSpec&, const CapsuleSpec&) = default;
 };
 
 /// A triangle mesh in its pose's frame, rendered with a god object (thin parts hold).
@@ -120,6 +122,7 @@ struct MeshSpec {
   std::vector<std::uint32_t> indices;  ///< Three per triangle.
   Impedance impedance{};
   bool shared = false;      ///< any session may update it; only its owner deletes it
+  friend bool operator==(const MeshSpec&, const MeshSpec&) = default;
 };
 
 /// Russo's tangent-plane local model: the plane through the pose position with outward `normal`
@@ -133,6 +136,7 @@ struct TangentPlaneSpec {
   double tangential_stiffness = 0.0; ///< Unit: N/m.
   double tangential_damping = 0.0;   ///< Unit: N·s/m.
   Impedance impedance{};
+  friend bool operator==(const TangentPlaneSpec&, const TangentPlaneSpec&) = default;
 };
 
 /// A distance function the fields are built on.
@@ -142,6 +146,7 @@ struct Distance {
   Vec3 origin{};            ///< Unit: m.
   Vec3 axis{0, 0, 1};       ///< kLine: direction; kPlane: normal.
   double radius = 0.0;      ///< kSphere. Unit: m.
+  friend bool operator==(const Distance&, const Distance&) = default;
 };
 
 /// A spring onto a point, line or plane (the zero set of `anchor`).
@@ -150,6 +155,7 @@ struct DistanceSpringSpec {
   double stiffness = 0.0;   ///< Unit: N/m.
   double damping = 0.0;     ///< Unit: N·s/m.
   double max_force = 0.0;   ///< Unit: N. 0: no clip.
+  friend bool operator==(const DistanceSpringSpec&, const DistanceSpringSpec&) = default;
 };
 
 /// F = −∇U over a distance f: polynomial (1/n) K (c − f)ⁿ where f < c, or Khatib
@@ -164,6 +170,7 @@ struct PotentialFieldSpec {
   double influence_distance = 0.0;  ///< f0 (Khatib). Unit: m.
   double min_distance = 0.0;        ///< Khatib's force is capped below this. Unit: m.
   bool central_differences = false; ///< gradient by central differences instead of analytic
+  friend bool operator==(const PotentialFieldSpec&, const PotentialFieldSpec&) = default;
 };
 
 /// F = F0 + K (p − origin) inside `radius`, fading (C¹) to zero over the outer `fade_width`.
@@ -173,6 +180,7 @@ struct LinearFieldSpec {
   Vec3 jacobian[3]{};       ///< Rows of K. Unit: N/m.
   double radius = 0.0;      ///< Unit: m.
   double fade_width = 0.0;  ///< Unit: m.
+  friend bool operator==(const LinearFieldSpec&, const LinearFieldSpec&) = default;
 };
 
 /// F = −B v, everywhere (radius 0) or inside a sphere with a fade.
@@ -181,6 +189,7 @@ struct ViscousFieldSpec {
   Vec3 center{};
   double radius = 0.0;      ///< Unit: m. 0: everywhere.
   double fade_width = 0.0;  ///< Unit: m.
+  friend bool operator==(const ViscousFieldSpec&, const ViscousFieldSpec&) = default;
 };
 
 /// A potential well with a repulsive rim around the zero set of `distance`.
@@ -190,6 +199,7 @@ struct DetentFieldSpec {
   double radius = 0.0;      ///< Unit: m.
   double rim_height = 0.0;  ///< Unit: J.
   double rim_width = 0.0;   ///< Unit: m.
+  friend bool operator==(const DetentFieldSpec&, const DetentFieldSpec&) = default;
 };
 
 /// Bits of State::flags.
