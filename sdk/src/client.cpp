@@ -12,59 +12,74 @@ namespace haptic {
 namespace {
 
 // Client-side checks for obvious mistakes, so they fail fast with a clear message; the server
-// validates everything again and stays the authority.
-void check_finite(double value, const char* field) {
-  if (!std::isfinite(value)) throw InvalidArgumentError(std::string(field) + ": must be finite");
+// validates everything again and stays the authority. Each names the field by the server's path
+// for it (`path` is where the item sits in the request: "object", "scene.objects[2]", ...), and
+// the caller puts the call's name first (checked()), so a message reads the same whichever side
+// found the mistake.
+void check_finite(double value, const std::string& field) {
+  if (!std::isfinite(value)) throw InvalidArgumentError(field + ": must be finite");
 }
 
 void check_finite(const Vec3& v, const std::string& field) {
-  check_finite(v.x, (field + ".x").c_str());
-  check_finite(v.y, (field + ".y").c_str());
-  check_finite(v.z, (field + ".z").c_str());
+  check_finite(v.x, field + ".x");
+  check_finite(v.y, field + ".y");
+  check_finite(v.z, field + ".z");
 }
 
-void check_non_negative(double value, const char* field) {
+void check_non_negative(double value, const std::string& field) {
   check_finite(value, field);
-  if (value < 0.0) throw InvalidArgumentError(std::string(field) + ": must be >= 0");
+  if (value < 0.0) throw InvalidArgumentError(field + ": must be >= 0");
 }
 
-void check_impedance(const Impedance& impedance) {
-  check_non_negative(impedance.stiffness, "impedance.stiffness");
-  check_non_negative(impedance.damping, "impedance.damping");
+void check_impedance(const Impedance& impedance, const std::string& path) {
+  check_non_negative(impedance.stiffness, path + ".impedance.stiffness");
+  check_non_negative(impedance.damping, path + ".impedance.damping");
 }
 
-void check(const WallSpec& wall) {
-  check_impedance(wall.impedance);
-  check_finite(wall.point, "wall.point");
-  check_finite(wall.normal, "wall.normal");
-  if (wall.normal == Vec3{}) throw InvalidArgumentError("wall.normal: must be non-zero");
+void check(const WallSpec& wall, const std::string& path) {
+  check_impedance(wall.impedance, path);
+  check_finite(wall.point, path + ".pose.position");
+  check_finite(wall.normal, path + ".half_space.normal");
+  if (wall.normal == Vec3{}) throw InvalidArgumentError(path + ".half_space.normal: must be non-zero");
 }
 
-void check(const SphereSpec& sphere) {
-  check_impedance(sphere.impedance);
-  check_finite(sphere.center, "sphere.center");
-  if (!(sphere.radius > 0.0)) throw InvalidArgumentError("sphere.radius: must be > 0");
+void check(const SphereSpec& sphere, const std::string& path) {
+  check_impedance(sphere.impedance, path);
+  check_finite(sphere.center, path + ".pose.position");
+  if (!(sphere.radius > 0.0)) throw InvalidArgumentError(path + ".sphere.radius: must be > 0");
 }
 
-void check(const SpringFieldSpec& spring) {
-  check_finite(spring.anchor, "spring.anchor");
-  check_non_negative(spring.stiffness, "spring.stiffness");
-  check_non_negative(spring.damping, "spring.damping");
-  check_non_negative(spring.max_force, "spring.max_force");
+void check(const SpringFieldSpec& spring, const std::string& path) {
+  check_finite(spring.anchor, path + ".spring_to_point.anchor");
+  check_non_negative(spring.stiffness, path + ".spring_to_point.stiffness");
+  check_non_negative(spring.damping, path + ".spring_to_point.damping");
+  check_non_negative(spring.max_force, path + ".spring_to_point.max_force");
 }
 
-void check(const OperatorInput& input) {
+void check(const OperatorInput& input, const std::string& path) {
   if (input.mode == OperatorInput::Mode::kFollow) {
-    check_finite(input.target, "input.target");
-    check_non_negative(input.stiffness, "input.stiffness");
-    check_non_negative(input.damping, "input.damping");
+    check_finite(input.target, path + ".target");
+    check_non_negative(input.stiffness, path + ".stiffness");
+    check_non_negative(input.damping, path + ".damping");
   } else if (input.mode == OperatorInput::Mode::kPush) {
-    check_finite(input.force, "input.force");
+    check_finite(input.force, path + ".force");
   }
 }
 
-detail::ClientCore& require(const std::shared_ptr<detail::ClientCore>& core) {
-  if (!core) throw Error(ErrorCode::kInternal, "the Client was moved from or closed");
+// Runs client-side checks for `call`, putting its name first as the server's errors have it
+// ("CreateObject: object.sphere.radius: must be > 0").
+template <typename Checks>
+void checked(const char* call, Checks&& checks) {
+  try {
+    checks();
+  } catch (const InvalidArgumentError& error) {
+    throw InvalidArgumentError(std::string(call) + ": " + error.what());
+  }
+}
+
+// `operation`: the RPC or method the caller is in, named first in the error.
+detail::ClientCore& require(const std::shared_ptr<detail::ClientCore>& core, const char* operation) {
+  if (!core) throw Error(ErrorCode::kInternal, std::string(operation) + ": the Client was moved from or closed");
   return *core;
 }
 
@@ -80,7 +95,7 @@ std::shared_ptr<detail::ClientCore> current_core(const std::weak_ptr<detail::Cli
 detail::ClientCore& require_current(const std::weak_ptr<detail::ClientCore>& core,
                                     std::uint64_t generation, const char* call, std::uint64_t id) {
   auto locked = core.lock();
-  if (!locked) throw Error(ErrorCode::kInternal, "the Client was moved from or closed");
+  if (!locked) throw Error(ErrorCode::kInternal, std::string(call) + ": the Client was moved from or closed");
   if (locked->scene_generation() != generation) {
     throw NotFoundError(std::string(call) + ": item " + std::to_string(id) +
                         " was replaced by apply_scene");
@@ -88,31 +103,16 @@ detail::ClientCore& require_current(const std::weak_ptr<detail::ClientCore>& cor
   return *locked;
 }
 
-// Runs check() on each spec, naming the offending one ("walls[2].impedance...").
-template <typename Spec>
-void check_each(const std::vector<Spec>& specs, const char* list) {
-  for (std::size_t i = 0; i < specs.size(); ++i) {
-    try {
-      check(specs[i]);
-    } catch (const InvalidArgumentError& error) {
-      throw InvalidArgumentError(std::string(list) + "[" + std::to_string(i) + "]: " + error.what());
-    }
-  }
-}
-
 // Checks (where the SDK has a check for the kind) and converts each item of a list of spec
-// variants, naming the offending one ("scene.objects[2]: ..."); `add` takes each message.
+// variants, naming the offending one ("ApplyScene: scene.objects[2].sphere.radius: ...");
+// `add` takes each message.
 template <typename Variant, typename Add>
 void convert_each(const std::vector<Variant>& items, const char* list, Add add) {
   for (std::size_t i = 0; i < items.size(); ++i) {
     std::visit(
         [&](const auto& item) {
-          if constexpr (requires { check(item); }) {
-            try {
-              check(item);
-            } catch (const InvalidArgumentError& error) {
-              throw InvalidArgumentError(std::string(list) + "[" + std::to_string(i) + "]: " + error.what());
-            }
+          if constexpr (requires { check(item, std::string()); }) {
+            checked("ApplyScene", [&] { check(item, std::string(list) + "[" + std::to_string(i) + "]"); });
           }
           add(detail::to_proto(item));
         },
@@ -130,30 +130,30 @@ Client::Client(Client&&) noexcept = default;
 Client& Client::operator=(Client&&) noexcept = default;
 
 ObjectHandle Client::register_object(const detail::WireObject& object) {
-  detail::ClientCore& core = require(core_);
+  detail::ClientCore& core = require(core_, "CreateObject");
   const detail::ClientCore::Created made = core.create_object(object.message);
   return ObjectHandle(core_, made.key, made.ref.id(), core.scene_generation(),
                       detail::from_proto(made.ref.stability()));
 }
 
 FieldHandle Client::register_field(const detail::WireField& field) {
-  detail::ClientCore& core = require(core_);
+  detail::ClientCore& core = require(core_, "CreateField");
   const detail::ClientCore::Created made = core.create_field(field.message);
   return FieldHandle(core_, made.key, made.ref.id(), core.scene_generation());
 }
 
 ObjectHandle Client::add_wall(const WallSpec& wall) {
-  check(wall);
+  checked("CreateObject", [&] { check(wall, "object"); });
   return register_object({detail::to_proto(wall)});
 }
 
 ObjectHandle Client::add_sphere(const SphereSpec& sphere) {
-  check(sphere);
+  checked("CreateObject", [&] { check(sphere, "object"); });
   return register_object({detail::to_proto(sphere)});
 }
 
 FieldHandle Client::add_spring_field(const SpringFieldSpec& spring) {
-  check(spring);
+  checked("CreateField", [&] { check(spring, "field"); });
   return register_field({detail::to_proto(spring)});
 }
 
@@ -196,7 +196,7 @@ FieldHandle Client::add_field(const DetentFieldSpec& detent) {
 Client::FileScene Client::apply_scene_file(const std::string& path) {
   v1::Scene scene;
   if (const std::string error = io::read_scene_file(path, scene); !error.empty()) {
-    throw InvalidArgumentError(error);
+    throw InvalidArgumentError("ApplyScene: " + error);
   }
   return apply_wire_scene({scene});
 }
@@ -209,7 +209,7 @@ AppliedScene Client::apply_scene(const SceneSpec& spec) {
 }
 
 AppliedScene Client::apply_wire_scene(const detail::WireScene& scene) {
-  detail::ClientCore& core = require(core_);
+  detail::ClientCore& core = require(core_, "ApplyScene");
   const detail::ClientCore::Applied applied = core.apply_scene(scene.message);
   const v1::ApplySceneResponse& reply = applied.reply;
   const std::uint64_t generation = core.scene_generation();
@@ -227,9 +227,10 @@ AppliedScene Client::apply_wire_scene(const detail::WireScene& scene) {
 }
 
 std::vector<ItemEnergy> Client::scene_energy() {
+  detail::ClientCore& core = require(core_, "GetSceneEnergy");
   v1::SessionRef request;
-  request.set_session_id(session_id());
-  const auto reply = require(core_).call<v1::SessionRef, v1::SceneEnergy>(
+  request.set_session_id(core.session_id());
+  const auto reply = core.call<v1::SessionRef, v1::SceneEnergy>(
       "GetSceneEnergy", &v1::Haptic::Stub::GetSceneEnergy, request);
   std::vector<ItemEnergy> out;
   for (const auto& item : reply.items()) {
@@ -240,9 +241,10 @@ std::vector<ItemEnergy> Client::scene_energy() {
 }
 
 std::vector<ObjectState> Client::object_states() {
+  detail::ClientCore& core = require(core_, "GetObjectStates");
   v1::SessionRef request;
-  request.set_session_id(session_id());
-  const auto reply = require(core_).call<v1::SessionRef, v1::ObjectStates>(
+  request.set_session_id(core.session_id());
+  const auto reply = core.call<v1::SessionRef, v1::ObjectStates>(
       "GetObjectStates", &v1::Haptic::Stub::GetObjectStates, request);
   std::vector<ObjectState> out;
   for (const auto& object : reply.objects()) {
@@ -252,10 +254,11 @@ std::vector<ObjectState> Client::object_states() {
 }
 
 RegisteredScene Client::scene(bool all_sessions) {
+  detail::ClientCore& core = require(core_, "GetScene");
   v1::GetSceneRequest request;
-  request.set_session_id(session_id());
+  request.set_session_id(core.session_id());
   request.set_all_sessions(all_sessions);
-  const auto reply = require(core_).call<v1::GetSceneRequest, v1::SceneContents>(
+  const auto reply = core.call<v1::GetSceneRequest, v1::SceneContents>(
       "GetScene", &v1::Haptic::Stub::GetScene, request);
   RegisteredScene out;
   for (const auto& object : reply.scene().objects()) out.scene.objects.push_back(detail::from_proto(object));
@@ -270,9 +273,6 @@ RegisteredScene Client::scene(bool all_sessions) {
 SceneHandles Client::apply_scene(const std::vector<WallSpec>& walls,
                                  const std::vector<SphereSpec>& spheres,
                                  const std::vector<SpringFieldSpec>& springs) {
-  check_each(walls, "walls");
-  check_each(spheres, "spheres");
-  check_each(springs, "springs");
   SceneSpec scene;
   scene.objects.insert(scene.objects.end(), walls.begin(), walls.end());
   scene.objects.insert(scene.objects.end(), spheres.begin(), spheres.end());
@@ -287,40 +287,43 @@ SceneHandles Client::apply_scene(const std::vector<WallSpec>& walls,
 }
 
 void Client::set_operator(const OperatorInput& input) {
-  check(input);
+  detail::ClientCore& core = require(core_, "SetOperator");
+  checked("SetOperator", [&] { check(input, "input"); });
   v1::SetOperatorRequest request;
-  request.set_session_id(session_id());
+  request.set_session_id(core.session_id());
   *request.mutable_input() = detail::to_proto(input);
-  require(core_).call<v1::SetOperatorRequest, v1::Empty>("SetOperator",
-                                                         &v1::Haptic::Stub::SetOperator, request);
+  core.call<v1::SetOperatorRequest, v1::Empty>("SetOperator", &v1::Haptic::Stub::SetOperator, request);
 }
 
 std::uint64_t Client::step(std::uint32_t ticks) {
+  detail::ClientCore& core = require(core_, "Step");
   v1::StepRequest request;
-  request.set_session_id(session_id());
+  request.set_session_id(core.session_id());
   request.set_ticks(ticks);
-  detail::ClientCore& core = require(core_);
   const auto reply =
       core.call<v1::StepRequest, v1::StepResponse>("Step", &v1::Haptic::Stub::Step, request);
   if (reply.has_state()) core.udp().offer(detail::from_proto(reply.state()));
   return reply.tick();
 }
 
-void Client::subscribe(std::uint32_t decimation) { require(core_).subscribe(decimation); }
+void Client::subscribe(std::uint32_t decimation) { require(core_, "SubscribeState").subscribe(decimation); }
 
-const DeviceInfo& Client::device_info() const { return require(core_).device_info(); }
+const DeviceInfo& Client::device_info() const { return require(core_, "device_info").device_info(); }
 
 Stats Client::stats() {
+  detail::ClientCore& core = require(core_, "GetStats");
   v1::SessionRef ref;
-  ref.set_session_id(session_id());
+  ref.set_session_id(core.session_id());
   return detail::from_proto(
-      require(core_).call<v1::SessionRef, v1::Stats>("GetStats", &v1::Haptic::Stub::GetStats, ref));
+      core.call<v1::SessionRef, v1::Stats>(
+      "GetStats", &v1::Haptic::Stub::GetStats, ref));
 }
 
 std::vector<SessionSummary> Client::sessions() {
+  detail::ClientCore& core = require(core_, "ListSessions");
   v1::SessionRef ref;
-  ref.set_session_id(session_id());
-  const auto list = require(core_).call<v1::SessionRef, v1::SessionList>(
+  ref.set_session_id(core.session_id());
+  const auto list = core.call<v1::SessionRef, v1::SessionList>(
       "ListSessions", &v1::Haptic::Stub::ListSessions, ref);
   std::vector<SessionSummary> out;
   out.reserve(static_cast<std::size_t>(list.sessions_size()));
@@ -329,58 +332,58 @@ std::vector<SessionSummary> Client::sessions() {
 }
 
 void Client::kick_session(std::uint64_t target, const std::string& reason) {
+  detail::ClientCore& core = require(core_, "KickSession");
   v1::KickSessionRequest request;
-  request.set_session_id(session_id());
+  request.set_session_id(core.session_id());
   request.set_target_session_id(target);
   request.set_reason(reason);
-  require(core_).call<v1::KickSessionRequest, v1::Empty>("KickSession",
-                                                        &v1::Haptic::Stub::KickSession, request);
+  core.call<v1::KickSessionRequest, v1::Empty>("KickSession", &v1::Haptic::Stub::KickSession, request);
 }
 
-std::uint64_t Client::session_id() const { return require(core_).session_id(); }
+std::uint64_t Client::session_id() const { return require(core_, "session_id").session_id(); }
 
-std::chrono::milliseconds Client::lease_timeout() const { return require(core_).lease_timeout(); }
+std::chrono::milliseconds Client::lease_timeout() const { return require(core_, "lease_timeout").lease_timeout(); }
 
 void Client::on_state(std::function<void(const State&)> callback) {
-  require(core_).udp().on_state(std::move(callback));
+  require(core_, "on_state").udp().on_state(std::move(callback));
 }
 
 void Client::on_event(std::function<void(const Event&)> callback) {
   if (!callback) {
-    require(core_).watch_events({});
+    require(core_, "WatchEvents").watch_events({});
     return;
   }
-  require(core_).watch_events(
+  require(core_, "WatchEvents").watch_events(
       [callback = std::move(callback)](const v1::Event& event) { callback(detail::from_proto(event)); });
 }
 
 bool Client::poll_state(State& out, std::chrono::milliseconds timeout) {
-  return require(core_).udp().poll(out, timeout);
+  return require(core_, "poll_state").udp().poll(out, timeout);
 }
 
 bool Client::wait_for_tick(std::uint64_t tick, State& out, std::chrono::milliseconds timeout) {
-  return require(core_).udp().wait_for_tick(tick, out, timeout);
+  return require(core_, "wait_for_tick").udp().wait_for_tick(tick, out, timeout);
 }
 
 std::optional<std::chrono::nanoseconds> Client::clock_offset() const {
-  return require(core_).udp().clock_offset();
+  return require(core_, "clock_offset").udp().clock_offset();
 }
 
-std::optional<double> Client::clock_drift() const { return require(core_).udp().clock_drift(); }
+std::optional<double> Client::clock_drift() const { return require(core_, "clock_drift").udp().clock_drift(); }
 
 std::optional<double> Client::server_time_at(std::chrono::steady_clock::time_point local) const {
-  return require(core_).udp().server_time_at(local);
+  return require(core_, "server_time_at").udp().server_time_at(local);
 }
 
-void Client::set_heartbeats_enabled(bool enabled) { require(core_).set_heartbeats_enabled(enabled); }
+void Client::set_heartbeats_enabled(bool enabled) { require(core_, "set_heartbeats_enabled").set_heartbeats_enabled(enabled); }
 
 void Client::on_connection(std::function<void(const ConnectionChange&)> callback) {
-  require(core_).on_connection(std::move(callback));
+  require(core_, "on_connection").on_connection(std::move(callback));
 }
 
-ConnectionChange::State Client::connection_state() const { return require(core_).connection_state(); }
+ConnectionChange::State Client::connection_state() const { return require(core_, "connection_state").connection_state(); }
 
-ReceiveCounters Client::receive_counters() const { return require(core_).counters(); }
+ReceiveCounters Client::receive_counters() const { return require(core_, "receive_counters").counters(); }
 
 void Client::close() {
   if (core_) {
@@ -462,12 +465,12 @@ std::uint64_t ItemHandle::release() noexcept {
 }  // namespace detail
 
 void ObjectHandle::update(const WallSpec& wall) {
-  check(wall);
+  checked("UpdateObject", [&] { check(wall, "object"); });
   replace({detail::to_proto(wall)});
 }
 
 void ObjectHandle::update(const SphereSpec& sphere) {
-  check(sphere);
+  checked("UpdateObject", [&] { check(sphere, "object"); });
   replace({detail::to_proto(sphere)});
 }
 
@@ -482,7 +485,7 @@ void ObjectHandle::replace(const detail::WireObject& object) {
 }
 
 void FieldHandle::update(const SpringFieldSpec& spring) {
-  check(spring);
+  checked("UpdateField", [&] { check(spring, "field"); });
   replace({detail::to_proto(spring)});
 }
 void FieldHandle::update(const DistanceSpringSpec& spring) { replace({detail::to_proto(spring)}); }

@@ -39,32 +39,34 @@ std::uint16_t udp_port_of(const std::string& address) {
                        std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
   const unsigned long port = numeric ? std::stoul(digits) : 0;
   if (!numeric || port == 0 || port > 65535 || colon == 0) {
-    throw InvalidArgumentError("udp_address: '" + address + "' is not host:port with a port 1 to 65535");
+    throw InvalidArgumentError("ClientConfig: udp_address: '" + address +
+                               "' is not host:port with a port 1 to 65535");
   }
   return static_cast<std::uint16_t>(port);
 }
 
 void check_config(const ClientConfig& config) {
-  if (config.server_address.empty()) throw InvalidArgumentError("server_address: must not be empty");
+  if (config.server_address.empty()) throw InvalidArgumentError("ClientConfig: server_address: must not be empty");
   if (config.client_name.empty() || config.client_name.size() > 64) {
-    throw InvalidArgumentError("client_name: must be 1 to 64 characters");
+    throw InvalidArgumentError("ClientConfig: client_name: must be 1 to 64 characters");
   }
-  if (config.rpc_timeout.count() <= 0) throw InvalidArgumentError("rpc_timeout: must be positive");
+  if (config.rpc_timeout.count() <= 0) throw InvalidArgumentError("ClientConfig: rpc_timeout: must be positive");
   if (config.heartbeat_period.count() <= 0) {
-    throw InvalidArgumentError("heartbeat_period: must be positive");
+    throw InvalidArgumentError("ClientConfig: heartbeat_period: must be positive");
   }
   if (!config.udp_address.empty()) udp_port_of(config.udp_address);  // throws if it names none
   if (config.reconnect_backoff_min.count() <= 0 ||
       config.reconnect_backoff_max < config.reconnect_backoff_min) {
     throw InvalidArgumentError(
-        "reconnect_backoff_min, reconnect_backoff_max: must be positive, the max at least the min");
+        "ClientConfig: reconnect_backoff_min, reconnect_backoff_max: must be positive, the max at "
+        "least the min");
   }
 }
 
 std::string read_pem(const char* field, const std::string& path) {
   std::ifstream file(path, std::ios::binary);
   if (!file) {
-    throw InvalidArgumentError(std::string("tls.") + field + ": cannot read '" + path + "': " +
+    throw InvalidArgumentError(std::string("ClientConfig: tls.") + field + ": cannot read '" + path + "': " +
                                std::strerror(errno));
   }
   std::stringstream text;
@@ -79,9 +81,9 @@ std::shared_ptr<grpc::Channel> make_channel(const ClientConfig& config) {
                                      arguments);
   }
   const TlsOptions& tls = *config.tls;
-  if (tls.ca_file.empty()) throw InvalidArgumentError("tls.ca_file: required with tls");
+  if (tls.ca_file.empty()) throw InvalidArgumentError("ClientConfig: tls.ca_file: required with tls");
   if (tls.cert_file.empty() != tls.key_file.empty()) {
-    throw InvalidArgumentError("tls.cert_file, tls.key_file: give both (mTLS) or neither");
+    throw InvalidArgumentError("ClientConfig: tls.cert_file, tls.key_file: give both (mTLS) or neither");
   }
   grpc::SslCredentialsOptions options;
   options.pem_root_certs = read_pem("ca_file", tls.ca_file);

@@ -249,7 +249,7 @@ class Client {
                            const std::vector<SphereSpec>& spheres,
                            const std::vector<SpringFieldSpec>& springs);
   /// The same for a scene of every object and field kind; the handles come in the scene's order.
-  /// InvalidArgumentError names the item ("scene.objects[3].box.half_extents.y: …").
+  /// InvalidArgumentError names the item ("ApplyScene: scene.objects[3].box.half_extents.y: …").
   AppliedScene apply_scene(const SceneSpec& scene);
 
   /// Sets what the server's simulated operator does (FailedPreconditionError on real hardware).

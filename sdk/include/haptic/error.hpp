@@ -1,5 +1,12 @@
 #pragma once
 // The SDK's exceptions: one small hierarchy, each carrying the server's message.
+//
+// Every message reads "<call>: <field path>: <what is wrong>" (the path where there is one):
+// <call> is the RPC the failing method makes (CreateObject, UpdateObject, ApplyScene,
+// SetOperator, GetStats, ...), or the method's own name for one that makes none (session_id,
+// poll_state), or "ClientConfig" for a bad configuration; <field path> is the server's name for
+// the field ("object.sphere.radius", "scene.objects[2].impedance.stiffness", "input.target.x").
+// A mistake the SDK catches before asking reads exactly as the server would say it.
 
 #include <cstdint>
 #include <stdexcept>

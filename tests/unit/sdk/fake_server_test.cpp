@@ -11,6 +11,7 @@
 
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -312,18 +313,49 @@ TEST_F(FakeServerTest, ServersInvalidArgumentBecomesInvalidArgumentErrorWithItsM
     FAIL() << "no exception";
   } catch (const InvalidArgumentError& error) {
     EXPECT_EQ(error.code(), ErrorCode::kInvalidArgument);
-    EXPECT_NE(std::string(error.what()).find("object.impedance.stiffness: must be <= 100000"),
-              std::string::npos)
+    EXPECT_EQ(std::string(error.what()).rfind("CreateObject: object.impedance.stiffness: must be <= 100000", 0),
+              0u)
         << error.what();
   }
 }
 
-TEST_F(FakeServerTest, ObviousMistakesAreCaughtBeforeTheServerIsAsked) {
+/// The message of the haptic::Error `action` throws ("" if none).
+template <typename Action>
+std::string error_of(Action&& action) {
+  try {
+    action();
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return {};
+}
+
+// Every error names the call first and then the field by the server's path for it, the same
+// whichever side found the mistake: "CreateObject: object.impedance.stiffness: ...".
+TEST_F(FakeServerTest, ObviousMistakesAreCaughtBeforeTheServerIsAskedNamingCallAndField) {
   Client client(config_);
-  EXPECT_THROW(client.add_wall(floor_wall(-1.0)), InvalidArgumentError);
-  EXPECT_THROW(client.add_wall({.normal = {0.0, 0.0, 0.0}}), InvalidArgumentError);
-  EXPECT_THROW(client.add_sphere({.radius = 0.0}), InvalidArgumentError);
+  EXPECT_EQ(error_of([&] { client.add_wall(floor_wall(-1.0)); }),
+            "CreateObject: object.impedance.stiffness: must be >= 0");
+  EXPECT_EQ(error_of([&] { client.add_wall({.normal = {0.0, 0.0, 0.0}}); }),
+            "CreateObject: object.half_space.normal: must be non-zero");
+  EXPECT_EQ(error_of([&] { client.add_sphere({.radius = 0.0}); }),
+            "CreateObject: object.sphere.radius: must be > 0");
+  EXPECT_EQ(error_of([&] { client.add_spring_field({.stiffness = -2.0}); }),
+            "CreateField: field.spring_to_point.stiffness: must be >= 0");
+  EXPECT_EQ(error_of([&] {
+              client.set_operator(OperatorInput::follow({std::nan(""), 0, 0}, 100.0, 1.0));
+            }),
+            "SetOperator: input.target.x: must be finite");
   EXPECT_TRUE(service_.record().creates.empty());
+  ObjectHandle wall = client.add_wall(floor_wall(1000.0));
+  EXPECT_EQ(error_of([&] { wall.update(WallSpec{.impedance = {1000.0, -1.0}}); }),
+            "UpdateObject: object.impedance.damping: must be >= 0");
+  ClientConfig bad = config_;
+  bad.rpc_timeout = std::chrono::milliseconds(0);
+  EXPECT_EQ(error_of([&] { Client refused(bad); }), "ClientConfig: rpc_timeout: must be positive");
+  Client moved_to = std::move(client);
+  EXPECT_EQ(error_of([&] { (void)client.stats(); }), "GetStats: the Client was moved from or closed");
+  EXPECT_EQ(error_of([&] { (void)client.session_id(); }), "session_id: the Client was moved from or closed");
 }
 
 TEST_F(FakeServerTest, ApplySceneSendsWallsThenSpheresAndStalesEarlierHandles) {
@@ -368,7 +400,7 @@ TEST_F(FakeServerTest, ApplySceneNamesTheBadSpecAndSendsNothing) {
     client.apply_scene({floor_wall(1000.0), floor_wall(-5.0)}, {}, {});
     FAIL() << "no exception";
   } catch (const InvalidArgumentError& error) {
-    EXPECT_EQ(std::string(error.what()), "walls[1]: impedance.stiffness: must be >= 0");
+    EXPECT_EQ(std::string(error.what()), "ApplyScene: scene.objects[1].impedance.stiffness: must be >= 0");
   }
   EXPECT_TRUE(service_.record().scenes.empty());
 }
