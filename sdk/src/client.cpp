@@ -387,6 +387,11 @@ ReceiveCounters Client::receive_counters() const { return require(core_, "receiv
 
 void Client::close() {
   if (core_) {
+    if (core_->on_callback_thread()) {
+      throw FailedPreconditionError(
+          "close: called from inside one of this client's callbacks, whose thread closing waits "
+          "for; return from the callback and close after");
+    }
     auto core = std::move(core_);
     core->close_session();
   }

@@ -236,6 +236,15 @@ void ClientCore::subscribe(std::uint32_t decimation) {
   }
 }
 
+bool ClientCore::on_callback_thread() const {
+  const auto self = std::this_thread::get_id();
+  {
+    std::lock_guard lock(events_mutex_);  // watch_events replaces the thread
+    if (self == events_thread_.get_id()) return true;
+  }
+  return self == supervisor_.get_id() || (udp_ && udp_->on_callback_thread());
+}
+
 void ClientCore::close_session() {
   stop_supervisor();
   if (closed_) return;
@@ -453,6 +462,7 @@ ClientCore::Probe ClientCore::probe(std::string& why) {
       why = "the server does not answer: " + status.error_message();
       return Probe::kUnreachable;
     case grpc::StatusCode::PERMISSION_DENIED:  // every role may ask this: the session was ended
+    case grpc::StatusCode::UNAUTHENTICATED:    // the token expired: no reconnection would help
       why = status.error_message();
       return Probe::kEnded;
     default:

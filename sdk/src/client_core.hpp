@@ -61,6 +61,8 @@ class ClientCore {
   std::uint64_t server_id(std::uint64_t key) const;
   /// Sets the state decimation; for n > 0 waits until the server knows our UDP address.
   void subscribe(std::uint32_t decimation);
+  /// Whether the calling thread runs one of this client's callbacks (state, events, connection).
+  bool on_callback_thread() const;
   void close_session();
   /// Streams WatchEvents on a thread of its own and calls `callback` with each event (the first
   /// is WATCH_STARTED); a new callback replaces the stream, an empty one ends it. Resumed after a
@@ -140,7 +142,7 @@ class ClientCore {
   std::uint64_t next_key_ = 1;           // guarded by items_mutex_
 
   // The event stream: its thread, its context (cancelled from here to end it), its callback.
-  std::mutex events_mutex_;
+  mutable std::mutex events_mutex_;
   std::unique_ptr<grpc::ClientContext> events_context_;
   std::function<void(const v1::Event&)> events_callback_;  // guarded by events_mutex_
   std::thread events_thread_;

@@ -53,6 +53,8 @@ class UdpLink {
   std::optional<double> clock_drift() const;
   std::optional<double> server_time_at(std::chrono::steady_clock::time_point local) const;
   ReceiveCounters counters() const;
+  /// Whether the calling thread is the one that runs the on_state callback.
+  bool on_callback_thread() const { return std::this_thread::get_id() == dispatcher_.get_id(); }
 
  private:
   void send_heartbeat();

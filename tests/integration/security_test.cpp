@@ -203,7 +203,9 @@ TEST(Security, ASessionEndsWhenItsTokenExpiresAndItsItemsGoWithIt) {
   Client admin(admin_config);
   ClientConfig visitor_config = config_for(server, "visitor");
   visitor_config.token = "visitor-token-0123456789";
+  ConnectionLog visitor_log;
   Client visitor(visitor_config);
+  visitor_log.attach(visitor);
   ObjectHandle wall = visitor.add_wall({.normal = {0, 0, 1}, .impedance = {800.0, 1.0}});
   ASSERT_EQ(admin.stats().objects, 1u);
 
@@ -216,6 +218,14 @@ TEST(Security, ASessionEndsWhenItsTokenExpiresAndItsItemsGoWithIt) {
   EXPECT_EQ(admin.stats().objects, 0u);
   const std::string late = refusal<UnauthenticatedError>([&] { (void)visitor.step(1); });
   EXPECT_NE(late.find("token 'visitor' expired at " + std::string(stamp)), std::string::npos) << late;
+  // The SDK tells its user, once, and does not try to reconnect with a token that cannot work.
+  const auto ended = visitor_log.wait(1, std::chrono::seconds(3));
+  ASSERT_TRUE(ended);
+  EXPECT_EQ(ended->first.state, ConnectionChange::State::kEnded);
+  EXPECT_NE(ended->first.reason.find("expired at " + std::string(stamp)), std::string::npos)
+      << ended->first.reason;
+  EXPECT_EQ(visitor.connection_state(), ConnectionChange::State::kEnded);
+  EXPECT_FALSE(visitor_log.wait(2, std::chrono::milliseconds(600)));
 }
 
 TEST(Security, TokensAlsoWorkOverPlaintextOnLoopback) {

@@ -489,6 +489,30 @@ TEST_F(FakeServerTest, GapsInTheSequenceAreLostSamplesAndLateOnesAreReordered) {
   EXPECT_EQ(counters.reconnects, 0u);
 }
 
+TEST_F(FakeServerTest, CloseFromInsideACallbackIsRefusedAndTheClientClosesAfter) {
+  config_.state_decimation = 1;
+  Client client(config_);
+  ASSERT_TRUE(data_plane_.receive_heartbeat());
+  std::mutex mutex;
+  std::condition_variable done;
+  std::string refused;
+  client.on_state([&](const State&) {
+    std::string message = error_of([&] { client.close(); });
+    std::lock_guard lock(mutex);
+    if (refused.empty()) refused = message.empty() ? "no error" : message;
+    done.notify_all();
+  });
+  data_plane_.send_state(1, 0.0);
+  {
+    std::unique_lock lock(mutex);
+    ASSERT_TRUE(done.wait_for(lock, seconds(2), [&] { return !refused.empty(); }));
+  }
+  EXPECT_EQ(refused.rfind("close: called from inside one of this client's callbacks", 0), 0u) << refused;
+  client.on_state({});
+  EXPECT_NO_THROW(client.close());  // from the test's own thread, it closes
+  EXPECT_EQ(error_of([&] { (void)client.stats(); }), "GetStats: the Client was moved from or closed");
+}
+
 TEST_F(FakeServerTest, ADuplicatedStateIsDroppedNotCountedAsLateOrLost) {
   config_.state_decimation = 1;
   Client client(config_);
