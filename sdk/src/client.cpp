@@ -98,7 +98,7 @@ detail::ClientCore& require_current(const std::weak_ptr<detail::ClientCore>& cor
   if (!locked) throw Error(ErrorCode::kInternal, std::string(call) + ": the Client was moved from or closed");
   if (locked->scene_generation() != generation) {
     throw NotFoundError(std::string(call) + ": item " + std::to_string(id) +
-                        " was replaced by apply_scene");
+                        " was replaced by apply_scene or removed by reset");
   }
   return *locked;
 }
@@ -302,9 +302,12 @@ std::uint64_t Client::step(std::uint32_t ticks) {
   request.set_ticks(ticks);
   const auto reply =
       core.call<v1::StepRequest, v1::StepResponse>("Step", &v1::Haptic::Stub::Step, request);
+  core.note_run(reply.run());
   if (reply.has_state()) core.udp().offer(detail::from_proto(reply.state()));
   return reply.tick();
 }
+
+void Client::reset() { require(core_, "Reset").reset(); }
 
 void Client::subscribe(std::uint32_t decimation) { require(core_, "SubscribeState").subscribe(decimation); }
 

@@ -353,6 +353,28 @@ void ClientCore::delete_field(std::uint64_t key) {
   items_.erase(key);
 }
 
+void ClientCore::reset() {
+  v1::SessionRef ref;
+  ref.set_session_id(session_id_);
+  const auto reply = call<v1::SessionRef, v1::ResetResponse>("Reset", &v1::Haptic::Stub::Reset, ref);
+  {
+    std::lock_guard lock(items_mutex_);
+    items_.clear();  // the server removed them all
+  }
+  ++scene_generation_;
+  std::lock_guard lock(run_mutex_);
+  udp_->restart_ticks();
+  known_run_ = reply.run();
+}
+
+void ClientCore::note_run(std::uint64_t run) {
+  std::lock_guard lock(run_mutex_);
+  // The old run's datagrams all left the server before its reset finished, which was before
+  // this step began: restart_ticks() reads them off the socket before forgetting.
+  if (known_run_ != run) udp_->restart_ticks();
+  known_run_ = run;
+}
+
 ClientCore::Applied ClientCore::apply_scene(const v1::Scene& scene) {
   v1::ApplySceneRequest request;
   request.set_session_id(session_id_);

@@ -57,6 +57,12 @@ class ClientCore {
   /// Replaces the session's scene; on success bumps the scene generation, staling older handles.
   Applied apply_scene(const v1::Scene& scene);
   std::uint64_t scene_generation() const { return scene_generation_.load(); }
+  /// A lockstep Reset: on success the session holds no items (handles go stale, as after
+  /// apply_scene) and the state stream's ticks start again.
+  void reset();
+  /// A Step reply's run (StepResponse.run): if another client reset the server since, the ticks
+  /// this client knew are forgotten before the reply's sample is offered.
+  void note_run(std::uint64_t run);
   /// The item's id on the server now; 0 if the client no longer holds it.
   std::uint64_t server_id(std::uint64_t key) const;
   /// Sets the state decimation; for n > 0 waits until the server knows our UDP address.
@@ -127,6 +133,10 @@ class ClientCore {
   DeviceInfo device_info_;
   std::chrono::milliseconds lease_timeout_{0};
   std::atomic<std::uint64_t> scene_generation_{0};
+  // The server's run as last seen (0: never reset; a client that joins later forgets its first
+  // samples once, harmlessly, at its first step). Guarded by run_mutex_.
+  std::uint64_t known_run_ = 0;
+  std::mutex run_mutex_;
   std::atomic<std::uint32_t> decimation_{0};  // the state stream asked for, resumed after a loss
   std::unique_ptr<UdpLink> udp_;
 

@@ -485,6 +485,7 @@ Event from_proto(const v1::Event& e) {
     case v1::Event::FORCE_FAULT: out.kind = Event::Kind::kForceFault; break;
     case v1::Event::WATCH_STARTED: out.kind = Event::Kind::kWatchStarted; break;
     case v1::Event::DEVICE_FAULT: out.kind = Event::Kind::kDeviceFault; break;
+    case v1::Event::RESET: out.kind = Event::Kind::kReset; break;
     default: out.kind = Event::Kind::kUnknown; break;
   }
   out.session_id = e.session_id();

@@ -201,6 +201,11 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
   // (the network duplicated it) is dropped. A lower sequence with a newer tick is a new
   // subscription, numbered from 1 again.
   if (header.sequence > last_sequence_) {
+    if (payload.tick < newest_tick_) {
+      // A newer datagram with an older tick: the server's ticks started again (a lockstep reset).
+      forget_ticks_locked();
+      newest.reset();
+    }
     counters_.lost += header.sequence - last_sequence_ - 1;
     const std::uint64_t shift = header.sequence - last_sequence_;
     seen_window_ = (shift >= 64 ? 0 : seen_window_ << shift) | 1u;
@@ -243,6 +248,31 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
   if (!newest || state.tick >= newest->tick) newest = state;
 }
 
+void UdpLink::forget_ticks_locked() {
+  newest_tick_ = 0;
+  have_latest_ = false;
+  last_polled_tick_.reset();
+  clock_ = ClockSync{};
+}
+
+void UdpLink::restart_ticks() {
+  std::promise<void> done;
+  asio::post(io_, [&] {
+    // What is in the socket now belongs to the old run: take it as usual first.
+    asio::error_code error;
+    if (socket_.available(error) > 0 && !error) {
+      const std::size_t size = socket_.receive_from(asio::buffer(receive_buffer_), sender_, 0, error);
+      if (!error) receive_batch(size);
+    }
+    {
+      std::lock_guard lock(mutex_);
+      forget_ticks_locked();
+    }
+    done.set_value();
+  });
+  done.get_future().wait();
+}
+
 void UdpLink::rebind(std::uint16_t port, std::uint64_t session_id, const wire::Key& key) {
   std::promise<void> switched;
   asio::post(io_, [&] {
@@ -255,10 +285,7 @@ void UdpLink::rebind(std::uint16_t port, std::uint64_t session_id, const wire::K
       // The new session's ticks, sequences and server clock start again from zero.
       last_sequence_ = 0;
       seen_window_ = 0;
-      newest_tick_ = 0;
-      have_latest_ = false;
-      last_polled_tick_.reset();
-      clock_ = ClockSync{};
+      forget_ticks_locked();
     }
     send_heartbeat();
     switched.set_value();

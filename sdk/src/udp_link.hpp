@@ -40,6 +40,11 @@ class UdpLink {
   /// stream (the newest sample, the clock estimate, the sequence) starts afresh; the socket, the
   /// callback and the counters stay. Blocks until the UDP thread has switched.
   void rebind(std::uint16_t port, std::uint64_t session_id, const wire::Key& key);
+  /// The server's ticks start again from 1 (a lockstep reset, whose reply has just come): reads
+  /// what has already reached the socket (the old run's last datagrams, which the server sent
+  /// before replying) and then forgets the old run's ticks, newest sample and clock. Blocks
+  /// until the UDP thread has done so.
+  void restart_ticks();
   /// When the last authenticated datagram arrived (a State or a path challenge); none before one.
   std::optional<std::chrono::steady_clock::time_point> last_heard() const;
   /// Adds `samples` to ReceiveCounters::lost (the samples an outage cost, estimated by its owner).
@@ -69,6 +74,8 @@ class UdpLink {
             std::optional<State>& newest, std::uint64_t& accepted);
   /// Echoes a PathChallenge's nonce (the server sends state only where one was answered).
   void answer_challenge(std::span<const std::uint8_t> datagram);
+  /// Forgets the newest tick, sample and clock estimate (ticks restarted). Holds mutex_.
+  void forget_ticks_locked();
 
   asio::io_context io_;
   asio::ip::udp::socket socket_;

@@ -103,6 +103,8 @@ Server::Server(const v1::ServerConfig& config)
   const auto ports = static_cast<std::uint32_t>(devices_.size());
   runtime::TickConfig tick;
   tick.period_s = 1.0 / rate;
+  period_s_ = tick.period_s;
+  for (const config::PortDevice& port : devices_) descriptions_.push_back(port.device->description());
   tick.output_ramp_ticks = ms_to_ticks(config.removal_ramp_ms(), rate);
   // Each port's force limit and passivity controller follow its own device.
   const std::vector<runtime::TickPort> tick_ports =
@@ -142,26 +144,25 @@ Server::Server(const v1::ServerConfig& config)
   limits.device_mass = design.mass;
   limits.device_damping = design.damping;
   limits.device_unknown_reason = design.unknown_reason;
-  schema::SceneSpecs initial;
-  if (auto e = schema::to_scene_specs(config.initial_scene(), "initial_scene.", limits, initial); !e.empty()) {
+  if (auto e = schema::to_scene_specs(config.initial_scene(), "initial_scene.", limits, initial_scene_);
+      !e.empty()) {
     throw std::runtime_error(e);
   }
   std::vector<std::uint64_t> object_ids, field_ids;
   if (const grpc::Status status =
-          scene_->replace_session_scene(0, initial.objects, initial.fields, object_ids, field_ids,
-                                        &config.initial_scene());
+          scene_->replace_session_scene(0, initial_scene_.objects, initial_scene_.fields, object_ids,
+                                        field_ids, &config.initial_scene());
       !status.ok()) {
     throw std::runtime_error("initial_scene: " + status.error_message());
   }
 
-  engine::HandInput hand;
-  if (auto e = schema::to_hand_input(config.initial_operator(), "initial_operator", limits, hand);
+  if (auto e = schema::to_hand_input(config.initial_operator(), "initial_operator", limits, initial_hand_);
       !e.empty()) {
     throw std::runtime_error(e);
   }
   // Every simulated hand starts with the configured input.
   for (const config::PortDevice& port : devices_) {
-    if (port.simulated != nullptr) port.simulated->set_hand(hand);
+    if (port.simulated != nullptr) port.simulated->set_hand(initial_hand_);
   }
 
   const std::uint32_t udp_port = config.udp_port();
@@ -171,16 +172,20 @@ Server::Server(const v1::ServerConfig& config)
   std::vector<net::DevicePort> service_ports;
   for (std::uint32_t i = 0; i < ports; ++i) {
     std::function<void(const engine::HandInput&)> set_hand;  // none for a device without one
-    if (runtime::SimulatedDevice* device = devices_[i].simulated) {
-      set_hand = [device](const engine::HandInput& input) { device->set_hand(input); };
+    if (devices_[i].simulated != nullptr) {
+      // Through devices_ each time: a reset replaces the device.
+      set_hand = [this, i](const engine::HandInput& input) {
+        std::lock_guard lock(devices_mutex_);
+        devices_[i].simulated->set_hand(input);
+      };
     }
-    service_ports.push_back(net::DevicePort{samples_[i].get(), &devices_[i].device->description(),
-                                            std::move(set_hand)});
+    service_ports.push_back(net::DevicePort{samples_[i].get(), &descriptions_[i], std::move(set_hand)});
   }
   const config::SecurityMaterial security = config::load_security(config.security());
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
-      [this] { return stats(); }, net::AccessControl(credentials(security.tokens))});
+      [this] { return stats(); }, net::AccessControl(credentials(security.tokens)),
+      [this](std::uint64_t session_id) { return reset_lockstep(session_id); }});
   const std::uint32_t fd_limit = raise_fd_limit();
   net::ConnectionLimits connection_limits;
   connection_limits.max_connections =
@@ -283,8 +288,7 @@ void Server::start() {
 }
 
 void Server::shutdown() {
-  if (shut_down_) return;
-  shut_down_ = true;
+  if (shut_down_.exchange(true)) return;
   // The force first: the output ramps to zero from the next tick, while the control plane closes
   // beside it. gRPC's shutdown may wait out its whole deadline (an idle client connection is
   // enough), and the hand must not be pushed all that time. Requests still in flight (a lockstep
@@ -305,9 +309,12 @@ void Server::shutdown() {
   }
   if (control_plane_closer.joinable()) control_plane_closer.join();
   // With the loop stopped, leave every device in its safe state (motors off, brakes on).
-  for (const config::PortDevice& port : devices_) {
-    port.device->enter_safe_state();
-    port.device->stop();
+  {
+    std::lock_guard devices_lock(devices_mutex_);
+    for (const config::PortDevice& port : devices_) {
+      port.device->enter_safe_state();
+      port.device->stop();
+    }
   }
   {
     std::lock_guard lock(housekeeping_mutex_);
@@ -317,6 +324,53 @@ void Server::shutdown() {
   if (housekeeping_.joinable()) housekeeping_.join();
   udp_.stop();
   spdlog::info("hapticd: stopped after {} ticks", counters_.ticks.load());
+}
+
+grpc::Status Server::reset_lockstep(std::uint64_t session_id) {
+  if (loop_->config().mode != runtime::TimeMode::kLockstep) {
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            "only a LOCKSTEP server can be reset; this one runs in real time"};
+  }
+  for (std::size_t i = 0; i < descriptions_.size(); ++i) {
+    if (!descriptions_[i].simulated) {
+      return {grpc::StatusCode::FAILED_PRECONDITION,
+              "device port " + std::to_string(i) + " (" + descriptions_[i].name +
+                  ") is hardware: only simulated devices can be put back as they started"};
+    }
+  }
+  grpc::Status status;
+  loop_->reset_lockstep([&] {
+    std::lock_guard lock(devices_mutex_);
+    if (shut_down_) {
+      status = {grpc::StatusCode::UNAVAILABLE, "the server is shutting down"};
+      return false;
+    }
+    // Fresh devices first (making them can throw; nothing has changed yet), then the scene,
+    // whose refusal (another session's items) also leaves everything as it was.
+    std::vector<config::PortDevice> fresh = config::make_devices(config_);
+    for (std::size_t i = 0; i < fresh.size(); ++i) {
+      if (fresh[i].device->start() != runtime::DeviceStatus::kOk) {
+        status = {grpc::StatusCode::INTERNAL, "device port " + std::to_string(i) + " failed to start again"};
+        return false;
+      }
+      fresh[i].simulated->set_hand(initial_hand_);
+    }
+    status = scene_->reset(session_id, initial_scene_.objects, initial_scene_.fields, config_.initial_scene());
+    if (!status.ok()) {
+      for (config::PortDevice& port : fresh) port.device->stop();
+      return false;
+    }
+    // Every datagram of the old ticks leaves before the ticks start again, so a client can tell
+    // the two runs apart by when they arrive (the Reset reply comes after).
+    udp_.wait_sent_through(samples_.back()->newest(), std::chrono::seconds(1));
+    for (config::PortDevice& port : devices_) port.device->stop();
+    devices_ = std::move(fresh);
+    runner_->replace_ports(config::tick_ports(config_, devices_, ring_pointers(samples_), period_s_));
+    for (const auto& ring : samples_) ring->restart();
+    sessions_.restart_ticks();
+    return true;
+  });
+  return status;
 }
 
 v1::Stats Server::stats() const {

@@ -43,6 +43,12 @@ class Server {
   std::uint16_t grpc_port() const { return grpc_port_; }
   std::uint16_t udp_port() const { return udp_.port(); }
   v1::Stats stats() const;
+  /// Lockstep with simulated devices only: puts the devices, their simulated operators, the loop
+  /// and the scene back as they started (the caller's items go, the server's own scene comes
+  /// back, ids and ticks count from 1), so the same calls reproduce the same run. Sessions and
+  /// their subscriptions stay. FAILED_PRECONDITION (nothing changed) in real time, with a
+  /// hardware device, or while another session holds items.
+  grpc::Status reset_lockstep(std::uint64_t session_id);
   /// Server time now (what samples are stamped with). Unit: ns.
   std::int64_t server_time_ns() const { return loop_->server_time_ns(); }
   /// CLOCK_MONOTONIC time of server time 0, in real time; none in lockstep. Unit: ns.
@@ -56,7 +62,12 @@ class Server {
   void log_status();
 
   v1::ServerConfig config_;
+  std::mutex devices_mutex_;  // guards devices_ against a reset replacing them
   std::vector<config::PortDevice> devices_;  // per device port: the device, its model, its operator
+  std::vector<runtime::DeviceDescription> descriptions_;  // each port's, as the service sees it
+  schema::SceneSpecs initial_scene_;  // the server's own scene (session 0), validated
+  engine::HandInput initial_hand_;    // what every simulated operator starts with
+  double period_s_ = 1e-3;            // Unit: s.
   runtime::SceneExchange scenes_;
   std::vector<std::unique_ptr<runtime::SampleRing>> samples_;  // per device port
   runtime::LoopCounters counters_;
@@ -78,7 +89,7 @@ class Server {
   bool stopping_ = false;  // guarded by housekeeping_mutex_
   std::atomic<std::uint64_t> leases_expired_{0};
   bool started_ = false;
-  bool shut_down_ = false;
+  std::atomic<bool> shut_down_{false};  // read by a reset on a control-plane thread
 
   // Status-line bookkeeping (housekeeping thread only).
   std::uint64_t status_last_ticks_ = 0;

@@ -485,6 +485,17 @@ grpc::Status HapticService::SetOperator(grpc::ServerContext* context, const v1::
   return grpc::Status::OK;
 }
 
+grpc::Status HapticService::Reset(grpc::ServerContext* context, const v1::SessionRef* request,
+                                  v1::ResetResponse* response) {
+  if (auto status = check_session(context, request->session_id(), Permission::kControl, "Reset"); !status.ok()) return status;
+  if (!deps_.reset) return {grpc::StatusCode::FAILED_PRECONDITION, "this server cannot be reset"};
+  if (auto status = deps_.reset(request->session_id()); !status.ok()) return status;
+  response->set_run(deps_.loop.run());
+  publish_event(v1::Event::RESET, request->session_id(),
+                "lockstep reset: ticks count from 1 again and the scene is as the server started");
+  return grpc::Status::OK;
+}
+
 grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepRequest* request,
                                  v1::StepResponse* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "Step"); !status.ok()) return status;
@@ -498,6 +509,7 @@ grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepReq
   }
   const std::uint64_t tick = deps_.loop.step(request->ticks());
   response->set_tick(tick);
+  response->set_run(deps_.loop.run());
   response->set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
   runtime::TickSample sample;
   if (port_of(request->session_id()).samples->read(tick, sample)) {

@@ -36,6 +36,8 @@ struct ServiceDependencies {
   schema::SceneLimits limits;
   std::function<v1::Stats()> stats;
   AccessControl access;  // no tokens: every caller may do everything
+  /// A lockstep reset for the session (Reset); empty: refused.
+  std::function<grpc::Status(std::uint64_t)> reset;
 };
 
 class HapticService final : public v1::Haptic::Service {
@@ -82,6 +84,8 @@ class HapticService final : public v1::Haptic::Service {
   grpc::Status SetOperator(grpc::ServerContext*, const v1::SetOperatorRequest*,
                            v1::Empty*) override;
   grpc::Status Step(grpc::ServerContext*, const v1::StepRequest*, v1::StepResponse*) override;
+  grpc::Status Reset(grpc::ServerContext*, const v1::SessionRef* request,
+                     v1::ResetResponse* response) override;
 
   /// Ends every session opened with a token that has expired since (a session's heartbeats would
   /// otherwise keep its items in the scene after its holder lost the right to them). Returns how

@@ -192,6 +192,15 @@ grpc::Status SceneStore::replace_session_scene(std::uint64_t session_id,
                                                std::vector<std::uint64_t>& field_ids,
                                                const v1::Scene* source) {
   std::lock_guard lock(mutex_);
+  return replace_locked(session_id, objects, fields, object_ids, field_ids, source, next_tick_());
+}
+
+grpc::Status SceneStore::replace_locked(std::uint64_t session_id,
+                                        const std::vector<engine::ObjectSpec>& objects,
+                                        const std::vector<engine::FieldSpec>& fields,
+                                        std::vector<std::uint64_t>& object_ids,
+                                        std::vector<std::uint64_t>& field_ids, const v1::Scene* source,
+                                        std::int64_t first_tick) {
   if (objects.size() + fields.size() > max_items_per_session_) {
     return {grpc::StatusCode::RESOURCE_EXHAUSTED,
             "scene: " + std::to_string(objects.size() + fields.size()) +
@@ -206,7 +215,7 @@ grpc::Status SceneStore::replace_session_scene(std::uint64_t session_id,
   }
   for (const auto& field : fields) added.bytes += cost_of(field).bytes;
   if (auto status = check_budget(added, "scene"); !status.ok()) return status;
-  const std::int64_t fade_begin = next_tick_();
+  const std::int64_t fade_begin = first_tick;
   for (auto& [id, item] : items_) {
     if (item.meta.session_id == session_id && is_live(item.meta)) {
       item.meta.fade_begin_tick = fade_begin;
@@ -232,6 +241,30 @@ grpc::Status SceneStore::replace_session_scene(std::uint64_t session_id,
   }
   publish_locked();
   return grpc::Status::OK;
+}
+
+grpc::Status SceneStore::reset(std::uint64_t session_id, const std::vector<engine::ObjectSpec>& objects,
+                               const std::vector<engine::FieldSpec>& fields, const v1::Scene& source) {
+  std::lock_guard lock(mutex_);
+  // Another session's live items stand in the way; what is fading out was removed already.
+  std::map<std::uint64_t, std::uint32_t> others;  // session -> live items it holds
+  for (const auto& [id, item] : items_) {
+    const std::uint64_t owner = item.meta.session_id;
+    if (owner != session_id && owner != 0 && is_live(item.meta)) ++others[owner];
+  }
+  if (!others.empty()) {
+    const auto& [other, count] = *others.begin();
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            "session " + std::to_string(other) + " holds " + std::to_string(count) +
+                " objects and fields; a reset would take them from under it: close it or remove "
+                "them first"};
+  }
+  items_.clear();
+  superseded_.clear();
+  next_id_ = 1;
+  ++run_;  // the loop carries nothing from the old scenes into the new ones
+  std::vector<std::uint64_t> object_ids, field_ids;
+  return replace_locked(0, objects, fields, object_ids, field_ids, &source, 1);
 }
 
 std::size_t SceneStore::remove_session(std::uint64_t session_id) {
@@ -328,9 +361,10 @@ void SceneStore::publish_locked() {
   };
   for (const auto& [id, item] : items_) add(item);
   for (const Item& item : superseded_) add(item);
-  exchange_.publish(std::make_unique<const engine::CompiledScene>(
-      engine::compile_scene(description, removal_ramp_ticks_, ++generation_, period_s_,
-                            session_force_budget_, ports_)));
+  engine::CompiledScene compiled = engine::compile_scene(description, removal_ramp_ticks_, ++generation_,
+                                                         period_s_, session_force_budget_, ports_);
+  compiled.run = run_;
+  exchange_.publish(std::make_unique<const engine::CompiledScene>(std::move(compiled)));
 }
 
 }  // namespace haptic::net

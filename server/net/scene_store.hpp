@@ -93,6 +93,14 @@ class SceneStore {
   /// session's own, or every session's (and the server's) with `all_sessions`.
   std::vector<SceneEntry> read(std::uint64_t session_id, bool all_sessions) const;
 
+  /// A lockstep reset for `session_id`: every item goes at once (no ramp: no tick runs until the
+  /// next step, and the run must start as the first did), ids count from 1 again, and the
+  /// server's own scene (`objects`, `fields`, from `source`) is made again as at start, ramping
+  /// in from tick 1 (the loop numbers its ticks from 1 again). Refused (FAILED_PRECONDITION
+  /// naming it, nothing changed) while another session holds live items (fading ones go).
+  grpc::Status reset(std::uint64_t session_id, const std::vector<engine::ObjectSpec>& objects,
+                     const std::vector<engine::FieldSpec>& fields, const v1::Scene& source);
+
   /// Starts the fade-out of everything the session owns (lease lost, session closed).
   std::size_t remove_session(std::uint64_t session_id);
 
@@ -124,6 +132,12 @@ class SceneStore {
   /// OK if the scene can take `added` more (besides what it holds), else RESOURCE_EXHAUSTED
   /// naming the budget; `what` names the addition in the message.
   grpc::Status check_budget(const ItemCost& added, const std::string& what) const;
+  /// replace_session_scene's work, under the lock.
+  grpc::Status replace_locked(std::uint64_t session_id, const std::vector<engine::ObjectSpec>& objects,
+                              const std::vector<engine::FieldSpec>& fields,
+                              std::vector<std::uint64_t>& object_ids,
+                              std::vector<std::uint64_t>& field_ids, const v1::Scene* source,
+                              std::int64_t first_tick);
   void publish_locked();
 
   runtime::SceneExchange& exchange_;
@@ -141,6 +155,7 @@ class SceneStore {
   std::uint64_t next_id_ = 1;
   std::uint64_t next_version_key_ = 1;  // every version of every item gets its own
   std::uint64_t generation_ = 0;
+  std::uint64_t run_ = 0;  // bumped by reset(): see engine::CompiledScene::run
 };
 
 }  // namespace haptic::net

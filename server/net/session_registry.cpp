@@ -258,6 +258,12 @@ std::optional<bool> SessionRegistry::subscribe(std::uint64_t session_id, std::ui
   return it->second.address.has_value();
 }
 
+void SessionRegistry::restart_ticks() {
+  std::lock_guard lock(mutex_);
+  for (auto& [id, session] : sessions_) session.first_tick = 0;
+  ++version_;
+}
+
 std::vector<std::uint64_t> SessionRegistry::expire(SteadyClock::time_point now) {
   std::vector<std::uint64_t> expired;
   std::lock_guard lock(mutex_);

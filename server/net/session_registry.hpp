@@ -141,6 +141,9 @@ class SessionRegistry {
   std::optional<bool> subscribe(std::uint64_t session_id, std::uint32_t decimation,
                                 std::uint64_t first_tick = 0);
 
+  /// A lockstep reset: the ticks start again, so every subscription streams from the first.
+  void restart_ticks();
+
   /// Removes and returns the sessions whose lease ran out at `now`.
   std::vector<std::uint64_t> expire(SteadyClock::time_point now);
 

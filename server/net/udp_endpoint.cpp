@@ -185,13 +185,21 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
   // The loop publishes the ports in order, the last port last: once its ring holds a tick, every
   // port's ring does.
   const runtime::SampleRing& last_ring = *rings_.back();
+  std::uint32_t epoch = last_ring.epoch();
   std::uint64_t last_tick = last_ring.newest();
   std::vector<runtime::TickSample> samples(rings_.size());  // one tick's, per port
   std::vector<bool> present(rings_.size());
   std::array<std::uint8_t, wire::kMaxDatagramSize> buffer{};
   while (!last_ring.stopping()) {
-    last_ring.wait_beyond(last_tick);
+    last_ring.wait_beyond(last_tick, epoch);
     if (last_ring.stopping()) break;
+    if (const std::uint32_t now = last_ring.epoch(); now != epoch) {
+      // A lockstep reset: the ticks start again from 1 (the sequences go on).
+      epoch = now;
+      last_tick = 0;
+      sent_through_.store(0, std::memory_order_release);
+      continue;
+    }
     const std::uint64_t newest = last_ring.newest();
     if (const auto version = sessions_.subscribers_version(); version != subscribers_version) {
       subscribers = sessions_.subscribers();
@@ -250,7 +258,17 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
       }
     }
     last_tick = newest;
+    sent_through_.store(newest, std::memory_order_release);
   }
+}
+
+bool UdpEndpoint::wait_sent_through(std::uint64_t tick, std::chrono::milliseconds timeout) const {
+  const auto give_up = std::chrono::steady_clock::now() + timeout;
+  while (sent_through_.load(std::memory_order_acquire) < tick) {
+    if (std::chrono::steady_clock::now() > give_up || stopping_.load()) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+  }
+  return true;
 }
 
 }  // namespace haptic::net

@@ -10,6 +10,7 @@
 // only for the sessions subscribed at that decimation, each from its own device port's ring.
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -74,6 +75,10 @@ class UdpEndpoint {
 
   const UdpCounters& counters() const { return counters_; }
 
+  /// Waits (up to `timeout`) until the sender has sent what is due up to tick `tick`: before a
+  /// lockstep reset, so that no datagram of the old ticks leaves after it. True when it has.
+  bool wait_sent_through(std::uint64_t tick, std::chrono::milliseconds timeout) const;
+
  private:
   void receive_loop();
   /// One authenticated datagram from `from`; false when it is dropped.
@@ -88,6 +93,7 @@ class UdpEndpoint {
   int socket_ = -1;
   std::uint16_t port_ = 0;
   std::atomic<bool> stopping_{false};
+  std::atomic<std::uint64_t> sent_through_{0};  // the sender's last_tick, for wait_sent_through
   std::thread receiver_;
   std::thread sender_;
   UdpCounters counters_;

@@ -90,8 +90,9 @@ void LoopThread::run_device_clocked() {
 }
 
 void LoopThread::run_lockstep() {
-  std::uint64_t tick = 0;
   for (;;) {
+    // Read each time: a reset (while this thread waits) numbers the ticks from 1 again.
+    std::uint64_t tick = completed_.load(std::memory_order_acquire);
     const std::uint64_t target = target_.load(std::memory_order_acquire);
     if (stop_requested_.load(std::memory_order_acquire)) return;
     if (tick >= target) {
@@ -119,6 +120,17 @@ std::uint64_t LoopThread::step(std::uint32_t ticks) {
     step_signal_.wait(seen, std::memory_order_acquire);
   }
   return completed_ticks();
+}
+
+bool LoopThread::reset_lockstep(const std::function<bool()>& while_idle) {
+  std::lock_guard lock(step_mutex_);
+  // No step is in progress (we hold its mutex) and the last one saw all its ticks completed: the
+  // loop thread runs no tick until the next step raises the target.
+  if (!while_idle()) return false;
+  completed_.store(0, std::memory_order_release);
+  target_.store(0, std::memory_order_release);
+  run_.fetch_add(1, std::memory_order_acq_rel);
+  return true;
 }
 
 void LoopThread::ramp_out_and_stop() {

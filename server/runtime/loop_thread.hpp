@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <thread>
 
@@ -48,6 +49,14 @@ class LoopThread {
   /// Lockstep only: runs `ticks` ticks and returns the index of the last one. Callers from several
   /// threads are served one after another.
   std::uint64_t step(std::uint32_t ticks);
+
+  /// Lockstep only, off the loop: waits out any step in progress, runs `while_idle` while no
+  /// tick runs (to put the runner's devices and the scene back as they started) and, if it says
+  /// so (true), numbers ticks from 1 again (server time 0). Steps wait meanwhile. Returns what
+  /// `while_idle` did.
+  bool reset_lockstep(const std::function<bool()>& while_idle);
+  /// Resets so far (each starts a run whose ticks count from 1).
+  std::uint64_t run() const { return run_.load(std::memory_order_acquire); }
 
   /// Ramps the output force to zero over the runner's output_ramp_ticks and waits for it (in
   /// lockstep the ramp is run as ticks), then stops the thread.
@@ -88,6 +97,7 @@ class LoopThread {
   // (a 32-bit word: libstdc++ waits on it with a plain futex).
   std::atomic<std::uint32_t> step_signal_{0};
   std::mutex step_mutex_;                 // serialises step() callers (off the loop)
+  std::atomic<std::uint64_t> run_{0};     // resets so far
 };
 
 }  // namespace haptic::runtime

@@ -30,14 +30,33 @@ class SampleRing {
   /// Tick index of the newest published sample, 0 before the first.
   std::uint64_t newest() const { return published_.load(std::memory_order_acquire); }
 
-  /// Blocks until a sample newer than `tick` is published or stop() is called.
-  void wait_beyond(std::uint64_t tick) const {
+  /// Blocks until a sample newer than `tick` is published, the ticks restart (epoch() moves on
+  /// from `epoch`) or stop() is called.
+  void wait_beyond(std::uint64_t tick, std::uint32_t epoch) const {
     for (;;) {
       const std::uint32_t seen = signal_.load(std::memory_order_acquire);
-      if (published_.load(std::memory_order_acquire) > tick || stopping()) return;
+      if (published_.load(std::memory_order_acquire) > tick || epoch_.load(std::memory_order_acquire) != epoch ||
+          stopping()) {
+        return;
+      }
       signal_.wait(seen, std::memory_order_acquire);
     }
   }
+
+  /// The same within the present epoch.
+  void wait_beyond(std::uint64_t tick) const { wait_beyond(tick, epoch()); }
+
+  /// Off the loop, while it runs no tick (a lockstep reset): the ticks start again from 1. Readers
+  /// see epoch() change and start over; old samples stay in their slots until overwritten (a
+  /// slot's tick tells them apart).
+  void restart() {
+    published_.store(0, std::memory_order_release);
+    epoch_.fetch_add(1, std::memory_order_acq_rel);
+    signal_.fetch_add(1, std::memory_order_release);
+    signal_.notify_all();
+  }
+  /// Bumped by every restart().
+  std::uint32_t epoch() const { return epoch_.load(std::memory_order_acquire); }
 
   /// Wakes waiters for good (shutdown): stopping() turns true and newest() moves past the last
   /// real sample, whose slot then reads as missing.
@@ -59,6 +78,7 @@ class SampleRing {
   std::array<LatestValue<TickSample>, kCapacity> slots_;
   std::atomic<std::uint64_t> published_{0};
   std::atomic<bool> stopping_{false};
+  std::atomic<std::uint32_t> epoch_{0};
   std::atomic<std::uint32_t> signal_{0};  // bumped with every publish; what waiters sleep on
 };
 

@@ -15,6 +15,11 @@ TickRunner::TickRunner(const std::vector<TickPort>& ports, SceneExchange& scenes
                        LoopCounters& counters, const TickConfig& config)
     : scenes_(scenes), counters_(counters), config_(config) {
   config_.output_ramp_ticks = std::max<std::int64_t>(1, config_.output_ramp_ticks);
+  make_ports(ports);
+}
+
+void TickRunner::make_ports(const std::vector<TickPort>& ports) {
+  ports_.clear();
   ports_.reserve(ports.size());
   for (const TickPort& port : ports) {
     Port& out = ports_.emplace_back(Port{DevicePort(*port.device, *port.model), port.samples,
@@ -22,6 +27,12 @@ TickRunner::TickRunner(const std::vector<TickPort>& ports, SceneExchange& scenes
                                          port.device->description().capabilities.orientation});
     if (port.passivity) out.passivity.emplace(*port.passivity);
   }
+}
+
+void TickRunner::replace_ports(const std::vector<TickPort>& ports) {
+  make_ports(ports);
+  ramp_first_tick_.store(UINT64_MAX, std::memory_order_release);
+  output_zero_.store(false, std::memory_order_release);
 }
 
 double TickRunner::output_gain(std::uint64_t tick) const {

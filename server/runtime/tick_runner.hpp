@@ -65,6 +65,11 @@ class TickRunner {
   /// virtual masses advance once under all the ports' reactions.
   void run(std::uint64_t tick, std::int64_t time_ns);
 
+  /// Off the loop, while it runs no tick (a lockstep reset): the ports become `ports` (fresh
+  /// devices), each with a fresh passivity controller, force guard and last good reading, and
+  /// any output ramp is forgotten. Same number of ports as before.
+  void replace_ports(const std::vector<TickPort>& ports);
+
   /// Any thread: from tick `first_tick` on, the output gain falls linearly to zero over
   /// output_ramp_ticks ticks and stays there.
   void begin_output_ramp(std::uint64_t first_tick) {
@@ -87,6 +92,7 @@ class TickRunner {
   };
 
   double output_gain(std::uint64_t tick) const;
+  void make_ports(const std::vector<TickPort>& ports);
   void run_port(const engine::CompiledScene& scene, std::uint32_t index, std::uint64_t tick,
                 std::int64_t time_ns, double gain);
 

@@ -481,8 +481,9 @@ TEST(RpcSurface, EveryUnaryRpcWithAnUnknownSessionIsNotFoundAndDoesNothing) {
     expect_not_found("SubscribeState", &Stub::SubscribeState, subscribe, v1::SubscribeStateResponse{});
     expect_not_found("SetOperator", &Stub::SetOperator, set_operator, v1::Empty{});
     expect_not_found("Step", &Stub::Step, step, v1::StepResponse{});
+    expect_not_found("Reset", &Stub::Reset, v1::SessionRef{}, v1::ResetResponse{});
   }
-  EXPECT_EQ(calls, 2 * 16);  // every session-scoped unary RPC of haptic.v1.Haptic, twice
+  EXPECT_EQ(calls, 2 * 17);  // every session-scoped unary RPC of haptic.v1.Haptic, twice
 
   // Nothing was created, stepped or set: no ticks ran, and the tool has not been pushed.
   const v1::Stats after = h.stats(session);

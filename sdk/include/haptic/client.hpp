@@ -256,6 +256,12 @@ class Client {
   void set_operator(const OperatorInput& input);
   /// Lockstep servers only: runs `ticks` ticks; returns the index of the last one.
   std::uint64_t step(std::uint32_t ticks);
+  /// Lockstep servers with simulated devices only: puts the server back as it started (devices,
+  /// simulated operators, ticks from 1, the server's own scene; this session's items go), so the
+  /// same calls reproduce the same run bit for bit. Handles made before go stale (as after
+  /// apply_scene); the state stream carries on from tick 1. FailedPreconditionError, changing
+  /// nothing, in real time, with a hardware device, or while another session holds items.
+  void reset();
   /// Changes the state-stream decimation (every n-th tick; 0 stops it).
   void subscribe(std::uint32_t decimation);
 

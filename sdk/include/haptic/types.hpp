@@ -241,6 +241,7 @@ struct Event {
     kForceFault,    ///< non-finite forces were replaced by zero
     kWatchStarted,  ///< the first event of every stream: later events will arrive
     kDeviceFault,   ///< the device's reading failed or was not finite; zero force commanded
+    kReset,         ///< a lockstep reset: ticks count from 1 again, the scene is as it started
   };
   Kind kind = Kind::kUnknown;
   std::uint64_t session_id = 0;  ///< The session it concerns (0: the server's own).

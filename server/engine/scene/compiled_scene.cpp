@@ -541,6 +541,7 @@ void publish_meters(SceneState& state) {
 }  // namespace
 
 void carry_state(const CompiledScene& from, const CompiledScene& to) {
+  if (from.run != to.run) return;  // a reset: every item starts afresh
   SceneState& old_state = *from.state;  // the loop owns both states; meter_taken is scratch
   SceneState& new_state = *to.state;
   carry_motions<ContactState>(port_slice(old_state.contacts, 0, old_state.contacts_per_port),
@@ -644,7 +645,7 @@ struct PortPass {
 /// Stage 1: half-spaces, d = dot(point − p, n) the penetration (see contact_magnitude).
 [[gnu::always_inline]] inline void add_half_spaces(PortPass& pass) {
   for (const CompiledHalfSpace& wall : pass.scene.half_spaces) {
-    if (is_fading_out(wall.ramp)) pass.out.ramping = true;
+    if (is_fading_out(wall.ramp, pass.tick, pass.ramp_ticks)) pass.out.ramping = true;
     const double d = dot(wall.point_W - pass.p_WT, wall.normal_W);
     const double gain = d > 0.0 ? ramp_gain(wall.ramp, pass.tick, pass.ramp_ticks) : 0.0;
     const Vec3 F =
@@ -666,7 +667,7 @@ struct PortPass {
 /// Stage 2: spheres, the same law along the radial direction.
 [[gnu::always_inline]] inline void add_spheres(PortPass& pass) {
   for (const CompiledSphere& sphere : pass.scene.spheres) {
-    if (is_fading_out(sphere.ramp)) pass.out.ramping = true;
+    if (is_fading_out(sphere.ramp, pass.tick, pass.ramp_ticks)) pass.out.ramping = true;
     const Vec3 r = pass.p_WT - sphere.center_W;
     const double distance = norm(r);
     const double d = sphere.radius - distance;
@@ -691,7 +692,7 @@ struct PortPass {
 /// impedance filter; a virtual mass is met where it has moved to, and takes −F.
 [[gnu::always_inline]] inline void add_contacts(PortPass& pass) {
   for (const CompiledContact& contact : pass.scene.contacts) {
-    if (is_fading_out(contact.ramp)) pass.out.ramping = true;
+    if (is_fading_out(contact.ramp, pass.tick, pass.ramp_ticks)) pass.out.ramping = true;
     ContactState& s = pass.contacts[contact.state];
     const double gain = ramp_gain(contact.ramp, pass.tick, pass.ramp_ticks);
     const bool moves = contact.object_mass > 0.0;
@@ -752,7 +753,7 @@ struct PortPass {
 /// friction on top where the material has it.
 [[gnu::always_inline]] inline void add_meshes(PortPass& pass) {
   for (const CompiledMesh& mesh : pass.scene.meshes) {
-    if (is_fading_out(mesh.ramp)) pass.out.ramping = true;
+    if (is_fading_out(mesh.ramp, pass.tick, pass.ramp_ticks)) pass.out.ramping = true;
     MeshState& s = pass.meshes[mesh.state];
     const bool moves = mesh.object_mass > 0.0;
     ContactMotion& motion = pass.state.mesh_motions[mesh.state];
@@ -784,7 +785,7 @@ struct PortPass {
 /// Stage 5: springs to a point.
 [[gnu::always_inline]] inline void add_springs(PortPass& pass) {
   for (const CompiledSpring& spring : pass.scene.springs) {
-    if (is_fading_out(spring.ramp)) pass.out.ramping = true;
+    if (is_fading_out(spring.ramp, pass.tick, pass.ramp_ticks)) pass.out.ramping = true;
     const double gain = ramp_gain(spring.ramp, pass.tick, pass.ramp_ticks);
     // F = −∇U − b v with U = ½ k |p − anchor|².
     Vec3 F = -spring.stiffness * (pass.p_WT - spring.anchor_W) - spring.damping * pass.v_WT;
@@ -801,7 +802,7 @@ struct PortPass {
 /// Stage 6: every other energy field.
 [[gnu::always_inline]] inline void add_fields(PortPass& pass) {
   for (const CompiledField& field : pass.scene.fields) {
-    if (is_fading_out(field.ramp)) pass.out.ramping = true;
+    if (is_fading_out(field.ramp, pass.tick, pass.ramp_ticks)) pass.out.ramping = true;
     const double gain = ramp_gain(field.ramp, pass.tick, pass.ramp_ticks);
     const Vec3 F = gain * evaluate_field(field.spec, pass.p_WT, pass.v_WT).F_T_W;
     meter(pass.state, pass.meters + field.meter, F, pass.v_WT, pass.dt);

@@ -200,6 +200,9 @@ struct CompiledScene {
   double session_force_budget = 0.0;
   double period_s = 1e-3;                // The loop period the discrete laws were built for.
   std::uint64_t generation = 0;          // Increases with every published scene.
+  /// Which run the scene belongs to: a lockstep reset starts another, and carry_state carries
+  /// nothing across runs (ids are reused, so an item must not inherit its namesake's state).
+  std::uint64_t run = 0;
   std::unique_ptr<SceneState> state = std::make_unique<SceneState>();  // written by the loop only
 };
 
@@ -215,8 +218,8 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
 /// and once for a virtual mass's motion; a version new in `to` inherits its item's newest old
 /// version's proxy, filter history and motion, and a mesh version its god object, rebased onto its
 /// new geometry at its first tick; the energy of a version that `to` no longer holds is added to
-/// a version of the same item that it does, so an item's totals survive its updates. Does not
-/// allocate.
+/// a version of the same item that it does, so an item's totals survive its updates. Nothing
+/// when the two belong to different runs (CompiledScene::run). Does not allocate.
 void carry_state(const CompiledScene& from, const CompiledScene& to);
 
 /// A virtual mass's state, read off the loop.
@@ -274,8 +277,16 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
 double fade_gain(std::int64_t fade_begin_tick, std::int64_t tick, std::int64_t ramp_ticks);
 
 /// Whether the item is being removed or replaced by a newer version.
-inline bool is_fading_out(const ItemRamp& ramp) {
-  return ramp.fade_begin_tick != kNeverTick || ramp.superseded_at[0] != kNeverTick;
+/// Whether an item's force is (or is about to be) ramping out at `tick`: a removal or a newer
+/// version has begun its fade and the fade has not yet reached zero. By tick alone, so a lockstep
+/// run flags the same ticks however late the housekeeping drops the finished item.
+inline bool is_fading_out(const ItemRamp& ramp, std::int64_t tick, std::int64_t ramp_ticks) {
+  const auto unfinished = [&](std::int64_t begin) { return begin != kNeverTick && tick - begin < ramp_ticks; };
+  if (unfinished(ramp.fade_begin_tick)) return true;
+  for (const std::int64_t superseded : ramp.superseded_at) {
+    if (unfinished(superseded)) return true;
+  }
+  return false;
 }
 
 /// Gain of an item at tick `tick`: its fade-in times its fade-outs (see ItemRamp).
