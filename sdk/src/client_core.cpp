@@ -215,6 +215,8 @@ void ClientCore::watch_events(std::function<void(const v1::Event&)> callback) {
 }
 
 void ClientCore::subscribe(std::uint32_t decimation) {
+  // A stream started again after a stop is numbered from 1 again.
+  if (decimation > 0 && decimation_ == 0) udp_->new_subscription();
   decimation_ = decimation;
   v1::SubscribeStateRequest request;
   request.set_session_id(session_id_);
@@ -362,15 +364,14 @@ void ClientCore::reset() {
     items_.clear();  // the server removed them all
   }
   ++scene_generation_;
-  std::lock_guard lock(run_mutex_);
-  udp_->restart_ticks();
-  known_run_ = reply.run();
+  note_run(reply.run());  // unless a step of ours has seen the new run already
 }
 
 void ClientCore::note_run(std::uint64_t run) {
   std::lock_guard lock(run_mutex_);
   // The old run's datagrams all left the server before its reset finished, which was before
-  // this step began: restart_ticks() reads them off the socket before forgetting.
+  // this step began: restart_ticks() reads what has reached the socket (on one host, all of
+  // them) before forgetting, and drops any numbered as one seen already.
   if (known_run_ != run) udp_->restart_ticks();
   known_run_ = run;
 }

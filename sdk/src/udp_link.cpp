@@ -123,25 +123,33 @@ void UdpLink::start_receive() {
 }
 
 void UdpLink::receive_batch(std::size_t first_size) {
-  const auto received_at = std::chrono::steady_clock::now();
-  std::optional<State> newest;
-  std::uint64_t accepted = 0;
-  take(first_size, received_at, newest, accepted);
+  Batch batch;
+  batch.received_at = std::chrono::steady_clock::now();
+  take({receive_buffer_.data(), first_size}, batch);
+  drain(receive_buffer_, batch);
+  hand_out(batch);
+}
+
+void UdpLink::drain(std::span<std::uint8_t> buffer, Batch& batch) {
   // Whatever else has queued up meanwhile: read it all now, keep only the newest.
+  asio::ip::udp::endpoint from;
   for (int i = 0; i < kMaxDrain; ++i) {
     asio::error_code error;
     if (socket_.available(error) == 0 || error) break;
-    const std::size_t size = socket_.receive_from(asio::buffer(receive_buffer_), sender_, 0, error);
+    const std::size_t size = socket_.receive_from(asio::buffer(buffer.data(), buffer.size()), from, 0, error);
     if (error) break;
-    take(size, received_at, newest, accepted);
+    take({buffer.data(), size}, batch);
   }
-  if (!newest) return;
+}
+
+void UdpLink::hand_out(const Batch& batch) {
+  if (!batch.newest) return;
   {
     std::lock_guard lock(mutex_);
-    counters_.skipped += accepted - 1;
+    counters_.skipped += batch.accepted - 1;
     // Older than what we have (reordered on the way): counted, but the newest stays latest.
-    if (!have_latest_ || newest->tick >= latest_.tick) {
-      latest_ = *newest;
+    if (!have_latest_ || batch.newest->tick >= latest_.tick) {
+      latest_ = *batch.newest;
       have_latest_ = true;
     }
   }
@@ -150,7 +158,7 @@ void UdpLink::receive_batch(std::size_t first_size) {
   {
     std::lock_guard lock(dispatch_mutex_);
     if (pending_) ++callback_skipped_;  // the callback is still busy with an older one
-    pending_ = *newest;
+    pending_ = *batch.newest;
   }
   dispatch_ready_.notify_one();
 }
@@ -179,9 +187,8 @@ void UdpLink::answer_challenge(std::span<const std::uint8_t> datagram) {
   last_heard_ = std::chrono::steady_clock::now();
 }
 
-void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point received_at,
-                   std::optional<State>& newest, std::uint64_t& accepted) {
-  const std::span<const std::uint8_t> datagram(receive_buffer_.data(), size);
+void UdpLink::take(std::span<const std::uint8_t> datagram, Batch& batch) {
+  std::optional<State>& newest = batch.newest;
   wire::Header header;
   if (wire::peek_header(datagram, header) == wire::DecodeError::kNone &&
       header.type == wire::DatagramType::kPathChallenge) {
@@ -196,14 +203,20 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
     ++counters_.rejected;
     return;
   }
+  if (header.sequence <= stale_through_) {
+    ++counters_.skipped;  // of a run before a lockstep reset
+    return;
+  }
   // The server numbers each subscription's States without gaps: a jump is datagrams lost on the
   // way, and one arriving late (an older tick too) was not lost after all. A datagram seen before
   // (the network duplicated it) is dropped. A lower sequence with a newer tick is a new
   // subscription, numbered from 1 again.
   if (header.sequence > last_sequence_) {
     if (payload.tick < newest_tick_) {
-      // A newer datagram with an older tick: the server's ticks started again (a lockstep reset).
+      // A newer datagram with an older tick: the server's ticks started again (a lockstep reset
+      // another client made). What was numbered before this one belongs to the old run.
       forget_ticks_locked();
+      stale_through_ = header.sequence - 1;
       newest.reset();
     }
     counters_.lost += header.sequence - last_sequence_ - 1;
@@ -215,8 +228,13 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
     seen_window_ = 1;
   } else {
     const std::uint64_t behind = last_sequence_ - header.sequence;
-    const std::uint64_t bit = behind < 64 ? std::uint64_t{1} << behind : 0;
-    if (bit != 0 && (seen_window_ & bit) != 0) {
+    if (behind >= 64) {
+      // Too old to tell a late arrival from a copy: kept out of the loss count either way.
+      ++counters_.reordered;
+      return;
+    }
+    const std::uint64_t bit = std::uint64_t{1} << behind;
+    if ((seen_window_ & bit) != 0) {
       ++counters_.duplicates;
       return;
     }
@@ -225,7 +243,7 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
     ++counters_.reordered;
   }
   ++counters_.accepted;
-  ++accepted;
+  ++batch.accepted;
   State state;
   state.tick = payload.tick;
   state.sequence = header.sequence;
@@ -240,11 +258,11 @@ void UdpLink::take(std::size_t size, std::chrono::steady_clock::time_point recei
   if (payload.has_orientation) {
     state.orientation = Quaternion{payload.R_WT.w, payload.R_WT.x, payload.R_WT.y, payload.R_WT.z};
   }
-  state.received_at = received_at;
-  last_heard_ = received_at;
+  state.received_at = batch.received_at;
+  last_heard_ = batch.received_at;
   newest_tick_ = std::max(newest_tick_, payload.tick);
   // How much longer than the quickest recent sample this one took: time spent queued anywhere.
-  state.age = std::chrono::nanoseconds(clock_.add(header.time_ns, steady_ns(received_at)));
+  state.age = std::chrono::nanoseconds(clock_.add(header.time_ns, steady_ns(batch.received_at)));
   if (!newest || state.tick >= newest->tick) newest = state;
 }
 
@@ -258,19 +276,26 @@ void UdpLink::forget_ticks_locked() {
 void UdpLink::restart_ticks() {
   std::promise<void> done;
   asio::post(io_, [&] {
-    // What is in the socket now belongs to the old run: take it as usual first.
-    asio::error_code error;
-    if (socket_.available(error) > 0 && !error) {
-      const std::size_t size = socket_.receive_from(asio::buffer(receive_buffer_), sender_, 0, error);
-      if (!error) receive_batch(size);
-    }
+    // What is in the socket now belongs to the old run (the server sent it before it replied):
+    // take it as usual first, into a buffer of its own (a receive may be pending on the other).
+    std::array<std::uint8_t, 2048> scratch{};
+    Batch batch;
+    batch.received_at = std::chrono::steady_clock::now();
+    drain(scratch, batch);
+    hand_out(batch);
     {
       std::lock_guard lock(mutex_);
+      stale_through_ = last_sequence_;
       forget_ticks_locked();
     }
     done.set_value();
   });
   done.get_future().wait();
+}
+
+void UdpLink::new_subscription() {
+  std::lock_guard lock(mutex_);
+  stale_through_ = 0;  // a subscription started afresh numbers from 1 again
 }
 
 void UdpLink::rebind(std::uint16_t port, std::uint64_t session_id, const wire::Key& key) {
@@ -285,6 +310,7 @@ void UdpLink::rebind(std::uint16_t port, std::uint64_t session_id, const wire::K
       // The new session's ticks, sequences and server clock start again from zero.
       last_sequence_ = 0;
       seen_window_ = 0;
+      stale_through_ = 0;
       forget_ticks_locked();
     }
     send_heartbeat();

@@ -42,9 +42,12 @@ class UdpLink {
   void rebind(std::uint16_t port, std::uint64_t session_id, const wire::Key& key);
   /// The server's ticks start again from 1 (a lockstep reset, whose reply has just come): reads
   /// what has already reached the socket (the old run's last datagrams, which the server sent
-  /// before replying) and then forgets the old run's ticks, newest sample and clock. Blocks
-  /// until the UDP thread has done so.
+  /// before replying: on one host, all of them), then forgets the old run's ticks, newest sample
+  /// and clock, and drops any later datagram numbered as one already seen. Blocks until the UDP
+  /// thread has done so.
   void restart_ticks();
+  /// The client (re)subscribed: the server may number from 1 again.
+  void new_subscription();
   /// When the last authenticated datagram arrived (a State or a path challenge); none before one.
   std::optional<std::chrono::steady_clock::time_point> last_heard() const;
   /// Adds `samples` to ReceiveCounters::lost (the samples an outage cost, estimated by its owner).
@@ -70,8 +73,17 @@ class UdpLink {
   void receive_batch(std::size_t first_size);
   /// Decodes the datagram in the buffer: answers a challenge, or keeps a State if it is the
   /// newest so far (`accepted` counts States taken).
-  void take(std::size_t size, std::chrono::steady_clock::time_point received_at,
-            std::optional<State>& newest, std::uint64_t& accepted);
+  /// What one wake-up read: its time, the newest State taken, how many were taken.
+  struct Batch {
+    std::chrono::steady_clock::time_point received_at;
+    std::optional<State> newest;
+    std::uint64_t accepted = 0;
+  };
+  void take(std::span<const std::uint8_t> datagram, Batch& batch);
+  /// Reads and takes every datagram already queued on the socket, into `buffer`.
+  void drain(std::span<std::uint8_t> buffer, Batch& batch);
+  /// Makes the batch's newest State the latest and hands it to the callback's thread.
+  void hand_out(const Batch& batch);
   /// Echoes a PathChallenge's nonce (the server sends state only where one was answered).
   void answer_challenge(std::span<const std::uint8_t> datagram);
   /// Forgets the newest tick, sample and clock estimate (ticks restarted). Holds mutex_.
@@ -96,6 +108,7 @@ class UdpLink {
   std::optional<std::uint64_t> last_polled_tick_;  // guarded by mutex_; none before the first
   std::uint64_t last_sequence_ = 0;    // guarded by mutex_
   std::uint64_t seen_window_ = 0;      // guarded by mutex_: bit i set: last_sequence_ - i arrived
+  std::uint64_t stale_through_ = 0;    // guarded by mutex_: sequences of a run before a reset
   std::uint64_t newest_tick_ = 0;      // guarded by mutex_: of the States taken
   ClockSync clock_;                    // guarded by mutex_
   std::optional<std::chrono::steady_clock::time_point> last_heard_;  // guarded by mutex_

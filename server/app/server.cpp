@@ -339,35 +339,48 @@ grpc::Status Server::reset_lockstep(std::uint64_t session_id) {
     }
   }
   grpc::Status status;
-  loop_->reset_lockstep([&] {
+  loop_->reset_lockstep([&](const std::function<void()>& restart_loop) {
     std::lock_guard lock(devices_mutex_);
     if (shut_down_) {
       status = {grpc::StatusCode::UNAVAILABLE, "the server is shutting down"};
       return false;
     }
-    // Fresh devices first (making them can throw; nothing has changed yet), then the scene,
-    // whose refusal (another session's items) also leaves everything as it was.
+    // Fresh devices first (making them can fail; nothing has changed yet).
     std::vector<config::PortDevice> fresh = config::make_devices(config_);
+    const auto discard = [&fresh] {
+      for (config::PortDevice& port : fresh) port.device->stop();
+    };
     for (std::size_t i = 0; i < fresh.size(); ++i) {
       if (fresh[i].device->start() != runtime::DeviceStatus::kOk) {
         status = {grpc::StatusCode::INTERNAL, "device port " + std::to_string(i) + " failed to start again"};
+        discard();
         return false;
       }
       fresh[i].simulated->set_hand(initial_hand_);
     }
-    status = scene_->reset(session_id, initial_scene_.objects, initial_scene_.fields, config_.initial_scene());
-    if (!status.ok()) {
-      for (config::PortDevice& port : fresh) port.device->stop();
+    // Every datagram of the old ticks leaves before the ticks start again (a client reading its
+    // socket after the reply finds them all there, on one host).
+    if (!udp_.wait_sent_through(samples_.back()->newest(), std::chrono::seconds(1))) {
+      status = {grpc::StatusCode::UNAVAILABLE, "the data plane did not send the last ticks within 1 s"};
+      discard();
       return false;
     }
-    // Every datagram of the old ticks leaves before the ticks start again, so a client can tell
-    // the two runs apart by when they arrive (the Reset reply comes after).
-    udp_.wait_sent_through(samples_.back()->newest(), std::chrono::seconds(1));
-    for (config::PortDevice& port : devices_) port.device->stop();
-    devices_ = std::move(fresh);
-    runner_->replace_ports(config::tick_ports(config_, devices_, ring_pointers(samples_), period_s_));
-    for (const auto& ring : samples_) ring->restart();
-    sessions_.restart_ticks();
+    // The scene's check, the restart and the new scene under the store's lock: no other
+    // session's change lands in between (it would be stamped with the old tick count).
+    status = scene_->reset(session_id, initial_scene_.objects, initial_scene_.fields, config_.initial_scene(),
+                           [&] {
+                             restart_loop();
+                             for (config::PortDevice& port : devices_) port.device->stop();
+                             devices_ = std::move(fresh);
+                             runner_->replace_ports(
+                                 config::tick_ports(config_, devices_, ring_pointers(samples_), period_s_));
+                             for (const auto& ring : samples_) ring->restart();
+                             sessions_.restart_ticks();
+                           });
+    if (!status.ok()) {
+      discard();
+      return false;
+    }
     return true;
   });
   return status;

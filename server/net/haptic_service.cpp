@@ -501,15 +501,16 @@ grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepReq
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "Step"); !status.ok()) return status;
   if (deps_.loop.config().mode != runtime::TimeMode::kLockstep) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
-            "Step: the server runs in REAL_TIME; start it with time_mode LOCKSTEP"};
+            "the server runs in REAL_TIME; start it with time_mode LOCKSTEP"};
   }
   if (request->ticks() == 0 || request->ticks() > kMaxStepTicks) {
     return invalid("ticks: must be 1 to " + std::to_string(kMaxStepTicks) + ", got " +
                    std::to_string(request->ticks()));
   }
-  const std::uint64_t tick = deps_.loop.step(request->ticks());
+  const runtime::LoopThread::Stepped stepped = deps_.loop.step(request->ticks());
+  const std::uint64_t tick = stepped.tick;
   response->set_tick(tick);
-  response->set_run(deps_.loop.run());
+  response->set_run(stepped.run);
   response->set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
   runtime::TickSample sample;
   if (port_of(request->session_id()).samples->read(tick, sample)) {

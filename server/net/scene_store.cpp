@@ -244,7 +244,8 @@ grpc::Status SceneStore::replace_locked(std::uint64_t session_id,
 }
 
 grpc::Status SceneStore::reset(std::uint64_t session_id, const std::vector<engine::ObjectSpec>& objects,
-                               const std::vector<engine::FieldSpec>& fields, const v1::Scene& source) {
+                               const std::vector<engine::FieldSpec>& fields, const v1::Scene& source,
+                               const std::function<void()>& restart) {
   std::lock_guard lock(mutex_);
   // Another session's live items stand in the way; what is fading out was removed already.
   std::map<std::uint64_t, std::uint32_t> others;  // session -> live items it holds
@@ -259,6 +260,7 @@ grpc::Status SceneStore::reset(std::uint64_t session_id, const std::vector<engin
                 " objects and fields; a reset would take them from under it: close it or remove "
                 "them first"};
   }
+  restart();
   items_.clear();
   superseded_.clear();
   next_id_ = 1;

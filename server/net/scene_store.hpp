@@ -96,10 +96,13 @@ class SceneStore {
   /// A lockstep reset for `session_id`: every item goes at once (no ramp: no tick runs until the
   /// next step, and the run must start as the first did), ids count from 1 again, and the
   /// server's own scene (`objects`, `fields`, from `source`) is made again as at start, ramping
-  /// in from tick 1 (the loop numbers its ticks from 1 again). Refused (FAILED_PRECONDITION
-  /// naming it, nothing changed) while another session holds live items (fading ones go).
+  /// in from tick 1. Refused (FAILED_PRECONDITION naming it, nothing changed) while another
+  /// session holds live items (fading ones go). `restart` (the loop numbering its ticks from 1,
+  /// fresh devices) runs under the store's lock once the check has passed, so no other session's
+  /// change lands between the check, the restart and the new scene.
   grpc::Status reset(std::uint64_t session_id, const std::vector<engine::ObjectSpec>& objects,
-                     const std::vector<engine::FieldSpec>& fields, const v1::Scene& source);
+                     const std::vector<engine::FieldSpec>& fields, const v1::Scene& source,
+                     const std::function<void()>& restart);
 
   /// Starts the fade-out of everything the session owns (lease lost, session closed).
   std::size_t remove_session(std::uint64_t session_id);

@@ -90,11 +90,20 @@ void LoopThread::run_device_clocked() {
 }
 
 void LoopThread::run_lockstep() {
+  std::uint64_t tick = 0;
   for (;;) {
-    // Read each time: a reset (while this thread waits) numbers the ticks from 1 again.
-    std::uint64_t tick = completed_.load(std::memory_order_acquire);
     const std::uint64_t target = target_.load(std::memory_order_acquire);
     if (stop_requested_.load(std::memory_order_acquire)) return;
+    if (restart_requested_.load(std::memory_order_acquire)) {
+      // A reset (its caller holds step_mutex_ and waits for this): ticks count from 1 again.
+      tick = 0;
+      completed_.store(0, std::memory_order_release);
+      target_.store(0, std::memory_order_release);
+      restart_requested_.store(false, std::memory_order_release);
+      step_signal_.fetch_add(1, std::memory_order_release);
+      step_signal_.notify_all();
+      continue;
+    }
     if (tick >= target) {
       target_.wait(target, std::memory_order_acquire);
       continue;
@@ -109,7 +118,7 @@ void LoopThread::run_lockstep() {
   }
 }
 
-std::uint64_t LoopThread::step(std::uint32_t ticks) {
+LoopThread::Stepped LoopThread::step(std::uint32_t ticks) {
   std::lock_guard lock(step_mutex_);
   const std::uint64_t target = completed_ticks() + ticks;
   target_.store(target, std::memory_order_release);
@@ -119,25 +128,34 @@ std::uint64_t LoopThread::step(std::uint32_t ticks) {
     if (completed_ticks() >= target || stop_requested_.load(std::memory_order_acquire)) break;
     step_signal_.wait(seen, std::memory_order_acquire);
   }
-  return completed_ticks();
+  return {completed_ticks(), run_.load(std::memory_order_acquire)};
 }
 
-bool LoopThread::reset_lockstep(const std::function<bool()>& while_idle) {
+bool LoopThread::reset_lockstep(const std::function<bool(const std::function<void()>&)>& while_idle) {
   std::lock_guard lock(step_mutex_);
-  // No step is in progress (we hold its mutex) and the last one saw all its ticks completed: the
-  // loop thread runs no tick until the next step raises the target.
-  if (!while_idle()) return false;
-  completed_.store(0, std::memory_order_release);
-  target_.store(0, std::memory_order_release);
-  run_.fetch_add(1, std::memory_order_acq_rel);
-  return true;
+  // No step is in progress (we hold its mutex): the loop thread runs no tick until one raises the
+  // target. `restart` has the loop thread itself number its ticks from 1 again, and waits for it.
+  const auto restart = [this] {
+    restart_requested_.store(true, std::memory_order_release);
+    target_.store(kRestartTarget, std::memory_order_release);  // wakes it (a value it cannot hold)
+    target_.notify_all();
+    for (;;) {
+      const std::uint32_t seen = step_signal_.load(std::memory_order_acquire);
+      if (!restart_requested_.load(std::memory_order_acquire) || stop_requested_.load(std::memory_order_acquire)) {
+        break;
+      }
+      step_signal_.wait(seen, std::memory_order_acquire);
+    }
+    run_.fetch_add(1, std::memory_order_acq_rel);
+  };
+  return while_idle(restart);
 }
 
 void LoopThread::ramp_out_and_stop() {
   if (thread_.joinable()) {
     runner_.begin_output_ramp(completed_ticks() + 1);
     if (config_.mode == TimeMode::kLockstep) {
-      step(static_cast<std::uint32_t>(runner_.config().output_ramp_ticks + 1));
+      (void)step(static_cast<std::uint32_t>(runner_.config().output_ramp_ticks + 1));
     } else {
       // Bounded wait: at 100 Hz a 50-tick ramp takes 0.5 s; stalls of the host add a little.
       const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(5);

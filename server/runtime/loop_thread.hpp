@@ -46,15 +46,20 @@ class LoopThread {
   /// Starts the thread; returns what real-time setup it got (real-time mode only).
   RealtimeSetup start();
 
-  /// Lockstep only: runs `ticks` ticks and returns the index of the last one. Callers from several
-  /// threads are served one after another.
-  std::uint64_t step(std::uint32_t ticks);
+  /// What a lockstep step reached: the index of its last tick, and the run it belongs to (resets
+  /// so far), read together.
+  struct Stepped {
+    std::uint64_t tick = 0;
+    std::uint64_t run = 0;
+  };
+  /// Lockstep only: runs `ticks` ticks. Callers from several threads are served one after another.
+  Stepped step(std::uint32_t ticks);
 
-  /// Lockstep only, off the loop: waits out any step in progress, runs `while_idle` while no
-  /// tick runs (to put the runner's devices and the scene back as they started) and, if it says
-  /// so (true), numbers ticks from 1 again (server time 0). Steps wait meanwhile. Returns what
-  /// `while_idle` did.
-  bool reset_lockstep(const std::function<bool()>& while_idle);
+  /// Lockstep only, off the loop: waits out any step in progress, then calls `while_idle` while
+  /// no tick runs (steps wait meanwhile), handing it `restart`, which has the loop number its ticks
+  /// from 1 again (server time 0) and starts the next run. `while_idle` puts the devices and the
+  /// scene back around it; returns what it returns.
+  bool reset_lockstep(const std::function<bool(const std::function<void()>& restart)>& while_idle);
   /// Resets so far (each starts a run whose ticks count from 1).
   std::uint64_t run() const { return run_.load(std::memory_order_acquire); }
 
@@ -98,6 +103,8 @@ class LoopThread {
   std::atomic<std::uint32_t> step_signal_{0};
   std::mutex step_mutex_;                 // serialises step() callers (off the loop)
   std::atomic<std::uint64_t> run_{0};     // resets so far
+  std::atomic<bool> restart_requested_{false};  // lockstep: reset_lockstep asks the loop thread
+  static constexpr std::uint64_t kRestartTarget = UINT64_MAX;
 };
 
 }  // namespace haptic::runtime

@@ -47,8 +47,8 @@ class SampleRing {
   void wait_beyond(std::uint64_t tick) const { wait_beyond(tick, epoch()); }
 
   /// Off the loop, while it runs no tick (a lockstep reset): the ticks start again from 1. Readers
-  /// see epoch() change and start over; old samples stay in their slots until overwritten (a
-  /// slot's tick tells them apart).
+  /// see epoch() change and start over. Old samples stay in their slots until overwritten; readers
+  /// read only published ticks (up to newest()), whose slots the new run has written.
   void restart() {
     published_.store(0, std::memory_order_release);
     epoch_.fetch_add(1, std::memory_order_acq_rel);

@@ -31,7 +31,10 @@ void TickRunner::make_ports(const std::vector<TickPort>& ports) {
 
 void TickRunner::replace_ports(const std::vector<TickPort>& ports) {
   make_ports(ports);
-  ramp_first_tick_.store(UINT64_MAX, std::memory_order_release);
+  // A shutdown ramp asked for meanwhile still applies: from the new run's first tick.
+  if (ramp_first_tick_.load(std::memory_order_acquire) != UINT64_MAX) {
+    ramp_first_tick_.store(1, std::memory_order_release);
+  }
   output_zero_.store(false, std::memory_order_release);
 }
 

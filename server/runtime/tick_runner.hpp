@@ -66,8 +66,9 @@ class TickRunner {
   void run(std::uint64_t tick, std::int64_t time_ns);
 
   /// Off the loop, while it runs no tick (a lockstep reset): the ports become `ports` (fresh
-  /// devices), each with a fresh passivity controller, force guard and last good reading, and
-  /// any output ramp is forgotten. Same number of ports as before.
+  /// devices), each with a fresh passivity controller, force guard and last good reading; an
+  /// output ramp already asked for starts again from tick 1 (ticks are numbered afresh). Same
+  /// number of ports as before.
   void replace_ports(const std::vector<TickPort>& ports);
 
   /// Any thread: from tick `first_tick` on, the output gain falls linearly to zero over

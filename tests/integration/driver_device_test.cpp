@@ -5,10 +5,12 @@
 
 #include <haptic/haptic.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
@@ -116,10 +118,16 @@ TEST(DriverDevice, ButtonsAndOrientationReachTheStepReplyAndTheUdpStream) {
     std::lock_guard lock(mutex);
     streamed = state;
   });
-  for (int i = 0; i < 100; ++i) {
-    step_and_get(client, 1);
+  // Datagrams leave on the sender's thread and reach the callback on another: on a loaded
+  // machine the steps can outrun them, so step a while and then wait a while.
+  const auto seen = [&] {
     std::lock_guard lock(mutex);
-    if (streamed) break;
+    return streamed.has_value();
+  };
+  for (int i = 0; i < 100 && !seen(); ++i) step_and_get(client, 1);
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (!seen() && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   client.on_state({});
   std::lock_guard lock(mutex);

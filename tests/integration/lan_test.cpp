@@ -14,6 +14,7 @@
 #include <sys/time.h>
 
 #include <algorithm>
+#include <iterator>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -340,11 +341,13 @@ TEST(LanRelay, DropsDuplicatesAndDelaysAsConfiguredAndCountsWhatItDid) {
   constexpr int kSent = 2000;
   std::vector<steady_clock::time_point> sent_at(kSent);
   std::atomic<int> sent{0};
-  int received = 0;
+  std::atomic<int> received{0};
   double shortest_ms = 1e9;
+  std::atomic<bool> stop_reading{false};
   std::thread reader([&] {  // reads as they come, so the stand-in's buffer never overflows
     int index = 0;
-    while (::recv(server, &index, sizeof(index), 0) == static_cast<ssize_t>(sizeof(index))) {
+    while (!stop_reading.load()) {
+      if (::recv(server, &index, sizeof(index), 0) != static_cast<ssize_t>(sizeof(index))) continue;
       ++received;
       if (index < 0 || index >= sent.load()) continue;
       const double ms = std::chrono::duration<double, std::milli>(steady_clock::now() - sent_at[index]).count();
@@ -357,11 +360,21 @@ TEST(LanRelay, DropsDuplicatesAndDelaysAsConfiguredAndCountsWhatItDid) {
     ::sendto(client, &i, sizeof(i), 0, reinterpret_cast<const sockaddr*>(&to), sizeof(to));
     if (i % 50 == 49) std::this_thread::sleep_for(milliseconds(1));
   }
-  reader.join();  // ends 200 ms after the last datagram
+  // Until the relay has passed on all it took in and the reader has them (or 10 s).
+  const auto give_up = steady_clock::now() + std::chrono::seconds(10);
+  for (;;) {
+    const RelayCounters now = relay.to_server_counters();
+    const bool settled = now.received == static_cast<std::uint64_t>(kSent) &&
+                         now.delivered == now.received - now.dropped + now.duplicated;
+    if ((settled && static_cast<std::uint64_t>(received.load()) == now.delivered) || steady_clock::now() > give_up) break;
+    std::this_thread::sleep_for(milliseconds(10));
+  }
+  stop_reading = true;
+  reader.join();
   const RelayCounters counters = relay.to_server_counters();
   EXPECT_EQ(counters.received, static_cast<std::uint64_t>(kSent));
   EXPECT_EQ(counters.delivered, counters.received - counters.dropped + counters.duplicated);
-  EXPECT_EQ(static_cast<std::uint64_t>(received), counters.delivered);
+  EXPECT_EQ(static_cast<std::uint64_t>(received.load()), counters.delivered);
   // Binomial(2000, 0.2): σ ≈ 18; ±4σ.
   EXPECT_NEAR(static_cast<double>(counters.dropped), 400.0, 72.0);
   EXPECT_NEAR(static_cast<double>(counters.duplicated), 160.0, 60.0);
@@ -410,7 +423,9 @@ TEST_P(LanProfile, TheClientAccountsForEveryStateAndTheForceNeverSteps) {
     EXPECT_EQ(counters.accepted, network_counters->states_received - network_counters->states_dropped);
     EXPECT_EQ(counters.duplicates, network_counters->states_duplicated);
     EXPECT_LE(counters.lost, network_counters->states_dropped);
-    EXPECT_GE(counters.lost + 3, network_counters->states_dropped);
+    // Drops after the last State to arrive are never seen as gaps: ten in a row at 30 % loss
+    // is a chance of 6e-6.
+    EXPECT_GE(counters.lost + 10, network_counters->states_dropped);
   }
 
   std::vector<double> latency_ms;
@@ -500,18 +515,21 @@ TEST(Lan, APulledCableRampsTheForceOutAtLeaseExpiryAndTheClientComesBackWithItsW
       return e.kind == Event::Kind::kLeaseExpired && e.session_id == first_session;
     });
     ASSERT_NE(expiry, events.end());
-    // The loop skips the periods an overrun lost, so ticks are found by their time stamps: the
-    // first sample stamped at or after the expiry, and the first zero force from there.
-    const auto at_expiry = std::find_if(states.begin(), states.end(), [&](const State& s) {
+      // The loop skips the periods an overrun lost, so ticks are found by their time stamps: the
+    // last sample stamped before the expiry (the observer's callback sees only the newest of a
+    // backlog, so this can only be early, never late) and the first zero force after it.
+    const auto after = std::find_if(states.begin(), states.end(), [&](const State& s) {
       return s.server_time >= expiry->server_time;
     });
-    ASSERT_NE(at_expiry, states.end());
-    const auto zero =
-        std::find_if(at_expiry, states.end(), [&](const State& s) { return norm(s.force) == 0.0; });
+    ASSERT_NE(after, states.begin());
+    ASSERT_NE(after, states.end());
+    const auto before_expiry = std::prev(after);
+    const auto zero = std::find_if(after, states.end(), [&](const State& s) { return norm(s.force) == 0.0; });
     ASSERT_NE(zero, states.end()) << "the force never reached zero after the lease ran out";
-    ramp_ticks = static_cast<double>(zero->tick - at_expiry->tick);
-    EXPECT_GE(ramp_ticks, kRampMs - 5.0);   // ramped, not cut
-    EXPECT_LE(ramp_ticks, kRampMs + 15.0);  // the ramp, plus the housekeeping period and a sample
+    ramp_ticks = static_cast<double>(zero->tick - before_expiry->tick);
+    EXPECT_GE(ramp_ticks, kRampMs - 5.0);  // ramped, not cut
+    // The ramp, plus the housekeeping period, plus what a stalled observer missed on either side.
+    EXPECT_LE(ramp_ticks, kRampMs + 60.0);
   }
   const ForceFigures device = force_figures(states);
   EXPECT_TRUE(device.all_finite);

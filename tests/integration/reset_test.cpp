@@ -92,6 +92,16 @@ TEST(LockstepReset, TheSameCallsAfterAResetGiveTheSameRunBitForBit) {
   ASSERT_TRUE(observer.wait_for_tick(observer.step(1), observed, seconds(5)));
   EXPECT_EQ(observed.tick, 1u);  // the stream carries on, from tick 1
   client.reset();                 // and back again, so the second run starts where the first did
+  // The observer's stream (datagrams, not Step replies: sequence > 0) goes on from tick 1 too.
+  State streamed;
+  const auto give_up = std::chrono::steady_clock::now() + seconds(5);
+  do {
+    (void)client.step(1);
+  } while (!(observer.poll_state(streamed, milliseconds(20)) && streamed.sequence > 0 && streamed.tick <= 40) &&
+           std::chrono::steady_clock::now() < give_up);
+  EXPECT_GT(streamed.sequence, 0u);
+  EXPECT_LE(streamed.tick, 40u) << "the observer's stream still shows the old run";
+  client.reset();                 // the run starts from tick 1 again
 
   const ScriptedRun second = drive(client);
   ASSERT_EQ(second.states.size(), first.states.size());
@@ -124,7 +134,7 @@ TEST(LockstepReset, TheSameCallsAfterAResetGiveTheSameRunBitForBit) {
   std::lock_guard lock(events_mutex);
   EXPECT_EQ(std::count_if(events.begin(), events.end(),
                           [](const Event& e) { return e.kind == Event::Kind::kReset; }),
-            2);
+            3);
 }
 
 TEST(LockstepReset, IsRefusedChangingNothingWhileAnotherSessionHoldsItems) {

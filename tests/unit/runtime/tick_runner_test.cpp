@@ -351,8 +351,8 @@ TEST(LoopThread, LockstepStepRunsExactlyTheTicksAskedFor) {
   SampleRing& samples = rig.samples;
   TickRunner& runner = rig.runner;
   LoopCounters& counters = rig.counters;
-  EXPECT_EQ(loop.step(10), 10u);
-  EXPECT_EQ(loop.step(5), 15u);
+  EXPECT_EQ(loop.step(10).tick, 10u);
+  EXPECT_EQ(loop.step(5).tick, 15u);
   EXPECT_EQ(loop.server_time_ns(), 15 * 1'000'000);
   TickSample s;
   ASSERT_TRUE(samples.read(15, s));
@@ -365,9 +365,32 @@ TEST(LoopThread, LockstepStepRunsExactlyTheTicksAskedFor) {
 TEST(LoopThread, StepAfterStopReturnsAtOnce) {
   LockstepRig rig;
   LoopThread& loop = rig.loop;
-  EXPECT_EQ(loop.step(3), 3u);
+  EXPECT_EQ(loop.step(3).tick, 3u);
   loop.stop();
-  EXPECT_EQ(loop.step(1000), 3u);  // nothing runs any more, and the caller is not stranded
+  EXPECT_EQ(loop.step(1000).tick, 3u);  // nothing runs any more, and the caller is not stranded
+}
+
+// A reset right after a step, however the loop thread is placed when it comes, numbers the ticks
+// from 1 again and starts a new run; the next step runs exactly its own ticks (no hang, no ticks
+// nobody asked for). Many rounds, to meet the loop thread at every point of its cycle.
+TEST(LoopThread, AResetRightAfterAStepRestartsTheTicksWithoutLosingOrAddingAny) {
+  LockstepRig rig;
+  LoopThread& loop = rig.loop;
+  for (std::uint64_t round = 1; round <= 300; ++round) {
+    ASSERT_EQ(loop.step(static_cast<std::uint32_t>(1 + round % 3)).tick, 1 + round % 3) << "round " << round;
+    bool idle_saw_old_ticks = false;
+    ASSERT_TRUE(loop.reset_lockstep([&](const std::function<void()>& restart) {
+      idle_saw_old_ticks = loop.completed_ticks() == 1 + round % 3;
+      restart();
+      return loop.completed_ticks() == 0;
+    })) << "round " << round;
+    EXPECT_TRUE(idle_saw_old_ticks);
+    EXPECT_EQ(loop.run(), round);
+  }
+  const LoopThread::Stepped stepped = loop.step(7);
+  EXPECT_EQ(stepped.tick, 7u);
+  EXPECT_EQ(stepped.run, 300u);
+  EXPECT_EQ(loop.server_time_ns(), 7 * 1'000'000);
 }
 
 }  // namespace
