@@ -12,10 +12,14 @@ std::string read_scene_file(const std::string& path, v1::Scene& out) {
   if (!file) return path + ": cannot open";
   std::stringstream text;
   text << file.rdbuf();
+  return parse_scene_json(text.str(), path, out);
+}
+
+std::string parse_scene_json(const std::string& text, const std::string& source, v1::Scene& out) {
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;
-  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &out, options);
-  if (!status.ok()) return path + ": not a valid Scene: " + std::string(status.message());
+  const auto status = google::protobuf::util::JsonStringToMessage(text, &out, options);
+  if (!status.ok()) return source + ": not a valid Scene: " + std::string(status.message());
   return {};
 }
 

@@ -13,4 +13,7 @@ namespace haptic::io {
 /// "<path>: cannot open" or "<path>: not a valid Scene: <parser's message>".
 std::string read_scene_file(const std::string& path, v1::Scene& out);
 
+/// The same for text already read; `source` names it in the message.
+std::string parse_scene_json(const std::string& text, const std::string& source, v1::Scene& out);
+
 }  // namespace haptic::io

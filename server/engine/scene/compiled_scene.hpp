@@ -276,7 +276,6 @@ SceneForce evaluate_scene(const CompiledScene& scene, const Vec3& p_WT, const Ve
 /// Gain of an item whose fade began at fade_begin_tick, at tick `tick`: 1 before, then linear to 0.
 double fade_gain(std::int64_t fade_begin_tick, std::int64_t tick, std::int64_t ramp_ticks);
 
-/// Whether the item is being removed or replaced by a newer version.
 /// Whether an item's force is (or is about to be) ramping out at `tick`: a removal or a newer
 /// version has begun its fade and the fade has not yet reached zero. By tick alone, so a lockstep
 /// run flags the same ticks however late the housekeeping drops the finished item.
