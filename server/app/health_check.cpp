@@ -5,6 +5,7 @@
 
 #include <fstream>
 #include <future>
+#include <regex>
 #include <sstream>
 #include <vector>
 
@@ -53,6 +54,32 @@ bool check_health(const std::string& address, std::chrono::milliseconds timeout,
     return false;
   }
   return true;
+}
+
+std::string local_dial_address(const std::string& bound_address, std::uint16_t port) {
+  const auto colon = bound_address.rfind(':');
+  std::string host = colon == std::string::npos ? bound_address : bound_address.substr(0, colon);
+  if (host.empty() || host == "0.0.0.0") host = "127.0.0.1";
+  if (host == "[::]" || host == "::") host = "[::1]";
+  return host + ":" + std::to_string(port);
+}
+
+std::string address_from_ready_file(const std::string& path, std::string& why) {
+  std::ifstream file(path);
+  if (!file) {
+    why = "no ready file " + path + " (the server has not finished starting, or writes none)";
+    return {};
+  }
+  std::stringstream text;
+  text << file.rdbuf();
+  static const std::regex address_field(R"re("grpc_address"\s*:\s*"([^"]+)")re");
+  std::smatch match;
+  const std::string contents = text.str();
+  if (!std::regex_search(contents, match, address_field)) {
+    why = "ready file " + path + " has no \"grpc_address\"";
+    return {};
+  }
+  return match[1].str();
 }
 
 }  // namespace haptic::app

@@ -5,6 +5,7 @@
 // systemd scripts and grpc_health_probe expect.
 
 #include <chrono>
+#include <cstdint>
 #include <string>
 
 namespace haptic::app {
@@ -13,5 +14,14 @@ namespace haptic::app {
 /// false with `why` saying what happened. With `ca_file` (PEM), over TLS trusting that CA.
 bool check_health(const std::string& address, std::chrono::milliseconds timeout, std::string& why,
                   const std::string& ca_file = {});
+
+/// Where a process on the same host dials a control plane bound to `bound_address` ("host:port",
+/// the port ignored) now listening on `port`: a wildcard host (0.0.0.0, [::], none) is reached on
+/// loopback, any other host as it is.
+std::string local_dial_address(const std::string& bound_address, std::uint16_t port);
+
+/// The "grpc_address" of a ready file hapticd wrote (--ready-file); empty, with `why` saying what
+/// was wrong, when the file is missing or has none.
+std::string address_from_ready_file(const std::string& path, std::string& why);
 
 }  // namespace haptic::app

@@ -19,12 +19,16 @@ namespace {
 // Written once the ports are bound, so a script or test can find ephemeral ports without parsing
 // logs. Written to a temporary name and renamed, so a reader never sees half a file. In real time
 // it also names the CLOCK_MONOTONIC instant of server time 0 (ns), so a process on the same host
-// can tell how old a sample's stamp is.
-void write_ready_file(const std::string& path, const haptic::app::Server& server) {
+// can tell how old a sample's stamp is. "grpc_address" is where a process on the same host reaches
+// the control plane (a wildcard bind is reached on loopback): `--health-check --ready-file` dials it.
+void write_ready_file(const std::string& path, const haptic::app::Server& server,
+                      const std::string& bound_address) {
   const std::string temporary = path + ".tmp";
   {
     std::ofstream out(temporary);
-    out << "{\"grpc_port\": " << server.grpc_port() << ", \"udp_port\": " << server.udp_port();
+    out << "{\"grpc_port\": " << server.grpc_port() << ", \"udp_port\": " << server.udp_port()
+        << ", \"grpc_address\": \"" << haptic::app::local_dial_address(bound_address, server.grpc_port())
+        << "\"";
     if (const auto origin = server.time_origin_ns()) out << ", \"time_origin_ns\": " << *origin;
     out << "}\n";
   }
@@ -61,7 +65,9 @@ int main(int argc, char** argv) {
   std::string health_address;
   cli.add_option("--health-check", health_address,
                  "ask the server at HOST:PORT over a fresh connection whether it serves; exit 0 if "
-                 "it answers SERVING within 2 s, else 1 (for container and systemd checks)");
+                 "it answers SERVING within 2 s, else 1 (for container and systemd checks). Without "
+                 "HOST:PORT, the server that wrote --ready-file")
+      ->expected(0, 1);
   std::string health_ca;
   cli.add_option("--health-ca", health_ca,
                  "with --health-check: speak TLS, trusting this PEM CA (a server with security.tls "
@@ -69,8 +75,19 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   CLI11_PARSE(cli, argc, argv);
 
-  if (!health_address.empty()) {
+  if (cli.count("--health-check") > 0) {
     std::string why;
+    if (health_address.empty()) {
+      if (ready_file.empty()) {
+        std::cerr << "hapticd: --health-check needs HOST:PORT or --ready-file\n";
+        return 2;
+      }
+      health_address = haptic::app::address_from_ready_file(ready_file, why);
+      if (health_address.empty()) {
+        std::cerr << "hapticd: " << why << "\n";
+        return 1;
+      }
+    }
     if (!haptic::app::check_health(health_address, std::chrono::seconds(2), why, health_ca)) {
       std::cerr << "hapticd: " << why << "\n";
       return 1;
@@ -123,7 +140,7 @@ int main(int argc, char** argv) {
   try {
     haptic::app::Server server(config);
     server.start();
-    if (!ready_file.empty()) write_ready_file(ready_file, server);
+    if (!ready_file.empty()) write_ready_file(ready_file, server, config.grpc_address());
     int signal_number = 0;
     sigwait(&stop_signals, &signal_number);
     spdlog::info("hapticd: {} received, ramping forces to zero", strsignal(signal_number));

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Builds the hapticd image with podman from this build's binaries (docker/Dockerfile with
 # BINARIES=prebuilt: the runtime stage users get, without compiling everything a second time),
-# runs it in lockstep, checks its user and its health check, and drives it with the host's
-# touch_wall in lockstep.
+# runs it in lockstep, checks its user, that it holds hapticd alone and that the runtime's health
+# status (the image's HEALTHCHECK) turns healthy, and drives it with the host's touch_wall in
+# lockstep.
 # scripts/setup installs podman, runc and debootstrap, so a missing one is a failure here, not a
 # skip; exit 77 (skipped) only when HAPTIC_SKIP_CONTAINER=1 says this machine cannot run
 # containers at all.
@@ -52,18 +53,34 @@ trap cleanup EXIT
 context="$work/context"
 mkdir -p "$context/docker/prebuilt"
 cp "$source_dir/docker/Dockerfile" "$source_dir/docker/hapticd-container.json" "$context/docker/"
-cp "$hapticd" "$touch_wall" "$context/docker/prebuilt/"
+cp "$hapticd" "$context/docker/prebuilt/"
 echo "building image hapticd:test"
-podman "${podman_opts[@]}" build "${run_opts[@]}" -q -f "$context/docker/Dockerfile" \
+# Rebuilding leaves the previous image and its stages untagged: those this build left go again.
+dangling_before=$(podman "${podman_opts[@]}" images -q --filter dangling=true | sort)
+# --format docker: the OCI format has no HEALTHCHECK, so podman's default would drop it.
+podman "${podman_opts[@]}" build "${run_opts[@]}" --format docker -q -f "$context/docker/Dockerfile" \
   --build-arg BASE_IMAGE="$base" --build-arg BINARIES=prebuilt -t localhost/hapticd:test \
   "$context" >/dev/null
+dangling_after=$(podman "${podman_opts[@]}" images -q --filter dangling=true | sort)
+stale=$(comm -13 <(echo "$dangling_before") <(echo "$dangling_after") | grep . || true)
+[ -z "$stale" ] || podman "${podman_opts[@]}" rmi $stale >/dev/null 2>&1 || true
+
+health_command=$(podman "${podman_opts[@]}" image inspect --format '{{json .Config.Healthcheck.Test}}' \
+  localhost/hapticd:test)
+echo "image health check: $health_command"
+echo "$health_command" | grep -q -- '--health-check' \
+  || { echo "FAIL: the image has no HEALTHCHECK running hapticd --health-check"; exit 1; }
+# The runtime stage holds hapticd alone: no example, tool or build output beside it.
+installed=$(podman "${podman_opts[@]}" run --rm "${run_opts[@]}" --entrypoint /bin/ls \
+  localhost/hapticd:test /usr/local/bin | tr '\n' ' ')
+[ "$installed" = "hapticd " ] \
+  || { echo "FAIL: /usr/local/bin in the image holds '$installed', not hapticd alone"; exit 1; }
 
 # Host networking with ephemeral loopback ports: no fixed port can collide with anything else.
 mkdir -p "$work/run"
 chmod 777 "$work/run"
 container=$(podman "${podman_opts[@]}" run -d "${run_opts[@]}" --network host -v "$work/run:/run/hapticd" \
-  localhost/hapticd:test --lockstep --grpc-address 127.0.0.1:0 --udp-port 0 \
-  --ready-file /run/hapticd/ready.json)
+  localhost/hapticd:test --lockstep --grpc-address 127.0.0.1:0 --udp-port 0)
 for _ in $(seq 1 200); do
   [ -f "$work/run/ready.json" ] && break
   sleep 0.1
@@ -74,9 +91,13 @@ fi
 grpc_port=$(sed -n 's/.*"grpc_port": *\([0-9]*\).*/\1/p' "$work/run/ready.json")
 user=$(podman "${podman_opts[@]}" exec "$container" id -un)
 [ "$user" = hapticd ] || { echo "FAIL: container runs as '$user', not hapticd"; exit 1; }
-# The image's health check command, run inside the container against the live server.
-podman "${podman_opts[@]}" exec "$container" /usr/local/bin/hapticd --health-check "127.0.0.1:$grpc_port" \
-  || { echo "FAIL: the health check does not see the server serving"; exit 1; }
+# The runtime's own health check (the image's HEALTHCHECK, run now rather than on its 10 s timer):
+# it must find the server on its ephemeral port through the ready file, and report it healthy.
+podman "${podman_opts[@]}" healthcheck run "$container" \
+  || { echo "FAIL: the image's health check does not see the server serving"; exit 1; }
+status=$(podman "${podman_opts[@]}" inspect --format '{{.State.Health.Status}}' "$container")
+echo "health status: $status"
+[ "$status" = healthy ] || { echo "FAIL: health status '$status', not healthy"; exit 1; }
 
 echo "running touch_wall against the container on port $grpc_port, in lockstep"
 output=$("$touch_wall" "127.0.0.1:$grpc_port" --lockstep)

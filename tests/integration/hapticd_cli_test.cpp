@@ -126,6 +126,31 @@ TEST(HapticdCli, ASecondServerOnABusyGrpcOrUdpPortFailsAtStartWithOneClearLine) 
   EXPECT_EQ(run_hapticd({"--health-check", "127.0.0.1:" + std::to_string(first.grpc_port())}).exit_code, 0);
 }
 
+// A container's health check cannot know an ephemeral port: it finds the server through the ready
+// file the server wrote.
+TEST(HapticdCli, TheHealthCheckFindsTheServerThroughItsReadyFile) {
+  test::ServerProcess server(test::lockstep_config());
+  const Outcome check = run_hapticd({"--health-check", "--ready-file", server.ready_file()});
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find("hapticd at 127.0.0.1:" + std::to_string(server.grpc_port()) +
+                              ": serving"),
+            std::string::npos)
+      << check.output;
+
+  const Outcome no_file = run_hapticd({"--health-check", "--ready-file", "/nonexistent/ready.json"});
+  EXPECT_EQ(no_file.exit_code, 1);
+  EXPECT_NE(no_file.output.find("no ready file /nonexistent/ready.json"), std::string::npos)
+      << no_file.output;
+  const Outcome neither = run_hapticd({"--health-check"});
+  EXPECT_EQ(neither.exit_code, 2);
+  EXPECT_NE(neither.output.find("--health-check needs HOST:PORT or --ready-file"), std::string::npos)
+      << neither.output;
+
+  server.stop();
+  const Outcome stopped = run_hapticd({"--health-check", "--ready-file", server.ready_file()});
+  EXPECT_EQ(stopped.exit_code, 1) << stopped.output;
+}
+
 TEST(HapticdCli, WithTlsTooASecondServerOnTheBusyPortFailsWithOneClearLine) {
   const std::string certs = TEST_CERTS_DIR;
   const std::string security = R"("security": {"tls": {"cert_file": ")" + certs +

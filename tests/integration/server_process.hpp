@@ -47,6 +47,7 @@ class ServerProcess {
     std::filesystem::create_directories(dir_);
     const auto config_path = dir_ / "config.json";
     const auto ready_path = dir_ / "ready.json";
+    ready_file_ = ready_path.string();
     std::ofstream(config_path) << config_json;
 
     // The command line, made before fork: the child of a threaded process must not allocate.
@@ -135,6 +136,8 @@ class ServerProcess {
   std::chrono::steady_clock::time_point ready_at() const { return ready_at_; }
   std::uint16_t grpc_port() const { return grpc_port_; }
   std::uint16_t udp_port() const { return udp_port_; }
+  /// The file the server wrote once listening (--ready-file).
+  const std::string& ready_file() const { return ready_file_; }
   /// Real time: this host's steady clock at server time 0 (so a sample stamped t was made at
   /// time_origin() + t). None in lockstep.
   std::optional<std::chrono::steady_clock::time_point> time_origin() const { return time_origin_; }
@@ -147,6 +150,7 @@ class ServerProcess {
   }
 
   std::filesystem::path dir_;
+  std::string ready_file_;
   std::string host_address_;
   pid_t pid_ = -1;
   std::chrono::steady_clock::time_point forked_at_;
