@@ -7,6 +7,7 @@
 #include <sstream>
 #include <thread>
 
+#include "haptic/io/session_id.hpp"
 #include "conversions.hpp"
 #include "status_mapping.hpp"
 
@@ -476,7 +477,7 @@ ClientCore::Probe ClientCore::probe(std::string& why) {
   const grpc::Status status = stub()->GetDeviceInfo(&context, ref, &ignored);
   switch (status.error_code()) {
     case grpc::StatusCode::NOT_FOUND:
-      why = "the server no longer knows session " + std::to_string(session_id_) + ": " +
+      why = "the server no longer knows session " + io::format_session_id(session_id_) + ": " +
             status.error_message();
       return Probe::kSessionGone;
     case grpc::StatusCode::UNAVAILABLE:

@@ -491,6 +491,7 @@ Event from_proto(const v1::Event& e) {
   out.session_id = e.session_id();
   out.server_time = e.server_time_s();
   out.message = e.message();
+  out.item_id = e.item_id();
   return out;
 }
 

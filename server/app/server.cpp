@@ -454,7 +454,6 @@ void Server::housekeeping_loop() {
     for (const std::uint64_t id : sessions_.expire(steady_clock::now())) {
       leases_expired_.fetch_add(1, std::memory_order_relaxed);
       service_->end_session(id, v1::Event::LEASE_EXPIRED);
-      spdlog::info("session {:016x}: lease expired, its objects ramp out", id);
     }
     if (++housekeeping_rounds % 100 == 0) service_->end_sessions_of_expired_tokens();  // each second
     scene_->compact();

@@ -1,6 +1,5 @@
 #include "net/haptic_service.hpp"
 
-
 #include <spdlog/spdlog.h>
 
 #include <cctype>
@@ -8,6 +7,7 @@
 #include <cstdlib>
 #include <span>
 
+#include "haptic/io/session_id.hpp"
 #include "haptic/io/session_secret.hpp"
 #include "net/control_listener.hpp"
 #include "schema/stability.hpp"
@@ -25,7 +25,7 @@ schema::DeviceMassDamper mass_damper(const runtime::DeviceDescription& device) {
 void log_if_unstable(const v1::StabilityReport& report, std::uint64_t session_id,
                      std::uint64_t object_id) {
   if (report.warning().empty()) return;
-  spdlog::warn("session {:016x}: object {} accepted but {}", session_id, object_id,
+  spdlog::warn("session {}: object {} accepted but {}", io::format_session_id(session_id), object_id,
                report.warning());
 }
 
@@ -78,17 +78,17 @@ grpc::Status HapticService::check_session(const grpc::ServerContext* context,
     case Access::kNoSuchSession:
       if (auto reason = deps_.sessions.ended_reason(session_id)) {
         return {grpc::StatusCode::PERMISSION_DENIED,
-                "session_id: session " + std::to_string(session_id) + " was " + *reason +
+                "session_id: session " + io::format_session_id(session_id) + " was " + *reason +
                     "; open a new one only if you may"};
       }
       return {grpc::StatusCode::NOT_FOUND,
-              "session_id: no open session " + std::to_string(session_id) +
+              "session_id: no open session " + io::format_session_id(session_id) +
                   " (never opened, closed, or its lease expired)"};
     case Access::kWrongSecret:
       break;
   }
   return {grpc::StatusCode::PERMISSION_DENIED,
-          "session_id: session " + std::to_string(session_id) +
+          "session_id: session " + io::format_session_id(session_id) +
               (secret.empty() ? " needs its session secret, and this call carries none"
                               : " belongs to another client: this call's session secret is not its") +
               " (only the client that opened a session may act for it; it sends the secret "
@@ -101,18 +101,32 @@ const DevicePort& HapticService::port_of(std::uint64_t session_id) const {
 }
 
 void HapticService::publish_event(v1::Event::Kind kind, std::uint64_t session_id,
-                                  const std::string& message) {
+                                  const std::string& message, std::uint64_t item_id) {
   v1::Event event;
   event.set_kind(kind);
   event.set_session_id(session_id);
+  event.set_item_id(item_id);
   event.set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
   event.set_message(message);
   deps_.events.publish(event);
 }
 
+void HapticService::publish_item_change(std::uint64_t session_id, ItemKind kind,
+                                        std::uint64_t item_id, const char* change) {
+  publish_event(v1::Event::SCENE_CHANGED, session_id,
+                std::string(kind == ItemKind::kObject ? "object " : "field ") +
+                    std::to_string(item_id) + " " + change,
+                item_id);
+}
+
 void HapticService::end_session(std::uint64_t session_id, v1::Event::Kind why,
                                 const std::string& reason) {
   const std::size_t faded = deps_.scene.remove_session(session_id);
+  const std::string how =
+      !reason.empty() ? reason
+                      : (why == v1::Event::LEASE_EXPIRED ? "lease expired" : "closed by its client");
+  spdlog::info("session {}: {}; {} objects and fields ramping out",
+               io::format_session_id(session_id), how, faded);
   publish_event(why, session_id,
                 (reason.empty() ? std::string() : reason + "; ") + std::to_string(faded) +
                     " objects and fields ramping out");
@@ -128,8 +142,6 @@ std::size_t HapticService::end_sessions_of_expired_tokens(std::chrono::system_cl
     }
     const std::string reason = "ended: token '" + session.caller.token_name + "' expired";
     if (!deps_.sessions.end(session.id, reason)) continue;  // closed meanwhile
-    spdlog::info("session {:016x}: token '{}' expired, its objects ramp out", session.id,
-                 session.caller.token_name);
     end_session(session.id, v1::Event::SESSION_CLOSED, reason);
     ++ended;
   }
@@ -192,11 +204,15 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::
   *response->mutable_device() = device_info(request->device_index());
   response->set_lease_timeout_ms(static_cast<std::uint32_t>(deps_.sessions.lease_timeout().count()));
   response->set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
-  publish_event(v1::Event::SESSION_OPENED, session->id,
-                "client '" + request->client_name() + "'" +
-                    (caller.token_name.empty() ? std::string()
-                                               : " with token '" + caller.token_name + "' (" +
-                                                     role_name(caller.role) + ")"));
+  const std::string opened_by =
+      "client '" + request->client_name() + "'" +
+      (caller.token_name.empty()
+           ? std::string()
+           : " with token '" + caller.token_name + "' (" + role_name(caller.role) + ")");
+  spdlog::info("session {}: opened by {} from {} on device {}", io::format_session_id(session->id),
+               opened_by, session->peer.empty() ? "an unknown host" : session->peer,
+               request->device_index());
+  publish_event(v1::Event::SESSION_OPENED, session->id, opened_by);
   return grpc::Status::OK;
 }
 
@@ -227,6 +243,7 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1:
                        request->object().impedance().transparency_optimal_damping(),
                        request->object().impedance().virtual_coupling());
   log_if_unstable(response->stability(), request->session_id(), id);
+  publish_item_change(request->session_id(), ItemKind::kObject, id, "created");
   return grpc::Status::OK;
 }
 
@@ -249,13 +266,19 @@ grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1:
                        request->object().impedance().transparency_optimal_damping(),
                        request->object().impedance().virtual_coupling());
   log_if_unstable(response->stability(), request->session_id(), request->object_id());
+  publish_item_change(request->session_id(), ItemKind::kObject, request->object_id(), "updated");
   return grpc::Status::OK;
 }
 
 grpc::Status HapticService::DeleteObject(grpc::ServerContext* context, const v1::DeleteRequest* request,
                                          v1::Empty*) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "DeleteObject"); !status.ok()) return status;
-  return deps_.scene.remove(request->session_id(), ItemKind::kObject, request->id());
+  if (auto status = deps_.scene.remove(request->session_id(), ItemKind::kObject, request->id());
+      !status.ok()) {
+    return status;
+  }
+  publish_item_change(request->session_id(), ItemKind::kObject, request->id(), "deleted");
+  return grpc::Status::OK;
 }
 
 grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::CreateFieldRequest* request,
@@ -272,6 +295,7 @@ grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::
     return status;
   }
   response->set_id(id);
+  publish_item_change(request->session_id(), ItemKind::kField, id, "created");
   return grpc::Status::OK;
 }
 
@@ -282,14 +306,25 @@ grpc::Status HapticService::UpdateField(grpc::ServerContext* context, const v1::
   if (auto error = schema::to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
     return invalid(error);
   }
-  return deps_.scene.update(request->session_id(), ItemKind::kField, request->field_id(), spec,
-                            {{}, std::make_shared<const v1::Field>(request->field())});
+  if (auto status =
+          deps_.scene.update(request->session_id(), ItemKind::kField, request->field_id(), spec,
+                             {{}, std::make_shared<const v1::Field>(request->field())});
+      !status.ok()) {
+    return status;
+  }
+  publish_item_change(request->session_id(), ItemKind::kField, request->field_id(), "updated");
+  return grpc::Status::OK;
 }
 
 grpc::Status HapticService::DeleteField(grpc::ServerContext* context, const v1::DeleteRequest* request,
                                         v1::Empty*) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "DeleteField"); !status.ok()) return status;
-  return deps_.scene.remove(request->session_id(), ItemKind::kField, request->id());
+  if (auto status = deps_.scene.remove(request->session_id(), ItemKind::kField, request->id());
+      !status.ok()) {
+    return status;
+  }
+  publish_item_change(request->session_id(), ItemKind::kField, request->id(), "deleted");
+  return grpc::Status::OK;
 }
 
 grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext* context, const v1::SessionRef* request,
@@ -445,10 +480,8 @@ grpc::Status HapticService::KickSession(grpc::ServerContext* context,
       "ended by " + by + (request->reason().empty() ? "" : ": " + request->reason());
   if (!deps_.sessions.end(request->target_session_id(), reason)) {
     return {grpc::StatusCode::NOT_FOUND, "target_session_id: no open session " +
-                                             std::to_string(request->target_session_id())};
+                                             io::format_session_id(request->target_session_id())};
   }
-  spdlog::info("session {:016x} ended by {} ({})", request->target_session_id(), by,
-               request->reason().empty() ? "no reason given" : request->reason());
   end_session(request->target_session_id(), v1::Event::SESSION_CLOSED, reason);
   return grpc::Status::OK;
 }

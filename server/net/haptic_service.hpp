@@ -45,10 +45,15 @@ class HapticService final : public v1::Haptic::Service {
   explicit HapticService(ServiceDependencies deps) : deps_(std::move(deps)) {}
 
   /// Publishes an event stamped with server time.
-  void publish_event(v1::Event::Kind kind, std::uint64_t session_id, const std::string& message);
+  void publish_event(v1::Event::Kind kind, std::uint64_t session_id, const std::string& message,
+                     std::uint64_t item_id = 0);
 
-  /// Ends the session: its items fade out. Used by CloseSession, KickSession and lease expiry;
-  /// `reason` (if any) goes into the event.
+  /// SCENE_CHANGED for one item of the session: "object 3 created", with its id.
+  void publish_item_change(std::uint64_t session_id, ItemKind kind, std::uint64_t item_id,
+                           const char* change);
+
+  /// Ends the session: its items fade out. Used by CloseSession, KickSession, lease expiry and
+  /// expired tokens; `reason` (if any) goes into the event. Logs one line naming the session.
   void end_session(std::uint64_t session_id, v1::Event::Kind why, const std::string& reason = {});
 
   grpc::Status OpenSession(grpc::ServerContext*, const v1::OpenSessionRequest*,

@@ -17,6 +17,7 @@
 #include <tuple>
 #include <vector>
 
+#include "haptic/io/session_id.hpp"
 #include "haptic/io/session_secret.hpp"
 #include "haptic/v1/service.grpc.pb.h"
 #include "integration/raw_client.hpp"
@@ -30,7 +31,7 @@ using Stub = v1::Haptic::Stub;
 using SteadyClock = std::chrono::steady_clock;
 
 std::string no_session(std::uint64_t id) {
-  return "session_id: no open session " + std::to_string(id) +
+  return "session_id: no open session " + io::format_session_id(id) +
          " (never opened, closed, or its lease expired)";
 }
 
@@ -758,10 +759,34 @@ TEST(RpcSurface, EventsOfSessionsAndScenesCarryTheSessionAndTheirMessage) {
   EXPECT_EQ(event.session_id(), watcher.session_id());
   EXPECT_EQ(event.message(), "");
 
-  // A refused open and a refused scene announce nothing: the next events are the good ones'.
+  // A refused open, update and scene announce nothing: the next events are the good ones'.
   v1::OpenSessionResponse refused;
   ASSERT_EQ(h.client().open(refused, "").error_code(), Code::INVALID_ARGUMENT);
   const auto actor = h.open("actor-7");
+  // Every item a call changes is announced with its id.
+  const std::uint64_t object = h.create_object(actor, sphere(-0.05));
+  v1::UpdateObjectRequest update;
+  update.set_session_id(actor.session_id());
+  update.set_object_id(object);
+  *update.mutable_object() = sphere(-0.06);
+  v1::ItemRef updated;
+  ASSERT_TRUE(h.call(&Stub::UpdateObject, update, updated, actor).ok());
+  update.set_object_id(object + 100);  // no such object: refused, no event
+  ASSERT_EQ(h.call(&Stub::UpdateObject, update, updated, actor).error_code(), Code::NOT_FOUND);
+  const std::uint64_t field = h.create_field(actor, spring({{}, 10.0, 0.5}));
+  v1::UpdateFieldRequest update_field;
+  update_field.set_session_id(actor.session_id());
+  update_field.set_field_id(field);
+  *update_field.mutable_field() = spring({{}, 20.0, 0.5});
+  v1::Empty none;
+  ASSERT_TRUE(h.call(&Stub::UpdateField, update_field, none, actor).ok());
+  v1::DeleteRequest remove;
+  remove.set_session_id(actor.session_id());
+  remove.set_id(field);
+  ASSERT_TRUE(h.call(&Stub::DeleteField, remove, none, actor).ok());
+  remove.set_id(object);
+  ASSERT_TRUE(h.call(&Stub::DeleteObject, remove, none, actor).ok());
+  ASSERT_EQ(h.call(&Stub::DeleteObject, remove, none, actor).error_code(), Code::NOT_FOUND);
   v1::ApplySceneRequest apply;
   apply.set_session_id(actor.session_id());
   *apply.mutable_scene()->add_objects() = sphere(-0.05);
@@ -779,10 +804,17 @@ TEST(RpcSurface, EventsOfSessionsAndScenesCarryTheSessionAndTheirMessage) {
   const struct {
     v1::Event::Kind kind;
     std::string message;
+    std::uint64_t item_id;
   } expected[] = {
-      {v1::Event::SESSION_OPENED, "client 'actor-7'"},
-      {v1::Event::SCENE_CHANGED, "2 objects, 1 fields"},
-      {v1::Event::SESSION_CLOSED, "3 objects and fields ramping out"},
+      {v1::Event::SESSION_OPENED, "client 'actor-7'", 0},
+      {v1::Event::SCENE_CHANGED, "object " + std::to_string(object) + " created", object},
+      {v1::Event::SCENE_CHANGED, "object " + std::to_string(object) + " updated", object},
+      {v1::Event::SCENE_CHANGED, "field " + std::to_string(field) + " created", field},
+      {v1::Event::SCENE_CHANGED, "field " + std::to_string(field) + " updated", field},
+      {v1::Event::SCENE_CHANGED, "field " + std::to_string(field) + " deleted", field},
+      {v1::Event::SCENE_CHANGED, "object " + std::to_string(object) + " deleted", object},
+      {v1::Event::SCENE_CHANGED, "2 objects, 1 fields", 0},
+      {v1::Event::SESSION_CLOSED, "3 objects and fields ramping out", 0},
   };
   double last_time = 0.0;
   for (const auto& e : expected) {
@@ -790,6 +822,7 @@ TEST(RpcSurface, EventsOfSessionsAndScenesCarryTheSessionAndTheirMessage) {
     EXPECT_EQ(event.kind(), e.kind) << event.DebugString();
     EXPECT_EQ(event.session_id(), actor.session_id()) << event.DebugString();
     EXPECT_EQ(event.message(), e.message) << event.DebugString();
+    EXPECT_EQ(event.item_id(), e.item_id) << event.DebugString();
     EXPECT_GE(event.server_time_s(), last_time);
     last_time = event.server_time_s();
   }
@@ -826,6 +859,8 @@ TEST(RpcSurface, ASilentSessionsLeaseExpiresWithAnEventAndItsItemsGo) {
   v1::Event event = next_event(*events);
   EXPECT_EQ(event.kind(), v1::Event::SESSION_OPENED);
   EXPECT_EQ(event.session_id(), silent.session_id());
+  event = next_event(*events);
+  EXPECT_EQ(event.kind(), v1::Event::SCENE_CHANGED) << event.DebugString();
   event = next_event(*events);
   EXPECT_EQ(event.kind(), v1::Event::LEASE_EXPIRED) << event.DebugString();
   EXPECT_EQ(event.session_id(), silent.session_id());

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "haptic/io/session_id.hpp"
 #include "haptic/io/session_secret.hpp"
 #include "haptic/v1/service.grpc.pb.h"
 #include "integration/raw_client.hpp"
@@ -107,7 +108,7 @@ TEST_F(SessionCapability, AnotherClientCannotActAsASessionWhoseIdItHasRead) {
     v1::Empty empty;
     const grpc::Status denied = call(&v1::Haptic::Stub::DeleteObject, remove, empty, secret);
     EXPECT_EQ(denied.error_code(), grpc::StatusCode::PERMISSION_DENIED);
-    EXPECT_EQ(denied.error_message().rfind("session_id: session " + std::to_string(victim_id), 0), 0u)
+    EXPECT_EQ(denied.error_message().rfind("session_id: session " + io::format_session_id(victim_id), 0), 0u)
         << denied.error_message();
 
     v1::UpdateObjectRequest update;

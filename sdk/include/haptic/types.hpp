@@ -246,7 +246,10 @@ struct Event {
   Kind kind = Kind::kUnknown;
   std::uint64_t session_id = 0;  ///< The session it concerns (0: the server's own).
   double server_time = 0.0;      ///< Unit: s.
+  /// kSceneChanged: "object 3 created" / "updated" / "deleted" (or "field …"), one event per item;
+  /// a whole scene applied at once: "N objects, M fields".
   std::string message;
+  std::uint64_t item_id = 0;     ///< kSceneChanged for one item: its id; else 0.
 };
 
 /// A change of a Client's connection (Client::on_connection).
