@@ -453,6 +453,27 @@ Stats from_proto(const v1::Stats& s) {
   out.samples_skipped = s.samples_skipped();
   out.connections_open = s.connections_open();
   out.connections_refused = s.connections_refused();
+  out.lateness_p999_us = s.lateness_p999_us();
+  out.lateness_samples = s.lateness_samples();
+  out.window_s = s.window_s();
+  out.send_delay_p999_us = s.send_delay_p999_us();
+  for (const v1::ClientStats& c : s.clients()) {
+    ClientStats& client = out.clients.emplace_back();
+    client.session_id = c.session_id();
+    client.client_name = c.client_name();
+    client.peer = c.peer();
+    client.device_index = c.device_index();
+    client.decimation = c.decimation();
+    client.datagrams_sent = c.datagrams_sent();
+    client.heartbeats = c.heartbeats();
+    client.states_received = c.states_received();
+    client.states_lost = c.states_lost();
+    client.last_heartbeat_age_s = c.last_heartbeat_age_s();
+    client.round_trip_samples = c.round_trip_samples();
+    client.round_trip_p50_us = c.round_trip_p50_us();
+    client.round_trip_p99_us = c.round_trip_p99_us();
+    client.round_trip_p999_us = c.round_trip_p999_us();
+  }
   return out;
 }
 

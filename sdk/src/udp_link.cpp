@@ -98,6 +98,16 @@ void UdpLink::send_heartbeat() {
   {
     std::lock_guard lock(mutex_);
     payload.last_state_sequence = last_sequence_;
+    // What this session's stream brought, and the newest State's stamp with how long it was held
+    // here: the server reads the round trip from it (GetStats).
+    payload.states_received = counters_.accepted - session_accepted_base_;
+    payload.states_lost =
+        counters_.lost > session_lost_base_ ? counters_.lost - session_lost_base_ : 0;
+    if (last_sequence_ > 0) {
+      payload.echo_state_time_ns = echo_state_time_ns_;
+      payload.echo_hold_ns = std::max<std::int64_t>(
+          0, header.time_ns - steady_ns(echo_received_at_));
+    }
   }
   wire::encode_heartbeat(header, payload, key_, bytes);
   asio::error_code ignored;  // a lost heartbeat is made good by the next one
@@ -244,6 +254,8 @@ void UdpLink::take(std::span<const std::uint8_t> datagram, Batch& batch) {
   }
   ++counters_.accepted;
   ++batch.accepted;
+  echo_state_time_ns_ = header.time_ns;
+  echo_received_at_ = batch.received_at;
   State state;
   state.tick = payload.tick;
   state.sequence = header.sequence;
@@ -311,6 +323,8 @@ void UdpLink::rebind(std::uint16_t port, std::uint64_t session_id, const wire::K
       last_sequence_ = 0;
       seen_window_ = 0;
       stale_through_ = 0;
+      session_accepted_base_ = counters_.accepted;
+      session_lost_base_ = counters_.lost;
       forget_ticks_locked();
     }
     send_heartbeat();

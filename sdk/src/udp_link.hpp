@@ -113,6 +113,12 @@ class UdpLink {
   ClockSync clock_;                    // guarded by mutex_
   std::optional<std::chrono::steady_clock::time_point> last_heard_;  // guarded by mutex_
   ReceiveCounters counters_;           // guarded by mutex_
+  // The heartbeat's report (guarded by mutex_): counters_ as the current session started, and the
+  // newest State's server stamp with its arrival (the round-trip echo).
+  std::uint64_t session_accepted_base_ = 0;
+  std::uint64_t session_lost_base_ = 0;
+  std::int64_t echo_state_time_ns_ = 0;
+  std::chrono::steady_clock::time_point echo_received_at_{};
 
   /// The callback's own thread: a slow callback must not hold up the io thread, which sends
   /// the heartbeats that keep the lease. It is handed the newest State (conflated).

@@ -386,6 +386,40 @@ grpc::Status Server::reset_lockstep(std::uint64_t session_id) {
   return status;
 }
 
+namespace {
+
+/// Nearest-rank percentile of `sorted` (ascending, not empty): q = 0.5, 0.99, 0.999.
+double percentile_of(const std::vector<std::int64_t>& sorted, double q) {
+  const auto rank = static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1) + 0.5);
+  return static_cast<double>(sorted[std::min(rank, sorted.size() - 1)]);
+}
+
+v1::ClientStats to_proto(const net::ClientStatistics& client) {
+  v1::ClientStats out;
+  out.set_session_id(client.info.id);
+  out.set_client_name(client.info.client_name);
+  out.set_peer(client.info.peer);
+  out.set_device_index(client.info.device_index);
+  out.set_decimation(client.decimation);
+  out.set_datagrams_sent(client.datagrams_sent);
+  out.set_heartbeats(client.heartbeats);
+  out.set_states_received(client.states_received);
+  out.set_states_lost(client.states_lost);
+  out.set_last_heartbeat_age_s(
+      client.since_heartbeat ? std::chrono::duration<double>(*client.since_heartbeat).count() : -1.0);
+  std::vector<std::int64_t> round_trips = client.round_trips_ns;
+  out.set_round_trip_samples(static_cast<std::uint32_t>(round_trips.size()));
+  if (!round_trips.empty()) {
+    std::sort(round_trips.begin(), round_trips.end());
+    out.set_round_trip_p50_us(percentile_of(round_trips, 0.5) / 1000.0);
+    out.set_round_trip_p99_us(percentile_of(round_trips, 0.99) / 1000.0);
+    out.set_round_trip_p999_us(percentile_of(round_trips, 0.999) / 1000.0);
+  }
+  return out;
+}
+
+}  // namespace
+
 v1::Stats Server::stats() const {
   v1::Stats stats;
   stats.set_ticks(counters_.ticks.load(std::memory_order_relaxed));
@@ -393,10 +427,14 @@ v1::Stats Server::stats() const {
   if (elapsed_ns > 0) {
     stats.set_achieved_rate_hz(static_cast<double>(stats.ticks()) / (static_cast<double>(elapsed_ns) * 1e-9));
   }
-  const runtime::LatenessSummary lateness = lateness_.summarize();
+  const std::int64_t now_ns = runtime::monotonic_now_ns();
+  const runtime::LatenessSummary lateness = lateness_.summarize(now_ns);
   stats.set_lateness_p50_us(lateness.p50_us);
   stats.set_lateness_p99_us(lateness.p99_us);
+  stats.set_lateness_p999_us(lateness.p999_us);
   stats.set_lateness_max_us(lateness.max_us);
+  stats.set_lateness_samples(lateness.samples);
+  stats.set_window_s(lateness.window_s);
   stats.set_overruns(counters_.overruns.load(std::memory_order_relaxed));
   stats.set_sessions(static_cast<std::uint32_t>(sessions_.size()));
   const net::SceneCounts scene = scene_->counts();
@@ -418,9 +456,13 @@ v1::Stats Server::stats() const {
   stats.set_force_saturations(counters_.force_saturations.load(std::memory_order_relaxed));
   stats.set_passivity_active_ticks(counters_.passivity_active_ticks.load(std::memory_order_relaxed));
   stats.set_leases_expired(leases_expired_.load(std::memory_order_relaxed));
-  const runtime::LatenessSummary send_delay = udp_.counters().send_delay.summarize();
+  const runtime::LatenessSummary send_delay = udp_.counters().send_delay.summarize(now_ns);
   stats.set_send_delay_p50_us(send_delay.p50_us);
   stats.set_send_delay_p99_us(send_delay.p99_us);
+  stats.set_send_delay_p999_us(send_delay.p999_us);
+  for (const net::ClientStatistics& client : sessions_.client_statistics()) {
+    *stats.add_clients() = to_proto(client);
+  }
   return stats;
 }
 
@@ -431,7 +473,7 @@ void Server::log_status() {
   const double rate = seconds > 0 ? static_cast<double>(ticks - status_last_ticks_) / seconds : 0.0;
   status_last_ns_ = now_ns;
   status_last_ticks_ = ticks;
-  const runtime::LatenessSummary lateness = lateness_.summarize();
+  const runtime::LatenessSummary lateness = lateness_.summarize(runtime::monotonic_now_ns());
   spdlog::info(
       "status: rate {:.1f} Hz, lateness p50 {:.0f} us p99 {:.0f} us max {:.0f} us, overruns {}, "
       "clients {}, force faults {}",

@@ -117,6 +117,28 @@ std::vector<SessionInfo> SessionRegistry::list() const {
   return out;
 }
 
+std::vector<ClientStatistics> SessionRegistry::client_statistics(SteadyClock::time_point now) const {
+  std::lock_guard lock(mutex_);
+  std::vector<ClientStatistics> out;
+  out.reserve(sessions_.size());
+  for (const auto& [id, session] : sessions_) {
+    ClientStatistics& client = out.emplace_back();
+    client.info = session.info;
+    client.decimation = session.decimation;
+    client.datagrams_sent = session.sent->load(std::memory_order_relaxed);
+    client.heartbeats = session.heartbeats_accepted;
+    client.states_received = session.report.states_received;
+    client.states_lost = session.report.states_lost;
+    if (session.last_heartbeat) client.since_heartbeat = now - *session.last_heartbeat;
+    const std::size_t kept = std::min(session.round_trip_count, kRoundTripWindow);
+    const std::size_t oldest = session.round_trip_count - kept;
+    for (std::size_t i = 0; i < kept; ++i) {
+      client.round_trips_ns.push_back(session.round_trips[(oldest + i) % kRoundTripWindow]);
+    }
+  }
+  return out;
+}
+
 bool SessionRegistry::end(std::uint64_t session_id, const std::string& reason) {
   std::lock_guard lock(mutex_);
   if (sessions_.erase(session_id) == 0) return false;
@@ -199,7 +221,8 @@ bool SessionRegistry::source_allowed(const Session& session, const UdpAddress& f
 }
 
 HeartbeatOutcome SessionRegistry::on_heartbeat(std::uint64_t session_id, std::uint64_t sequence,
-                                               const UdpAddress& from, SteadyClock::time_point now) {
+                                               const UdpAddress& from, SteadyClock::time_point now,
+                                               const HeartbeatReport& report) {
   using Verdict = HeartbeatOutcome::Verdict;
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(session_id);
@@ -210,6 +233,13 @@ HeartbeatOutcome SessionRegistry::on_heartbeat(std::uint64_t session_id, std::ui
   if (!session.heartbeats.take(kHeartbeatRateHz, kHeartbeatBurst, now)) return {Verdict::kRateLimited};
   session.last_heartbeat_sequence = sequence;
   session.last_seen = now;
+  ++session.heartbeats_accepted;
+  session.last_heartbeat = now;
+  session.report = report;
+  if (report.round_trip_ns) {
+    session.round_trips[session.round_trip_count % kRoundTripWindow] = *report.round_trip_ns;
+    ++session.round_trip_count;
+  }
   if (session.address && same_address(*session.address, from)) return {Verdict::kAccepted};
   // A new address (the first, or the client moved): state keeps going where it went, if
   // anywhere, until this one answers a challenge. One challenge per address per interval.
@@ -290,7 +320,7 @@ std::vector<Subscriber> SessionRegistry::subscribers() const {
   for (const auto& [id, session] : sessions_) {
     if (session.decimation == 0 || !session.address) continue;
     out.push_back(Subscriber{id, session.info.key, *session.address, session.decimation,
-                             session.first_tick, session.info.device_index});
+                             session.first_tick, session.info.device_index, session.sent});
   }
   return out;
 }

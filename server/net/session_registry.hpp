@@ -6,9 +6,11 @@
 #include <sys/socket.h>
 
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <span>
@@ -97,7 +99,35 @@ struct Subscriber {
   std::uint32_t decimation = 1;
   std::uint64_t first_tick = 0;  // the stream starts here: ticks before the subscription are not sent
   std::uint32_t device_index = 0;  // whose samples it is sent
+  /// The session's count of State datagrams sent; the sender adds to it (relaxed), GetStats reads.
+  std::shared_ptr<std::atomic<std::uint64_t>> sent;
 };
+
+/// What a heartbeat reports of the stream as the client receives it (wire::HeartbeatPayload).
+struct HeartbeatReport {
+  std::uint64_t states_received = 0;
+  std::uint64_t states_lost = 0;
+  /// Server time at receipt − the echoed State's stamp − the client's hold (ns); none in
+  /// lockstep, before any State, or when the echo makes no sense (negative, over a minute).
+  std::optional<std::int64_t> round_trip_ns;
+};
+
+/// One client as GetStats shows it.
+struct ClientStatistics {
+  SessionInfo info;
+  std::uint32_t decimation = 0;        // 0: not subscribed
+  std::uint64_t datagrams_sent = 0;    // State datagrams sent to it
+  std::uint64_t heartbeats = 0;        // heartbeats accepted
+  std::uint64_t states_received = 0;   // as its last heartbeat reported
+  std::uint64_t states_lost = 0;
+  /// How long ago its last heartbeat arrived; none yet.
+  std::optional<SteadyClock::duration> since_heartbeat;
+  /// Round trips of its last kRoundTripWindow heartbeats (ns), in arrival order.
+  std::vector<std::int64_t> round_trips_ns;
+};
+
+/// Round-trip samples kept per session: 25.6 s of the SDK's 10 heartbeats a second.
+inline constexpr std::size_t kRoundTripWindow = 256;
 
 class SessionRegistry {
  public:
@@ -128,8 +158,10 @@ class SessionRegistry {
   /// A heartbeat authenticated with the session's key, from `from`. Renews the lease unless it is
   /// refused (see HeartbeatOutcome). State only ever goes to an address that has answered a
   /// challenge: a heartbeat from any other asks for one to be sent there.
+  /// `report` is kept when the heartbeat is (not when refused).
   HeartbeatOutcome on_heartbeat(std::uint64_t session_id, std::uint64_t sequence,
-                                const UdpAddress& from, SteadyClock::time_point now = SteadyClock::now());
+                                const UdpAddress& from, SteadyClock::time_point now = SteadyClock::now(),
+                                const HeartbeatReport& report = {});
   /// A PathResponse authenticated with the session's key: if it comes from the challenged
   /// address with its nonce (and a fresh sequence), that address is where state goes from now on.
   bool on_path_response(std::uint64_t session_id, std::uint64_t sequence, std::uint64_t nonce,
@@ -154,6 +186,8 @@ class SessionRegistry {
   std::size_t size() const;
   /// Every open session (ListSessions), in id order.
   std::vector<SessionInfo> list() const;
+  /// Every open session's traffic (GetStats), in id order.
+  std::vector<ClientStatistics> client_statistics(SteadyClock::time_point now = SteadyClock::now()) const;
   std::chrono::milliseconds lease_timeout() const { return limits_.lease_timeout; }
 
  private:
@@ -168,6 +202,12 @@ class SessionRegistry {
     std::uint64_t last_heartbeat_sequence = 0;  // heartbeats and path responses share it
     std::uint32_t decimation = 0;
     std::uint64_t first_tick = 0;
+    std::shared_ptr<std::atomic<std::uint64_t>> sent = std::make_shared<std::atomic<std::uint64_t>>(0);
+    std::uint64_t heartbeats_accepted = 0;
+    std::optional<SteadyClock::time_point> last_heartbeat;
+    HeartbeatReport report;
+    std::array<std::int64_t, kRoundTripWindow> round_trips{};  // a ring
+    std::size_t round_trip_count = 0;                          // samples ever kept
   };
 
   mutable std::mutex mutex_;

@@ -66,6 +66,7 @@ void UdpEndpoint::bind(const std::string& address, std::uint16_t port) {
 
 void UdpEndpoint::start(std::optional<std::int64_t> time_origin_ns, int sender_cpu) {
   stopping_.store(false);
+  time_origin_ns_ = time_origin_ns;
   receiver_ = std::thread([this] { receive_loop(); });
   sender_ = std::thread([this, time_origin_ns, sender_cpu] { send_loop(time_origin_ns, sender_cpu); });
 }
@@ -117,7 +118,24 @@ bool UdpEndpoint::handle_heartbeat(std::span<const std::uint8_t> datagram,
     return false;
   }
   using Verdict = HeartbeatOutcome::Verdict;
-  const HeartbeatOutcome outcome = sessions_.on_heartbeat(peeked.session_id, header.sequence, from);
+  HeartbeatReport report{heartbeat.states_received, heartbeat.states_lost, std::nullopt};
+  if (time_origin_ns_ && heartbeat.last_state_sequence > 0) {
+    // Server time now, less the echoed tick stamp, less the time the client held it. A client can
+    // only misreport its own figures; nonsense (negative, over a minute) is not kept.
+    // (Checked arithmetic: the echo is the client's to choose, extremes included.)
+    constexpr std::int64_t kMaxRoundTripNs = 60'000'000'000;
+    const std::int64_t server_now = runtime::monotonic_now_ns() - *time_origin_ns_;
+    std::int64_t round_trip = 0;
+    const bool overflow =
+        __builtin_sub_overflow(server_now, heartbeat.echo_state_time_ns, &round_trip) ||
+        __builtin_sub_overflow(round_trip, heartbeat.echo_hold_ns, &round_trip);
+    if (!overflow && heartbeat.echo_hold_ns >= 0 && round_trip >= 0 &&
+        round_trip <= kMaxRoundTripNs) {
+      report.round_trip_ns = round_trip;
+    }
+  }
+  const HeartbeatOutcome outcome =
+      sessions_.on_heartbeat(peeked.session_id, header.sequence, from, SteadyClock::now(), report);
   switch (outcome.verdict) {
     case Verdict::kAccepted:
       return true;
@@ -251,8 +269,10 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
         counters_.send_errors.fetch_add(1, std::memory_order_relaxed);
       } else {
         counters_.sent.fetch_add(1, std::memory_order_relaxed);
+        if (subscriber.sent) subscriber.sent->fetch_add(1, std::memory_order_relaxed);
         if (first_send && time_origin_ns) {
-          counters_.send_delay.record(runtime::monotonic_now_ns() - (*time_origin_ns + sample.time_ns));
+          const std::int64_t sent_ns = runtime::monotonic_now_ns();
+          counters_.send_delay.record(sent_ns - (*time_origin_ns + sample.time_ns), sent_ns);
         }
         first_send = false;
       }

@@ -66,7 +66,8 @@ class UdpEndpoint {
   std::uint16_t port() const { return port_; }
 
   /// Starts the receiver and sender threads. With a time origin (the CLOCK_MONOTONIC time of
-  /// server time 0, real time only) the sender also measures each tick's send delay. With
+  /// server time 0, real time only) the sender also measures each tick's send delay, and the
+  /// receiver each client's round trip from its heartbeats' echoes. With
   /// sender_cpu >= 0 the sender runs on that CPU: the loop's, so that the loop's wake-up reaches a
   /// thread on a busy CPU instead of an idle one (on a VM, waking an idle vCPU cost ≈ 70 µs).
   void start(std::optional<std::int64_t> time_origin_ns = std::nullopt, int sender_cpu = -1);
@@ -94,6 +95,7 @@ class UdpEndpoint {
   std::uint16_t port_ = 0;
   std::atomic<bool> stopping_{false};
   std::atomic<std::uint64_t> sent_through_{0};  // the sender's last_tick, for wait_sent_through
+  std::optional<std::int64_t> time_origin_ns_;  // set by start() before the threads run
   std::thread receiver_;
   std::thread sender_;
   UdpCounters counters_;

@@ -1,5 +1,7 @@
 #include "runtime/loop_stats.hpp"
 
+#include <algorithm>
+
 namespace haptic::runtime {
 namespace {
 
@@ -11,14 +13,32 @@ double bin_lower_edge_us(std::size_t bin) {
 
 }  // namespace
 
-LatenessSummary LatenessHistogram::summarize() const {
+LatenessHistogram::LatenessHistogram(int window_s)
+    : slot_count_(static_cast<std::size_t>(window_s < 1 ? 1 : window_s) + 1),
+      slots_(std::make_unique<Slot[]>(slot_count_)) {}
+
+LatenessSummary LatenessHistogram::summarize(std::int64_t now_ns) const {
   std::array<std::uint64_t, kBins> counts{};
   LatenessSummary summary;
-  for (std::size_t i = 0; i < kBins; ++i) {
-    counts[i] = bins_[i].load(std::memory_order_relaxed);
-    summary.samples += counts[i];
+  summary.window_s = static_cast<double>(window_s());
+  const std::int64_t now_second = now_ns / kSlotNs;
+  std::int64_t max_ns = 0;
+  for (std::size_t s = 0; s < slot_count_; ++s) {
+    const Slot& slot = slots_[s];
+    const std::int64_t second = slot.second.load(std::memory_order_acquire);
+    // Within the window: this second and the window_s before it (older slots wait to be reused).
+    if (second < 0 || second > now_second ||
+        second <= now_second - static_cast<std::int64_t>(slot_count_)) {
+      continue;
+    }
+    for (std::size_t i = 0; i < kBins; ++i) {
+      const std::uint64_t count = slot.bins[i].load(std::memory_order_relaxed);
+      counts[i] += count;
+      summary.samples += count;
+    }
+    max_ns = std::max(max_ns, slot.max_ns.load(std::memory_order_relaxed));
   }
-  summary.max_us = static_cast<double>(max_ns_.load(std::memory_order_relaxed)) / 1000.0;
+  summary.max_us = static_cast<double>(max_ns) / 1000.0;
   if (summary.samples == 0) return summary;
   auto percentile = [&](double q) {
     const auto rank = static_cast<std::uint64_t>(q * static_cast<double>(summary.samples - 1));
@@ -33,11 +53,6 @@ LatenessSummary LatenessHistogram::summarize() const {
   summary.p99_us = percentile(0.99);
   summary.p999_us = percentile(0.999);
   return summary;
-}
-
-void LatenessHistogram::reset() {
-  for (auto& bin : bins_) bin.store(0, std::memory_order_relaxed);
-  max_ns_.store(0, std::memory_order_relaxed);
 }
 
 }  // namespace haptic::runtime

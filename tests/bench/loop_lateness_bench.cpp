@@ -40,7 +40,8 @@ Result run(double seconds, double rate_hz, std::int64_t spin_ns) {
   runtime::SceneExchange scenes(std::make_unique<const engine::CompiledScene>(default_scene()));
   runtime::SampleRing samples;
   runtime::LoopCounters counters;
-  runtime::LatenessHistogram lateness;
+  // A window as long as the run: the whole run is summarized.
+  runtime::LatenessHistogram lateness(static_cast<int>(seconds) + 1);
   runtime::CartesianModel model;
   runtime::TickRunner runner(device, model, scenes, samples, counters,
                              runtime::TickConfig{1.0 / rate_hz, {}, 50, {}});
@@ -52,7 +53,7 @@ Result run(double seconds, double rate_hz, std::int64_t spin_ns) {
   result.setup = loop.start();
   std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
   loop.stop();
-  result.lateness = lateness.summarize();
+  result.lateness = lateness.summarize(runtime::monotonic_now_ns());
   result.overruns = counters.overruns.load();
   result.ticks = counters.ticks.load();
   return result;

@@ -231,5 +231,74 @@ TEST(SdkIntegrationRealTime, StepIsRefusedOutsideLockstepAndStateStreams) {
   EXPECT_EQ(client.receive_counters().rejected, 0u);
 }
 
+// GetStats shows each client's stream from both ends: what the server sent it, what its heartbeats
+// say arrived, and the round trip their echoes measure; the loop's figures cover a sliding window.
+TEST(SdkIntegrationRealTime, StatsShowEachClientsStreamFromBothEnds) {
+  test::ServerProcess server(R"({"time_mode": "REAL_TIME", "udp_address": "127.0.0.1",
+      "status_period_s": 0, "real_time": {"use_fifo": false}})");
+  Client every_tick(config_for(server, "every-tick"));
+  ClientConfig tenth = config_for(server, "every-tenth");
+  tenth.state_decimation = 10;
+  Client every_tenth(tenth);
+  ClientConfig quiet = config_for(server, "no-stream");
+  quiet.state_decimation = 0;
+  Client no_stream(quiet);
+
+  // A second of streaming, then the figures: the clients' heartbeats (every 20 ms) have reported.
+  std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+  const Stats stats = no_stream.stats();
+  ASSERT_EQ(stats.clients.size(), 3u);
+  const auto find = [&](std::uint64_t id) -> const ClientStats& {
+    for (const ClientStats& c : stats.clients) {
+      if (c.session_id == id) return c;
+    }
+    ADD_FAILURE() << "no client " << id;
+    return stats.clients.front();
+  };
+  const ClientStats& fast = find(every_tick.session_id());
+  const ClientStats& slow = find(every_tenth.session_id());
+  const ClientStats& none = find(no_stream.session_id());
+  EXPECT_EQ(fast.client_name, "every-tick");
+  EXPECT_EQ(fast.peer, "127.0.0.1");
+  EXPECT_EQ(fast.decimation, 1u);
+  EXPECT_EQ(slow.decimation, 10u);
+  EXPECT_EQ(none.decimation, 0u);
+  EXPECT_EQ(none.datagrams_sent, 0u);
+  EXPECT_EQ(none.states_received, 0u);
+  EXPECT_EQ(none.round_trip_samples, 0u);  // nothing to echo
+  // About a second at 1 kHz, and a tenth of it.
+  EXPECT_GT(fast.datagrams_sent, 500u);
+  EXPECT_GT(slow.datagrams_sent, 50u);
+  EXPECT_LT(slow.datagrams_sent, fast.datagrams_sent / 5);
+  for (const ClientStats* c : {&fast, &slow, &none}) {
+    SCOPED_TRACE(c->client_name);
+    EXPECT_GE(c->heartbeats, 20u);  // 50 a second for over a second
+    EXPECT_GE(c->last_heartbeat_age_s, 0.0);
+    EXPECT_LT(c->last_heartbeat_age_s, 1.0);
+    // What a heartbeat reported cannot exceed what had been sent by then.
+    EXPECT_LE(c->states_received + c->states_lost, c->datagrams_sent);
+  }
+  for (const ClientStats* c : {&fast, &slow}) {
+    SCOPED_TRACE(c->client_name);
+    EXPECT_GT(c->states_received, 0u);
+    EXPECT_GE(c->round_trip_samples, 10u);
+    EXPECT_GT(c->round_trip_p50_us, 0.0);
+    EXPECT_LE(c->round_trip_p50_us, c->round_trip_p99_us);
+    EXPECT_LE(c->round_trip_p99_us, c->round_trip_p999_us);
+    EXPECT_LT(c->round_trip_p999_us, 1e6);  // under a second on loopback, however loaded
+  }
+  // The client's own counters agree with what it reported (they can only have grown since).
+  EXPECT_GE(every_tick.receive_counters().accepted, fast.states_received);
+  EXPECT_GE(every_tick.receive_counters().lost, fast.states_lost);
+
+  // The loop's lateness covers the window, not the run: at most window_s + 1 seconds of ticks.
+  EXPECT_EQ(stats.window_s, 10.0);
+  EXPECT_GT(stats.lateness_samples, 500u);
+  EXPECT_LE(stats.lateness_samples, stats.ticks);
+  EXPECT_LE(stats.lateness_p50_us, stats.lateness_p99_us);
+  EXPECT_LE(stats.lateness_p99_us, stats.lateness_p999_us);
+  EXPECT_LE(stats.lateness_p999_us, stats.lateness_max_us);
+}
+
 }  // namespace
 }  // namespace haptic

@@ -203,6 +203,10 @@ std::size_t encode_heartbeat(Header header, const HeartbeatPayload& heartbeat, c
   return encode_as(header, DatagramType::kHeartbeat, kHeartbeatPayloadSize, key, out, [&](Writer& w) {
     w.i64(heartbeat.client_time_ns);
     w.u64(heartbeat.last_state_sequence);
+    w.u64(heartbeat.states_received);
+    w.u64(heartbeat.states_lost);
+    w.i64(heartbeat.echo_state_time_ns);
+    w.i64(heartbeat.echo_hold_ns);
   });
 }
 
@@ -257,6 +261,10 @@ DecodeError decode_heartbeat(std::span<const std::uint8_t> datagram, const Key& 
     HeartbeatPayload decoded;
     decoded.client_time_ns = r.i64();
     decoded.last_state_sequence = r.u64();
+    decoded.states_received = r.u64();
+    decoded.states_lost = r.u64();
+    decoded.echo_state_time_ns = r.i64();
+    decoded.echo_hold_ns = r.i64();
     return decoded;
   });
 }

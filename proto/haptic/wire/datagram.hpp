@@ -26,8 +26,9 @@
 namespace haptic::wire {
 
 inline constexpr std::uint32_t kMagic = 0x43545048u;  // bytes "HPTC"
-// 2: path validation (PathChallenge/Response); 3: buttons in State, StateOriented.
-inline constexpr std::uint16_t kWireVersion = 3;
+// 2: path validation (PathChallenge/Response); 3: buttons in State, StateOriented; 4: the
+// client's receive report and the round-trip echo in Heartbeat.
+inline constexpr std::uint16_t kWireVersion = 4;
 inline constexpr std::size_t kHeaderSize = 40;
 inline constexpr std::size_t kTagSize = 8;
 
@@ -89,9 +90,18 @@ enum StateFlags : std::uint32_t {
                                 // the last good state shown
 };
 
+/// The client's heartbeat: it keeps the lease, and reports how the stream arrives (what the server
+/// cannot see: datagrams lost on the way, and how long the way is, from the echo).
 struct HeartbeatPayload {
   std::int64_t client_time_ns = 0;     // Client clock when sent.
   std::uint64_t last_state_sequence = 0;  // Highest state sequence received, 0 if none.
+  std::uint64_t states_received = 0;   // State datagrams accepted in this session so far.
+  std::uint64_t states_lost = 0;       // Sequence gaps in this session so far, net of late arrivals.
+  /// The round-trip echo, when last_state_sequence > 0: the time_ns (server time) of the newest
+  /// State received, and how long ago it arrived when this heartbeat left (ns, client clock). The
+  /// server's time at receipt − echo − hold is the round trip from that tick's stamp.
+  std::int64_t echo_state_time_ns = 0;
+  std::int64_t echo_hold_ns = 0;
   friend bool operator==(const HeartbeatPayload&, const HeartbeatPayload&) = default;
 };
 
@@ -109,13 +119,13 @@ struct PathResponsePayload {
 
 inline constexpr std::size_t kStatePayloadSize = 8 + 4 * 24 + 4 + 4 + 4;  // 116
 inline constexpr std::size_t kStateOrientedPayloadSize = kStatePayloadSize + 32;  // 148
-inline constexpr std::size_t kHeartbeatPayloadSize = 16;
+inline constexpr std::size_t kHeartbeatPayloadSize = 48;
 inline constexpr std::size_t kPathPayloadSize = 16;  // challenge and response alike
 inline constexpr std::size_t kStateDatagramSize = kHeaderSize + kStatePayloadSize + kTagSize;
 inline constexpr std::size_t kStateOrientedDatagramSize =
     kHeaderSize + kStateOrientedPayloadSize + kTagSize;
 inline constexpr std::size_t kHeartbeatDatagramSize = kHeaderSize + kHeartbeatPayloadSize + kTagSize;
-/// A challenge is exactly as long as the heartbeat that draws it: no amplification.
+/// A challenge is shorter than the heartbeat that draws it: no amplification.
 inline constexpr std::size_t kPathDatagramSize = kHeaderSize + kPathPayloadSize + kTagSize;
 inline constexpr std::size_t kMaxDatagramSize = kStateOrientedDatagramSize;
 

@@ -357,12 +357,37 @@ struct ItemEnergy {
 };
 
 /// The server's counters (GetStats).
+/// One client's state stream in Stats: what the server sent it, and what its heartbeats report
+/// of what arrived.
+struct ClientStats {
+  std::uint64_t session_id = 0;
+  std::string client_name;
+  std::string peer;                   ///< the host it was opened from
+  std::uint32_t device_index = 0;
+  std::uint32_t decimation = 0;       ///< its subscription (every n-th tick); 0: none
+  std::uint64_t datagrams_sent = 0;   ///< State datagrams sent to it
+  std::uint64_t heartbeats = 0;       ///< heartbeats accepted from it
+  std::uint64_t states_received = 0;  ///< as its last heartbeat reported
+  std::uint64_t states_lost = 0;      ///< as its last heartbeat reported (sequence gaps)
+  double last_heartbeat_age_s = -1.0;  ///< how long ago its last heartbeat came; -1: none yet
+  /// Round trip from a tick's stamp to the client and back (send delay + network both ways), over
+  /// its last 256 heartbeats; real time only. Unit: µs.
+  std::uint32_t round_trip_samples = 0;
+  double round_trip_p50_us = 0.0;
+  double round_trip_p99_us = 0.0;
+  double round_trip_p999_us = 0.0;
+};
+
 struct Stats {
   std::uint64_t ticks = 0;
   double achieved_rate_hz = 0.0;
+  /// The loop's wake-up lateness over the last window_s seconds (a sliding window).
   double lateness_p50_us = 0.0;
   double lateness_p99_us = 0.0;
   double lateness_max_us = 0.0;
+  double lateness_p999_us = 0.0;
+  std::uint64_t lateness_samples = 0;  ///< ticks in the window
+  double window_s = 0.0;               ///< of the lateness and send-delay figures. Unit: s.
   std::uint64_t overruns = 0;
   std::uint32_t sessions = 0;
   std::uint32_t objects = 0;
@@ -377,12 +402,14 @@ struct Stats {
   std::uint64_t device_faults = 0;
   double send_delay_p50_us = 0.0;  ///< real time: tick stamp to its first datagram sent
   double send_delay_p99_us = 0.0;
+  double send_delay_p999_us = 0.0;
   std::uint64_t heartbeats_rate_limited = 0;   ///< of datagrams_dropped: over a session's budget
   std::uint64_t datagrams_foreign_source = 0;  ///< of datagrams_dropped: from another host
   std::uint64_t path_challenges_sent = 0;      ///< to UDP addresses not yet proven to receive
   std::uint64_t samples_skipped = 0;  ///< not sent: a newer one was ready (the sender fell behind)
   std::uint32_t connections_open = 0;     ///< control-plane connections held now
   std::uint64_t connections_refused = 0;  ///< over a connection cap, or no descriptor left
+  std::vector<ClientStats> clients;  ///< every open session, in id order
 };
 
 /// What the server's simulated operator (a hand holding the tool) does. Profiles and trajectories

@@ -136,15 +136,40 @@ TEST(SnapshotExchange, LoopSeesNewestAndOldSnapshotsAreFreedOnlyAfterAdoption) {
 
 TEST(LatenessHistogram, PercentilesFromKnownSamples) {
   LatenessHistogram histogram;
-  for (int i = 0; i < 980; ++i) histogram.record(10'000);   // 10 µs
-  for (int i = 0; i < 20; ++i) histogram.record(2'500'000);  // 2.5 ms: the top 2 %
-  const LatenessSummary summary = histogram.summarize();
+  const std::int64_t now = 5'000'000'000;
+  for (int i = 0; i < 980; ++i) histogram.record(10'000, now);   // 10 µs
+  for (int i = 0; i < 20; ++i) histogram.record(2'500'000, now);  // 2.5 ms: the top 2 %
+  const LatenessSummary summary = histogram.summarize(now);
   EXPECT_EQ(summary.samples, 1000u);
   EXPECT_DOUBLE_EQ(summary.p50_us, 10.0);
   EXPECT_DOUBLE_EQ(summary.p99_us, 2500.0);
   EXPECT_DOUBLE_EQ(summary.max_us, 2500.0);
-  histogram.record(-5);  // early wake counts as zero lateness
-  EXPECT_EQ(histogram.summarize().samples, 1001u);
+  EXPECT_DOUBLE_EQ(summary.window_s, 10.0);
+  histogram.record(-5, now);  // early wake counts as zero lateness
+  EXPECT_EQ(histogram.summarize(now).samples, 1001u);
+}
+
+// A stall leaves the figures once it is older than the window: they show the loop now.
+TEST(LatenessHistogram, AStallLeavesTheSummaryOnceOlderThanTheWindow) {
+  constexpr std::int64_t kSecond = 1'000'000'000;
+  LatenessHistogram histogram(3);  // the last 3 whole seconds and the current one
+  histogram.record(50'000'000, 10 * kSecond);  // a 50 ms stall at t = 10 s
+  // 1 kHz of 5 µs wakes from then on.
+  std::int64_t t = 10 * kSecond;
+  const auto run_until = [&](std::int64_t end) {
+    for (; t < end; t += 1'000'000) histogram.record(5'000, t);
+  };
+  run_until(13 * kSecond + kSecond / 2);
+  LatenessSummary summary = histogram.summarize(t);
+  EXPECT_DOUBLE_EQ(summary.max_us, 50'000.0);  // t = 13.5 s: second 10 is still in the window
+  EXPECT_EQ(summary.samples, 3'501u);
+  run_until(14 * kSecond + kSecond / 2);
+  summary = histogram.summarize(t);
+  EXPECT_DOUBLE_EQ(summary.max_us, 5.0);  // t = 14.5 s: seconds 11–14 only
+  EXPECT_EQ(summary.samples, 3'500u);
+  EXPECT_DOUBLE_EQ(summary.p999_us, 5.0);
+  // Read long after the last sample, nothing is left in the window.
+  EXPECT_EQ(histogram.summarize(t + 10 * kSecond).samples, 0u);
 }
 
 }  // namespace

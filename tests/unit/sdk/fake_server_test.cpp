@@ -407,14 +407,14 @@ TEST_F(FakeServerTest, ApplySceneNamesTheBadSpecAndSendsNothing) {
 
 TEST_F(FakeServerTest, AnotherApiVersionIsAVersionMismatchCarryingBoth) {
   service_.refuse_open_with({grpc::StatusCode::FAILED_PRECONDITION,
-                             "api_version: client speaks 3, server speaks 4"});
+                             "api_version: client speaks 4, server speaks 5"});
   try {
     Client client(config_);
     FAIL() << "no exception";
   } catch (const VersionMismatchError& error) {
     EXPECT_EQ(error.client_version(), kApiVersion);
-    EXPECT_EQ(error.client_version(), 3u);
-    EXPECT_EQ(error.server_version(), 4u);
+    EXPECT_EQ(error.client_version(), 4u);
+    EXPECT_EQ(error.server_version(), 5u);
   }
 }
 

@@ -1,6 +1,7 @@
 // The SDK's translations: grpc::Status -> exception types, SDK values <-> haptic.v1 messages.
 #include <gtest/gtest.h>
 
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -37,12 +38,12 @@ TEST(StatusMapping, EachCodeBecomesItsExceptionWithTheServersMessage) {
 TEST(StatusMapping, VersionMismatchCarriesBothVersions) {
   try {
     throw_if_failed(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                                 "api_version: client speaks 3, server speaks 4"),
+                                 "api_version: client speaks 4, server speaks 5"),
                     "OpenSession");
     FAIL();
   } catch (const VersionMismatchError& error) {
     EXPECT_EQ(error.client_version(), kApiVersion);
-    EXPECT_EQ(error.server_version(), 4u);
+    EXPECT_EQ(error.server_version(), 5u);
     EXPECT_EQ(error.code(), ErrorCode::kVersionMismatch);
   }
 }
@@ -70,6 +71,28 @@ TEST(Conversions, SpecsBecomeTheSchemasMessages) {
   const v1::OperatorInput push = to_proto(OperatorInput::push({0, 0, -5.0}));
   EXPECT_EQ(push.mode(), v1::OperatorInput::APPLY_FORCE);
   EXPECT_EQ(push.force().z(), -5.0);
+}
+
+/// Sets every singular field of `message` to 100 + its field number, whatever its type (strings
+/// as that number's digits).
+void fill_by_number(google::protobuf::Message& message) {
+  const google::protobuf::Descriptor& descriptor = *message.GetDescriptor();
+  const google::protobuf::Reflection& reflection = *message.GetReflection();
+  for (int i = 0; i < descriptor.field_count(); ++i) {
+    const google::protobuf::FieldDescriptor& field = *descriptor.field(i);
+    if (field.is_repeated()) continue;
+    const int value = 100 + field.number();
+    switch (field.cpp_type()) {
+      case google::protobuf::FieldDescriptor::CPPTYPE_UINT64: reflection.SetUInt64(&message, &field, value); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_UINT32: reflection.SetUInt32(&message, &field, value); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE: reflection.SetDouble(&message, &field, value); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_STRING:
+        reflection.SetString(&message, &field, std::to_string(value));
+        break;
+      default:
+        ADD_FAILURE() << descriptor.name() << "." << field.name() << " has a type this test does not set";
+    }
+  }
 }
 
 TEST(Conversions, ToolStateAndStatsComeBackWhole) {
@@ -101,18 +124,11 @@ TEST(Conversions, ToolStateAndStatsComeBackWhole) {
 
   v1::Stats stats;
   const google::protobuf::Descriptor& descriptor = *v1::Stats::descriptor();
-  const google::protobuf::Reflection& reflection = *v1::Stats::GetReflection();
-  // Field number n gets the value 100 + n, whatever its type.
-  for (int i = 0; i < descriptor.field_count(); ++i) {
-    const google::protobuf::FieldDescriptor& field = *descriptor.field(i);
-    const int value = 100 + field.number();
-    switch (field.cpp_type()) {
-      case google::protobuf::FieldDescriptor::CPPTYPE_UINT64: reflection.SetUInt64(&stats, &field, value); break;
-      case google::protobuf::FieldDescriptor::CPPTYPE_UINT32: reflection.SetUInt32(&stats, &field, value); break;
-      case google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE: reflection.SetDouble(&stats, &field, value); break;
-      default: ADD_FAILURE() << "Stats." << field.name() << " has a type this test does not set";
-    }
-  }
+  // Field number n gets the value 100 + n, whatever its type (the one repeated field, clients,
+  // gets one ClientStats filled the same way).
+  fill_by_number(stats);
+  v1::ClientStats& client = *stats.add_clients();
+  fill_by_number(client);
   const Stats out = from_proto(stats);
   // One line per proto field: a new one without its line here fails the count below.
   const std::vector<std::pair<const char*, double>> seen = {
@@ -141,12 +157,43 @@ TEST(Conversions, ToolStateAndStatsComeBackWhole) {
       {"samples_skipped", static_cast<double>(out.samples_skipped)},
       {"connections_open", static_cast<double>(out.connections_open)},
       {"connections_refused", static_cast<double>(out.connections_refused)},
+      {"lateness_p999_us", out.lateness_p999_us},
+      {"lateness_samples", static_cast<double>(out.lateness_samples)},
+      {"window_s", out.window_s},
+      {"send_delay_p999_us", out.send_delay_p999_us},
   };
-  EXPECT_EQ(seen.size(), static_cast<std::size_t>(descriptor.field_count()));
+  // Every field but the repeated `clients`, checked below.
+  EXPECT_EQ(seen.size() + 1, static_cast<std::size_t>(descriptor.field_count()));
   for (const auto& [name, value] : seen) {
     const google::protobuf::FieldDescriptor* field = descriptor.FindFieldByName(name);
     ASSERT_NE(field, nullptr) << name;
     EXPECT_EQ(value, 100.0 + field->number()) << name;
+  }
+
+  ASSERT_EQ(out.clients.size(), 1u);
+  const ClientStats& c = out.clients[0];
+  const google::protobuf::Descriptor& client_descriptor = *v1::ClientStats::descriptor();
+  const std::vector<std::pair<const char*, double>> client_seen = {
+      {"session_id", static_cast<double>(c.session_id)},
+      {"client_name", std::stod(c.client_name)},
+      {"peer", std::stod(c.peer)},
+      {"device_index", static_cast<double>(c.device_index)},
+      {"decimation", static_cast<double>(c.decimation)},
+      {"datagrams_sent", static_cast<double>(c.datagrams_sent)},
+      {"heartbeats", static_cast<double>(c.heartbeats)},
+      {"states_received", static_cast<double>(c.states_received)},
+      {"states_lost", static_cast<double>(c.states_lost)},
+      {"last_heartbeat_age_s", c.last_heartbeat_age_s},
+      {"round_trip_samples", static_cast<double>(c.round_trip_samples)},
+      {"round_trip_p50_us", c.round_trip_p50_us},
+      {"round_trip_p99_us", c.round_trip_p99_us},
+      {"round_trip_p999_us", c.round_trip_p999_us},
+  };
+  EXPECT_EQ(client_seen.size(), static_cast<std::size_t>(client_descriptor.field_count()));
+  for (const auto& [name, value] : client_seen) {
+    const google::protobuf::FieldDescriptor* field = client_descriptor.FindFieldByName(name);
+    ASSERT_NE(field, nullptr) << name;
+    EXPECT_EQ(value, 100.0 + field->number()) << "ClientStats." << name;
   }
 }
 

@@ -96,10 +96,10 @@ TEST(DatagramLayout, SizesMatchTheDocumentedLayout) {
   EXPECT_EQ(kHeaderSize, 40u);
   EXPECT_EQ(kStatePayloadSize, 116u);
   EXPECT_EQ(kStateOrientedPayloadSize, 148u);
-  EXPECT_EQ(kHeartbeatPayloadSize, 16u);
+  EXPECT_EQ(kHeartbeatPayloadSize, 48u);
   EXPECT_EQ(kStateDatagramSize, 164u);
   EXPECT_EQ(kStateOrientedDatagramSize, 196u);
-  EXPECT_EQ(kHeartbeatDatagramSize, 64u);
+  EXPECT_EQ(kHeartbeatDatagramSize, 96u);
   EXPECT_EQ(kMaxDatagramSize, 196u);
 }
 
@@ -107,14 +107,18 @@ TEST(DatagramLayout, SizesMatchTheDocumentedLayout) {
 // implementation, so this pins layout and tag together.
 TEST(DatagramLayout, HeartbeatMatchesGoldenBytes) {
   constexpr std::array<std::uint8_t, kHeartbeatDatagramSize> kGolden = {
-      0x48, 0x50, 0x54, 0x43, 0x03, 0x00, 0x02, 0x00,  // "HPTC", version 3, type 2
+      0x48, 0x50, 0x54, 0x43, 0x04, 0x00, 0x02, 0x00,  // "HPTC", version 4, type 2
       0xef, 0xcd, 0xab, 0x89, 0x67, 0x45, 0x23, 0x01,  // session_id
       0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // sequence 1
       0xd6, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff,  // time_ns -42
-      0x10, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // payload_size 16, reserved 0
+      0x30, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // payload_size 48, reserved 0
       0x00, 0xca, 0x9a, 0x3b, 0x00, 0x00, 0x00, 0x00,  // client_time_ns 1e9
       0x07, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // last_state_sequence 7
-      0x9f, 0xa5, 0x37, 0x5d, 0x2d, 0x9b, 0xf0, 0x9c,  // SipHash-2-4 tag
+      0x06, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // states_received 6
+      0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // states_lost 1
+      0xc0, 0xb4, 0xb3, 0xff, 0xff, 0xff, 0xff, 0xff,  // echo_state_time_ns -5e6
+      0x90, 0xd0, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00,  // echo_hold_ns 250000
+      0x24, 0x32, 0xd5, 0xc8, 0x87, 0x3d, 0xc1, 0xe0,  // SipHash-2-4 tag
   };
   Key key;
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(i);
@@ -123,20 +127,21 @@ TEST(DatagramLayout, HeartbeatMatchesGoldenBytes) {
   h.sequence = 1;
   h.time_ns = -42;
   std::array<std::uint8_t, kHeartbeatDatagramSize> out{};
-  ASSERT_EQ(encode_heartbeat(h, HeartbeatPayload{1'000'000'000, 7}, key, out),
+  ASSERT_EQ(encode_heartbeat(h, HeartbeatPayload{1'000'000'000, 7, 6, 1, -5'000'000, 250'000}, key, out),
             kHeartbeatDatagramSize);
   for (std::size_t i = 0; i < out.size(); ++i) EXPECT_EQ(out[i], kGolden[i]) << "offset " << i;
 
   Header header;
   HeartbeatPayload heartbeat;
   ASSERT_EQ(decode_heartbeat(kGolden, key, header, heartbeat), DecodeError::kNone);
-  EXPECT_EQ(heartbeat, (HeartbeatPayload{1'000'000'000, 7}));
+  EXPECT_EQ(heartbeat, (HeartbeatPayload{1'000'000'000, 7, 6, 1, -5'000'000, 250'000}));
 }
 
-TEST(DatagramLayout, PathChallengeAndResponseAreAsLongAsAHeartbeat) {
-  // A challenge answers a heartbeat: equal lengths, so reflecting off the server amplifies nothing.
+TEST(DatagramLayout, PathChallengeAndResponseAreShorterThanAHeartbeat) {
+  // A challenge answers a heartbeat: no longer, so reflecting off the server amplifies nothing.
   EXPECT_EQ(kPathPayloadSize, 16u);
-  EXPECT_EQ(kPathDatagramSize, kHeartbeatDatagramSize);
+  EXPECT_EQ(kPathDatagramSize, 64u);
+  EXPECT_LT(kPathDatagramSize, kHeartbeatDatagramSize);
 }
 
 TEST(DatagramRoundTrip, PathChallengeAndResponseAreBitExactAndNotEachOther) {
@@ -277,10 +282,13 @@ TEST(DatagramLayout, StateOrientedAppendsTheOrientation) {
 
 TEST(DatagramRoundTrip, HeartbeatWithExtremeValues) {
   for (const HeartbeatPayload sent :
-       {HeartbeatPayload{0, 0}, HeartbeatPayload{-123456789, 77},
+       {HeartbeatPayload{0, 0}, HeartbeatPayload{-123456789, 77, 70, 7, 12345, 67890},
         HeartbeatPayload{std::numeric_limits<std::int64_t>::min(),
-                         std::numeric_limits<std::uint64_t>::max()},
-        HeartbeatPayload{std::numeric_limits<std::int64_t>::max(), 1}}) {
+                         std::numeric_limits<std::uint64_t>::max(),
+                         std::numeric_limits<std::uint64_t>::max(), 0,
+                         std::numeric_limits<std::int64_t>::min(),
+                         std::numeric_limits<std::int64_t>::max()},
+        HeartbeatPayload{std::numeric_limits<std::int64_t>::max(), 1, 1, 0, -1, 0}}) {
     Bytes bytes(kHeartbeatDatagramSize);
     ASSERT_EQ(encode_heartbeat(sample_header(), sent, test_key(), bytes), kHeartbeatDatagramSize);
     Header header;
@@ -352,8 +360,9 @@ TEST(DatagramReject, BadMagic) {
 }
 
 TEST(DatagramReject, BadVersion) {
-  // 1: before path validation; 2: before buttons and StateOriented.
-  for (const std::uint16_t version : {0, 1, 2, 4, 0x0100, 0xffff}) {
+  // 1: before path validation; 2: before buttons and StateOriented; 3: before the heartbeat's
+  // receive report.
+  for (const std::uint16_t version : {0, 1, 2, 3, 5, 0x0100, 0xffff}) {
     Bytes bytes = encoded_heartbeat();
     bytes[4] = static_cast<std::uint8_t>(version);
     bytes[5] = static_cast<std::uint8_t>(version >> 8);
