@@ -27,6 +27,7 @@ void write_ready_file(const std::string& path, const haptic::app::Server& server
   {
     std::ofstream out(temporary);
     out << "{\"grpc_port\": " << server.grpc_port() << ", \"udp_port\": " << server.udp_port()
+        << ", \"metrics_port\": " << server.metrics_port()
         << ", \"grpc_address\": \"" << haptic::app::local_dial_address(bound_address, server.grpc_port())
         << "\"";
     if (const auto origin = server.time_origin_ns()) out << ", \"time_origin_ns\": " << *origin;
@@ -56,11 +57,14 @@ int main(int argc, char** argv) {
   cli.add_option("--grpc-address", grpc_address, "override grpc_address (host:port; port 0 = any)");
   cli.add_option("--udp-address", udp_address, "override udp_address (the UDP bind address)");
   cli.add_option("--udp-port", udp_port, "override udp_port (0 = any)")->check(CLI::Range(0, 65535));
+  std::string metrics_address;
+  cli.add_option("--metrics-address", metrics_address,
+                 "override metrics_address: serve Prometheus metrics at http://HOST:PORT/metrics");
   cli.add_flag("--insecure", insecure,
                "serve non-loopback addresses without TLS or tokens (insecure_remote_access)");
   cli.add_flag("--lockstep", lockstep, "run in LOCKSTEP time: ticks advance only by the Step RPC");
   cli.add_option("--ready-file", ready_file,
-                 "write {\"grpc_port\":..,\"udp_port\":..,\"time_origin_ns\":..} here once listening");
+                 "write {\"grpc_port\":..,\"udp_port\":..,\"metrics_port\":..,\"grpc_address\":..,\"time_origin_ns\":..} here once listening");
   cli.add_flag("--print-config", print_config, "print the effective configuration and exit");
   std::string health_address;
   cli.add_option("--health-check", health_address,
@@ -103,6 +107,7 @@ int main(int argc, char** argv) {
     const auto apply_overrides = [&](haptic::v1::ServerConfig& edited) {
       if (!grpc_address.empty()) edited.set_grpc_address(grpc_address);
       if (!udp_address.empty()) edited.set_udp_address(udp_address);
+      if (!metrics_address.empty()) edited.set_metrics_address(metrics_address);
       if (insecure) edited.set_insecure_remote_access(true);
       if (udp_port >= 0) edited.set_udp_port(static_cast<std::uint32_t>(udp_port));
       if (lockstep) edited.set_time_mode(haptic::v1::LOCKSTEP);

@@ -16,6 +16,7 @@
 #include "config/security.hpp"
 #include "config/server_config.hpp"
 #include "schema/scene_specs.hpp"
+#include "net/prometheus_text.hpp"
 #include "runtime/realtime.hpp"
 
 namespace haptic::app {
@@ -233,10 +234,18 @@ Server::Server(const v1::ServerConfig& config)
   if (!grpc_server_) throw std::runtime_error("cannot start the gRPC server");
   if (security.tls) {
     grpc_port_ = static_cast<std::uint16_t>(tls_port);
+    bind_metrics();
     return;
   }
   grpc_port_ = listener_->port();
   listener_->start([server = grpc_server_.get()](int fd) { grpc::AddInsecureChannelFromFd(server, fd); });
+  bind_metrics();
+}
+
+void Server::bind_metrics() {
+  if (config_.metrics_address().empty()) return;
+  metrics_ = std::make_unique<net::MetricsEndpoint>();
+  metrics_->bind(config_.metrics_address());
 }
 
 Server::~Server() { shutdown(); }
@@ -268,6 +277,16 @@ void Server::start() {
              setup.cpu);
   status_last_ns_ = runtime::monotonic_now_ns();
   housekeeping_ = std::thread([this] { housekeeping_loop(); });
+  if (metrics_) {
+    metrics_->start([this] { return net::prometheus_text(stats()); });
+    spdlog::info("hapticd: metrics at http://{}/metrics (port {})", config_.metrics_address(),
+                 metrics_->port());
+    if (!config::is_loopback_host(config::host_of_address(config_.metrics_address()))) {
+      spdlog::warn("hapticd: the metrics endpoint {} is not on loopback: anyone who reaches it "
+                   "reads the counts, client names and hosts (no TLS, no tokens)",
+                   config_.metrics_address());
+    }
+  }
   started_ = true;
   std::string devices = devices_.front().device->description().name;
   for (std::size_t i = 1; i < devices_.size(); ++i) {
@@ -296,6 +315,7 @@ void Server::shutdown() {
   // output, so nothing they add can push.
   events_.close();
   if (listener_) listener_->stop();
+  if (metrics_) metrics_->stop();
   std::thread control_plane_closer;
   if (grpc_server_) {
     control_plane_closer = std::thread([this] {

@@ -18,6 +18,7 @@
 #include "net/control_listener.hpp"
 #include "net/event_hub.hpp"
 #include "net/haptic_service.hpp"
+#include "net/metrics_endpoint.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
 #include "net/udp_endpoint.hpp"
@@ -41,6 +42,8 @@ class Server {
   void shutdown();
 
   std::uint16_t grpc_port() const { return grpc_port_; }
+  /// The metrics endpoint's port; 0 without one (metrics_address empty).
+  std::uint16_t metrics_port() const { return metrics_ ? metrics_->port() : 0; }
   std::uint16_t udp_port() const { return udp_.port(); }
   v1::Stats stats() const;
   /// Lockstep with simulated devices only: puts the devices, their simulated operators, the loop
@@ -59,6 +62,7 @@ class Server {
 
  private:
   void housekeeping_loop();
+  void bind_metrics();
   void log_status();
 
   v1::ServerConfig config_;
@@ -82,6 +86,7 @@ class Server {
   std::unique_ptr<net::ControlListener> listener_;  // accepts gRPC's connections for it
   std::unique_ptr<grpc::Server> grpc_server_;
   std::uint16_t grpc_port_ = 0;
+  std::unique_ptr<net::MetricsEndpoint> metrics_;  // when metrics_address is set
 
   std::thread housekeeping_;
   std::mutex housekeeping_mutex_;

@@ -136,6 +136,18 @@ std::string validate(const v1::ServerConfig& config) {
   if (config.udp_port() > 65535) {
     return "udp_port: must be 0 to 65535, got " + std::to_string(config.udp_port());
   }
+  if (const std::string& metrics = config.metrics_address(); !metrics.empty()) {
+    const auto colon = metrics.rfind(':');
+    const std::string port = colon == std::string::npos ? std::string() : metrics.substr(colon + 1);
+    const bool digits = !port.empty() && port.size() <= 5 &&
+                        port.find_first_not_of("0123456789") == std::string::npos;
+    const std::string host = host_of_address(metrics);
+    const bool bare_ipv6 = host.find(':') != std::string::npos && metrics.front() != '[';
+    if (!digits || std::stoi(port) > 65535 || host.empty() || bare_ipv6) {
+      return "metrics_address: must be HOST:PORT or [IPv6]:PORT (port 0 to 65535; 0 picks one), "
+             "got '" + metrics + "'";
+    }
+  }
   if (config.time_mode() != v1::REAL_TIME && config.time_mode() != v1::LOCKSTEP) {
     return "time_mode: must be REAL_TIME or LOCKSTEP";
   }

@@ -18,6 +18,7 @@
 #include <stdexcept>
 
 #include "net/session_registry.hpp"
+#include "net/tcp_listen.hpp"
 #include "runtime/realtime.hpp"
 
 namespace haptic::net {
@@ -46,62 +47,9 @@ ControlListener::~ControlListener() {
 }
 
 void ControlListener::bind(const std::string& address) {
-  std::string host = address, service = "0";
-  if (!address.empty() && address.front() == '[') {
-    const auto end = address.find(']');
-    host = address.substr(1, end == std::string::npos ? std::string::npos : end - 1);
-    if (end != std::string::npos && end + 1 < address.size() && address[end + 1] == ':') {
-      service = address.substr(end + 2);
-    }
-  } else if (const auto colon = address.rfind(':'); colon != std::string::npos) {
-    host = address.substr(0, colon);
-    service = address.substr(colon + 1);
-  }
-  addrinfo hints{};
-  hints.ai_family = AF_UNSPEC;
-  hints.ai_socktype = SOCK_STREAM;
-  hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
-  addrinfo* found = nullptr;
-  if (const int rc = ::getaddrinfo(host.empty() ? nullptr : host.c_str(), service.c_str(), &hints, &found);
-      rc != 0) {
-    throw std::runtime_error("grpc_address '" + address + "': " + ::gai_strerror(rc));
-  }
-  std::string error;
-  for (addrinfo* ai = found; ai != nullptr; ai = ai->ai_next) {
-    const int fd = ::socket(ai->ai_family, ai->ai_socktype | SOCK_CLOEXEC | SOCK_NONBLOCK, ai->ai_protocol);
-    if (fd < 0) {
-      error = std::strerror(errno);
-      continue;
-    }
-    // SO_REUSEADDR only (a restart need not wait out TIME_WAIT); never SO_REUSEPORT, so a second
-    // server cannot quietly share the port and split the clients between the two.
-    const int on = 1;
-    ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on);
-    if (ai->ai_family == AF_INET6) ::setsockopt(fd, IPPROTO_IPV6, IPV6_V6ONLY, &on, sizeof on);
-    sockaddr_storage where{};
-    std::memcpy(&where, ai->ai_addr, ai->ai_addrlen);
-    if (port_ != 0) {  // every address on the port the first one got
-      (where.ss_family == AF_INET6 ? reinterpret_cast<sockaddr_in6*>(&where)->sin6_port
-                                   : reinterpret_cast<sockaddr_in*>(&where)->sin_port) = htons(port_);
-    }
-    if (::bind(fd, reinterpret_cast<sockaddr*>(&where), ai->ai_addrlen) != 0 ||
-        ::listen(fd, SOMAXCONN) != 0) {
-      error = std::strerror(errno);
-      ::close(fd);
-      continue;
-    }
-    sockaddr_storage bound{};
-    socklen_t length = sizeof bound;
-    ::getsockname(fd, reinterpret_cast<sockaddr*>(&bound), &length);
-    port_ = ntohs(bound.ss_family == AF_INET6 ? reinterpret_cast<sockaddr_in6*>(&bound)->sin6_port
-                                              : reinterpret_cast<sockaddr_in*>(&bound)->sin_port);
-    listening_.push_back(fd);
-  }
-  ::freeaddrinfo(found);
-  if (listening_.empty()) {
-    throw std::runtime_error("cannot listen for gRPC on " + address + ": " +
-                             (error.empty() ? "no address" : error));
-  }
+  ListeningSockets sockets = listen_tcp(address, "gRPC", "grpc_address");
+  listening_ = std::move(sockets.fds);
+  port_ = sockets.port;
   reserve_fd_ = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
 }
 

@@ -97,6 +97,7 @@ class ServerProcess {
     text << ready.rdbuf();
     grpc_port_ = read_port(text.str(), "\"grpc_port\":");
     udp_port_ = read_port(text.str(), "\"udp_port\":");
+    metrics_port_ = read_port(text.str(), "\"metrics_port\":");
     const std::string origin_key = "\"time_origin_ns\":";
     if (const auto at = text.str().find(origin_key); at != std::string::npos) {
       time_origin_ = std::chrono::steady_clock::time_point(
@@ -136,6 +137,8 @@ class ServerProcess {
   std::chrono::steady_clock::time_point ready_at() const { return ready_at_; }
   std::uint16_t grpc_port() const { return grpc_port_; }
   std::uint16_t udp_port() const { return udp_port_; }
+  /// The metrics endpoint's port; 0 when the server has none.
+  std::uint16_t metrics_port() const { return metrics_port_; }
   /// The file the server wrote once listening (--ready-file).
   const std::string& ready_file() const { return ready_file_; }
   /// Real time: this host's steady clock at server time 0 (so a sample stamped t was made at
@@ -157,6 +160,7 @@ class ServerProcess {
   std::chrono::steady_clock::time_point ready_at_;
   std::uint16_t grpc_port_ = 0;
   std::uint16_t udp_port_ = 0;
+  std::uint16_t metrics_port_ = 0;
   std::optional<std::chrono::steady_clock::time_point> time_origin_;
 };
 

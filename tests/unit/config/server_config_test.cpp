@@ -62,6 +62,18 @@ TEST(Config, BadValuesAreRejectedNamingTheField) {
   EXPECT_NE(error_of(R"({"initial_operator": {"mode": "APPLY_FORCE", "force": {"x": "NaN"}}})")
                 .find("initial_operator.force.x"),
             std::string::npos);
+  for (const char* bad : {"127.0.0.1", "127.0.0.1:", "127.0.0.1:http", "127.0.0.1:70000", ":9464",
+                          "::1:9464"}) {
+    const std::string error = error_of(std::string(R"({"metrics_address": ")") + bad + "\"}");
+    EXPECT_NE(error.find("metrics_address: must be HOST:PORT or [IPv6]:PORT (port 0 to 65535; 0 "
+                         "picks one), got '" + std::string(bad) + "'"),
+              std::string::npos)
+        << error;
+  }
+  for (const char* good : {"127.0.0.1:9464", "localhost:0", "[::1]:9464"}) {
+    EXPECT_EQ(validate(parse_config(std::string(R"({"metrics_address": ")") + good + "\"}", "x")), "")
+        << good;
+  }
 }
 
 TEST(Config, NonLoopbackAddressesAreRefusedUnlessInsecureRemoteAccessIsAccepted) {
