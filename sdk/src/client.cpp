@@ -201,12 +201,20 @@ Client::FileScene Client::apply_scene_file(const std::string& path) {
   return apply_wire_scene({scene});
 }
 
-AppliedScene Client::apply_scene(const SceneSpec& spec) {
+namespace {
+
+v1::Scene to_proto_scene(const SceneSpec& spec) {
   v1::Scene scene;
   convert_each(spec.objects, "scene.objects", [&](auto message) { *scene.add_objects() = std::move(message); });
   convert_each(spec.fields, "scene.fields", [&](auto message) { *scene.add_fields() = std::move(message); });
-  return apply_wire_scene({scene});
+  return scene;
 }
+
+}  // namespace
+
+std::string scene_json(const SceneSpec& scene) { return io::scene_json(to_proto_scene(scene)); }
+
+AppliedScene Client::apply_scene(const SceneSpec& spec) { return apply_wire_scene({to_proto_scene(spec)}); }
 
 AppliedScene Client::apply_wire_scene(const detail::WireScene& scene) {
   detail::ClientCore& core = require(core_, "ApplyScene");

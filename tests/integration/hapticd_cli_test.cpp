@@ -12,50 +12,17 @@
 #include <string>
 #include <vector>
 
+#include "integration/run_program.hpp"
 #include "integration/server_process.hpp"
 
 namespace haptic {
 namespace {
 
-struct Outcome {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
+using test::Outcome;
 
 /// Runs hapticd with `args` to completion (every call here exits at once: --print-config or a
 /// refusal), capturing what it prints.
-Outcome run_hapticd(const std::vector<std::string>& args) {
-  int pipe_fds[2];
-  if (::pipe(pipe_fds) != 0) return {};
-  const pid_t parent = ::getpid();
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive the test
-    if (::getppid() != parent) ::_exit(127);
-    ::dup2(pipe_fds[1], STDOUT_FILENO);
-    ::dup2(pipe_fds[1], STDERR_FILENO);
-    ::close(pipe_fds[0]);
-    std::vector<char*> argv;
-    std::string binary = HAPTICD_BINARY;
-    argv.push_back(binary.data());
-    std::vector<std::string> copies = args;
-    for (std::string& arg : copies) argv.push_back(arg.data());
-    argv.push_back(nullptr);
-    ::execv(binary.c_str(), argv.data());
-    ::_exit(127);
-  }
-  ::close(pipe_fds[1]);
-  Outcome outcome;
-  std::array<char, 4096> buffer{};
-  for (ssize_t n; (n = ::read(pipe_fds[0], buffer.data(), buffer.size())) > 0;) {
-    outcome.output.append(buffer.data(), static_cast<std::size_t>(n));
-  }
-  ::close(pipe_fds[0]);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return outcome;
-}
+Outcome run_hapticd(const std::vector<std::string>& args) { return test::run_program(HAPTICD_BINARY, args); }
 
 TEST(HapticdCli, ANonLoopbackAddressIsRefusedWithoutInsecureNamingTheAddress) {
   const Outcome grpc = run_hapticd({"--grpc-address", "0.0.0.0:0", "--print-config"});

@@ -23,4 +23,13 @@ std::string parse_scene_json(const std::string& text, const std::string& source,
   return {};
 }
 
+std::string scene_json(const v1::Scene& scene) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.add_whitespace = true;
+  options.preserve_proto_field_names = true;
+  std::string text;
+  (void)google::protobuf::util::MessageToJsonString(scene, &text, options);
+  return text;
+}
+
 }  // namespace haptic::io

@@ -16,4 +16,8 @@ std::string read_scene_file(const std::string& path, v1::Scene& out);
 /// The same for text already read; `source` names it in the message.
 std::string parse_scene_json(const std::string& text, const std::string& source, v1::Scene& out);
 
+/// `scene` as a scene file's text (indented JSON, field names as the files write them): what
+/// read_scene_file reads back to the same message.
+std::string scene_json(const v1::Scene& scene);
+
 }  // namespace haptic::io

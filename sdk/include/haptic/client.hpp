@@ -180,6 +180,11 @@ struct RegisteredScene {
   std::vector<std::uint64_t> field_sessions;
 };
 
+/// `scene` as a scene file (protobuf JSON, as config/scenes/ holds): what apply_scene_file and
+/// `hapticd --scene` read back as the same objects and fields. Throws InvalidArgumentError naming
+/// the first element that cannot be written (as apply_scene would refuse it).
+std::string scene_json(const SceneSpec& scene);
+
 /// The handles of a scene applied whole (Client::apply_scene, apply_scene_file), in order.
 struct AppliedScene {
   std::vector<ObjectHandle> objects;
