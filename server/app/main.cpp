@@ -12,6 +12,7 @@
 
 #include "config/server_config.hpp"
 #include "app/health_check.hpp"
+#include "app/replay.hpp"
 #include "app/server.hpp"
 
 namespace {
@@ -77,7 +78,54 @@ int main(int argc, char** argv) {
                  "with --health-check: speak TLS, trusting this PEM CA (a server with security.tls "
                  "that asks for no client certificate)")
       ->check(CLI::ExistingFile);
+  std::string record_path;
+  cli.add_option("--record", record_path,
+                 "record the run into FILE from its first tick: every change and every tick's "
+                 "sample (zstd; hapticd --replay FILE reproduces it)");
+  std::string replay_path;
+  cli.add_option("--replay", replay_path,
+                 "replay a recording in lockstep and compare every tick's force with it, bit for "
+                 "bit; exit 0 when all are the same, 1 when any differs, 2 when it cannot be "
+                 "replayed")
+      ->check(CLI::ExistingFile);
   CLI11_PARSE(cli, argc, argv);
+
+  if (!replay_path.empty()) {
+    spdlog::set_level(spdlog::level::warn);  // the replay's own server need not announce itself
+    try {
+      const haptic::app::ReplayReport report =
+          haptic::app::replay_recording(replay_path, [](std::uint64_t ticks) {
+            std::fprintf(stderr, "\rreplay: %llu ticks", static_cast<unsigned long long>(ticks));
+          });
+      std::fprintf(stderr, "\r");
+      std::printf("replay of %s: %llu ticks, %llu changes, %llu samples compared, %llu differ; "
+                  "the recording %s, %llu samples missed in it\n",
+                  replay_path.c_str(), static_cast<unsigned long long>(report.ticks),
+                  static_cast<unsigned long long>(report.changes),
+                  static_cast<unsigned long long>(report.samples_compared),
+                  static_cast<unsigned long long>(report.samples_differing),
+                  report.stopped_because.c_str(),
+                  static_cast<unsigned long long>(report.samples_missed));
+      if (!report.identical()) {
+        std::printf("first difference: %s\n",
+                    !report.first_difference.empty() ? report.first_difference.c_str()
+                    : report.samples_not_replayed > 0
+                        ? "the recorded shutdown ramp ran longer than the replay's"
+                        : "nothing was compared");
+        if (report.real_time) {
+          std::printf("(recorded in REAL_TIME: each change took effect at whatever tick the loop "
+                      "was on, and is replayed after the tick it was stamped with; only a LOCKSTEP "
+                      "recording is reproduced bit for bit)\n");
+        }
+        return 1;
+      }
+      std::printf("every force and position is the same, bit for bit\n");
+      return 0;
+    } catch (const haptic::app::ReplayError& error) {
+      std::fprintf(stderr, "hapticd --replay: %s\n", error.what());
+      return 2;
+    }
+  }
 
   if (cli.count("--health-check") > 0) {
     std::string why;
@@ -144,6 +192,12 @@ int main(int argc, char** argv) {
 
   try {
     haptic::app::Server server(config);
+    if (!record_path.empty()) {
+      if (const std::string error = server.start_recording(record_path); !error.empty()) {
+        spdlog::error("hapticd: --record: {}", error);
+        return 1;
+      }
+    }
     server.start();
     if (!ready_file.empty()) write_ready_file(ready_file, server, config.grpc_address());
     int signal_number = 0;

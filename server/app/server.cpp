@@ -183,10 +183,14 @@ Server::Server(const v1::ServerConfig& config)
     service_ports.push_back(net::DevicePort{samples_[i].get(), &descriptions_[i], std::move(set_hand)});
   }
   const config::SecurityMaterial security = config::load_security(config.security());
+  std::vector<const runtime::SampleRing*> rings;
+  for (const auto& ring : samples_) rings.push_back(ring.get());
+  recorder_ = std::make_unique<net::Recorder>([this] { return loop_->completed_ticks(); },
+                                             std::move(rings));
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
       [this] { return stats(); }, net::AccessControl(credentials(security.tokens)),
-      [this](std::uint64_t session_id) { return reset_lockstep(session_id); }});
+      [this](std::uint64_t session_id) { return reset_lockstep(session_id); }, recorder_.get()});
   const std::uint32_t fd_limit = raise_fd_limit();
   net::ConnectionLimits connection_limits;
   connection_limits.max_connections =
@@ -249,6 +253,12 @@ void Server::bind_metrics() {
 }
 
 Server::~Server() { shutdown(); }
+
+std::string Server::start_recording(const std::string& path) {
+  return recorder_->start(path, config_);
+}
+
+std::optional<v1::RecordEnd> Server::stop_recording() { return recorder_->stop("stopped"); }
 
 void Server::start() {
   for (std::size_t i = 0; i < devices_.size(); ++i) {
@@ -316,6 +326,11 @@ void Server::shutdown() {
   events_.close();
   if (listener_) listener_->stop();
   if (metrics_) metrics_->stop();
+  if (started_ && recorder_->active()) {
+    v1::RecordedChange change;
+    change.set_shutdown(true);
+    recorder_->record(std::move(change));
+  }
   std::thread control_plane_closer;
   if (grpc_server_) {
     control_plane_closer = std::thread([this] {
@@ -327,6 +342,7 @@ void Server::shutdown() {
   } else {
     loop_->stop();
   }
+  recorder_->stop("shutdown");  // the ramp-out's ticks included
   if (control_plane_closer.joinable()) control_plane_closer.join();
   // With the loop stopped, leave every device in its safe state (motors off, brakes on).
   {
@@ -389,6 +405,8 @@ grpc::Status Server::reset_lockstep(std::uint64_t session_id) {
     // session's change lands in between (it would be stamped with the old tick count).
     status = scene_->reset(session_id, initial_scene_.objects, initial_scene_.fields, config_.initial_scene(),
                            [&] {
+                             // A recording covers one run: the reset ends it, its samples written.
+                             recorder_->stop("lockstep reset");
                              restart_loop();
                              for (config::PortDevice& port : devices_) port.device->stop();
                              devices_ = std::move(fresh);

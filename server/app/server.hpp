@@ -19,6 +19,7 @@
 #include "net/event_hub.hpp"
 #include "net/haptic_service.hpp"
 #include "net/metrics_endpoint.hpp"
+#include "net/recorder.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
 #include "net/udp_endpoint.hpp"
@@ -45,7 +46,15 @@ class Server {
   /// The metrics endpoint's port; 0 without one (metrics_address empty).
   std::uint16_t metrics_port() const { return metrics_ ? metrics_->port() : 0; }
   std::uint16_t udp_port() const { return udp_.port(); }
+  /// Device port `port`'s tick samples (the replay compares them with a recording's).
+  const runtime::SampleRing& samples(std::size_t port) const { return *samples_.at(port); }
+  std::size_t device_ports() const { return samples_.size(); }
   v1::Stats stats() const;
+  /// Starts recording the run into `path` (net::Recorder): before start(), from the first tick.
+  /// Returns "" or why not.
+  std::string start_recording(const std::string& path);
+  /// Stops a recording; its totals, or nullopt when none ran.
+  std::optional<v1::RecordEnd> stop_recording();
   /// Lockstep with simulated devices only: puts the devices, their simulated operators, the loop
   /// and the scene back as they started (the caller's items go, the server's own scene comes
   /// back, ids and ticks count from 1), so the same calls reproduce the same run. Sessions and
@@ -87,6 +96,7 @@ class Server {
   std::unique_ptr<grpc::Server> grpc_server_;
   std::uint16_t grpc_port_ = 0;
   std::unique_ptr<net::MetricsEndpoint> metrics_;  // when metrics_address is set
+  std::unique_ptr<net::Recorder> recorder_;
 
   std::thread housekeeping_;
   std::mutex housekeeping_mutex_;

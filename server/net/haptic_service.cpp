@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <cstdlib>
@@ -119,9 +120,19 @@ void HapticService::publish_item_change(std::uint64_t session_id, ItemKind kind,
                 item_id);
 }
 
+void HapticService::record_change(std::uint64_t session_id,
+                                  const std::function<void(v1::RecordedChange&)>& fill) {
+  if (deps_.recorder == nullptr || !deps_.recorder->active()) return;
+  v1::RecordedChange change;
+  change.set_session_id(session_id);
+  fill(change);
+  deps_.recorder->record(std::move(change));
+}
+
 void HapticService::end_session(std::uint64_t session_id, v1::Event::Kind why,
                                 const std::string& reason) {
   const std::size_t faded = deps_.scene.remove_session(session_id);
+  record_change(session_id, [](v1::RecordedChange& change) { change.set_ended(true); });
   const std::string how =
       !reason.empty() ? reason
                       : (why == v1::Event::LEASE_EXPIRED ? "lease expired" : "closed by its client");
@@ -213,6 +224,10 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::
                opened_by, session->peer.empty() ? "an unknown host" : session->peer,
                request->device_index());
   publish_event(v1::Event::SESSION_OPENED, session->id, opened_by);
+  record_change(session->id, [&](v1::RecordedChange& change) {
+    change.mutable_opened()->set_client_name(request->client_name());
+    change.mutable_opened()->set_device_index(request->device_index());
+  });
   return grpc::Status::OK;
 }
 
@@ -244,6 +259,10 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1:
                        request->object().impedance().virtual_coupling());
   log_if_unstable(response->stability(), request->session_id(), id);
   publish_item_change(request->session_id(), ItemKind::kObject, id, "created");
+  record_change(request->session_id(), [&](v1::RecordedChange& change) {
+    change.mutable_object_created()->set_id(id);
+    *change.mutable_object_created()->mutable_object() = request->object();
+  });
   return grpc::Status::OK;
 }
 
@@ -267,6 +286,10 @@ grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1:
                        request->object().impedance().virtual_coupling());
   log_if_unstable(response->stability(), request->session_id(), request->object_id());
   publish_item_change(request->session_id(), ItemKind::kObject, request->object_id(), "updated");
+  record_change(request->session_id(), [&](v1::RecordedChange& change) {
+    change.mutable_object_updated()->set_id(request->object_id());
+    *change.mutable_object_updated()->mutable_object() = request->object();
+  });
   return grpc::Status::OK;
 }
 
@@ -278,6 +301,9 @@ grpc::Status HapticService::DeleteObject(grpc::ServerContext* context, const v1:
     return status;
   }
   publish_item_change(request->session_id(), ItemKind::kObject, request->id(), "deleted");
+  record_change(request->session_id(), [&](v1::RecordedChange& change) {
+    change.mutable_object_deleted()->set_id(request->id());
+  });
   return grpc::Status::OK;
 }
 
@@ -296,6 +322,10 @@ grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::
   }
   response->set_id(id);
   publish_item_change(request->session_id(), ItemKind::kField, id, "created");
+  record_change(request->session_id(), [&](v1::RecordedChange& change) {
+    change.mutable_field_created()->set_id(id);
+    *change.mutable_field_created()->mutable_field() = request->field();
+  });
   return grpc::Status::OK;
 }
 
@@ -313,6 +343,10 @@ grpc::Status HapticService::UpdateField(grpc::ServerContext* context, const v1::
     return status;
   }
   publish_item_change(request->session_id(), ItemKind::kField, request->field_id(), "updated");
+  record_change(request->session_id(), [&](v1::RecordedChange& change) {
+    change.mutable_field_updated()->set_id(request->field_id());
+    *change.mutable_field_updated()->mutable_field() = request->field();
+  });
   return grpc::Status::OK;
 }
 
@@ -324,6 +358,9 @@ grpc::Status HapticService::DeleteField(grpc::ServerContext* context, const v1::
     return status;
   }
   publish_item_change(request->session_id(), ItemKind::kField, request->id(), "deleted");
+  record_change(request->session_id(), [&](v1::RecordedChange& change) {
+    change.mutable_field_deleted()->set_id(request->id());
+  });
   return grpc::Status::OK;
 }
 
@@ -400,6 +437,9 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::A
   publish_event(v1::Event::SCENE_CHANGED, request->session_id(),
                 std::to_string(object_ids.size()) + " objects, " +
                     std::to_string(field_ids.size()) + " fields");
+  record_change(request->session_id(), [&](v1::RecordedChange& change) {
+    *change.mutable_scene_applied()->mutable_scene() = request->scene();
+  });
   return grpc::Status::OK;
 }
 
@@ -515,6 +555,9 @@ grpc::Status HapticService::SetOperator(grpc::ServerContext* context, const v1::
     return invalid(error);
   }
   port.set_hand(hand);
+  record_change(request->session_id(), [&](v1::RecordedChange& change) {
+    *change.mutable_operator_input() = request->input();
+  });
   return grpc::Status::OK;
 }
 
@@ -540,7 +583,19 @@ grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepReq
     return invalid("ticks: must be 1 to " + std::to_string(kMaxStepTicks) + ", got " +
                    std::to_string(request->ticks()));
   }
-  const runtime::LoopThread::Stepped stepped = deps_.loop.step(request->ticks());
+  runtime::LoopThread::Stepped stepped;
+  if (deps_.recorder != nullptr && deps_.recorder->active()) {
+    // The recorder reads every tick's sample from a ring of 1024: step in pieces it keeps up with.
+    constexpr std::uint32_t kPiece = runtime::SampleRing::kCapacity / 2;
+    for (std::uint32_t left = request->ticks(); left > 0;) {
+      const std::uint32_t piece = std::min(left, kPiece);
+      stepped = deps_.loop.step(piece);
+      left -= piece;
+      deps_.recorder->wait_written_through(stepped.tick, std::chrono::seconds(5));
+    }
+  } else {
+    stepped = deps_.loop.step(request->ticks());
+  }
   const std::uint64_t tick = stepped.tick;
   response->set_tick(tick);
   response->set_run(stepped.run);

@@ -10,6 +10,7 @@
 #include "haptic/v1/service.grpc.pb.h"
 #include "net/access_control.hpp"
 #include "net/event_hub.hpp"
+#include "net/recorder.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
 #include "schema/scene_specs.hpp"
@@ -38,6 +39,8 @@ struct ServiceDependencies {
   AccessControl access;  // no tokens: every caller may do everything
   /// A lockstep reset for the session (Reset); empty: refused.
   std::function<grpc::Status(std::uint64_t)> reset;
+  /// Where accepted changes are recorded (when a recording runs); none: never.
+  Recorder* recorder = nullptr;
 };
 
 class HapticService final : public v1::Haptic::Service {
@@ -51,6 +54,9 @@ class HapticService final : public v1::Haptic::Service {
   /// SCENE_CHANGED for one item of the session: "object 3 created", with its id.
   void publish_item_change(std::uint64_t session_id, ItemKind kind, std::uint64_t item_id,
                            const char* change);
+  /// Hands an accepted change to the recorder, when one records (`fill` makes it only then).
+  void record_change(std::uint64_t session_id,
+                     const std::function<void(v1::RecordedChange&)>& fill);
 
   /// Ends the session: its items fade out. Used by CloseSession, KickSession, lease expiry and
   /// expired tokens; `reason` (if any) goes into the event. Logs one line naming the session.

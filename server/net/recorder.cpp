@@ -1,0 +1,154 @@
+#include "net/recorder.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "net/recording_file.hpp"
+
+namespace haptic::net {
+namespace {
+
+constexpr auto kRound = std::chrono::milliseconds(2);  // a round per 2 ticks at 1 kHz; the ring holds 1024
+
+v1::Vec3 vec(const engine::Vec3& v) {
+  v1::Vec3 out;
+  out.set_x(v.x);
+  out.set_y(v.y);
+  out.set_z(v.z);
+  return out;
+}
+
+}  // namespace
+
+Recorder::Recorder(std::function<std::uint64_t()> completed_ticks,
+                   std::vector<const runtime::SampleRing*> rings)
+    : completed_ticks_(std::move(completed_ticks)), rings_(std::move(rings)) {}
+
+Recorder::~Recorder() { stop("shutdown"); }
+
+std::string Recorder::start(const std::string& path, const v1::ServerConfig& config) {
+  std::unique_lock lock(mutex_);
+  if (writer_) return "already recording to '" + writer_->path() + "'";
+  std::unique_ptr<RecordingWriter> writer;
+  try {
+    writer = std::make_unique<RecordingWriter>(path);
+  } catch (const std::exception& error) {
+    return error.what();
+  }
+  const std::uint64_t start_tick = completed_ticks_();
+  v1::Record header;
+  v1::RecordHeader& h = *header.mutable_header();
+  h.set_format("hapticd-recording");
+  h.set_version(1);
+  *h.mutable_config() = config;
+  h.mutable_config()->clear_security();  // no secrets in a recording
+  h.set_start_tick(start_tick);
+  h.set_device_ports(static_cast<std::uint32_t>(rings_.size()));
+  if (!writer->write(header)) return writer->error();
+  writer_ = std::move(writer);
+  queued_.clear();
+  totals_.Clear();
+  next_tick_ = start_tick + 1;
+  written_through_.store(start_tick, std::memory_order_release);
+  stopping_ = false;
+  active_.store(true, std::memory_order_release);
+  if (thread_.joinable()) thread_.join();  // a previous recording's, already finished
+  thread_ = std::thread([this] { run(); });
+  spdlog::info("recording to '{}' from tick {}", path, start_tick + 1);
+  return {};
+}
+
+std::optional<v1::RecordEnd> Recorder::stop(const std::string& why) {
+  {
+    std::lock_guard lock(mutex_);
+    if (!writer_ || stopping_) return std::nullopt;
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  std::lock_guard lock(mutex_);
+  totals_.set_stopped_because(why);
+  v1::Record end;
+  *end.mutable_end() = totals_;
+  writer_->write(end);
+  if (!writer_->close()) spdlog::error("recording: {}", writer_->error());
+  spdlog::info("recording '{}' {}: {} samples ({} missed), {} changes", writer_->path(), why,
+               totals_.samples(), totals_.samples_missed(), totals_.changes());
+  writer_.reset();
+  active_.store(false, std::memory_order_release);
+  return totals_;
+}
+
+std::string Recorder::path() const {
+  std::lock_guard lock(mutex_);
+  return writer_ ? writer_->path() : std::string();
+}
+
+void Recorder::record(v1::RecordedChange change) {
+  if (!active()) return;
+  std::lock_guard lock(mutex_);
+  if (!writer_) return;
+  // Under the lock the recorder thread takes the completed tick with: a change stamped with tick
+  // T is always written before the samples after T.
+  change.set_after_tick(completed_ticks_());
+  queued_.push_back(std::move(change));
+}
+
+bool Recorder::wait_written_through(std::uint64_t tick, std::chrono::milliseconds timeout) const {
+  const auto give_up = std::chrono::steady_clock::now() + timeout;
+  while (active() && written_through_.load(std::memory_order_acquire) < tick) {
+    if (std::chrono::steady_clock::now() > give_up) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  return true;
+}
+
+void Recorder::run() {
+  std::unique_lock lock(mutex_);
+  while (!stopping_) {
+    wake_.wait_for(lock, kRound, [this] { return stopping_; });
+    lock.unlock();
+    write_due();
+    lock.lock();
+  }
+  lock.unlock();
+  write_due();  // what was due when stop() came
+}
+
+void Recorder::write_due() {
+  std::vector<v1::RecordedChange> changes;
+  std::uint64_t completed = 0;
+  {
+    std::lock_guard lock(mutex_);
+    completed = completed_ticks_();
+    changes.swap(queued_);
+  }
+  // The writer is only replaced under stop(), after this thread has ended.
+  RecordingWriter& writer = *writer_;
+  v1::Record record;
+  for (v1::RecordedChange& change : changes) {
+    *record.mutable_change() = std::move(change);
+    writer.write(record);
+    totals_.set_changes(totals_.changes() + 1);
+  }
+  runtime::TickSample sample;
+  for (; next_tick_ <= completed; ++next_tick_) {
+    for (std::size_t port = 0; port < rings_.size(); ++port) {
+      if (!rings_[port]->read(next_tick_, sample)) {
+        totals_.set_samples_missed(totals_.samples_missed() + 1);
+        continue;
+      }
+      v1::RecordedSample& out = *record.mutable_sample();
+      out.set_tick(sample.tick);
+      out.set_port(static_cast<std::uint32_t>(port));
+      *out.mutable_position() = vec(sample.p_WT);
+      *out.mutable_velocity() = vec(sample.v_WT);
+      *out.mutable_force() = vec(sample.F_T_W);
+      out.set_flags(sample.flags);
+      writer.write(record);
+      totals_.set_samples(totals_.samples() + 1);
+    }
+  }
+  written_through_.store(completed, std::memory_order_release);
+}
+
+}  // namespace haptic::net

@@ -1,0 +1,160 @@
+#include "net/recording_file.hpp"
+
+#include <zstd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace haptic::net {
+namespace {
+
+constexpr std::size_t kFlushBytes = 64 * 1024;  // records gathered before a compression step
+constexpr int kLevel = 3;                      // zstd's default: fast, and samples compress well
+
+void append_varint(std::string& out, std::uint64_t value) {
+  while (value >= 0x80) {
+    out.push_back(static_cast<char>((value & 0x7f) | 0x80));
+    value >>= 7;
+  }
+  out.push_back(static_cast<char>(value));
+}
+
+}  // namespace
+
+RecordingWriter::RecordingWriter(const std::string& path) : path_(path) {
+  file_ = std::fopen(path.c_str(), "wb");
+  if (file_ == nullptr) {
+    throw std::runtime_error("recording '" + path + "': cannot create it: " + std::strerror(errno));
+  }
+  context_ = ZSTD_createCCtx();
+  ZSTD_CCtx_setParameter(context_, ZSTD_c_compressionLevel, kLevel);
+  ZSTD_CCtx_setParameter(context_, ZSTD_c_checksumFlag, 1);  // a damaged file is caught on reading
+}
+
+RecordingWriter::~RecordingWriter() {
+  close();
+}
+
+bool RecordingWriter::write(const v1::Record& record) {
+  if (!error_.empty() || file_ == nullptr) return false;
+  append_varint(pending_, record.ByteSizeLong());
+  record.AppendToString(&pending_);
+  if (pending_.size() < kFlushBytes) return true;
+  const bool ok = compress(pending_.data(), pending_.size(), false);
+  pending_.clear();
+  return ok;
+}
+
+bool RecordingWriter::compress(const void* data, std::size_t size, bool end) {
+  ZSTD_inBuffer in{data, size, 0};
+  out_.resize(ZSTD_CStreamOutSize());
+  for (;;) {
+    ZSTD_outBuffer out{out_.data(), out_.size(), 0};
+    const std::size_t remaining =
+        ZSTD_compressStream2(context_, &out, &in, end ? ZSTD_e_end : ZSTD_e_continue);
+    if (ZSTD_isError(remaining)) {
+      error_ = std::string("zstd: ") + ZSTD_getErrorName(remaining);
+      return false;
+    }
+    if (out.pos > 0 && std::fwrite(out_.data(), 1, out.pos, file_) != out.pos) {
+      error_ = "writing '" + path_ + "': " + std::strerror(errno);
+      return false;
+    }
+    if (end ? remaining == 0 : in.pos == in.size) return true;
+  }
+}
+
+bool RecordingWriter::close() {
+  if (file_ == nullptr) return error_.empty();
+  compress(pending_.data(), pending_.size(), true);
+  pending_.clear();
+  if (std::fclose(file_) != 0 && error_.empty()) error_ = "closing '" + path_ + "': " + std::strerror(errno);
+  file_ = nullptr;
+  ZSTD_freeCCtx(context_);
+  context_ = nullptr;
+  return error_.empty();
+}
+
+RecordingReader::RecordingReader(const std::string& path) : path_(path) {
+  file_ = std::fopen(path.c_str(), "rb");
+  if (file_ == nullptr) {
+    throw std::runtime_error("recording '" + path + "': cannot open it: " + std::strerror(errno));
+  }
+  context_ = ZSTD_createDCtx();
+}
+
+RecordingReader::~RecordingReader() {
+  if (file_ != nullptr) std::fclose(file_);
+  ZSTD_freeDCtx(context_);
+}
+
+bool RecordingReader::fill(std::size_t bytes) {
+  if (read_ > 0 && read_ >= buffer_.size() / 2) {  // drop what was consumed
+    buffer_.erase(0, read_);
+    read_ = 0;
+  }
+  std::string chunk(ZSTD_DStreamOutSize(), '\0');
+  while (buffer_.size() - read_ < bytes) {
+    if (in_used_ == in_.size()) {
+      if (file_done_) return false;
+      in_.resize(ZSTD_DStreamInSize());
+      const std::size_t got = std::fread(in_.data(), 1, in_.size(), file_);
+      in_.resize(got);
+      in_used_ = 0;
+      if (got == 0) {
+        file_done_ = true;
+        if (!frame_done_) error_ = "recording '" + path_ + "': the file ends in the middle (truncated)";
+        return false;
+      }
+    }
+    ZSTD_inBuffer in{in_.data(), in_.size(), in_used_};
+    ZSTD_outBuffer out{chunk.data(), chunk.size(), 0};
+    const std::size_t result = ZSTD_decompressStream(context_, &out, &in);
+    if (ZSTD_isError(result)) {
+      error_ = "recording '" + path_ + "': not a readable recording (zstd: " +
+               ZSTD_getErrorName(result) + ")";
+      file_done_ = true;
+      return false;
+    }
+    frame_done_ = result == 0;
+    in_used_ = in.pos;
+    buffer_.append(chunk.data(), out.pos);
+  }
+  return true;
+}
+
+bool RecordingReader::next(v1::Record& record) {
+  // The varint length: up to 10 bytes.
+  std::uint64_t length = 0;
+  for (int shift = 0;; shift += 7) {
+    if (!fill(1)) {
+      if (shift > 0 && error_.empty()) error_ = "recording '" + path_ + "': the last record is cut short";
+      return false;
+    }
+    const auto byte = static_cast<unsigned char>(buffer_[read_++]);
+    length |= static_cast<std::uint64_t>(byte & 0x7f) << shift;
+    if ((byte & 0x80) == 0) break;
+    if (shift >= 63) {
+      error_ = "recording '" + path_ + "': a record's length is not a varint";
+      return false;
+    }
+  }
+  constexpr std::uint64_t kMaxRecord = 512ull << 20;  // a scene with the largest meshes fits
+  if (length > kMaxRecord) {
+    error_ = "recording '" + path_ + "': a record claims " + std::to_string(length) + " bytes";
+    return false;
+  }
+  if (!fill(static_cast<std::size_t>(length))) {
+    if (error_.empty()) error_ = "recording '" + path_ + "': the last record is cut short";
+    return false;
+  }
+  if (!record.ParseFromArray(buffer_.data() + read_, static_cast<int>(length))) {
+    error_ = "recording '" + path_ + "': a record does not parse";
+    return false;
+  }
+  read_ += static_cast<std::size_t>(length);
+  return true;
+}
+
+}  // namespace haptic::net

@@ -1,0 +1,72 @@
+#pragma once
+// The recording file (haptic/v1/recording.proto): a zstd stream of length-delimited Record
+// messages. The writer is used by one thread (the recorder's); the reader streams, so a long
+// recording is never held whole in memory.
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "haptic/v1/recording.pb.h"
+
+struct ZSTD_CCtx_s;
+struct ZSTD_DCtx_s;
+
+namespace haptic::net {
+
+class RecordingWriter {
+ public:
+  /// Creates (truncates) `path`. Throws std::runtime_error naming the file and why.
+  explicit RecordingWriter(const std::string& path);
+  ~RecordingWriter();  // finishes the stream and closes the file (close() first to see errors)
+  RecordingWriter(const RecordingWriter&) = delete;
+  RecordingWriter& operator=(const RecordingWriter&) = delete;
+
+  /// Appends one record; false (and error() says why) once a write has failed.
+  bool write(const v1::Record& record);
+  /// Ends the zstd frame and closes the file; false if anything failed.
+  bool close();
+  const std::string& error() const { return error_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  bool compress(const void* data, std::size_t size, bool end);
+
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  ZSTD_CCtx_s* context_ = nullptr;
+  std::string pending_;   // records gathered before compression (a few kB at a time)
+  std::string out_;       // compressed bytes
+  std::string error_;
+};
+
+class RecordingReader {
+ public:
+  /// Opens `path`. Throws std::runtime_error naming the file and why.
+  explicit RecordingReader(const std::string& path);
+  ~RecordingReader();
+  RecordingReader(const RecordingReader&) = delete;
+  RecordingReader& operator=(const RecordingReader&) = delete;
+
+  /// The next record; false at the end of the file or on an error (error() is then not empty:
+  /// a truncated file, bytes that are not zstd, a record that does not parse).
+  bool next(v1::Record& record);
+  const std::string& error() const { return error_; }
+
+ private:
+  /// Decompresses until `buffer_` holds at least `bytes` unread bytes; false at the end.
+  bool fill(std::size_t bytes);
+
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  ZSTD_DCtx_s* context_ = nullptr;
+  std::string in_;         // compressed bytes read, not yet decompressed
+  std::size_t in_used_ = 0;
+  std::string buffer_;     // decompressed bytes
+  std::size_t read_ = 0;   // of buffer_, consumed
+  bool file_done_ = false;
+  bool frame_done_ = true; // the last decompress call ended a frame (a file may end there)
+  std::string error_;
+};
+
+}  // namespace haptic::net

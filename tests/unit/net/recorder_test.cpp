@@ -1,0 +1,177 @@
+// The recorder and its file: records read back as written (zstd, delimited), damage is named, and
+// recording every tick adds no allocation to the ticking thread while its own thread keeps up.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <bit>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "net/recorder.hpp"
+#include "net/recording_file.hpp"
+#include "runtime/cartesian_model.hpp"
+#include "runtime/simulated_point_mass_device.hpp"
+#include "runtime/tick_runner.hpp"
+#include "support/allocation_counter.hpp"
+
+namespace haptic::net {
+namespace {
+
+std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() /
+          ("hapticd-" + name + "-" + std::to_string(::getpid()) + ".hrec"))
+      .string();
+}
+
+v1::Record sample_record(std::uint64_t tick, double force) {
+  v1::Record record;
+  record.mutable_sample()->set_tick(tick);
+  record.mutable_sample()->mutable_force()->set_z(force);
+  return record;
+}
+
+TEST(RecordingFile, RecordsReadBackAsWrittenAcrossManyCompressionBlocks) {
+  const std::string path = temp_path("roundtrip");
+  {
+    RecordingWriter writer(path);
+    v1::Record header;
+    header.mutable_header()->set_format("hapticd-recording");
+    ASSERT_TRUE(writer.write(header));
+    // 200,000 samples: several 64 kB blocks, values whose bits must survive (NaN, -0, denormals).
+    for (std::uint64_t tick = 1; tick <= 200'000; ++tick) {
+      const double force = tick == 7 ? -0.0 : tick == 8 ? 4.9e-324 : 1.0 / static_cast<double>(tick);
+      ASSERT_TRUE(writer.write(sample_record(tick, force)));
+    }
+    ASSERT_TRUE(writer.close()) << writer.error();
+  }
+  RecordingReader reader(path);
+  v1::Record record;
+  ASSERT_TRUE(reader.next(record));
+  EXPECT_EQ(record.header().format(), "hapticd-recording");
+  for (std::uint64_t tick = 1; tick <= 200'000; ++tick) {
+    ASSERT_TRUE(reader.next(record)) << tick << " " << reader.error();
+    ASSERT_EQ(record.sample().tick(), tick);
+    const double force = tick == 7 ? -0.0 : tick == 8 ? 4.9e-324 : 1.0 / static_cast<double>(tick);
+    ASSERT_EQ(std::bit_cast<std::uint64_t>(record.sample().force().z()), std::bit_cast<std::uint64_t>(force));
+  }
+  EXPECT_FALSE(reader.next(record));
+  EXPECT_EQ(reader.error(), "");  // a clean end
+  std::filesystem::remove(path);
+}
+
+TEST(RecordingFile, DamageIsNamedNotMistakenForAnEnd) {
+  const std::string path = temp_path("damaged");
+  {
+    RecordingWriter writer(path);
+    for (std::uint64_t tick = 1; tick <= 50'000; ++tick) writer.write(sample_record(tick, 1.5));
+    ASSERT_TRUE(writer.close());
+  }
+  // Cut in the middle: what is there reads, then the cut is reported.
+  std::filesystem::resize_file(path, std::filesystem::file_size(path) / 2);
+  {
+    RecordingReader reader(path);
+    v1::Record record;
+    std::uint64_t read = 0;
+    while (reader.next(record)) ++read;
+    EXPECT_GT(read, 0u);
+    EXPECT_LT(read, 50'000u);
+    EXPECT_NE(reader.error().find("ends in the middle"), std::string::npos) << reader.error();
+  }
+  // Not zstd at all.
+  std::ofstream(path) << "{\"this\": \"is JSON\"}";
+  {
+    RecordingReader reader(path);
+    v1::Record record;
+    EXPECT_FALSE(reader.next(record));
+    EXPECT_NE(reader.error().find("not a readable recording"), std::string::npos) << reader.error();
+  }
+  std::filesystem::remove(path);
+  EXPECT_THROW(RecordingReader("/nonexistent/x.hrec"), std::runtime_error);
+  EXPECT_THROW(RecordingWriter("/nonexistent/x.hrec"), std::runtime_error);
+}
+
+// The ticking thread publishes samples as always; the recorder's thread writes them. Ticking with
+// a recording running allocates nothing, and every tick's sample is in the file exactly.
+TEST(Recorder, EveryTickIsRecordedWithoutAllocatingOnTheTickingThread) {
+  runtime::SimulatedPointMassDevice device(engine::PointMassParams{},
+                                           engine::PointMassState{{0.0, 0.0, 0.01}, {}}, 20.0);
+  runtime::CartesianModel model;
+  runtime::SceneExchange scenes(std::make_unique<const engine::CompiledScene>());
+  runtime::SampleRing ring;
+  runtime::LoopCounters counters;
+  runtime::TickRunner runner(device, model, scenes, ring, counters, runtime::TickConfig{0.001, {}, 50, {}});
+  engine::HandInput push;
+  push.mode = engine::HandInput::Mode::kApplyForce;
+  push.force = {0.0, 0.0, -2.0};
+  device.set_hand(push);
+
+  std::atomic<std::uint64_t> completed{0};
+  Recorder recorder([&] { return completed.load(); }, {&ring});
+  const std::string path = temp_path("recorder");
+  ASSERT_EQ(recorder.start(path, v1::ServerConfig{}), "");
+  v1::RecordedChange change;
+  change.mutable_opened()->set_client_name("tester");
+  recorder.record(change);  // stamped after tick 0
+
+  std::vector<runtime::TickSample> published;
+  std::uint64_t inside = 0;
+  for (std::uint64_t tick = 1; tick <= 5000; ++tick) {
+    test::reset_allocations();
+    {
+      test::CountAllocations counting;
+      runner.run(tick, static_cast<std::int64_t>(tick - 1) * 1'000'000);
+      completed.store(tick);
+    }
+    inside += test::allocations();
+    runtime::TickSample sample;
+    ASSERT_TRUE(ring.read(tick, sample));
+    published.push_back(sample);
+    // The ring holds 1024: let the recorder keep up, as a lockstep Step does.
+    if (tick % 500 == 0) {
+      ASSERT_TRUE(recorder.wait_written_through(tick, std::chrono::seconds(5)));
+    }
+  }
+  const auto end = recorder.stop("stopped");
+  ASSERT_TRUE(end.has_value());
+  EXPECT_EQ(inside, 0u);
+  EXPECT_EQ(end->samples(), 5000u);
+  EXPECT_EQ(end->samples_missed(), 0u);
+  EXPECT_EQ(end->changes(), 1u);
+  EXPECT_FALSE(recorder.active());
+
+  RecordingReader reader(path);
+  v1::Record record;
+  ASSERT_TRUE(reader.next(record));
+  ASSERT_TRUE(record.has_header());
+  EXPECT_EQ(record.header().start_tick(), 0u);
+  EXPECT_EQ(record.header().device_ports(), 1u);
+  ASSERT_TRUE(reader.next(record));
+  ASSERT_TRUE(record.has_change());  // before any sample: it took effect from tick 1
+  EXPECT_EQ(record.change().after_tick(), 0u);
+  EXPECT_EQ(record.change().opened().client_name(), "tester");
+  for (const runtime::TickSample& sample : published) {
+    ASSERT_TRUE(reader.next(record));
+    ASSERT_TRUE(record.has_sample());
+    ASSERT_EQ(record.sample().tick(), sample.tick);
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(record.sample().force().z()),
+              std::bit_cast<std::uint64_t>(sample.F_T_W.z));
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(record.sample().position().z()),
+              std::bit_cast<std::uint64_t>(sample.p_WT.z));
+  }
+  ASSERT_TRUE(reader.next(record));
+  EXPECT_EQ(record.end().stopped_because(), "stopped");
+  EXPECT_FALSE(reader.next(record));
+  std::filesystem::remove(path);
+
+  // A second recording may follow; one at a time.
+  ASSERT_EQ(recorder.start(path, v1::ServerConfig{}), "");
+  EXPECT_EQ(recorder.start(path, v1::ServerConfig{}), "already recording to '" + path + "'");
+  recorder.stop("stopped");
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace haptic::net
