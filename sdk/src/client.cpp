@@ -351,6 +351,31 @@ void Client::kick_session(std::uint64_t target, const std::string& reason) {
   core.call<v1::KickSessionRequest, v1::Empty>("KickSession", &v1::Haptic::Stub::KickSession, request);
 }
 
+namespace {
+
+RecordingStatus from_proto(const v1::RecordingStatus& status) {
+  return {status.path(), status.start_tick(), status.samples(), status.samples_missed(), status.changes()};
+}
+
+}  // namespace
+
+RecordingStatus Client::start_recording(const std::string& name) {
+  detail::ClientCore& core = require(core_, "StartRecording");
+  v1::StartRecordingRequest request;
+  request.set_session_id(core.session_id());
+  request.set_name(name);
+  return from_proto(core.call<v1::StartRecordingRequest, v1::RecordingStatus>(
+      "StartRecording", &v1::Haptic::Stub::StartRecording, request));
+}
+
+RecordingStatus Client::stop_recording() {
+  detail::ClientCore& core = require(core_, "StopRecording");
+  v1::SessionRef request;
+  request.set_session_id(core.session_id());
+  return from_proto(core.call<v1::SessionRef, v1::RecordingStatus>(
+      "StopRecording", &v1::Haptic::Stub::StopRecording, request));
+}
+
 std::uint64_t Client::session_id() const { return require(core_, "session_id").session_id(); }
 
 std::chrono::milliseconds Client::lease_timeout() const { return require(core_, "lease_timeout").lease_timeout(); }

@@ -190,7 +190,8 @@ Server::Server(const v1::ServerConfig& config)
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
       [this] { return stats(); }, net::AccessControl(credentials(security.tokens)),
-      [this](std::uint64_t session_id) { return reset_lockstep(session_id); }, recorder_.get()});
+      [this](std::uint64_t session_id) { return reset_lockstep(session_id); }, recorder_.get(),
+      config.recording_dir(), [this](const std::string& path) { return start_recording(path); }});
   const std::uint32_t fd_limit = raise_fd_limit();
   net::ConnectionLimits connection_limits;
   connection_limits.max_connections =
@@ -255,7 +256,30 @@ void Server::bind_metrics() {
 Server::~Server() { shutdown(); }
 
 std::string Server::start_recording(const std::string& path) {
-  return recorder_->start(path, config_);
+  if (std::string error = recorder_->start(path, config_); !error.empty()) return error;
+  // What clients hold already comes first, after tick start_tick: their sessions, then their live
+  // items in id order (a replay numbers them alike unless ids were skipped by deletions).
+  for (const net::SessionInfo& session : sessions_.list()) {
+    v1::RecordedChange change;
+    change.set_session_id(session.id);
+    change.mutable_opened()->set_client_name(session.client_name);
+    change.mutable_opened()->set_device_index(session.device_index);
+    recorder_->record(std::move(change));
+  }
+  for (const net::SceneEntry& entry : scene_->read(0, true)) {
+    if (entry.session_id == 0) continue;  // the server's own scene is in the configuration
+    v1::RecordedChange change;
+    change.set_session_id(entry.session_id);
+    if (entry.source.object) {
+      change.mutable_object_created()->set_id(entry.id);
+      *change.mutable_object_created()->mutable_object() = *entry.source.object;
+    } else if (entry.source.field) {
+      change.mutable_field_created()->set_id(entry.id);
+      *change.mutable_field_created()->mutable_field() = *entry.source.field;
+    }
+    recorder_->record(std::move(change));
+  }
+  return {};
 }
 
 std::optional<v1::RecordEnd> Server::stop_recording() { return recorder_->stop("stopped"); }

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -135,6 +136,10 @@ std::string validate(const v1::ServerConfig& config) {
   }
   if (config.udp_port() > 65535) {
     return "udp_port: must be 0 to 65535, got " + std::to_string(config.udp_port());
+  }
+  if (const std::string& dir = config.recording_dir();
+      !dir.empty() && !std::filesystem::is_directory(dir)) {
+    return "recording_dir: '" + dir + "' is not a folder (StartRecording writes its files there)";
   }
   if (const std::string& metrics = config.metrics_address(); !metrics.empty()) {
     const auto colon = metrics.rfind(':');

@@ -526,6 +526,51 @@ grpc::Status HapticService::KickSession(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
+grpc::Status HapticService::StartRecording(grpc::ServerContext* context,
+                                           const v1::StartRecordingRequest* request,
+                                           v1::RecordingStatus* response) {
+  if (auto status = check_session(context, request->session_id(), Permission::kAdmin, "StartRecording");
+      !status.ok()) {
+    return status;
+  }
+  if (deps_.recorder == nullptr || deps_.recording_dir.empty() || !deps_.start_recording) {
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            "this server has no recording_dir: set one in its configuration to record on request "
+            "(or start it with --record FILE)"};
+  }
+  const std::string& name = request->name();
+  const bool allowed_characters = std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
+  });
+  if (name.empty() || name.size() > 64 || name.front() == '.' || !allowed_characters) {
+    return invalid("name: 1 to 64 of A-Z a-z 0-9 . _ - not starting with '.', got '" +
+                   name.substr(0, 80) + "'");
+  }
+  const std::string path = deps_.recording_dir + "/" + name;
+  if (const std::string error = deps_.start_recording(path); !error.empty()) {
+    return {grpc::StatusCode::FAILED_PRECONDITION, error};
+  }
+  response->set_path(path);
+  response->set_start_tick(deps_.recorder->start_tick());
+  return grpc::Status::OK;
+}
+
+grpc::Status HapticService::StopRecording(grpc::ServerContext* context, const v1::SessionRef* request,
+                                          v1::RecordingStatus* response) {
+  if (auto status = check_session(context, request->session_id(), Permission::kAdmin, "StopRecording");
+      !status.ok()) {
+    return status;
+  }
+  const std::string path = deps_.recorder != nullptr ? deps_.recorder->path() : std::string();
+  const auto end = deps_.recorder != nullptr ? deps_.recorder->stop("stopped") : std::nullopt;
+  if (!end) return {grpc::StatusCode::FAILED_PRECONDITION, "no recording is running"};
+  response->set_path(path);
+  response->set_samples(end->samples());
+  response->set_samples_missed(end->samples_missed());
+  response->set_changes(end->changes());
+  return grpc::Status::OK;
+}
+
 grpc::Status HapticService::SubscribeState(grpc::ServerContext* context,
                                            const v1::SubscribeStateRequest* request,
                                            v1::SubscribeStateResponse* response) {

@@ -41,6 +41,9 @@ struct ServiceDependencies {
   std::function<grpc::Status(std::uint64_t)> reset;
   /// Where accepted changes are recorded (when a recording runs); none: never.
   Recorder* recorder = nullptr;
+  /// StartRecording's folder ("" refuses it) and how a recording starts (the header's config).
+  std::string recording_dir;
+  std::function<std::string(const std::string& path)> start_recording;
 };
 
 class HapticService final : public v1::Haptic::Service {
@@ -89,6 +92,9 @@ class HapticService final : public v1::Haptic::Service {
   grpc::Status WatchEvents(grpc::ServerContext*, const v1::WatchEventsRequest*,
                            grpc::ServerWriter<v1::Event>*) override;
   grpc::Status ListSessions(grpc::ServerContext*, const v1::SessionRef*, v1::SessionList*) override;
+  grpc::Status StartRecording(grpc::ServerContext*, const v1::StartRecordingRequest*,
+                              v1::RecordingStatus*) override;
+  grpc::Status StopRecording(grpc::ServerContext*, const v1::SessionRef*, v1::RecordingStatus*) override;
   grpc::Status KickSession(grpc::ServerContext*, const v1::KickSessionRequest*, v1::Empty*) override;
   grpc::Status SubscribeState(grpc::ServerContext*, const v1::SubscribeStateRequest*,
                               v1::SubscribeStateResponse*) override;

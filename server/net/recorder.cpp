@@ -48,6 +48,7 @@ std::string Recorder::start(const std::string& path, const v1::ServerConfig& con
   queued_.clear();
   totals_.Clear();
   next_tick_ = start_tick + 1;
+  start_tick_.store(start_tick, std::memory_order_release);
   written_through_.store(start_tick, std::memory_order_release);
   stopping_ = false;
   active_.store(true, std::memory_order_release);

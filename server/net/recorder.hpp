@@ -45,6 +45,8 @@ class Recorder {
   bool active() const { return active_.load(std::memory_order_acquire); }
   /// The file being written ("" when not recording).
   std::string path() const;
+  /// Ticks completed when the recording began (its header's start_tick).
+  std::uint64_t start_tick() const { return start_tick_.load(std::memory_order_acquire); }
 
   /// Queues a change made now (stamped with the ticks completed so far). Nothing when not active.
   void record(v1::RecordedChange change);
@@ -71,6 +73,7 @@ class Recorder {
   v1::RecordEnd totals_;
   std::atomic<bool> active_{false};
   std::atomic<std::uint64_t> written_through_{0};
+  std::atomic<std::uint64_t> start_tick_{0};
   std::thread thread_;
 };
 

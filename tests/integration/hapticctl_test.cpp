@@ -1,6 +1,7 @@
 // hapticctl against a real hapticd: every command's output, the scene it dumps read back as the
 // same scene, a kick that ends a client, the admin role it needs, and clear refusals.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <haptic/haptic.hpp>
 
@@ -159,15 +160,56 @@ TEST(Hapticctl, WithTokensItNeedsTheAdminRole) {
       << admin.output;
 }
 
+// A recording started and stopped from hapticctl, with a client's wall already there, replays bit
+// for bit; names outside the folder and a server without one are refused saying why.
+TEST(Hapticctl, RecordStartAndStopMakeAReplayableRecording) {
+  const auto dir = std::filesystem::temp_directory_path() / ("hapticctl-rec-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  test::ServerProcess server(test::lockstep_config(R"("recording_dir": ")" + dir.string() + "\""));
+  Client driver(test::config_for(server, "driver"));
+  ObjectHandle wall = driver.add_wall(WallSpec{{0, 0, 0.002}, {0, 0, 1}, {1200.0, 1.5}});
+  driver.set_operator(OperatorInput::push({0, 0, -1.0}));
+
+  const Outcome started = hapticctl(server, {"record", "start", "run.hrec"});
+  EXPECT_EQ(started.exit_code, 0) << started.output;
+  EXPECT_EQ(started.output, "recording into " + (dir / "run.hrec").string() +
+                                " on the server from tick 1 (replayable: hapticd --replay)\n");
+  driver.set_operator(OperatorInput::push({0, 0, -2.0}));
+  (void)driver.step(800);
+  const Outcome stopped = hapticctl(server, {"record", "stop"});
+  EXPECT_EQ(stopped.exit_code, 0) << stopped.output;
+  EXPECT_NE(stopped.output.find("stopped: 800 samples (0 missed), "), std::string::npos) << stopped.output;
+
+  const Outcome replayed = test::run_program(HAPTICD_BINARY, {"--replay", (dir / "run.hrec").string()});
+  EXPECT_EQ(replayed.exit_code, 0) << replayed.output;
+  EXPECT_NE(replayed.output.find("800 samples compared, 0 differ"), std::string::npos) << replayed.output;
+
+  const Outcome none_running = hapticctl(server, {"record", "stop"});
+  EXPECT_EQ(none_running.exit_code, 1);
+  EXPECT_EQ(none_running.output, "hapticctl: StopRecording: no recording is running\n");
+  const Outcome escape = hapticctl(server, {"record", "start", "../outside.hrec"});
+  EXPECT_EQ(escape.exit_code, 1);
+  EXPECT_NE(escape.output.find("name: 1 to 64 of A-Z a-z 0-9 . _ - not starting with '.', got "
+                               "'../outside.hrec'"),
+            std::string::npos)
+      << escape.output;
+  std::filesystem::remove_all(dir);
+
+  test::ServerProcess without(test::lockstep_config());
+  const Outcome refused = hapticctl(without, {"record", "start", "run.hrec"});
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.output.find("this server has no recording_dir"), std::string::npos) << refused.output;
+}
+
 TEST(Hapticctl, EveryCommandHasHelp) {
-  for (const char* command : {"status", "sessions", "stats", "events", "scene", "kick"}) {
+  for (const char* command : {"status", "sessions", "stats", "events", "scene", "kick", "record"}) {
     const Outcome help = test::run_program(HAPTICCTL_BINARY, {command, "--help"});
     EXPECT_EQ(help.exit_code, 0) << command;
     EXPECT_NE(help.output.find(std::string("hapticctl ") + command), std::string::npos) << help.output;
   }
   const Outcome top = test::run_program(HAPTICCTL_BINARY, {"--help"});
   EXPECT_EQ(top.exit_code, 0);
-  for (const char* command : {"status", "sessions", "stats", "events", "scene", "kick"}) {
+  for (const char* command : {"status", "sessions", "stats", "events", "scene", "kick", "record"}) {
     EXPECT_NE(top.output.find(std::string("  ") + command + " "), std::string::npos) << top.output;
   }
 }

@@ -3,6 +3,7 @@
 //
 //   hapticctl [--server HOST:PORT] [--token T | --token-file F] [--ca CA.pem] COMMAND
 //   status | sessions | stats [--watch] | events | scene [--all] [--json] | kick SESSION
+//   record start NAME | record stop
 //
 // Exit status: 0 done; 1 the server refused or could not be reached (its message on stderr);
 // 2 a bad command line.
@@ -110,6 +111,14 @@ int main(int argc, char** argv) {
       ->required();
   kick->add_option("--reason", reason, "shown to the client and in the event (up to 256 characters)");
 
+  CLI::App* record = cli.add_subcommand("record", "record the run on the server, for hapticd --replay");
+  record->require_subcommand(1);
+  CLI::App* record_start = record->add_subcommand(
+      "start", "start recording into NAME in the server's recording_dir (every change and tick)");
+  std::string record_name;
+  record_start->add_option("NAME", record_name, "the file's name (A-Z a-z 0-9 . _ -)")->required();
+  CLI::App* record_stop = record->add_subcommand("stop", "stop the recording and show its totals");
+
   CLI11_PARSE(cli, argc, argv);
 
   std::uint64_t target = 0;
@@ -171,6 +180,16 @@ int main(int argc, char** argv) {
       const haptic::RegisteredScene registered = client.scene(all_sessions);
       std::cout << (as_json ? haptic::scene_json(registered.scene) + "\n"
                             : hapticctl::scene_view(registered));
+    } else if (record_start->parsed()) {
+      const haptic::RecordingStatus started = client.start_recording(record_name);
+      std::cout << "recording into " << started.path << " on the server from tick "
+                << started.start_tick + 1
+                << (started.start_tick == 0 ? " (replayable: hapticd --replay)\n"
+                                            : " (begun mid-run: hapticd --replay cannot reproduce it)\n");
+    } else if (record_stop->parsed()) {
+      const haptic::RecordingStatus stopped = client.stop_recording();
+      std::cout << "recording " << stopped.path << " stopped: " << stopped.samples << " samples ("
+                << stopped.samples_missed << " missed), " << stopped.changes << " changes\n";
     } else if (kick->parsed()) {
       client.kick_session(target, reason);
       std::cout << "session " << hapticctl::session_text(target) << " ended\n";

@@ -280,6 +280,12 @@ class Client {
   /// is NotFoundError, and every watcher sees kSessionClosed with `reason` (at most 256
   /// characters). With tokens on the server: an ADMIN token only.
   void kick_session(std::uint64_t session_id, const std::string& reason = {});
+  /// Starts recording the run on the server (StartRecording) into the file `name` in its
+  /// recording_dir: every change and every tick's sample, for `hapticd --replay`. ADMIN token only
+  /// (with tokens); FailedPreconditionError without recording_dir or while one runs.
+  RecordingStatus start_recording(const std::string& name);
+  /// Stops it, with its totals (FailedPreconditionError when none runs).
+  RecordingStatus stop_recording();
   /// The session's id now (a reconnection after a server restart opens a new one).
   std::uint64_t session_id() const;
   /// How long the server keeps a silent session (no heartbeat, no RPC) before dropping it.

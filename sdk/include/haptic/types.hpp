@@ -284,6 +284,15 @@ enum class Role {
   kAdmin,       ///< also statistics, every session, ending one
 };
 
+/// A recording on the server (Client::start_recording, stop_recording).
+struct RecordingStatus {
+  std::string path;                 ///< on the server
+  std::uint64_t start_tick = 0;     ///< ticks completed when it began; 0: hapticd --replay reproduces it
+  std::uint64_t samples = 0;        ///< stop: samples written
+  std::uint64_t samples_missed = 0; ///< stop: samples the recorder could not read in time
+  std::uint64_t changes = 0;        ///< stop: changes written
+};
+
 /// One open session, as an admin sees it (Client::sessions).
 struct SessionSummary {
   std::uint64_t session_id = 0;
