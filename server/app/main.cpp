@@ -2,6 +2,7 @@
 // point-mass device at 1 kHz in real time); --config loads a JSON ServerConfig.
 
 #include <signal.h>
+#include <unistd.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -93,11 +94,13 @@ int main(int argc, char** argv) {
   if (!replay_path.empty()) {
     spdlog::set_level(spdlog::level::warn);  // the replay's own server need not announce itself
     try {
-      const haptic::app::ReplayReport report =
-          haptic::app::replay_recording(replay_path, [](std::uint64_t ticks) {
-            std::fprintf(stderr, "\rreplay: %llu ticks", static_cast<unsigned long long>(ticks));
+      // Progress on a terminal only: a log or a pipe gets the result alone.
+      const bool terminal = ::isatty(STDERR_FILENO) != 0;
+      const haptic::app::ReplayReport report = haptic::app::replay_recording(
+          replay_path, [terminal](std::uint64_t ticks) {
+            if (terminal) std::fprintf(stderr, "\rreplay: %llu ticks", static_cast<unsigned long long>(ticks));
           });
-      std::fprintf(stderr, "\r");
+      if (terminal) std::fprintf(stderr, "\r\x1b[K");
       std::printf("replay of %s: %llu ticks, %llu changes, %llu samples compared, %llu differ; "
                   "the recording %s, %llu samples missed in it\n",
                   replay_path.c_str(), static_cast<unsigned long long>(report.ticks),
