@@ -14,6 +14,7 @@
 #include "haptic/v1/recording.pb.h"
 #include "haptic/v1/service.grpc.pb.h"
 #include "net/recording_file.hpp"
+#include "schema/scene_specs.hpp"
 
 namespace haptic::app {
 namespace {
@@ -56,14 +57,6 @@ bool same_bits(const v1::Vec3& recorded, const engine::Vec3& replayed) {
   return std::bit_cast<std::uint64_t>(recorded.x()) == std::bit_cast<std::uint64_t>(replayed.x) &&
          std::bit_cast<std::uint64_t>(recorded.y()) == std::bit_cast<std::uint64_t>(replayed.y) &&
          std::bit_cast<std::uint64_t>(recorded.z()) == std::bit_cast<std::uint64_t>(replayed.z);
-}
-
-v1::Vec3 to_vec(const engine::Vec3& v) {
-  v1::Vec3 out;
-  out.set_x(v.x);
-  out.set_y(v.y);
-  out.set_z(v.z);
-  return out;
 }
 
 class Replay {
@@ -142,7 +135,7 @@ class Replay {
             "tick " + std::to_string(recorded.tick()) + " port " + std::to_string(recorded.port()) +
             ": " + what + " recorded " +
             vec_text(force_same ? recorded.position() : recorded.force()) + ", replayed " +
-            vec_text(to_vec(force_same ? replayed.p_WT : replayed.F_T_W));
+            vec_text(schema::to_proto(force_same ? replayed.p_WT : replayed.F_T_W));
       }
       ++report_.samples_differing;
     }

@@ -3,19 +3,12 @@
 #include <spdlog/spdlog.h>
 
 #include "net/recording_file.hpp"
+#include "schema/scene_specs.hpp"
 
 namespace haptic::net {
 namespace {
 
 constexpr auto kRound = std::chrono::milliseconds(2);  // a round per 2 ticks at 1 kHz; the ring holds 1024
-
-v1::Vec3 vec(const engine::Vec3& v) {
-  v1::Vec3 out;
-  out.set_x(v.x);
-  out.set_y(v.y);
-  out.set_z(v.z);
-  return out;
-}
 
 }  // namespace
 
@@ -141,9 +134,9 @@ void Recorder::write_due() {
       v1::RecordedSample& out = *record.mutable_sample();
       out.set_tick(sample.tick);
       out.set_port(static_cast<std::uint32_t>(port));
-      *out.mutable_position() = vec(sample.p_WT);
-      *out.mutable_velocity() = vec(sample.v_WT);
-      *out.mutable_force() = vec(sample.F_T_W);
+      *out.mutable_position() = schema::to_proto(sample.p_WT);
+      *out.mutable_velocity() = schema::to_proto(sample.v_WT);
+      *out.mutable_force() = schema::to_proto(sample.F_T_W);
       out.set_flags(sample.flags);
       writer.write(record);
       totals_.set_samples(totals_.samples() + 1);

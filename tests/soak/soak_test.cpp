@@ -173,14 +173,26 @@ double server_now_s(const test::ServerProcess& server) {
   return std::chrono::duration<double>(steady_clock::now() - *server.time_origin()).count();
 }
 
-TEST(Soak, AClientKilledMidContactLosesItsForceThroughTheRampAfterItsLease) {
-  test::ServerProcess server(real_time_config());
+/// A real-time server, an observer tracing the device's force, and soak_client in contact.
+struct ContactRig {
+  ContactRig() {
+    trace.attach(observer);
+    in_contact = wall.wait_ready() && trace.wait_for([](double f) { return f > 2.0; }, 0.3, seconds(5));
+  }
+  test::ServerProcess server{real_time_config()};
   ForceTrace trace;
-  Client observer(test::config_for(server, "observer"));
-  trace.attach(observer);
-  WallClientProcess wall(server.address());
-  ASSERT_TRUE(wall.wait_ready());
-  ASSERT_TRUE(trace.wait_for([](double f) { return f > 2.0; }, 0.3, seconds(5))) << "no contact";
+  Client observer{test::config_for(server, "observer")};
+  WallClientProcess wall{server.address()};
+  bool in_contact = false;
+};
+
+TEST(Soak, AClientKilledMidContactLosesItsForceThroughTheRampAfterItsLease) {
+  ContactRig rig;
+  ASSERT_TRUE(rig.in_contact);
+  test::ServerProcess& server = rig.server;
+  ForceTrace& trace = rig.trace;
+  Client& observer = rig.observer;
+  WallClientProcess& wall = rig.wall;
 
   const double killed_at = server_now_s(server);
   wall.signal(SIGKILL);
@@ -202,13 +214,12 @@ TEST(Soak, AClientKilledMidContactLosesItsForceThroughTheRampAfterItsLease) {
 }
 
 TEST(Soak, AStoppedClientLosesItsLeaseWithoutDisturbingOthersAndComesBackWhenContinued) {
-  test::ServerProcess server(real_time_config());
-  ForceTrace trace;
-  Client observer(test::config_for(server, "observer"));
-  trace.attach(observer);
-  WallClientProcess wall(server.address());
-  ASSERT_TRUE(wall.wait_ready());
-  ASSERT_TRUE(trace.wait_for([](double f) { return f > 2.0; }, 0.3, seconds(5)));
+  ContactRig rig;
+  ASSERT_TRUE(rig.in_contact);
+  test::ServerProcess& server = rig.server;
+  ForceTrace& trace = rig.trace;
+  Client& observer = rig.observer;
+  WallClientProcess& wall = rig.wall;
 
   const double stopped_at = server_now_s(server);
   wall.signal(SIGSTOP);
