@@ -41,9 +41,10 @@ constexpr double kRampMs = 50.0;  // the default removal_ramp_ms
 // (0.15 N a tick measured from 4.4 N); a cut without the ramp would step by the whole force.
 constexpr double kMaxForceStepPerTick = 1.0;  // N
 
-std::string real_time_config(const std::string& extra = {}) {
+/// A real-time server with the lease `lease_ms` and `extra` fields spliced in.
+std::string real_time_config(const std::string& extra = {}, int lease_ms = kLeaseMs) {
   return R"({"time_mode": "REAL_TIME", "status_period_s": 0, "real_time": {"use_fifo": false},
-    "lease_timeout_ms": )" + std::to_string(kLeaseMs) +
+    "lease_timeout_ms": )" + std::to_string(lease_ms) +
          R"(, "simulated_point_mass": {"initial_position": {"z": 0.005}})" +
          (extra.empty() ? "" : ", " + extra) + "}";
 }
@@ -260,7 +261,7 @@ TEST(Soak, SixtyFourClientsAtOneKilohertz) {
   const double run_s = soak_seconds(60.0);
   test::ServerProcess server(real_time_config(
       R"("max_sessions": 80, "max_sessions_per_peer": 80, "session_open_rate_per_peer": 1000,
-         "session_open_burst_per_peer": 100, "lease_timeout_ms": 2000)"));
+         "session_open_burst_per_peer": 100)", 2000));
   ClientConfig admin_config = test::config_for(server, "admin");
   admin_config.state_decimation = 0;
   Client admin(admin_config);
@@ -316,7 +317,7 @@ TEST(Soak, AThousandSessions) {
   constexpr int kSessions = 1000;
   test::ServerProcess server(real_time_config(
       R"("max_sessions": 1100, "max_sessions_per_peer": 1100, "session_open_rate_per_peer": 1000,
-         "session_open_burst_per_peer": 1100, "lease_timeout_ms": 120000)"));
+         "session_open_burst_per_peer": 1100)", 120000));
   test::RawClient raw(server.address());
   v1::OpenSessionResponse admin;
   ASSERT_TRUE(raw.open(admin, "admin").ok());
@@ -356,7 +357,7 @@ TEST(Soak, AThousandSessions) {
 
 TEST(Soak, TenThousandItemsInOneSession) {
   constexpr int kItems = 10000;
-  test::ServerProcess server(real_time_config(R"("max_objects_per_session": 10000)"));
+  test::ServerProcess server(real_time_config(R"("max_objects_per_session": 10000)", 120000));
   test::RawClient raw(server.address());
   v1::OpenSessionResponse session;
   ASSERT_TRUE(raw.open(session, "crowd").ok());
@@ -461,7 +462,7 @@ TEST(Soak, SigtermUnderLoadExitsCleanlyThroughTheRamp) {
 
 TEST(Soak, SigkillAndRestartEveryClientComesBackWithItsWall) {
   constexpr int kClients = 8;
-  auto first = std::make_unique<test::ServerProcess>(real_time_config(R"("lease_timeout_ms": 1000)"));
+  auto first = std::make_unique<test::ServerProcess>(real_time_config({}, 1000));
   const std::uint16_t grpc_port = first->grpc_port();
   const std::uint16_t udp_port = first->udp_port();
   std::vector<std::unique_ptr<test::ConnectionLog>> logs;
@@ -478,7 +479,7 @@ TEST(Soak, SigkillAndRestartEveryClientComesBackWithItsWall) {
   const auto killed = steady_clock::now();
   for (auto& log : logs) ASSERT_TRUE(log->wait(1, seconds(5))) << "no loss noticed";
   const double noticed_ms = seconds_since(killed) * 1e3;
-  test::ServerProcess second(real_time_config(R"("lease_timeout_ms": 1000)"), {}, 0, grpc_port, udp_port);
+  test::ServerProcess second(real_time_config({}, 1000), {}, 0, grpc_port, udp_port);
   double slowest_ms = 0.0;
   for (auto& log : logs) {
     const auto resumed = log->wait(2, seconds(10));
