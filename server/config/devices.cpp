@@ -52,6 +52,16 @@ engine::DcMotorParams dc_motor_params(const v1::SimulatedDcMotorConfig& config) 
 
 namespace {
 
+/// Sub-steps given (an explicit 0 too: proto3 `optional`) must be 1 to 10000; absent means 10.
+template <typename DeviceConfig>
+std::string check_substeps(const std::string& device, const DeviceConfig& config) {
+  if (config.has_substeps() && (config.substeps() == 0 || config.substeps() > 10000)) {
+    return device + ".substeps: must be 1 to 10000 (absent: 10), got " +
+           std::to_string(config.substeps());
+  }
+  return {};
+}
+
 std::string validate_dc_motor(const v1::SimulatedDcMotorConfig& motor) {
   if (auto error = dc_motor_params(motor).validate(); !error.empty()) {
     // Name the configuration's field rather than the model's symbol.
@@ -66,7 +76,7 @@ std::string validate_dc_motor(const v1::SimulatedDcMotorConfig& motor) {
     return "simulated_dc_motor: " + error;
   }
   if (!std::isfinite(motor.initial_angle())) return "simulated_dc_motor.initial_angle: must be finite";
-  if (motor.substeps() > 10000) return "simulated_dc_motor.substeps: must be 0 (default) to 10000";
+  if (auto error = check_substeps("simulated_dc_motor", motor); !error.empty()) return error;
   if (auto error = validate_integrator(motor.integrator()); !error.empty()) {
     return "simulated_dc_motor.integrator: " + error;
   }
@@ -77,12 +87,13 @@ std::string validate_dc_motor(const v1::SimulatedDcMotorConfig& motor) {
 }
 
 /// The checks every simulated device's integrator and force limit share.
-std::string validate_common(const std::string& device, const std::string& integrator,
-                            std::uint32_t substeps, double max_force) {
-  if (auto error = validate_integrator(integrator); !error.empty()) {
+template <typename DeviceConfig>
+std::string validate_common(const std::string& device, const DeviceConfig& config) {
+  if (auto error = validate_integrator(config.integrator()); !error.empty()) {
     return device + ".integrator: " + error;
   }
-  if (substeps > 10000) return device + ".substeps: must be 0 (default) to 10000";
+  if (auto error = check_substeps(device, config); !error.empty()) return error;
+  const double max_force = config.max_force();
   if (!std::isfinite(max_force) || max_force < 0.0 || max_force > 1e3) {
     return device + ".max_force: must be 0 (default) to 1000";
   }
@@ -150,13 +161,11 @@ std::string validate_five_bar(const v1::SimulatedFiveBarConfig& five_bar) {
     return "simulated_five_bar.inertias: must be \"identified\" or \"theoretical\", got \"" +
            five_bar.inertias() + "\"";
   }
-  return validate_common("simulated_five_bar", five_bar.integrator(), five_bar.substeps(),
-                         five_bar.max_force());
+  return validate_common("simulated_five_bar", five_bar);
 }
 
 std::string validate_joystick(const v1::SimulatedJoystickConfig& joystick) {
-  if (auto error = validate_common("simulated_joystick", joystick.integrator(),
-                                   joystick.substeps(), joystick.max_force());
+  if (auto error = validate_common("simulated_joystick", joystick);
       !error.empty()) {
     return error;
   }
@@ -173,8 +182,7 @@ std::string validate_joystick(const v1::SimulatedJoystickConfig& joystick) {
 }
 
 std::string validate_parallel_dob(const v1::SimulatedParallelDobConfig& dob, double rate) {
-  if (auto error = validate_common("simulated_parallel_dob", dob.integrator(), dob.substeps(),
-                                   dob.max_force());
+  if (auto error = validate_common("simulated_parallel_dob", dob);
       !error.empty()) {
     return error;
   }
@@ -236,7 +244,7 @@ double loop_rate_of(const v1::ServerConfig& config) {
 void fill_point_mass_defaults(v1::SimulatedPointMassConfig& mass) {
   if (mass.mass() == 0.0) mass.set_mass(0.01);           // Eom et al., experiment
   if (mass.damping() == 0.0) mass.set_damping(0.022);    // Eom et al., experiment
-  if (mass.substeps() == 0) mass.set_substeps(10);
+  if (!mass.has_substeps()) mass.set_substeps(10);
   // Start 20 mm above the origin, clear of a wall at z = 0 (touch_wall's).
   if (!mass.has_initial_position()) default_vec(mass.mutable_initial_position(), 0.0, 0.0, 0.02);
   if (!mass.has_workspace_min()) default_vec(mass.mutable_workspace_min(), -0.1, -0.1, -0.1);
@@ -249,7 +257,7 @@ std::string validate_point_mass(const v1::SimulatedPointMassConfig& device) {
   if (!std::isfinite(device.damping()) || device.damping() < 0.0) {
     return "simulated_point_mass.damping: must be finite and >= 0";
   }
-  if (device.substeps() > 10000) return "simulated_point_mass.substeps: must be 1 to 10000";
+  if (auto error = check_substeps("simulated_point_mass", device); !error.empty()) return error;
   if (auto e = check_positive(device.max_force(), 1e4, "simulated_point_mass.max_force"); !e.empty()) {
     return e;
   }

@@ -87,7 +87,7 @@ void fill_defaults(v1::ServerConfig& config) {
   if (config.grpc_address().empty()) config.set_grpc_address("127.0.0.1:50051");
   if (config.udp_address().empty()) config.set_udp_address("127.0.0.1");
   if (!config.has_udp_port()) config.set_udp_port(50052);
-  if (config.loop_rate_hz() == 0.0) config.set_loop_rate_hz(1000.0);
+  if (!config.has_loop_rate_hz()) config.set_loop_rate_hz(1000.0);
   if (config.time_mode() == v1::TIME_MODE_UNSPECIFIED) config.set_time_mode(v1::REAL_TIME);
   if (config.lease_timeout_ms() == 0) config.set_lease_timeout_ms(1000);
   if (config.removal_ramp_ms() == 0) config.set_removal_ramp_ms(50);

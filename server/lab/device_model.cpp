@@ -140,6 +140,23 @@ std::optional<DeviceModel> apply_device_arguments(const DeviceArguments& argumen
   return model;
 }
 
+void require_device_model(double mass_kg, double damping_n_s_m, double period_s) {
+  const auto fail = [](const std::string& what, double value) {
+    std::ostringstream out;
+    out << what << ", got " << value;
+    throw std::invalid_argument(out.str());
+  };
+  if (!(std::isfinite(mass_kg) && mass_kg >= 1e-6 && mass_kg <= 1e3)) {
+    fail("mass: must be 1e-6 to 1000 kg", mass_kg);
+  }
+  if (!(std::isfinite(damping_n_s_m) && damping_n_s_m >= 0.0)) {
+    fail("damping: must be finite and >= 0 N*s/m", damping_n_s_m);
+  }
+  if (!(std::isfinite(period_s) && period_s >= 1e-4 && period_s <= 1e-2)) {
+    fail("period: must be 1e-4 to 0.01 s (hapticd's loops run at 100 to 10000 Hz)", period_s);
+  }
+}
+
 std::string describe(const DeviceModel& model) {
   std::ostringstream out;
   out << "Device model from `" << model.source << "`: " << model.name << " (" << model.model << ") at "

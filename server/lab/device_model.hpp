@@ -63,4 +63,9 @@ std::optional<DeviceModel> apply_device_arguments(const DeviceArguments& argumen
 /// One markdown paragraph saying where the model came from (appended to the reports).
 std::string describe(const DeviceModel& model);
 
+/// The device model's numbers as haptic-lab's studies take them: mass 1e-6 to 1000 kg, damping
+/// finite and >= 0, period 1e-4 to 0.01 s (hapticd's loops run at 100 to 10000 Hz). Throws
+/// std::invalid_argument naming the first that is not, and its value.
+void require_device_model(double mass_kg, double damping_n_s_m, double period_s);
+
 }  // namespace haptic::lab

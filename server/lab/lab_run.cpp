@@ -5,6 +5,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <sstream>
 #include <vector>
 
 #include "config/server_config.hpp"
@@ -66,6 +67,17 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   config::fill_defaults(config);
   if (auto e = config::validate(config); !e.empty()) throw std::invalid_argument(e);
   const double period_s = 1.0 / config.loop_rate_hz();
+  // A run is whole ticks: a duration between two is a mistake, not something to round away.
+  const double exact_ticks = duration_s * config.loop_rate_hz();
+  if (std::abs(exact_ticks - std::round(exact_ticks)) > 1e-6 * std::max(1.0, exact_ticks) ||
+      std::round(exact_ticks) < 1.0) {
+    const double below = std::max(1.0, std::floor(exact_ticks)) * period_s;
+    const double above = std::max(1.0, std::ceil(exact_ticks)) * period_s;
+    std::ostringstream message;
+    message << "duration: " << duration_s << " s is " << exact_ticks << " ticks at " << config.loop_rate_hz()
+            << " Hz; give a whole number of ticks (" << below << " or " << above << " s)";
+    throw std::invalid_argument(message.str());
+  }
 
   std::vector<config::PortDevice> devices = config::make_devices(config);
   const auto ports = static_cast<std::uint32_t>(devices.size());

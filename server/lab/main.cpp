@@ -199,7 +199,13 @@ int main(int argc, char** argv) {
   commands.push_back(add_zwidth(cli));
   commands.push_back(from_functions<haptic::lab::StudyCommandOptions>(cli, haptic::lab::add_study_command,
                                                                      haptic::lab::run_study_command));
-  CLI11_PARSE(cli, argc, argv);
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    // --help is 0; any mistake on the command line (a missing file among them) is 2, as a refused
+    // parameter is below, whatever number CLI11 gives its kind of error.
+    return cli.exit(error) == 0 ? 0 : 2;
+  }
 
   for (const Subcommand& command : commands) {
     if (!*command.app) continue;

@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "lab/device_model.hpp"
+
 namespace haptic::lab {
 namespace {
 
@@ -15,11 +17,9 @@ void require(bool ok, const std::string& message) {
 
 TransparencyReport transparency_study(const engine::WallDesignParams& p, double lo, double hi,
                                       int points, double widen_limit) {
-  require(std::isfinite(p.mass) && p.mass > 0.0, "mass: must be finite and > 0");
-  require(std::isfinite(p.damping) && p.damping >= 0.0, "damping: must be finite and >= 0");
+  require_device_model(p.mass, p.damping, p.sample_period);
   require(std::isfinite(p.wall_stiffness) && p.wall_stiffness > 0.0, "stiffness: must be finite and > 0");
   require(std::isfinite(p.wall_damping) && p.wall_damping > 0.0, "wall damping: must be finite and > 0");
-  require(std::isfinite(p.sample_period) && p.sample_period > 0.0, "period: must be finite and > 0");
   require(std::isfinite(p.weight_cutoff) && p.weight_cutoff > 0.0, "w1: must be finite and > 0");
   require(p.mass_uncertainty >= 0.0 && p.mass_uncertainty < 1.0, "alpha: must be in [0, 1)");
   require(p.damping_uncertainty >= 0.0 && p.damping_uncertainty < 1.0, "beta: must be in [0, 1)");

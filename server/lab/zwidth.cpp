@@ -7,6 +7,7 @@
 #include <string>
 
 #include "engine/device/point_mass_plant.hpp"
+#include "lab/device_model.hpp"
 
 namespace haptic::lab {
 namespace {
@@ -53,9 +54,7 @@ bool simulate(const ZWidthParams& p, double K, double B) {
 }  // namespace
 
 ZWidthReport zwidth(const ZWidthParams& p) {
-  require(std::isfinite(p.mass) && p.mass > 0.0, "mass: must be finite and > 0");
-  require(std::isfinite(p.damping) && p.damping >= 0.0, "damping: must be finite and >= 0");
-  require(std::isfinite(p.period) && p.period >= 1e-5 && p.period <= 0.1, "period: must be in [1e-5, 0.1] s");
+  require_device_model(p.mass, p.damping, p.period);
   require(p.delay_ticks <= 100, "delay: must be 0 to 100 ticks");
   require(p.hand_mass >= 0.0 && p.hand_stiffness >= 0.0 && p.hand_damping >= 0.0,
           "hand: mass, stiffness and damping must be >= 0");

@@ -45,6 +45,28 @@ TEST(Config, TheShippedConfigurationFileParses) {
                   .has_simulated_parallel_dob());
 }
 
+// A zero written out is a value, not "the default": a rate or a sub-step count of 0 is refused.
+TEST(Config, AnExplicitZeroRateOrSubstepCountIsRefusedNotTakenForTheDefault) {
+  EXPECT_NE(error_of(R"({"loop_rate_hz": 0})").find("loop_rate_hz: must be in [100, 10000], got 0"),
+            std::string::npos)
+      << error_of(R"({"loop_rate_hz": 0})");
+  for (const char* device : {"simulated_point_mass", "simulated_dc_motor", "simulated_five_bar",
+                             "simulated_joystick", "simulated_parallel_dob"}) {
+    const std::string error = error_of(std::string("{\"") + device + "\": {\"substeps\": 0}}");
+    EXPECT_NE(error.find(std::string(device) + ".substeps: must be 1 to 10000 (absent: 10), got 0"),
+              std::string::npos)
+        << error;
+    const std::string too_many = error_of(std::string("{\"") + device + "\": {\"substeps\": 10001}}");
+    EXPECT_NE(too_many.find(std::string(device) + ".substeps: must be 1 to 10000"), std::string::npos)
+        << too_many;
+  }
+  // Absent, they take their defaults.
+  const v1::ServerConfig config = parse_config("{}", "x");
+  EXPECT_EQ(config.loop_rate_hz(), 1000.0);
+  EXPECT_EQ(config.simulated_point_mass().substeps(), 10u);
+  EXPECT_EQ(validate(config), "");
+}
+
 TEST(Config, BadValuesAreRejectedNamingTheField) {
   EXPECT_NE(error_of(R"({"loop_rate_hz": 20000})").find("loop_rate_hz"), std::string::npos);
   EXPECT_NE(error_of(R"({"simulated_point_mass": {"mass": -1}})").find("simulated_point_mass.mass"),
