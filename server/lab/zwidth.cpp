@@ -63,16 +63,18 @@ ZWidthReport zwidth(const ZWidthParams& p) {
           "grid: needs at least 2 x 2 and at most 10000 cells");
   require(p.seconds > 0.5 && p.seconds <= 60.0, "seconds: must be in (0.5, 60]");
   ZWidthReport report;
-  report.theory_applies = p.delay_ticks == 0 && p.hand_mass == 0.0 && p.hand_stiffness == 0.0 &&
-                          p.hand_damping == 0.0;
+  report.theory_applies = p.hand_mass == 0.0 && p.hand_stiffness == 0.0 && p.hand_damping == 0.0;
+  report.passivity_applies = p.delay_ticks == 0;
   const engine::MassDamperDevice device{p.mass, p.damping};
   for (int i = 0; i < p.k_points; ++i) {
     const double K = p.k_min * std::pow(p.k_max / p.k_min, static_cast<double>(i) / (p.k_points - 1));
     for (int j = 0; j < p.b_points; ++j) {
       const double B = j == 0 ? 0.0 : p.b_max * std::pow(1e-3, static_cast<double>(p.b_points - 1 - j) / (p.b_points - 2 > 0 ? p.b_points - 2 : 1));
-      ZWidthCell cell{K, B, p.damping > engine::colgate_bound(K, B, p.period), false, false};
-      cell.eigen_stable =
-          engine::sampled_wall_margin(engine::ImpedanceParams{K, B, 0.0}, p.discretization, device, p.period).stable;
+      ZWidthCell cell{K, B, report.passivity_applies && p.damping > engine::colgate_bound(K, B, p.period),
+                      false, false};
+      cell.eigen_stable = engine::sampled_wall_margin(engine::ImpedanceParams{K, B, 0.0}, p.discretization,
+                                                      device, p.period, p.delay_ticks)
+                              .stable;
       cell.simulation_stable = simulate(p, K, B);
       report.cells.push_back(cell);
     }
@@ -83,8 +85,13 @@ ZWidthReport zwidth(const ZWidthParams& p) {
 void write_csv(const ZWidthReport& report, std::ostream& out) {
   out << "stiffness_n_m,damping_n_s_m,passive,eigen_stable,simulation_stable\n";
   for (const ZWidthCell& c : report.cells) {
-    out << c.stiffness << ',' << c.damping << ',' << c.passive << ',' << c.eigen_stable << ','
-        << c.simulation_stable << '\n';
+    out << c.stiffness << ',' << c.damping << ',';
+    if (report.passivity_applies) {
+      out << c.passive;
+    } else {
+      out << "n/a";
+    }
+    out << ',' << c.eigen_stable << ',' << c.simulation_stable << '\n';
   }
 }
 
@@ -99,10 +106,20 @@ void write_markdown(const ZWidthParams& p, const ZWidthReport& report, std::ostr
       << " N/m, b = " << p.hand_damping << " N·s/m.\n\n"
       << "Eigenvalues and simulation agree on " << agree << " of " << report.cells.size() << " cells";
   if (!report.theory_applies) {
-    out << " — the eigenvalue test models neither a hand nor a delay, so disagreement is expected here";
+    out << " — the eigenvalue test does not model the hand, so disagreement is expected here";
   }
-  out << ". Passive by Colgate's bound but unstable by eigenvalues: " << passive_not_stable
-      << " (the bound is sufficient, so this should be 0).\n\n"
+  if (p.delay_ticks > 0) {
+    out << " (both model the " << p.delay_ticks << "-tick delay: the eigenvalues as z^-" << p.delay_ticks
+        << " on the wall's force)";
+  }
+  if (report.passivity_applies) {
+    out << ". Passive by Colgate's bound but unstable by eigenvalues: " << passive_not_stable
+        << " (the bound is sufficient, so this should be 0).\n\n";
+  } else {
+    out << ". Colgate's bound, b > KT/2 + |B|, assumes no delay: not applied here (no cell is "
+           "marked passive).\n\n";
+  }
+  out
       << "Map (rows K, columns B): P passive (and stable), S stable, s stable in simulation only, "
          "e stable by eigenvalues only, . unstable.\n\n```\n";
   const std::size_t columns = static_cast<std::size_t>(p.b_points);

@@ -3,11 +3,13 @@
 // (Colgate & Brown's Z-width), by three tests on a grid:
 //   (a) passive by Colgate's bound, b > K T/2 + |B| (Colgate & Schenkel; Madill eq. 2.6);
 //   (b) stable by the exact eigenvalues of the sampled loop — the device as a mass-damper under a
-//       zero-order hold, the wall's discrete law (engine/scene/impedance, sampled_wall_margin);
+//       zero-order hold, the wall's discrete law, and the delay as z^−d on the wall's force
+//       (engine/scene/impedance, sampled_wall_margin);
 //   (c) stable in simulation: the same device and law, stepped exactly, from a 1 mm penetration,
 //       with a chosen operator's hand (mass, stiffness, damping) holding the tool.
-// (a) is sufficient, not necessary, so it lies inside (b); (b) and (c) agree where the theory's
-// assumptions hold (linear wall in permanent contact, no hand, no delay).
+// (a) is sufficient, not necessary, so it lies inside (b), and assumes no delay: with one it is not
+// applied ("n/a"). (b) and (c) agree where the theory's assumptions hold (linear wall in permanent
+// contact, no hand).
 
 #include <cstdint>
 #include <ostream>
@@ -39,13 +41,14 @@ struct ZWidthCell {
 
 struct ZWidthReport {
   std::vector<ZWidthCell> cells;
-  bool theory_applies = true;  // false with a hand or a delay: (b) does not model them
+  bool theory_applies = true;    // false with a hand: (b) does not model one
+  bool passivity_applies = true; // false with a delay: Colgate's bound assumes none (cells' passive false)
 };
 
 /// Throws std::invalid_argument naming a bad parameter.
 ZWidthReport zwidth(const ZWidthParams& params);
 
-/// CSV: stiffness_n_m, damping_n_s_m, passive, eigen_stable, simulation_stable.
+/// CSV: stiffness_n_m, damping_n_s_m, passive ("n/a" with a delay), eigen_stable, simulation_stable.
 void write_csv(const ZWidthReport& report, std::ostream& out);
 /// Markdown: the parameters, how often the tests agree, and why where they do not, and a map.
 void write_markdown(const ZWidthParams& params, const ZWidthReport& report, std::ostream& out);

@@ -255,7 +255,7 @@ bool schur_stable(const Polynomial& input) {
 // --- Sampled wall -----------------------------------------------------------------------------
 
 Polynomial wall_characteristic_polynomial(const ImpedanceWeights& wall,
-                                          const MassDamperDevice& device) {
+                                          const MassDamperDevice& device, std::uint32_t delay_ticks) {
   const double T = wall.period;
   const double m = device.mass;
   const double x = device.damping * T / m;
@@ -283,7 +283,12 @@ Polynomial wall_characteristic_polynomial(const ImpedanceWeights& wall,
   const Polynomial D = make_polynomial({e, -(1.0 + e), 1.0});
   Polynomial Nc, Dc;
   wall_transfer_function(wall, Nc, Dc);
-  return trimmed(add(multiply(D, Dc), multiply(N, Nc)));
+  // The delay: z^d on the wall's denominator side (F(z) = −z^{−d} W(z) X(z)).
+  Polynomial delay;
+  const int d = static_cast<int>(std::min<std::uint32_t>(delay_ticks, Polynomial::kMaxDelayTicks));
+  delay.degree = d;
+  delay.c[static_cast<std::size_t>(d)] = 1.0;
+  return trimmed(add(multiply(multiply(D, Dc), delay), multiply(N, Nc)));
 }
 
 namespace {
@@ -298,20 +303,21 @@ double max_root_magnitude(const Polynomial& p) {
 }
 
 bool wall_stable(ImpedanceParams wall, double K, ImpedanceDiscretization discretization,
-                 const MassDamperDevice& device, double T) {
+                 const MassDamperDevice& device, double T, std::uint32_t delay_ticks) {
   wall.stiffness = K;
   return schur_stable(
-      wall_characteristic_polynomial(impedance_weights(wall, discretization, T), device));
+      wall_characteristic_polynomial(impedance_weights(wall, discretization, T), device, delay_ticks));
 }
 
 }  // namespace
 
 SampledWallMargin sampled_wall_margin(const ImpedanceParams& wall,
                                       ImpedanceDiscretization discretization,
-                                      const MassDamperDevice& device, double T) {
+                                      const MassDamperDevice& device, double T,
+                                      std::uint32_t delay_ticks) {
   SampledWallMargin margin;
-  const Polynomial p =
-      wall_characteristic_polynomial(impedance_weights(wall, discretization, T), device);
+  const Polynomial p = wall_characteristic_polynomial(impedance_weights(wall, discretization, T),
+                                                      device, delay_ticks);
   margin.max_pole_magnitude = max_root_magnitude(p);
   margin.stable = schur_stable(p);
   margin.colgate_damping = colgate_bound(wall.stiffness, wall.damping, T);
@@ -322,7 +328,7 @@ SampledWallMargin sampled_wall_margin(const ImpedanceParams& wall,
   const double scale = device.mass / (T * T);
   double lo = 0.0;
   for (double K = 1e-12 * scale; K <= 1e12; K *= 10.0) {
-    if (wall_stable(wall, K, discretization, device, T)) {
+    if (wall_stable(wall, K, discretization, device, T, delay_ticks)) {
       lo = K;
       break;
     }
@@ -332,7 +338,7 @@ SampledWallMargin sampled_wall_margin(const ImpedanceParams& wall,
     return margin;
   }
   double hi = lo;
-  while (wall_stable(wall, hi, discretization, device, T)) {
+  while (wall_stable(wall, hi, discretization, device, T, delay_ticks)) {
     lo = hi;
     hi *= 2.0;
     if (hi > 1e12) {
@@ -342,7 +348,7 @@ SampledWallMargin sampled_wall_margin(const ImpedanceParams& wall,
   }
   while (hi - lo > 1e-9 * hi) {
     const double mid = 0.5 * (lo + hi);
-    (wall_stable(wall, mid, discretization, device, T) ? lo : hi) = mid;
+    (wall_stable(wall, mid, discretization, device, T, delay_ticks) ? lo : hi) = mid;
   }
   margin.max_stable_stiffness = lo;
   return margin;

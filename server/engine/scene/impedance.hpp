@@ -153,7 +153,9 @@ inline double colgate_bound(double K, double B, double T) {
 
 /// A polynomial with real coefficients, lowest power first: p(z) = Σ c[i] z^i, i <= degree.
 struct Polynomial {
-  static constexpr int kMaxDegree = 8;
+  /// A wall law (degree ≤ 4) on the device (2) behind up to kMaxDelayTicks ticks of delay.
+  static constexpr int kMaxDelayTicks = 100;
+  static constexpr int kMaxDegree = 8 + kMaxDelayTicks;
   std::array<double, kMaxDegree + 1> c{};
   int degree = 0;
 };
@@ -178,9 +180,12 @@ struct MassDamperDevice {
 /// W(z) = Nc(z)/Dc(z). The device's exact step over T with x = bT/m, e = e^{−x},
 /// φ = (1 − e)/x, g = (x − 1 + e)/x² gives
 ///   N(z) = (T²/m) (g z + φ² − e g),   D(z) = (z − 1)(z − e).
-/// Linear: the wall is taken to stay in contact (it may pull).
+/// Linear: the wall is taken to stay in contact (it may pull). With `delay_ticks` = d the force
+/// reaches the device d ticks after the reading it answers, W(z) z^{−d}, so the polynomial is
+/// z^d D(z) Dc(z) + N(z) Nc(z) (d ≤ Polynomial::kMaxDelayTicks).
 Polynomial wall_characteristic_polynomial(const ImpedanceWeights& wall,
-                                          const MassDamperDevice& device);
+                                          const MassDamperDevice& device,
+                                          std::uint32_t delay_ticks = 0);
 
 /// What sampled_wall_margin reports.
 struct SampledWallMargin {
@@ -195,11 +200,13 @@ struct SampledWallMargin {
 };
 
 /// Stability margin of a virtual wall (params, discretization) on the device at period T (Unit: s),
-/// from the roots and the Jury test of wall_characteristic_polynomial; K' by bisection to 1e-9
-/// relative. Off the loop.
+/// behind `delay_ticks` ticks of delay, from the roots and the Jury test of
+/// wall_characteristic_polynomial; K' by bisection to 1e-9 relative. Colgate's bound (and
+/// `passive`) assume no delay. Off the loop.
 SampledWallMargin sampled_wall_margin(const ImpedanceParams& wall,
                                       ImpedanceDiscretization discretization,
-                                      const MassDamperDevice& device, double T);
+                                      const MassDamperDevice& device, double T,
+                                      std::uint32_t delay_ticks = 0);
 
 // ---------------------------------------------------------------------------------------------
 // Virtual coupling (Colgate, Stanley & Brown 1995).

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "engine/scene/impedance.hpp"
 #include "lab/zwidth.hpp"
 
 namespace haptic::lab {
@@ -48,16 +49,61 @@ TEST(LabZWidth, TheBoundLiesInsideTheEigenvalueRegionAndSimulationAgreesWithIt_E
   EXPECT_NE(markdown.str().find("Passive by Colgate's bound but unstable by eigenvalues: 0"), std::string::npos);
 }
 
-TEST(LabZWidth, ADelayShrinksTheRegionAndTheReportSaysTheTheoryDoesNotModelIt) {
+// With a delay the eigenvalues model it too (z^-d on the wall's force): they and simulation still
+// agree, the region shrinks, and Colgate's bound (which assumes no delay) is not applied.
+TEST(LabZWidth, ADelayShrinksTheRegionAndTheEigenvaluesModelIt) {
   ZWidthParams p = small_grid();
   std::size_t stable_without = 0;
-  for (const ZWidthCell& c : zwidth(p).cells) stable_without += c.simulation_stable;
-  p.delay_ticks = 2;
-  const ZWidthReport delayed = zwidth(p);
-  std::size_t stable_with = 0;
-  for (const ZWidthCell& c : delayed.cells) stable_with += c.simulation_stable;
-  EXPECT_FALSE(delayed.theory_applies);
-  EXPECT_LT(stable_with, stable_without);
+  for (const ZWidthCell& c : zwidth(p).cells) stable_without += c.eigen_stable;
+  for (const std::uint32_t delay : {1u, 2u}) {
+    p.delay_ticks = delay;
+    const ZWidthReport delayed = zwidth(p);
+    std::size_t stable_with = 0, agree = 0;
+    for (const ZWidthCell& c : delayed.cells) {
+      stable_with += c.eigen_stable;
+      agree += c.eigen_stable == c.simulation_stable;
+      EXPECT_FALSE(c.passive);
+    }
+    EXPECT_TRUE(delayed.theory_applies);
+    EXPECT_FALSE(delayed.passivity_applies);
+    EXPECT_LT(stable_with, stable_without) << delay;
+    EXPECT_GE(agree, delayed.cells.size() - 2) << delay;  // a marginal cell or two at most
+    std::ostringstream csv, markdown;
+    write_csv(delayed, csv);
+    write_markdown(p, delayed, markdown);
+    EXPECT_NE(csv.str().find(",n/a,"), std::string::npos);
+    EXPECT_NE(markdown.str().find("assumes no delay: not applied here"), std::string::npos);
+  }
+}
+
+// The boundary K'(B) of the delayed loop by the eigenvalues is the one simulation finds: at 0.99 K'
+// the simulated wall settles, at 1.01 K' it does not (the undelayed K' would be 3x too high).
+TEST(LabZWidth, TheDelayedEigenvalueBoundaryIsTheSimulatedOne) {
+  const engine::MassDamperDevice device{0.01, 0.022};
+  constexpr double kT = 1e-3;
+  for (const double B : {0.0, 0.5}) {
+    const double without = engine::sampled_wall_margin({1000.0, B, 0.0},
+                                                       engine::ImpedanceDiscretization::kBackwardDifference,
+                                                       device, kT)
+                               .max_stable_stiffness;
+    const double with = engine::sampled_wall_margin({1000.0, B, 0.0},
+                                                    engine::ImpedanceDiscretization::kBackwardDifference,
+                                                    device, kT, 1)
+                            .max_stable_stiffness;
+    EXPECT_LT(with, 0.6 * without) << B;
+    ZWidthParams p;
+    p.delay_ticks = 1;
+    p.k_min = 0.99 * with;
+    p.k_max = 1.01 * with;
+    p.k_points = 2;
+    p.b_max = B > 0.0 ? B : 1.0;
+    p.b_points = 2;  // B = 0 and b_max
+    p.seconds = 3.0;
+    const ZWidthReport report = zwidth(p);
+    const std::size_t column = B > 0.0 ? 1 : 0;
+    EXPECT_TRUE(report.cells[0 * 2 + column].simulation_stable) << "B " << B << " at 0.99 K'";
+    EXPECT_FALSE(report.cells[1 * 2 + column].simulation_stable) << "B " << B << " at 1.01 K'";
+  }
 }
 
 TEST(LabZWidth, BadParametersAreRefusedNamingThem) {
