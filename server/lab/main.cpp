@@ -177,6 +177,11 @@ Subcommand add_zwidth(CLI::App& cli) {
   app->add_option("--hand-mass", o->z.hand_mass, "operator's hand mass, kg (default 0)");
   app->add_option("--hand-stiffness", o->z.hand_stiffness, "hand stiffness, N/m (default 0)");
   app->add_option("--hand-damping", o->z.hand_damping, "hand damping, N*s/m (default 0)");
+  app->add_option("--k-min", o->z.k_min, "grid: least stiffness, N/m (default 1)");
+  app->add_option("--k-max", o->z.k_max, "grid: greatest stiffness, N/m (default 1e5)");
+  app->add_option("--k-points", o->z.k_points, "grid: stiffnesses, log-spaced (default 16)");
+  app->add_option("--b-max", o->z.b_max, "grid: greatest damping, N*s/m (default 10)");
+  app->add_option("--b-points", o->z.b_points, "grid: dampings, 0 then log-spaced (default 12)");
   app->add_option("--csv", o->csv_path, "write the grid as CSV here");
   app->add_option("--markdown", o->markdown_path, "write the report here; default: standard output");
   return {app, [o] {

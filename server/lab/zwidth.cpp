@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <deque>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -51,6 +53,29 @@ bool simulate(const ZWidthParams& p, double K, double B) {
   return largest < 0.001;
 }
 
+/// The largest K whose simulated run settles, by bisection to 1e-6 relative, starting from a
+/// bracket around `guess` (the eigenvalues' K'); 0 when even guess / 1e3 grows, inf when 1e3 guess
+/// settles.
+double simulated_boundary(const ZWidthParams& p, double B, double guess) {
+  if (!std::isfinite(guess) || guess <= 0.0) guess = 1.0;
+  double lo = guess, hi = guess;
+  while (!simulate(p, lo, B)) {
+    lo /= 2.0;
+    if (lo < guess * 1e-3) return 0.0;
+  }
+  hi = std::max(hi, lo * 2.0);
+  while (simulate(p, hi, B)) {
+    lo = hi;
+    hi *= 2.0;
+    if (hi > guess * 1e3) return std::numeric_limits<double>::infinity();
+  }
+  while (hi - lo > 1e-6 * hi) {
+    const double mid = 0.5 * (lo + hi);
+    (simulate(p, mid, B) ? lo : hi) = mid;
+  }
+  return lo;
+}
+
 }  // namespace
 
 ZWidthReport zwidth(const ZWidthParams& p) {
@@ -78,6 +103,19 @@ ZWidthReport zwidth(const ZWidthParams& p) {
       cell.simulation_stable = simulate(p, K, B);
       report.cells.push_back(cell);
     }
+  }
+  for (int j = 0; j < p.b_points; ++j) {
+    const double B = report.cells[static_cast<std::size_t>(j)].damping;
+    ZWidthBoundary edge;
+    edge.damping = B;
+    edge.k_max_colgate = report.passivity_applies
+                             ? std::max(0.0, 2.0 * (p.damping - std::abs(B)) / p.period)
+                             : std::numeric_limits<double>::quiet_NaN();
+    edge.k_max_eigen = engine::sampled_wall_margin(engine::ImpedanceParams{1.0, B, 0.0}, p.discretization,
+                                                   device, p.period, p.delay_ticks)
+                           .max_stable_stiffness;
+    edge.k_max_simulation = simulated_boundary(p, B, edge.k_max_eigen);
+    report.boundary.push_back(edge);
   }
   return report;
 }
@@ -133,7 +171,21 @@ void write_markdown(const ZWidthParams& p, const ZWidthReport& report, std::ostr
     }
     out << '\n';
   }
-  out << "```\n";
+  out << "```\n\nBoundary: the largest stiffness K each test allows at each damping B (the eigenvalues' by "
+         "bisection to 1e-9, the simulation's to 1e-6, relative):\n\n"
+      << "| B (N·s/m) | Colgate 2(b − |B|)/T (N/m) | eigenvalues (N/m) | simulation (N/m) |\n"
+      << "|---:|---:|---:|---:|\n";
+  for (const ZWidthBoundary& edge : report.boundary) {
+    char line[160];
+    if (std::isnan(edge.k_max_colgate)) {
+      std::snprintf(line, sizeof line, "| %.6g | n/a (delay) | %.7g | %.7g |\n", edge.damping,
+                    edge.k_max_eigen, edge.k_max_simulation);
+    } else {
+      std::snprintf(line, sizeof line, "| %.6g | %.7g | %.7g | %.7g |\n", edge.damping, edge.k_max_colgate,
+                    edge.k_max_eigen, edge.k_max_simulation);
+    }
+    out << line;
+  }
 }
 
 }  // namespace haptic::lab

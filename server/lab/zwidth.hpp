@@ -39,8 +39,17 @@ struct ZWidthCell {
   bool passive, eigen_stable, simulation_stable;
 };
 
+/// The boundary at one damping B: the largest stiffness each test allows. Unit: N/m.
+struct ZWidthBoundary {
+  double damping = 0.0;           // B. Unit: N·s/m.
+  double k_max_colgate = 0.0;     // 2(b − |B|)/T; 0 when b ≤ |B|; NaN with a delay (not applied)
+  double k_max_eigen = 0.0;       // the sampled loop's K' (bisection to 1e-9 relative); inf: none
+  double k_max_simulation = 0.0;  // bisection to 1e-6 relative between a settling and a growing run
+};
+
 struct ZWidthReport {
   std::vector<ZWidthCell> cells;
+  std::vector<ZWidthBoundary> boundary;  // one per grid column (B)
   bool theory_applies = true;    // false with a hand: (b) does not model one
   bool passivity_applies = true; // false with a delay: Colgate's bound assumes none (cells' passive false)
 };
