@@ -37,11 +37,12 @@ TransparencyReport transparency_study(const engine::WallDesignParams& p, double 
   report.optimum_at_edge = at_edge();
   for (int i = 0; i < points; ++i) {
     const double B_c = lo * std::pow(hi / lo, static_cast<double>(i) / (points - 1));
-    report.sweep.push_back({B_c, engine::transparency_index(p, B_c), engine::robust_stability_norm(p, B_c)});
+    report.sweep.push_back({B_c, engine::transparency_index(p, B_c), engine::robust_stability_norm(p, B_c),
+                            engine::nominal_loop_stable(p, B_c)});
   }
   if (!report.optimum.robustly_stable) {
     for (const TransparencyPoint& point : report.sweep) {
-      if (point.robust_norm <= 1.0 && (!report.best_robust || point.transparency_index < report.best_robust->transparency_index)) {
+      if (point.robust() && (!report.best_robust || point.transparency_index < report.best_robust->transparency_index)) {
         report.best_robust = point;
       }
     }
@@ -50,10 +51,11 @@ TransparencyReport transparency_study(const engine::WallDesignParams& p, double 
 }
 
 void write_csv(const TransparencyReport& report, std::ostream& out) {
-  out << "controller_damping_n_s_m,transparency_index,robust_norm,robust_norm_db\n";
+  out << "controller_damping_n_s_m,transparency_index,robust_norm,robust_norm_db,nominal_stable,robust\n";
   for (const TransparencyPoint& point : report.sweep) {
     out << point.controller_damping << ',' << point.transparency_index << ',' << point.robust_norm
-        << ',' << engine::to_db(point.robust_norm) << '\n';
+        << ',' << engine::to_db(point.robust_norm) << ',' << point.nominal_stable << ','
+        << point.robust() << '\n';
   }
 }
 
@@ -81,10 +83,11 @@ void write_markdown(const engine::WallDesignParams& p, const TransparencyReport&
     out << "The optimum is at the sweep's upper end (" << report.swept_to
         << " N·s/m): J still falls beyond it.\n\n";
   }
-  out << "| B_c [N·s/m] | J | ‖L‖∞ [dB] | robust |\n|---|---|---|---|\n";
+  out << "| B_c [N·s/m] | J | ‖L‖∞ [dB] | nominal loop | robust |\n|---|---|---|---|---|\n";
   for (const TransparencyPoint& point : report.sweep) {
     out << "| " << point.controller_damping << " | " << point.transparency_index << " | "
-        << engine::to_db(point.robust_norm) << " | " << (point.robust_norm <= 1.0 ? "yes" : "no") << " |\n";
+        << engine::to_db(point.robust_norm) << " | " << (point.nominal_stable ? "stable" : "UNSTABLE")
+        << " | " << (point.robust() ? "yes" : "no") << " |\n";
   }
 }
 

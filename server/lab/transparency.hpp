@@ -14,7 +14,11 @@ namespace haptic::lab {
 struct TransparencyPoint {
   double controller_damping;  // B_c. Unit: N·s/m.
   double transparency_index;  // J (eq. 11).
-  double robust_norm;         // ‖L‖∞ (eq. 17), linear; robustly stable iff ≤ 1.
+  double robust_norm;         // ‖L‖∞ (eq. 17), linear.
+  bool nominal_stable;        // the nominal closed loop is stable
+  /// Eom et al.'s Theorem 1: robustly stable iff the nominal loop is stable and ‖L‖∞ < 1; a small
+  /// ‖L‖∞ says nothing of a loop that is unstable to begin with.
+  bool robust() const { return nominal_stable && robust_norm < 1.0; }
 };
 
 struct TransparencyReport {
@@ -36,7 +40,8 @@ struct TransparencyReport {
 TransparencyReport transparency_study(const engine::WallDesignParams& params, double lo = 0.1,
                                       double hi = 100.0, int points = 41, double widen_limit = 1e5);
 
-/// The sweep as CSV: controller_damping_n_s_m, transparency_index, robust_norm, robust_norm_db.
+/// The sweep as CSV: controller_damping_n_s_m, transparency_index, robust_norm, robust_norm_db,
+/// nominal_stable, robust.
 void write_csv(const TransparencyReport& report, std::ostream& out);
 
 /// A markdown summary: the parameters, the optimum and the verdict, and the sweep as a table.

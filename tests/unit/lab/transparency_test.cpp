@@ -34,7 +34,7 @@ TEST(LabTransparency, TheSweepHasAnInteriorMinimumAtTheOptimumWhichIsRobust_Eq11
   std::ostringstream csv, markdown;
   write_csv(report, csv);
   write_markdown(params, report, markdown);
-  EXPECT_EQ(csv.str().rfind("controller_damping_n_s_m,transparency_index,robust_norm,robust_norm_db\n", 0), 0u);
+  EXPECT_EQ(csv.str().rfind("controller_damping_n_s_m,transparency_index,robust_norm,robust_norm_db,nominal_stable,robust\n", 0), 0u);
   EXPECT_NE(markdown.str().find("robustly stable"), std::string::npos);
 }
 
@@ -51,10 +51,12 @@ TEST(LabTransparency, AHeavilyDampedDeviceWidensTheSweepUntilTheOptimumIsInside)
   // There J's optimum is not robustly stable (eq. 17); the best swept B_c that is, is reported.
   ASSERT_FALSE(report.optimum.robustly_stable);
   ASSERT_TRUE(report.best_robust.has_value());
-  EXPECT_LE(report.best_robust->robust_norm, 1.0);
+  EXPECT_TRUE(report.best_robust->robust());
   EXPECT_GT(report.best_robust->transparency_index, report.optimum.transparency_index);
   for (const TransparencyPoint& point : report.sweep) {
-    if (point.robust_norm <= 1.0) EXPECT_GE(point.transparency_index, report.best_robust->transparency_index);
+    if (point.robust()) {
+      EXPECT_GE(point.transparency_index, report.best_robust->transparency_index);
+    }
   }
   // Narrowing the widening limit leaves it at the edge, and the report says so.
   const TransparencyReport capped = transparency_study(params, 0.1, 100.0, 41, 100.0);
@@ -74,6 +76,27 @@ TEST(LabTransparency, BadParametersAreRefusedNamingThem) {
     EXPECT_EQ(std::string(error.what()).rfind("mass:", 0), 0u);
   }
   EXPECT_THROW(transparency_study(engine::WallDesignParams{}, 10.0, 1.0), std::invalid_argument);
+}
+
+// Robust means a stable nominal loop and ‖L‖∞ < 1 (Eom et al., Theorem 1): on the default device
+// B_c = 84 and 100 N·s/m have ‖L‖∞ of −3 and −6 dB but an unstable nominal loop, so they are not.
+TEST(LabTransparency, AnUnstableNominalLoopIsNeverCalledRobust) {
+  const TransparencyReport report = transparency_study(engine::WallDesignParams{});
+  std::size_t checked = 0;
+  for (const TransparencyPoint& point : report.sweep) {
+    EXPECT_EQ(point.robust(), point.nominal_stable && point.robust_norm < 1.0);
+    if (point.controller_damping > 80.0 && point.controller_damping <= 100.0) {
+      EXPECT_LT(point.robust_norm, 1.0) << point.controller_damping;
+      EXPECT_FALSE(point.nominal_stable) << point.controller_damping;
+      EXPECT_FALSE(point.robust()) << point.controller_damping;
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 2u);
+  std::ostringstream markdown;
+  write_markdown(engine::WallDesignParams{}, report, markdown);
+  EXPECT_NE(markdown.str().find("| 100 | 4.46938 | -6.24727 | UNSTABLE | no |"), std::string::npos)
+      << markdown.str();
 }
 
 }  // namespace
