@@ -39,7 +39,8 @@ TEST(SpringDamperDiscretization, ExactWeightsSumToTheStiffness_Eq8_12) {
         // Round-off scales with the weights themselves (≈ B_V / T when k_V T / B_V is small).
         const double tolerance = 1e-12 * (std::abs(a.c1) + k_V);
         EXPECT_NEAR(a.c1 + a.c2, k_V, tolerance) << "k_V " << k_V << " B_V " << B_V << " T " << T;
-        // Eq. 8.12 as printed, where it does not overflow.
+        // Eq. 8.12a as printed, and 8.12b corrected (see the test below), where they do not
+        // overflow.
         const double x = k_V * T / B_V;
         if (x < 50.0) {
           EXPECT_NEAR(a.c1, k_V * std::exp(x) / (std::exp(x) - 1.0), 1e-9 * std::abs(a.c1));
@@ -48,6 +49,38 @@ TEST(SpringDamperDiscretization, ExactWeightsSumToTheStiffness_Eq8_12) {
       }
     }
   }
+}
+
+// Eq. 8.12b is garbled as printed, a2 = −k_V / (k_V / e^{k_V T/B_V} − 1) (000, L486): with it the
+// weights do not sum to k_V (the spring would not rest where eq. 8.19 says), and it is not eq.
+// 8.10b's a2 either. The form used, −k_V / (e^{k_V T/B_V} − 1), is the one a1 + a2 = k_V (stated
+// after eq. 8.19) and eq. 8.10b's −k_V e^{−x} / (1 − e^{−x}) both give.
+TEST(SpringDamperDiscretization, Eq8_12bAsPrintedIsGarbledTheCorrectedFormSumsToTheStiffness) {
+  const double k_V = 50.0, B_V = 0.02, T = 1e-3;
+  const double x = k_V * T / B_V;  // 2.5
+  const SpringDamperCoefficients a = exact_delayed_coefficients(k_V, B_V, T);
+  const double printed_a2 = -k_V / (k_V / std::exp(x) - 1.0);
+  const double from_8_10b = -k_V * std::exp(-x) / (1.0 - std::exp(-x));
+  EXPECT_NEAR(a.c2, from_8_10b, 1e-12 * k_V);
+  EXPECT_NEAR(a.c1 + a.c2, k_V, 1e-12 * k_V);
+  EXPECT_GT(std::abs(a.c1 + printed_a2 - k_V), 0.2 * k_V);  // as printed: 38.4, 23 % short of k_V
+}
+
+// Eq. 9.4 repeats eq. 8.19's rest term, −a_V θ_m0 (000, L555): at rest, θ_m(k) = θ_m(k−1) = θ_m0,
+// it leaves b_V θ_m0 of torque, so the spring would push at its own rest angle. Substituting eq.
+// 8.18a into eq. 8.11 gives −(a_V + b_V) θ_m0 = −r k_V θ_m0 (as eq. 9.5 and 9.7 carry), which is
+// what VirtualTorsionSpring applies: zero torque at rest.
+TEST(VirtualTorsionSpring, AtItsRestAngleItsTorqueIsZeroUnlikeEq9_4AsPrinted) {
+  const double k_V = 20.0, B_V = 0.05, T = 1e-3, r = 0.1, theta_m0 = 3.0;
+  const SpringDamperCoefficients a = exact_delayed_coefficients(k_V, B_V, T);
+  VirtualTorsionSpring spring(a, r, theta_m0);
+  spring.reset(theta_m0);
+  EXPECT_EQ(spring.torque(theta_m0), 0.0);
+  const double a_V = r * a.c1, b_V = r * (k_V - a.c1);
+  EXPECT_NEAR(a_V + b_V, r * k_V, 1e-12);  // "It is also met that a_V + b_V = r k_V"
+  const double printed = a_V * theta_m0 + b_V * theta_m0 - a_V * theta_m0;  // eq. 9.4 at rest
+  EXPECT_NEAR(printed, b_V * theta_m0, 1e-12);
+  EXPECT_GT(std::abs(printed), 1.0);  // a torque at rest: the printed rest term is wrong
 }
 
 // b_i → a_i as T → 0 (eqs. 8.16, 8.17). The relative difference vanishes; the absolute one does
