@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -185,21 +186,24 @@ struct ContactRig {
   Client observer{test::config_for(server, "observer")};
   WallClientProcess wall{server.address()};
   bool in_contact = false;
+
+  /// Sends the wall's client `signal_number` and waits (up to 5 s) for the force to have been
+  /// zero for `settled_s`; the force's fall from that moment, which `at_s` (server time) gets.
+  std::optional<Fade> silence(int signal_number, double settled_s, double& at_s) {
+    at_s = server_now_s(server);
+    wall.signal(signal_number);
+    if (!trace.wait_for([](double f) { return f < 1e-9; }, settled_s, seconds(5))) return std::nullopt;
+    return fade_after(trace.points(), at_s);
+  }
 };
 
 TEST(Soak, AClientKilledMidContactLosesItsForceThroughTheRampAfterItsLease) {
   ContactRig rig;
   ASSERT_TRUE(rig.in_contact);
-  test::ServerProcess& server = rig.server;
-  ForceTrace& trace = rig.trace;
-  Client& observer = rig.observer;
-  WallClientProcess& wall = rig.wall;
-
-  const double killed_at = server_now_s(server);
-  wall.signal(SIGKILL);
-  ASSERT_TRUE(trace.wait_for([](double f) { return f < 1e-9; }, 0.2, seconds(5)))
-      << "the force did not reach zero";
-  const Fade fade = fade_after(trace.points(), killed_at);
+  double killed_at = 0.0;
+  const std::optional<Fade> faded = rig.silence(SIGKILL, 0.2, killed_at);
+  ASSERT_TRUE(faded) << "the force did not reach zero";
+  const Fade& fade = *faded;
   const double to_zero_ms = (fade.zero_s - killed_at) * 1e3;
   const double ramp_ms = (fade.zero_s - fade.fall_start_s) * 1e3;
   std::printf("soak: SIGKILL mid-contact (%.2f N): force zero %.0f ms after the kill (lease %d ms + "
@@ -211,22 +215,18 @@ TEST(Soak, AClientKilledMidContactLosesItsForceThroughTheRampAfterItsLease) {
   EXPECT_GT(to_zero_ms, kLeaseMs - 110.0);
   EXPECT_GE(fade.ramp_ticks, 40u);
   EXPECT_LE(fade.largest_step, kMaxForceStepPerTick);
-  EXPECT_EQ(observer.stats().leases_expired, 1u);
+  EXPECT_EQ(rig.observer.stats().leases_expired, 1u);
 }
 
 TEST(Soak, AStoppedClientLosesItsLeaseWithoutDisturbingOthersAndComesBackWhenContinued) {
   ContactRig rig;
   ASSERT_TRUE(rig.in_contact);
-  test::ServerProcess& server = rig.server;
+  double stopped_at = 0.0;
+  const std::optional<Fade> faded = rig.silence(SIGSTOP, 0.3, stopped_at);
+  ASSERT_TRUE(faded) << "the force did not reach zero";
+  const Fade& fade = *faded;
   ForceTrace& trace = rig.trace;
-  Client& observer = rig.observer;
-  WallClientProcess& wall = rig.wall;
-
-  const double stopped_at = server_now_s(server);
-  wall.signal(SIGSTOP);
-  ASSERT_TRUE(trace.wait_for([](double f) { return f < 1e-9; }, 0.3, seconds(5)));
-  const Fade fade = fade_after(trace.points(), stopped_at);
-  EXPECT_EQ(observer.stats().leases_expired, 1u);
+  EXPECT_EQ(rig.observer.stats().leases_expired, 1u);
   // The observer's stream went on throughout: no gap longer than 100 ms in server time.
   double largest_gap = 0.0;
   const auto points = trace.points();
@@ -236,7 +236,7 @@ TEST(Soak, AStoppedClientLosesItsLeaseWithoutDisturbingOthersAndComesBackWhenCon
     }
   }
   const auto continued = steady_clock::now();
-  wall.signal(SIGCONT);
+  rig.wall.signal(SIGCONT);
   // Its SDK finds the session gone, opens a new one and registers the wall again.
   const bool back = trace.wait_for([](double f) { return f > 2.0; }, 0.1, seconds(10));
   std::printf("soak: SIGSTOP mid-contact: force zero %.0f ms after the stop (ramp %llu ticks, "
