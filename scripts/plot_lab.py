@@ -139,7 +139,14 @@ def transparency(rows, out):
     ax.set_ylabel("transparency index J")
     twin = ax.twinx()
     twin.plot(b, [float(r["robust_norm_db"]) for r in rows], color="#c44e52", label="‖L‖∞ (eq. 17)")
-    twin.axhline(0.0, color="#c44e52", lw=0.8, ls="--")
+    # Every hold model's ‖L‖∞, where the CSV has them: the verdict near the optimum depends on it.
+    holds = [("delay", "e^(−sT/2)", ":"), ("pade", "Padé", "-."), ("exact", "exact hold", "--")]
+    for name, label, style in holds:
+        column = "robust_norm_db_" + name
+        if column in rows[0]:
+            twin.plot(b, [float(r[column]) for r in rows], color="#c44e52", lw=0.8, ls=style,
+                      label="‖L‖∞, " + label)
+    twin.axhline(0.0, color="0.5", lw=0.8)
     twin.set_ylabel("‖L‖∞ [dB] (robust below 0 dB)")
     ax.set_title("Transparency and robust stability (haptic-lab transparency)")
     fig.legend(fontsize=8, loc="upper right", bbox_to_anchor=(0.86, 0.86))

@@ -129,11 +129,19 @@ Subcommand add_run(CLI::App& cli) {
           }};
 }
 
+/// The hold model named on the command line. Throws std::invalid_argument otherwise.
+haptic::engine::HoldModel hold_model_from_name(const std::string& name) {
+  for (const haptic::engine::HoldModel hold : haptic::engine::kHoldModels) {
+    if (name == haptic::engine::hold_model_name(hold)) return hold;
+  }
+  throw std::invalid_argument("--hold: must be second-order, delay, pade or exact, got \"" + name + "\"");
+}
+
 Subcommand add_transparency(CLI::App& cli) {
   struct Options {
     haptic::engine::WallDesignParams design;
     DeviceOption device;
-    std::string csv_path, markdown_path;
+    std::string hold = "second-order", csv_path, markdown_path;
   };
   auto o = std::make_shared<Options>();
   CLI::App* app = cli.add_subcommand(
@@ -144,9 +152,13 @@ Subcommand add_transparency(CLI::App& cli) {
   app->add_option("--w1", o->design.weight_cutoff, "transparency weight cut-off, rad/s (default 100)");
   app->add_option("--alpha", o->design.mass_uncertainty, "mass uncertainty (default 0.5)");
   app->add_option("--beta", o->design.damping_uncertainty, "damping uncertainty (default 0.5)");
+  app->add_option("--hold", o->hold,
+                  "the hold's model for the sweep: second-order (default), delay, pade or exact; "
+                  "the report gives every model's verdict");
   app->add_option("--csv", o->csv_path, "write the sweep as CSV here");
   app->add_option("--markdown", o->markdown_path, "write the report here; default: standard output");
   return {app, [o] {
+            o->design.hold = hold_model_from_name(o->hold);
             const auto model = o->device.apply(o->design.mass, o->design.damping, o->design.sample_period);
             write_reports(o->design, haptic::lab::transparency_study(o->design), o->csv_path,
                           o->markdown_path, model ? haptic::lab::describe(*model) : std::string());

@@ -40,6 +40,18 @@ TransparencyReport transparency_study(const engine::WallDesignParams& p, double 
     report.sweep.push_back({B_c, engine::transparency_index(p, B_c), engine::robust_stability_norm(p, B_c),
                             engine::nominal_loop_stable(p, B_c)});
   }
+  for (const engine::HoldModel hold : engine::kHoldModels) {
+    engine::WallDesignParams q = p;
+    q.hold = hold;
+    const double B_c = report.optimum.controller_damping;
+    report.holds.push_back({hold, engine::optimise_controller_damping(q, lo, hi),
+                            {engine::robust_stability_norm(q, B_c), engine::nominal_loop_stable(q, B_c)}});
+    std::vector<HoldPoint>& hold_points = report.sweep_by_hold.emplace_back();
+    for (const TransparencyPoint& point : report.sweep) {
+      hold_points.push_back({engine::robust_stability_norm(q, point.controller_damping),
+                        engine::nominal_loop_stable(q, point.controller_damping)});
+    }
+  }
   if (!report.optimum.robustly_stable) {
     for (const TransparencyPoint& point : report.sweep) {
       if (point.robust() && (!report.best_robust || point.transparency_index < report.best_robust->transparency_index)) {
@@ -50,12 +62,50 @@ TransparencyReport transparency_study(const engine::WallDesignParams& p, double 
   return report;
 }
 
+namespace {
+
+/// The hold model's name as a CSV column suffix: "second-order" -> "second_order".
+std::string column_suffix(engine::HoldModel hold) {
+  std::string name = engine::hold_model_name(hold);
+  for (char& c : name) {
+    if (c == '-') c = '_';
+  }
+  return name;
+}
+
+const char* verdict(const HoldPoint& point) {
+  if (!point.nominal_stable) return "nominal loop UNSTABLE";
+  return point.robust() ? "robustly stable" : "NOT robustly stable";
+}
+
+/// ZOH(s) of each hold model as the report prints it.
+const char* hold_formula(engine::HoldModel hold) {
+  switch (hold) {
+    case engine::HoldModel::kSecondOrder: return "ω_N²/(s² + 2ζω_N s + ω_N²), ζ = π/4";
+    case engine::HoldModel::kHalfPeriodDelay: return "e^(−sT/2)";
+    case engine::HoldModel::kPade: return "(1 − sT/4)/(1 + sT/4)";
+    case engine::HoldModel::kExact: return "(1 − e^(−sT))/(sT)";
+  }
+  return "?";
+}
+
+}  // namespace
+
 void write_csv(const TransparencyReport& report, std::ostream& out) {
-  out << "controller_damping_n_s_m,transparency_index,robust_norm,robust_norm_db,nominal_stable,robust\n";
-  for (const TransparencyPoint& point : report.sweep) {
+  out << "controller_damping_n_s_m,transparency_index,robust_norm,robust_norm_db,nominal_stable,robust";
+  for (const HoldVerdict& verdict : report.holds) {
+    out << ",robust_norm_db_" << column_suffix(verdict.hold) << ",robust_" << column_suffix(verdict.hold);
+  }
+  out << '\n';
+  for (std::size_t j = 0; j < report.sweep.size(); ++j) {
+    const TransparencyPoint& point = report.sweep[j];
     out << point.controller_damping << ',' << point.transparency_index << ',' << point.robust_norm
         << ',' << engine::to_db(point.robust_norm) << ',' << point.nominal_stable << ','
-        << point.robust() << '\n';
+        << point.robust();
+    for (const std::vector<HoldPoint>& points : report.sweep_by_hold) {
+      out << ',' << engine::to_db(points[j].robust_norm) << ',' << points[j].robust();
+    }
+    out << '\n';
   }
 }
 
@@ -66,7 +116,8 @@ void write_markdown(const engine::WallDesignParams& p, const TransparencyReport&
       << "Device m = " << p.mass << " kg, b = " << p.damping << " N·s/m; wall K = " << p.wall_stiffness
       << " N/m, B = " << p.wall_damping << " N·s/m; T = " << p.sample_period
       << " s; w1 cut-off " << p.weight_cutoff << " rad/s; α = " << p.mass_uncertainty
-      << ", β = " << p.damping_uncertainty << ".\n\n"
+      << ", β = " << p.damping_uncertainty << "; hold model " << engine::hold_model_name(p.hold)
+      << ", ZOH(s) = " << hold_formula(p.hold) << ".\n\n"
       << "Optimum B_c = " << o.controller_damping << " N·s/m: J = " << o.transparency_index
       << ", ‖L‖∞ = " << engine::to_db(o.robust_stability_norm) << " dB — "
       << (o.robustly_stable ? "robustly stable" : (o.nominal_loop_stable ? "NOT robustly stable"
@@ -83,6 +134,20 @@ void write_markdown(const engine::WallDesignParams& p, const TransparencyReport&
     out << "The optimum is at the sweep's upper end (" << report.swept_to
         << " N·s/m): J still falls beyond it.\n\n";
   }
+  out << "## Each hold model's verdict\n\n"
+      << "The document gives the hold only as a low-pass with unity DC gain and 90° lag at Nyquist; "
+         "the verdict near the optimum depends on the model.\n\n"
+      << "| hold | ZOH(s) | its optimum B_c [N·s/m] | J | ‖L‖∞ [dB] | verdict | ‖L‖∞ at B_c = "
+      << o.controller_damping << " [dB] | verdict there |\n|---|---|---|---|---|---|---|---|\n";
+  for (const HoldVerdict& h : report.holds) {
+    const HoldPoint own{h.own_optimum.robust_stability_norm, h.own_optimum.nominal_loop_stable};
+    out << "| " << engine::hold_model_name(h.hold) << " | " << hold_formula(h.hold) << " | "
+        << h.own_optimum.controller_damping << " | " << h.own_optimum.transparency_index << " | "
+        << engine::to_db(own.robust_norm) << " | " << verdict(own) << " | "
+        << engine::to_db(h.at_report_optimum.robust_norm) << " | " << verdict(h.at_report_optimum)
+        << " |\n";
+  }
+  out << "\n## The sweep (" << engine::hold_model_name(p.hold) << " hold)\n\n";
   out << "| B_c [N·s/m] | J | ‖L‖∞ [dB] | nominal loop | robust |\n|---|---|---|---|---|\n";
   for (const TransparencyPoint& point : report.sweep) {
     out << "| " << point.controller_damping << " | " << point.transparency_index << " | "

@@ -56,9 +56,35 @@ Complex device_admittance(const WallDesignParams& p, Complex s) {
   return 1.0 / (p.mass * s + p.damping);
 }
 
-Complex zoh_approximation(const WallDesignParams& p, Complex s) {
-  const double wn = nyquist(p);
-  return wn * wn / (s * s + 2.0 * kZohDamping * wn * s + wn * wn);
+const char* hold_model_name(HoldModel hold) {
+  switch (hold) {
+    case HoldModel::kSecondOrder: return "second-order";
+    case HoldModel::kHalfPeriodDelay: return "delay";
+    case HoldModel::kPade: return "pade";
+    case HoldModel::kExact: return "exact";
+  }
+  return "?";
+}
+
+Complex hold_response(const WallDesignParams& p, Complex s) {
+  const double T = p.sample_period;
+  switch (p.hold) {
+    case HoldModel::kSecondOrder: {
+      const double wn = nyquist(p);
+      return wn * wn / (s * s + 2.0 * kZohDamping * wn * s + wn * wn);
+    }
+    case HoldModel::kHalfPeriodDelay:
+      return std::exp(-s * (T / 2.0));
+    case HoldModel::kPade:
+      return (1.0 - s * (T / 4.0)) / (1.0 + s * (T / 4.0));
+    case HoldModel::kExact: {
+      const Complex x = s * T;
+      // (1 − e^{−x}) / x loses its digits to cancellation near 0: there, its series.
+      if (std::abs(x) < 1e-4) return 1.0 - x / 2.0 + x * x / 6.0;
+      return (1.0 - std::exp(-x)) / x;
+    }
+  }
+  return 1.0;
 }
 
 Complex virtual_wall(const WallDesignParams& p, Complex s) {
@@ -75,7 +101,7 @@ Complex controller(const WallDesignParams& p, double controller_damping, Complex
 
 Complex transmitted_admittance(const WallDesignParams& p, double controller_damping, Complex s) {
   const Complex P = device_admittance(p, s);
-  return P / (1.0 + zoh_approximation(p, s) * P * controller(p, controller_damping, s));
+  return P / (1.0 + hold_response(p, s) * P * controller(p, controller_damping, s));
 }
 
 Complex transparency_weight(const WallDesignParams& p, Complex s) {
@@ -85,25 +111,88 @@ Complex transparency_weight(const WallDesignParams& p, Complex s) {
 Complex uncertainty_loop(const WallDesignParams& p, double controller_damping, Complex s) {
   const Complex W = p.mass_uncertainty * p.mass * s + p.damping_uncertainty * p.damping;
   const Complex P = device_admittance(p, s);
-  return -W * P / (1.0 + zoh_approximation(p, s) * P * controller(p, controller_damping, s));
+  return -W * P / (1.0 + hold_response(p, s) * P * controller(p, controller_damping, s));
 }
 
 bool nominal_loop_stable(const WallDesignParams& p, double controller_damping) {
   assert_valid(p);
-  // s (ms + b)(s² + 2ζω_N s + ω_N²) + ω_N² (B_c s + K) = a4 s⁴ + a3 s³ + a2 s² + a1 s + a0.
-  const double wn = nyquist(p);
   const double m = p.mass;
   const double b = p.damping;
-  const double a4 = m;
-  const double a3 = 2.0 * kZohDamping * wn * m + b;
-  const double a2 = wn * wn * m + 2.0 * kZohDamping * wn * b;
-  const double a1 = wn * wn * (b + controller_damping);
-  const double a0 = wn * wn * p.wall_stiffness;
-  if (a4 <= 0.0 || a3 <= 0.0 || a2 <= 0.0 || a1 <= 0.0 || a0 <= 0.0) return false;
-  // Hurwitz determinants of a quartic: Δ2 = a3 a2 − a4 a1, Δ3 = a1 Δ2 − a3² a0.
-  const double delta2 = a3 * a2 - a4 * a1;
-  const double delta3 = a1 * delta2 - a3 * a3 * a0;
-  return delta2 > 0.0 && delta3 > 0.0;
+  const double K = p.wall_stiffness;
+  switch (p.hold) {
+    case HoldModel::kSecondOrder: {
+      // s (ms + b)(s² + 2ζω_N s + ω_N²) + ω_N² (B_c s + K) = a4 s⁴ + a3 s³ + a2 s² + a1 s + a0.
+      const double wn = nyquist(p);
+      const double a4 = m;
+      const double a3 = 2.0 * kZohDamping * wn * m + b;
+      const double a2 = wn * wn * m + 2.0 * kZohDamping * wn * b;
+      const double a1 = wn * wn * (b + controller_damping);
+      const double a0 = wn * wn * K;
+      if (a4 <= 0.0 || a3 <= 0.0 || a2 <= 0.0 || a1 <= 0.0 || a0 <= 0.0) return false;
+      // Hurwitz determinants of a quartic: Δ2 = a3 a2 − a4 a1, Δ3 = a1 Δ2 − a3² a0.
+      const double delta2 = a3 * a2 - a4 * a1;
+      const double delta3 = a1 * delta2 - a3 * a3 * a0;
+      return delta2 > 0.0 && delta3 > 0.0;
+    }
+    case HoldModel::kPade: {
+      // s (ms + b)(1 + θs) + (1 − θs)(B_c s + K), θ = T/4: a3 s³ + a2 s² + a1 s + a0.
+      const double theta = p.sample_period / 4.0;
+      const double a3 = theta * m;
+      const double a2 = m + theta * (b - controller_damping);
+      const double a1 = b + controller_damping - theta * K;
+      const double a0 = K;
+      if (a3 <= 0.0 || a2 <= 0.0 || a1 <= 0.0 || a0 <= 0.0) return false;
+      return a2 * a1 > a3 * a0;  // the cubic's Hurwitz determinant Δ2
+    }
+    case HoldModel::kHalfPeriodDelay:
+    case HoldModel::kExact:
+      return right_half_plane_roots(p, controller_damping) == 0;
+  }
+  return false;
+}
+
+int right_half_plane_roots(const WallDesignParams& p, double controller_damping) {
+  assert_valid(p);
+  const double m = p.mass;
+  const double K = p.wall_stiffness;
+  const double B_c = controller_damping;
+  const auto dominant = [&](double omega) {  // s (ms + b) at s = jω
+    const Complex s = jw(omega);
+    return s * (m * s + p.damping);
+  };
+  const auto characteristic = [&](double omega) {
+    const Complex s = jw(omega);
+    return dominant(omega) + hold_response(p, s) * (B_c * s + K);
+  };
+  // Beyond ω_x, |s (ms + b)| >= m ω² > B_c ω + K >= |ZOH (B_c s + K)|: f stays within 90° of its
+  // dominant term, whose phase rises monotonically to π.
+  const double omega_x = 1.01 * (std::abs(B_c) + std::sqrt(B_c * B_c + 4.0 * m * K)) / (2.0 * m);
+  // Steps: 2 % of ω (at least of 1 rad/s), and at most 1/64 of e^{−jωT}'s period.
+  const double max_step = 2.0 * kPi / (64.0 * p.sample_period);
+  double omega = 0.0;
+  Complex f = characteristic(0.0);  // K, phase 0
+  double phase = 0.0;
+  while (omega < omega_x) {
+    double step = std::min({0.02 * std::max(omega, 1.0), max_step, omega_x - omega});
+    Complex next;
+    double turn;
+    for (;;) {  // halve the step until the phase turns less than 0.3 rad in it
+      next = characteristic(omega + step);
+      turn = std::arg(next / f);
+      if (std::abs(turn) < 0.3 || step < 1e-9 * std::max(omega, 1.0)) break;
+      step /= 2.0;
+    }
+    phase += turn;
+    omega += step;
+    f = next;
+  }
+  // phase = arg s(ms + b) at ω_x + the deviation (|·| < π/2) + 2πk; as ω → ∞ it reaches π + 2πk.
+  const double deviation = std::arg(f / dominant(omega_x));
+  const double dominant_phase = kPi / 2.0 + std::atan2(m * omega_x, p.damping);
+  const double k = std::round((phase - dominant_phase - deviation) / (2.0 * kPi));
+  // Over −∞ < ω < ∞ the phase changes by 2 (π + 2πk); the roots on the right number
+  // (n − Δ/π) / 2 with n = 2, the degree of the dominant term.
+  return static_cast<int>(-2.0 * k);
 }
 
 double transparency_index(const WallDesignParams& p, double controller_damping) {

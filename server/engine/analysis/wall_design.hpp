@@ -14,11 +14,14 @@
 //   L(s)   = −W P / (1 + ZOH P C)                robustly stable iff ||L||_∞ <= 1      (eqs. 16, 17)
 //
 // The document approximates the zero-order hold by "a low pass filter with unity steady-state gain
-// and 90 degrees phase lag at the Nyquist frequency" without giving it. Here
+// and 90 degrees phase lag at the Nyquist frequency" without giving it. The default here
 //   ZOH(s) = ω_N² / (s² + 2 ζ ω_N s + ω_N²),   ω_N = π / T,  ζ = π / 4:
 // unity gain at DC and exactly −90° at ω_N by construction; ζ = π/4 makes its low-frequency phase
 // −ωT/2 (the exact hold's, (1 − e^{−sT}) / (sT)) and its gain at ω_N 1/(2ζ) = 2/π (also the
-// exact hold's). A first-order 1/(1 + sT/2) would reach only −57.5° at ω_N.
+// exact hold's). A first-order 1/(1 + sT/2) would reach only −57.5° at ω_N. Near the optimum the
+// robust-stability verdict depends on this choice (‖L‖∞ from −0.7 to +1.0 dB on the document's
+// device), so the other usual models of the hold are here too (HoldModel) and haptic-lab reports
+// each one's verdict.
 //
 // w1, which the document leaves open ("a low pass filter", eq. 11), is w1(s) = ω_1 / (s + ω_1);
 // the default ω_1 = 100 rad/s (about 16 Hz, the band of a hand's voluntary force) puts the optimum
@@ -27,6 +30,21 @@
 #include <complex>
 
 namespace haptic::engine {
+
+/// How the loop's hold and sampling delay enter the continuous-time design (the ZOH(s) of eq. 9).
+enum class HoldModel {
+  kSecondOrder,  // ω_N² / (s² + 2ζω_N s + ω_N²), ζ = π/4 (above): the document's description
+  kHalfPeriodDelay,  // e^{−sT/2}: the hold's average delay, with no roll-off
+  kPade,         // (1 − sT/4) / (1 + sT/4): first-order Padé of e^{−sT/2}, an all-pass
+  kExact,        // (1 − e^{−sT}) / (sT): the hold's own frequency response (delay and sinc roll-off)
+};
+
+/// Every hold model, in the order haptic-lab reports them.
+inline constexpr HoldModel kHoldModels[] = {HoldModel::kSecondOrder, HoldModel::kHalfPeriodDelay,
+                                            HoldModel::kPade, HoldModel::kExact};
+
+/// "second-order", "delay", "pade", "exact": the names haptic-lab's --hold takes.
+const char* hold_model_name(HoldModel hold);
 
 /// One axis of the haptic loop of Eom et al. Fig. 3; defaults are their experiment's values.
 struct WallDesignParams {
@@ -38,14 +56,15 @@ struct WallDesignParams {
   double weight_cutoff = 100.0;    // ω_1 of w1 (about 16 Hz). Unit: rad/s. > 0.
   double mass_uncertainty = 0.5;     // α of eq. 13, in [0, 1).
   double damping_uncertainty = 0.5;  // β of eq. 13, in [0, 1).
+  HoldModel hold = HoldModel::kSecondOrder;  // ZOH(s) of eq. 9
 };
 
 using Complex = std::complex<double>;
 
 /// P(s) = 1/(ms + b) (eq. 7). Unit: m/(N*s).
 Complex device_admittance(const WallDesignParams& p, Complex s);
-/// The hold's rational approximation above (dimensionless).
-Complex zoh_approximation(const WallDesignParams& p, Complex s);
+/// ZOH(s) of eq. 9 as p.hold models it (dimensionless). |ZOH(jω)| <= 1 for every model.
+Complex hold_response(const WallDesignParams& p, Complex s);
 /// V(s) = (K + Bs)/s (eq. 8). Unit: N*s/m.
 Complex virtual_wall(const WallDesignParams& p, Complex s);
 /// Y_v(s) = 1/V(s) (eq. 11). Unit: m/(N*s).
@@ -59,10 +78,20 @@ Complex transparency_weight(const WallDesignParams& p, Complex s);
 /// L(s) = −W P/(1 + ZOH P C), W = α m s + β b (eqs. 15, 16; dimensionless).
 Complex uncertainty_loop(const WallDesignParams& p, double controller_damping, Complex s);
 
-/// Whether the nominal loop 1 + ZOH P C = 0 has all its roots in the open left half-plane
-/// (Routh–Hurwitz on its quartic characteristic polynomial). J and ||L||_∞ only mean what eqs. 11
-/// and 17 say for a stable nominal loop.
+/// Whether the nominal loop 1 + ZOH P C = 0 has all its roots in the open left half-plane. J and
+/// ||L||_∞ only mean what eqs. 11 and 17 say for a stable nominal loop. For the rational holds,
+/// Routh–Hurwitz on the characteristic polynomial (a quartic for kSecondOrder, a cubic for kPade);
+/// for kHalfPeriodDelay and kExact, whose characteristic function is not a polynomial,
+/// right_half_plane_roots() == 0.
 bool nominal_loop_stable(const WallDesignParams& p, double controller_damping);
+
+/// The number of roots of s (m s + b) + ZOH(s) (B_c s + K), the nominal loop's characteristic
+/// function, with Re s >= 0, by the argument principle: its phase is followed along s = jω from
+/// ω = 0 (where it is K > 0) until m ω² > B_c ω + K, beyond which the m s² term outweighs the rest
+/// (|ZOH| <= 1) and the remaining phase is known in closed form. Valid for every hold model (each
+/// ZOH(s) is analytic in the right half-plane); the phase is sampled finely enough to follow
+/// e^{−jωT}. Always even (f(0) > 0 and f → +∞ along the positive real axis).
+int right_half_plane_roots(const WallDesignParams& p, double controller_damping);
 
 /// J(B_c) of eq. 11, (1/π) ∫_0^∞ |w1 (Y_v − Y_t)|² dω (the integrand is even in ω): trapezoids in
 /// ln ω, 400 points per decade from 1e-2 rad/s to 1000 ω_N, plus the tail above,
