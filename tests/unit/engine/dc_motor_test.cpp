@@ -83,6 +83,40 @@ TEST(VirtualTorsionSpring, AtItsRestAngleItsTorqueIsZeroUnlikeEq9_4AsPrinted) {
   EXPECT_GT(std::abs(printed), 1.0);  // a torque at rest: the printed rest term is wrong
 }
 
+// Eq. 9.5 prints θ_m where the damping term needs θ̇_m (000, L580): τ_V = r k_V θ_m + r B_V θ_m −
+// r k_V θ_m0 as printed has no velocity in it, and eq. 9.7, which the document derives from it,
+// carries r B_V on θ̇_m. The discrete spring of eq. 9.4 (rest term corrected) on a ramp θ_m(t) =
+// θ_m0 + v t approaches the corrected form r k_V (θ_m − θ_m0) + r B_V θ̇_m as T → 0 (first order:
+// c1 θ(k) + c2 θ(k−1) = k_V θ(k) − c2 v T and −c2 T = k_V T / (e^x − 1) → B_V), while the printed
+// form stays a whole r B_V (θ_m − v) away.
+TEST(VirtualTorsionSpring, TendsToEq9_5WithTheVelocityNotThePositionInItsDampingTerm) {
+  const double k_V = 20.0, B_V = 0.05, r = 0.1, theta_m0 = 3.0, t = 0.05;
+  for (const double v : {-4.0, 1.0, 6.0}) {  // rad/s at the motor axis
+    for (const double T : {1e-3, 1e-4, 1e-5}) {
+      VirtualTorsionSpring spring(exact_delayed_coefficients(k_V, B_V, T), r, theta_m0);
+      const auto ticks = static_cast<std::uint64_t>(std::llround(t / T));
+      spring.reset(theta_m0);
+      double tau = 0.0;
+      double theta = theta_m0;
+      for (std::uint64_t k = 1; k <= ticks; ++k) {
+        theta = theta_m0 + v * static_cast<double>(k) * T;
+        tau = spring.torque(theta);
+      }
+      const double corrected = r * k_V * (theta - theta_m0) + r * B_V * v;
+      const double printed = r * k_V * theta + r * B_V * theta - r * k_V * theta_m0;
+      // The first-order error: −c2 T = B_V (1 − x/2 + x²/12 − …), x = k_V T / B_V, so τ falls short
+      // by r k_V v T / 2 to within x/6 of it (0.4 at T = 1 ms).
+      const double first_order = r * k_V * std::abs(v) * T / 2.0;
+      EXPECT_NEAR(std::abs(tau - corrected), first_order, 0.07 * first_order) << "v " << v << " T " << T;
+      // Against the printed form, the whole damping term's difference, r B_V (v − θ_m).
+      EXPECT_NEAR(tau - printed, r * B_V * (v - theta), 1.1 * first_order) << "v " << v << " T " << T;
+      if (T <= 1e-4) {  // the two forms are told apart
+        EXPECT_GT(r * B_V * std::abs(v - theta), 10.0 * first_order) << "v " << v << " T " << T;
+      }
+    }
+  }
+}
+
 // b_i → a_i as T → 0 (eqs. 8.16, 8.17). The relative difference vanishes; the absolute one does
 // not: with x = k_V T / B_V, a1 − b1 = k_V (1/(eˣ − 1) − 1/x) → −k_V / 2, and a2 − b2 → +k_V / 2,
 // while both weights grow like B_V / T. So the relative difference is ≈ x / 2: first order in T.
