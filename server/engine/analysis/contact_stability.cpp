@@ -61,4 +61,28 @@ ContactBreakpoints contact_breakpoints(const ContactModelParams& p) {
   return {std::sqrt(w1_sq), std::sqrt(w2_sq)};
 }
 
+CriticalForceGain critical_force_gain(const ContactModelParams& p, double filter_cutoff) {
+  const ContactTransferFunction tf = contact_transfer_function(p);
+  const auto loop = [&](double omega) {
+    const std::complex<double> s(0.0, omega);
+    const std::complex<double> filter = filter_cutoff > 0.0 ? 1.0 / (1.0 + s / filter_cutoff) : 1.0;
+    return evaluate(tf, s) * filter;
+  };
+  // The phase falls through −180° where the imaginary part changes sign with the real part < 0:
+  // scanned at 1 % steps from 1 rad/s, then bisected to 1e-12 relative.
+  double lo = 1.0;
+  for (double hi = lo * 1.01; hi < 1e6; lo = hi, hi *= 1.01) {
+    const std::complex<double> a = loop(lo), b = loop(hi);
+    if (b.real() < 0.0 && (a.imag() < 0.0) != (b.imag() < 0.0)) {
+      while (hi - lo > 1e-12 * hi) {
+        const double mid = 0.5 * (lo + hi);
+        ((loop(mid).imag() < 0.0) == (a.imag() < 0.0) ? lo : hi) = mid;
+      }
+      return {lo, 1.0 / std::abs(loop(lo))};
+    }
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  return {nan, nan};
+}
+
 }  // namespace haptic::engine

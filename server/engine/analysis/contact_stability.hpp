@@ -51,4 +51,17 @@ struct ContactBreakpoints {
 };
 ContactBreakpoints contact_breakpoints(const ContactModelParams& p);
 
+/// Where the force loop closed around eq. 4.4 with a proportional gain K goes unstable (L940–L946:
+/// the root locus's higher, transmission pair crosses into the right half-plane, "ω_crit = 1200
+/// rad/sec" with the document's masses): the frequency at which the loop's phase reaches −180°
+/// and the gain K = 1 / |F_c/F_m| there. A load-cell filter 1 / (1 + s/ω_f) in the loop
+/// (filter_cutoff = ω_f > 0; the document's is 130 Hz, L945) adds lag and lowers both.
+/// Units: rad/s; the gain is dimensionless (force per force). NaN when the phase never reaches
+/// −180° below 10⁶ rad/s.
+struct CriticalForceGain {
+  double omega = 0.0;
+  double gain = 0.0;
+};
+CriticalForceGain critical_force_gain(const ContactModelParams& p, double filter_cutoff = 0.0);
+
 }  // namespace haptic::engine

@@ -267,6 +267,21 @@ double GimbalJoystickPlant::stick_band(double capacity, std::size_t i) const {
 }
 
 // ---------------------------------------------------------------------------------------------
+// The cable drive and the sleeve (eqs. 3.29–3.34).
+
+double capstan_slip_torque(double r, double preload, double mu_beta) {
+  return 2.0 * r * preload * std::tanh(mu_beta / 2.0);
+}
+
+double sleeve_shaft_force(double tau, double r, double preload, double nu_alpha) {
+  return tau / r * std::cosh(nu_alpha) - 2.0 * preload * std::sinh(nu_alpha);
+}
+
+double sleeve_breakaway_torque(double r, double preload, double nu_alpha) {
+  return 2.0 * r * preload * std::tanh(nu_alpha);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Eq. 3.38, cleaned.
 
 std::string CableTransmissionParams::validate() const {

@@ -251,6 +251,25 @@ class GimbalJoystickPlant {
 };
 
 // ---------------------------------------------------------------------------------------------
+// The cable drive and the sleeve (§3.2.2, L742–L800). r: drive-pulley radius (m); preload: the
+// cable's pre-load tension T_PL (N); τ: drive torque (N·m).
+
+/// The capstan's slip limit (eq. 3.29): the cable holds on the pulley while
+/// (T_PL − τ/2r) / (T_PL + τ/2r) >= e^{−μβ}, i.e. up to τ_max = 2 r T_PL tanh(μβ/2).
+/// mu_beta: friction coefficient × wrap angle (rad). Unit: N·m.
+double capstan_slip_torque(double r, double preload, double mu_beta);
+
+/// The force along the shaft after the sleeve (eqs. 3.30–3.32): the cable's two sides leave the
+/// pulley at T_PL ∓ τ/2r and the sleeve's bend α (friction ν) scales them by e^{±να}, so
+/// F_R = (τ/r) cosh(να) − 2 T_PL sinh(να): a load factor 2 cosh(να) on τ/2r (eq. 3.33) and a
+/// friction 2 T_PL sinh(να) (eq. 3.37 prints it with the opposite sign). Unit: N.
+double sleeve_shaft_force(double tau, double r, double preload, double nu_alpha);
+
+/// The torque at which the shaft breaks away, F_R = 0 (eq. 3.34): τ_c = 2 r T_PL tanh(να), fed
+/// forward by the force loop (L872). Unit: N·m.
+double sleeve_breakaway_torque(double r, double preload, double nu_alpha);
+
+// ---------------------------------------------------------------------------------------------
 // Eq. 3.38, cleaned: the 1-DOF shaft model with the motor side held.
 
 /// Parameters of m_s r² Ψ̈ + F_d r sgn(Ψ̇) + k r² Ψ = τ cosh(να) (eq. 3.38 with the right-hand side

@@ -14,7 +14,9 @@
 #include <vector>
 
 #include "engine/analysis/contact_stability.hpp"
+#include "engine/analysis/routh.hpp"
 #include "engine/control/brake_rule.hpp"
+#include "engine/control/force_servo.hpp"
 #include "engine/control/joystick_watchdog.hpp"
 #include "engine/device/gimbal_joystick.hpp"
 
@@ -359,6 +361,131 @@ TEST(ContactStability, FirstBreakpointIs41RadPerSecondWithTheChosenMasses_Eq4_5)
   ContactModelParams broken = p;
   broken.M_s = -0.11;
   EXPECT_EQ(broken.validate().rfind("M_s: ", 0), 0u);
+}
+
+// L940–L946: closing the force loop with a gain K around eq. 4.4, "the root locus predicts that the
+// instability frequency should occur at ω_crit = 1200 rad/sec"; the load cell's 130 Hz filter
+// "causes a lower instability frequency". With the chosen masses (0.30 / 0.11 kg, which give
+// ω1 = 41 rad/s above) the phase crossing is computed, and the closed loop's characteristic
+// polynomial D + K N (times the filter's 1 + s/ω_f) is checked with Routh's array on either side
+// of the critical gain.
+TEST(ContactStability, TheForceLoopGoesUnstableNear1200RadPerSecond_L944) {
+  const GimbalJoystickParams plant;
+  ContactModelParams p;
+  p.M_m = plant.M_m;
+  p.M_s = plant.M_s;
+  const ContactTransferFunction tf = contact_transfer_function(p);
+  const double filter = 2.0 * kPi * 130.0;  // rad/s (L945)
+  const CriticalForceGain bare = critical_force_gain(p);
+  const CriticalForceGain filtered = critical_force_gain(p, filter);
+  std::printf("  critical: %.1f rad/s at gain %.2f; with the 130 Hz filter %.1f rad/s at gain %.2f\n",
+              bare.omega, bare.gain, filtered.omega, filtered.gain);
+  EXPECT_NEAR(bare.omega, 1200.0, 60.0);  // the document's 1200 rad/s, to 5 %
+  EXPECT_GT(bare.gain, 30.0);             // this model: 41–44
+  EXPECT_LT(bare.gain, 60.0);
+  EXPECT_LT(filtered.omega, 0.8 * bare.omega);  // the filter's lag lowers the crossing
+  EXPECT_LT(filtered.gain, bare.gain);
+  const auto closed_loop_stable = [&](double gain, double cutoff) {
+    // (D (1 + s/ω_f) + K N), highest power first; without a filter, D + K N.
+    std::vector<double> c;
+    const std::vector<double> d(tf.denominator.begin(), tf.denominator.end());
+    std::vector<double> n(d.size(), 0.0);
+    for (std::size_t i = 0; i < tf.numerator.size(); ++i) n[d.size() - tf.numerator.size() + i] = tf.numerator[i];
+    if (cutoff > 0.0) {
+      c.assign(d.size() + 1, 0.0);
+      for (std::size_t i = 0; i < d.size(); ++i) {
+        c[i] += d[i] / cutoff;
+        c[i + 1] += d[i] + gain * n[i];
+      }
+    } else {
+      for (std::size_t i = 0; i < d.size(); ++i) c.push_back(d[i] + gain * n[i]);
+    }
+    return routh_hurwitz_stable(c);
+  };
+  EXPECT_TRUE(closed_loop_stable(0.98 * bare.gain, 0.0));
+  EXPECT_FALSE(closed_loop_stable(1.02 * bare.gain, 0.0));
+  EXPECT_TRUE(closed_loop_stable(0.98 * filtered.gain, filter));
+  EXPECT_FALSE(closed_loop_stable(1.02 * filtered.gain, filter));
+  // "The critical gain depends primarily on the transmission and contact stiffnesses" (L938): each
+  // moves it (here a ten times stiffer cable lowers it to 32, as the transmission's damping b_t
+  // counts for less), and a stiffer grip lowers it: "by stiffening the wrist … the instability is
+  // excited" (L916).
+  ContactModelParams stiffer_cable = p;
+  stiffer_cable.k_t = 10.0 * p.k_t;
+  ContactModelParams stiffer_grip = p;
+  stiffer_grip.k_h = 2.0 * p.k_h;
+  std::printf("  k_t x10: gain %.2f; k_h x2: gain %.2f\n", critical_force_gain(stiffer_cable).gain,
+              critical_force_gain(stiffer_grip).gain);
+  EXPECT_GT(std::abs(critical_force_gain(stiffer_cable).gain / bare.gain - 1.0), 0.1);
+  EXPECT_LT(critical_force_gain(stiffer_grip).gain, 0.95 * bare.gain);
+}
+
+// Eq. 4.2: the servo of Fig. 4.4 (feed-forward through K_t*, proportional force feedback) driving
+// the printed-disk motor (first-order, 8.8 ms, L378) through a transmission of true ratio K_t,
+// sampled at 1 kHz, settles at F_des (K_t/K_t* + K_p K_t) / (1 + K_p K_t); the error left by a
+// wrong K_t* shrinks as K_p grows.
+TEST(ForceServo, SettlesAtEq4_2sStaticGain) {
+  const double T = 1e-3, time_constant = 8.8e-3;
+  const double a = std::exp(-T / time_constant);
+  const double F_des = 5.0;  // N
+  for (const double K_t : {0.7, 1.0, 1.3}) {  // true ratio, N per command unit; K_t* = 1
+    double previous_error = 1e9;
+    for (const double K_p : {0.0, 1.0, 4.0, 12.0}) {
+      const ForceServoParams servo{1.0, K_p};
+      double force = 0.0;  // the load cell's reading of the output
+      for (int k = 0; k < 5000; ++k) {
+        const double u = force_servo_command(servo, F_des, force);
+        force = a * force + (1.0 - a) * K_t * u;  // the motor's lag, exactly held over T
+      }
+      const double expected = F_des * static_force_gain(servo, K_t);
+      EXPECT_NEAR(force, expected, 1e-9 * F_des) << "K_t " << K_t << " K_p " << K_p;
+      const double error = std::abs(force - F_des);
+      if (K_t != 1.0) {
+        EXPECT_LT(error, previous_error) << "K_t " << K_t << " K_p " << K_p;
+        previous_error = error;
+      } else {
+        EXPECT_NEAR(error, 0.0, 1e-9);  // a right estimate needs no feedback
+      }
+    }
+  }
+  // Closed form against the document's expression, written out.
+  const double K_t = 1.3, K_t_star = 1.1, K_p = 2.0;
+  EXPECT_DOUBLE_EQ(static_force_gain({K_t_star, K_p}, K_t), (K_t / K_t_star + K_p * K_t) / (1.0 + K_p * K_t));
+}
+
+// Eqs. 3.29–3.34 against the cable's tensions written out: T1,2 = T_PL ∓ τ/2r at the pulley, the
+// sleeve scales them (eqs. 3.30, 3.31), F_R is their difference (eq. 3.32).
+TEST(CableDrive, CapstanAndSleeveFormulasFollowFromTheTensions_Eq3_29_to_3_34) {
+  const double r = 0.009525, preload = 40.0;  // m (the drive pulley), N [I]
+  for (const double mu_beta : {0.3, 1.0, 2.5}) {
+    const double tau_max = capstan_slip_torque(r, preload, mu_beta);
+    const auto ratio = [&](double tau) {  // T1 / T2 (eq. 3.29's left side)
+      return (preload - tau / (2.0 * r)) / (preload + tau / (2.0 * r));
+    };
+    EXPECT_NEAR(ratio(tau_max), std::exp(-mu_beta), 1e-12) << mu_beta;  // slips exactly here
+    EXPECT_GT(ratio(0.99 * tau_max), std::exp(-mu_beta)) << mu_beta;       // holds below
+    EXPECT_LT(tau_max, 2.0 * r * preload);  // never more than the pre-load can carry
+  }
+  for (const double nu_alpha : {0.1, 0.5, 1.2}) {
+    for (const double tau : {-0.3, 0.0, 0.2, 0.6}) {
+      const double T1 = preload - tau / (2.0 * r), T2 = preload + tau / (2.0 * r);
+      const double T1_out = T1 * std::exp(nu_alpha);  // eq. 3.30
+      const double T2_out = T2 / std::exp(nu_alpha);  // eq. 3.31
+      EXPECT_NEAR(sleeve_shaft_force(tau, r, preload, nu_alpha), T2_out - T1_out, 1e-9) << nu_alpha;
+    }
+    const double tau_c = sleeve_breakaway_torque(r, preload, nu_alpha);
+    EXPECT_NEAR(sleeve_shaft_force(tau_c, r, preload, nu_alpha), 0.0, 1e-9);  // eq. 3.34
+    const double printed_3_34 = (std::exp(nu_alpha) - std::exp(-nu_alpha)) /
+                                (std::exp(-nu_alpha) + std::exp(nu_alpha)) * 2.0 * r * preload;
+    EXPECT_NEAR(tau_c, printed_3_34, 1e-12);
+    // Eq. 3.33's load factor with no pre-load: F_R / (τ/2r) = e^{−να} + e^{να}.
+    EXPECT_NEAR(sleeve_shaft_force(0.4, r, 0.0, nu_alpha) / (0.4 / (2.0 * r)),
+                std::exp(-nu_alpha) + std::exp(nu_alpha), 1e-12);
+    // Eq. 3.37 as printed, T_PL (e^{−να} − e^{να}), is negative: the friction's magnitude is
+    // 2 T_PL sinh(να), what F_R lacks at τ = 0.
+    EXPECT_LT(preload * (std::exp(-nu_alpha) - std::exp(nu_alpha)), 0.0);
+    EXPECT_NEAR(-sleeve_shaft_force(0.0, r, preload, nu_alpha), 2.0 * preload * std::sinh(nu_alpha), 1e-9);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -9,6 +9,7 @@
 #include <numbers>
 #include <vector>
 
+#include "engine/analysis/routh.hpp"
 #include "engine/analysis/wall_design.hpp"
 
 namespace haptic::engine {
@@ -63,32 +64,6 @@ TEST(WallDesign, EveryHoldModelHasUnityDcGainAndTheHoldsLowFrequencyPhase) {
   EXPECT_NEAR(std::arg(hold_response(p, jw(nyquist))), -2.0 * std::atan(kPi / 4.0), 1e-12);
 }
 
-// The roots of a real polynomial (highest power first) with Re s > 0: the sign changes down the
-// first column of its Routh array (no zero may appear in it: the test's cases are generic).
-int routh_right_half_plane_roots(std::vector<double> a) {
-  std::vector<std::vector<double>> rows;
-  std::vector<double> r0, r1;
-  for (std::size_t i = 0; i < a.size(); i += 2) r0.push_back(a[i]);
-  for (std::size_t i = 1; i < a.size(); i += 2) r1.push_back(a[i]);
-  r1.resize(r0.size(), 0.0);
-  rows.push_back(r0);
-  rows.push_back(r1);
-  for (std::size_t n = 2; n < a.size(); ++n) {
-    const auto& u = rows[n - 2];
-    const auto& v = rows[n - 1];
-    std::vector<double> w(u.size(), 0.0);
-    for (std::size_t i = 0; i + 1 < u.size(); ++i) {
-      w[i] = (v[0] * u[i + 1] - u[0] * v[i + 1]) / v[0];
-    }
-    rows.push_back(w);
-  }
-  int changes = 0;
-  for (std::size_t n = 1; n < rows.size(); ++n) {
-    if ((rows[n][0] > 0.0) != (rows[n - 1][0] > 0.0)) ++changes;
-  }
-  return changes;
-}
-
 // right_half_plane_roots() (the argument principle along jω) against an independent count, the
 // Routh array of the rational holds' characteristic polynomials, on the document's device and
 // 000's motor over four decades of B_c.
@@ -106,13 +81,14 @@ TEST(WallDesign, ArgumentPrincipleCountsTheRootsRouthsArrayCounts) {
     const double K = p.wall_stiffness;
     for (double bc = 0.1; bc < 3000.0; bc *= 1.25) {
       p.hold = HoldModel::kSecondOrder;
-      const int quartic = routh_right_half_plane_roots(
-          {m, 2.0 * z * wn * m + b, wn * wn * m + 2.0 * z * wn * b, wn * wn * (b + bc), wn * wn * K});
+      const double quartic_coefficients[] = {m, 2.0 * z * wn * m + b, wn * wn * m + 2.0 * z * wn * b,
+                                             wn * wn * (b + bc), wn * wn * K};
+      const int quartic = routh_right_half_plane_roots(quartic_coefficients);
       EXPECT_EQ(right_half_plane_roots(p, bc), quartic) << m << " " << bc;
       EXPECT_EQ(nominal_loop_stable(p, bc), quartic == 0) << m << " " << bc;
       p.hold = HoldModel::kPade;
-      const int cubic = routh_right_half_plane_roots(
-          {theta * m, m + theta * (b - bc), b + bc - theta * K, K});
+      const double cubic_coefficients[] = {theta * m, m + theta * (b - bc), b + bc - theta * K, K};
+      const int cubic = routh_right_half_plane_roots(cubic_coefficients);
       EXPECT_EQ(right_half_plane_roots(p, bc), cubic) << m << " " << bc;
       EXPECT_EQ(nominal_loop_stable(p, bc), cubic == 0) << m << " " << bc;
       unstable += (quartic > 0) + (cubic > 0);
