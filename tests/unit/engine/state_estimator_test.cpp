@@ -235,9 +235,11 @@ struct WallRun {
   double max_abs_torque = 0.0;          // over the whole run, N·m
 };
 
+/// coulomb: the joint's Coulomb friction, N·m (Table 5.4's 0.088 unless given).
 WallRun simulate_wall(WallKind kind, const JointWallParams& gains, const Grip& grip, double push,
-                      bool release) {
+                      bool release, double coulomb = SingleJointParams::axial().coulomb) {
   SingleJointParams joint = SingleJointParams::axial();
+  joint.coulomb = coulomb;
   const double m_h = grip.mass * kArm * kArm;
   const double k_h = grip.stiffness * kArm * kArm;
   const double b_h = grip.damping * kArm * kArm;
@@ -382,8 +384,11 @@ TEST(JointWalls, EstimatorWallHoldsWhereTheConventionalOneLimitCycles_Fig6_20) {
   }
 }
 
-// §6.1's K_p = 400, K_d = 0 (L2899–2903): at most the slight buzz of a one-count torque staircase.
-TEST(JointWalls, ConventionalWallAt400IsAtMostAOneCountBuzz_Fig6_5) {
+// §6.1's K_p = 400, K_d = 0 (L2899–2903): "a small amount of vibration" with a light grip, the
+// one-count staircase of Fig. 6.5 — bounded from both sides: with the light (loose) grip the torque
+// steps by exactly one count's K_p Δ and no more, the position moves by less than a count, contact
+// is never lost. The tight grip stays within the same bound.
+TEST(JointWalls, ConventionalWallAt400IsAOneCountBuzz_Fig6_5) {
   for (const GripCase& g : kGrips) {
     const WallRun r =
         simulate_wall(WallKind::kConventional, gains(400.0, 0.0), g.grip, kGentlePush, false);
@@ -394,6 +399,58 @@ TEST(JointWalls, ConventionalWallAt400IsAtMostAOneCountBuzz_Fig6_5) {
     EXPECT_LT(r.position_pp_counts, 1.0) << g.name;
     EXPECT_LT(r.max_penetration_counts, 8.0) << g.name;
   }
+  const WallRun light =
+      simulate_wall(WallKind::kConventional, gains(400.0, 0.0), kLooseGrip, kGentlePush, false);
+  EXPECT_NEAR(light.torque_pp, 400.0 * kCount, 1e-9);  // the buzz is there: one whole count
+}
+
+// §6.1 at K_p = 600, K_d = 0 (L2911–2913): the thesis' vibration is "so severe" that it trips a
+// limit switch, and a light grip is the worse case (L2899). This rigid single-joint model does not
+// reproduce that, and the test pins down why. (K_d = 0, so the velocity filter plays no part; the
+// thesis names quantization, L2903.)
+//  - With Table 5.4's Coulomb friction (0.088 N·m, with sticking) neither grip vibrates: the light
+//    grip rests within a count; the tight grip hunts across one count boundary, the torque
+//    stepping by K_p Δ = 0.31 N·m (more than the friction) with a sub-count motion. The ordering
+//    is the thesis' reversed.
+//  - The friction is what hides the thesis' ordering: with it removed, the light grip bounces in
+//    and out of the wall by several counts while the tight grip still stays within one. Coulomb
+//    friction takes 4 f A per cycle, more than the sampled spring's leak (K_p T/2 − b) π ω A²
+//    returns below A = 4f / (π ω (K_p T/2 − b)), hundreds of counts for the light grip, so every
+//    small oscillation dies; the real joint's friction at sub-count amplitudes (pre-sliding) and
+//    the structure's 133 Hz axial mode (§5.4), neither modelled, are where the thesis' vibration
+//    can live.
+TEST(JointWalls, ConventionalWallAt600IsNotTheThesisSevereVibrationAndWhy_L2913) {
+  const WallRun light =
+      simulate_wall(WallKind::kConventional, gains(600.0, 0.0), kLooseGrip, kGentlePush, false);
+  const WallRun tight =
+      simulate_wall(WallKind::kConventional, gains(600.0, 0.0), kTightGrip, kGentlePush, false);
+  report("conventional wall 600/0, loose grip", light);
+  report("conventional wall 600/0, tight grip", tight);
+  EXPECT_LT(light.position_pp_counts, 1.0);
+  EXPECT_EQ(light.contact_losses, 0);
+  EXPECT_NEAR(tight.torque_pp, 600.0 * kCount, 1e-9);
+  EXPECT_GE(tight.contact_losses, kLimitCycleLosses);
+  EXPECT_LT(tight.position_pp_counts, 0.1);
+
+  const WallRun light_frictionless = simulate_wall(WallKind::kConventional, gains(600.0, 0.0),
+                                                   kLooseGrip, kGentlePush, false, 0.0);
+  const WallRun tight_frictionless = simulate_wall(WallKind::kConventional, gains(600.0, 0.0),
+                                                   kTightGrip, kGentlePush, false, 0.0);
+  report("600/0, loose grip, no Coulomb friction", light_frictionless);
+  report("600/0, tight grip, no Coulomb friction", tight_frictionless);
+  EXPECT_GT(light_frictionless.position_pp_counts, 3.0);
+  EXPECT_GE(light_frictionless.contact_losses, 3);
+  EXPECT_LT(tight_frictionless.position_pp_counts, 1.0);
+  // The friction bound for the light grip at the joint (hand b l² + the joint's B).
+  const SingleJointParams joint = SingleJointParams::axial();
+  const double damping = kLooseGrip.damping * kArm * kArm + joint.damping;
+  const double leak = 600.0 * kT / 2.0 - damping;  // > 0: Colgate's bound is broken, barely
+  const double omega = std::sqrt(600.0 / (joint.inertia + kLooseGrip.mass * kArm * kArm));
+  const double smallest_growing = 4.0 * joint.coulomb / (kPi * omega * leak);
+  std::printf("  light grip at 600: leak %.3f N*m*s/rad; oscillations grow only above %.0f counts\n",
+              leak, smallest_growing / kCount);
+  EXPECT_GT(leak, 0.0);
+  EXPECT_GT(smallest_growing / kCount, 100.0);
 }
 
 // Exit gating (L3259–3261): the torque is exactly zero on the first sample whose gate (q_m for the
