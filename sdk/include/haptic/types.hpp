@@ -225,6 +225,10 @@ struct State {
   /// The tool's orientation R_WT, for a device that measures one (capabilities.orientation).
   std::optional<Quaternion> orientation;
   std::chrono::steady_clock::time_point received_at;  ///< Local receipt time.
+  /// When the datagram reached this host's socket, by the kernel's receive stamp (SO_TIMESTAMPNS)
+  /// on steady_clock: received_at − arrived_at is the time the receiving thread took to run.
+  /// Empty where the kernel gives no stamp, and for a sample from a Step reply.
+  std::optional<std::chrono::steady_clock::time_point> arrived_at;
   /// At receipt: how much longer this sample took to arrive than the quickest recent one
   /// (receipt − stamp + clock_offset): the time it spent queued anywhere. 0 from a Step reply.
   std::chrono::nanoseconds age{0};
