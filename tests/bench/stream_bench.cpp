@@ -344,6 +344,7 @@ haptic::v1::ServerConfig server_config(int clients) {
   config.set_status_period_s(0);
   config.set_max_sessions(static_cast<std::uint32_t>(std::max(clients, 64)));
   config.set_max_sessions_per_peer(static_cast<std::uint32_t>(std::max(clients, 64)));
+  config.set_session_open_burst_per_peer(static_cast<std::uint32_t>(std::max(clients, 64)));  // one host
   return config;
 }
 
