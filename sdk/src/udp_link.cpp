@@ -1,6 +1,14 @@
 #include "udp_link.hpp"
 
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <future>
 
 #include "haptic/error.hpp"
@@ -18,6 +26,21 @@ Vec3 to_vec(const wire::Vec3d& v) { return {v.x, v.y, v.z}; }
 constexpr int kReceiveBufferBytes = 1 << 20;
 // At most this many datagrams are taken in one wake-up before the newest is handed out.
 constexpr int kMaxDrain = 1024;
+// Datagrams read per recvmmsg call.
+constexpr unsigned kBatch = 32;
+
+/// CLOCK_REALTIME − CLOCK_MONOTONIC now: the kernel stamps arrivals on the former
+/// (SO_TIMESTAMPNS), steady_clock is the latter.
+std::int64_t realtime_minus_monotonic_ns() {
+  timespec a{}, r{}, b{};
+  clock_gettime(CLOCK_MONOTONIC, &a);
+  clock_gettime(CLOCK_REALTIME, &r);
+  clock_gettime(CLOCK_MONOTONIC, &b);
+  const auto ns = [](const timespec& t) {
+    return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+  };
+  return ns(r) - (ns(a) + ns(b)) / 2;
+}
 
 }  // namespace
 
@@ -52,37 +75,95 @@ UdpLink::UdpLink(const std::string& host, std::uint16_t port, std::uint64_t sess
   // hands out only the newest sample. (Handing out every queued datagram in order is what once
   // made samples a second old.) The kernel may cap the size at net.core.rmem_max.
   socket_.set_option(asio::socket_base::receive_buffer_size(kReceiveBufferBytes), error);
+  // The kernel's receive stamp on each datagram: State::arrived_at.
+  const int on = 1;
+  ::setsockopt(socket_.native_handle(), SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
+  wake_fd_ = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+  if (wake_fd_ < 0) throw ConnectionError(std::string("UDP: cannot make an eventfd: ") + std::strerror(errno));
 
   send_heartbeat();  // at once, so the server learns where to send state
   schedule_heartbeat();
-  start_receive();
   thread_ = std::thread([this] { io_.run(); });
-  dispatcher_ = std::thread([this] { dispatch_loop(); });
+  receiver_ = std::thread([this] { receive_loop(); });
 }
 
 UdpLink::~UdpLink() {
+  stopping_.store(true);
+  const std::uint64_t one = 1;
+  (void)!::write(wake_fd_, &one, sizeof one);
+  if (receiver_.joinable()) receiver_.join();
   io_.stop();
   if (thread_.joinable()) thread_.join();
-  {
-    std::lock_guard lock(dispatch_mutex_);
-    stopping_dispatch_ = true;
-  }
-  dispatch_ready_.notify_all();
-  if (dispatcher_.joinable()) dispatcher_.join();
+  ::close(wake_fd_);
 }
 
-void UdpLink::dispatch_loop() {
-  for (;;) {
-    State state;
-    {
-      std::unique_lock lock(dispatch_mutex_);
-      dispatch_ready_.wait(lock, [this] { return stopping_dispatch_ || pending_.has_value(); });
-      if (stopping_dispatch_) return;
-      state = *pending_;
-      pending_.reset();
+void UdpLink::receive_loop() {
+  const int fd = socket_.native_handle();
+  while (!stopping_.load()) {
+    pollfd fds[2] = {{fd, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+    if (::poll(fds, 2, -1) < 0 && errno != EINTR) break;
+    if (stopping_.load()) break;
+    if ((fds[1].revents & POLLIN) != 0) {
+      std::uint64_t count = 0;
+      (void)!::read(wake_fd_, &count, sizeof count);
+      std::vector<std::function<void()>> requests;
+      {
+        std::lock_guard lock(requests_mutex_);
+        requests.swap(requests_);
+      }
+      for (const auto& request : requests) request();
     }
+    if ((fds[0].revents & POLLIN) != 0) {
+      Batch batch;
+      batch.received_at = std::chrono::steady_clock::now();
+      drain(batch);
+      hand_out(batch);
+    }
+    deliver();
+  }
+}
+
+void UdpLink::run_on_receiver(const std::function<void()>& work) {
+  if (on_callback_thread()) {
+    work();  // a callback's own call: the receive thread is this one
+    return;
+  }
+  std::promise<void> done;
+  {
+    std::lock_guard lock(requests_mutex_);
+    requests_.push_back([&] {
+      work();
+      done.set_value();
+    });
+  }
+  const std::uint64_t one = 1;
+  (void)!::write(wake_fd_, &one, sizeof one);
+  done.get_future().wait();
+}
+
+void UdpLink::send_to_server(std::span<const std::uint8_t> bytes) {
+  asio::ip::udp::endpoint to;
+  {
+    std::lock_guard lock(identity_mutex_);
+    to = server_;
+  }
+  // A lost datagram is made good by the next heartbeat (or, for an answer, the next challenge).
+  (void)::sendto(socket_.native_handle(), bytes.data(), bytes.size(), MSG_DONTWAIT, to.data(),
+                 static_cast<socklen_t>(to.size()));
+}
+
+void UdpLink::deliver() {
+  if (in_callback_) return;  // a callback's own call: its caller delivers after it returns
+  while (pending_) {  // again if the callback's own calls read a newer State meanwhile
+    const State state = std::move(*pending_);
+    pending_.reset();
     std::lock_guard lock(callback_mutex_);
-    if (callback_) callback_(state);
+    if (!callback_) return;
+    in_callback_ = true;
+    callback_started_ = std::chrono::steady_clock::now();
+    callback_(state);
+    callback_ended_ = std::chrono::steady_clock::now();
+    in_callback_ = false;
   }
 }
 
@@ -90,7 +171,12 @@ void UdpLink::send_heartbeat() {
   if (!heartbeats_enabled_.load()) return;
   std::array<std::uint8_t, wire::kHeartbeatDatagramSize> bytes{};
   wire::Header header;
-  header.session_id = session_id_;
+  wire::Key key;
+  {
+    std::lock_guard lock(identity_mutex_);
+    header.session_id = session_id_;
+    key = key_;
+  }
   header.sequence = ++heartbeat_sequence_;
   header.time_ns = steady_ns(std::chrono::steady_clock::now());
   wire::HeartbeatPayload payload;
@@ -109,9 +195,8 @@ void UdpLink::send_heartbeat() {
           0, header.time_ns - steady_ns(echo_received_at_));
     }
   }
-  wire::encode_heartbeat(header, payload, key_, bytes);
-  asio::error_code ignored;  // a lost heartbeat is made good by the next one
-  socket_.send_to(asio::buffer(bytes), server_, 0, ignored);
+  wire::encode_heartbeat(header, payload, key, bytes);
+  send_to_server(bytes);
 }
 
 void UdpLink::schedule_heartbeat() {
@@ -123,32 +208,44 @@ void UdpLink::schedule_heartbeat() {
   });
 }
 
-void UdpLink::start_receive() {
-  socket_.async_receive_from(asio::buffer(receive_buffer_), sender_,
-                             [this](const asio::error_code& error, std::size_t size) {
-                               if (error == asio::error::operation_aborted) return;
-                               if (!error) receive_batch(size);
-                               start_receive();
-                             });
-}
-
-void UdpLink::receive_batch(std::size_t first_size) {
-  Batch batch;
-  batch.received_at = std::chrono::steady_clock::now();
-  take({receive_buffer_.data(), first_size}, batch);
-  drain(receive_buffer_, batch);
-  hand_out(batch);
-}
-
-void UdpLink::drain(std::span<std::uint8_t> buffer, Batch& batch) {
-  // Whatever else has queued up meanwhile: read it all now, keep only the newest.
-  asio::ip::udp::endpoint from;
-  for (int i = 0; i < kMaxDrain; ++i) {
-    asio::error_code error;
-    if (socket_.available(error) == 0 || error) break;
-    const std::size_t size = socket_.receive_from(asio::buffer(buffer.data(), buffer.size()), from, 0, error);
-    if (error) break;
-    take({buffer.data(), size}, batch);
+void UdpLink::drain(Batch& batch) {
+  struct Slot {
+    std::array<std::uint8_t, 2048> bytes;
+    alignas(cmsghdr) std::array<char, CMSG_SPACE(sizeof(timespec))> control;
+    iovec iov;
+  };
+  // Per thread and reused: this runs on the receive thread (and, for restart_ticks, nowhere else).
+  static thread_local std::array<Slot, kBatch> slots;
+  static thread_local std::array<mmsghdr, kBatch> messages;
+  const std::int64_t realtime_offset = realtime_minus_monotonic_ns();
+  for (int read = 0; read < kMaxDrain;) {
+    for (unsigned i = 0; i < kBatch; ++i) {
+      slots[i].iov = {slots[i].bytes.data(), slots[i].bytes.size()};
+      messages[i] = {};
+      messages[i].msg_hdr.msg_iov = &slots[i].iov;
+      messages[i].msg_hdr.msg_iovlen = 1;
+      messages[i].msg_hdr.msg_control = slots[i].control.data();
+      messages[i].msg_hdr.msg_controllen = slots[i].control.size();
+    }
+    const int got = ::recvmmsg(socket_.native_handle(), messages.data(), kBatch, MSG_DONTWAIT, nullptr);
+    if (got <= 0) break;
+    for (int i = 0; i < got; ++i) {
+      std::optional<std::chrono::steady_clock::time_point> arrived_at;
+      msghdr& header = messages[static_cast<std::size_t>(i)].msg_hdr;
+      for (cmsghdr* c = CMSG_FIRSTHDR(&header); c != nullptr; c = CMSG_NXTHDR(&header, c)) {
+        if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+          timespec ts{};
+          std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+          const std::int64_t ns =
+              static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec - realtime_offset;
+          arrived_at = std::chrono::steady_clock::time_point(std::chrono::nanoseconds(ns));
+        }
+      }
+      take({slots[static_cast<std::size_t>(i)].bytes.data(), messages[static_cast<std::size_t>(i)].msg_len},
+           arrived_at, batch);
+    }
+    read += got;
+    if (static_cast<unsigned>(got) < kBatch) break;
   }
 }
 
@@ -156,7 +253,12 @@ void UdpLink::hand_out(const Batch& batch) {
   if (!batch.newest) return;
   {
     std::lock_guard lock(mutex_);
-    counters_.skipped += batch.accepted - 1;
+    // The States passed over for the newest: those that queued behind a running callback, and
+    // those that arrived together otherwise.
+    const std::uint64_t passed_over = batch.accepted - 1;
+    const std::uint64_t behind_callback = std::min(passed_over, batch.during_callback);
+    counters_.callback_skipped += behind_callback;
+    counters_.skipped += passed_over - behind_callback;
     // Older than what we have (reordered on the way): counted, but the newest stays latest.
     if (!have_latest_ || batch.newest->tick >= latest_.tick) {
       latest_ = *batch.newest;
@@ -165,19 +267,27 @@ void UdpLink::hand_out(const Batch& batch) {
   }
   arrived_.notify_all();
   if (!has_callback_.load(std::memory_order_acquire)) return;
-  {
-    std::lock_guard lock(dispatch_mutex_);
-    if (pending_) ++callback_skipped_;  // the callback is still busy with an older one
-    pending_ = *batch.newest;
+  if (pending_ && pending_->tick <= batch.newest->tick) {
+    std::lock_guard lock(mutex_);
+    // Replaced before the callback saw it: while it runs (a call of its own read the socket), or
+    // by a second read in the same wake-up.
+    ++(in_callback_ ? counters_.callback_skipped : counters_.skipped);
   }
-  dispatch_ready_.notify_one();
+  if (!pending_ || pending_->tick <= batch.newest->tick) pending_ = *batch.newest;
 }
 
 void UdpLink::answer_challenge(std::span<const std::uint8_t> datagram) {
   wire::Header header;
   wire::PathChallengePayload challenge;
-  if (wire::decode_path_challenge(datagram, key_, header, challenge) != wire::DecodeError::kNone ||
-      header.session_id != session_id_) {
+  wire::Key key;
+  std::uint64_t session_id = 0;
+  {
+    std::lock_guard lock(identity_mutex_);
+    key = key_;
+    session_id = session_id_;
+  }
+  if (wire::decode_path_challenge(datagram, key, header, challenge) != wire::DecodeError::kNone ||
+      header.session_id != session_id) {
     std::lock_guard lock(mutex_);
     ++counters_.rejected;
     return;
@@ -186,18 +296,18 @@ void UdpLink::answer_challenge(std::span<const std::uint8_t> datagram) {
   // From this socket, so that the address the server saw is the one proven to receive.
   std::array<std::uint8_t, wire::kPathDatagramSize> bytes{};
   wire::Header reply;
-  reply.session_id = session_id_;
+  reply.session_id = session_id;
   reply.sequence = ++heartbeat_sequence_;
   reply.time_ns = steady_ns(std::chrono::steady_clock::now());
-  wire::encode_path_response(reply, {challenge.nonce, reply.time_ns}, key_, bytes);
-  asio::error_code ignored;  // lost: the next heartbeat draws another challenge
-  socket_.send_to(asio::buffer(bytes), server_, 0, ignored);
+  wire::encode_path_response(reply, {challenge.nonce, reply.time_ns}, key, bytes);
+  send_to_server(bytes);  // lost: the next heartbeat draws another challenge
   std::lock_guard lock(mutex_);
   ++counters_.challenges_answered;
   last_heard_ = std::chrono::steady_clock::now();
 }
 
-void UdpLink::take(std::span<const std::uint8_t> datagram, Batch& batch) {
+void UdpLink::take(std::span<const std::uint8_t> datagram,
+                   std::optional<std::chrono::steady_clock::time_point> arrived_at, Batch& batch) {
   std::optional<State>& newest = batch.newest;
   wire::Header header;
   if (wire::peek_header(datagram, header) == wire::DecodeError::kNone &&
@@ -206,8 +316,15 @@ void UdpLink::take(std::span<const std::uint8_t> datagram, Batch& batch) {
     return;
   }
   wire::StatePayload payload;
-  const bool ok = wire::decode_state(datagram, key_, header, payload) == wire::DecodeError::kNone &&
-                  header.session_id == session_id_;
+  wire::Key key;
+  std::uint64_t session_id = 0;
+  {
+    std::lock_guard lock(identity_mutex_);
+    key = key_;
+    session_id = session_id_;
+  }
+  const bool ok = wire::decode_state(datagram, key, header, payload) == wire::DecodeError::kNone &&
+                  header.session_id == session_id;
   std::lock_guard lock(mutex_);
   if (!ok) {
     ++counters_.rejected;
@@ -254,6 +371,10 @@ void UdpLink::take(std::span<const std::uint8_t> datagram, Batch& batch) {
   }
   ++counters_.accepted;
   ++batch.accepted;
+  if (arrived_at && callback_ended_ > callback_started_ && *arrived_at >= callback_started_ &&
+      *arrived_at <= callback_ended_) {
+    ++batch.during_callback;  // it queued while the callback ran
+  }
   echo_state_time_ns_ = header.time_ns;
   echo_received_at_ = batch.received_at;
   State state;
@@ -271,6 +392,7 @@ void UdpLink::take(std::span<const std::uint8_t> datagram, Batch& batch) {
     state.orientation = Quaternion{payload.R_WT.w, payload.R_WT.x, payload.R_WT.y, payload.R_WT.z};
   }
   state.received_at = batch.received_at;
+  state.arrived_at = arrived_at;
   last_heard_ = batch.received_at;
   newest_tick_ = std::max(newest_tick_, payload.tick);
   // How much longer than the quickest recent sample this one took: time spent queued anywhere.
@@ -286,23 +408,17 @@ void UdpLink::forget_ticks_locked() {
 }
 
 void UdpLink::restart_ticks() {
-  std::promise<void> done;
-  asio::post(io_, [&] {
+  run_on_receiver([this] {
     // What is in the socket now belongs to the old run (the server sent it before it replied):
-    // take it as usual first, into a buffer of its own (a receive may be pending on the other).
-    std::array<std::uint8_t, 2048> scratch{};
+    // take it as usual first.
     Batch batch;
     batch.received_at = std::chrono::steady_clock::now();
-    drain(scratch, batch);
+    drain(batch);
     hand_out(batch);
-    {
-      std::lock_guard lock(mutex_);
-      stale_through_ = last_sequence_;
-      forget_ticks_locked();
-    }
-    done.set_value();
+    std::lock_guard lock(mutex_);
+    stale_through_ = last_sequence_;
+    forget_ticks_locked();
   });
-  done.get_future().wait();
 }
 
 void UdpLink::new_subscription() {
@@ -311,26 +427,24 @@ void UdpLink::new_subscription() {
 }
 
 void UdpLink::rebind(std::uint16_t port, std::uint64_t session_id, const wire::Key& key) {
-  std::promise<void> switched;
-  asio::post(io_, [&] {
-    server_.port(port);
-    session_id_ = session_id;
-    key_ = key;
-    heartbeat_sequence_ = 0;
+  run_on_receiver([&] {
     {
-      std::lock_guard lock(mutex_);
-      // The new session's ticks, sequences and server clock start again from zero.
-      last_sequence_ = 0;
-      seen_window_ = 0;
-      stale_through_ = 0;
-      session_accepted_base_ = counters_.accepted;
-      session_lost_base_ = counters_.lost;
-      forget_ticks_locked();
+      std::lock_guard lock(identity_mutex_);
+      server_.port(port);
+      session_id_ = session_id;
+      key_ = key;
     }
-    send_heartbeat();
-    switched.set_value();
+    heartbeat_sequence_ = 0;
+    std::lock_guard lock(mutex_);
+    // The new session's ticks, sequences and server clock start again from zero.
+    last_sequence_ = 0;
+    seen_window_ = 0;
+    stale_through_ = 0;
+    session_accepted_base_ = counters_.accepted;
+    session_lost_base_ = counters_.lost;
+    forget_ticks_locked();
   });
-  switched.get_future().wait();
+  send_heartbeat_soon();
 }
 
 std::optional<std::chrono::steady_clock::time_point> UdpLink::last_heard() const {
@@ -347,10 +461,6 @@ void UdpLink::on_state(std::function<void(const State&)> callback) {
   std::lock_guard lock(callback_mutex_);  // waits for a callback in progress to return
   has_callback_.store(static_cast<bool>(callback), std::memory_order_release);
   callback_ = std::move(callback);
-  if (!callback_) {
-    std::lock_guard pending(dispatch_mutex_);
-    pending_.reset();
-  }
 }
 
 void UdpLink::offer(const State& state) {
@@ -407,14 +517,8 @@ std::optional<double> UdpLink::server_time_at(std::chrono::steady_clock::time_po
 }
 
 ReceiveCounters UdpLink::counters() const {
-  ReceiveCounters out;
-  {
-    std::lock_guard lock(mutex_);
-    out = counters_;
-  }
-  std::lock_guard lock(dispatch_mutex_);
-  out.callback_skipped = callback_skipped_;
-  return out;
+  std::lock_guard lock(mutex_);
+  return counters_;
 }
 
 }  // namespace haptic::detail

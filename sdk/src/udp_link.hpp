@@ -1,6 +1,9 @@
 #pragma once
 // The SDK's end of the UDP data plane: one socket on an ephemeral port, heartbeats to the server
-// (which answers the address they come from), authenticated State datagrams in. One asio thread.
+// (which answers the address they come from), authenticated State datagrams in. Two threads: the
+// receive thread blocks on the socket, reads whatever has queued with recvmmsg, keeps the newest
+// State and hands it to the on_state callback itself (one wake-up from the wire to the
+// application); an asio thread sends the heartbeats, so a slow callback never costs the lease.
 
 #include <asio.hpp>
 
@@ -14,6 +17,7 @@
 #include <span>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "clock_sync.hpp"
 #include "haptic/types.hpp"
@@ -61,45 +65,61 @@ class UdpLink {
   std::optional<double> clock_drift() const;
   std::optional<double> server_time_at(std::chrono::steady_clock::time_point local) const;
   ReceiveCounters counters() const;
-  /// Whether the calling thread is the one that runs the on_state callback.
-  bool on_callback_thread() const { return std::this_thread::get_id() == dispatcher_.get_id(); }
+  /// Whether the calling thread is the one that runs the on_state callback (the receive thread).
+  bool on_callback_thread() const { return std::this_thread::get_id() == receiver_.get_id(); }
 
  private:
-  void send_heartbeat();
-  void schedule_heartbeat();
-  void start_receive();
-  /// One wake-up: the datagram already in the buffer and every one queued behind it; only the
-  /// newest State is handed out (the others are counted as skipped).
-  void receive_batch(std::size_t first_size);
-  /// Decodes the datagram in the buffer: answers a challenge, or keeps a State if it is the
-  /// newest so far (`accepted` counts States taken).
-  /// What one wake-up read: its time, the newest State taken, how many were taken.
+  /// What one wake-up read: its time, the newest State taken, how many were taken, and how many
+  /// of those had reached the socket while the callback was running.
   struct Batch {
     std::chrono::steady_clock::time_point received_at;
     std::optional<State> newest;
     std::uint64_t accepted = 0;
+    std::uint64_t during_callback = 0;
   };
-  void take(std::span<const std::uint8_t> datagram, Batch& batch);
-  /// Reads and takes every datagram already queued on the socket, into `buffer`.
-  void drain(std::span<std::uint8_t> buffer, Batch& batch);
-  /// Makes the batch's newest State the latest and hands it to the callback's thread.
+
+  void send_heartbeat();
+  void schedule_heartbeat();
+  /// The receive thread: waits on the socket and the wake-up descriptor, runs posted requests,
+  /// reads, and calls the callback with the newest State outside any request.
+  void receive_loop();
+  /// Reads every datagram already queued (recvmmsg, up to kMaxDrain) and takes each.
+  void drain(Batch& batch);
+  /// Decodes one datagram: answers a challenge, or keeps a State if it is the newest so far.
+  /// arrived_at: the kernel's receive stamp, if any.
+  void take(std::span<const std::uint8_t> datagram,
+            std::optional<std::chrono::steady_clock::time_point> arrived_at, Batch& batch);
+  /// Makes the batch's newest State the latest and the callback's next.
   void hand_out(const Batch& batch);
+  /// Calls the callback with the pending State, if any (receive thread, outside the callback).
+  void deliver();
   /// Echoes a PathChallenge's nonce (the server sends state only where one was answered).
   void answer_challenge(std::span<const std::uint8_t> datagram);
   /// Forgets the newest tick, sample and clock estimate (ticks restarted). Holds mutex_.
   void forget_ticks_locked();
+  /// Runs `work` on the receive thread and waits for it (inline when already there).
+  void run_on_receiver(const std::function<void()>& work);
+  /// Sends `bytes` to the server from the socket (any thread).
+  void send_to_server(std::span<const std::uint8_t> bytes);
 
-  asio::io_context io_;
+  asio::io_context io_;  // the heartbeat timer's
   asio::ip::udp::socket socket_;
-  asio::ip::udp::endpoint server_;
-  asio::ip::udp::endpoint sender_;
   asio::steady_timer heartbeat_timer_;
   std::chrono::milliseconds heartbeat_period_;
-  std::uint64_t session_id_;
-  wire::Key key_;
-  std::uint64_t heartbeat_sequence_ = 0;  // io thread only
-  std::array<std::uint8_t, 2048> receive_buffer_{};
+  int wake_fd_ = -1;  // an eventfd: requests for the receive thread, and stopping
+  std::atomic<std::uint64_t> heartbeat_sequence_{0};
   std::atomic<bool> heartbeats_enabled_{true};
+  std::atomic<bool> stopping_{false};
+
+  // Who this link speaks for, and where the server is: the receive thread and the heartbeat
+  // thread both read them; rebind() changes them.
+  mutable std::mutex identity_mutex_;
+  asio::ip::udp::endpoint server_;  // guarded by identity_mutex_
+  std::uint64_t session_id_;        // guarded by identity_mutex_
+  wire::Key key_;                   // guarded by identity_mutex_
+
+  std::mutex requests_mutex_;
+  std::vector<std::function<void()>> requests_;  // guarded by requests_mutex_
 
   mutable std::mutex mutex_;
   std::condition_variable arrived_;
@@ -120,21 +140,18 @@ class UdpLink {
   std::int64_t echo_state_time_ns_ = 0;
   std::chrono::steady_clock::time_point echo_received_at_{};
 
-  /// The callback's own thread: a slow callback must not hold up the io thread, which sends
-  /// the heartbeats that keep the lease. It is handed the newest State (conflated).
-  void dispatch_loop();
-
-  std::mutex callback_mutex_;  // held while the callback runs, so on_state({}) waits it out
+  // The callback (receive thread). callback_mutex_ is held while it runs, so on_state({}) waits
+  // it out. The last call's start and end, to tell States that queued behind it from others.
+  std::mutex callback_mutex_;
   std::function<void(const State&)> callback_;  // guarded by callback_mutex_
   std::atomic<bool> has_callback_{false};
-  mutable std::mutex dispatch_mutex_;
-  std::condition_variable dispatch_ready_;
-  std::optional<State> pending_;       // guarded by dispatch_mutex_: the next State for the callback
-  bool stopping_dispatch_ = false;     // guarded by dispatch_mutex_
-  std::uint64_t callback_skipped_ = 0; // guarded by dispatch_mutex_
+  std::optional<State> pending_;       // receive thread only: the callback's next State
+  bool in_callback_ = false;           // receive thread only
+  std::chrono::steady_clock::time_point callback_started_{};  // receive thread only
+  std::chrono::steady_clock::time_point callback_ended_{};    // receive thread only
 
-  std::thread thread_;
-  std::thread dispatcher_;
+  std::thread thread_;    // asio: heartbeats
+  std::thread receiver_;  // the socket and the callback
 };
 
 }  // namespace haptic::detail

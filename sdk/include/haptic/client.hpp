@@ -291,12 +291,13 @@ class Client {
   /// How long the server keeps a silent session (no heartbeat, no RPC) before dropping it.
   std::chrono::milliseconds lease_timeout() const;
 
-  /// Called on a thread of the SDK's own (not the receive thread, which keeps sending the
-  /// heartbeats that hold the lease however long the callback takes) with the newest State
-  /// datagram: when several arrive while it runs, only the newest is passed next and the others
-  /// are counted in ReceiveCounters::callback_skipped (and in ::skipped when they queued up on
-  /// the socket); never for the sample a Step reply carries. Do not call on_state from inside it.
-  /// Pass an empty function to stop; on_state returns once a callback in progress has.
+  /// Called on the SDK's receive thread, the moment a State datagram is read, with the newest
+  /// one: the receive thread reads everything that has queued on the socket (recvmmsg) and passes
+  /// only the newest, so a callback that runs long is next handed the newest State, and the ones
+  /// that arrived meanwhile are counted in ReceiveCounters::callback_skipped (the others passed
+  /// over in ::skipped). The heartbeats that hold the lease go from another thread, however long
+  /// the callback takes. Never for the sample a Step reply carries. Do not call on_state from
+  /// inside it. Pass an empty function to stop; on_state returns once a callback in progress has.
   void on_state(std::function<void(const State&)> callback);
   /// Calls `callback` on a thread of the SDK's with each server event from now on (sessions
   /// opening and closing, leases expiring, scene changes, force and device faults), starting

@@ -522,13 +522,14 @@ struct ReceiveCounters {
   std::uint64_t accepted = 0;  ///< State datagrams decoded and authenticated.
   std::uint64_t rejected = 0;  ///< Datagrams dropped: malformed, wrong session, bad tag.
   /// Accepted States never handed out: a newer one had arrived by the time the receive thread
-  /// read them (it hands out only the newest of what has queued up).
+  /// read them (it hands out only the newest of what has queued up), the callback_skipped ones
+  /// apart.
   std::uint64_t skipped = 0;
   /// Path challenges answered: the server asks each new UDP address to prove it receives before
   /// it sends state there.
   std::uint64_t challenges_answered = 0;
-  /// States the on_state callback never saw because it was still busy with an older one (it runs
-  /// on a thread of its own and is always handed the newest).
+  /// States the on_state callback never saw because they arrived (by the kernel's receive stamp)
+  /// while it was still busy with an older one; it is always handed the newest.
   std::uint64_t callback_skipped = 0;
   /// States the server sent that never arrived: gaps in each session's sequence (net of late
   /// arrivals), plus, for each outage the client reconnected after, the samples the stream
