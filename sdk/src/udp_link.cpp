@@ -46,8 +46,7 @@ std::int64_t realtime_minus_monotonic_ns() {
 
 UdpLink::UdpLink(const std::string& host, std::uint16_t port, std::uint64_t session_id,
                  const wire::Key& key, std::chrono::milliseconds heartbeat_period)
-    : socket_(io_),
-      heartbeat_timer_(io_),
+    : heartbeat_timer_(io_),
       heartbeat_period_(heartbeat_period),
       session_id_(session_id),
       key_(key) {
@@ -66,20 +65,29 @@ UdpLink::UdpLink(const std::string& host, std::uint16_t port, std::uint64_t sess
       break;
     }
   }
-  socket_.open(server_.protocol(), error);
-  if (!error) socket_.bind(asio::ip::udp::endpoint(server_.protocol(), 0), error);
-  if (error) throw ConnectionError("UDP: cannot open a socket: " + error.message());
+  socket_ = ::socket(server_.protocol().family(), SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (socket_ < 0) throw ConnectionError(std::string("UDP: cannot open a socket: ") + std::strerror(errno));
+  const asio::ip::udp::endpoint any(server_.protocol(), 0);
+  if (::bind(socket_, any.data(), static_cast<socklen_t>(any.size())) != 0) {
+    const std::string why = std::strerror(errno);
+    ::close(socket_);
+    throw ConnectionError("UDP: cannot bind a socket: " + why);
+  }
   // Room for a lockstep Step's burst (another client's Step of many ticks sends them all at once;
   // the tail of a burst that overflows is what is lost, and it holds the newest tick). What waits
   // here does not go stale on its way to the application: each wake-up drains the socket and
   // hands out only the newest sample. (Handing out every queued datagram in order is what once
   // made samples a second old.) The kernel may cap the size at net.core.rmem_max.
-  socket_.set_option(asio::socket_base::receive_buffer_size(kReceiveBufferBytes), error);
+  ::setsockopt(socket_, SOL_SOCKET, SO_RCVBUF, &kReceiveBufferBytes, sizeof kReceiveBufferBytes);
   // The kernel's receive stamp on each datagram: State::arrived_at.
   const int on = 1;
-  ::setsockopt(socket_.native_handle(), SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
+  ::setsockopt(socket_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
   wake_fd_ = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-  if (wake_fd_ < 0) throw ConnectionError(std::string("UDP: cannot make an eventfd: ") + std::strerror(errno));
+  if (wake_fd_ < 0) {
+    const std::string why = std::strerror(errno);
+    ::close(socket_);
+    throw ConnectionError("UDP: cannot make an eventfd: " + why);
+  }
 
   send_heartbeat();  // at once, so the server learns where to send state
   schedule_heartbeat();
@@ -95,10 +103,11 @@ UdpLink::~UdpLink() {
   io_.stop();
   if (thread_.joinable()) thread_.join();
   ::close(wake_fd_);
+  ::close(socket_);
 }
 
 void UdpLink::receive_loop() {
-  const int fd = socket_.native_handle();
+  const int fd = socket_;
   while (!stopping_.load()) {
     pollfd fds[2] = {{fd, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
     if (::poll(fds, 2, -1) < 0 && errno != EINTR) break;
@@ -148,7 +157,7 @@ void UdpLink::send_to_server(std::span<const std::uint8_t> bytes) {
     to = server_;
   }
   // A lost datagram is made good by the next heartbeat (or, for an answer, the next challenge).
-  (void)::sendto(socket_.native_handle(), bytes.data(), bytes.size(), MSG_DONTWAIT, to.data(),
+  (void)::sendto(socket_, bytes.data(), bytes.size(), MSG_DONTWAIT, to.data(),
                  static_cast<socklen_t>(to.size()));
 }
 
@@ -227,7 +236,7 @@ void UdpLink::drain(Batch& batch) {
       messages[i].msg_hdr.msg_control = slots[i].control.data();
       messages[i].msg_hdr.msg_controllen = slots[i].control.size();
     }
-    const int got = ::recvmmsg(socket_.native_handle(), messages.data(), kBatch, MSG_DONTWAIT, nullptr);
+    const int got = ::recvmmsg(socket_, messages.data(), kBatch, MSG_DONTWAIT, nullptr);
     if (got <= 0) break;
     for (int i = 0; i < got; ++i) {
       std::optional<std::chrono::steady_clock::time_point> arrived_at;

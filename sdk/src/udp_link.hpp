@@ -103,7 +103,9 @@ class UdpLink {
   void send_to_server(std::span<const std::uint8_t> bytes);
 
   asio::io_context io_;  // the heartbeat timer's
-  asio::ip::udp::socket socket_;
+  // The data socket, a plain descriptor: an asio socket would be registered with the io thread's
+  // epoll, and every datagram would wake that thread for nothing.
+  int socket_ = -1;
   asio::steady_timer heartbeat_timer_;
   std::chrono::milliseconds heartbeat_period_;
   int wake_fd_ = -1;  // an eventfd: requests for the receive thread, and stopping

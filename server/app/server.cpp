@@ -305,10 +305,24 @@ void Server::start() {
       spdlog::warn("loop: mlockall refused ({}); page faults may delay ticks", setup.mlock_error);
     }
   }
-  udp_.start(loop_->config().mode == runtime::TimeMode::kRealTime
-                 ? std::optional<std::int64_t>(loop_->start_ns())
-                 : std::nullopt,
-             setup.cpu);
+  const bool real_time = loop_->config().mode == runtime::TimeMode::kRealTime;
+  net::SenderScheduling sender;
+  if (real_time) {
+    const int cpu = config_.real_time().sender_cpu();
+    sender.cpu = cpu == config::kSenderOnLoopCpu ? setup.cpu : cpu;
+    sender.priority = config_.real_time().sender_priority();
+  }
+  const net::SenderSetup sender_setup =
+      udp_.start(real_time ? std::optional<std::int64_t>(loop_->start_ns()) : std::nullopt, sender);
+  if (!sender_setup.priority_error.empty()) {
+    spdlog::warn("udp: the State sender's SCHED_FIFO {} refused ({}); it runs with normal "
+                 "scheduling, so busy threads may delay datagrams",
+                 sender.priority, sender_setup.priority_error);
+  }
+  if (!sender_setup.cpu_error.empty()) {
+    spdlog::warn("udp: cannot pin the State sender to CPU {} ({}); it runs unpinned", sender.cpu,
+                 sender_setup.cpu_error);
+  }
   status_last_ns_ = runtime::monotonic_now_ns();
   housekeeping_ = std::thread([this] { housekeeping_loop(); });
   if (metrics_) {

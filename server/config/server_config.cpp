@@ -117,6 +117,10 @@ void fill_defaults(v1::ServerConfig& config) {
     const int cpus = static_cast<int>(std::thread::hardware_concurrency());
     real_time->set_cpu(real_time->use_fifo() && cpus > 1 ? cpus - 1 : -1);
   }
+  if (!real_time->has_sender_cpu()) real_time->set_sender_cpu(kSenderOnLoopCpu);
+  if (!real_time->has_sender_priority()) {
+    real_time->set_sender_priority(real_time->use_fifo() ? real_time->fifo_priority() - 1 : 0);
+  }
 
   if (config.initial_operator().mode() == v1::OperatorInput::MODE_UNSPECIFIED) {
     config.mutable_initial_operator()->set_mode(v1::OperatorInput::NONE);
@@ -189,6 +193,17 @@ std::string validate(const v1::ServerConfig& config) {
   if (config.real_time().cpu() < -1 || (cpus > 0 && config.real_time().cpu() >= cpus)) {
     return "real_time.cpu: must be -1 (no pinning) or 0 to " + std::to_string(cpus - 1) + ", got " +
            std::to_string(config.real_time().cpu());
+  }
+  if (config.real_time().sender_cpu() < kSenderOnLoopCpu ||
+      (cpus > 0 && config.real_time().sender_cpu() >= cpus)) {
+    return "real_time.sender_cpu: must be -2 (the loop's), -1 (no pinning) or 0 to " +
+           std::to_string(cpus - 1) + ", got " + std::to_string(config.real_time().sender_cpu());
+  }
+  if (config.real_time().sender_priority() < 0 ||
+      config.real_time().sender_priority() >= config.real_time().fifo_priority()) {
+    return "real_time.sender_priority: must be 0 (normal scheduling) or 1 to fifo_priority − 1 (" +
+           std::to_string(config.real_time().fifo_priority() - 1) + "), got " +
+           std::to_string(config.real_time().sender_priority());
   }
   const double period_us = 1e6 / config.loop_rate_hz();
   if (config.real_time().spin_us() >= period_us) {

@@ -10,6 +10,9 @@
 
 namespace haptic::config {
 
+/// real_time.sender_cpu's value for "on the loop's CPU" (the default).
+inline constexpr int kSenderOnLoopCpu = -2;
+
 class ConfigError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

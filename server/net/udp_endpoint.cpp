@@ -1,14 +1,19 @@
 #include "net/udp_endpoint.hpp"
 
+#include <future>
+
 #include <arpa/inet.h>
 #include <netdb.h>
 #include <poll.h>
+#include <sys/socket.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
+#include <future>
 #include <map>
 #include <stdexcept>
 #include <vector>
@@ -64,11 +69,21 @@ void UdpEndpoint::bind(const std::string& address, std::uint16_t port) {
                                             : reinterpret_cast<sockaddr_in*>(&bound)->sin_port);
 }
 
-void UdpEndpoint::start(std::optional<std::int64_t> time_origin_ns, int sender_cpu) {
+SenderSetup UdpEndpoint::start(std::optional<std::int64_t> time_origin_ns,
+                                            SenderScheduling scheduling) {
   stopping_.store(false);
   time_origin_ns_ = time_origin_ns;
   receiver_ = std::thread([this] { receive_loop(); });
-  sender_ = std::thread([this, time_origin_ns, sender_cpu] { send_loop(time_origin_ns, sender_cpu); });
+  std::promise<SenderSetup> setup_promise;
+  auto setup = setup_promise.get_future();
+  sender_ = std::thread([this, time_origin_ns, scheduling, &setup_promise] {
+    SenderSetup granted;
+    if (scheduling.cpu >= 0) granted.cpu_error = runtime::pin_to_cpu(scheduling.cpu);
+    if (scheduling.priority > 0) granted.priority_error = runtime::set_fifo_priority(scheduling.priority);
+    setup_promise.set_value(granted);
+    send_loop(time_origin_ns);
+  });
+  return setup.get();
 }
 
 void UdpEndpoint::stop() {
@@ -189,8 +204,7 @@ void plan_sends(std::span<const Subscriber> subscribers, std::uint64_t last_tick
   }
 }
 
-void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu) {
-  if (cpu >= 0) (void)runtime::pin_to_cpu(cpu);  // best effort; the loop reports pinning problems
+void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns) {
   // Real time conflates: when this thread has fallen behind (the host was busy), each subscriber
   // gets only its newest due sample and the older ones are skipped and counted, never queued —
   // for haptics and graphics a stale sample is worse than a lost one. Lockstep sends every due
@@ -207,7 +221,16 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
   std::uint64_t last_tick = last_ring.newest();
   std::vector<runtime::TickSample> samples(rings_.size());  // one tick's, per port
   std::vector<bool> present(rings_.size());
-  std::array<std::uint8_t, wire::kMaxDatagramSize> buffer{};
+  // A wake-up's datagrams, encoded first and handed to the kernel together (sendmmsg): one
+  // system call per batch instead of one per subscriber.
+  struct Outgoing {
+    std::array<std::uint8_t, wire::kMaxDatagramSize> bytes;
+    iovec iov;
+    const Subscriber* subscriber;
+    std::int64_t stamp_ns;  // the tick's time stamp (server time)
+  };
+  std::vector<Outgoing> outgoing;
+  std::vector<mmsghdr> messages;
   while (!last_ring.stopping()) {
     last_ring.wait_beyond(last_tick, epoch);
     if (last_ring.stopping()) break;
@@ -232,8 +255,9 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
     std::uint64_t skipped = 0;
     plan_sends(subscribers, last_tick, newest, conflate, plan, skipped);
     counters_.samples_skipped.fetch_add(skipped, std::memory_order_relaxed);
+    if (outgoing.size() < plan.size()) outgoing.resize(plan.size());
+    std::size_t count = 0;
     std::uint64_t read_tick = 0;  // the tick whose samples are in `samples`
-    bool first_send = true;
     for (const PlannedSend& send : plan) {
       const Subscriber& subscriber = subscribers[send.subscriber];
       if (subscriber.device_index >= rings_.size()) continue;
@@ -243,7 +267,6 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
           if (!present[port]) counters_.samples_missed.fetch_add(1, std::memory_order_relaxed);
         }
         read_tick = send.tick;
-        first_send = true;
       }
       if (!present[subscriber.device_index]) continue;
       const runtime::TickSample& sample = samples[subscriber.device_index];
@@ -262,20 +285,42 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, int cpu)
       state.buttons = sample.buttons;
       state.has_orientation = sample.has_orientation;  // only then the 32 bytes go out
       state.R_WT = {sample.R_WT.w, sample.R_WT.x, sample.R_WT.y, sample.R_WT.z};
-      const std::size_t size = wire::encode_state(header, state, subscriber.key, buffer);
-      const auto& to = subscriber.address;
-      if (::sendto(socket_, buffer.data(), size, MSG_DONTWAIT,
-                   reinterpret_cast<const sockaddr*>(&to.storage), to.length) < 0) {
-        counters_.send_errors.fetch_add(1, std::memory_order_relaxed);
-      } else {
-        counters_.sent.fetch_add(1, std::memory_order_relaxed);
-        if (subscriber.sent) subscriber.sent->fetch_add(1, std::memory_order_relaxed);
-        if (first_send && time_origin_ns) {
-          const std::int64_t sent_ns = runtime::monotonic_now_ns();
-          counters_.send_delay.record(sent_ns - (*time_origin_ns + sample.time_ns), sent_ns);
+      Outgoing& out = outgoing[count++];
+      const std::size_t size = wire::encode_state(header, state, subscriber.key, out.bytes);
+      out.iov = {out.bytes.data(), size};
+      out.subscriber = &subscriber;
+      out.stamp_ns = sample.time_ns;
+    }
+    messages.assign(count, mmsghdr{});
+    for (std::size_t i = 0; i < count; ++i) {
+      msghdr& m = messages[i].msg_hdr;
+      m.msg_name = const_cast<sockaddr_storage*>(&outgoing[i].subscriber->address.storage);
+      m.msg_namelen = outgoing[i].subscriber->address.length;
+      m.msg_iov = &outgoing[i].iov;
+      m.msg_iovlen = 1;
+    }
+    const std::int64_t handed_ns = time_origin_ns ? runtime::monotonic_now_ns() : 0;
+    for (std::size_t first = 0; first < count;) {
+      const unsigned chunk = static_cast<unsigned>(std::min<std::size_t>(count - first, UIO_MAXIOV));
+      const int sent = ::sendmmsg(socket_, messages.data() + first, chunk, MSG_DONTWAIT);
+      // A message the kernel refused (its socket buffer full, an unreachable address) is counted
+      // and the rest go on.
+      const std::size_t done = sent > 0 ? static_cast<std::size_t>(sent) : 0;
+      for (std::size_t i = first; i < first + done; ++i) {
+        if (const auto& per_client = outgoing[i].subscriber->sent) {
+          per_client->fetch_add(1, std::memory_order_relaxed);
         }
-        first_send = false;
       }
+      counters_.sent.fetch_add(done, std::memory_order_relaxed);
+      first += done;
+      if (done < chunk) {
+        counters_.send_errors.fetch_add(1, std::memory_order_relaxed);
+        ++first;
+      }
+    }
+    if (time_origin_ns && count > 0) {
+      // The tick's datagrams were handed to the kernel at handed_ns; the first left then.
+      counters_.send_delay.record(handed_ns - (*time_origin_ns + outgoing[0].stamp_ns), handed_ns);
     }
     last_tick = newest;
     sent_through_.store(newest, std::memory_order_release);

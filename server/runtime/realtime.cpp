@@ -49,6 +49,15 @@ RealtimeSetup apply_realtime(int priority) {
   return setup;
 }
 
+std::string set_fifo_priority(int priority) {
+  sched_param param{};
+  param.sched_priority = priority;
+  if (const int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param); rc != 0) {
+    return std::strerror(rc);
+  }
+  return {};
+}
+
 std::string pin_to_cpu(int cpu) {
   cpu_set_t set;
   CPU_ZERO(&set);

@@ -19,6 +19,10 @@ struct RealtimeSetup {
 /// what was refused is reported so the caller can log it (off the loop) and carry on.
 RealtimeSetup apply_realtime(int priority);
 
+/// Asks for SCHED_FIFO at `priority` for the calling thread alone (no memory locking). Empty on
+/// success, else why not.
+std::string set_fifo_priority(int priority);
+
 /// Pins the calling thread to one CPU. Empty on success, else why not.
 std::string pin_to_cpu(int cpu);
 

@@ -9,6 +9,8 @@
 //   hapticd  the server with its default configuration (real time, 1 kHz) on loopback; each client
 //            process uses the SDK and records in its State callback, as an application would.
 //
+// The receiving processes' own CPU per sample is printed too ("client us"): on one host the
+// clients share the cores with the server, so their cost is part of every age.
 // Per sample every client records the tick's deadline (the floor's stamp; hapticd's State
 // server_time mapped to CLOCK_MONOTONIC through the server's start), the kernel's receive time
 // (SO_TIMESTAMPNS; the SDK reports it as State::arrived_at) and the moment the application has it.
@@ -17,6 +19,7 @@
 // sending process's CPU (getrusage; the clients are other processes) and the loop's overruns.
 //
 // Usage: stream_bench [--seconds S=10] [--clients 1,8,32,64] [--rounds R=1] [--csv FILE]
+//                     [--sender-cpu N] [--sender-priority P]  (hapticd's real_time.sender_cpu, _priority)
 // (a child: stream_bench --client floor|hapticd TARGET ORIGIN_NS SECONDS OUT_FILE INDEX)
 #include <haptic/haptic.hpp>
 #include <netinet/in.h>
@@ -35,6 +38,7 @@
 #include <cstring>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -81,10 +85,16 @@ double percentile(std::vector<double> v, double q) {
   return v[k];
 }
 
-void write_samples(const std::string& path, const std::vector<Sample>& samples) {
+/// This process's CPU time so far (user + system). Unit: ns.
+std::int64_t process_cpu_ns() { return clock_ns(CLOCK_PROCESS_CPUTIME_ID); }
+
+/// The samples, then one record {-1, CPU ns over the recording, 0}: the client's own cost.
+void write_samples(const std::string& path, const std::vector<Sample>& samples, std::int64_t cpu_ns) {
   std::ofstream out(path, std::ios::binary);
   out.write(reinterpret_cast<const char*>(samples.data()),
             static_cast<std::streamsize>(samples.size() * sizeof(Sample)));
+  const Sample cost{-1, cpu_ns, 0};
+  out.write(reinterpret_cast<const char*>(&cost), sizeof cost);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -105,7 +115,7 @@ int run_floor_client(std::uint16_t port, double seconds, const std::string& out_
   const std::int64_t offset = realtime_offset_ns();
   std::vector<Sample> samples;
   samples.reserve(static_cast<std::size_t>(seconds * 1100) + 64);
-  std::int64_t record_from = 0, record_until = 0;
+  std::int64_t record_from = 0, record_until = 0, cpu_from = -1;
   std::uint8_t buffer[2048];
   alignas(cmsghdr) char control[256];
   for (;;) {
@@ -124,6 +134,7 @@ int run_floor_client(std::uint16_t port, double seconds, const std::string& out_
     }
     if (record_from != 0 && now >= record_until) break;
     if (size < static_cast<ssize_t>(2 * sizeof(std::int64_t)) || now < record_from) continue;
+    if (cpu_from < 0) cpu_from = process_cpu_ns();
     Sample sample;
     std::memcpy(&sample.deadline_ns, buffer, sizeof(std::int64_t));
     for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
@@ -136,8 +147,9 @@ int run_floor_client(std::uint16_t port, double seconds, const std::string& out_
     sample.app_ns = now;
     samples.push_back(sample);
   }
+  const std::int64_t cpu = process_cpu_ns() - cpu_from;
   ::close(fd);
-  write_samples(out_path, samples);
+  write_samples(out_path, samples, cpu);
   return 0;
 }
 
@@ -167,12 +179,14 @@ int run_hapticd_client(const std::string& address, std::int64_t origin_ns, doubl
     samples.push_back(sample);
   });
   std::this_thread::sleep_for(kSettle);
+  const std::int64_t cpu_from = process_cpu_ns();
   recording = true;
   std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
   recording = false;
+  const std::int64_t cpu = process_cpu_ns() - cpu_from;
   client.on_state({});
   std::lock_guard lock(mutex);
-  write_samples(out_path, samples);
+  write_samples(out_path, samples, cpu);
   return 0;
 }
 
@@ -253,7 +267,9 @@ struct Case {
   double net_p50 = 0.0, net_p99 = 0.0;       // deadline -> kernel, µs (0: not known)
   double app_p50 = 0.0, app_p99 = 0.0;       // kernel -> application, µs
   double cpu_percent = 0.0;                  // the sending process, % of one core
+  double client_cpu_us = 0.0;                // the receiving processes' CPU per sample, µs
   std::uint64_t overruns = 0;
+  double first_send_p50 = 0.0, first_send_p99 = 0.0;  // hapticd: tick stamp -> datagrams handed over, µs
 };
 
 double cpu_seconds() {
@@ -266,7 +282,7 @@ double cpu_seconds() {
 /// Spawns `count` clients of `system`, waits for them, and reads what they recorded.
 std::vector<std::vector<Sample>> run_clients(const std::string& system, const std::string& target,
                                              std::int64_t origin_ns, int count, double seconds,
-                                             double& cpu_percent) {
+                                             double& cpu_percent, double& client_cpu_us_per_sample) {
   std::vector<pid_t> children;
   std::vector<std::string> files;
   for (int i = 0; i < count; ++i) {
@@ -292,6 +308,8 @@ std::vector<std::vector<Sample>> run_clients(const std::string& system, const st
   cpu_percent = 100.0 * (cpu_seconds() - cpu0) /
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   std::vector<std::vector<Sample>> out;
+  std::int64_t client_cpu_ns = 0;
+  std::size_t client_samples = 0;
   for (int i = 0; i < count; ++i) {
     int status = 0;
     waitpid(children[static_cast<std::size_t>(i)], &status, 0);
@@ -301,10 +319,19 @@ std::vector<std::vector<Sample>> run_clients(const std::string& system, const st
     std::vector<Sample> samples;
     std::ifstream in(files[static_cast<std::size_t>(i)], std::ios::binary);
     Sample s;
-    while (in.read(reinterpret_cast<char*>(&s), sizeof s)) samples.push_back(s);
+    while (in.read(reinterpret_cast<char*>(&s), sizeof s)) {
+      if (s.deadline_ns == -1) {
+        client_cpu_ns += s.kernel_ns;
+      } else {
+        samples.push_back(s);
+      }
+    }
+    client_samples += samples.size();
     std::remove(files[static_cast<std::size_t>(i)].c_str());
     out.push_back(std::move(samples));
   }
+  client_cpu_us_per_sample =
+      client_samples == 0 ? 0.0 : 1e-3 * static_cast<double>(client_cpu_ns) / static_cast<double>(client_samples);
   return out;
 }
 
@@ -336,8 +363,13 @@ Case summarize(const std::string& system, int count, double seconds,
   return c;
 }
 
+/// hapticd's State sender as the command line sets it (unset: the configuration's defaults).
+std::optional<int> sender_cpu, sender_priority;
+
 haptic::v1::ServerConfig server_config(int clients) {
   haptic::v1::ServerConfig config = haptic::config::default_config();
+  if (sender_cpu) config.mutable_real_time()->set_sender_cpu(*sender_cpu);
+  if (sender_priority) config.mutable_real_time()->set_sender_priority(*sender_priority);
   config.set_grpc_address("127.0.0.1:0");
   config.set_udp_address("127.0.0.1");
   config.set_udp_port(0);
@@ -352,10 +384,11 @@ Case run_floor(int count, double seconds) {
   const haptic::v1::ServerConfig config = server_config(count);  // the loop's priority, CPU, spin
   FloorSender sender(static_cast<int>(config.real_time().fifo_priority()), config.real_time().cpu(),
                      static_cast<std::int64_t>(config.real_time().spin_us()) * 1000);
-  double cpu = 0.0;
-  const auto samples = run_clients("floor", std::to_string(sender.port()), 0, count, seconds, cpu);
+  double cpu = 0.0, client_cpu = 0.0;
+  const auto samples = run_clients("floor", std::to_string(sender.port()), 0, count, seconds, cpu, client_cpu);
   Case c = summarize("floor", count, seconds, samples);
   c.cpu_percent = cpu;
+  c.client_cpu_us = client_cpu;
   c.overruns = sender.overruns();
   return c;
 }
@@ -366,18 +399,23 @@ Case run_hapticd(int count, double seconds) {
   const std::string address = "127.0.0.1:" + std::to_string(server.grpc_port());
   const std::int64_t origin_ns = monotonic_ns() - server.server_time_ns();
   const std::uint64_t overruns0 = server.stats().overruns();
-  double cpu = 0.0;
-  const auto samples = run_clients("hapticd", address, origin_ns, count, seconds, cpu);
+  double cpu = 0.0, client_cpu = 0.0;
+  const auto samples = run_clients("hapticd", address, origin_ns, count, seconds, cpu, client_cpu);
   Case c = summarize("hapticd", count, seconds, samples);
   c.cpu_percent = cpu;
-  c.overruns = server.stats().overruns() - overruns0;
+  c.client_cpu_us = client_cpu;
+  const haptic::v1::Stats stats = server.stats();
+  c.overruns = stats.overruns() - overruns0;
+  c.first_send_p50 = stats.send_delay_p50_us();
+  c.first_send_p99 = stats.send_delay_p99_us();
   server.shutdown();
   return c;
 }
 
 void print_header() {
-  std::printf("%7s  %-8s  %15s  %24s  %17s  %17s  %7s  %8s\n", "clients", "system", "rate slow/med Hz",
-              "age p50 / p99 / p99.9 us", "to kernel p50/p99", "to app p50/p99", "CPU %", "overruns");
+  std::printf("%7s  %-8s  %15s  %24s  %17s  %17s  %7s  %9s  %8s\n", "clients", "system", "rate slow/med Hz",
+              "age p50 / p99 / p99.9 us", "to kernel p50/p99", "to app p50/p99", "CPU %",
+              "client us", "overruns");
 }
 
 void print_case(const Case& c) {
@@ -386,9 +424,13 @@ void print_case(const Case& c) {
     std::snprintf(net, sizeof net, "%.0f / %.0f", c.net_p50, c.net_p99);
     std::snprintf(app, sizeof app, "%.0f / %.0f", c.app_p50, c.app_p99);
   }
-  std::printf("%7d  %-8s  %7.1f / %5.1f  %8.0f / %6.0f / %6.0f  %17s  %17s  %7.1f  %8llu\n", c.clients,
+  std::printf("%7d  %-8s  %7.1f / %5.1f  %8.0f / %6.0f / %6.0f  %17s  %17s  %7.1f  %9.1f  %8llu", c.clients,
               c.system.c_str(), c.rate_slowest, c.rate_median, c.p50, c.p99, c.p999, net, app,
-              c.cpu_percent, static_cast<unsigned long long>(c.overruns));
+              c.cpu_percent, c.client_cpu_us, static_cast<unsigned long long>(c.overruns));
+  if (c.system == "hapticd") {
+    std::printf("  (sender: tick -> sendmmsg p50 %.0f / p99 %.0f us)", c.first_send_p50, c.first_send_p99);
+  }
+  std::printf("\n");
   std::fflush(stdout);
 }
 
@@ -429,11 +471,16 @@ int main(int argc, char** argv) {
       counts = parse_counts(argv[++i]);
     } else if (arg == "--rounds" && has_value) {
       rounds = std::atoi(argv[++i]);
+    } else if (arg == "--sender-cpu" && has_value) {
+      sender_cpu = std::atoi(argv[++i]);
+    } else if (arg == "--sender-priority" && has_value) {
+      sender_priority = std::atoi(argv[++i]);
     } else if (arg == "--csv" && has_value) {
       csv_path = argv[++i];
     } else {
       std::fprintf(stderr,
-                   "usage: stream_bench [--seconds S=10] [--clients 1,8,32,64] [--rounds R=1] [--csv FILE]\n");
+                   "usage: stream_bench [--seconds S=10] [--clients 1,8,32,64] [--rounds R=1] [--csv FILE]\n"
+                   "                    [--sender-cpu N] [--sender-priority P]   (hapticd's real_time.sender_*)\n");
       return 2;
     }
   }
@@ -461,11 +508,12 @@ int main(int argc, char** argv) {
   if (!csv_path.empty()) {
     std::ofstream csv(csv_path);
     csv << "system,clients,rate_slowest_hz,rate_median_hz,age_p50_us,age_p99_us,age_p999_us,"
-           "kernel_p50_us,kernel_p99_us,app_p50_us,app_p99_us,cpu_percent,overruns\n";
+           "kernel_p50_us,kernel_p99_us,app_p50_us,app_p99_us,cpu_percent,client_cpu_us_per_sample,overruns\n";
     for (const Case& c : cases) {
       csv << c.system << ',' << c.clients << ',' << c.rate_slowest << ',' << c.rate_median << ','
           << c.p50 << ',' << c.p99 << ',' << c.p999 << ',' << c.net_p50 << ',' << c.net_p99 << ','
-          << c.app_p50 << ',' << c.app_p99 << ',' << c.cpu_percent << ',' << c.overruns << '\n';
+          << c.app_p50 << ',' << c.app_p99 << ',' << c.cpu_percent << ',' << c.client_cpu_us << ','
+          << c.overruns << '\n';
     }
   }
   return 0;
