@@ -119,7 +119,17 @@ Server::Server(const v1::ServerConfig& config)
   loop.use_fifo = config.real_time().use_fifo();
   loop.fifo_priority = config.real_time().fifo_priority();
   loop.spin_ns = static_cast<std::int64_t>(config.real_time().spin_us()) * 1000;
-  loop.cpu = loop.mode == runtime::TimeMode::kRealTime ? config.real_time().cpu() : -1;
+  if (loop.mode == runtime::TimeMode::kRealTime &&
+      (config.real_time().use_fifo() || config.real_time().has_cpu())) {
+    runtime::LoopCpuChoice cpu = runtime::choose_loop_cpu(
+        config.real_time().has_cpu() ? std::optional<int>(config.real_time().cpu()) : std::nullopt,
+        static_cast<int>(std::thread::hardware_concurrency()));
+    loop.cpu = cpu.cpu;
+    loop_cpu_claim_ = std::move(cpu.claim);
+    loop_cpu_warning_ = std::move(cpu.warning);
+  } else {
+    loop.cpu = -1;
+  }
   if (runtime::ServoClock* servo = devices_.front().servo) {
     // Device-clocked: the driver's servo loop paces the ticks, at its own rate.
     if (std::abs(servo->rate_hz() - rate) > 1e-9 * rate) {
@@ -291,6 +301,7 @@ void Server::start() {
                                devices_[i].device->description().name + ") failed to start");
     }
   }
+  if (!loop_cpu_warning_.empty()) spdlog::warn("loop: {}", loop_cpu_warning_);
   const runtime::RealtimeSetup setup = loop_->start();
   if (loop_->config().mode == runtime::TimeMode::kRealTime && loop_->config().use_fifo) {
     if (!setup.fifo) {
@@ -340,8 +351,10 @@ void Server::start() {
   for (std::size_t i = 1; i < devices_.size(); ++i) {
     devices += " + port " + std::to_string(i) + ": " + devices_[i].device->description().name;
   }
-  spdlog::info("hapticd: {} at {} Hz ({}), gRPC {} (port {}), UDP {} (port {})", devices,
+  const int loop_cpu = loop_->config().cpu;
+  spdlog::info("hapticd: {} at {} Hz ({}{}), gRPC {} (port {}), UDP {} (port {})", devices,
                config_.loop_rate_hz(), v1::TimeMode_Name(config_.time_mode()),
+               loop_cpu >= 0 ? ", loop on CPU " + std::to_string(loop_cpu) : std::string(),
                config_.grpc_address(), grpc_port_, config_.udp_address(), udp_.port());
   const bool remote = !config::is_loopback_host(config::host_of_address(config_.grpc_address())) ||
                      !config::is_loopback_host(config_.udp_address());

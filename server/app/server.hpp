@@ -23,6 +23,7 @@
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
 #include "net/udp_endpoint.hpp"
+#include "runtime/loop_cpu.hpp"
 #include "runtime/loop_thread.hpp"
 #include "config/devices.hpp"
 #include "runtime/tick_runner.hpp"
@@ -87,6 +88,10 @@ class Server {
   runtime::LatenessHistogram lateness_;
   std::unique_ptr<runtime::TickRunner> runner_;
   std::unique_ptr<runtime::LoopThread> loop_;
+  /// The host-wide claim on the loop's CPU (real time with SCHED_FIFO), held while this server
+  /// lives, and what to say about the choice when the loop starts.
+  std::optional<runtime::LoopCpuClaim> loop_cpu_claim_;
+  std::string loop_cpu_warning_;
   net::SessionRegistry sessions_;
   std::unique_ptr<net::SceneStore> scene_;
   net::EventHub events_;

@@ -113,10 +113,8 @@ void fill_defaults(v1::ServerConfig& config) {
   if (!real_time->has_use_fifo()) real_time->set_use_fifo(true);
   if (real_time->fifo_priority() == 0) real_time->set_fifo_priority(80);
   if (real_time->spin_us() == 0) real_time->set_spin_us(100);
-  if (!real_time->has_cpu()) {
-    const int cpus = static_cast<int>(std::thread::hardware_concurrency());
-    real_time->set_cpu(real_time->use_fifo() && cpus > 1 ? cpus - 1 : -1);
-  }
+  // real_time.cpu left unset: the server picks a CPU no other hapticd's loop holds when it starts
+  // (runtime/loop_cpu.hpp).
   if (!real_time->has_sender_cpu()) real_time->set_sender_cpu(kSenderOnLoopCpu);
   if (!real_time->has_sender_priority()) {
     real_time->set_sender_priority(real_time->use_fifo() ? real_time->fifo_priority() - 1 : 0);
@@ -190,7 +188,8 @@ std::string validate(const v1::ServerConfig& config) {
     return "real_time.fifo_priority: must be 1 to 99";
   }
   const int cpus = static_cast<int>(std::thread::hardware_concurrency());
-  if (config.real_time().cpu() < -1 || (cpus > 0 && config.real_time().cpu() >= cpus)) {
+  if (config.real_time().has_cpu() &&
+      (config.real_time().cpu() < -1 || (cpus > 0 && config.real_time().cpu() >= cpus))) {
     return "real_time.cpu: must be -1 (no pinning) or 0 to " + std::to_string(cpus - 1) + ", got " +
            std::to_string(config.real_time().cpu());
   }

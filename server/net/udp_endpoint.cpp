@@ -299,6 +299,13 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns) {
       m.msg_iov = &outgoing[i].iov;
       m.msg_iovlen = 1;
     }
+    // Each client's count goes up before its datagram leaves (and down again if it could not):
+    // a client that reports what it received (its heartbeat) never reports more than was sent.
+    for (std::size_t i = 0; i < count; ++i) {
+      if (const auto& per_client = outgoing[i].subscriber->sent) {
+        per_client->fetch_add(1, std::memory_order_relaxed);
+      }
+    }
     const std::int64_t handed_ns = time_origin_ns ? runtime::monotonic_now_ns() : 0;
     for (std::size_t first = 0; first < count;) {
       const unsigned chunk = static_cast<unsigned>(std::min<std::size_t>(count - first, UIO_MAXIOV));
@@ -306,15 +313,13 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns) {
       // A message the kernel refused (its socket buffer full, an unreachable address) is counted
       // and the rest go on.
       const std::size_t done = sent > 0 ? static_cast<std::size_t>(sent) : 0;
-      for (std::size_t i = first; i < first + done; ++i) {
-        if (const auto& per_client = outgoing[i].subscriber->sent) {
-          per_client->fetch_add(1, std::memory_order_relaxed);
-        }
-      }
       counters_.sent.fetch_add(done, std::memory_order_relaxed);
       first += done;
       if (done < chunk) {
         counters_.send_errors.fetch_add(1, std::memory_order_relaxed);
+        if (const auto& per_client = outgoing[first].subscriber->sent) {
+          per_client->fetch_sub(1, std::memory_order_relaxed);
+        }
         ++first;
       }
     }

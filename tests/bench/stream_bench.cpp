@@ -47,6 +47,7 @@
 #include "app/server.hpp"
 #include "config/server_config.hpp"
 #include "haptic/wire/datagram.hpp"
+#include "runtime/loop_cpu.hpp"
 #include "runtime/realtime.hpp"
 
 extern char** environ;
@@ -381,8 +382,11 @@ haptic::v1::ServerConfig server_config(int clients) {
 }
 
 Case run_floor(int count, double seconds) {
-  const haptic::v1::ServerConfig config = server_config(count);  // the loop's priority, CPU, spin
-  FloorSender sender(static_cast<int>(config.real_time().fifo_priority()), config.real_time().cpu(),
+  const haptic::v1::ServerConfig config = server_config(count);  // the loop's priority and spin
+  // The CPU hapticd's loop would take (and the claim on it, for the floor's run).
+  const haptic::runtime::LoopCpuChoice loop_cpu =
+      haptic::runtime::choose_loop_cpu(std::nullopt, static_cast<int>(std::thread::hardware_concurrency()));
+  FloorSender sender(static_cast<int>(config.real_time().fifo_priority()), loop_cpu.cpu,
                      static_cast<std::int64_t>(config.real_time().spin_us()) * 1000);
   double cpu = 0.0, client_cpu = 0.0;
   const auto samples = run_clients("floor", std::to_string(sender.port()), 0, count, seconds, cpu, client_cpu);
