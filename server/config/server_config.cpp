@@ -112,7 +112,13 @@ void fill_defaults(v1::ServerConfig& config) {
   auto* real_time = config.mutable_real_time();
   if (!real_time->has_use_fifo()) real_time->set_use_fifo(true);
   if (real_time->fifo_priority() == 0) real_time->set_fifo_priority(80);
-  if (real_time->spin_us() == 0) real_time->set_spin_us(100);
+  if (real_time->spin_us() == 0 && config.loop_rate_hz() > 0.0) {
+    // 200 µs, or half the period where that is shorter: enough on the project's VMs that the
+    // loop's p99 lateness matches a busy-spin loop's (tests/bench/loop_lateness_bench) at 1, 4
+    // and 10 kHz, for spin × rate of a core (a fifth at 1 kHz).
+    const double period_us = 1e6 / config.loop_rate_hz();
+    real_time->set_spin_us(static_cast<std::uint32_t>(std::min(200.0, std::floor(period_us / 2.0))));
+  }
   // real_time.cpu left unset: the server picks a CPU no other hapticd's loop holds when it starts
   // (runtime/loop_cpu.hpp).
   if (!real_time->has_sender_cpu()) real_time->set_sender_cpu(kSenderOnLoopCpu);

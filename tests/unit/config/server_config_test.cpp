@@ -24,6 +24,25 @@ TEST(Config, DefaultsAreTheDocumentedOnes) {
   EXPECT_EQ(validate(config), "");
 }
 
+// The real-time defaults: a spin that fits every rate (200 µs, or half a shorter period), the
+// State sender on the loop's CPU just below the loop's priority, and the loop's CPU left for the
+// server to choose when it starts (runtime/loop_cpu.hpp).
+TEST(Config, RealTimeDefaultsFitTheRateAndPutTheSenderJustBelowTheLoop) {
+  EXPECT_EQ(default_config().real_time().spin_us(), 200u);
+  EXPECT_EQ(parse_config(R"({"loop_rate_hz": 4000})", "x").real_time().spin_us(), 125u);
+  EXPECT_EQ(parse_config(R"({"loop_rate_hz": 10000})", "x").real_time().spin_us(), 50u);  // valid at 10 kHz
+  EXPECT_EQ(parse_config(R"({"real_time": {"spin_us": 30}})", "x").real_time().spin_us(), 30u);
+  const v1::ServerConfig config = default_config();
+  EXPECT_FALSE(config.real_time().has_cpu());
+  EXPECT_EQ(config.real_time().sender_cpu(), kSenderOnLoopCpu);
+  EXPECT_EQ(config.real_time().sender_priority(), config.real_time().fifo_priority() - 1);
+  EXPECT_EQ(parse_config(R"({"real_time": {"use_fifo": false}})", "x").real_time().sender_priority(), 0);
+  EXPECT_NE(error_of(R"({"real_time": {"sender_priority": 80}})").find("real_time.sender_priority"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"real_time": {"sender_cpu": -3}})").find("real_time.sender_cpu"),
+            std::string::npos);
+}
+
 TEST(Config, ExplicitZeroIsKeptWhereZeroMeansSomething) {
   const v1::ServerConfig config =
       parse_config(R"({"udp_port": 0, "status_period_s": 0, "real_time": {"use_fifo": false}})", "x");
