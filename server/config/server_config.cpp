@@ -83,6 +83,11 @@ bool is_loopback_host(const std::string& host) {
   return all_loopback;
 }
 
+std::uint32_t default_spin_us(double rate_hz) {
+  const double period_us = 1e6 / rate_hz;
+  return static_cast<std::uint32_t>(std::min(200.0, std::floor(0.8 * period_us)));
+}
+
 void fill_defaults(v1::ServerConfig& config) {
   if (config.grpc_address().empty()) config.set_grpc_address("127.0.0.1:50051");
   if (config.udp_address().empty()) config.set_udp_address("127.0.0.1");
@@ -113,11 +118,7 @@ void fill_defaults(v1::ServerConfig& config) {
   if (!real_time->has_use_fifo()) real_time->set_use_fifo(true);
   if (real_time->fifo_priority() == 0) real_time->set_fifo_priority(80);
   if (real_time->spin_us() == 0 && config.loop_rate_hz() > 0.0) {
-    // 200 µs, or half the period where that is shorter: enough on the project's VMs that the
-    // loop's p99 lateness matches a busy-spin loop's (tests/bench/loop_lateness_bench) at 1, 4
-    // and 10 kHz, for spin × rate of a core (a fifth at 1 kHz).
-    const double period_us = 1e6 / config.loop_rate_hz();
-    real_time->set_spin_us(static_cast<std::uint32_t>(std::min(200.0, std::floor(period_us / 2.0))));
+    real_time->set_spin_us(default_spin_us(config.loop_rate_hz()));
   }
   // real_time.cpu left unset: the server picks a CPU no other hapticd's loop holds when it starts
   // (runtime/loop_cpu.hpp).

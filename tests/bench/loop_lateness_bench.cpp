@@ -5,7 +5,7 @@
 // pacing's sake. Lateness = wake-up − deadline, 1 µs resolution; ratios below are of
 // (lateness + 1 µs), since the floor's median is often 0.
 // Usage: loop_lateness_bench [seconds=10] [rates=1000,4000,10000] [spin_us]
-// (spin_us: the loop's real_time.spin_us; default hapticd's 100, or half the period where shorter)
+// (spin_us: the loop's real_time.spin_us; default hapticd's, config::default_spin_us)
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "config/server_config.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/loop_cpu.hpp"
 #include "runtime/loop_thread.hpp"
@@ -134,9 +135,9 @@ int main(int argc, char** argv) {
               seconds, cpu.cpu, kFifoPriority);
   for (const double rate : rates) {
     const double period_us = 1e6 / rate;
-    // hapticd's default spin, 100 µs, or half the period where that is shorter (spin_us must be).
-    const double spin_us = argc > 3 ? std::atof(argv[3]) : 100.0;
-    const auto spin_ns = static_cast<std::int64_t>(std::min(spin_us, period_us / 2.0) * 1000.0);
+    // hapticd's default spin at this rate, or the one asked for (less than a period).
+    const double spin_us = argc > 3 ? std::atof(argv[3]) : config::default_spin_us(rate);
+    const auto spin_ns = static_cast<std::int64_t>(std::min(spin_us, period_us - 1.0) * 1000.0);
     std::printf("%.0f Hz (period %.0f us, spin %lld us)\n", rate, period_us,
                 static_cast<long long>(spin_ns / 1000));
     const Result floor = run_busy_spin(seconds, rate, cpu.cpu);

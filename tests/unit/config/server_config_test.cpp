@@ -24,13 +24,13 @@ TEST(Config, DefaultsAreTheDocumentedOnes) {
   EXPECT_EQ(validate(config), "");
 }
 
-// The real-time defaults: a spin that fits every rate (200 µs, or half a shorter period), the
+// The real-time defaults: a spin that fits every rate (200 µs, or 80 % of a shorter period), the
 // State sender on the loop's CPU just below the loop's priority, and the loop's CPU left for the
 // server to choose when it starts (runtime/loop_cpu.hpp).
 TEST(Config, RealTimeDefaultsFitTheRateAndPutTheSenderJustBelowTheLoop) {
   EXPECT_EQ(default_config().real_time().spin_us(), 200u);
-  EXPECT_EQ(parse_config(R"({"loop_rate_hz": 4000})", "x").real_time().spin_us(), 125u);
-  EXPECT_EQ(parse_config(R"({"loop_rate_hz": 10000})", "x").real_time().spin_us(), 50u);  // valid at 10 kHz
+  EXPECT_EQ(parse_config(R"({"loop_rate_hz": 4000})", "x").real_time().spin_us(), 200u);
+  EXPECT_EQ(parse_config(R"({"loop_rate_hz": 10000})", "x").real_time().spin_us(), 80u);  // valid at 10 kHz
   EXPECT_EQ(parse_config(R"({"real_time": {"spin_us": 30}})", "x").real_time().spin_us(), 30u);
   const v1::ServerConfig config = default_config();
   EXPECT_FALSE(config.real_time().has_cpu());
