@@ -511,13 +511,15 @@ v1::ClientStats to_proto(const net::ClientStatistics& client) {
 
 v1::Stats Server::stats() const {
   v1::Stats stats;
-  stats.set_ticks(counters_.ticks.load(std::memory_order_relaxed));
+  // The lateness first, the tick count after: each sample belongs to a tick already counted (the
+  // loop records it after the tick), so the count read later is never below the samples.
+  const std::int64_t now_ns = runtime::monotonic_now_ns();
+  const runtime::LatenessSummary lateness = lateness_.summarize(now_ns);
+  stats.set_ticks(counters_.ticks.load(std::memory_order_acquire));
   const std::int64_t elapsed_ns = loop_->server_time_ns();
   if (elapsed_ns > 0) {
     stats.set_achieved_rate_hz(static_cast<double>(stats.ticks()) / (static_cast<double>(elapsed_ns) * 1e-9));
   }
-  const std::int64_t now_ns = runtime::monotonic_now_ns();
-  const runtime::LatenessSummary lateness = lateness_.summarize(now_ns);
   stats.set_lateness_p50_us(lateness.p50_us);
   stats.set_lateness_p99_us(lateness.p99_us);
   stats.set_lateness_p999_us(lateness.p999_us);

@@ -32,7 +32,7 @@ LatenessSummary LatenessHistogram::summarize(std::int64_t now_ns) const {
       continue;
     }
     for (std::size_t i = 0; i < kBins; ++i) {
-      const std::uint64_t count = slot.bins[i].load(std::memory_order_relaxed);
+      const std::uint64_t count = slot.bins[i].load(std::memory_order_acquire);
       counts[i] += count;
       summary.samples += count;
     }

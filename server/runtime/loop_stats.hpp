@@ -43,7 +43,9 @@ class LatenessHistogram {
       slot.max_ns.store(0, std::memory_order_relaxed);
       slot.second.store(second, std::memory_order_release);
     }
-    slot.bins[bin_of(lateness_ns)].fetch_add(1, std::memory_order_relaxed);
+    // Release: a reader that counts this sample also sees what the recording thread did before
+    // it (the tick it belongs to, counted in LoopCounters::ticks).
+    slot.bins[bin_of(lateness_ns)].fetch_add(1, std::memory_order_release);
     if (lateness_ns > slot.max_ns.load(std::memory_order_relaxed)) {
       slot.max_ns.store(lateness_ns, std::memory_order_relaxed);  // single writer
     }

@@ -53,10 +53,12 @@ void LoopThread::run_real_time() {
   std::uint64_t tick = 0;
   while (!stop_requested_.load(std::memory_order_acquire)) {
     const std::int64_t woke = sleep_then_spin_until(deadline, config_.spin_ns);
-    lateness_.record(woke - deadline, woke);
     ++tick;
     runner_.run(tick, deadline - start_ns_);
     completed_.store(tick, std::memory_order_release);
+    // After the tick, so that every lateness sample belongs to a counted tick (Stats never shows
+    // more samples than ticks).
+    lateness_.record(woke - deadline, woke);
     deadline += period_ns_;
     const std::int64_t now = monotonic_now_ns();
     if (now > deadline) {
