@@ -107,22 +107,12 @@ UdpLink::~UdpLink() {
 }
 
 void UdpLink::receive_loop() {
-  const int fd = socket_;
   while (!stopping_.load()) {
-    pollfd fds[2] = {{fd, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+    pollfd fds[2] = {{socket_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
     if (::poll(fds, 2, -1) < 0 && errno != EINTR) break;
     if (stopping_.load()) break;
-    if ((fds[1].revents & POLLIN) != 0) {
-      std::uint64_t count = 0;
-      (void)!::read(wake_fd_, &count, sizeof count);
-      std::vector<std::function<void()>> requests;
-      {
-        std::lock_guard lock(requests_mutex_);
-        requests.swap(requests_);
-      }
-      for (const auto& request : requests) request();
-    }
     if ((fds[0].revents & POLLIN) != 0) {
+      std::lock_guard lock(receive_mutex_);
       Batch batch;
       batch.received_at = std::chrono::steady_clock::now();
       drain(batch);
@@ -130,24 +120,6 @@ void UdpLink::receive_loop() {
     }
     deliver();
   }
-}
-
-void UdpLink::run_on_receiver(const std::function<void()>& work) {
-  if (on_callback_thread()) {
-    work();  // a callback's own call: the receive thread is this one
-    return;
-  }
-  std::promise<void> done;
-  {
-    std::lock_guard lock(requests_mutex_);
-    requests_.push_back([&] {
-      work();
-      done.set_value();
-    });
-  }
-  const std::uint64_t one = 1;
-  (void)!::write(wake_fd_, &one, sizeof one);
-  done.get_future().wait();
 }
 
 void UdpLink::send_to_server(std::span<const std::uint8_t> bytes) {
@@ -162,17 +134,20 @@ void UdpLink::send_to_server(std::span<const std::uint8_t> bytes) {
 }
 
 void UdpLink::deliver() {
-  if (in_callback_) return;  // a callback's own call: its caller delivers after it returns
-  while (pending_) {  // again if the callback's own calls read a newer State meanwhile
-    const State state = std::move(*pending_);
-    pending_.reset();
+  for (;;) {  // again if the callback's own calls read a newer State meanwhile
+    std::optional<State> state;
+    {
+      std::lock_guard lock(receive_mutex_);
+      state.swap(pending_);
+    }
+    if (!state) return;
     std::lock_guard lock(callback_mutex_);
     if (!callback_) return;
-    in_callback_ = true;
-    callback_started_ = std::chrono::steady_clock::now();
-    callback_(state);
-    callback_ended_ = std::chrono::steady_clock::now();
-    in_callback_ = false;
+    callback_started_ns_.store(steady_ns(std::chrono::steady_clock::now()), std::memory_order_relaxed);
+    in_callback_.store(true, std::memory_order_release);
+    callback_(*state);
+    in_callback_.store(false, std::memory_order_release);
+    callback_ended_ns_.store(steady_ns(std::chrono::steady_clock::now()), std::memory_order_relaxed);
   }
 }
 
@@ -280,7 +255,7 @@ void UdpLink::hand_out(const Batch& batch) {
     std::lock_guard lock(mutex_);
     // Replaced before the callback saw it: while it runs (a call of its own read the socket), or
     // by a second read in the same wake-up.
-    ++(in_callback_ ? counters_.callback_skipped : counters_.skipped);
+    ++(in_callback_.load(std::memory_order_acquire) ? counters_.callback_skipped : counters_.skipped);
   }
   if (!pending_ || pending_->tick <= batch.newest->tick) pending_ = *batch.newest;
 }
@@ -380,9 +355,13 @@ void UdpLink::take(std::span<const std::uint8_t> datagram,
   }
   ++counters_.accepted;
   ++batch.accepted;
-  if (arrived_at && callback_ended_ > callback_started_ && *arrived_at >= callback_started_ &&
-      *arrived_at <= callback_ended_) {
-    ++batch.during_callback;  // it queued while the callback ran
+  if (arrived_at) {
+    // It queued while the callback ran: it arrived after the last call began, and before that
+    // call ended (or the call is still running, when read from another thread's restart).
+    const std::int64_t at = steady_ns(*arrived_at);
+    const std::int64_t began = callback_started_ns_.load(std::memory_order_relaxed);
+    const std::int64_t ended = callback_ended_ns_.load(std::memory_order_relaxed);
+    if (began > 0 && at >= began && (at <= ended || ended < began)) ++batch.during_callback;
   }
   echo_state_time_ns_ = header.time_ns;
   echo_received_at_ = batch.received_at;
@@ -417,17 +396,18 @@ void UdpLink::forget_ticks_locked() {
 }
 
 void UdpLink::restart_ticks() {
-  run_on_receiver([this] {
-    // What is in the socket now belongs to the old run (the server sent it before it replied):
-    // take it as usual first.
-    Batch batch;
-    batch.received_at = std::chrono::steady_clock::now();
-    drain(batch);
-    hand_out(batch);
-    std::lock_guard lock(mutex_);
-    stale_through_ = last_sequence_;
-    forget_ticks_locked();
-  });
+  // What is in the socket now belongs to the old run (the server sent it before it replied):
+  // take it as usual first. Under the receive lock, so the receive thread takes nothing of it
+  // after the old run is forgotten; any thread may call this (a callback included: it runs on
+  // the receive thread, which holds no lock while it runs).
+  std::lock_guard lock(receive_mutex_);
+  Batch batch;
+  batch.received_at = std::chrono::steady_clock::now();
+  drain(batch);
+  hand_out(batch);
+  std::lock_guard state(mutex_);
+  stale_through_ = last_sequence_;
+  forget_ticks_locked();
 }
 
 void UdpLink::new_subscription() {
@@ -436,15 +416,16 @@ void UdpLink::new_subscription() {
 }
 
 void UdpLink::rebind(std::uint16_t port, std::uint64_t session_id, const wire::Key& key) {
-  run_on_receiver([&] {
+  {
+    std::lock_guard lock(receive_mutex_);  // no datagram is half taken under the old identity
     {
-      std::lock_guard lock(identity_mutex_);
+      std::lock_guard identity(identity_mutex_);
       server_.port(port);
       session_id_ = session_id;
       key_ = key;
     }
     heartbeat_sequence_ = 0;
-    std::lock_guard lock(mutex_);
+    std::lock_guard state(mutex_);
     // The new session's ticks, sequences and server clock start again from zero.
     last_sequence_ = 0;
     seen_window_ = 0;
@@ -452,7 +433,7 @@ void UdpLink::rebind(std::uint16_t port, std::uint64_t session_id, const wire::K
     session_accepted_base_ = counters_.accepted;
     session_lost_base_ = counters_.lost;
     forget_ticks_locked();
-  });
+  }
   send_heartbeat_soon();
 }
 

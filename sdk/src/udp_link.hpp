@@ -80,25 +80,25 @@ class UdpLink {
 
   void send_heartbeat();
   void schedule_heartbeat();
-  /// The receive thread: waits on the socket and the wake-up descriptor, runs posted requests,
-  /// reads, and calls the callback with the newest State outside any request.
+  /// The receive thread: waits on the socket (and the wake-up descriptor, for stopping), reads
+  /// under receive_mutex_, and calls the callback with the newest State outside any lock.
   void receive_loop();
-  /// Reads every datagram already queued (recvmmsg, up to kMaxDrain) and takes each.
+  /// Reads every datagram already queued (recvmmsg, up to kMaxDrain) and takes each. Holds
+  /// receive_mutex_.
   void drain(Batch& batch);
   /// Decodes one datagram: answers a challenge, or keeps a State if it is the newest so far.
   /// arrived_at: the kernel's receive stamp, if any.
   void take(std::span<const std::uint8_t> datagram,
             std::optional<std::chrono::steady_clock::time_point> arrived_at, Batch& batch);
-  /// Makes the batch's newest State the latest and the callback's next.
+  /// Makes the batch's newest State the latest and the callback's next. Holds receive_mutex_.
   void hand_out(const Batch& batch);
-  /// Calls the callback with the pending State, if any (receive thread, outside the callback).
+  /// Calls the callback with the pending State, if any (receive thread, holding no lock but
+  /// callback_mutex_).
   void deliver();
   /// Echoes a PathChallenge's nonce (the server sends state only where one was answered).
   void answer_challenge(std::span<const std::uint8_t> datagram);
   /// Forgets the newest tick, sample and clock estimate (ticks restarted). Holds mutex_.
   void forget_ticks_locked();
-  /// Runs `work` on the receive thread and waits for it (inline when already there).
-  void run_on_receiver(const std::function<void()>& work);
   /// Sends `bytes` to the server from the socket (any thread).
   void send_to_server(std::span<const std::uint8_t> bytes);
 
@@ -108,7 +108,7 @@ class UdpLink {
   int socket_ = -1;
   asio::steady_timer heartbeat_timer_;
   std::chrono::milliseconds heartbeat_period_;
-  int wake_fd_ = -1;  // an eventfd: requests for the receive thread, and stopping
+  int wake_fd_ = -1;  // an eventfd: wakes the receive thread to stop
   std::atomic<std::uint64_t> heartbeat_sequence_{0};
   std::atomic<bool> heartbeats_enabled_{true};
   std::atomic<bool> stopping_{false};
@@ -120,8 +120,10 @@ class UdpLink {
   std::uint64_t session_id_;        // guarded by identity_mutex_
   wire::Key key_;                   // guarded by identity_mutex_
 
-  std::mutex requests_mutex_;
-  std::vector<std::function<void()>> requests_;  // guarded by requests_mutex_
+  // Held while datagrams are read and taken (by the receive thread, or by restart_ticks and
+  // rebind from any thread), never while the callback runs.
+  std::mutex receive_mutex_;
+  std::optional<State> pending_;  // guarded by receive_mutex_: the callback's next State
 
   mutable std::mutex mutex_;
   std::condition_variable arrived_;
@@ -147,10 +149,9 @@ class UdpLink {
   std::mutex callback_mutex_;
   std::function<void(const State&)> callback_;  // guarded by callback_mutex_
   std::atomic<bool> has_callback_{false};
-  std::optional<State> pending_;       // receive thread only: the callback's next State
-  bool in_callback_ = false;           // receive thread only
-  std::chrono::steady_clock::time_point callback_started_{};  // receive thread only
-  std::chrono::steady_clock::time_point callback_ended_{};    // receive thread only
+  std::atomic<bool> in_callback_{false};
+  std::atomic<std::int64_t> callback_started_ns_{0};  // the last call's start, steady ns
+  std::atomic<std::int64_t> callback_ended_ns_{0};    // and its end
 
   std::thread thread_;    // asio: heartbeats
   std::thread receiver_;  // the socket and the callback

@@ -6,8 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <future>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -135,6 +138,43 @@ TEST(LockstepReset, TheSameCallsAfterAResetGiveTheSameRunBitForBit) {
   EXPECT_EQ(std::count_if(events.begin(), events.end(),
                           [](const Event& e) { return e.kind == Event::Kind::kReset; }),
             3);
+}
+
+// A client that steps from inside its own on_state callback while another of its threads resets
+// the server: each reset restarts the client's tick stream, and the callback's steps learn of
+// the new run too. Neither waits for the other's thread (the stream's restart takes the receive
+// lock, which the callback never holds), so twenty resets finish while the callback keeps going.
+TEST(LockstepReset, ACallbackThatStepsAndResetsOnAnotherThreadNeverWaitForEachOther) {
+  ServerProcess server(lockstep_config(kInitialScene));
+  Client client(config_for(server, "stepper"));
+  std::atomic<int> callback_steps{0};
+  std::atomic<bool> stepping{true};
+  client.on_state([&](const State&) {
+    if (!stepping.load()) return;
+    try {
+      (void)client.step(1);
+      ++callback_steps;
+    } catch (const Error&) {
+      // a step refused while the reset holds the server: the next State tries again
+    }
+  });
+  (void)client.step(1);  // the first State starts the callback's stepping
+  auto resets = std::async(std::launch::async, [&] {
+    for (int i = 0; i < 20; ++i) {
+      client.reset();
+      (void)client.step(1);  // a State after each reset, so the callback runs again
+    }
+  });
+  if (resets.wait_for(seconds(30)) != std::future_status::ready) {
+    ADD_FAILURE() << "the resets and the callback's steps wait on each other";
+    std::_Exit(1);  // a deadlocked client cannot be destroyed
+  }
+  resets.get();
+  stepping = false;
+  client.on_state({});
+  EXPECT_GT(callback_steps.load(), 0);
+  State state;
+  EXPECT_TRUE(client.wait_for_tick(client.step(1), state, seconds(5)));  // still streaming
 }
 
 TEST(LockstepReset, IsRefusedChangingNothingWhileAnotherSessionHoldsItems) {
