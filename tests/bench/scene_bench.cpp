@@ -1,6 +1,7 @@
-// Per-tick cost of engine::evaluate_scene (Google Benchmark) on seven representative scenes:
-// empty; one frictionless wall; 10 mixed objects and 3 fields; 1,000 spheres; a 10,082-triangle
-// mesh; 8 sessions of 10 objects each; the default server scene (one wall, one spring field).
+// Per-tick cost of engine::evaluate_scene (Google Benchmark) on representative scenes: empty; one
+// frictionless wall; 10 mixed objects and 3 fields; 1,000 and 10,648 spheres, each also without
+// the sphere stage's broad phase (the ratio is what the grid buys); a 10,082-triangle mesh; 8
+// sessions of 10 objects each; the default server scene (one wall, one spring field).
 // Each scene is compiled once per run with compile_scene(description, 50, 1, 1e-3).
 //
 // The tool follows a Lissajous curve through the scene's objects, one sample per 1 ms tick, so
@@ -92,6 +93,7 @@ double mean_speed(const std::vector<PathSample>& path) {
 struct SceneCase {
   SceneDescription description;
   std::vector<PathSample> path;
+  bool without_sphere_grid = false;  // look at every sphere every tick (drop_sphere_grid)
 };
 
 class Builder {
@@ -291,21 +293,36 @@ SceneCase mixed() {
   return c;
 }
 
-/// 1,000 spheres of 5 mm radius on a 10 x 10 x 10 grid of 12 mm pitch (a 113 mm cube), the tool
-/// crossing it in all three axes.
-SceneCase sphere_grid() {
+/// side³ spheres of 5 mm radius on a lattice of 12 mm pitch, the tool crossing it in all three
+/// axes (10: a 113 mm cube of 1,000; 22: a 257 mm cube of 10,648).
+SceneCase sphere_lattice(int side) {
   SceneCase c;
   Builder b(c.description);
   constexpr double kPitch = 0.012;
-  for (int i = 0; i < 10; ++i) {
-    for (int j = 0; j < 10; ++j) {
-      for (int k = 0; k < 10; ++k) {
-        const Vec3 center{kPitch * (i - 4.5), kPitch * (j - 4.5), kPitch * (k - 4.5)};
+  const double middle = 0.5 * (side - 1);
+  for (int i = 0; i < side; ++i) {
+    for (int j = 0; j < side; ++j) {
+      for (int k = 0; k < side; ++k) {
+        const Vec3 center{kPitch * (i - middle), kPitch * (j - middle), kPitch * (k - middle)};
         b.object(sphere(center, 0.005, 800.0, 0.5));
       }
     }
   }
   c.path = sample_path(workspace_path(0.0, 0.05));
+  return c;
+}
+SceneCase sphere_grid() { return sphere_lattice(10); }
+SceneCase spheres_10k() { return sphere_lattice(22); }
+/// The same scenes looking at every sphere every tick (the broad phase dropped): the ratio of the
+/// two, in one run, is what the broad phase buys.
+SceneCase sphere_grid_every() {
+  SceneCase c = sphere_lattice(10);
+  c.without_sphere_grid = true;
+  return c;
+}
+SceneCase spheres_10k_every() {
+  SceneCase c = sphere_lattice(22);
+  c.without_sphere_grid = true;
   return c;
 }
 
@@ -379,7 +396,8 @@ double clock_overhead_ns() {
 
 void BM_EvaluateScene(benchmark::State& state, SceneCase (*make)()) {
   const SceneCase c = make();
-  const CompiledScene scene = compile_scene(c.description, 50, 1, kDt);
+  CompiledScene scene = compile_scene(c.description, 50, 1, kDt);
+  if (c.without_sphere_grid) drop_sphere_grid(scene);
   const std::vector<PathSample>& path = c.path;
   std::size_t i = 0;
   std::int64_t tick = 0;
@@ -426,6 +444,9 @@ BENCHMARK_CAPTURE(BM_EvaluateScene, empty, empty_scene);
 BENCHMARK_CAPTURE(BM_EvaluateScene, one_wall, one_wall);
 BENCHMARK_CAPTURE(BM_EvaluateScene, mixed_10_objects_3_fields, mixed);
 BENCHMARK_CAPTURE(BM_EvaluateScene, spheres_1000, sphere_grid);
+BENCHMARK_CAPTURE(BM_EvaluateScene, spheres_1000_every_sphere, sphere_grid_every);
+BENCHMARK_CAPTURE(BM_EvaluateScene, spheres_10648, spheres_10k);
+BENCHMARK_CAPTURE(BM_EvaluateScene, spheres_10648_every_sphere, spheres_10k_every);
 BENCHMARK_CAPTURE(BM_EvaluateScene, mesh_10k_triangles, terrain_mesh);
 BENCHMARK_CAPTURE(BM_EvaluateScene, users_8x10_objects, eight_users);
 BENCHMARK_CAPTURE(BM_EvaluateScene, default_server, default_server);

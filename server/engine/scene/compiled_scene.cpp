@@ -345,6 +345,28 @@ struct SceneBuilder {
     }
   }
 
+  /// The spheres' broad phase, where there are enough of them to need one, and its per-port
+  /// lists sized so the loop allocates nothing.
+  void build_sphere_grid() {
+    const std::size_t n = scene.spheres.size();
+    if (n < kSphereGridMinSpheres) return;
+    std::vector<Vec3> centers;
+    std::vector<double> radii;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const CompiledSphere& sphere = scene.spheres[i];
+      centers.push_back(sphere.center_W);
+      radii.push_back(sphere.radius);
+      const ItemRamp& r = sphere.ramp;
+      if (r.fade_begin_tick != kNeverTick || r.superseded_at[0] != kNeverTick) scene.fading_spheres.push_back(i);
+    }
+    scene.sphere_grid = SphereGrid(centers, radii);
+    state.sphere_active.assign(2 * n * state.ports, 0);
+    state.sphere_active_count.assign(state.ports, 0);
+    state.sphere_active_side.assign(state.ports, 0);
+    state.sphere_candidates.assign(2 * n * state.ports, 0);
+    state.spheres_primed.assign(state.ports, 0);
+  }
+
   /// The non-empty stages, so the loop skips an empty one with one branch.
   void mark_stages() {
     scene.stages = (scene.half_spaces.empty() ? 0u : kStageHalfSpaces) |
@@ -352,7 +374,8 @@ struct SceneBuilder {
                    (scene.contacts.empty() ? 0u : kStageContacts) |
                    (scene.meshes.empty() ? 0u : kStageMeshes) |
                    (scene.springs.empty() ? 0u : kStageSprings) |
-                   (scene.fields.empty() ? 0u : kStageFields);
+                   (scene.fields.empty() ? 0u : kStageFields) |
+                   (scene.sphere_grid.empty() ? 0u : kStageSphereGrid);
   }
 };
 
@@ -375,8 +398,14 @@ CompiledScene compile_scene(const SceneDescription& description, std::int64_t re
   for (const FieldEntry& entry : description.fields) builder.add_field(entry);
   builder.size_per_port_state(items);
   builder.start_motions();
+  builder.build_sphere_grid();
   builder.mark_stages();
   return scene;
+}
+
+void drop_sphere_grid(CompiledScene& scene) {
+  scene.sphere_grid = SphereGrid();
+  scene.stages &= ~kStageSphereGrid;
 }
 
 namespace {
@@ -664,28 +693,81 @@ struct PortPass {
   }
 }
 
-/// Stage 2: spheres, the same law along the radial direction.
+/// One sphere of stage 2: the same law as a half-space's along the radial direction. True when it
+/// pushed (the tool is inside and the sphere's gain is above zero).
+[[gnu::always_inline]] inline bool add_sphere(PortPass& pass, const CompiledSphere& sphere) {
+  const Vec3 r = pass.p_WT - sphere.center_W;
+  const double distance = norm(r);
+  const double d = sphere.radius - distance;
+  const double gain = d > 0.0 ? ramp_gain(sphere.ramp, pass.tick, pass.ramp_ticks) : 0.0;
+  // At the exact centre the direction is undefined; push along +z.
+  const Vec3 n = distance > 0.0 ? r * (1.0 / distance) : Vec3{0.0, 0.0, 1.0};
+  const Vec3 F =
+      gain > 0.0 ? (gain * contact_magnitude(sphere.stiffness, sphere.damping, d, n, pass.v_WT)) * n
+                 : Vec3{};
+  meter(pass.state, pass.meters + sphere.meter, F, pass.v_WT, pass.dt);
+  if (gain == 0.0) return false;
+  pass.contribute(sphere.slot, F, false);
+  ++pass.out.contact_count;
+  if (d > pass.deepest) {
+    pass.deepest = d;
+    pass.out.p_WP = sphere.center_W + sphere.radius * n;
+  }
+  return true;
+}
+
+/// Stage 2: spheres, every one of them.
 [[gnu::always_inline]] inline void add_spheres(PortPass& pass) {
   for (const CompiledSphere& sphere : pass.scene.spheres) {
     if (is_fading_out(sphere.ramp, pass.tick, pass.ramp_ticks)) pass.out.ramping = true;
-    const Vec3 r = pass.p_WT - sphere.center_W;
-    const double distance = norm(r);
-    const double d = sphere.radius - distance;
-    const double gain = d > 0.0 ? ramp_gain(sphere.ramp, pass.tick, pass.ramp_ticks) : 0.0;
-    // At the exact centre the direction is undefined; push along +z.
-    const Vec3 n = distance > 0.0 ? r * (1.0 / distance) : Vec3{0.0, 0.0, 1.0};
-    const Vec3 F =
-        gain > 0.0 ? (gain * contact_magnitude(sphere.stiffness, sphere.damping, d, n, pass.v_WT)) * n
-                   : Vec3{};
-    meter(pass.state, pass.meters + sphere.meter, F, pass.v_WT, pass.dt);
-    if (gain == 0.0) continue;
-    pass.contribute(sphere.slot, F, false);
-    ++pass.out.contact_count;
-    if (d > pass.deepest) {
-      pass.deepest = d;
-      pass.out.p_WP = sphere.center_W + sphere.radius * n;
+    add_sphere(pass, sphere);
+  }
+}
+
+/// Stage 2 through the broad phase: the spheres listed in the tool's cell and those it touched
+/// last tick (whose meters must see the contact end), each once, in index order — so the forces
+/// add up in the same order, bit for bit, as add_spheres'. A sphere it skips is one the tool is
+/// outside of, whose meter add_spheres would leave as it is (no power now or on the last tick).
+/// The port's first tick looks at every sphere (as add_spheres), which leaves every meter as
+/// add_spheres would have and starts the list of those touched.
+void add_spheres_through_grid(PortPass& pass, std::uint32_t port) {
+  const CompiledScene& scene = pass.scene;
+  SceneState& state = pass.state;
+  const std::size_t n = scene.spheres.size();
+  const std::uint8_t side = state.sphere_active_side[port];
+  const std::uint32_t* last = state.sphere_active.data() + (2 * port + side) * n;
+  std::uint32_t* next = state.sphere_active.data() + (2 * port + (1 - side)) * n;
+  std::uint32_t touched = 0;
+  if (state.spheres_primed[port] == 0) {
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const CompiledSphere& sphere = scene.spheres[i];
+      if (is_fading_out(sphere.ramp, pass.tick, pass.ramp_ticks)) pass.out.ramping = true;
+      if (add_sphere(pass, sphere)) next[touched++] = i;
+    }
+    state.spheres_primed[port] = 1;
+  } else {
+    for (const std::uint32_t i : scene.fading_spheres) {
+      if (is_fading_out(scene.spheres[i].ramp, pass.tick, pass.ramp_ticks)) pass.out.ramping = true;
+    }
+    // Last tick's touched spheres and this cell's, merged (both ascending) without repeats.
+    const std::span<const std::uint32_t> cell = scene.sphere_grid.candidates(pass.p_WT);
+    std::uint32_t* candidates = state.sphere_candidates.data() + 2 * port * n;
+    const std::uint32_t* a = last;
+    const std::uint32_t* a_end = last + state.sphere_active_count[port];
+    const std::uint32_t* b = cell.data();
+    const std::uint32_t* b_end = cell.data() + cell.size();
+    std::uint32_t count = 0;
+    while (a != a_end || b != b_end) {
+      const std::uint32_t i = (b == b_end || (a != a_end && *a < *b)) ? *a++ : *b++;
+      if (count == 0 || candidates[count - 1] != i) candidates[count++] = i;
+    }
+    for (std::uint32_t k = 0; k < count; ++k) {
+      const std::uint32_t i = candidates[k];
+      if (add_sphere(pass, scene.spheres[i])) next[touched++] = i;
     }
   }
+  state.sphere_active_count[port] = touched;
+  state.sphere_active_side[port] = static_cast<std::uint8_t>(1 - side);
 }
 
 /// Stage 3: stateful contacts, each through its proxy (the velocity law, friction) or its
@@ -852,7 +934,11 @@ struct PortPass {
     std::fill(state.slot_fields.begin(), state.slot_fields.end(), Vec3{});
   }
   if (scene.stages & kStageHalfSpaces) add_half_spaces(pass);
-  if (scene.stages & kStageSpheres) add_spheres(pass);
+  if (scene.stages & kStageSphereGrid) {
+    add_spheres_through_grid(pass, port);
+  } else if (scene.stages & kStageSpheres) {
+    add_spheres(pass);
+  }
   if (scene.stages & kStageContacts) add_contacts(pass);
   if (scene.stages & kStageMeshes) add_meshes(pass);
   if (scene.stages & kStageSprings) add_springs(pass);

@@ -21,6 +21,7 @@
 #include "engine/scene/impedance.hpp"
 #include "engine/scene/scene_spec.hpp"
 #include "engine/scene/shapes.hpp"
+#include "engine/scene/sphere_grid.hpp"
 
 namespace haptic::engine {
 
@@ -170,6 +171,16 @@ struct SceneState {
   std::vector<std::uint64_t> slot_sessions;
   std::vector<Vec3> slot_force;
   std::vector<Vec3> slot_fields;
+  /// The sphere stage's broad phase (with CompiledScene::sphere_grid), per port: the spheres in
+  /// contact on the last tick (two lists of `spheres` entries, flipped each tick: they must be
+  /// looked at once more, so their meters see the contact end), a scratch list of this tick's
+  /// candidates, and whether the port's first tick — which looks at every sphere, as the stage
+  /// without a grid does every tick — has run.
+  std::vector<std::uint32_t> sphere_active;       // 2 × spheres per port
+  std::vector<std::uint32_t> sphere_active_count;  // per port
+  std::vector<std::uint8_t> sphere_active_side;    // per port: which of the two lists is last tick's
+  std::vector<std::uint32_t> sphere_candidates;    // 2 × spheres per port
+  std::vector<std::uint8_t> spheres_primed;        // per port
 };
 
 /// Which stages a compiled scene runs (docs/scene.md); an empty stage is skipped entirely.
@@ -180,6 +191,7 @@ enum SceneStage : std::uint32_t {
   kStageMeshes = 1u << 3,
   kStageSprings = 1u << 4,
   kStageFields = 1u << 5,
+  kStageSphereGrid = 1u << 6,  // the sphere stage through its broad phase
 };
 
 struct CompiledScene {
@@ -193,6 +205,11 @@ struct CompiledScene {
   std::vector<std::uint32_t> masses;
   /// The meshes that are virtual masses (indices into `meshes`).
   std::vector<std::uint32_t> mesh_masses;
+  /// The spheres' broad phase: built from kSphereGridMinSpheres spheres on (kStageSphereGrid);
+  /// with it a tick looks only at the spheres listed where the tool is, those it touched last
+  /// tick, and those fading out (fading_spheres, for SceneForce::ramping).
+  SphereGrid sphere_grid;
+  std::vector<std::uint32_t> fading_spheres;
   std::uint32_t stages = 0;              // SceneStage bits of the non-empty stages
   std::int64_t removal_ramp_ticks = 50;  // Ticks over which an item ramps in or out; >= 1.
   /// Largest force one session's items may exert together (the server's own scene is exempt);
@@ -205,6 +222,10 @@ struct CompiledScene {
   std::uint64_t run = 0;
   std::unique_ptr<SceneState> state = std::make_unique<SceneState>();  // written by the loop only
 };
+
+/// Makes the sphere stage look at every sphere every tick, as it does without a grid (for tests
+/// and benchmarks that compare the two). Off the loop.
+void drop_sphere_grid(CompiledScene& scene);
 
 /// Flattens a description into a compiled scene (off the loop; allocates). period_s: the loop
 /// period (s), for the discrete impedance laws. ports: how many tools (one per device) are

@@ -44,6 +44,15 @@ SceneDescription busy_scene() {
   object({0, -0.03, 0}, {}, 500.0, 0.0, HalfSpaceSpec{{0, 1, 0}}, 3000);
   object({0.005, 0.005, 0}, {}, 600.0, 0.2, SphereSpec{0.01}, kNeverTick);
   object({-0.01, 0, 0.01}, {}, 400.0, 0.0, SphereSpec{0.015}, 5000);
+  // A lattice of small spheres, enough for the sphere stage's broad phase (kStageSphereGrid).
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) {
+      for (int k = 0; k < 6; ++k) {
+        object({0.01 * (i - 2.5), 0.01 * (j - 2.5), 0.01 * (k - 2.5)}, {}, 300.0, 0.1, SphereSpec{0.003},
+               (i + j + k) % 7 == 0 ? 4000 : kNeverTick);
+      }
+    }
+  }
   d.fields.push_back(
       {{2, 10, kNeverTick, {}}, FieldSpec{SpringToPointSpec{{0, 0, 0}, 50.0, 0.1, 2.0}}});
   d.fields.push_back({{2, 11, 7000, {}}, FieldSpec{SpringToPointSpec{{0.01, 0, 0}, 20.0, 0.0, 0.0}}});
@@ -52,6 +61,7 @@ SceneDescription busy_scene() {
 
 TEST(EngineNoAllocation, TenThousandTicksOfSceneGuardAndPlantAllocateNothing) {
   const CompiledScene scene = compile_scene(busy_scene(), 50, 1);
+  ASSERT_NE(scene.stages & kStageSphereGrid, 0u);
   ForceGuard guard(ForceLimits{});
   PointMassPlant plant(PointMassParams{});
   HandInput hand;
