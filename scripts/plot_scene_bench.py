@@ -24,8 +24,12 @@ LABELS = {
     "users_8x10_objects": "8 users ×\n10 objects",
     "mesh_10k_triangles": "10k-triangle\nmesh",
     "spheres_1000": "1,000 spheres",
+    "spheres_1000_every_sphere": "1,000 spheres,\nno broad phase",
+    "spheres_10648": "10,648 spheres",
+    "spheres_10648_every_sphere": "10,648 spheres,\nno broad phase",
 }
-TARGETS_NS = {"mixed_10_objects_3_fields": 2000.0, "spheres_1000": 20000.0, "mesh_10k_triangles": 20000.0}
+TARGETS_NS = {"mixed_10_objects_3_fields": 2000.0, "spheres_1000": 1000.0, "spheres_10648": 2000.0,
+              "mesh_10k_triangles": 20000.0}
 
 
 def main(source, target):
@@ -40,7 +44,7 @@ def main(source, target):
     order = list(LABELS)
     rows.sort(key=lambda r: order.index(r[0]) if r[0] in order else len(order))
     names = [LABELS.get(r[0], r[0]) for r in rows]
-    fig, ax = plt.subplots(figsize=(8.5, 4.2))
+    fig, ax = plt.subplots(figsize=(10.5, 4.4))
     x = range(len(rows))
     ax.bar(x, [r[1] for r in rows], color="#4c72b0", label="median per tick")
     ax.vlines(x, [r[2] for r in rows], [r[3] for r in rows], color="black", lw=1.2,
@@ -52,7 +56,7 @@ def main(source, target):
     ax.set_yscale("log")
     ax.set_ylabel("evaluate_scene per tick [ns]")
     ax.set_xticks(list(x))
-    ax.set_xticklabels(names, fontsize=8)
+    ax.set_xticklabels(names, fontsize=7)
     ax.set_title("Scene cost per 1 ms tick (2-core VM, scene_bench)")
     ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
