@@ -26,8 +26,6 @@ Vec3 to_vec(const wire::Vec3d& v) { return {v.x, v.y, v.z}; }
 constexpr int kReceiveBufferBytes = 1 << 20;
 // At most this many datagrams are taken in one wake-up before the newest is handed out.
 constexpr int kMaxDrain = 1024;
-// Datagrams read per recvmmsg call.
-constexpr unsigned kBatch = 32;
 
 /// CLOCK_REALTIME − CLOCK_MONOTONIC now: the kernel stamps arrivals on the former
 /// (SO_TIMESTAMPNS), steady_clock is the latter.
@@ -193,14 +191,9 @@ void UdpLink::schedule_heartbeat() {
 }
 
 void UdpLink::drain(Batch& batch) {
-  struct Slot {
-    std::array<std::uint8_t, 2048> bytes;
-    alignas(cmsghdr) std::array<char, CMSG_SPACE(sizeof(timespec))> control;
-    iovec iov;
-  };
-  // Per thread and reused: this runs on the receive thread (and, for restart_ticks, nowhere else).
-  static thread_local std::array<Slot, kBatch> slots;
-  static thread_local std::array<mmsghdr, kBatch> messages;
+  // The link's own buffers: drain runs only under receive_mutex_.
+  auto& slots = receive_buffers_->slots;
+  auto& messages = receive_buffers_->messages;
   const std::int64_t realtime_offset = realtime_minus_monotonic_ns();
   for (int read = 0; read < kMaxDrain;) {
     for (unsigned i = 0; i < kBatch; ++i) {

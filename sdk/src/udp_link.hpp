@@ -6,12 +6,16 @@
 // application); an asio thread sends the heartbeats, so a slow callback never costs the lease.
 
 #include <asio.hpp>
+#include <sys/socket.h>
+#include <time.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <span>
@@ -124,6 +128,18 @@ class UdpLink {
   // rebind from any thread), never while the callback runs.
   std::mutex receive_mutex_;
   std::optional<State> pending_;  // guarded by receive_mutex_: the callback's next State
+  /// recvmmsg's buffers, kBatch datagrams a call (guarded by receive_mutex_; on the heap, 67 KB).
+  static constexpr unsigned kBatch = 32;
+  struct ReceiveSlot {
+    std::array<std::uint8_t, 2048> bytes;
+    alignas(cmsghdr) std::array<char, CMSG_SPACE(sizeof(timespec))> control;
+    iovec iov;
+  };
+  struct ReceiveBuffers {
+    std::array<ReceiveSlot, kBatch> slots;
+    std::array<mmsghdr, kBatch> messages;
+  };
+  std::unique_ptr<ReceiveBuffers> receive_buffers_ = std::make_unique<ReceiveBuffers>();
 
   mutable std::mutex mutex_;
   std::condition_variable arrived_;
