@@ -43,14 +43,23 @@ ino_t inode_of(int fd) {
 
 ControlListener::~ControlListener() {
   stop();
-  if (reserve_fd_ >= 0) ::close(reserve_fd_);
+  for (const int fd : reserve_fds_) ::close(fd);
+}
+
+void ControlListener::top_up_reserves() {
+  while (reserve_fds_.size() < kReserveFds) {
+    const int fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return;
+    reserve_fds_.push_back(fd);
+  }
 }
 
 void ControlListener::bind(const std::string& address) {
   ListeningSockets sockets = listen_tcp(address, "gRPC", "grpc_address");
   listening_ = std::move(sockets.fds);
   port_ = sockets.port;
-  reserve_fd_ = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  reserve_fds_.reserve(kReserveFds);
+  top_up_reserves();
 }
 
 void ControlListener::start(std::function<void(int fd)> serve) {
@@ -79,6 +88,7 @@ void ControlListener::accept_loop() {
   while (!stopping_.load(std::memory_order_acquire)) {
     const int ready = ::poll(fds.data(), fds.size(), kPollMs);
     reap();
+    top_up_reserves();  // a reserve lost to another thread is taken back as soon as fds free up
     if (ready <= 0) continue;
     for (const pollfd& p : fds) {
       if (p.revents & POLLIN) accept_one(p.fd);
@@ -96,14 +106,17 @@ void ControlListener::accept_one(int listening_fd) {
     if (fd < 0) {
       if (errno == EINTR || errno == ECONNABORTED) continue;
       if (errno == EMFILE || errno == ENFILE) {
-        // No fd to accept with: free the reserved one, accept the connection and close it, so it
+        // No fd to accept with: free a reserved one, accept the connection and close it, so it
         // neither waits in the backlog nor keeps the listener readable forever; then re-reserve.
-        if (reserve_fd_ >= 0) ::close(reserve_fd_);
+        if (!reserve_fds_.empty()) {
+          ::close(reserve_fds_.back());
+          reserve_fds_.pop_back();
+        }
         const int dropped = ::accept4(listening_fd, nullptr, nullptr, SOCK_CLOEXEC);
         if (dropped >= 0) refuse(dropped, "the process is out of file descriptors", {});  // closes it
-        reserve_fd_ = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+        top_up_reserves();
         if (dropped >= 0) continue;
-        // Not even the reserve helped (another thread took the fd): back off rather than spin on
+        // Not even a reserve helped (another thread took the fd): back off rather than spin on
         // a listener that stays readable; connections wait in the backlog meanwhile.
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
       }

@@ -72,7 +72,14 @@ class ControlListener {
   ConnectionLimits limits_;
   std::vector<int> listening_;
   std::uint16_t port_ = 0;
-  int reserve_fd_ = -1;  // held so that accept() can be made to succeed when fds run out
+  /// Descriptors held so that accept() can be made to succeed when the process runs out: one is
+  /// freed to accept (and refuse) a connection, and taken back. Several, and topped up on every
+  /// pass, because another thread (gRPC's) may take a freed number first: with a single reserve
+  /// that race once left the listener unable to refuse anything until a connection closed.
+  std::vector<int> reserve_fds_;
+  static constexpr std::size_t kReserveFds = 4;
+  /// Opens reserves up to kReserveFds (as many as the process can have).
+  void top_up_reserves();
   std::function<void(int)> serve_;
   std::vector<Connection> connections_;  // accept thread only
   std::atomic<bool> stopping_{false};
