@@ -21,7 +21,6 @@
 #include <span>
 #include <string>
 #include <thread>
-#include <vector>
 
 #include "clock_sync.hpp"
 #include "haptic/types.hpp"
