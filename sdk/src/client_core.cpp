@@ -253,6 +253,8 @@ void ClientCore::close_session() {
   if (closed_) return;
   closed_ = true;
   udp_.reset();
+  // The server ended the session itself (an admin, an expired token): nothing is left to close.
+  if (connection_state_ == ConnectionChange::State::kEnded) return;
   v1::SessionRef ref;
   ref.set_session_id(session_id_);
   call<v1::SessionRef, v1::Empty>("CloseSession", &v1::Haptic::Stub::CloseSession, ref);

@@ -338,7 +338,8 @@ class Client {
   void set_heartbeats_enabled(bool enabled);
   ReceiveCounters receive_counters() const;
 
-  /// Closes the session now; throws haptic::Error if the server refuses. Not from inside this
+  /// Closes the session now; throws haptic::Error if the server refuses. After kEnded (the server
+  /// ended the session) there is nothing to close, and it only stops the client. Not from inside this
   /// client's on_state, on_event or on_connection callback (closing waits for those threads):
   /// that throws FailedPreconditionError; return from the callback first. For the same reason a
   /// callback must not destroy its Client.
