@@ -5,6 +5,7 @@ import gc
 import threading
 import time
 
+import numpy as np
 import pytest
 
 import hapticd
@@ -149,3 +150,18 @@ def test_python_threads_share_one_client(client):
         worker.join(30)
     assert not errors
     assert client.step(1) == first + 2 * steps + 1
+
+
+def test_samples_carry_monotonic_times_and_interpolate_between_frames(client):
+    client.set_operator(hapticd.OperatorInput.push((0, 0, -0.5)))
+    before = time.monotonic()
+    a = client.wait_for_tick(client.step(5))
+    b = client.wait_for_tick(client.step(5))
+    after = time.monotonic()
+    assert before <= a.received_at <= b.received_at <= after
+    middle = hapticd.interpolate_position(a, b, (a.server_time + b.server_time) / 2)
+    assert middle.shape == (3,)
+    assert min(a.position[2], b.position[2]) <= middle[2] <= max(a.position[2], b.position[2])
+    np.testing.assert_allclose(hapticd.interpolate_position(a, b, b.server_time), b.position)
+    ahead = hapticd.predict_position(a, b, b.server_time + 0.005)
+    assert ahead[2] < b.position[2]  # still falling
