@@ -260,34 +260,41 @@ struct DeleteWithoutGil {
 
 namespace pybind11::detail {
 
-/// haptic::Vec3 ⇄ a float64 array of 3 (from any sequence of 3 numbers).
-template <>
-struct type_caster<haptic::Vec3> {
-  PYBIND11_TYPE_CASTER(haptic::Vec3, const_name("numpy.ndarray[3]"));
+/// A value of N doubles ⇄ a float64 array of N (from any sequence of N numbers); `Fields` lists
+/// its members in the array's order.
+template <class Value, auto... Fields>
+struct fixed_array_caster {
+  static constexpr std::size_t kSize = sizeof...(Fields);
+  Value value;
   bool load(handle source, bool /*convert*/) {
-    std::array<double, 3> numbers{};
+    std::array<double, kSize> numbers{};
     if (!haptic::python::read_numbers(source, numbers)) return false;
-    value = {numbers[0], numbers[1], numbers[2]};
+    std::size_t i = 0;
+    ((value.*Fields = numbers[i++]), ...);
     return true;
   }
-  static handle cast(const haptic::Vec3& v, return_value_policy, handle) {
-    return haptic::python::to_array(std::array<double, 3>{v.x, v.y, v.z}).release();
+  static handle cast(const Value& v, return_value_policy, handle) {
+    return haptic::python::to_array(std::array<double, kSize>{(v.*Fields)...}).release();
   }
+  operator Value*() { return &value; }
+  operator Value&() { return value; }
+  template <typename T>
+  using cast_op_type = pybind11::detail::cast_op_type<T>;
+};
+
+/// haptic::Vec3 ⇄ a float64 array of 3.
+template <>
+struct type_caster<haptic::Vec3>
+    : fixed_array_caster<haptic::Vec3, &haptic::Vec3::x, &haptic::Vec3::y, &haptic::Vec3::z> {
+  static constexpr auto name = const_name("numpy.ndarray[3]");
 };
 
 /// haptic::Quaternion ⇄ a float64 array (w, x, y, z).
 template <>
-struct type_caster<haptic::Quaternion> {
-  PYBIND11_TYPE_CASTER(haptic::Quaternion, const_name("numpy.ndarray[4] (w, x, y, z)"));
-  bool load(handle source, bool /*convert*/) {
-    std::array<double, 4> numbers{};
-    if (!haptic::python::read_numbers(source, numbers)) return false;
-    value = {numbers[0], numbers[1], numbers[2], numbers[3]};
-    return true;
-  }
-  static handle cast(const haptic::Quaternion& q, return_value_policy, handle) {
-    return haptic::python::to_array(std::array<double, 4>{q.w, q.x, q.y, q.z}).release();
-  }
+struct type_caster<haptic::Quaternion>
+    : fixed_array_caster<haptic::Quaternion, &haptic::Quaternion::w, &haptic::Quaternion::x,
+                         &haptic::Quaternion::y, &haptic::Quaternion::z> {
+  static constexpr auto name = const_name("numpy.ndarray[4] (w, x, y, z)");
 };
 
 }  // namespace pybind11::detail

@@ -41,6 +41,21 @@ AppliedSceneHandles to_python(AppliedScene&& applied) {
   return handles;
 }
 
+/// `with value:` returns the value itself and calls `finish(value)` without the GIL at the end
+/// of the block (an exception from the block goes on).
+template <class T, class Holder, class Finish>
+void def_context_manager(py::class_<T, Holder>& cls, Finish finish, const char* doc) {
+  cls.def("__enter__", [](py::object self) { return self; })
+      .def(
+          "__exit__",
+          [finish](T& value, const py::args&) {
+            py::gil_scoped_release released;
+            finish(value);
+            return false;
+          },
+          doc);
+}
+
 /// What ObjectHandle and FieldHandle share (detail::ItemHandle), plus the context-manager
 /// protocol: leaving a `with` block removes the item.
 template <class Handle, class Holder>
@@ -58,20 +73,21 @@ void bind_item_handle(py::class_<Handle, Holder>& cls) {
       .def(
           "release", [](Handle& h) { return h.release(); },
           "Stops owning the item (it stays until the session ends); returns its id.")
-      .def("__enter__", [](py::object self) { return self; })
-      .def(
-          "__exit__",
-          [](Handle& self, const py::args&) {
-            py::gil_scoped_release released;
-            self.remove();
-            return false;
-          },
-          "Removes the item.")
       .def("__repr__", [](const py::object& self) {
         const Handle& handle = self.cast<const Handle&>();
         return py::str("{}(id={}, owned={})")
             .format(py::type::of(self).attr("__name__"), handle.id(), handle.owned());
       });
+  def_context_manager(cls, [](Handle& handle) { handle.remove(); }, "Removes the item.");
+}
+
+/// Binds `handle.update(spec)` for each spec type in Specs.
+template <class... Specs, class Handle, class Holder>
+void def_updates(py::class_<Handle, Holder>& cls, const char* doc) {
+  (cls.def(
+       "update", [](Handle& handle, const Specs& spec) { handle.update(spec); }, py::arg("spec"),
+       ReleaseGil(), doc),
+   ...);
 }
 
 /// Binds `client.<name>(spec)` for each spec type in Specs to `add`.
@@ -156,36 +172,15 @@ void bind_handles(py::module_& m) {
   object.def_property_readonly("stability", &ObjectHandle::stability,
                                py::return_value_policy::copy,
                                "StabilityReport for the impedance as registered or last updated.");
-  const auto update_object = [&object](auto tag) {
-    using Spec = typename decltype(tag)::type;
-    object.def(
-        "update", [](ObjectHandle& handle, const Spec& spec) { handle.update(spec); },
-        py::arg("spec"), ReleaseGil(),
-        "Replaces the object with `spec` (any object kind); on an error the old one stays.");
-  };
-  update_object(std::type_identity<WallSpec>{});
-  update_object(std::type_identity<SphereSpec>{});
-  update_object(std::type_identity<BoxSpec>{});
-  update_object(std::type_identity<CapsuleSpec>{});
-  update_object(std::type_identity<TangentPlaneSpec>{});
-  update_object(std::type_identity<MeshSpec>{});
+  def_updates<WallSpec, SphereSpec, BoxSpec, CapsuleSpec, TangentPlaneSpec, MeshSpec>(
+      object, "Replaces the object with `spec` (any object kind); on an error the old one stays.");
 
   py::class_<FieldHandle, std::unique_ptr<FieldHandle, DeleteWithoutGil<FieldHandle>>> field(
       m, "FieldHandle", "A registered energy field; owned as ObjectHandle's object is.");
   bind_item_handle(field);
-  const auto update_field = [&field](auto tag) {
-    using Spec = typename decltype(tag)::type;
-    field.def(
-        "update", [](FieldHandle& handle, const Spec& spec) { handle.update(spec); },
-        py::arg("spec"), ReleaseGil(),
-        "Replaces the field with `spec` (any field kind); on an error the old one stays.");
-  };
-  update_field(std::type_identity<SpringFieldSpec>{});
-  update_field(std::type_identity<DistanceSpringSpec>{});
-  update_field(std::type_identity<PotentialFieldSpec>{});
-  update_field(std::type_identity<LinearFieldSpec>{});
-  update_field(std::type_identity<ViscousFieldSpec>{});
-  update_field(std::type_identity<DetentFieldSpec>{});
+  def_updates<SpringFieldSpec, DistanceSpringSpec, PotentialFieldSpec, LinearFieldSpec,
+              ViscousFieldSpec, DetentFieldSpec>(
+      field, "Replaces the field with `spec` (any field kind); on an error the old one stays.");
 
   py::class_<AppliedSceneHandles>(m, "AppliedScene",
                                   "The handles of a scene applied whole, in the scene's order; "
@@ -390,16 +385,8 @@ void bind_client_class(py::module_& m) {
            ReleaseGil(), "Stops or resumes UDP heartbeats (stopping simulates a lost client).")
       .def("receive_counters", &Client::receive_counters, "ReceiveCounters")
       .def("close", &Client::close, ReleaseGil(),
-           "Closes the session now; raises hapticd.Error if the server refuses.")
-      .def("__enter__", [](py::object self) { return self; })
-      .def(
-          "__exit__",
-          [](Client& client, const py::args&) {
-            py::gil_scoped_release released;
-            client.close();
-            return false;
-          },
-          "Closes the session.");
+           "Closes the session now; raises hapticd.Error if the server refuses.");
+  def_context_manager(cls, [](Client& client) { client.close(); }, "Closes the session.");
 }
 
 }  // namespace
