@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import hapticd
+from conftest import ServerProcess, lockstep_config
 
 STIFF = hapticd.Impedance(stiffness=1000.0, damping=1.0)
 
@@ -177,3 +178,27 @@ def test_no_server_is_a_connection_error():
 def test_a_bad_option_is_named():
     with pytest.raises(TypeError, match="Client\\(\\) has no option 'adress'"):
         hapticd.Client(adress="127.0.0.1:1")
+
+
+def test_two_users_on_two_device_ports_share_one_scene():
+    server = ServerProcess(lockstep_config(extra_devices=[
+        {"simulated_point_mass": {"initial_position": {"y": 0.05, "z": 0.02}}}]))
+    try:
+        with hapticd.Client(server.config(client_name="left")) as left, \
+             hapticd.Client(server.config(client_name="right", device_index=1)) as right:
+            assert right.device_info.simulated
+            box = left.add_box(hapticd.BoxSpec(pose=hapticd.Pose(position=(0, 0.025, 0)),
+                                               half_extents=(0.1, 0.1, 0.01), impedance=STIFF))
+            right.set_operator(hapticd.OperatorInput.push((0, 0, -1.0)))
+            last = left.step(1000)
+            mine, theirs = left.wait_for_tick(last), right.wait_for_tick(last)
+            assert mine.position[1] == pytest.approx(0.0) and theirs.position[1] == pytest.approx(0.05)
+            assert mine.contact_count == 0 and mine.position[2] == pytest.approx(0.02, abs=1e-4)
+            # The right user's tool rests on the left user's box: 1 N over 1000 N/m, 1 mm deep.
+            assert theirs.contact_count == 1
+            assert theirs.position[2] == pytest.approx(0.01 - 0.001, rel=0.02)
+            assert right.scene(all_sessions=True).object_sessions == [left.session_id]
+            assert right.scene().object_ids == []  # none of its own
+            box.remove()
+    finally:
+        assert server.stop() == 0
