@@ -1,6 +1,7 @@
 #include "net/http_server.hpp"
 
 #include <poll.h>
+#include <pthread.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -145,6 +146,8 @@ void HttpServer::stop() {
 }
 
 void HttpServer::serve_loop() {
+  // "http-viewer", "http-metrics": top -H and /proc tell the endpoints' threads apart.
+  ::pthread_setname_np(::pthread_self(), ("http-" + name_).substr(0, 15).c_str());
   std::vector<Connection> connections;
   std::vector<pollfd> polled;
   while (!stopping_.load()) {

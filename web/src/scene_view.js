@@ -66,7 +66,7 @@ export class SceneView {
   /// Draws into `canvas`; throws when the browser has no WebGL.
   constructor(canvas) {
     this.canvas = canvas;
-    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true });
     this.renderer.setPixelRatio(window.devicePixelRatio || 1);
     this.scene = new THREE.Scene();
     this.scene.background = new THREE.Color(0x14171c);
@@ -76,6 +76,9 @@ export class SceneView {
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.target.set(0, 0, 0);
     this.controls.update();
+    // Drawn only when something changed (a software renderer spends tens of ms a frame).
+    this.dirty = true;
+    this.controls.addEventListener('change', () => { this.dirty = true; });
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x30343c, 1.6));
     const sun = new THREE.DirectionalLight(0xffffff, 1.4);
     sun.position.set(0.3, -0.2, 0.6);
@@ -98,10 +101,12 @@ export class SceneView {
     this.renderer.setSize(width, height, false);
     this.camera.aspect = width / height;
     this.camera.updateProjectionMatrix();
+    this.dirty = true;
   }
 
   /// Each port's workspace box and a tool for each; the view frames port 0's workspace.
   setDevices(devices) {
+    this.dirty = true;
     this.workspace.clear();
     for (const tool of this.tools) this.scene.remove(tool.group);
     this.tools = [];
@@ -132,6 +137,7 @@ export class SceneView {
 
   /// Replaces the drawn items with `contents` (a haptic.v1.SceneContents).
   setScene(contents) {
+    this.dirty = true;
     this.items.traverse((node) => node.geometry?.dispose());
     this.items.clear();
     this.movable.clear();
@@ -291,6 +297,7 @@ export class SceneView {
 
   /// Moves the tools and the virtual masses to `state` (a haptic.v1.ViewerState).
   setState(state) {
+    this.dirty = true;
     (state.tools ?? []).forEach((tool, port) => {
       const drawn = this.tools[port];
       if (!drawn) return;
@@ -317,8 +324,11 @@ export class SceneView {
     }
   }
 
+  /// Draws the scene if anything changed since the last time; returns whether it drew.
   render() {
-    this.controls.update();
+    if (!this.dirty) return false;
+    this.dirty = false;
     this.renderer.render(this.scene, this.camera);
+    return true;
   }
 }

@@ -21,6 +21,8 @@ const shown = {
   frames: 0,            // frames rendered
   fps: 0,
   statePolls: 0,
+  statsPolls: 0,
+  latenessSamples: '0', // ticks in the statistics' lateness window
   error: null,          // the latest problem shown to the user
   webgl: true,
 };
@@ -145,15 +147,15 @@ class Viewer {
     if (!this.statsPolling) this.pollStats();
   }
 
+  /// Each display frame: draws the scene when the state, the scene or the camera changed.
   frame() {
     const now = performance.now();
-    this.frameTimes = (this.frameTimes ?? []).filter((t) => now - t < 1000);
-    this.frameTimes.push(now);
-    shown.fps = this.frameTimes.length;
-    if (this.view) {
-      this.view.render();
+    if (this.view?.render()) {
       shown.frames += 1;
+      this.frameTimes = (this.frameTimes ?? []).filter((t) => now - t < 1000);
+      this.frameTimes.push(now);
     }
+    shown.fps = (this.frameTimes ?? []).filter((t) => now - t < 1000).length;
     requestAnimationFrame(() => this.frame());
   }
 
@@ -241,6 +243,8 @@ class Viewer {
   }
 
   showStats(stats, lateness) {
+    shown.statsPolls += 1;
+    shown.latenessSamples = lateness?.samples ?? '0';
     const t = (performance.now() - this.started) / 1000;
     // The rate over the last poll (GetStats' own is the mean since start).
     const ticks = Number(stats.ticks);
@@ -251,8 +255,9 @@ class Viewer {
     $('window-s').textContent = String(stats.window_s ?? 10);
     $('loop-figures').textContent =
       `${ticks} ticks · ${rate.toFixed(1)} Hz now (${(stats.achieved_rate_hz ?? 0).toFixed(1)} mean) · ` +
-      `lateness p50 ${stats.lateness_p50_us} / p99 ${stats.lateness_p99_us} / p99.9 ${stats.lateness_p999_us} / ` +
-      `max ${stats.lateness_max_us} µs · overruns ${stats.overruns} · sessions ${stats.sessions} · ` +
+      `lateness p50 ${stats.lateness_p50_us.toFixed(0)} / p99 ${stats.lateness_p99_us.toFixed(0)} / ` +
+      `p99.9 ${stats.lateness_p999_us.toFixed(0)} / max ${stats.lateness_max_us.toFixed(0)} µs · ` +
+      `overruns ${stats.overruns} · sessions ${stats.sessions} · ` +
       `force faults ${stats.force_faults} · saturations ${stats.force_saturations}`;
     drawHistogram($('lateness-plot'), lateness);
     drawSeries($('rate-plot'), [

@@ -105,7 +105,7 @@ describe('the viewer of a lockstep server', () => {
     assert.ok(viewer.webgl, 'the page could not get WebGL');
     // The table lists them too, one row each.
     assert.equal(await page.locator('#items tbody tr').count(), expected.objects.length + expected.fields.length);
-    await page.waitForFunction(() => window.hapticViewer.frames > 10, null, { timeout: WAIT_MS });
+    await page.waitForFunction(() => window.hapticViewer.frames > 0, null, { timeout: WAIT_MS });
     await page.screenshot({ path: path.join(SCREENSHOTS, 'viewer-scene.png') });
   });
 
@@ -121,8 +121,47 @@ describe('the viewer of a lockstep server', () => {
               `the tool moved only from ${before} to ${viewer.toolPosition}`);
     assert.equal(viewer.tools[0].contacts, 1);
     assert.ok(viewer.tools[0].force[0] < 0, 'the sphere pushes back along −x');
+    // The statistics of the same tick in the picture too.
+    await page.waitForFunction((n) => window.hapticViewer.statsPolls > n, viewer.statsPolls, { timeout: WAIT_MS });
     await page.screenshot({ path: path.join(SCREENSHOTS, 'viewer-contact.png') });
     assert.deepEqual(consoleErrors, []);
+  });
+});
+
+describe('the viewer of a real-time server', () => {
+  let server;
+  let driver;
+  let browser;
+
+  before(async () => {
+    server = await startServer({ status_period_s: 0, real_time: { use_fifo: false } });
+    driver = await startDriver(server.ports.grpc_address);
+    await driver.command('sway');
+    browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', args: CHROMIUM_ARGS });
+  });
+
+  after(async () => {
+    await browser?.close();
+    await driver?.stop();
+    await server?.stop();
+  });
+
+  test('the tool follows the swaying hand and the lateness histogram fills', async () => {
+    const page = await browser.newPage({ viewport: { width: 1400, height: 860 } });
+    await page.goto(server.url);
+    await page.waitForFunction(() => window.hapticViewer?.toolPosition !== null, null, { timeout: WAIT_MS });
+    const first = (await shown(page)).toolPosition;
+    await page.waitForFunction((x) => Math.abs(window.hapticViewer.toolPosition[0] - x) > 0.005, first[0],
+                               { timeout: WAIT_MS });
+    // A few seconds of statistics for the plots, then the picture.
+    await page.waitForFunction(() => window.hapticViewer.statsPolls >= 8, null, { timeout: WAIT_MS });
+    const viewer = await shown(page);
+    assert.ok(Number(viewer.latenessSamples) > 0, 'a real-time loop records its lateness');
+    assert.equal(viewer.objects.length, driver.registered.objects.length);
+    console.log(`viewer in headless chromium: ${viewer.fps} frames/s drawn, ${viewer.statePolls} states and ` +
+                `${viewer.statsPolls} statistics polled`);
+    await page.screenshot({ path: path.join(SCREENSHOTS, 'viewer-realtime.png') });
+    await page.close();
   });
 });
 
