@@ -30,6 +30,7 @@ void write_ready_file(const std::string& path, const haptic::app::Server& server
     std::ofstream out(temporary);
     out << "{\"grpc_port\": " << server.grpc_port() << ", \"udp_port\": " << server.udp_port()
         << ", \"metrics_port\": " << server.metrics_port()
+        << ", \"viewer_port\": " << server.viewer_port()
         << ", \"grpc_address\": \"" << haptic::app::local_dial_address(bound_address, server.grpc_port())
         << "\"";
     if (const auto origin = server.time_origin_ns()) out << ", \"time_origin_ns\": " << *origin;
@@ -46,6 +47,8 @@ int main(int argc, char** argv) {
   std::string ready_file;
   std::string grpc_address;
   std::string udp_address;
+  std::string viewer_address;
+  std::string viewer_root;
   int udp_port = -1;
   bool insecure = false;
   bool lockstep = false;
@@ -62,11 +65,18 @@ int main(int argc, char** argv) {
   std::string metrics_address;
   cli.add_option("--metrics-address", metrics_address,
                  "override metrics_address: serve Prometheus metrics at http://HOST:PORT/metrics");
+  cli.add_option("--http", viewer_address,
+                 "override viewer_address: serve the read-only web viewer at http://127.0.0.1:PORT/ "
+                 "(PORT alone; 0 picks one) or at HOST:PORT (docs/viewer.md)");
+  cli.add_option("--viewer-root", viewer_root,
+                 "override viewer_root: the folder holding the viewer's page (index.html)")
+      ->check(CLI::ExistingDirectory);
   cli.add_flag("--insecure", insecure,
                "serve non-loopback addresses without TLS or tokens (insecure_remote_access)");
   cli.add_flag("--lockstep", lockstep, "run in LOCKSTEP time: ticks advance only by the Step RPC");
   cli.add_option("--ready-file", ready_file,
-                 "write {\"grpc_port\":..,\"udp_port\":..,\"metrics_port\":..,\"grpc_address\":..,\"time_origin_ns\":..} here once listening");
+                 "write {\"grpc_port\":..,\"udp_port\":..,\"metrics_port\":..,\"viewer_port\":..,"
+                 "\"grpc_address\":..,\"time_origin_ns\":..} here once listening");
   cli.add_flag("--print-config", print_config, "print the effective configuration and exit");
   std::string health_address;
   cli.add_option("--health-check", health_address,
@@ -159,6 +169,12 @@ int main(int argc, char** argv) {
       if (!grpc_address.empty()) edited.set_grpc_address(grpc_address);
       if (!udp_address.empty()) edited.set_udp_address(udp_address);
       if (!metrics_address.empty()) edited.set_metrics_address(metrics_address);
+      if (!viewer_address.empty()) {
+        // A port alone is the loopback address's.
+        const bool port_only = viewer_address.find_first_not_of("0123456789") == std::string::npos;
+        edited.set_viewer_address(port_only ? "127.0.0.1:" + viewer_address : viewer_address);
+      }
+      if (!viewer_root.empty()) edited.set_viewer_root(viewer_root);
       if (insecure) edited.set_insecure_remote_access(true);
       if (udp_port >= 0) edited.set_udp_port(static_cast<std::uint32_t>(udp_port));
       if (lockstep) edited.set_time_mode(haptic::v1::LOCKSTEP);

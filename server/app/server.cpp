@@ -11,8 +11,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 
+#include "app/health_check.hpp"
 #include "config/security.hpp"
 #include "config/server_config.hpp"
 #include "schema/scene_specs.hpp"
@@ -59,6 +61,19 @@ std::shared_ptr<grpc::ServerCredentials> tls_credentials(const config::SecurityM
   options.pem_root_certs = security.client_ca_pem;
   options.pem_key_cert_pairs.push_back({security.key_pem, security.cert_pem});
   return grpc::SslServerCredentials(options);
+}
+
+/// The viewer's page: the configured folder; else the installed one (share/hapticd/web beside the
+/// binary's bin/); else the build tree's (where a build puts it).
+std::filesystem::path viewer_root(const v1::ServerConfig& config) {
+  if (!config.viewer_root().empty()) return config.viewer_root();
+  std::error_code error;
+  const std::filesystem::path binary = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    const std::filesystem::path installed = binary.parent_path().parent_path() / "share/hapticd/web";
+    if (std::filesystem::is_regular_file(installed / "index.html", error)) return installed;
+  }
+  return HAPTIC_VIEWER_BUILD_ROOT;
 }
 
 /// Control-plane threads for unary calls, beside those the event streams may hold.
@@ -197,9 +212,10 @@ Server::Server(const v1::ServerConfig& config)
   for (const auto& ring : samples_) rings.push_back(ring.get());
   recorder_ = std::make_unique<net::Recorder>([this] { return loop_->completed_ticks(); },
                                              std::move(rings));
+  const net::AccessControl access(credentials(security.tokens));
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
-      [this] { return stats(); }, net::AccessControl(credentials(security.tokens)),
+      [this] { return stats(); }, access,
       [this](std::uint64_t session_id) { return reset_lockstep(session_id); }, recorder_.get(),
       config.recording_dir(), [this](const std::string& path) { return start_recording(path); }});
   const std::uint32_t fd_limit = raise_fd_limit();
@@ -249,18 +265,33 @@ Server::Server(const v1::ServerConfig& config)
   if (!grpc_server_) throw std::runtime_error("cannot start the gRPC server");
   if (security.tls) {
     grpc_port_ = static_cast<std::uint16_t>(tls_port);
-    bind_metrics();
+    bind_http_endpoints(access);
     return;
   }
   grpc_port_ = listener_->port();
   listener_->start([server = grpc_server_.get()](int fd) { grpc::AddInsecureChannelFromFd(server, fd); });
-  bind_metrics();
+  bind_http_endpoints(access);
 }
 
-void Server::bind_metrics() {
-  if (config_.metrics_address().empty()) return;
-  metrics_ = std::make_unique<net::MetricsEndpoint>();
-  metrics_->bind(config_.metrics_address());
+void Server::bind_http_endpoints(const net::AccessControl& access) {
+  if (!config_.metrics_address().empty()) {
+    metrics_ = std::make_unique<net::MetricsEndpoint>();
+    metrics_->bind(config_.metrics_address());
+  }
+  if (config_.viewer_address().empty()) return;
+  net::ViewerSources sources;
+  sources.scene = scene_.get();
+  for (std::size_t port = 0; port < samples_.size(); ++port) {
+    sources.samples.push_back(samples_[port].get());
+    sources.devices.push_back(service_->device_info(static_cast<std::uint32_t>(port)));
+  }
+  sources.stats = [this] { return stats(); };
+  sources.lateness = &lateness_;
+  sources.access = access;
+  sources.loopback_only = config::is_loopback_host(config::host_of_address(config_.viewer_address()));
+  viewer_ = std::make_unique<net::ViewerEndpoint>(std::move(sources));
+  viewer_->load_page(viewer_root(config_));
+  viewer_->bind(config_.viewer_address());
 }
 
 Server::~Server() { shutdown(); }
@@ -346,6 +377,18 @@ void Server::start() {
                    config_.metrics_address());
     }
   }
+  if (viewer_) {
+    viewer_->start();
+    spdlog::info("hapticd: viewer at http://{}/",
+                 local_dial_address(config_.viewer_address(), viewer_->port()));
+    if (!config::is_loopback_host(config::host_of_address(config_.viewer_address()))) {
+      spdlog::warn("hapticd: the viewer {} is not on loopback: anyone who reaches it {} (plain HTTP)",
+                   config_.viewer_address(),
+                   config_.security().tokens_size() > 0 || !config_.security().tokens_file().empty()
+                       ? "sees the bearer tokens its page sends"
+                       : "reads the scene, the tool's motion and the statistics, client names and hosts");
+    }
+  }
   started_ = true;
   std::string devices = devices_.front().device->description().name;
   for (std::size_t i = 1; i < devices_.size(); ++i) {
@@ -377,6 +420,7 @@ void Server::shutdown() {
   events_.close();
   if (listener_) listener_->stop();
   if (metrics_) metrics_->stop();
+  if (viewer_) viewer_->stop();
   if (started_ && recorder_->active()) {
     v1::RecordedChange change;
     change.set_shutdown(true);

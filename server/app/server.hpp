@@ -23,6 +23,7 @@
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
 #include "net/udp_endpoint.hpp"
+#include "net/viewer_endpoint.hpp"
 #include "runtime/loop_cpu.hpp"
 #include "runtime/loop_thread.hpp"
 #include "config/devices.hpp"
@@ -46,6 +47,8 @@ class Server {
   std::uint16_t grpc_port() const { return grpc_port_; }
   /// The metrics endpoint's port; 0 without one (metrics_address empty).
   std::uint16_t metrics_port() const { return metrics_ ? metrics_->port() : 0; }
+  /// The web viewer's port; 0 without one (viewer_address empty).
+  std::uint16_t viewer_port() const { return viewer_ ? viewer_->port() : 0; }
   std::uint16_t udp_port() const { return udp_.port(); }
   /// Device port `port`'s tick samples (the replay compares them with a recording's).
   const runtime::SampleRing& samples(std::size_t port) const { return *samples_.at(port); }
@@ -72,7 +75,8 @@ class Server {
 
  private:
   void housekeeping_loop();
-  void bind_metrics();
+  /// The metrics endpoint and the viewer, when configured (`access`: the control plane's tokens).
+  void bind_http_endpoints(const net::AccessControl& access);
   void log_status();
 
   v1::ServerConfig config_;
@@ -101,6 +105,7 @@ class Server {
   std::unique_ptr<grpc::Server> grpc_server_;
   std::uint16_t grpc_port_ = 0;
   std::unique_ptr<net::MetricsEndpoint> metrics_;  // when metrics_address is set
+  std::unique_ptr<net::ViewerEndpoint> viewer_;    // when viewer_address is set
   std::unique_ptr<net::Recorder> recorder_;
 
   std::thread housekeeping_;

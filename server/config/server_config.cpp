@@ -55,6 +55,38 @@ std::string check_exposure(const v1::ServerConfig& config) {
   return {};
 }
 
+/// An HTTP endpoint's address: empty (none), HOST:PORT or [IPv6]:PORT.
+std::string check_http_address(const char* field, const std::string& address) {
+  if (address.empty()) return {};
+  const auto colon = address.rfind(':');
+  const std::string port = colon == std::string::npos ? std::string() : address.substr(colon + 1);
+  const bool digits = !port.empty() && port.size() <= 5 &&
+                      port.find_first_not_of("0123456789") == std::string::npos;
+  const std::string host = host_of_address(address);
+  const bool bare_ipv6 = host.find(':') != std::string::npos && address.front() != '[';
+  if (!digits || std::stoi(port) > 65535 || host.empty() || bare_ipv6) {
+    return std::string(field) + ": must be HOST:PORT or [IPv6]:PORT (port 0 to 65535; 0 picks one), got '" +
+           address + "'";
+  }
+  return {};
+}
+
+/// The viewer speaks plain HTTP: a bearer token typed into its page would cross the network in
+/// clear, so with tokens a non-loopback viewer_address needs insecure_remote_access.
+std::string check_viewer_exposure(const v1::ServerConfig& config) {
+  const v1::SecurityConfig& security = config.security();
+  const bool tokens = security.tokens_size() > 0 || !security.tokens_file().empty();
+  if (config.viewer_address().empty() || !tokens || config.insecure_remote_access() ||
+      is_loopback_host(host_of_address(config.viewer_address()))) {
+    return {};
+  }
+  return "viewer_address: '" + config.viewer_address() +
+         "' is not a loopback address, and the viewer speaks plain HTTP, so the bearer tokens its "
+         "page sends would cross the network in clear. Bind 127.0.0.1 (the default of --http PORT) "
+         "and reach it through an SSH tunnel (docs/viewer.md), or accept the risk with --insecure "
+         "(insecure_remote_access: true)";
+}
+
 }  // namespace
 
 std::string host_of_address(const std::string& address) {
@@ -150,18 +182,9 @@ std::string validate(const v1::ServerConfig& config) {
       !dir.empty() && !std::filesystem::is_directory(dir)) {
     return "recording_dir: '" + dir + "' is not a folder (StartRecording writes its files there)";
   }
-  if (const std::string& metrics = config.metrics_address(); !metrics.empty()) {
-    const auto colon = metrics.rfind(':');
-    const std::string port = colon == std::string::npos ? std::string() : metrics.substr(colon + 1);
-    const bool digits = !port.empty() && port.size() <= 5 &&
-                        port.find_first_not_of("0123456789") == std::string::npos;
-    const std::string host = host_of_address(metrics);
-    const bool bare_ipv6 = host.find(':') != std::string::npos && metrics.front() != '[';
-    if (!digits || std::stoi(port) > 65535 || host.empty() || bare_ipv6) {
-      return "metrics_address: must be HOST:PORT or [IPv6]:PORT (port 0 to 65535; 0 picks one), "
-             "got '" + metrics + "'";
-    }
-  }
+  if (auto e = check_http_address("metrics_address", config.metrics_address()); !e.empty()) return e;
+  if (auto e = check_http_address("viewer_address", config.viewer_address()); !e.empty()) return e;
+  if (auto e = check_viewer_exposure(config); !e.empty()) return e;
   if (config.time_mode() != v1::REAL_TIME && config.time_mode() != v1::LOCKSTEP) {
     return "time_mode: must be REAL_TIME or LOCKSTEP";
   }

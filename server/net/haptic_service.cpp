@@ -11,6 +11,7 @@
 #include "haptic/io/session_id.hpp"
 #include "haptic/io/session_secret.hpp"
 #include "net/control_listener.hpp"
+#include "net/read_back.hpp"
 #include "schema/stability.hpp"
 
 namespace haptic::net {
@@ -381,29 +382,14 @@ grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext* context, const v
 grpc::Status HapticService::GetObjectStates(grpc::ServerContext* context, const v1::SessionRef* request,
                                             v1::ObjectStates* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kObserve, "GetObjectStates"); !status.ok()) return status;
-  for (const engine::ObjectMotion& motion : deps_.scene.motions()) {
-    v1::ObjectState& out = *response->add_objects();
-    out.set_id(motion.id);
-    *out.mutable_position() = schema::to_proto(motion.p_WO);
-    *out.mutable_velocity() = schema::to_proto(motion.v_WO);
-  }
+  *response = to_object_states(deps_.scene.motions());
   return grpc::Status::OK;
 }
 
 grpc::Status HapticService::GetScene(grpc::ServerContext* context, const v1::GetSceneRequest* request,
                                      v1::SceneContents* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kObserve, "GetScene"); !status.ok()) return status;
-  for (const SceneEntry& entry : deps_.scene.read(request->session_id(), request->all_sessions())) {
-    if (entry.source.object) {
-      *response->mutable_scene()->add_objects() = *entry.source.object;
-      response->add_object_ids(entry.id);
-      response->add_object_sessions(entry.session_id);
-    } else if (entry.source.field) {
-      *response->mutable_scene()->add_fields() = *entry.source.field;
-      response->add_field_ids(entry.id);
-      response->add_field_sessions(entry.session_id);
-    }
-  }
+  *response = to_scene_contents(deps_.scene.read(request->session_id(), request->all_sessions()));
   return grpc::Status::OK;
 }
 
@@ -647,17 +633,7 @@ grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepReq
   response->set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
   runtime::TickSample sample;
   if (port_of(request->session_id()).samples->read(tick, sample)) {
-    v1::ToolState* state = response->mutable_state();
-    state->set_tick(sample.tick);
-    state->set_server_time_s(static_cast<double>(sample.time_ns) * 1e-9);
-    *state->mutable_position() = schema::to_proto(sample.p_WT);
-    *state->mutable_velocity() = schema::to_proto(sample.v_WT);
-    *state->mutable_force() = schema::to_proto(sample.F_T_W);
-    *state->mutable_proxy() = schema::to_proto(sample.p_WP);
-    state->set_contact_count(sample.contact_count);
-    state->set_flags(sample.flags);
-    state->set_buttons(sample.buttons);
-    if (sample.has_orientation) *state->mutable_orientation() = schema::to_proto(sample.R_WT);
+    *response->mutable_state() = to_tool_state(sample);
   }
   return grpc::Status::OK;
 }

@@ -323,6 +323,11 @@ std::vector<SceneEntry> SceneStore::read(std::uint64_t session_id, bool all_sess
   return entries;
 }
 
+std::uint64_t SceneStore::generation() const {
+  std::lock_guard lock(mutex_);
+  return generation_;
+}
+
 SceneCounts SceneStore::counts() const {
   std::lock_guard lock(mutex_);
   SceneCounts counts;

@@ -112,6 +112,10 @@ class SceneStore {
 
   SceneCounts counts() const;
 
+  /// Bumped by every snapshot published (any change, a compaction, a reset): a reader that saw
+  /// another value reads the scene again.
+  std::uint64_t generation() const;
+
   /// Energy exchanged with the device per item, as the loop has metered it (empty before the
   /// loop's first tick).
   std::vector<engine::ItemEnergyTotals> energy() const;

@@ -3,22 +3,23 @@
 #include <algorithm>
 
 namespace haptic::runtime {
-namespace {
 
-double bin_lower_edge_us(std::size_t bin) {
-  if (bin < LatenessHistogram::kFineBins) return static_cast<double>(bin);
-  return static_cast<double>(LatenessHistogram::kFineBins) +
-         100.0 * static_cast<double>(bin - LatenessHistogram::kFineBins);
+double LatenessHistogram::bin_lower_edge_us(std::size_t bin) {
+  if (bin < kFineBins) return static_cast<double>(bin);
+  return static_cast<double>(kFineBins) + 100.0 * static_cast<double>(bin - kFineBins);
 }
-
-}  // namespace
 
 LatenessHistogram::LatenessHistogram(int window_s)
     : slot_count_(static_cast<std::size_t>(window_s < 1 ? 1 : window_s) + 1),
       slots_(std::make_unique<Slot[]>(slot_count_)) {}
 
 LatenessSummary LatenessHistogram::summarize(std::int64_t now_ns) const {
-  std::array<std::uint64_t, kBins> counts{};
+  Counts counts;
+  return summarize(now_ns, counts);
+}
+
+LatenessSummary LatenessHistogram::summarize(std::int64_t now_ns, Counts& counts) const {
+  counts.fill(0);
   LatenessSummary summary;
   summary.window_s = static_cast<double>(window_s());
   const std::int64_t now_second = now_ns / kSlotNs;

@@ -51,9 +51,18 @@ class LatenessHistogram {
     }
   }
 
+  using Counts = std::array<std::uint64_t, kBins>;
+
   /// Off the recording thread: the window ending at `now_ns` (same clock as record's).
   /// Percentiles are bin lower edges (1 µs resolution below 1 ms).
   LatenessSummary summarize(std::int64_t now_ns) const;
+  /// The same window bin by bin (what summarize reads): `counts` is filled in; returns its
+  /// summary. Reads only what record() wrote; costs the recording thread nothing.
+  LatenessSummary summarize(std::int64_t now_ns, Counts& counts) const;
+
+  /// Bin `bin`'s lower edge and width. Unit: µs.
+  static double bin_lower_edge_us(std::size_t bin);
+  static double bin_width_us(std::size_t bin) { return bin < kFineBins ? 1.0 : 100.0; }
 
   int window_s() const { return static_cast<int>(slot_count_) - 1; }
 

@@ -1,10 +1,6 @@
 // The metrics endpoint of a real hapticd: Prometheus' text at /metrics over plain HTTP, every
 // session in it, clear answers to anything else, and none without metrics_address.
-#include <arpa/inet.h>
 #include <gtest/gtest.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
 #include <haptic/haptic.hpp>
 
@@ -13,34 +9,10 @@
 #include "haptic/io/session_id.hpp"
 #include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
+#include "support/http_client.hpp"
 
 namespace haptic {
 namespace {
-
-/// Sends `request` to 127.0.0.1:`port` and returns all the server answers before it closes.
-std::string http(std::uint16_t port, const std::string& request) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(port);
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  timeval timeout{5, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-  std::string reply;
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0) {
-    (void)::send(fd, request.data(), request.size(), MSG_NOSIGNAL);
-    char buffer[4096];
-    for (ssize_t got; (got = ::recv(fd, buffer, sizeof buffer, 0)) > 0;) {
-      reply.append(buffer, static_cast<std::size_t>(got));
-    }
-  }
-  ::close(fd);
-  return reply;
-}
-
-std::string get(std::uint16_t port, const std::string& path) {
-  return http(port, "GET " + path + " HTTP/1.1\r\nHost: localhost\r\n\r\n");
-}
 
 TEST(MetricsEndpoint, ServesEveryFigureAndEverySessionInPrometheusText) {
   test::ServerProcess server(test::lockstep_config(), "--metrics-address=127.0.0.1:0");
@@ -48,11 +20,11 @@ TEST(MetricsEndpoint, ServesEveryFigureAndEverySessionInPrometheusText) {
   Client viewer(test::config_for(server, "viewer"));
   (void)viewer.step(25);
 
-  const std::string reply = get(server.metrics_port(), "/metrics");
-  EXPECT_EQ(reply.rfind("HTTP/1.1 200 OK\r\n", 0), 0u) << reply.substr(0, 200);
-  EXPECT_NE(reply.find("Content-Type: text/plain; version=0.0.4; charset=utf-8\r\n"), std::string::npos);
-  const std::string body = reply.substr(reply.find("\r\n\r\n") + 4);
-  EXPECT_NE(reply.find("Content-Length: " + std::to_string(body.size()) + "\r\n"), std::string::npos);
+  const test::HttpReply reply = test::http_get(server.metrics_port(), "/metrics");
+  EXPECT_EQ(reply.status, 200) << reply.head;
+  EXPECT_EQ(reply.header("Content-Type"), "text/plain; version=0.0.4; charset=utf-8");
+  const std::string& body = reply.body;
+  EXPECT_EQ(reply.header("Content-Length"), std::to_string(body.size()));
   EXPECT_NE(body.find("# TYPE hapticd_loop_ticks_total counter\nhapticd_loop_ticks_total 25\n"),
             std::string::npos)
       << body;
@@ -64,17 +36,24 @@ TEST(MetricsEndpoint, ServesEveryFigureAndEverySessionInPrometheusText) {
       << body;
 
   // HEAD: the head alone. Anything else: a status that says what is wrong.
-  const std::string head = http(server.metrics_port(), "HEAD /metrics HTTP/1.1\r\n\r\n");
-  EXPECT_EQ(head.rfind("HTTP/1.1 200 OK\r\n", 0), 0u);
-  EXPECT_EQ(head.substr(head.find("\r\n\r\n") + 4), "");
-  EXPECT_EQ(get(server.metrics_port(), "/").rfind("HTTP/1.1 200 OK\r\n", 0), 0u);
-  const std::string missing = get(server.metrics_port(), "/metricz");
-  EXPECT_EQ(missing.rfind("HTTP/1.1 404 Not Found\r\n", 0), 0u);
-  EXPECT_NE(missing.find("no /metricz; see /metrics"), std::string::npos);
-  EXPECT_EQ(http(server.metrics_port(), "POST /metrics HTTP/1.1\r\n\r\n").rfind("HTTP/1.1 405", 0), 0u);
+  {
+    test::HttpConnection connection(server.metrics_port());
+    connection.send("HEAD /metrics HTTP/1.1\r\nConnection: close\r\n\r\n");
+    EXPECT_EQ(connection.read_reply(true).status, 200);
+    EXPECT_TRUE(connection.closed_by_server());  // no body followed
+  }
+  EXPECT_EQ(test::http_get(server.metrics_port(), "/").status, 200);
+  const test::HttpReply missing = test::http_get(server.metrics_port(), "/metricz");
+  EXPECT_EQ(missing.status, 404);
+  EXPECT_NE(missing.body.find("no /metricz; see /metrics"), std::string::npos);
+  EXPECT_EQ(test::http_request(server.metrics_port(), "POST", "/metrics").status, 405);
   // A request that never ends is dropped (after 2 s) and the next scrape is answered.
-  EXPECT_EQ(http(server.metrics_port(), "GET /metrics HTTP/1.1\r\n"), "");
-  EXPECT_EQ(get(server.metrics_port(), "/metrics").rfind("HTTP/1.1 200 OK\r\n", 0), 0u);
+  {
+    test::HttpConnection stalled(server.metrics_port());
+    stalled.send("GET /metrics HTTP/1.1\r\n");
+    EXPECT_EQ(stalled.read_reply().status, 0);
+  }
+  EXPECT_EQ(test::http_get(server.metrics_port(), "/metrics").status, 200);
 }
 
 TEST(MetricsEndpoint, NoneWithoutAMetricsAddress) {

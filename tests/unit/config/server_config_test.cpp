@@ -117,6 +117,28 @@ TEST(Config, BadValuesAreRejectedNamingTheField) {
   }
 }
 
+TEST(Config, TheViewersAddressIsCheckedAndWithTokensKeptOnLoopback) {
+  const std::string bad = error_of(R"({"viewer_address": "127.0.0.1"})");
+  EXPECT_NE(bad.find("viewer_address: must be HOST:PORT or [IPv6]:PORT (port 0 to 65535; 0 picks one), "
+                     "got '127.0.0.1'"),
+            std::string::npos)
+      << bad;
+  const std::string tokens =
+      R"("security": {"tokens": [{"name": "v", "token": "observer-token-0123456789", "role": "OBSERVER"}]})";
+  EXPECT_EQ(validate(parse_config(R"({"viewer_address": "127.0.0.1:8080", )" + tokens + "}", "x")), "");
+  // Plain HTTP off loopback would carry the tokens in clear.
+  const std::string remote = error_of(R"({"viewer_address": "0.0.0.0:8080", )" + tokens + "}");
+  EXPECT_NE(remote.find("viewer_address: '0.0.0.0:8080' is not a loopback address, and the viewer speaks "
+                        "plain HTTP, so the bearer tokens its page sends would cross the network in clear"),
+            std::string::npos)
+      << remote;
+  EXPECT_EQ(validate(parse_config(
+                R"({"viewer_address": "0.0.0.0:8080", "insecure_remote_access": true, )" + tokens + "}", "x")),
+            "");
+  // Without tokens there is nothing to leak but what it shows: served (with a warning at start).
+  EXPECT_EQ(validate(parse_config(R"({"viewer_address": "0.0.0.0:8080"})", "x")), "");
+}
+
 TEST(Config, NonLoopbackAddressesAreRefusedUnlessInsecureRemoteAccessIsAccepted) {
   // Without TLS or tokens, a non-loopback bind would let anyone on the network command forces.
   EXPECT_EQ(error_of(R"({"grpc_address": "0.0.0.0:50051"})").rfind("test.json: grpc_address: '0.0.0.0:50051' is not a loopback address", 0), 0u)

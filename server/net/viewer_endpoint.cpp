@@ -1,0 +1,172 @@
+#include "net/viewer_endpoint.hpp"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "net/read_back.hpp"
+#include "runtime/realtime.hpp"
+
+namespace haptic::net {
+namespace {
+
+constexpr std::uintmax_t kMaxPageFileBytes = 16u << 20;  // a page file larger than this is not served
+
+const char* content_type_of(const std::filesystem::path& file) {
+  const std::string extension = file.extension().string();
+  if (extension == ".html") return "text/html; charset=utf-8";
+  if (extension == ".js" || extension == ".mjs") return "text/javascript; charset=utf-8";
+  if (extension == ".css") return "text/css; charset=utf-8";
+  if (extension == ".json" || extension == ".map") return "application/json";
+  if (extension == ".png") return "image/png";
+  if (extension == ".svg") return "image/svg+xml";
+  if (extension == ".ico") return "image/x-icon";
+  return "application/octet-stream";
+}
+
+std::string to_json(const google::protobuf::Message& message) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  options.always_print_primitive_fields = true;
+  std::string out;
+  if (const auto status = google::protobuf::util::MessageToJsonString(message, &out, options); !status.ok()) {
+    throw std::runtime_error("cannot write " + message.GetTypeName() + " as JSON: " + status.ToString());
+  }
+  return out;
+}
+
+/// True when the Host header's host (without its port) is a loopback name.
+bool loopback_host_header(const std::string& host_header) {
+  std::string host = host_header;
+  if (!host.empty() && host.front() == '[') {
+    host = host.substr(1, host.find(']') == std::string::npos ? std::string::npos : host.find(']') - 1);
+  } else if (const auto colon = host.rfind(':'); colon != std::string::npos) {
+    host = host.substr(0, colon);
+  }
+  if (host == "localhost" || host == "::1") return true;
+  return host.rfind("127.", 0) == 0 && host.find_first_not_of("0123456789.") == std::string::npos;
+}
+
+HttpResponse json_response(const google::protobuf::Message& message) {
+  HttpResponse response;
+  response.content_type = "application/json";
+  response.body = to_json(message);
+  response.headers.emplace_back("Cache-Control", "no-store");
+  return response;
+}
+
+}  // namespace
+
+void StaticFiles::load(const std::filesystem::path& root, const std::string& field) {
+  files_.clear();
+  if (!std::filesystem::is_regular_file(root / "index.html")) {
+    throw std::runtime_error(field + ": no index.html in '" + root.string() +
+                             "' (a build puts the page into its share/hapticd/web once scripts/setup "
+                             "has run npm ci in web/)");
+  }
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
+    if (!entry.is_regular_file() || entry.file_size() > kMaxPageFileBytes) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    HttpResponse file;
+    file.content_type = content_type_of(entry.path());
+    file.body = bytes.str();
+    file.headers.emplace_back("Cache-Control", "no-cache");
+    file.headers.emplace_back("X-Content-Type-Options", "nosniff");
+    files_["/" + entry.path().lexically_relative(root).generic_string()] = std::move(file);
+  }
+}
+
+const HttpResponse* StaticFiles::find(const std::string& path) const {
+  const auto found = files_.find(path == "/" ? "/index.html" : path);
+  return found == files_.end() ? nullptr : &found->second;
+}
+
+v1::ViewerScene viewer_scene(const ViewerSources& sources) {
+  v1::ViewerScene scene;
+  // The generation first: a change after it shows as a newer one in the next /api/state.
+  scene.set_generation(sources.scene->generation());
+  for (const v1::DeviceInfo& device : sources.devices) *scene.add_devices() = device;
+  *scene.mutable_contents() = to_scene_contents(sources.scene->read(0, true));
+  return scene;
+}
+
+v1::ViewerState viewer_state(const ViewerSources& sources) {
+  v1::ViewerState state;
+  state.set_scene_generation(sources.scene->generation());
+  for (std::size_t port = 0; port < sources.samples.size(); ++port) {
+    v1::ToolState& tool = *state.add_tools();
+    runtime::TickSample sample;
+    const std::uint64_t newest = sources.samples[port]->newest();
+    if (newest == 0 || !sources.samples[port]->read(newest, sample)) continue;
+    tool = to_tool_state(sample);
+    if (port == 0) {
+      state.set_tick(sample.tick);
+      state.set_server_time_s(tool.server_time_s());
+    }
+  }
+  *state.mutable_objects() = to_object_states(sources.scene->motions()).objects();
+  return state;
+}
+
+v1::ViewerStats viewer_stats(const ViewerSources& sources, std::int64_t now_ns) {
+  v1::ViewerStats out;
+  *out.mutable_stats() = sources.stats();
+  runtime::LatenessHistogram::Counts counts;
+  const runtime::LatenessSummary summary = sources.lateness->summarize(now_ns, counts);
+  v1::LatenessHistogram& histogram = *out.mutable_lateness();
+  histogram.set_window_s(summary.window_s);
+  histogram.set_samples(summary.samples);
+  for (std::size_t bin = 0; bin < counts.size(); ++bin) {
+    if (counts[bin] == 0) continue;
+    histogram.add_bin_lower_us(runtime::LatenessHistogram::bin_lower_edge_us(bin));
+    histogram.add_bin_width_us(runtime::LatenessHistogram::bin_width_us(bin));
+    histogram.add_counts(counts[bin]);
+  }
+  return out;
+}
+
+void ViewerEndpoint::start() {
+  http_.start([this](const HttpRequest& request) { return handle(request); });
+}
+
+HttpResponse ViewerEndpoint::handle(const HttpRequest& request) const {
+  if (const std::string* host = request.header("host");
+      sources_.loopback_only && host != nullptr && !loopback_host_header(*host)) {
+    return HttpResponse::text(403, "hapticd viewer: Host '" + *host +
+                                       "' is not a loopback name, and this viewer serves loopback "
+                                       "only: open it as http://127.0.0.1:" +
+                                       std::to_string(port()) + "/\n");
+  }
+  if (request.path.rfind("/api/", 0) != 0) {
+    if (const HttpResponse* file = page_.find(request.path)) return *file;
+    return HttpResponse::text(404, "hapticd viewer: no " + request.path + "; the page is at /\n");
+  }
+  const bool scene = request.path == "/api/scene";
+  const bool state = request.path == "/api/state";
+  const bool stats = request.path == "/api/stats";
+  if (!scene && !state && !stats) {
+    return HttpResponse::text(404, "hapticd viewer: no " + request.path +
+                                       "; the resources are /api/scene, /api/state and /api/stats\n");
+  }
+  // The permission of the RPC that reads the same: GetScene/GetObjectStates, GetStats.
+  const std::string call = "GET " + request.path;
+  const grpc::Status allowed = sources_.access.authorize_header(
+      request.header("authorization"), stats ? Permission::kAdmin : Permission::kObserve, call.c_str(),
+      nullptr, std::chrono::system_clock::now());
+  if (!allowed.ok()) {
+    const bool unauthenticated = allowed.error_code() == grpc::StatusCode::UNAUTHENTICATED;
+    HttpResponse refusal =
+        HttpResponse::text(unauthenticated ? 401 : 403, "hapticd viewer: " + allowed.error_message() + "\n");
+    if (unauthenticated) refusal.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"hapticd\"");
+    return refusal;
+  }
+  if (scene) return json_response(viewer_scene(sources_));
+  if (state) return json_response(viewer_state(sources_));
+  return json_response(viewer_stats(sources_, runtime::monotonic_now_ns()));
+}
+
+}  // namespace haptic::net

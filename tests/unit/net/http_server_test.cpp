@@ -1,0 +1,131 @@
+// The HTTP/1.1 server under the metrics endpoint and the viewer: request heads parsed or refused
+// naming why, replies framed by Content-Length, and on loopback pipelined requests, the connection
+// cap, over-long heads and a failing handler.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include "net/http_server.hpp"
+#include "support/http_client.hpp"
+
+namespace haptic::net {
+namespace {
+
+TEST(HttpRequestHead, ParsesTheRequestLineAndHeaders) {
+  HttpRequest request;
+  ASSERT_EQ(parse_request_head("GET /api/scene?x=1 HTTP/1.1\r\nHost: 127.0.0.1:8080\r\n"
+                               "AUTHORIZATION:  Bearer abc \r\n",
+                               request),
+            "");
+  EXPECT_EQ(request.method, "GET");
+  EXPECT_EQ(request.target, "/api/scene?x=1");
+  EXPECT_EQ(request.path, "/api/scene");
+  ASSERT_NE(request.header("authorization"), nullptr);
+  EXPECT_EQ(*request.header("authorization"), "Bearer abc");
+  EXPECT_EQ(*request.header("host"), "127.0.0.1:8080");
+  EXPECT_EQ(request.header("cookie"), nullptr);
+  EXPECT_TRUE(request.keep_alive);  // HTTP/1.1's default
+
+  ASSERT_EQ(parse_request_head("GET / HTTP/1.1\nConnection: Close", request), "");  // bare LF too
+  EXPECT_FALSE(request.keep_alive);
+  ASSERT_EQ(parse_request_head("GET / HTTP/1.0", request), "");
+  EXPECT_FALSE(request.keep_alive);  // HTTP/1.0's default
+  ASSERT_EQ(parse_request_head("GET / HTTP/1.0\r\nConnection: keep-alive", request), "");
+  EXPECT_TRUE(request.keep_alive);
+}
+
+TEST(HttpRequestHead, RefusesWhatIsNotARequestNamingWhy) {
+  HttpRequest request;
+  EXPECT_EQ(parse_request_head("GET", request),
+            "the request line must be 'METHOD TARGET HTTP/1.x', got 'GET'");
+  EXPECT_EQ(parse_request_head("GET / HTTP/1.1 extra", request),
+            "the request line must be 'METHOD TARGET HTTP/1.x', got 'GET / HTTP/1.1 extra'");
+  EXPECT_EQ(parse_request_head("GET / HTTP/2.0", request),
+            "only HTTP/1.0 and HTTP/1.1 are served, got 'HTTP/2.0'");
+  EXPECT_EQ(parse_request_head("GET http://example.com/ HTTP/1.1", request),
+            "the target must be a path starting with '/', got 'http://example.com/'");
+  EXPECT_EQ(parse_request_head("GET / HTTP/1.1\r\nno colon here", request),
+            "a header line must be 'Name: value', got 'no colon here'");
+}
+
+TEST(HttpResponse, IsFramedByItsContentLength) {
+  HttpResponse response = HttpResponse::text(404, "no such page\n");
+  response.headers.emplace_back("Cache-Control", "no-store");
+  EXPECT_EQ(format_response(response, false, true),
+            "HTTP/1.1 404 Not Found\r\nContent-Type: text/plain; charset=utf-8\r\nContent-Length: 13\r\n"
+            "Connection: keep-alive\r\nCache-Control: no-store\r\n\r\nno such page\n");
+  // HEAD: the same head (the length of the body a GET would get), no body.
+  EXPECT_EQ(format_response(response, true, false),
+            "HTTP/1.1 404 Not Found\r\nContent-Type: text/plain; charset=utf-8\r\nContent-Length: 13\r\n"
+            "Connection: close\r\nCache-Control: no-store\r\n\r\n");
+}
+
+/// A server on an ephemeral loopback port that answers with the request's path.
+struct EchoServer {
+  explicit EchoServer(HttpLimits limits = {}) : http("test", limits) {
+    http.bind("127.0.0.1:0", "test_address");
+    http.start([](const HttpRequest& request) {
+      if (request.path == "/fail") throw std::runtime_error("the handler failed");
+      return HttpResponse::text(200, request.path);
+    });
+  }
+  HttpServer http;
+};
+
+TEST(HttpServer, AnswersPipelinedRequestsInOrderOnOneConnection) {
+  EchoServer server;
+  test::HttpConnection connection(server.http.port());
+  connection.send("GET /first HTTP/1.1\r\n\r\nGET /second HTTP/1.1\r\n\r\nHEAD /third HTTP/1.1\r\n\r\n");
+  EXPECT_EQ(connection.read_reply().body, "/first");
+  EXPECT_EQ(connection.read_reply().body, "/second");
+  const test::HttpReply head = connection.read_reply(true);
+  EXPECT_EQ(head.status, 200);
+  EXPECT_EQ(head.header("Content-Length"), "6");
+  connection.send("GET /last HTTP/1.1\r\nConnection: close\r\n\r\n");
+  EXPECT_EQ(connection.read_reply().body, "/last");
+  EXPECT_TRUE(connection.closed_by_server());
+  EXPECT_EQ(server.http.replies(), 4u);
+}
+
+TEST(HttpServer, RefusesAnOverlongHeadAFailingHandlerAndOtherMethods) {
+  EchoServer server(HttpLimits{.max_request_bytes = 1024});
+  test::HttpConnection long_head(server.http.port());
+  long_head.send("GET / HTTP/1.1\r\nX-Filler: " + std::string(2000, 'x'));
+  const test::HttpReply too_long = long_head.read_reply();
+  EXPECT_EQ(too_long.status, 431);
+  EXPECT_EQ(too_long.body, "hapticd test: the request head is longer than 1024 bytes\n");
+  EXPECT_TRUE(long_head.closed_by_server());
+
+  const test::HttpReply failed = test::http_get(server.http.port(), "/fail");
+  EXPECT_EQ(failed.status, 500);
+  EXPECT_EQ(failed.body, "hapticd test: the handler failed\n");
+  const test::HttpReply posted = test::http_request(server.http.port(), "POST", "/");
+  EXPECT_EQ(posted.status, 405);
+  EXPECT_EQ(posted.header("Allow"), "GET, HEAD");
+}
+
+TEST(HttpServer, ClosesAConnectionPastTheCapAndServesAgainOnceOneGoes) {
+  EchoServer server(HttpLimits{.max_connections = 2});
+  auto first = std::make_unique<test::HttpConnection>(server.http.port());
+  test::HttpConnection second(server.http.port());
+  // Both held open (a reply each shows the server has taken them).
+  first->send("GET /1 HTTP/1.1\r\n\r\n");
+  second.send("GET /2 HTTP/1.1\r\n\r\n");
+  ASSERT_EQ(first->read_reply().status, 200);
+  ASSERT_EQ(second.read_reply().status, 200);
+  test::HttpConnection third(server.http.port());
+  third.send("GET /3 HTTP/1.1\r\n\r\n");
+  EXPECT_EQ(third.read_reply().status, 0);
+  EXPECT_EQ(server.http.refused(), 1u);
+  first.reset();  // one goes: the next is served
+  test::HttpReply fourth;
+  for (int attempt = 0; attempt < 100 && fourth.status == 0; ++attempt) {
+    fourth = test::http_get(server.http.port(), "/4");  // once the server has seen the close
+  }
+  EXPECT_EQ(fourth.body, "/4");
+}
+
+}  // namespace
+}  // namespace haptic::net

@@ -1,0 +1,277 @@
+// hapticd's read-only viewer: polls /api/state at display rate, /api/stats twice a second and
+// /api/scene whenever the scene's generation moves on (docs/viewer.md). Never writes anything.
+import { SceneView, TOOL_COLORS, caseOf, OBJECT_KINDS, FIELD_KINDS, vec } from './scene_view.js';
+import { drawHistogram, drawSeries } from './plots.js';
+
+const TOKEN_KEY = 'hapticd-viewer-token';
+const STATE_PERIOD_MS = 16;   // at most ~60 requests a second, one at a time
+const STATS_PERIOD_MS = 500;
+const HISTORY_S = 60;
+
+const $ = (id) => document.getElementById(id);
+
+// What the page shows, for a person and for tests (read-only; the page never reads it back).
+const shown = {
+  objects: [],          // [{id, session, kind}]
+  fields: [],           // [{id, session, kind}]
+  tools: [],            // per device port: {position: [x, y, z], force: [...], contacts}
+  toolPosition: null,   // port 0's [x, y, z] (m)
+  tick: '0',
+  sceneGeneration: null,
+  frames: 0,            // frames rendered
+  fps: 0,
+  statePolls: 0,
+  statsPolls: 0,
+  latenessSamples: '0', // ticks in the statistics' lateness window
+  error: null,          // the latest problem shown to the user
+  webgl: true,
+};
+window.hapticViewer = shown;
+
+// A token from the URL's fragment (#token=…) goes to this tab's storage and out of the address bar.
+// Returns whether there was one.
+function takeTokenFromUrl() {
+  const match = /(?:^#|&)token=([^&]*)/.exec(window.location.hash);
+  if (!match) return false;
+  sessionStorage.setItem(TOKEN_KEY, decodeURIComponent(match[1]));
+  history.replaceState(null, '', window.location.pathname + window.location.search);
+  return true;
+}
+
+class Unauthorized extends Error {}
+
+/// GETs `path` with the stored token; throws Unauthorized on 401 and Error naming the status else.
+async function getJson(path) {
+  const token = sessionStorage.getItem(TOKEN_KEY);
+  const response = await fetch(path, {
+    cache: 'no-store',
+    headers: token ? { Authorization: `Bearer ${token}` } : {},
+  });
+  if (response.ok) return response.json();
+  const text = (await response.text()).trim();
+  if (response.status === 401) throw new Unauthorized(text);
+  const error = new Error(text || `${path}: HTTP ${response.status}`);
+  error.status = response.status;
+  throw error;
+}
+
+function setStatus(text, kind) {
+  const status = $('status');
+  status.textContent = text;
+  status.className = `status ${kind ?? ''}`;
+  if (kind === 'error') shown.error = text;
+}
+
+function askForToken(why) {
+  $('token-form').hidden = false;
+  $('token-why').textContent = why;
+  setStatus('needs a token', 'error');
+}
+
+function mm(v) {
+  return `${(1000 * v.x).toFixed(1)}, ${(1000 * v.y).toFixed(1)}, ${(1000 * v.z).toFixed(1)}`;
+}
+
+/// A session id (a JSON string of a uint64) as the log writes it: 16 hex digits; 0 is the server.
+function sessionName(id) {
+  if (id === undefined || id === '0' || id === 0) return 'server';
+  return BigInt(id).toString(16).padStart(16, '0');
+}
+
+function cells(row, values) {
+  row.replaceChildren(...values.map((value) => {
+    const cell = document.createElement('td');
+    if (value instanceof Node) cell.append(value); else cell.textContent = value;
+    return cell;
+  }));
+  return row;
+}
+
+function fillTable(tbody, rows) {
+  tbody.replaceChildren(...rows.map((values) => cells(document.createElement('tr'), values)));
+}
+
+function swatch(color) {
+  const span = document.createElement('span');
+  span.className = 'swatch';
+  span.style.background = `#${color.toString(16).padStart(6, '0')}`;
+  return span;
+}
+
+/// Where an item is, in a few characters (mm).
+function whereOf(item, kind) {
+  const body = item[kind] ?? {};
+  // An object's pose; a field's anchor (a point, or a distance's origin), origin or centre.
+  const point = item.pose?.position ?? body.anchor?.origin ?? body.anchor ?? body.distance?.origin ??
+                body.origin ?? body.center;
+  return point ? mm(vec(point)) : '';
+}
+
+class Viewer {
+  constructor() {
+    this.devices = [];
+    this.generation = null;
+    this.history = [];  // [t_s, rate_hz, p99_us]
+    this.lastStats = null;
+    this.started = performance.now();
+    try {
+      this.view = new SceneView($('scene'));
+    } catch (error) {
+      shown.webgl = false;
+      this.view = null;
+      $('view-message').hidden = false;
+      $('view-message').textContent = `This browser gives no WebGL, so the scene cannot be drawn (${error.message}); the tables still update.`;
+    }
+  }
+
+  start() {
+    $('token-form').addEventListener('submit', (event) => {
+      event.preventDefault();
+      sessionStorage.setItem(TOKEN_KEY, $('token').value.trim());
+      $('token').value = '';
+      this.useNewToken();
+    });
+    window.addEventListener('hashchange', () => {
+      if (takeTokenFromUrl()) this.useNewToken();
+    });
+    this.pollState();
+    this.pollStats();
+    this.frame();
+  }
+
+  /// Starts over with the token just stored: the scene, the state and the statistics again.
+  useNewToken() {
+    $('token-form').hidden = true;
+    this.generation = null;
+    this.pollState();
+    if (!this.statsPolling) this.pollStats();
+  }
+
+  /// Each display frame: draws the scene when the state, the scene or the camera changed.
+  frame() {
+    const now = performance.now();
+    if (this.view?.render()) {
+      shown.frames += 1;
+      this.frameTimes = (this.frameTimes ?? []).filter((t) => now - t < 1000);
+      this.frameTimes.push(now);
+    }
+    shown.fps = (this.frameTimes ?? []).filter((t) => now - t < 1000).length;
+    requestAnimationFrame(() => this.frame());
+  }
+
+  async loadScene() {
+    const scene = await getJson('/api/scene');
+    this.generation = scene.generation;
+    shown.sceneGeneration = scene.generation;
+    if (JSON.stringify(scene.devices) !== JSON.stringify(this.devices)) {
+      this.devices = scene.devices ?? [];
+      this.view?.setDevices(this.devices);
+    }
+    const contents = scene.contents ?? {};
+    this.view?.setScene(contents);
+    const objects = contents.scene?.objects ?? [];
+    const fields = contents.scene?.fields ?? [];
+    shown.objects = objects.map((o, i) => ({ id: contents.object_ids[i], session: contents.object_sessions[i], kind: caseOf(o, OBJECT_KINDS) }));
+    shown.fields = fields.map((f, i) => ({ id: contents.field_ids[i], session: contents.field_sessions[i], kind: caseOf(f, FIELD_KINDS) }));
+    $('scene-counts').textContent = `${objects.length} objects, ${fields.length} fields`;
+    fillTable($('items').tBodies[0], [
+      ...objects.map((o, i) => [contents.object_ids[i], sessionName(contents.object_sessions[i]), shown.objects[i].kind + (o.dynamics?.mass > 0 ? ' (movable)' : ''), whereOf(o, shown.objects[i].kind)]),
+      ...fields.map((f, i) => [contents.field_ids[i], sessionName(contents.field_sessions[i]), `${shown.fields[i].kind} field`, whereOf(f, shown.fields[i].kind)]),
+    ]);
+  }
+
+  async pollState() {
+    if (this.statePolling) return;
+    this.statePolling = true;
+    try {
+      const state = await getJson('/api/state');
+      if (state.scene_generation !== this.generation) await this.loadScene();
+      this.showState(state);
+      setStatus('live', 'ok');
+      shown.error = null;
+      this.statePolling = false;
+      setTimeout(() => this.pollState(), STATE_PERIOD_MS);
+    } catch (error) {
+      this.statePolling = false;
+      if (error instanceof Unauthorized) {
+        askForToken(error.message);  // polling resumes when a token is given
+        return;
+      }
+      setStatus(`no answer: ${error.message}`, 'error');
+      setTimeout(() => this.pollState(), 1000);
+    }
+  }
+
+  showState(state) {
+    shown.statePolls += 1;
+    shown.tick = state.tick;
+    shown.tools = (state.tools ?? []).map((tool) => ({
+      position: [vec(tool.position).x, vec(tool.position).y, vec(tool.position).z],
+      force: [vec(tool.force).x, vec(tool.force).y, vec(tool.force).z],
+      contacts: tool.contact_count ?? 0,
+    }));
+    shown.toolPosition = shown.tools[0]?.position ?? null;
+    this.view?.setState(state);
+    $('clock').textContent = `tick ${state.tick} · t = ${(state.server_time_s ?? 0).toFixed(3)} s · ${shown.fps} fps`;
+    fillTable($('tools').tBodies[0], (state.tools ?? []).map((tool, port) => [
+      swatch(TOOL_COLORS[port % TOOL_COLORS.length]), this.devices[port]?.model ?? '', mm(vec(tool.position)),
+      (() => { const f = vec(tool.force); return `${f.x.toFixed(2)}, ${f.y.toFixed(2)}, ${f.z.toFixed(2)}`; })(),
+      (1000 * vec(tool.velocity).length()).toFixed(1), String(tool.contact_count ?? 0),
+    ]));
+  }
+
+  async pollStats() {
+    this.statsPolling = true;
+    try {
+      const { stats, lateness } = await getJson('/api/stats');
+      $('stats-why').hidden = true;
+      this.showStats(stats, lateness);
+    } catch (error) {
+      const refused = error instanceof Unauthorized || error.status === 403;
+      if (!(error instanceof Unauthorized)) {  // pollState asks for the token
+        $('stats-why').hidden = false;
+        $('stats-why').textContent = error.status === 403
+          ? `The statistics need an ADMIN token, as GetStats does: ${error.message}`
+          : `No statistics: ${error.message}`;
+      }
+      if (refused) {  // until another token is given
+        this.statsPolling = false;
+        return;
+      }
+    }
+    setTimeout(() => this.pollStats(), STATS_PERIOD_MS);
+  }
+
+  showStats(stats, lateness) {
+    shown.statsPolls += 1;
+    shown.latenessSamples = lateness?.samples ?? '0';
+    const t = (performance.now() - this.started) / 1000;
+    // The rate over the last poll (GetStats' own is the mean since start).
+    const ticks = Number(stats.ticks);
+    const rate = this.lastStats ? (ticks - this.lastStats.ticks) / Math.max(1e-3, t - this.lastStats.t) : stats.achieved_rate_hz;
+    this.lastStats = { ticks, t };
+    this.history.push([t, rate, stats.lateness_p99_us]);
+    this.history = this.history.filter(([at]) => t - at <= HISTORY_S);
+    $('window-s').textContent = String(stats.window_s ?? 10);
+    $('loop-figures').textContent =
+      `${ticks} ticks · ${rate.toFixed(1)} Hz now (${(stats.achieved_rate_hz ?? 0).toFixed(1)} mean) · ` +
+      `lateness p50 ${stats.lateness_p50_us.toFixed(0)} / p99 ${stats.lateness_p99_us.toFixed(0)} / ` +
+      `p99.9 ${stats.lateness_p999_us.toFixed(0)} / max ${stats.lateness_max_us.toFixed(0)} µs · ` +
+      `overruns ${stats.overruns} · sessions ${stats.sessions} · ` +
+      `force faults ${stats.force_faults} · saturations ${stats.force_saturations}`;
+    drawHistogram($('lateness-plot'), lateness);
+    drawSeries($('rate-plot'), [
+      { name: 'rate', unit: 'Hz', color: '#7ddc7d', points: this.history.map(([at, r]) => [at, r]) },
+      { name: 'p99', unit: 'µs', color: '#ffb347', points: this.history.map(([at, , p]) => [at, p]) },
+    ], HISTORY_S);
+    fillTable($('clients').tBodies[0], (stats.clients ?? []).map((c) => [
+      sessionName(c.session_id), c.client_name, c.peer, String(c.device_index),
+      c.decimation ? `${c.decimation}` : 'off', c.datagrams_sent, c.states_lost,
+      c.last_heartbeat_age_s < 0 ? 'none' : `${(1000 * c.last_heartbeat_age_s).toFixed(0)} ms`,
+      c.round_trip_samples > 0 ? `${c.round_trip_p50_us.toFixed(0)} / ${c.round_trip_p99_us.toFixed(0)}` : '–',
+    ]));
+  }
+}
+
+takeTokenFromUrl();
+new Viewer().start();

@@ -1,0 +1,208 @@
+// The viewer in headless Chromium (ctest browser.viewer; tests/browser/CMakeLists.txt sets the
+// environment): a lockstep hapticd with --http 0, a client registering one object of every shape
+// and one field of every kind (tests/browser/viewer_driver), the page loaded by playwright-core
+// driving Debian's chromium. Checks what the page shows against what was registered, that the
+// tool follows the simulated operator, and the token prompt; writes screenshots into $SCREENSHOTS.
+import { after, before, describe, test } from 'node:test';
+import assert from 'node:assert/strict';
+import { spawn } from 'node:child_process';
+import { once } from 'node:events';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import readline from 'node:readline';
+import { chromium } from 'playwright-core';
+
+const HAPTICD = process.env.HAPTICD;
+const DRIVER = process.env.VIEWER_DRIVER;
+const SCREENSHOTS = process.env.SCREENSHOTS ?? path.join(os.tmpdir(), 'viewer-screenshots');
+// Chromium as root in a sandbox-less container, on a closed network, drawing WebGL in software.
+const CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+  '--disable-quic', '--no-first-run', '--disable-background-networking', '--disable-component-update',
+  '--disable-sync'];
+const WAIT_MS = 20000;  // for anything to show; the test's own bound (ctest's is 180 s)
+
+/// A hapticd on ephemeral loopback ports, started from `config` (a ServerConfig), ready once its
+/// ready file names its ports.
+async function startServer(config) {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'hapticd-viewer-'));
+  fs.writeFileSync(path.join(dir, 'config.json'), JSON.stringify(config));
+  const ready = path.join(dir, 'ready.json');
+  const server = spawn(HAPTICD, ['--config', path.join(dir, 'config.json'), '--grpc-address', '127.0.0.1:0',
+    '--udp-port', '0', '--http', '0', '--ready-file', ready], { stdio: ['ignore', 'inherit', 'inherit'] });
+  const giveUp = Date.now() + WAIT_MS;
+  while (!fs.existsSync(ready)) {
+    if (server.exitCode !== null) throw new Error(`hapticd exited (${server.exitCode}) before it was ready`);
+    if (Date.now() > giveUp) throw new Error('hapticd not ready');
+    await new Promise((resolve) => setTimeout(resolve, 20));
+  }
+  const ports = JSON.parse(fs.readFileSync(ready, 'utf8'));
+  return {
+    ports,
+    url: `http://127.0.0.1:${ports.viewer_port}/`,
+    async stop() {
+      server.kill('SIGTERM');
+      if (server.exitCode === null) await once(server, 'exit');
+      fs.rmSync(dir, { recursive: true, force: true });
+    },
+  };
+}
+
+/// The SDK client: registers every kind at start (its first line says what), then takes commands.
+async function startDriver(grpcAddress) {
+  const driver = spawn(DRIVER, [grpcAddress], { stdio: ['pipe', 'pipe', 'inherit'] });
+  const lines = readline.createInterface({ input: driver.stdout })[Symbol.asyncIterator]();
+  const next = async () => JSON.parse((await lines.next()).value);
+  return {
+    registered: await next(),
+    async command(line) {
+      driver.stdin.write(`${line}\n`);
+      return next();
+    },
+    async stop() {
+      driver.stdin.end('quit\n');
+      if (driver.exitCode === null) await once(driver, 'exit');
+    },
+  };
+}
+
+const shown = (page) => page.evaluate(() => window.hapticViewer);
+const byId = (a, b) => Number(a.id) - Number(b.id);
+
+describe('the viewer of a lockstep server', () => {
+  let server;
+  let driver;
+  let browser;
+  let page;
+  const consoleErrors = [];
+
+  before(async () => {
+    fs.mkdirSync(SCREENSHOTS, { recursive: true });
+    server = await startServer({ time_mode: 'LOCKSTEP', status_period_s: 0, real_time: { use_fifo: false } });
+    driver = await startDriver(server.ports.grpc_address);
+    await driver.command('move 0 0 0.02 50');  // let the new items ramp in
+    browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', args: CHROMIUM_ARGS });
+    page = await browser.newPage({ viewport: { width: 1400, height: 860 } });
+    page.on('console', (message) => { if (message.type() === 'error') consoleErrors.push(message.text()); });
+    page.on('pageerror', (error) => consoleErrors.push(error.message));
+    await page.goto(server.url);
+  });
+
+  after(async () => {
+    await browser?.close();
+    await driver?.stop();
+    await server?.stop();
+  });
+
+  test('shows every object and field the client registered, with its kind', async () => {
+    const expected = driver.registered;
+    await page.waitForFunction((n) => window.hapticViewer?.objects.length === n, expected.objects.length,
+                               { timeout: WAIT_MS });
+    const viewer = await shown(page);
+    assert.deepEqual(viewer.objects.map(({ id, kind }) => ({ id, kind })).sort(byId), expected.objects);
+    assert.deepEqual(viewer.fields.map(({ id, kind }) => ({ id, kind })).sort(byId), expected.fields);
+    assert.ok(viewer.objects.every((o) => o.session === expected.session));
+    assert.ok(viewer.webgl, 'the page could not get WebGL');
+    // The table lists them too, one row each.
+    assert.equal(await page.locator('#items tbody tr').count(), expected.objects.length + expected.fields.length);
+    await page.waitForFunction(() => window.hapticViewer.frames > 0, null, { timeout: WAIT_MS });
+    await page.screenshot({ path: path.join(SCREENSHOTS, 'viewer-scene.png') });
+  });
+
+  test('the tool moves when the simulated operator moves it', async () => {
+    const before = (await shown(page)).toolPosition;
+    // Into the pushable sphere at x = 50 mm: in contact, pushing it away, 100 ms on.
+    const moved = await driver.command('move 0.05 0 0 100');
+    await page.waitForFunction((tick) => window.hapticViewer.tick === tick, moved.tick, { timeout: WAIT_MS });
+    const viewer = await shown(page);
+    viewer.toolPosition.forEach((value, axis) => assert.ok(Math.abs(value - moved.position[axis]) < 1e-12,
+      `axis ${axis}: the page shows ${value} m, the client stepped to ${moved.position[axis]} m`));
+    assert.ok(Math.hypot(...viewer.toolPosition.map((v, axis) => v - before[axis])) > 0.02,
+              `the tool moved only from ${before} to ${viewer.toolPosition}`);
+    assert.equal(viewer.tools[0].contacts, 1);
+    assert.ok(viewer.tools[0].force[0] < 0, 'the sphere pushes back along −x');
+    // The statistics of the same tick in the picture too.
+    await page.waitForFunction((n) => window.hapticViewer.statsPolls > n, viewer.statsPolls, { timeout: WAIT_MS });
+    await page.screenshot({ path: path.join(SCREENSHOTS, 'viewer-contact.png') });
+    assert.deepEqual(consoleErrors, []);
+  });
+});
+
+describe('the viewer of a real-time server', () => {
+  let server;
+  let driver;
+  let browser;
+
+  before(async () => {
+    server = await startServer({ status_period_s: 0, real_time: { use_fifo: false } });
+    driver = await startDriver(server.ports.grpc_address);
+    await driver.command('sway');
+    browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', args: CHROMIUM_ARGS });
+  });
+
+  after(async () => {
+    await browser?.close();
+    await driver?.stop();
+    await server?.stop();
+  });
+
+  test('the tool follows the swaying hand and the lateness histogram fills', async () => {
+    const page = await browser.newPage({ viewport: { width: 1400, height: 860 } });
+    await page.goto(server.url);
+    await page.waitForFunction(() => window.hapticViewer?.toolPosition !== null, null, { timeout: WAIT_MS });
+    const first = (await shown(page)).toolPosition;
+    await page.waitForFunction((x) => Math.abs(window.hapticViewer.toolPosition[0] - x) > 0.005, first[0],
+                               { timeout: WAIT_MS });
+    // A few seconds of statistics for the plots, then the picture.
+    await page.waitForFunction(() => window.hapticViewer.statsPolls >= 8, null, { timeout: WAIT_MS });
+    const viewer = await shown(page);
+    assert.ok(Number(viewer.latenessSamples) > 0, 'a real-time loop records its lateness');
+    assert.equal(viewer.objects.length, driver.registered.objects.length);
+    console.log(`viewer in headless chromium: ${viewer.fps} frames/s drawn, ${viewer.statePolls} states and ` +
+                `${viewer.statsPolls} statistics polled`);
+    await page.screenshot({ path: path.join(SCREENSHOTS, 'viewer-realtime.png') });
+    await page.close();
+  });
+});
+
+describe('the viewer of a server with tokens', () => {
+  let server;
+  let browser;
+  const tokens = [
+    { name: 'visitor', token: 'observer-token-0123456789', role: 'OBSERVER' },
+    { name: 'lab-admin', token: 'admin-token-0123456789ab', role: 'ADMIN' },
+  ];
+
+  before(async () => {
+    server = await startServer({ time_mode: 'LOCKSTEP', status_period_s: 0, real_time: { use_fifo: false },
+      security: { tokens } });
+    browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', args: CHROMIUM_ARGS });
+  });
+
+  after(async () => {
+    await browser?.close();
+    await server?.stop();
+  });
+
+  test('asks for a token, and an OBSERVER token shows the scene but not the statistics', async () => {
+    const page = await browser.newPage();
+    await page.goto(server.url);
+    await page.locator('#token-form').waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert.match(await page.locator('#token-why').textContent(), /needs a bearer token/);
+    // A token in the fragment is taken into the tab's storage and out of the address bar.
+    await page.goto(`${server.url}#token=${tokens[0].token}`);
+    await page.waitForFunction(() => window.hapticViewer?.statePolls > 0, null, { timeout: WAIT_MS });
+    assert.equal(new URL(page.url()).hash, '');
+    await page.locator('#stats-why').waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert.match(await page.locator('#stats-why').textContent(), /needs role ADMIN or above; token 'visitor' has role OBSERVER/);
+    // The prompt takes an ADMIN token: the statistics follow.
+    await page.goto(server.url);
+    await page.evaluate(() => sessionStorage.clear());
+    await page.reload();
+    await page.locator('#token').fill(tokens[1].token);
+    await page.locator('#token-form button').click();
+    await page.waitForFunction(() => document.getElementById('loop-figures').textContent.includes('ticks'), null,
+                               { timeout: WAIT_MS });
+    await page.close();
+  });
+});
