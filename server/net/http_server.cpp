@@ -90,10 +90,12 @@ std::string parse_request_head(std::string_view head, HttpRequest& out) {
     at = end + 1;
     if (header.empty()) continue;
     const std::size_t colon = header.find(':');
-    if (colon == std::string_view::npos || colon == 0) {
+    // The name is checked after trimming: a line of "\r: x" would otherwise give an empty one.
+    const std::string_view name = colon == std::string_view::npos ? std::string_view() : trim(header.substr(0, colon));
+    if (name.empty()) {
       return "a header line must be 'Name: value', got '" + std::string(header.substr(0, 200)) + "'";
     }
-    out.headers[lower(trim(header.substr(0, colon)))] = std::string(trim(header.substr(colon + 1)));
+    out.headers[lower(name)] = std::string(trim(header.substr(colon + 1)));
   }
   const std::string* connection = out.header("connection");
   const std::string token = connection != nullptr ? lower(*connection) : std::string();

@@ -48,6 +48,9 @@ TEST(HttpRequestHead, RefusesWhatIsNotARequestNamingWhy) {
             "the target must be a path starting with '/', got 'http://example.com/'");
   EXPECT_EQ(parse_request_head("GET / HTTP/1.1\r\nno colon here", request),
             "a header line must be 'Name: value', got 'no colon here'");
+  // A name that is only a carriage return (found by http_request_fuzz) is no name.
+  EXPECT_EQ(parse_request_head("GET / HTTP/1.1\r\n\r: x", request),
+            "a header line must be 'Name: value', got '\r: x'");
 }
 
 TEST(HttpResponse, IsFramedByItsContentLength) {
