@@ -86,6 +86,12 @@ inline double monotonic_seconds(std::chrono::steady_clock::time_point time) {
   return std::chrono::duration<double>(time.time_since_epoch()).count();
 }
 
+/// Sets each keyword of `values` on `target`, an instance of a class StructBinder made, through
+/// the attribute's own setter. TypeError for a name not in its `_fields` ("<unknown>: 'x'; its
+/// fields: ...") or a value the field cannot take ("WallSpec.normal: cannot take (1, 2); expected
+/// numpy.ndarray[3]").
+void assign_fields(const py::object& target, const py::kwargs& values, const std::string& unknown);
+
 /// Binds one of the SDK's plain structs: each field as an attribute, a constructor taking any of
 /// them by keyword (TypeError naming an unknown one), a repr listing them, and == where the
 /// struct has one.
@@ -104,63 +110,49 @@ class StructBinder {
   template <class Member>
   StructBinder& field(const char* name, Member T::*member, const char* doc) {
     class_.def_readwrite(name, member, doc);
-    names_->emplace_back(name);
+    names_.emplace_back(name);
     return *this;
   }
   /// A field read and written through functions (units or shapes the member does not have).
   template <class Getter, class Setter>
   StructBinder& property(const char* name, Getter getter, Setter setter, const char* doc) {
     class_.def_property(name, getter, setter, doc);
-    names_->emplace_back(name);
+    names_.emplace_back(name);
     return *this;
   }
   /// Read-only attributes (results the server gives).
   template <class Member>
   StructBinder& readonly(const char* name, Member T::*member, const char* doc) {
     class_.def_readonly(name, member, doc);
-    names_->emplace_back(name);
+    names_.emplace_back(name);
     return *this;
   }
   template <class Getter>
   StructBinder& readonly_property(const char* name, Getter getter, const char* doc) {
     class_.def_property_readonly(name, getter, doc);
-    names_->emplace_back(name);
+    names_.emplace_back(name);
     return *this;
   }
   py::class_<T>& cls() { return class_; }
 
   /// Adds the keyword constructor, repr and equality; call once, after the fields.
   py::class_<T>& finish() {
-    const auto names = names_;
+    class_.attr("_fields") = py::tuple(py::cast(names_));
     const std::string type_name = name_;
-    class_.def(py::init([names, type_name](const py::kwargs& values) {
+    class_.def(py::init([type_name](const py::kwargs& values) {
                  T value{};
                  // A borrowed Python view of `value`, so that each keyword goes through the same
                  // attribute setter (and conversion) as a later assignment would.
-                 py::object view = py::cast(&value, py::return_value_policy::reference);
-                 for (const auto& [key, item] : values) {
-                   const auto key_text = py::str(key).cast<std::string>();
-                   if (std::find(names->begin(), names->end(), key_text) == names->end()) {
-                     throw py::type_error(type_name + "() has no field '" + key_text +
-                                          "'; its fields: " + join(*names));
-                   }
-                   try {
-                     py::setattr(view, key, item);
-                   } catch (py::error_already_set& error) {
-                     if (!error.matches(PyExc_TypeError)) throw;
-                     throw py::type_error(type_name + "." + key_text + ": cannot take " +
-                                          py::repr(item).template cast<std::string>() + "; expected " +
-                                          expected_type(error.what()));
-                   }
-                 }
+                 assign_fields(py::cast(&value, py::return_value_policy::reference), values,
+                               type_name + "() has no field");
                  return value;
                }),
-               ("Any of the fields by keyword: " + join(*names) + ".").c_str());
-    class_.def("__repr__", [names, type_name](const py::object& self) {
+               ("Any of the fields by keyword: " + join(names_) + ".").c_str());
+    class_.def("__repr__", [type_name](const py::object& self) {
       std::string text = type_name + "(";
-      for (std::size_t i = 0; i < names->size(); ++i) {
-        if (i > 0) text += ", ";
-        text += (*names)[i] + "=" + py::repr(self.attr((*names)[i].c_str())).cast<std::string>();
+      for (const py::handle field : py::tuple(py::type::of(self).attr("_fields"))) {
+        if (text.back() != '(') text += ", ";
+        text += field.cast<std::string>() + "=" + py::repr(self.attr(field)).template cast<std::string>();
       }
       return text + ")";
     });
@@ -175,13 +167,6 @@ class StructBinder {
   }
 
  private:
-  /// The type pybind11's refusal of a setter's argument names ("… arg0: numpy.ndarray[3]) …").
-  static std::string expected_type(const std::string& refusal) {
-    const auto start = refusal.find("arg0: ");
-    const auto end = refusal.find(") -> ", start);
-    if (start == std::string::npos || end == std::string::npos) return "another type";
-    return refusal.substr(start + 6, end - start - 6);
-  }
   static std::string join(const std::vector<std::string>& names) {
     std::string text;
     for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
@@ -190,7 +175,7 @@ class StructBinder {
 
   py::class_<T> class_;
   std::string name_;
-  std::shared_ptr<std::vector<std::string>> names_ = std::make_shared<std::vector<std::string>>();
+  std::vector<std::string> names_;  // the fields, in order: the class's _fields
 };
 
 /// A Python callable that the SDK's threads may hold, copy, call and drop without holding the

@@ -103,23 +103,17 @@ void def_adders(py::class_<Client, ClientHolder>& cls, const char* name, Add add
    ...);
 }
 
+/// `base` (or the defaults) with any of its fields replaced by keyword.
 ClientConfig config_from(std::optional<ClientConfig> base, const py::kwargs& overrides) {
   ClientConfig config = base.value_or(ClientConfig{});
-  if (overrides.empty()) return config;
-  py::object view = py::cast(&config, py::return_value_policy::reference);
-  for (const auto& [key, value] : overrides) {
-    if (!py::hasattr(view, key)) {
-      throw py::type_error("Client() has no option '" + py::str(key).cast<std::string>() +
-                           "'; it takes a ClientConfig and any of its fields by keyword");
-    }
-    py::setattr(view, key, value);
-  }
+  assign_fields(py::cast(&config, py::return_value_policy::reference), overrides,
+                "Client() has no option");
   return config;
 }
 
 /// Runs `wait` without the GIL for up to `timeout_s` seconds: its State, or None.
-std::optional<State> wait_for_state(double timeout_s,
-                          const std::function<bool(State&, std::chrono::milliseconds)>& wait) {
+std::optional<State> wait_for_state(
+    double timeout_s, const std::function<bool(State&, std::chrono::milliseconds)>& wait) {
   const std::chrono::milliseconds timeout = milliseconds_from_seconds(timeout_s, "timeout");
   State state;
   py::gil_scoped_release released;

@@ -534,6 +534,33 @@ std::vector<std::uint32_t> indices_from_array(const py::handle& source, const ch
   return indices;
 }
 
+void assign_fields(const py::object& target, const py::kwargs& values, const std::string& unknown) {
+  const py::tuple fields = py::type::of(target).attr("_fields");
+  const std::string type_name = py::type::of(target).attr("__name__").cast<std::string>();
+  for (const auto& [key, item] : values) {
+    const auto name = py::str(key).cast<std::string>();
+    if (!fields.contains(key)) {
+      std::string listed;
+      for (const py::handle field : fields) listed += (listed.empty() ? "" : ", ") + field.cast<std::string>();
+      throw py::type_error(unknown + " '" + name + "'; its fields: " + listed);
+    }
+    try {
+      py::setattr(target, key, item);
+    } catch (py::error_already_set& error) {
+      if (!error.matches(PyExc_TypeError)) throw;
+      // pybind11's refusal names the setter's parameter type: "... arg0: numpy.ndarray[3]) -> ...".
+      const std::string refusal = error.what();
+      const auto start = refusal.find("arg0: ");
+      const auto end = refusal.find(") -> ", start);
+      const std::string expected = start == std::string::npos || end == std::string::npos
+                                       ? "another type"
+                                       : refusal.substr(start + 6, end - start - 6);
+      throw py::type_error(type_name + "." + name + ": cannot take " +
+                           py::repr(item).cast<std::string>() + "; expected " + expected);
+    }
+  }
+}
+
 std::chrono::milliseconds milliseconds_from_seconds(double value, const char* what) {
   if (!std::isfinite(value) || value < 0.0) {
     throw py::value_error(std::string(what) + ": " + std::to_string(value) +
