@@ -6,8 +6,10 @@
 
 #include <chrono>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <unordered_set>
 #include <utility>
 #include <variant>
 #include <vector>
@@ -20,7 +22,55 @@ namespace haptic::python {
 
 namespace {
 
-using ClientHolder = std::unique_ptr<Client, DeleteWithoutGil<Client>>;
+/// Every Client alive in this process, so that the interpreter's exit can close them first
+/// (atexit): a Python callback still running when the interpreter finalizes would be cut off
+/// mid-call on the SDK's thread, and the process would crash.
+class LiveClients {
+ public:
+  void add(Client* client) {
+    std::lock_guard lock(mutex_);
+    clients_.insert(client);
+  }
+  void remove(Client* client) {
+    std::lock_guard lock(mutex_);
+    clients_.erase(client);
+  }
+  /// Closes each (called with the GIL, from atexit, once the program's own threads have ended);
+  /// a refusal from the server is ignored, as the destructor would.
+  void close_all() {
+    std::vector<Client*> open;
+    {
+      std::lock_guard lock(mutex_);
+      open.assign(clients_.begin(), clients_.end());
+    }
+    py::gil_scoped_release released;
+    for (Client* client : open) {
+      try {
+        client->close();
+      } catch (const std::exception&) {
+      }
+    }
+  }
+
+ private:
+  std::mutex mutex_;
+  std::unordered_set<Client*> clients_;
+};
+
+LiveClients& live_clients() {
+  static auto* clients = new LiveClients;  // never destroyed: atexit may run after statics go
+  return *clients;
+}
+
+/// Deletes a Client without the GIL, after taking it off the live list.
+struct DeleteClient {
+  void operator()(Client* client) const {
+    live_clients().remove(client);
+    DeleteWithoutGil<Client>{}(client);
+  }
+};
+
+using ClientHolder = std::unique_ptr<Client, DeleteClient>;
 using ReleaseGil = py::call_guard<py::gil_scoped_release>;
 
 /// The handles of a scene applied whole, each a Python ObjectHandle or FieldHandle.
@@ -200,8 +250,12 @@ void bind_client_class(py::module_& m) {
       "ClientConfig field by keyword. Usable as a context manager (closes at the end).");
   cls.def(py::init([](std::optional<ClientConfig> config, const py::kwargs& overrides) {
             ClientConfig chosen = config_from(std::move(config), overrides);
-            py::gil_scoped_release released;
-            return ClientHolder(new Client(std::move(chosen)));
+            ClientHolder client = [&] {
+              py::gil_scoped_release released;
+              return ClientHolder(new Client(std::move(chosen)));
+            }();
+            live_clients().add(client.get());
+            return client;
           }),
           py::arg("config") = py::none(),
           "Connects and opens a session. Raises ConnectionError, VersionMismatchError, "
@@ -389,6 +443,8 @@ void bind_client(py::module_& m) {
   bind_config(m);
   bind_handles(m);
   bind_client_class(m);
+  py::module_::import("atexit").attr("register")(
+      py::cpp_function([] { live_clients().close_all(); }, py::name("_close_clients_at_exit")));
 
   m.attr("API_VERSION") = kApiVersion;
   m.def("scene_json", &scene_json, py::arg("scene"),

@@ -2,6 +2,8 @@
 callback that raises; stopping or dropping a client while its callback runs; Python threads."""
 
 import gc
+import subprocess
+import sys
 import threading
 import time
 
@@ -9,6 +11,7 @@ import numpy as np
 import pytest
 
 import hapticd
+from conftest import ServerProcess, lockstep_config
 
 
 def wait_until(predicate, timeout=5.0):
@@ -165,3 +168,30 @@ def test_samples_carry_monotonic_times_and_interpolate_between_frames(client):
     np.testing.assert_allclose(hapticd.interpolate_position(a, b, b.server_time), b.position)
     ahead = hapticd.predict_position(a, b, b.server_time + 0.005)
     assert ahead[2] < b.position[2]  # still falling
+
+
+def test_a_program_that_exits_with_callbacks_running_exits_cleanly():
+    # The interpreter closes every open Client at exit (atexit) before it finalizes: a callback
+    # entering Python after that would be cut off on the SDK's thread and crash the process.
+    # A real-time server keeps the callbacks coming while the program ends.
+    server = ServerProcess(lockstep_config(time_mode="REAL_TIME"))
+    script = f"""
+import threading, time, hapticd
+client = hapticd.Client(server_address={server.address!r})
+calls = []
+def slow(state):
+    calls.append(state.tick)
+    time.sleep(0.001)  # lets go of the GIL, and takes it back
+client.on_state(slow)
+while len(calls) < 50:
+    time.sleep(0.01)
+print("leaving with the callbacks running", flush=True)
+"""
+    try:
+        for _ in range(3):
+            done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                                  timeout=60)
+            assert done.returncode == 0, (done.returncode, done.stderr)
+            assert "leaving with the callbacks running" in done.stdout
+    finally:
+        assert server.stop() == 0
