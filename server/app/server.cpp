@@ -288,7 +288,8 @@ void Server::bind_http_endpoints(const net::AccessControl& access) {
   sources.stats = [this] { return stats(); };
   sources.lateness = &lateness_;
   sources.access = access;
-  sources.loopback_only = config::is_loopback_host(config::host_of_address(config_.viewer_address()));
+  sources.host_name = config::host_of_address(config_.viewer_address());
+  sources.loopback_only = config::is_loopback_host(sources.host_name);
   viewer_ = std::make_unique<net::ViewerEndpoint>(std::move(sources));
   viewer_->load_page(viewer_root(config_));
   viewer_->bind(config_.viewer_address());
@@ -419,8 +420,6 @@ void Server::shutdown() {
   // output, so nothing they add can push.
   events_.close();
   if (listener_) listener_->stop();
-  if (metrics_) metrics_->stop();
-  if (viewer_) viewer_->stop();
   if (started_ && recorder_->active()) {
     v1::RecordedChange change;
     change.set_shutdown(true);
@@ -438,6 +437,10 @@ void Server::shutdown() {
     loop_->stop();
   }
   recorder_->stop("shutdown");  // the ramp-out's ticks included
+  // The HTTP endpoints only read, so they go after the ramp: each stop waits for its thread's
+  // next poll (up to 100 ms) and a reply in progress, which the force must not wait for.
+  if (metrics_) metrics_->stop();
+  if (viewer_) viewer_->stop();
   if (control_plane_closer.joinable()) control_plane_closer.join();
   // With the loop stopped, leave every device in its safe state (motors off, brakes on).
   {

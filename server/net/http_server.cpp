@@ -108,7 +108,10 @@ std::string format_response(const HttpResponse& response, bool head_only, bool k
   std::string bytes = "HTTP/1.1 " + std::to_string(response.status) + " " + reason_phrase(response.status) +
                       "\r\nContent-Type: " + response.content_type +
                       "\r\nContent-Length: " + std::to_string(response.body.size()) +
-                      "\r\nConnection: " + (keep_alive ? "keep-alive" : "close") + "\r\n";
+                      "\r\nConnection: " + (keep_alive ? "keep-alive" : "close") +
+                      // Every body is what its Content-Type says: an error line that echoes a path
+                      // or a Host is never taken for a page.
+                      "\r\nX-Content-Type-Options: nosniff\r\n";
   for (const auto& [name, value] : response.headers) bytes += name + ": " + value + "\r\n";
   bytes += "\r\n";
   if (!head_only) bytes += response.body;
@@ -154,7 +157,10 @@ void HttpServer::serve_loop() {
   std::vector<pollfd> polled;
   while (!stopping_.load()) {
     polled.clear();
-    for (const int fd : listening_) polled.push_back({fd, POLLIN, 0});
+    // Out of descriptors, a listener stays readable: it is left out until the pause ends rather
+    // than waking this thread again at once.
+    const bool accepting = std::chrono::steady_clock::now() >= accept_paused_until_;
+    for (const int fd : listening_) polled.push_back({fd, static_cast<short>(accepting ? POLLIN : 0), 0});
     auto wake = std::chrono::steady_clock::now() + std::chrono::milliseconds(kPollMs);
     for (const Connection& c : connections) {
       polled.push_back({c.fd, static_cast<short>(c.pending.empty() ? POLLIN : POLLOUT), 0});
@@ -174,10 +180,16 @@ void HttpServer::serve_loop() {
       Connection& c = connections[i];
       const short events = polled[listeners + i].revents;
       bool alive = true;
-      if ((events & POLLOUT) != 0) alive = flush(c);
-      if (alive && (events & (POLLIN | POLLHUP | POLLERR)) != 0 && c.pending.empty()) alive = receive(c);
-      // Every whole request already received, in turn (a reply sent at once makes room for the next).
-      while (alive && c.pending.empty() && answer(c)) alive = flush(c);
+      try {
+        if ((events & POLLOUT) != 0) alive = flush(c);
+        if (alive && (events & (POLLIN | POLLHUP | POLLERR)) != 0 && c.pending.empty()) alive = receive(c);
+        // Every whole request already received, in turn (a reply sent at once makes room for the next).
+        while (alive && c.pending.empty() && answer(c)) alive = flush(c);
+      } catch (const std::exception&) {
+        // Out of memory for one reply or one request's bytes: that connection goes, the server
+        // (and the device it holds) stays.
+        alive = false;
+      }
       // A reply queued or sent moved the deadline on; bytes that make no whole request do not.
       if (alive && now >= c.deadline) alive = false;
       if (alive) {
@@ -197,7 +209,13 @@ void HttpServer::serve_loop() {
 void HttpServer::accept_from(int listening_fd, std::vector<Connection>& connections) {
   for (;;) {
     const int fd = ::accept4(listening_fd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
-    if (fd < 0) return;
+    if (fd < 0) {
+      if (errno == EINTR || errno == ECONNABORTED) continue;
+      if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+        accept_paused_until_ = std::chrono::steady_clock::now() + std::chrono::milliseconds(kPollMs);
+      }
+      return;
+    }
     if (connections.size() >= limits_.max_connections) {
       refused_.fetch_add(1, std::memory_order_relaxed);  // counted before the peer sees the close
       ::close(fd);
@@ -239,15 +257,15 @@ bool HttpServer::answer(Connection& connection) {
     connection.deadline = std::chrono::steady_clock::now() + limits_.timeout;
     replies_.fetch_add(1, std::memory_order_relaxed);
   };
-  if (end == std::string::npos) {
-    if (connection.received.size() > limits_.max_request_bytes) {
-      reply(HttpResponse::text(431, "hapticd " + name_ + ": the request head is longer than " +
-                                        std::to_string(limits_.max_request_bytes) + " bytes\n"),
-            false, false);
-      return true;
-    }
-    return false;
+  const bool too_long = end == std::string::npos ? connection.received.size() > limits_.max_request_bytes
+                                                 : head_length > limits_.max_request_bytes;
+  if (too_long) {
+    reply(HttpResponse::text(431, "hapticd " + name_ + ": the request head is longer than " +
+                                      std::to_string(limits_.max_request_bytes) + " bytes\n"),
+          false, false);
+    return true;
   }
+  if (end == std::string::npos) return false;
   HttpRequest request;
   const std::string error =
       parse_request_head(std::string_view(connection.received).substr(0, head_length), request);
@@ -283,6 +301,8 @@ bool HttpServer::flush(Connection& connection) {
                                 connection.pending.size() - connection.sent, MSG_NOSIGNAL);
     if (sent > 0) {
       connection.sent += static_cast<std::size_t>(sent);
+      // The limit is on a reader that stops, not on a large reply read slowly: progress renews it.
+      connection.deadline = std::chrono::steady_clock::now() + limits_.timeout;
     } else if (sent < 0 && errno == EINTR) {
       continue;
     } else {

@@ -60,7 +60,9 @@ std::string format_response(const HttpResponse& response, bool head_only, bool k
 
 struct HttpLimits {
   std::size_t max_connections = 32;         // one more is accepted and closed at once
-  std::chrono::milliseconds timeout{2000};  // for each request head, and for each reply to leave
+  // For each request head to arrive, and for each reply to make progress (a large one read slowly
+  // is not cut off; a reader that stops is).
+  std::chrono::milliseconds timeout{2000};
   std::size_t max_request_bytes = 8192;     // a longer head is answered 431 and closed
 };
 
@@ -106,6 +108,8 @@ class HttpServer {
   std::uint16_t port_ = 0;
   Handler handler_;
   std::atomic<bool> stopping_{false};
+  // Set when accept ran out of descriptors: the listeners are not polled before then.
+  std::chrono::steady_clock::time_point accept_paused_until_{};
   std::atomic<std::uint64_t> replies_{0};
   std::atomic<std::uint64_t> refused_{0};
   std::thread thread_;

@@ -37,16 +37,43 @@ std::string to_json(const google::protobuf::Message& message) {
   return out;
 }
 
-/// True when the Host header's host (without its port) is a loopback name.
-bool loopback_host_header(const std::string& host_header) {
-  std::string host = host_header;
-  if (!host.empty() && host.front() == '[') {
-    host = host.substr(1, host.find(']') == std::string::npos ? std::string::npos : host.find(']') - 1);
-  } else if (const auto colon = host.rfind(':'); colon != std::string::npos) {
-    host = host.substr(0, colon);
+/// The host a Host header names, without its port or an IPv6 address's brackets.
+std::string host_of_header(const std::string& host_header) {
+  if (!host_header.empty() && host_header.front() == '[') {
+    const auto close = host_header.find(']');
+    return host_header.substr(1, close == std::string::npos ? std::string::npos : close - 1);
   }
+  return host_header.substr(0, host_header.rfind(':'));
+}
+
+bool loopback_name(const std::string& host) {
   if (host == "localhost" || host == "::1") return true;
   return host.rfind("127.", 0) == 0 && host.find_first_not_of("0123456789.") == std::string::npos;
+}
+
+/// An IPv4 or IPv6 address written out, which no DNS answer stands behind.
+bool address_literal(const std::string& host) {
+  // A name has no colon, and "dead.beef" is a name: only digits and dots, or a colon among hex.
+  return !host.empty() && (host.find_first_not_of("0123456789.") == std::string::npos ||
+                           (host.find(':') != std::string::npos &&
+                            host.find_first_not_of("0123456789abcdefABCDEF:.") == std::string::npos));
+}
+
+/// Empty when the request may be answered; else why not (see ViewerSources::loopback_only).
+std::string host_refusal(const HttpRequest& request, const ViewerSources& sources, std::uint16_t port) {
+  const std::string* header = request.header("host");
+  if (header == nullptr) {
+    return request.version == "HTTP/1.0" ? std::string() : "an HTTP/1.1 request must name its Host";
+  }
+  const std::string host = host_of_header(*header);
+  if (loopback_name(host)) return {};
+  if (sources.loopback_only) {
+    return "Host '" + *header + "' is not a loopback name, and this viewer serves loopback only: open it as "
+           "http://127.0.0.1:" + std::to_string(port) + "/";
+  }
+  if (address_literal(host) || host == sources.host_name) return {};
+  return "Host '" + *header + "' is neither an address nor '" + sources.host_name +
+         "' (viewer_address's host): open the viewer by one of those";
 }
 
 HttpResponse json_response(const google::protobuf::Message& message) {
@@ -75,7 +102,6 @@ void StaticFiles::load(const std::filesystem::path& root, const std::string& fie
     file.content_type = content_type_of(entry.path());
     file.body = bytes.str();
     file.headers.emplace_back("Cache-Control", "no-cache");
-    file.headers.emplace_back("X-Content-Type-Options", "nosniff");
     files_["/" + entry.path().lexically_relative(root).generic_string()] = std::move(file);
   }
 }
@@ -134,12 +160,9 @@ void ViewerEndpoint::start() {
 }
 
 HttpResponse ViewerEndpoint::handle(const HttpRequest& request) const {
-  if (const std::string* host = request.header("host");
-      sources_.loopback_only && host != nullptr && !loopback_host_header(*host)) {
-    return HttpResponse::text(403, "hapticd viewer: Host '" + *host +
-                                       "' is not a loopback name, and this viewer serves loopback "
-                                       "only: open it as http://127.0.0.1:" +
-                                       std::to_string(port()) + "/\n");
+  if (const std::string refusal = host_refusal(request, sources_, port()); !refusal.empty()) {
+    return HttpResponse::text(request.header("host") == nullptr ? 400 : 403,
+                              "hapticd viewer: " + refusal + "\n");
   }
   if (request.path.rfind("/api/", 0) != 0) {
     if (const HttpResponse* file = page_.find(request.path)) return *file;

@@ -37,9 +37,12 @@ struct ViewerSources {
   std::function<v1::Stats()> stats;                 // GetStats' figures
   const runtime::LatenessHistogram* lateness = nullptr;
   AccessControl access;  // no tokens: every request may read
-  /// Bound to loopback only: a request must name a loopback host in its Host header (a page from
-  /// another site whose name was made to resolve to 127.0.0.1 cannot read the API).
+  /// Against DNS rebinding (a page from another site whose name was made to resolve to this
+  /// host): a request must name in its Host header a loopback name, or, when the viewer is bound
+  /// to another address, an IP address or this name (the host of viewer_address). An HTTP/1.1
+  /// request without Host is refused too.
   bool loopback_only = true;
+  std::string host_name;  ///< the host of viewer_address, as configured
 };
 
 /// The page: every regular file under a folder, read once, by its path from the folder ("/" is

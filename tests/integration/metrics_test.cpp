@@ -51,7 +51,7 @@ TEST(MetricsEndpoint, ServesEveryFigureAndEverySessionInPrometheusText) {
   {
     test::HttpConnection stalled(server.metrics_port());
     stalled.send("GET /metrics HTTP/1.1\r\n");
-    EXPECT_EQ(stalled.read_reply().status, 0);
+    EXPECT_TRUE(stalled.closed_by_server());  // a reply would leave bytes; 5 s would be a timeout
   }
   EXPECT_EQ(test::http_get(server.metrics_port(), "/metrics").status, 200);
 }

@@ -169,6 +169,7 @@ class Viewer {
     }
     const contents = scene.contents ?? {};
     this.view?.setScene(contents);
+    this.drawnKey = null;  // the rebuilt scene takes the next state, whatever its tick
     const objects = contents.scene?.objects ?? [];
     const fields = contents.scene?.fields ?? [];
     shown.objects = objects.map((o, i) => ({ id: contents.object_ids[i], session: contents.object_sessions[i], kind: caseOf(o, OBJECT_KINDS) }));
@@ -211,7 +212,13 @@ class Viewer {
       contacts: tool.contact_count ?? 0,
     }));
     shown.toolPosition = shown.tools[0]?.position ?? null;
-    this.view?.setState(state);
+    // The view redraws only when it has something new to show: another tick, or a scene just
+    // rebuilt (polling an idle lockstep server draws nothing).
+    const drawnKey = `${state.tick}/${this.generation}`;
+    if (drawnKey !== this.drawnKey) {
+      this.drawnKey = drawnKey;
+      this.view?.setState(state);
+    }
     $('clock').textContent = `tick ${state.tick} · t = ${(state.server_time_s ?? 0).toFixed(3)} s · ${shown.fps} fps`;
     fillTable($('tools').tBodies[0], (state.tools ?? []).map((tool, port) => [
       swatch(TOOL_COLORS[port % TOOL_COLORS.length]), this.devices[port]?.model ?? '', mm(vec(tool.position)),

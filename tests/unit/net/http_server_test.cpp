@@ -58,11 +58,12 @@ TEST(HttpResponse, IsFramedByItsContentLength) {
   response.headers.emplace_back("Cache-Control", "no-store");
   EXPECT_EQ(format_response(response, false, true),
             "HTTP/1.1 404 Not Found\r\nContent-Type: text/plain; charset=utf-8\r\nContent-Length: 13\r\n"
-            "Connection: keep-alive\r\nCache-Control: no-store\r\n\r\nno such page\n");
+            "Connection: keep-alive\r\nX-Content-Type-Options: nosniff\r\nCache-Control: no-store\r\n\r\n"
+            "no such page\n");
   // HEAD: the same head (the length of the body a GET would get), no body.
   EXPECT_EQ(format_response(response, true, false),
             "HTTP/1.1 404 Not Found\r\nContent-Type: text/plain; charset=utf-8\r\nContent-Length: 13\r\n"
-            "Connection: close\r\nCache-Control: no-store\r\n\r\n");
+            "Connection: close\r\nX-Content-Type-Options: nosniff\r\nCache-Control: no-store\r\n\r\n");
 }
 
 /// A server on an ephemeral loopback port that answers with the request's path.

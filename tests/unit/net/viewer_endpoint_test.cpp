@@ -155,9 +155,31 @@ TEST_F(ViewerEndpointTest, ALoopbackViewerAnswersOnlyToLoopbackNames) {
        {"attacker.example", "attacker.example:8080", "127.0.0.1.attacker.example", "10.0.0.2:8080"}) {
     EXPECT_EQ(endpoint.handle(get("/api/state", {}, host)).status, 403) << host;
   }
+  // Bound elsewhere: an address, or the name it was configured with; no other name.
   ViewerSources remote = sources();
   remote.loopback_only = false;
-  EXPECT_EQ(ViewerEndpoint(std::move(remote)).handle(get("/api/state", {}, "viewer.lab:8080")).status, 200);
+  remote.host_name = "viewer.lab";
+  const ViewerEndpoint remote_endpoint(std::move(remote));
+  for (const char* host : {"viewer.lab:8080", "192.168.10.20:8080", "[fe80::1]:8080", "localhost:8080"}) {
+    EXPECT_EQ(remote_endpoint.handle(get("/api/state", {}, host)).status, 200) << host;
+  }
+  for (const char* host : {"attacker.example:8080", "dead.beef:8080", "cafe"}) {
+    const HttpResponse rebound = remote_endpoint.handle(get("/api/state", {}, host));
+    EXPECT_EQ(rebound.status, 403) << host;
+    EXPECT_NE(rebound.body.find("neither an address nor 'viewer.lab'"), std::string::npos) << rebound.body;
+  }
+}
+
+TEST_F(ViewerEndpointTest, AnHttp11RequestWithoutAHostIsRefused) {
+  ViewerEndpoint endpoint(sources());
+  HttpRequest request = get("/api/state");
+  request.headers.erase("host");
+  request.version = "HTTP/1.1";
+  const HttpResponse refused = endpoint.handle(request);
+  EXPECT_EQ(refused.status, 400);
+  EXPECT_NE(refused.body.find("must name its Host"), std::string::npos) << refused.body;
+  request.version = "HTTP/1.0";  // which has no Host to send
+  EXPECT_EQ(endpoint.handle(request).status, 200);
 }
 
 }  // namespace
