@@ -2,8 +2,6 @@
 
 #include <google/protobuf/util/json_util.h>
 
-#include <fstream>
-#include <sstream>
 #include <stdexcept>
 
 #include "net/read_back.hpp"
@@ -11,20 +9,6 @@
 
 namespace haptic::net {
 namespace {
-
-constexpr std::uintmax_t kMaxPageFileBytes = 16u << 20;  // a page file larger than this is not served
-
-const char* content_type_of(const std::filesystem::path& file) {
-  const std::string extension = file.extension().string();
-  if (extension == ".html") return "text/html; charset=utf-8";
-  if (extension == ".js" || extension == ".mjs") return "text/javascript; charset=utf-8";
-  if (extension == ".css") return "text/css; charset=utf-8";
-  if (extension == ".json" || extension == ".map") return "application/json";
-  if (extension == ".png") return "image/png";
-  if (extension == ".svg") return "image/svg+xml";
-  if (extension == ".ico") return "image/x-icon";
-  return "application/octet-stream";
-}
 
 std::string to_json(const google::protobuf::Message& message) {
   google::protobuf::util::JsonPrintOptions options;
@@ -86,31 +70,6 @@ HttpResponse json_response(const google::protobuf::Message& message) {
 
 }  // namespace
 
-void StaticFiles::load(const std::filesystem::path& root, const std::string& field) {
-  files_.clear();
-  if (!std::filesystem::is_regular_file(root / "index.html")) {
-    throw std::runtime_error(field + ": no index.html in '" + root.string() +
-                             "' (a build puts the page into its share/hapticd/web once scripts/setup "
-                             "has run npm ci in web/)");
-  }
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
-    if (!entry.is_regular_file() || entry.file_size() > kMaxPageFileBytes) continue;
-    std::ifstream in(entry.path(), std::ios::binary);
-    std::ostringstream bytes;
-    bytes << in.rdbuf();
-    HttpResponse file;
-    file.content_type = content_type_of(entry.path());
-    file.body = bytes.str();
-    file.headers.emplace_back("Cache-Control", "no-cache");
-    files_["/" + entry.path().lexically_relative(root).generic_string()] = std::move(file);
-  }
-}
-
-const HttpResponse* StaticFiles::find(const std::string& path) const {
-  const auto found = files_.find(path == "/" ? "/index.html" : path);
-  return found == files_.end() ? nullptr : &found->second;
-}
-
 v1::ViewerScene viewer_scene(const ViewerSources& sources) {
   v1::ViewerScene scene;
   // The generation first: a change after it shows as a newer one in the next /api/state.
@@ -125,9 +84,16 @@ v1::ViewerState viewer_state(const ViewerSources& sources) {
   state.set_scene_generation(sources.scene->generation());
   for (std::size_t port = 0; port < sources.samples.size(); ++port) {
     v1::ToolState& tool = *state.add_tools();
+    // The newest slot can be overwritten between newest() and read() when this thread is held off
+    // for a whole ring's length: then the newer newest is read, a few times at most.
     runtime::TickSample sample;
-    const std::uint64_t newest = sources.samples[port]->newest();
-    if (newest == 0 || !sources.samples[port]->read(newest, sample)) continue;
+    bool read = false;
+    for (int attempt = 0; attempt < 4 && !read; ++attempt) {
+      const std::uint64_t newest = sources.samples[port]->newest();
+      if (newest == 0) break;
+      read = sources.samples[port]->read(newest, sample);
+    }
+    if (!read) continue;  // no sample yet: an empty ToolState holds the port's place
     tool = to_tool_state(sample);
     if (port == 0) {
       state.set_tick(sample.tick);

@@ -16,7 +16,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
-#include <map>
 #include <string>
 #include <vector>
 
@@ -24,6 +23,7 @@
 #include "net/access_control.hpp"
 #include "net/http_server.hpp"
 #include "net/scene_store.hpp"
+#include "net/static_files.hpp"
 #include "runtime/loop_stats.hpp"
 #include "runtime/sample_ring.hpp"
 
@@ -43,20 +43,6 @@ struct ViewerSources {
   /// request without Host is refused too.
   bool loopback_only = true;
   std::string host_name;  ///< the host of viewer_address, as configured
-};
-
-/// The page: every regular file under a folder, read once, by its path from the folder ("/" is
-/// "/index.html").
-class StaticFiles {
- public:
-  /// Throws std::runtime_error naming `field` when `root` holds no index.html.
-  void load(const std::filesystem::path& root, const std::string& field);
-  /// The file at `path`, or nullptr.
-  const HttpResponse* find(const std::string& path) const;
-  std::size_t size() const { return files_.size(); }
-
- private:
-  std::map<std::string, HttpResponse> files_;
 };
 
 /// The bodies of the JSON resources, built off the loop from `sources` (for the endpoint and tests).
