@@ -191,7 +191,10 @@ void HttpServer::serve_loop() {
         alive = false;
       }
       // A reply queued or sent moved the deadline on; bytes that make no whole request do not.
-      if (alive && now >= c.deadline) alive = false;
+      if (alive && now >= c.deadline) {
+        timeouts_.fetch_add(1, std::memory_order_relaxed);
+        alive = false;
+      }
       if (alive) {
         kept.push_back(std::move(c));
       } else {

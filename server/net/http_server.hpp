@@ -89,6 +89,8 @@ class HttpServer {
   /// Replies sent, and connections closed at once because max_connections were open.
   std::uint64_t replies() const { return replies_.load(std::memory_order_relaxed); }
   std::uint64_t refused() const { return refused_.load(std::memory_order_relaxed); }
+  /// Connections closed because a request head or a reply made no progress within the timeout.
+  std::uint64_t timeouts() const { return timeouts_.load(std::memory_order_relaxed); }
 
  private:
   struct Connection;
@@ -112,6 +114,7 @@ class HttpServer {
   std::chrono::steady_clock::time_point accept_paused_until_{};
   std::atomic<std::uint64_t> replies_{0};
   std::atomic<std::uint64_t> refused_{0};
+  std::atomic<std::uint64_t> timeouts_{0};
   std::thread thread_;
 };
 

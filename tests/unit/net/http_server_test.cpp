@@ -1,10 +1,18 @@
 // The HTTP/1.1 server under the metrics endpoint and the viewer: request heads parsed or refused
 // naming why, replies framed by Content-Length, and on loopback pipelined requests, the connection
-// cap, over-long heads and a failing handler.
+// cap, over-long heads, a failing handler, and the timeout: on a reader that stops, not on a big
+// reply read slowly.
 #include <gtest/gtest.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <memory>
 #include <stdexcept>
+#include <string>
+#include <thread>
 #include <vector>
 
 #include "net/http_server.hpp"
@@ -67,11 +75,14 @@ TEST(HttpResponse, IsFramedByItsContentLength) {
 }
 
 /// A server on an ephemeral loopback port that answers with the request's path.
+constexpr std::size_t kBigReplyBytes = 64u << 20;  // more than the sockets' buffers hold
+
 struct EchoServer {
   explicit EchoServer(HttpLimits limits = {}) : http("test", limits) {
     http.bind("127.0.0.1:0", "test_address");
     http.start([](const HttpRequest& request) {
       if (request.path == "/fail") throw std::runtime_error("the handler failed");
+      if (request.path == "/big") return HttpResponse::text(200, std::string(kBigReplyBytes, 'x'));
       return HttpResponse::text(200, request.path);
     });
   }
@@ -129,6 +140,47 @@ TEST(HttpServer, ClosesAConnectionPastTheCapAndServesAgainOnceOneGoes) {
     fourth = test::http_get(server.http.port(), "/4");  // once the server has seen the close
   }
   EXPECT_EQ(fourth.body, "/4");
+}
+
+TEST(HttpServer, DropsAReaderThatStopsAndServesTheOthersMeanwhile) {
+  EchoServer server(HttpLimits{.timeout = std::chrono::milliseconds(300)});
+  test::HttpConnection stopped(server.http.port());
+  stopped.send("GET /big HTTP/1.1\r\n\r\n");  // and never read
+  // The big reply waits on its reader; the others do not wait on it.
+  EXPECT_EQ(test::http_get(server.http.port(), "/other").body, "/other");
+  for (int poll = 0; poll < 1000 && server.http.timeouts() == 0; ++poll) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));  // bounded: 10 s at most
+  }
+  ASSERT_EQ(server.http.timeouts(), 1u);
+  // What was already on its way still arrives; then the connection ends, short of the reply.
+  const test::HttpReply cut = stopped.read_reply();
+  EXPECT_EQ(cut.status, 200);
+  EXPECT_LT(cut.body.size(), kBigReplyBytes);
+}
+
+TEST(HttpServer, KeepsSendingABigReplyToAReaderThatReadsSlowlyButKeepsReading) {
+  // The limit is on progress, not on the whole reply: read at about 40 MB/s, the 64 MB take well
+  // over the 300 ms the server allows without progress, and arrive whole.
+  EchoServer server(HttpLimits{.timeout = std::chrono::milliseconds(300)});
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(server.http.port());
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+  const std::string request = "GET /big HTTP/1.1\r\nConnection: close\r\n\r\n";
+  ASSERT_EQ(::send(fd, request.data(), request.size(), MSG_NOSIGNAL), static_cast<ssize_t>(request.size()));
+  std::size_t received = 0;
+  std::vector<char> chunk(1 << 20);
+  for (;;) {
+    const ssize_t got = ::recv(fd, chunk.data(), chunk.size(), MSG_WAITALL);
+    if (got <= 0) break;
+    received += static_cast<std::size_t>(got);
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  }
+  ::close(fd);
+  EXPECT_GT(received, kBigReplyBytes);  // the head and the whole body
+  EXPECT_EQ(server.http.timeouts(), 0u);
 }
 
 }  // namespace
