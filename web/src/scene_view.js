@@ -138,7 +138,11 @@ export class SceneView {
   /// Replaces the drawn items with `contents` (a haptic.v1.SceneContents).
   setScene(contents) {
     this.dirty = true;
-    this.items.traverse((node) => node.geometry?.dispose());
+    // The GPU's copies go with the items: geometries, and materials (one or several per mesh).
+    this.items.traverse((node) => {
+      node.geometry?.dispose();
+      for (const material of [node.material ?? []].flat()) material.dispose();
+    });
     this.items.clear();
     this.movable.clear();
     this.springs = [];

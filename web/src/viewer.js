@@ -5,6 +5,7 @@ import { drawHistogram, drawSeries } from './plots.js';
 
 const TOKEN_KEY = 'hapticd-viewer-token';
 const STATE_PERIOD_MS = 16;   // at most ~60 requests a second, one at a time
+const SCENE_MIN_PERIOD_MS = 500;  // the scene is fetched again at most this often
 const STATS_PERIOD_MS = 500;
 const HISTORY_S = 60;
 
@@ -186,7 +187,13 @@ class Viewer {
     this.statePolling = true;
     try {
       const state = await getJson('/api/state');
-      if (state.scene_generation !== this.generation) await this.loadScene();
+      // A changed scene is fetched again, at most twice a second: a client updating an object at
+      // its own rate must not make the page rebuild the scene at every poll.
+      const sinceLoad = performance.now() - (this.sceneLoadedAt ?? -Infinity);
+      if (state.scene_generation !== this.generation && sinceLoad >= SCENE_MIN_PERIOD_MS) {
+        this.sceneLoadedAt = performance.now();
+        await this.loadScene();
+      }
       this.showState(state);
       setStatus('live', 'ok');
       shown.error = null;
