@@ -285,8 +285,7 @@ void Server::bind_http_endpoints(const net::AccessControl& access) {
     sources.samples.push_back(samples_[port].get());
     sources.devices.push_back(service_->device_info(static_cast<std::uint32_t>(port)));
   }
-  sources.stats = [this] { return stats(); };
-  sources.lateness = &lateness_;
+  sources.stats = [this](runtime::LatenessHistogram::Counts& lateness_bins) { return stats(&lateness_bins); };
   sources.access = access;
   sources.host_name = config::host_of_address(config_.viewer_address());
   sources.loopback_only = config::is_loopback_host(sources.host_name);
@@ -556,12 +555,14 @@ v1::ClientStats to_proto(const net::ClientStatistics& client) {
 
 }  // namespace
 
-v1::Stats Server::stats() const {
+v1::Stats Server::stats(runtime::LatenessHistogram::Counts* lateness_bins) const {
   v1::Stats stats;
   // The lateness first, the tick count after: each sample belongs to a tick already counted (the
   // loop records it after the tick), so the count read later is never below the samples.
   const std::int64_t now_ns = runtime::monotonic_now_ns();
-  const runtime::LatenessSummary lateness = lateness_.summarize(now_ns);
+  const runtime::LatenessSummary lateness = lateness_bins != nullptr
+                                                ? lateness_.summarize(now_ns, *lateness_bins)
+                                                : lateness_.summarize(now_ns);
   stats.set_ticks(counters_.ticks.load(std::memory_order_acquire));
   const std::int64_t elapsed_ns = loop_->server_time_ns();
   if (elapsed_ns > 0) {

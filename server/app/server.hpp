@@ -53,7 +53,9 @@ class Server {
   /// Device port `port`'s tick samples (the replay compares them with a recording's).
   const runtime::SampleRing& samples(std::size_t port) const { return *samples_.at(port); }
   std::size_t device_ports() const { return samples_.size(); }
-  v1::Stats stats() const;
+  /// GetStats' figures; with `lateness_bins`, also the lateness histogram they summarize, bin by
+  /// bin, from the same reading (the web viewer's plot).
+  v1::Stats stats(runtime::LatenessHistogram::Counts* lateness_bins = nullptr) const;
   /// Starts recording the run into `path` (net::Recorder): before start(), from the first tick.
   /// Returns "" or why not.
   std::string start_recording(const std::string& path);

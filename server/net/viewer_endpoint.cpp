@@ -5,7 +5,6 @@
 #include <stdexcept>
 
 #include "net/read_back.hpp"
-#include "runtime/realtime.hpp"
 
 namespace haptic::net {
 namespace {
@@ -104,14 +103,13 @@ v1::ViewerState viewer_state(const ViewerSources& sources) {
   return state;
 }
 
-v1::ViewerStats viewer_stats(const ViewerSources& sources, std::int64_t now_ns) {
+v1::ViewerStats viewer_stats(const ViewerSources& sources) {
   v1::ViewerStats out;
-  *out.mutable_stats() = sources.stats();
   runtime::LatenessHistogram::Counts counts;
-  const runtime::LatenessSummary summary = sources.lateness->summarize(now_ns, counts);
+  *out.mutable_stats() = sources.stats(counts);
   v1::LatenessHistogram& histogram = *out.mutable_lateness();
-  histogram.set_window_s(summary.window_s);
-  histogram.set_samples(summary.samples);
+  histogram.set_window_s(out.stats().window_s());
+  histogram.set_samples(out.stats().lateness_samples());
   for (std::size_t bin = 0; bin < counts.size(); ++bin) {
     if (counts[bin] == 0) continue;
     histogram.add_bin_lower_us(runtime::LatenessHistogram::bin_lower_edge_us(bin));
@@ -155,7 +153,7 @@ HttpResponse ViewerEndpoint::handle(const HttpRequest& request) const {
   }
   if (scene) return json_response(viewer_scene(sources_));
   if (state) return json_response(viewer_state(sources_));
-  return json_response(viewer_stats(sources_, runtime::monotonic_now_ns()));
+  return json_response(viewer_stats(sources_));
 }
 
 }  // namespace haptic::net

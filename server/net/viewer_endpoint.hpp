@@ -34,8 +34,9 @@ struct ViewerSources {
   const SceneStore* scene = nullptr;
   std::vector<const runtime::SampleRing*> samples;  // per device port, port 0 first; not empty
   std::vector<v1::DeviceInfo> devices;              // per device port, as GetDeviceInfo tells them
-  std::function<v1::Stats()> stats;                 // GetStats' figures
-  const runtime::LatenessHistogram* lateness = nullptr;
+  /// GetStats' figures, and the loop's lateness histogram bin by bin from the same reading
+  /// (the window its lateness percentiles summarize).
+  std::function<v1::Stats(runtime::LatenessHistogram::Counts& lateness_bins)> stats;
   AccessControl access;  // no tokens: every request may read
   /// Against DNS rebinding (a page from another site whose name was made to resolve to this
   /// host): a request must name in its Host header a loopback name, or, when the viewer is bound
@@ -48,7 +49,7 @@ struct ViewerSources {
 /// The bodies of the JSON resources, built off the loop from `sources` (for the endpoint and tests).
 v1::ViewerScene viewer_scene(const ViewerSources& sources);
 v1::ViewerState viewer_state(const ViewerSources& sources);
-v1::ViewerStats viewer_stats(const ViewerSources& sources, std::int64_t now_ns);
+v1::ViewerStats viewer_stats(const ViewerSources& sources);
 
 class ViewerEndpoint {
  public:

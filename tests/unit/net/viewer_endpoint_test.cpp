@@ -14,6 +14,8 @@ namespace {
 
 class ViewerEndpointTest : public ::testing::Test {
  protected:
+  static constexpr std::int64_t kNow = 5'000'000'000;  // the statistics' clock, ns
+
   void SetUp() override {
     root_ = std::filesystem::temp_directory_path() / ("viewer-endpoint-test-" + std::to_string(::getpid()));
     std::filesystem::create_directories(root_ / "vendor");
@@ -28,13 +30,15 @@ class ViewerEndpointTest : public ::testing::Test {
     out.scene = &store_;
     out.samples = {&ring_};
     out.devices.emplace_back().set_model("point_mass");
-    out.stats = [] {
+    // As Server::stats: the lateness figures and bins from one reading of the histogram.
+    out.stats = [this](runtime::LatenessHistogram::Counts& lateness_bins) {
+      const runtime::LatenessSummary lateness = lateness_.summarize(kNow, lateness_bins);
       v1::Stats stats;
       stats.set_ticks(42);
-      stats.set_window_s(10);
+      stats.set_window_s(lateness.window_s);
+      stats.set_lateness_samples(lateness.samples);
       return stats;
     };
-    out.lateness = &lateness_;
     out.access = AccessControl(std::move(credentials));
     return out;
   }
@@ -104,13 +108,13 @@ TEST_F(ViewerEndpointTest, TheStateIsEachPortsNewestSample) {
 }
 
 TEST_F(ViewerEndpointTest, TheHistogramHoldsTheWindowsNonEmptyBinsInOrder) {
-  const std::int64_t now = 5'000'000'000;
-  for (int i = 0; i < 980; ++i) lateness_.record(10'000, now);    // 10 µs: a fine bin
-  for (int i = 0; i < 20; ++i) lateness_.record(2'550'000, now);  // 2.55 ms: the coarse bin at 2.5 ms
-  const v1::ViewerStats stats = viewer_stats(sources(), now);
+  for (int i = 0; i < 980; ++i) lateness_.record(10'000, kNow);    // 10 µs: a fine bin
+  for (int i = 0; i < 20; ++i) lateness_.record(2'550'000, kNow);  // 2.55 ms: the coarse bin at 2.5 ms
+  const v1::ViewerStats stats = viewer_stats(sources());
   EXPECT_EQ(stats.stats().ticks(), 42u);
   const v1::LatenessHistogram& histogram = stats.lateness();
   EXPECT_EQ(histogram.samples(), 1000u);
+  EXPECT_EQ(stats.stats().lateness_samples(), 1000u);  // the figures and the bins: one reading
   EXPECT_DOUBLE_EQ(histogram.window_s(), 10.0);
   ASSERT_EQ(histogram.counts_size(), 2);
   EXPECT_DOUBLE_EQ(histogram.bin_lower_us(0), 10.0);
