@@ -27,7 +27,11 @@ python_package=$(find "$work/prefix" -type d -path '*/dist-packages/hapticd' | h
 if [ -n "$python_package" ]; then
   python=/usr/bin/python3
   [ -x "$python" ] || python=python3
-  (cd "$work" && PYTHONPATH="$(dirname "$python_package")" "$python" -c \
+  preload=""  # a sanitized module needs the sanitizers' runtime loaded first
+  case "$flags" in *-fsanitize=address*)
+    preload="$(g++ -print-file-name=libasan.so):$(g++ -print-file-name=libubsan.so)";;
+  esac
+  (cd "$work" && LD_PRELOAD="$preload" ASAN_OPTIONS=detect_leaks=0 PYTHONPATH="$(dirname "$python_package")" "$python" -c \
     "import hapticd; assert hapticd.SphereSpec(radius=0.5).radius == 0.5; print('python: hapticd', hapticd.API_VERSION)") \
     || { echo "FAIL: the installed Python package does not import"; exit 1; }
 fi
