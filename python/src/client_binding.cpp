@@ -79,15 +79,10 @@ struct AppliedSceneHandles {
   py::list fields;
 };
 
-template <class Handle>
-py::object to_python(Handle&& handle) {
-  return py::cast(std::forward<Handle>(handle));
-}
-
 AppliedSceneHandles to_python(AppliedScene&& applied) {
   AppliedSceneHandles handles;
-  for (ObjectHandle& object : applied.objects) handles.objects.append(to_python(std::move(object)));
-  for (FieldHandle& field : applied.fields) handles.fields.append(to_python(std::move(field)));
+  for (ObjectHandle& object : applied.objects) handles.objects.append(py::cast(std::move(object)));
+  for (FieldHandle& field : applied.fields) handles.fields.append(py::cast(std::move(field)));
   return handles;
 }
 
