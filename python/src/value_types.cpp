@@ -412,6 +412,11 @@ void bind_reports(py::module_& m) {
       .readonly("samples_skipped", &Stats::samples_skipped, "")
       .readonly("connections_open", &Stats::connections_open, "")
       .readonly("connections_refused", &Stats::connections_refused, "")
+      .readonly("connections_timed_out", &Stats::connections_timed_out,
+                "no TLS handshake or HTTP/2 preface within handshake_timeout_ms")
+      .readonly("connections_evicted", &Stats::connections_evicted,
+                "closed at max_connections for a host holding fewer")
+      .readonly("tls_handshakes_failed", &Stats::tls_handshakes_failed, "")
       .readonly("clients", &Stats::clients, "list of ClientStats, in session id order")
       .finish();
   StructBinder<SessionSummary>(m, "SessionSummary", "One open session, as an admin sees it.")

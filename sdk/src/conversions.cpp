@@ -453,6 +453,9 @@ Stats from_proto(const v1::Stats& s) {
   out.samples_skipped = s.samples_skipped();
   out.connections_open = s.connections_open();
   out.connections_refused = s.connections_refused();
+  out.connections_timed_out = s.connections_timed_out();
+  out.connections_evicted = s.connections_evicted();
+  out.tls_handshakes_failed = s.tls_handshakes_failed();
   out.lateness_p999_us = s.lateness_p999_us();
   out.lateness_samples = s.lateness_samples();
   out.window_s = s.window_s();

@@ -11,18 +11,30 @@
 
 namespace haptic::app {
 
+namespace {
+
+std::string read_pem(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::stringstream pem;
+  pem << file.rdbuf();
+  return pem.str();
+}
+
+}  // namespace
+
 bool check_health(const std::string& address, std::chrono::milliseconds timeout, std::string& why,
-                  const std::string& ca_file) {
+                  const HealthTls& tls) {
   grpc::ChannelArguments arguments;
   // A channel of its own: never a connection shared with (and kept alive by) anyone else.
   arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
   std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
-  if (!ca_file.empty()) {
-    std::ifstream file(ca_file, std::ios::binary);
-    std::stringstream pem;
-    pem << file.rdbuf();
+  if (!tls.ca_file.empty()) {
     grpc::SslCredentialsOptions options;
-    options.pem_root_certs = pem.str();
+    options.pem_root_certs = read_pem(tls.ca_file);
+    if (!tls.cert_file.empty()) {
+      options.pem_cert_chain = read_pem(tls.cert_file);
+      options.pem_private_key = read_pem(tls.key_file);
+    }
     credentials = grpc::SslCredentials(options);
   }
   const auto channel = grpc::CreateCustomChannel(address, credentials, arguments);

@@ -10,10 +10,18 @@
 
 namespace haptic::app {
 
+/// How --health-check speaks to a server with TLS: the CA its certificate comes from, and for
+/// mutual TLS a client certificate and key (PEM files). Empty ca_file: plaintext.
+struct HealthTls {
+  std::string ca_file;
+  std::string cert_file;
+  std::string key_file;
+};
+
 /// True when the server at `address` ("host:port") answers SERVING within `timeout`; otherwise
-/// false with `why` saying what happened. With `ca_file` (PEM), over TLS trusting that CA.
+/// false with `why` saying what happened.
 bool check_health(const std::string& address, std::chrono::milliseconds timeout, std::string& why,
-                  const std::string& ca_file = {});
+                  const HealthTls& tls = {});
 
 /// Where a process on the same host dials a control plane bound to `bound_address` ("host:port",
 /// the port ignored) now listening on `port`: a wildcard host (0.0.0.0, [::], none) is reached on

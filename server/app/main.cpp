@@ -84,11 +84,21 @@ int main(int argc, char** argv) {
                  "it answers SERVING within 2 s, else 1 (for container and systemd checks). Without "
                  "HOST:PORT, the server that wrote --ready-file")
       ->expected(0, 1);
-  std::string health_ca;
-  cli.add_option("--health-ca", health_ca,
-                 "with --health-check: speak TLS, trusting this PEM CA (a server with security.tls "
-                 "that asks for no client certificate)")
+  haptic::app::HealthTls health_tls;
+  CLI::Option* health_ca = cli.add_option("--health-ca", health_tls.ca_file,
+                 "with --health-check: speak TLS, trusting this PEM CA (a server with security.tls)")
       ->check(CLI::ExistingFile);
+  CLI::Option* health_cert =
+      cli.add_option("--health-cert", health_tls.cert_file,
+                     "with --health-ca: present this PEM client certificate (a server with mutual "
+                     "TLS, security.tls.client_ca_file)")
+          ->check(CLI::ExistingFile)
+          ->needs(health_ca);
+  CLI::Option* health_key = cli.add_option("--health-key", health_tls.key_file,
+                                           "with --health-cert: its PEM private key")
+                                ->check(CLI::ExistingFile)
+                                ->needs(health_cert);
+  health_cert->needs(health_key);
   std::string record_path;
   cli.add_option("--record", record_path,
                  "record the run into FILE from its first tick: every change and every tick's "
@@ -153,7 +163,7 @@ int main(int argc, char** argv) {
         return 1;
       }
     }
-    if (!haptic::app::check_health(health_address, std::chrono::seconds(2), why, health_ca)) {
+    if (!haptic::app::check_health(health_address, std::chrono::seconds(2), why, health_tls)) {
       std::cerr << "hapticd: " << why << "\n";
       return 1;
     }

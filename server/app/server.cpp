@@ -2,7 +2,6 @@
 
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/resource_quota.h>
-#include <grpcpp/security/server_credentials.h>
 #include <grpcpp/server_builder.h>
 #include <grpcpp/server_posix.h>
 #include <sys/resource.h>
@@ -19,6 +18,7 @@
 #include "config/server_config.hpp"
 #include "schema/scene_specs.hpp"
 #include "net/prometheus_text.hpp"
+#include "net/tls_server_context.hpp"
 #include "runtime/realtime.hpp"
 
 namespace haptic::app {
@@ -53,14 +53,12 @@ std::vector<net::Credential> credentials(const v1::AccessTokens& tokens) {
   return out;
 }
 
-/// TLS for the control plane; with a client CA, clients must present a certificate it signed.
-std::shared_ptr<grpc::ServerCredentials> tls_credentials(const config::SecurityMaterial& security) {
-  grpc::SslServerCredentialsOptions options(
-      security.client_ca_pem.empty() ? GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE
-                                     : GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY);
-  options.pem_root_certs = security.client_ca_pem;
-  options.pem_key_cert_pairs.push_back({security.key_pem, security.cert_pem});
-  return grpc::SslServerCredentials(options);
+/// TLS for the control plane, terminated by the control listener; with a client CA, clients must
+/// present a certificate it signed.
+std::shared_ptr<const net::TlsServerContext> tls_context(const config::SecurityMaterial& security) {
+  if (!security.tls) return nullptr;
+  return std::make_shared<const net::TlsServerContext>(
+      net::TlsServerMaterial{security.cert_pem, security.key_pem, security.client_ca_pem});
 }
 
 /// The viewer's page: the configured folder; else the installed one (share/hapticd/web beside the
@@ -219,55 +217,39 @@ Server::Server(const v1::ServerConfig& config)
       [this](std::uint64_t session_id) { return reset_lockstep(session_id); }, recorder_.get(),
       config.recording_dir(), [this](const std::string& path) { return start_recording(path); }});
   const std::uint32_t fd_limit = raise_fd_limit();
+  // A TLS connection takes three descriptors once served (the TCP socket and both ends of the
+  // socket pair to gRPC), a plaintext one one.
+  const std::uint32_t fds_per_connection = security.tls ? 3 : 1;
   net::ConnectionLimits connection_limits;
   connection_limits.max_connections =
       config.max_connections() > 0
           ? config.max_connections()
-          : std::clamp<std::uint32_t>(fd_limit > 256 ? fd_limit - 128 : fd_limit / 2, 16, 1024);
+          : std::clamp<std::uint32_t>((fd_limit > 256 ? fd_limit - 128 : fd_limit / 2) / fds_per_connection,
+                                      16, 1024);
   connection_limits.max_connections_per_peer =
       config.max_connections_per_peer() > 0 ? config.max_connections_per_peer() : 64;
-  if (connection_limits.max_connections + 64 > fd_limit) {
-    spdlog::warn("hapticd: max_connections {} is close to the fd limit {}: expect connections "
-                 "refused for want of descriptors", connection_limits.max_connections, fd_limit);
+  connection_limits.handshake_timeout = std::chrono::milliseconds(config.handshake_timeout_ms());
+  if (connection_limits.max_connections * fds_per_connection + 64 > fd_limit) {
+    spdlog::warn("hapticd: max_connections {} ({} descriptors each) is close to the fd limit {}: "
+                 "expect connections refused for want of descriptors",
+                 connection_limits.max_connections, fds_per_connection, fd_limit);
   }
+  // hapticd accepts every control-plane connection itself, and terminates TLS itself, so the caps,
+  // the handshake deadline and the recovery from running out of descriptors hold in both modes
+  // (net::ControlListener); gRPC has no listening port of its own.
+  listener_ = std::make_unique<net::ControlListener>(connection_limits, tls_context(security));
+  listener_->bind(config.grpc_address());
   grpc::ServerBuilder builder;
-  int tls_port = 0;  // the port gRPC bound, with TLS
-  if (security.tls) {
-    // gRPC 1.51 takes only plaintext connections from a descriptor (grpc_server_add_channel_from_fd),
-    // so with TLS gRPC listens itself: the connection caps and the recovery from running out of
-    // descriptors (ControlListener) do not apply; the port is still bound exclusively.
-    builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
-    // A trial bind first, for the one clear line a busy port deserves (gRPC logs only its own).
-    if (config::host_of_address(config.grpc_address()) != config.grpc_address() &&
-        !config.grpc_address().ends_with(":0")) {
-      net::ControlListener(connection_limits).bind(config.grpc_address());
-    }
-    builder.AddListeningPort(config.grpc_address(), tls_credentials(security), &tls_port);
-  } else {
-    listener_ = std::make_unique<net::ControlListener>(connection_limits);
-    listener_->bind(config.grpc_address());
-  }
   // Every call in progress holds a thread of gRPC's sync pool, an event stream for its whole life:
   // cap the pool, so that a flood of calls is refused (RESOURCE_EXHAUSTED) instead of growing it
   // without bound. Room for every allowed stream plus the unary calls of a busy server.
   grpc::ResourceQuota quota("hapticd-control-plane");
   quota.SetMaxThreads(static_cast<int>(config.max_event_streams()) + kUnaryCallThreads);
   builder.SetResourceQuota(quota);
-  // Without TLS, no listening port of gRPC's own: the ControlListener accepts and hands over.
   grpc::EnableDefaultHealthCheckService(true);  // grpc.health.v1, for hapticd --health-check
   builder.RegisterService(service_.get());
   grpc_server_ = builder.BuildAndStart();
-  if (security.tls && (!grpc_server_ || tls_port == 0)) {
-    throw std::runtime_error("grpc_address: cannot listen on '" + config.grpc_address() +
-                             "' with TLS: the port is in use, or the address is not this host's "
-                             "(or the certificate and key do not match)");
-  }
   if (!grpc_server_) throw std::runtime_error("cannot start the gRPC server");
-  if (security.tls) {
-    grpc_port_ = static_cast<std::uint16_t>(tls_port);
-    bind_http_endpoints(access);
-    return;
-  }
   grpc_port_ = listener_->port();
   listener_->start([server = grpc_server_.get()](int fd) { grpc::AddInsecureChannelFromFd(server, fd); });
   bind_http_endpoints(access);
@@ -418,7 +400,9 @@ void Server::shutdown() {
   // Step among them) run against a loop whose output is ramping; the ramp is a gain on the
   // output, so nothing they add can push.
   events_.close();
-  if (listener_) listener_->stop();
+  // No new connections; those open go on (with TLS the listener carries them) while gRPC's
+  // shutdown finishes the calls in flight.
+  if (listener_) listener_->stop_accepting();
   if (started_ && recorder_->active()) {
     v1::RecordedChange change;
     change.set_shutdown(true);
@@ -441,6 +425,7 @@ void Server::shutdown() {
   if (metrics_) metrics_->stop();
   if (viewer_) viewer_->stop();
   if (control_plane_closer.joinable()) control_plane_closer.join();
+  if (listener_) listener_->stop();
   // With the loop stopped, leave every device in its safe state (motors off, brakes on).
   {
     std::lock_guard devices_lock(devices_mutex_);
@@ -586,9 +571,13 @@ v1::Stats Server::stats(runtime::LatenessHistogram::Counts* lateness_bins) const
   stats.set_datagrams_foreign_source(udp_.counters().foreign_source.load(std::memory_order_relaxed));
   stats.set_path_challenges_sent(udp_.counters().challenges_sent.load(std::memory_order_relaxed));
   stats.set_samples_skipped(udp_.counters().samples_skipped.load(std::memory_order_relaxed));
-  if (listener_) {  // none with TLS: gRPC accepts those connections itself
-    stats.set_connections_open(listener_->counters().open.load(std::memory_order_relaxed));
-    stats.set_connections_refused(listener_->counters().refused.load(std::memory_order_relaxed));
+  if (listener_) {
+    const net::ConnectionCounters& connections = listener_->counters();
+    stats.set_connections_open(connections.open.load(std::memory_order_relaxed));
+    stats.set_connections_refused(connections.refused.load(std::memory_order_relaxed));
+    stats.set_connections_timed_out(connections.timed_out.load(std::memory_order_relaxed));
+    stats.set_connections_evicted(connections.evicted.load(std::memory_order_relaxed));
+    stats.set_tls_handshakes_failed(connections.tls_failed.load(std::memory_order_relaxed));
   }
   stats.set_force_faults(counters_.force_faults.load(std::memory_order_relaxed));
   stats.set_device_faults(counters_.device_errors.load(std::memory_order_relaxed));

@@ -138,6 +138,7 @@ void fill_defaults(v1::ServerConfig& config) {
   }
   if (config.session_open_rate_per_peer() == 0.0) config.set_session_open_rate_per_peer(10.0);
   if (config.session_open_burst_per_peer() == 0) config.set_session_open_burst_per_peer(32);
+  if (config.handshake_timeout_ms() == 0) config.set_handshake_timeout_ms(5000);
   if (config.max_scene_triangles() == 0) config.set_max_scene_triangles(200'000);
   if (config.max_scene_bytes() == 0) config.set_max_scene_bytes(64ull << 20);
 
@@ -203,6 +204,10 @@ std::string validate(const v1::ServerConfig& config) {
   if (config.session_open_burst_per_peer() > 100'000) {
     return "session_open_burst_per_peer: must be 1 to 100000, got " +
            std::to_string(config.session_open_burst_per_peer());
+  }
+  if (config.handshake_timeout_ms() < 100 || config.handshake_timeout_ms() > 60'000) {
+    return "handshake_timeout_ms: must be 100 to 60000, got " +
+           std::to_string(config.handshake_timeout_ms());
   }
   if (config.max_event_streams() > 1024) {
     return "max_event_streams: must be 1 to 1024 (each holds a thread), got " +

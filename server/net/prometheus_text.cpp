@@ -125,6 +125,15 @@ std::string prometheus_text(const v1::Stats& s) {
   e.single("hapticd_grpc_connections_refused_total", "counter",
            "Control-plane connections refused (over a cap, or no descriptor left).",
            static_cast<double>(s.connections_refused()));
+  e.single("hapticd_grpc_connections_timed_out_total", "counter",
+           "Control-plane connections closed for no TLS handshake or HTTP/2 preface in time.",
+           static_cast<double>(s.connections_timed_out()));
+  e.single("hapticd_grpc_connections_evicted_total", "counter",
+           "Control-plane connections closed at max_connections to make room for another host.",
+           static_cast<double>(s.connections_evicted()));
+  e.single("hapticd_tls_handshakes_failed_total", "counter",
+           "TLS handshakes on the control plane that failed.",
+           static_cast<double>(s.tls_handshakes_failed()));
   e.single("hapticd_force_faults_total", "counter",
            "Non-finite forces stopped before the device.", static_cast<double>(s.force_faults()));
   e.single("hapticd_device_faults_total", "counter",

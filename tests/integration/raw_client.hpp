@@ -7,7 +7,10 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <fstream>
 #include <memory>
+#include <optional>
+#include <sstream>
 #include <string>
 
 #include "haptic/io/session_secret.hpp"
@@ -15,12 +18,40 @@
 
 namespace haptic::test {
 
+/// TLS for a RawClient: PEM files (a client certificate for mutual TLS), and the name the
+/// server's certificate must carry when the address is not it.
+struct RawTls {
+  std::string ca_file;
+  std::string cert_file, key_file;  // empty: no client certificate
+  std::string server_name = "localhost";
+};
+
+inline std::string read_pem(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
 class RawClient {
  public:
-  explicit RawClient(const std::string& address) {
+  explicit RawClient(const std::string& address, const std::optional<RawTls>& tls = std::nullopt,
+                     const std::string& token = {})
+      : token_(token) {
     grpc::ChannelArguments arguments;
     arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);  // never share another's connection
-    channel_ = grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), arguments);
+    std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+    if (tls) {
+      grpc::SslCredentialsOptions options;
+      options.pem_root_certs = read_pem(tls->ca_file);
+      if (!tls->cert_file.empty()) {
+        options.pem_cert_chain = read_pem(tls->cert_file);
+        options.pem_private_key = read_pem(tls->key_file);
+      }
+      credentials = grpc::SslCredentials(options);
+      arguments.SetSslTargetNameOverride(tls->server_name);
+    }
+    channel_ = grpc::CreateCustomChannel(address, credentials, arguments);
     stub_ = v1::Haptic::NewStub(channel_);
   }
 
@@ -32,6 +63,7 @@ class RawClient {
     grpc::ClientContext context;
     context.set_deadline(std::chrono::system_clock::now() + deadline);
     if (!secret.empty()) context.AddMetadata(io::kSessionSecretMetadataKey, secret);
+    if (!token_.empty()) context.AddMetadata("authorization", "Bearer " + token_);
     return ((*stub_).*method)(&context, request, &response);
   }
 
@@ -55,6 +87,7 @@ class RawClient {
   v1::Haptic::Stub& stub() { return *stub_; }
 
  private:
+  std::string token_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::Haptic::Stub> stub_;
 };

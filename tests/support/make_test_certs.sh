@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Makes the certificates the security tests use, in $1: a CA, a server certificate it signed for
-# localhost and 127.0.0.1, a client certificate it signed (mTLS), and an unrelated CA that signed
+# localhost, 127.0.0.1 and 10.79.0.1 (the server's address in the flood test's namespaces), a
+# client certificate it signed (mTLS), and an unrelated CA that signed
 # neither (a client trusting only that one must be refused). Test material only: valid for 30 days
 # from the build, EC P-256 keys, never used outside the build tree.
 set -euo pipefail
@@ -17,7 +18,7 @@ openssl req -x509 -new -key other_ca.key -days "$days" -subj "/CN=another CA" -o
 
 key server.key
 openssl req -new -key server.key -subj "/CN=localhost" -out server.csr
-printf 'subjectAltName=DNS:localhost,IP:127.0.0.1\nextendedKeyUsage=serverAuth\n' > server.ext
+printf 'subjectAltName=DNS:localhost,IP:127.0.0.1,IP:10.79.0.1\nextendedKeyUsage=serverAuth\n' > server.ext
 openssl x509 -req -in server.csr -CA ca.pem -CAkey ca.key -CAcreateserial -days "$days" \
   -extfile server.ext -out server.pem 2>/dev/null
 

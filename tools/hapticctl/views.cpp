@@ -127,7 +127,8 @@ std::string status_view(const haptic::Stats& s) {
       << s.datagrams_dropped << " dropped (" << s.heartbeats_rate_limited << " over budget, "
       << s.datagrams_foreign_source << " foreign), " << s.samples_skipped << " samples skipped\n"
       << "grpc      " << s.connections_open << " connections, " << s.connections_refused
-      << " refused\n"
+      << " refused, " << s.connections_timed_out << " timed out, " << s.connections_evicted
+      << " evicted, " << s.tls_handshakes_failed << " TLS handshakes failed\n"
       << "faults    " << s.force_faults << " force, " << s.device_faults << " device, "
       << s.force_saturations << " saturated ticks, " << s.passivity_active_ticks
       << " passivity ticks\n";

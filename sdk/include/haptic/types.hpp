@@ -422,6 +422,11 @@ struct Stats {
   std::uint64_t samples_skipped = 0;  ///< not sent: a newer one was ready (the sender fell behind)
   std::uint32_t connections_open = 0;     ///< control-plane connections held now
   std::uint64_t connections_refused = 0;  ///< over a connection cap, or no descriptor left
+  /// Accepted, then closed: no TLS handshake or HTTP/2 preface within handshake_timeout_ms.
+  std::uint64_t connections_timed_out = 0;
+  /// Accepted, then closed at max_connections to make room for a host holding fewer.
+  std::uint64_t connections_evicted = 0;
+  std::uint64_t tls_handshakes_failed = 0;  ///< no or a wrong client certificate, not TLS, ...
   std::vector<ClientStats> clients;  ///< every open session, in id order
 };
 

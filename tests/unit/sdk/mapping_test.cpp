@@ -161,6 +161,9 @@ TEST(Conversions, ToolStateAndStatsComeBackWhole) {
       {"lateness_samples", static_cast<double>(out.lateness_samples)},
       {"window_s", out.window_s},
       {"send_delay_p999_us", out.send_delay_p999_us},
+      {"connections_timed_out", static_cast<double>(out.connections_timed_out)},
+      {"connections_evicted", static_cast<double>(out.connections_evicted)},
+      {"tls_handshakes_failed", static_cast<double>(out.tls_handshakes_failed)},
   };
   // Every field but the repeated `clients`, checked below.
   EXPECT_EQ(seen.size() + 1, static_cast<std::size_t>(descriptor.field_count()));
