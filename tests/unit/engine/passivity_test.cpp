@@ -81,6 +81,41 @@ TEST(Passivity, ANonFiniteRequestDoesNotSwitchTheControllerOff) {
   EXPECT_EQ(hit.dissipated(), fresh.dissipated());
 }
 
+TEST(Passivity, ANonFiniteRequestAfterContactForgetsTheStoredEnergy) {
+  // 1.8 mJ absorbed by earlier contact, then one non-finite request: the energy the port held
+  // before the fault must not carry over, or it pays for the active contact that follows and the
+  // controller lets the scene generate energy undamped for tick after tick.
+  PassivityControllerParams params{kT, 100.0, 1e-4, PassivityObserverMode::kHeldForceWork};
+  PassivityController fresh(params), hit(params);
+  // The tool presses into a wall at 0.1 m/s against 2 N: 0.2 mJ absorbed per completed period.
+  Vec3 p{0, 0, 0.01};
+  for (int k = 0; k < 10; ++k) {
+    const PassivityStep step = hit.apply({0, 0, 2.0}, {0, 0, -0.1}, p);
+    ASSERT_EQ(step.alpha, 0.0) << k;  // absorbing: nothing to do
+    p.z -= 1e-4;
+  }
+  ASSERT_NEAR(hit.energy(), 1.8e-3, 1e-12);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const PassivityStep faulted = hit.apply({0, 0, nan}, {0, 0, 0.0}, p);
+  EXPECT_EQ(faulted.alpha, 0.0);
+  EXPECT_EQ(hit.energy(), 0.0);
+  EXPECT_EQ(hit.dissipated(), 0.0);
+  // Then active contact (the wall pushes the tool out, F·v > 0): the controller damps from the
+  // first tick on, exactly as one that never saw the earlier contact.
+  for (int k = 0; k < 30; ++k) {
+    const Vec3 v{0, 0, 0.1}, F{0, 0, 1.0};
+    const PassivityStep a = fresh.apply(F, v, p);
+    const PassivityStep b = hit.apply(F, v, p);
+    EXPECT_GT(b.alpha, 0.0) << k;
+    EXPECT_LT(b.F_T_W.z, F.z) << k;
+    EXPECT_EQ(a.alpha, b.alpha) << k;
+    EXPECT_EQ(a.F_T_W, b.F_T_W) << k;
+    EXPECT_EQ(a.energy, b.energy) << k;
+    p.z += 1e-4;
+  }
+  EXPECT_EQ(hit.dissipated(), fresh.dissipated());
+}
+
 TEST(Passivity, ControllerClampsAlphaAndIgnoresSlowMotion) {
   PassivityController pc({kT, 2.0, 1e-3, PassivityObserverMode::kSampledPower});
   // A deficit of 1e-3 J at |v| = 0.1 would need α = 100: cut at 2, E stays negative.

@@ -93,6 +93,28 @@ TEST(SessionRegistry, StateGoesOnlyToAnAddressThatAnsweredItsChallenge) {
   EXPECT_EQ(registry.on_heartbeat(12345, 9, loopback(4000), t0).verdict, Verdict::kStale);  // unknown
 }
 
+TEST(SessionRegistry, ALatePathResponseDoesNotReopenSpentHeartbeatSequences) {
+  SessionRegistry registry(4, std::chrono::milliseconds(1000));
+  const auto session = registry.open("c", 0, "127.0.0.1");
+  ASSERT_TRUE(session);
+  const auto t0 = SteadyClock::now();
+  // Heartbeat 1 is challenged; the client answers with response 2, which is held up in the
+  // network while heartbeat 3 arrives (within the challenge interval: no new nonce).
+  const HeartbeatOutcome first = registry.on_heartbeat(session->id, 1, loopback(4000), t0);
+  ASSERT_EQ(first.verdict, Verdict::kChallenge);
+  ASSERT_EQ(registry.on_heartbeat(session->id, 3, loopback(4000), t0).verdict, Verdict::kAccepted);
+  // Response 2 arrives late, right nonce, right address: its sequence is spent.
+  EXPECT_FALSE(registry.on_path_response(session->id, 2, first.nonce, loopback(4000)));
+  // Had it moved the counter back to 2, a replay of heartbeat 3 would renew the lease again.
+  EXPECT_EQ(registry.on_heartbeat(session->id, 3, loopback(4000), t0).verdict, Verdict::kStale);
+  EXPECT_EQ(registry.on_heartbeat(session->id, 2, loopback(4000), t0).verdict, Verdict::kStale);
+  EXPECT_EQ(registry.client_statistics(t0)[0].heartbeats, 2u);  // 1 and 3, once each
+  // The same answer with a fresh sequence still proves the address.
+  EXPECT_TRUE(registry.on_path_response(session->id, 4, first.nonce, loopback(4000)));
+  EXPECT_EQ(registry.on_heartbeat(session->id, 4, loopback(4000), t0).verdict, Verdict::kStale);
+  EXPECT_EQ(registry.on_heartbeat(session->id, 5, loopback(4000), t0).verdict, Verdict::kAccepted);
+}
+
 TEST(SessionRegistry, AnySourceLetsAnotherHostAnswerTheChallenge) {
   SessionRegistry registry(SessionLimits{4, 4, std::chrono::milliseconds(1000), true});
   const auto session = registry.open("behind-nat", 0, "127.0.0.1");

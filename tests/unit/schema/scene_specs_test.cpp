@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 #include <utility>
 #include <variant>
 
@@ -225,6 +226,80 @@ TEST(Validation, NewFieldsNameWhatIsWrong) {
   EXPECT_EQ(to_field_spec(khatib, "f", SceneLimits{}, spec).rfind("f.potential.min_distance", 0), 0u);
   khatib.mutable_potential()->set_min_distance(0.001);
   EXPECT_EQ(to_field_spec(khatib, "f", SceneLimits{}, spec), "");
+}
+
+TEST(Validation, RefusesAnOrientationWithANanComponentNamingIt) {
+  // A NaN component makes the norm NaN, which no "within 1e-3 of 1" comparison refuses: only the
+  // finiteness check stops it.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  using Setter = void (v1::Quaternion::*)(double);
+  for (const auto& [axis, set] :
+       {std::pair<std::string, Setter>{"w", &v1::Quaternion::set_w}, {"x", &v1::Quaternion::set_x},
+        {"y", &v1::Quaternion::set_y}, {"z", &v1::Quaternion::set_z}}) {
+    v1::Object object = good_wall();
+    v1::Quaternion* q = object.mutable_pose()->mutable_orientation();
+    q->set_w(1.0);
+    (q->*set)(nan);
+    const std::string error = error_of(object);
+    EXPECT_EQ(error.rfind("object.pose.orientation." + axis + ": must be finite, got ", 0), 0u)
+        << axis << ": \"" << error << "\"";
+  }
+  // Through a whole scene, the path names the object too.
+  v1::Scene scene;
+  *scene.add_objects() = good_wall();
+  scene.mutable_objects(0)->mutable_pose()->mutable_orientation()->set_w(1.0);
+  scene.mutable_objects(0)->mutable_pose()->mutable_orientation()->set_y(nan);
+  SceneSpecs specs;
+  EXPECT_EQ(to_scene_specs(scene, "scene.", SceneLimits{}, specs)
+                .rfind("scene.objects[0].pose.orientation.y: must be finite, got ", 0),
+            0u);
+  EXPECT_TRUE(specs.objects.empty());  // all or nothing
+}
+
+v1::Object tangent_plane_with(double tangential_stiffness) {
+  v1::Object object = object_with(1000.0);
+  v1::TangentPlane* plane = object.mutable_tangent_plane();
+  plane->mutable_normal()->set_z(1.0);
+  plane->set_tangential_stiffness(tangential_stiffness);
+  plane->set_tangential_damping(1.0);
+  return object;
+}
+
+TEST(Validation, RefusesATangentPlaneStiffnessAboveTheLimit) {
+  engine::ObjectSpec spec;
+  ASSERT_EQ(to_object_spec(tangent_plane_with(1.0e6), "o", SceneLimits{}, spec), "");  // at the limit
+  ASSERT_TRUE(std::holds_alternative<engine::TangentPlaneSpec>(spec.shape));
+  EXPECT_EQ(std::get<engine::TangentPlaneSpec>(spec.shape).tangential_stiffness, 1.0e6);
+  EXPECT_EQ(to_object_spec(tangent_plane_with(2.0e6), "o", SceneLimits{}, spec),
+            "o.tangent_plane.tangential_stiffness: must be finite and in [0, 1e+06], got 2e+06");
+  // The bound is the server's limit, not a constant.
+  SceneLimits soft;
+  soft.max_stiffness = 5000.0;
+  EXPECT_EQ(to_object_spec(tangent_plane_with(5000.0), "o", soft, spec), "");
+  EXPECT_EQ(to_object_spec(tangent_plane_with(5001.0), "o", soft, spec),
+            "o.tangent_plane.tangential_stiffness: must be finite and in [0, 5000], got 5001");
+}
+
+TEST(Validation, RefusesACustomOperatorStiffnessAboveTheLimit) {
+  v1::OperatorInput input;
+  input.set_mode(v1::OperatorInput::FOLLOW_TARGET);
+  input.set_grip(v1::OperatorInput::CUSTOM);
+  input.set_damping(10.0);
+  input.set_mass(1.0);
+  engine::HandInput hand;
+  input.set_stiffness(1.0e6);  // at the limit
+  ASSERT_EQ(to_hand_input(input, "input", SceneLimits{}, hand), "");
+  EXPECT_EQ(hand.stiffness, 1.0e6);
+  input.set_stiffness(2.0e6);
+  EXPECT_EQ(to_hand_input(input, "input", SceneLimits{}, hand),
+            "input.stiffness: must be finite and in [0, 1e+06], got 2e+06");
+  SceneLimits soft;
+  soft.max_stiffness = 800.0;
+  input.set_stiffness(800.0);
+  EXPECT_EQ(to_hand_input(input, "input", soft, hand), "");
+  input.set_stiffness(801.0);
+  EXPECT_EQ(to_hand_input(input, "input", soft, hand),
+            "input.stiffness: must be finite and in [0, 800], got 801");
 }
 
 }  // namespace
