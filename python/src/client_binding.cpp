@@ -189,7 +189,10 @@ void bind_config(py::module_& m) {
   StructBinder<ClientConfig>(m, "ClientConfig", "How a Client connects. Durations in seconds.")
       .field("server_address", &ClientConfig::server_address, "gRPC host:port of hapticd")
       .field("tls", &ClientConfig::tls, "TlsOptions, or None for plaintext")
-      .field("token", &ClientConfig::token, "the bearer token the server gave this client")
+      .field("token", &ClientConfig::token,
+             "the bearer token the server gave this client; sent only over TLS or to loopback")
+      .field("allow_plaintext_token", &ClientConfig::allow_plaintext_token,
+             "send the token in clear to another host all the same (a trusted network)")
       .field("client_name", &ClientConfig::client_name, "1..64 printable characters")
       .property("rpc_timeout", rpc_get, rpc_set, "deadline of every control-plane call, s")
       .property("heartbeat_period", beat_get, beat_set, "UDP heartbeat period, s")

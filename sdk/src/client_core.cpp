@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -10,6 +11,7 @@
 #include "haptic/io/session_id.hpp"
 #include "conversions.hpp"
 #include "status_mapping.hpp"
+#include "tls_diagnosis.hpp"
 
 namespace haptic::detail {
 namespace {
@@ -46,8 +48,25 @@ std::uint16_t udp_port_of(const std::string& address) {
   return static_cast<std::uint16_t>(port);
 }
 
+/// A host no other machine can listen on: localhost, 127.0.0.0/8, ::1, or a Unix socket target.
+bool is_loopback(const std::string& server_address) {
+  if (server_address.rfind("unix:", 0) == 0) return true;
+  const std::string host = host_of(server_address);
+  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+}
+
 void check_config(const ClientConfig& config) {
   if (config.server_address.empty()) throw InvalidArgumentError("ClientConfig: server_address: must not be empty");
+  if (!config.token.empty() && !config.tls && !is_loopback(config.server_address)) {
+    if (!config.allow_plaintext_token) {
+      throw InvalidArgumentError(
+          "ClientConfig: token: would be sent in clear to '" + config.server_address +
+          "', where anyone on the network can read it: give tls (TlsOptions with the server's CA), "
+          "or set allow_plaintext_token on a network you trust");
+    }
+    std::fprintf(stderr, "haptic: warning: sending the bearer token in clear to '%s' "
+                 "(allow_plaintext_token)\n", config.server_address.c_str());
+  }
   if (config.client_name.empty() || config.client_name.size() > 64) {
     throw InvalidArgumentError("ClientConfig: client_name: must be 1 to 64 characters");
   }
@@ -121,6 +140,19 @@ v1::OpenSessionResponse ClientCore::open_session() {
   return opened;
 }
 
+v1::OpenSessionResponse ClientCore::open_session_saying_why() {
+  try {
+    return open_session();
+  } catch (const ConnectionError& error) {
+    // gRPC reports a TLS mismatch as a reset, a verify failure or a decryption error; one
+    // handshake of our own says which setting to change.
+    const std::string why = diagnose_tls_mismatch(
+        config_, std::min<std::chrono::milliseconds>(config_.rpc_timeout, std::chrono::seconds(1)));
+    if (why.empty()) throw;
+    throw ConnectionError(std::string(error.what()) + ". Likely: " + why);
+  }
+}
+
 namespace {
 wire::Key key_of(const v1::OpenSessionResponse& opened) {
   wire::Key key{};
@@ -142,7 +174,7 @@ ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
   check_config(config_);
   stub_ = v1::Haptic::NewStub(make_channel(config_));
 
-  const v1::OpenSessionResponse opened = open_session();
+  const v1::OpenSessionResponse opened = open_session_saying_why();
   session_id_ = opened.session_id();
   {
     std::lock_guard lock(identity_mutex_);

@@ -97,6 +97,9 @@ class ClientCore {
   /// Adds what every call carries: the bearer token (if any) and the session secret (once open).
   void authenticate(grpc::ClientContext& context) const;
   v1::OpenSessionResponse open_session();
+  /// open_session() for the first connection: a ConnectionError that a TLS mismatch explains
+  /// says which setting to change (tls_diagnosis).
+  v1::OpenSessionResponse open_session_saying_why();
   /// Where datagrams go: ClientConfig::udp_address if given, else the server's host and the port
   /// OpenSession named.
   std::string udp_host() const;

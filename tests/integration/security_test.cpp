@@ -168,18 +168,42 @@ TEST(Security, AnAdminListsSessionsWithTheirTokensAndEndsOne) {
   EXPECT_NO_THROW(controller.close());  // nothing left to close on the server
 }
 
-TEST(Security, AClientThatDoesNotTrustTheServersCaIsRefused) {
+// Each TLS mismatch is refused, and the error says which setting to change (gRPC alone says
+// "Connection reset by peer" or "certificate verify failed").
+TEST(Security, AClientThatDoesNotTrustTheServersCaIsRefusedSayingSo) {
   ServerProcess server(secured_config());
-  refusal<ConnectionError>(
+  const std::string other_ca = refusal<ConnectionError>(
       [&] { Client client(tls_client(server, "other-ca", kAdminToken, kCerts + "/other_ca.pem")); });
+  EXPECT_NE(other_ca.find("Likely: the server's certificate is not trusted by the CA in tls.ca_file"),
+            std::string::npos) << other_ca;
   ClientConfig plaintext = config_for(server, "plaintext");  // no TLS at all
   plaintext.token = kAdminToken;
-  refusal<ConnectionError>([&] { Client client(plaintext); });
+  const std::string no_tls = refusal<ConnectionError>([&] { Client client(plaintext); });
+  EXPECT_NE(no_tls.find("Likely: the server speaks TLS: give ClientConfig::tls"), std::string::npos) << no_tls;
+  ClientConfig wrong_name = tls_client(server, "wrong-name", kAdminToken);
+  wrong_name.tls->server_name = "haptics.other.lab";
+  const std::string name = refusal<ConnectionError>([&] { Client client(wrong_name); });
+  EXPECT_NE(name.find("Likely: the server's certificate does not carry the name 'haptics.other.lab'"),
+            std::string::npos) << name;
 }
 
-TEST(Security, MutualTlsRefusesAClientWithoutACertificate) {
+TEST(Security, ATlsClientOfAPlaintextServerIsToldTheServerDoesNotSpeakTls) {
+  ServerProcess server(R"({"time_mode": "LOCKSTEP"})");
+  ClientConfig config = config_for(server, "tls-to-plaintext");
+  config.tls = TlsOptions{};
+  config.tls->ca_file = kCerts + "/ca.pem";
+  config.rpc_timeout = std::chrono::milliseconds(3000);
+  const std::string message = refusal<ConnectionError>([&] { Client client(config); });
+  EXPECT_NE(message.find("Likely: the server does not speak TLS"), std::string::npos) << message;
+}
+
+TEST(Security, MutualTlsRefusesAClientWithoutACertificateSayingItWantsOne) {
   ServerProcess server(secured_config(/*client_ca=*/true));
-  refusal<ConnectionError>([&] { Client client(tls_client(server, "no-cert", kControllerToken)); });
+  const std::string message =
+      refusal<ConnectionError>([&] { Client client(tls_client(server, "no-cert", kControllerToken)); });
+  EXPECT_NE(message.find("Likely: the server asks for a client certificate (mutual TLS): give "
+                         "tls.cert_file and tls.key_file"),
+            std::string::npos) << message;
   ClientConfig with_cert = tls_client(server, "with-cert", kControllerToken);
   with_cert.tls->cert_file = kCerts + "/client.pem";
   with_cert.tls->key_file = kCerts + "/client.key";

@@ -1,7 +1,8 @@
 // hapticctl: look at and administer a running hapticd. Built on the SDK alone; it opens a session
 // of its own (no state stream) and needs the admin role where the server has tokens.
 //
-//   hapticctl [--server HOST:PORT] [--token T | --token-file F] [--ca CA.pem] COMMAND
+//   hapticctl [--server HOST:PORT] [--token T | --token-file F]
+//             [--ca CA.pem [--cert C.pem --key K.pem] [--server-name NAME]] COMMAND
 //   status | sessions | stats [--watch] | events | scene [--all] [--json] | kick SESSION
 //   record start NAME | record stop
 //
@@ -70,6 +71,21 @@ int main(int argc, char** argv) {
   std::string ca_file;
   cli.add_option("--ca", ca_file, "speak TLS, trusting this PEM CA (a server with security.tls)")
       ->check(CLI::ExistingFile);
+  haptic::TlsOptions tls;
+  CLI::Option* cert = cli.add_option("--cert", tls.cert_file,
+                                     "with --ca: present this PEM client certificate (a server with "
+                                     "mutual TLS)")
+                          ->check(CLI::ExistingFile);
+  CLI::Option* key = cli.add_option("--key", tls.key_file, "with --cert: its PEM private key")
+                         ->check(CLI::ExistingFile)
+                         ->needs(cert);
+  cert->needs(key);
+  cli.add_option("--server-name", tls.server_name,
+                 "with --ca: the name the server's certificate must carry (default: the host of "
+                 "--server)");
+  cli.add_flag("--allow-plaintext-token", config.allow_plaintext_token,
+               "send the token without TLS to another host all the same (a network you trust; "
+               "refused otherwise, since anyone on it could read the token)");
   int timeout_ms = 2000;
   cli.add_option("--timeout-ms", timeout_ms, "deadline of each call")
       ->capture_default_str()
@@ -131,7 +147,13 @@ int main(int argc, char** argv) {
     std::ifstream file(token_file);
     std::getline(file, config.token);
   }
-  if (!ca_file.empty()) config.tls = haptic::TlsOptions{ca_file, {}, {}, {}};
+  if (!ca_file.empty()) {
+    tls.ca_file = ca_file;
+    config.tls = tls;
+  } else if (!tls.cert_file.empty() || !tls.server_name.empty()) {
+    std::cerr << "hapticctl: --cert, --key and --server-name need --ca (TLS)\n";
+    return 2;
+  }
   config.rpc_timeout = std::chrono::milliseconds(timeout_ms);
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);

@@ -47,8 +47,13 @@ struct ClientConfig {
   /// Present: TLS (needed when the server has security.tls). Absent: plaintext.
   std::optional<TlsOptions> tls;
   /// The bearer token the server gave this client (its security.tokens); sent with every call.
-  /// Empty: none (a server without tokens).
+  /// Empty: none (a server without tokens). Sent only over TLS or to a loopback address: with a
+  /// token, no `tls` and another host, the Client refuses to start (InvalidArgumentError naming
+  /// TlsOptions), since anyone on the network could read the token and act with its role.
   std::string token;
+  /// Sends `token` in clear to a non-loopback address all the same, for a lab that has chosen
+  /// that on a network it trusts; said on stderr each time a Client starts so.
+  bool allow_plaintext_token = false;
   std::string client_name = "haptic-client";       ///< 1..64 printable characters; shown in logs.
   std::chrono::milliseconds rpc_timeout{2000};     ///< Deadline of every control-plane call.
   std::chrono::milliseconds heartbeat_period{100}; ///< UDP heartbeat period; keep well under the lease.

@@ -209,6 +209,37 @@ TEST(Client, BadConfigurationIsRefusedBeforeAnyConnection) {
   EXPECT_THROW(Client{config}, InvalidArgumentError);
 }
 
+TEST(Client, ATokenIsNeverSentInClearToAnotherHostUnlessAllowed) {
+  ClientConfig config;
+  config.token = "controller-token-0123456789";
+  // Not a loopback name, yet a connection to it would stay on this machine: should the check be
+  // gone, the test fails with ConnectionError and sends nothing anywhere.
+  config.server_address = "0.0.0.0:1";
+  config.rpc_timeout = std::chrono::milliseconds(200);
+  try {
+    Client client(config);
+    ADD_FAILURE() << "a token in clear to a non-loopback address was not refused";
+  } catch (const InvalidArgumentError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("ClientConfig: token: would be sent in clear to '0.0.0.0:1'"), std::string::npos)
+        << message;
+    EXPECT_NE(message.find("TlsOptions"), std::string::npos) << message;
+  }
+  // The explicit opt-out passes this check (and says so on stderr): here the next check, an
+  // invalid rpc_timeout, stops the client before any connection.
+  config.allow_plaintext_token = true;
+  config.rpc_timeout = std::chrono::milliseconds(0);
+  ::testing::internal::CaptureStderr();
+  try {
+    Client client(config);
+    ADD_FAILURE() << "an rpc_timeout of 0 was accepted";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("rpc_timeout"), std::string::npos) << error.what();
+  }
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("sending the bearer token in clear to '0.0.0.0:1'"),
+            std::string::npos);
+}
+
 TEST(Client, UnreachableServerIsAConnectionError) {
   ClientConfig config;
   config.server_address = "127.0.0.1:1";
