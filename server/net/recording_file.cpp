@@ -2,6 +2,7 @@
 
 #include <zstd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -90,26 +91,44 @@ RecordingReader::~RecordingReader() {
 }
 
 bool RecordingReader::fill(std::size_t bytes) {
-  if (read_ > 0 && read_ >= buffer_.size() / 2) {  // drop what was consumed
-    buffer_.erase(0, read_);
+  if (size_ - read_ >= bytes) return true;
+  // Room after what is unread for the bytes wanted and a block's output: what was consumed is
+  // dropped (the few unread bytes move to the front); the buffer grows only for a record larger
+  // than any before. Nothing is allocated or zero-filled otherwise.
+  const std::size_t block = ZSTD_DStreamOutSize();
+  const std::size_t room = bytes + block;
+  if (capacity_ - read_ < room) {
+    const std::size_t unread = size_ - read_;
+    if (capacity_ < room) {
+      const std::size_t capacity = std::max(room, 2 * block);
+      std::unique_ptr<char[]> grown(new char[capacity]);  // not zero-filled: written before read
+      if (unread > 0) std::memcpy(grown.get(), buffer_.get() + read_, unread);
+      buffer_ = std::move(grown);
+      capacity_ = capacity;
+    } else if (unread > 0) {
+      std::memmove(buffer_.get(), buffer_.get() + read_, unread);
+    }
+    size_ = unread;
     read_ = 0;
   }
-  std::string chunk(ZSTD_DStreamOutSize(), '\0');
-  while (buffer_.size() - read_ < bytes) {
-    if (in_used_ == in_.size()) {
+  if (!in_) {
+    in_capacity_ = ZSTD_DStreamInSize();
+    in_.reset(new char[in_capacity_]);
+  }
+  while (size_ - read_ < bytes) {
+    if (in_used_ == in_size_) {
       if (file_done_) return false;
-      in_.resize(ZSTD_DStreamInSize());
-      const std::size_t got = std::fread(in_.data(), 1, in_.size(), file_);
-      in_.resize(got);
+      in_size_ = std::fread(in_.get(), 1, in_capacity_, file_);
       in_used_ = 0;
-      if (got == 0) {
+      if (in_size_ == 0) {
         file_done_ = true;
         if (!frame_done_) error_ = "recording '" + path_ + "': the file ends in the middle (truncated)";
         return false;
       }
     }
-    ZSTD_inBuffer in{in_.data(), in_.size(), in_used_};
-    ZSTD_outBuffer out{chunk.data(), chunk.size(), 0};
+    ZSTD_inBuffer in{in_.get(), in_size_, in_used_};
+    // At least a block's room: the loop keeps size_ - read_ < bytes, and capacity_ - read_ >= room.
+    ZSTD_outBuffer out{buffer_.get() + size_, capacity_ - size_, 0};
     const std::size_t result = ZSTD_decompressStream(context_, &out, &in);
     if (ZSTD_isError(result)) {
       error_ = "recording '" + path_ + "': not a readable recording (zstd: " +
@@ -119,7 +138,7 @@ bool RecordingReader::fill(std::size_t bytes) {
     }
     frame_done_ = result == 0;
     in_used_ = in.pos;
-    buffer_.append(chunk.data(), out.pos);
+    size_ += out.pos;
   }
   return true;
 }
@@ -149,7 +168,7 @@ bool RecordingReader::next(v1::Record& record) {
     if (error_.empty()) error_ = "recording '" + path_ + "': the last record is cut short";
     return false;
   }
-  if (!record.ParseFromArray(buffer_.data() + read_, static_cast<int>(length))) {
+  if (!record.ParseFromArray(buffer_.get() + read_, static_cast<int>(length))) {
     error_ = "recording '" + path_ + "': a record does not parse";
     return false;
   }

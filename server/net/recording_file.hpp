@@ -54,16 +54,21 @@ class RecordingReader {
   const std::string& error() const { return error_; }
 
  private:
-  /// Decompresses until `buffer_` holds at least `bytes` unread bytes; false at the end.
+  /// Decompresses until the buffer holds at least `bytes` unread bytes; false at the end. Reuses
+  /// its buffers: it allocates only for a record larger than any before.
   bool fill(std::size_t bytes);
 
   std::string path_;
   std::FILE* file_ = nullptr;
   ZSTD_DCtx_s* context_ = nullptr;
-  std::string in_;         // compressed bytes read, not yet decompressed
-  std::size_t in_used_ = 0;
-  std::string buffer_;     // decompressed bytes
-  std::size_t read_ = 0;   // of buffer_, consumed
+  std::unique_ptr<char[]> in_;      // compressed bytes read from the file
+  std::size_t in_capacity_ = 0;
+  std::size_t in_size_ = 0;         // of in_, read from the file
+  std::size_t in_used_ = 0;         // of those, decompressed
+  std::unique_ptr<char[]> buffer_;  // decompressed bytes
+  std::size_t capacity_ = 0;
+  std::size_t size_ = 0;            // of buffer_, decompressed
+  std::size_t read_ = 0;            // of those, consumed
   bool file_done_ = false;
   bool frame_done_ = true; // the last decompress call ended a frame (a file may end there)
   std::string error_;

@@ -62,6 +62,66 @@ TEST(RecordingFile, RecordsReadBackAsWrittenAcrossManyCompressionBlocks) {
   std::filesystem::remove(path);
 }
 
+// The reader reuses its buffers: reading a record allocates what parsing it does and nothing more
+// (no buffer per decompression step), and a record larger than the buffer still reads back whole.
+TEST(RecordingFile, ReadingAllocatesNoMoreThanParsingDoes) {
+  const std::string path = temp_path("reuse");
+  const auto big = [](std::size_t size, char fill) {
+    v1::Record record;
+    record.mutable_change()->mutable_opened()->set_client_name(std::string(size, fill));
+    return record;
+  };
+  {
+    RecordingWriter writer(path);
+    for (std::uint64_t tick = 1; tick <= 30'000; ++tick) {
+      ASSERT_TRUE(writer.write(sample_record(tick, 1.0 / static_cast<double>(tick))));
+    }
+    ASSERT_TRUE(writer.write(big(300'000, 'a')));    // more than a block
+    ASSERT_TRUE(writer.write(big(3'000'000, 'b')));  // more than the buffer
+    for (std::uint64_t tick = 30'001; tick <= 40'000; ++tick) {
+      ASSERT_TRUE(writer.write(sample_record(tick, 0.5)));
+    }
+    ASSERT_TRUE(writer.close()) << writer.error();
+  }
+
+  // What parsing a sample into a reused Record allocates (its oneof's message, the force).
+  v1::Record record;
+  const std::string serialized = sample_record(5, 0.25).SerializeAsString();
+  ASSERT_TRUE(record.ParseFromString(serialized));
+  test::reset_allocations();
+  {
+    test::CountAllocations counting;
+    for (int i = 0; i < 1000; ++i) ASSERT_TRUE(record.ParseFromString(serialized));
+  }
+  const std::uint64_t per_parse = test::allocations() / 1000;
+
+  RecordingReader reader(path);
+  for (std::uint64_t tick = 1; tick <= 100; ++tick) ASSERT_TRUE(reader.next(record));  // buffers made
+  test::reset_allocations();
+  {
+    test::CountAllocations counting;
+    for (std::uint64_t tick = 101; tick <= 30'000; ++tick) {
+      if (!reader.next(record) || record.sample().tick() != tick) break;
+    }
+  }
+  EXPECT_EQ(record.sample().tick(), 30'000u) << reader.error();
+  // 29,900 records through about 15 decompressed blocks: a buffer per block, let alone per
+  // record, would show.
+  EXPECT_LE(test::allocations(), 29'900 * per_parse) << per_parse << " a parse";
+
+  ASSERT_TRUE(reader.next(record)) << reader.error();
+  EXPECT_EQ(record.change().opened().client_name(), std::string(300'000, 'a'));
+  ASSERT_TRUE(reader.next(record)) << reader.error();
+  EXPECT_EQ(record.change().opened().client_name(), std::string(3'000'000, 'b'));
+  for (std::uint64_t tick = 30'001; tick <= 40'000; ++tick) {
+    ASSERT_TRUE(reader.next(record)) << reader.error();
+    ASSERT_EQ(record.sample().tick(), tick);
+  }
+  EXPECT_FALSE(reader.next(record));
+  EXPECT_EQ(reader.error(), "");
+  std::filesystem::remove(path);
+}
+
 TEST(RecordingFile, DamageIsNamedNotMistakenForAnEnd) {
   const std::string path = temp_path("damaged");
   {
