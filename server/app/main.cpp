@@ -15,6 +15,10 @@
 #include "app/health_check.hpp"
 #include "app/replay.hpp"
 #include "app/server.hpp"
+#include "haptic/driver.h"
+#include "haptic/v1/service.pb.h"
+#include "haptic/version.hpp"
+#include "haptic/wire/datagram.hpp"
 
 namespace {
 
@@ -43,6 +47,10 @@ void write_ready_file(const std::string& path, const haptic::app::Server& server
 
 int main(int argc, char** argv) {
   CLI::App cli{"hapticd: networked haptic server (gRPC control plane, UDP data plane)"};
+  cli.set_version_flag("--version", std::string("hapticd ") + HAPTIC_VERSION + " (control API " +
+                                        std::to_string(haptic::v1::API_VERSION_CURRENT) + ", wire " +
+                                        std::to_string(haptic::wire::kWireVersion) + ", driver ABI " +
+                                        std::to_string(HAPTIC_DRIVER_ABI_VERSION) + ")");
   std::string config_path;
   std::string ready_file;
   std::string grpc_address;
@@ -109,7 +117,14 @@ int main(int argc, char** argv) {
                  "bit; exit 0 when all are the same, 1 when any differs, 2 when it cannot be "
                  "replayed")
       ->check(CLI::ExistingFile);
-  CLI11_PARSE(cli, argc, argv);
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    // --help and --version are 0; any mistake on the command line (a missing --config file among
+    // them) is 2, a configuration error, whatever number CLI11 gives its kind: the systemd unit
+    // does not restart on 2 (RestartPreventExitStatus).
+    return cli.exit(error) == 0 ? 0 : 2;
+  }
 
   if (!replay_path.empty()) {
     spdlog::set_level(spdlog::level::warn);  // the replay's own server need not announce itself
@@ -233,6 +248,11 @@ int main(int argc, char** argv) {
     sigwait(&stop_signals, &signal_number);
     spdlog::info("hapticd: {} received, ramping forces to zero", strsignal(signal_number));
     server.shutdown();
+  } catch (const haptic::config::ConfigError& error) {
+    // Found only at start (unreadable key or token files, a key that is not the certificate's):
+    // a configuration error like those above.
+    spdlog::error("hapticd: {}", error.what());
+    return 2;
   } catch (const std::exception& error) {
     spdlog::error("hapticd: {}", error.what());
     return 1;

@@ -57,8 +57,12 @@ std::vector<net::Credential> credentials(const v1::AccessTokens& tokens) {
 /// present a certificate it signed.
 std::shared_ptr<const net::TlsServerContext> tls_context(const config::SecurityMaterial& security) {
   if (!security.tls) return nullptr;
-  return std::make_shared<const net::TlsServerContext>(
-      net::TlsServerMaterial{security.cert_pem, security.key_pem, security.client_ca_pem});
+  try {
+    return std::make_shared<const net::TlsServerContext>(
+        net::TlsServerMaterial{security.cert_pem, security.key_pem, security.client_ca_pem});
+  } catch (const std::runtime_error& error) {
+    throw config::ConfigError(error.what());  // the files' contents: a configuration error
+  }
 }
 
 /// The viewer's page: the configured folder; else the installed one (share/hapticd/web beside the
@@ -211,6 +215,14 @@ Server::Server(const v1::ServerConfig& config)
   recorder_ = std::make_unique<net::Recorder>([this] { return loop_->completed_ticks(); },
                                              std::move(rings));
   const net::AccessControl access(credentials(security.tokens));
+  const int token_count = security.tokens.tokens_size();
+  security_summary_ = std::string(!security.tls ? "plaintext"
+                                  : security.client_ca_pem.empty() ? "TLS"
+                                                                   : "mutual TLS") +
+                      ", " +
+                      (token_count == 0 ? std::string("no tokens")
+                                        : std::to_string(token_count) +
+                                              (token_count == 1 ? " token" : " tokens"));
   service_ = std::make_unique<net::HapticService>(net::ServiceDependencies{
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
       [this] { return stats(); }, access,
@@ -377,10 +389,11 @@ void Server::start() {
     devices += " + port " + std::to_string(i) + ": " + devices_[i].device->description().name;
   }
   const int loop_cpu = loop_->config().cpu;
-  spdlog::info("hapticd: {} at {} Hz ({}{}), gRPC {} (port {}), UDP {} (port {})", devices,
+  spdlog::info("hapticd: {} at {} Hz ({}{}), gRPC {} (port {}, {}), UDP {} (port {})", devices,
                config_.loop_rate_hz(), v1::TimeMode_Name(config_.time_mode()),
                loop_cpu >= 0 ? ", loop on CPU " + std::to_string(loop_cpu) : std::string(),
-               config_.grpc_address(), grpc_port_, config_.udp_address(), udp_.port());
+               config_.grpc_address(), grpc_port_, security_summary_, config_.udp_address(),
+               udp_.port());
   const bool remote = !config::is_loopback_host(config::host_of_address(config_.grpc_address())) ||
                      !config::is_loopback_host(config_.udp_address());
   if (remote && !config::secured_for_remote_access(config_.security())) {

@@ -106,6 +106,8 @@ class Server {
   std::unique_ptr<net::ControlListener> listener_;  // accepts gRPC's connections for it
   std::unique_ptr<grpc::Server> grpc_server_;
   std::uint16_t grpc_port_ = 0;
+  /// The control plane's security for the start line: "mutual TLS, 3 tokens", "plaintext, no tokens".
+  std::string security_summary_;
   std::unique_ptr<net::MetricsEndpoint> metrics_;  // when metrics_address is set
   std::unique_ptr<net::ViewerEndpoint> viewer_;    // when viewer_address is set
   std::unique_ptr<net::Recorder> recorder_;

@@ -10,6 +10,7 @@
 // 3 a run that went non-finite; CLI11's own codes (> 100) for malformed command lines.
 
 #include <CLI/CLI.hpp>
+#include <haptic/version.hpp>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -210,6 +211,8 @@ Subcommand add_zwidth(CLI::App& cli) {
 int main(int argc, char** argv) {
   CLI::App cli{"haptic-lab: runs hapticd scenes in lockstep time and reports on them"};
   cli.require_subcommand(1);
+  cli.set_version_flag("--version", std::string("haptic-lab ") + HAPTIC_VERSION +
+                                        " (the engine and devices of hapticd " HAPTIC_VERSION ")");
   std::vector<Subcommand> commands;
   commands.push_back(add_run(cli));
   commands.push_back(add_transparency(cli));

@@ -17,7 +17,6 @@
 #include <mutex>
 #include <stdexcept>
 
-#include "net/session_registry.hpp"
 #include "net/tcp_listen.hpp"
 #include "runtime/realtime.hpp"
 
@@ -31,13 +30,6 @@ constexpr int kPollMs = 100;
 /// What an epoll event is about: the low two bits of its data, the rest an id.
 enum Tag : std::uint64_t { kWake = 0, kListening = 1, kNetSide = 2, kAppSide = 3 };
 std::uint64_t tagged(std::uint64_t id, Tag tag) { return (id << 2) | tag; }
-
-std::string host_of_sockaddr(const sockaddr_storage& address, socklen_t length) {
-  UdpAddress wrapped;  // the same normalisation as the data plane's (IPv4-mapped -> IPv4)
-  wrapped.storage = address;
-  wrapped.length = length;
-  return host_of(wrapped);
-}
 
 ino_t inode_of(int fd) {
   struct stat info {};
@@ -157,7 +149,7 @@ std::string ControlListener::host_of_connection(int fd) {
   socklen_t length = sizeof peer;
   if (::getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &length) != 0) return {};
   if (peer.ss_family != AF_INET && peer.ss_family != AF_INET6) return {};
-  return host_of_sockaddr(peer, length);
+  return host_of_peer(peer, length);
 }
 
 void ControlListener::accept_loop() {
@@ -226,7 +218,7 @@ void ControlListener::accept_one(int listening_fd) {
       }
       return;  // EAGAIN: nothing more; anything else: try again on the next poll
     }
-    const std::string host = host_of_sockaddr(peer, length);
+    const std::string host = host_of_peer(peer, length);
     if (!make_room(host)) {
       refuse(fd, connections_.size() >= limits_.max_connections ? "max_connections reached"
                                                                 : "max_connections_per_peer reached",

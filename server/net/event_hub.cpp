@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "haptic/io/session_id.hpp"
+
 namespace haptic::net {
 
 std::optional<v1::Event> EventHub::Watcher::next(std::chrono::milliseconds timeout) {
@@ -28,13 +30,13 @@ std::shared_ptr<EventHub::Watcher> EventHub::watch(std::uint64_t session_id, std
       watchers_.begin(), watchers_.end(),
       [&](const std::shared_ptr<Watcher>& w) { return w->session_id_ == session_id; }));
   if (held >= limits_.per_session) {
-    refusal = "WatchEvents: session " + std::to_string(session_id) + " already holds " +
-              std::to_string(held) + " event streams, the most one session may (" +
-              std::to_string(limits_.per_session) + ")";
+    refusal = "session " + io::format_session_id(session_id) + " already holds " +
+              std::to_string(held) + " event streams, the most one session may "
+              "(max_event_streams_per_session = " + std::to_string(limits_.per_session) + ")";
     return nullptr;
   }
   if (watchers_.size() >= limits_.total) {
-    refusal = "WatchEvents: the server already serves " + std::to_string(watchers_.size()) +
+    refusal = "the server already serves " + std::to_string(watchers_.size()) +
               " event streams, its most (max_event_streams = " + std::to_string(limits_.total) + ")";
     return nullptr;
   }

@@ -66,7 +66,8 @@ std::string check_client_name(const std::string& name) {
 grpc::Status HapticService::check_session(const grpc::ServerContext* context,
                                           std::uint64_t session_id, Permission permission,
                                           const char* call, Caller* caller) const {
-  if (auto status = deps_.access.authorize(*context, permission, call, caller); !status.ok()) {
+  if (auto status = deps_.access.authorize(*context, permission, call, caller, caller_host(context));
+      !status.ok()) {
     return status;
   }
   std::span<const std::uint8_t> secret;
@@ -189,7 +190,8 @@ v1::DeviceInfo HapticService::device_info(std::uint32_t port) const {
 grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::OpenSessionRequest* request,
                                         v1::OpenSessionResponse* response) {
   Caller caller;
-  if (auto status = deps_.access.authorize(*context, Permission::kObserve, "OpenSession", &caller);
+  if (auto status = deps_.access.authorize(*context, Permission::kObserve, "OpenSession", &caller,
+                                              caller_host(context));
       !status.ok()) {
     return status;
   }

@@ -120,6 +120,7 @@ std::string format_response(const HttpResponse& response, bool head_only, bool k
 
 struct HttpServer::Connection {
   int fd = -1;
+  std::string host;  // the client's
   std::string received;
   std::string pending;  // the reply being sent
   std::size_t sent = 0;
@@ -211,7 +212,10 @@ void HttpServer::serve_loop() {
 
 void HttpServer::accept_from(int listening_fd, std::vector<Connection>& connections) {
   for (;;) {
-    const int fd = ::accept4(listening_fd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    sockaddr_storage peer{};
+    socklen_t length = sizeof peer;
+    const int fd = ::accept4(listening_fd, reinterpret_cast<sockaddr*>(&peer), &length,
+                             SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0) {
       if (errno == EINTR || errno == ECONNABORTED) continue;
       if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
@@ -226,6 +230,7 @@ void HttpServer::accept_from(int listening_fd, std::vector<Connection>& connecti
     }
     Connection connection;
     connection.fd = fd;
+    connection.host = host_of_peer(peer, length);
     connection.deadline = std::chrono::steady_clock::now() + limits_.timeout;
     connections.push_back(std::move(connection));
   }
@@ -273,6 +278,7 @@ bool HttpServer::answer(Connection& connection) {
   const std::string error =
       parse_request_head(std::string_view(connection.received).substr(0, head_length), request);
   connection.received.erase(0, end);
+  request.peer = connection.host;
   if (!error.empty()) {
     reply(HttpResponse::text(400, "hapticd " + name_ + ": " + error + "\n"), false, false);
     return true;

@@ -27,6 +27,7 @@ struct HttpRequest {
   std::string version;                         // "HTTP/1.1" or "HTTP/1.0"
   std::map<std::string, std::string> headers;  // names in lower case, values trimmed
   bool keep_alive = false;                     // 1.1 without "Connection: close", or 1.0 with keep-alive
+  std::string peer;                            // the client's host (peer_host()'s form)
 
   /// The header's value, or nullptr when it was not sent.
   const std::string* header(const std::string& lower_case_name) const {

@@ -10,7 +10,16 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "net/session_registry.hpp"
+
 namespace haptic::net {
+
+std::string host_of_peer(const sockaddr_storage& address, socklen_t length) {
+  UdpAddress wrapped;  // the same normalisation as the data plane's (IPv4-mapped -> IPv4)
+  wrapped.storage = address;
+  wrapped.length = length;
+  return host_of(wrapped);
+}
 
 ListeningSockets listen_tcp(const std::string& address, const std::string& what,
                             const std::string& field) {

@@ -2,6 +2,8 @@
 // Listening TCP sockets for "host:port" ("[v6]:port", "host" alone: port 0), shared by the
 // control plane's listener and the metrics endpoint.
 
+#include <sys/socket.h>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -19,5 +21,9 @@ struct ListeningSockets {
 /// "<field> '<address>': <why>" when the address does not resolve.
 ListeningSockets listen_tcp(const std::string& address, const std::string& what,
                             const std::string& field);
+
+/// The host an accepted connection comes from, as accept() gave its address (IPv4-mapped IPv6
+/// written as IPv4, the data plane's form: peer_host()).
+std::string host_of_peer(const sockaddr_storage& address, socklen_t length);
 
 }  // namespace haptic::net

@@ -143,11 +143,11 @@ HttpResponse ViewerEndpoint::handle(const HttpRequest& request) const {
   const std::string call = "GET " + request.path;
   const grpc::Status allowed = sources_.access.authorize_header(
       request.header("authorization"), stats ? Permission::kAdmin : Permission::kObserve, call.c_str(),
-      nullptr, std::chrono::system_clock::now());
+      nullptr, std::chrono::system_clock::now(), request.peer);
   if (!allowed.ok()) {
     const bool unauthenticated = allowed.error_code() == grpc::StatusCode::UNAUTHENTICATED;
-    HttpResponse refusal =
-        HttpResponse::text(unauthenticated ? 401 : 403, "hapticd viewer: " + allowed.error_message() + "\n");
+    HttpResponse refusal = HttpResponse::text(
+        unauthenticated ? 401 : 403, "hapticd viewer: " + call + ": " + allowed.error_message() + "\n");
     if (unauthenticated) refusal.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"hapticd\"");
     return refusal;
   }

@@ -12,6 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "haptic/driver.h"
+#include "haptic/v1/service.pb.h"
+#include "haptic/version.hpp"
+#include "haptic/wire/datagram.hpp"
 #include "integration/run_program.hpp"
 #include "integration/server_process.hpp"
 
@@ -116,6 +120,40 @@ TEST(HapticdCli, TheHealthCheckFindsTheServerThroughItsReadyFile) {
   server.stop();
   const Outcome stopped = run_hapticd({"--health-check", "--ready-file", server.ready_file()});
   EXPECT_EQ(stopped.exit_code, 1) << stopped.output;
+}
+
+// Every configuration or command-line error is exit status 2 (the systemd unit's
+// RestartPreventExitStatus), whatever CLI11 or the check that found it would say.
+TEST(HapticdCli, EveryConfigurationOrCommandLineErrorIsExitStatusTwo) {
+  const Outcome missing = run_hapticd({"--config", "/nonexistent/hapticd.json"});
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("/nonexistent/hapticd.json"), std::string::npos) << missing.output;
+  const Outcome unknown = run_hapticd({"--no-such-option"});
+  EXPECT_EQ(unknown.exit_code, 2) << unknown.output;
+  const Outcome bad_value = run_hapticd({"--udp-port", "many"});
+  EXPECT_EQ(bad_value.exit_code, 2) << bad_value.output;
+  const Outcome health_key_alone =
+      run_hapticd({"--health-check", "127.0.0.1:1", "--health-key", HAPTICD_BINARY});
+  EXPECT_EQ(health_key_alone.exit_code, 2) << health_key_alone.output;
+  // Found only when the server is built: a key that is not the certificate's.
+  const std::string certs = TEST_CERTS_DIR;
+  const std::string path = ::testing::TempDir() + "/wrong_key.json";
+  std::ofstream(path) << R"({"time_mode": "LOCKSTEP", "grpc_address": "127.0.0.1:0", "udp_port": 0,
+      "security": {"tls": {"cert_file": ")" << certs << R"(/server.pem", "key_file": ")" << certs
+                      << R"(/client.key"}}})";
+  const Outcome wrong_key = run_hapticd({"--config", path});
+  EXPECT_EQ(wrong_key.exit_code, 2) << wrong_key.output;
+  EXPECT_NE(wrong_key.output.find("security.tls: the private key does not match the certificate"),
+            std::string::npos) << wrong_key.output;
+}
+
+TEST(HapticdCli, VersionNamesTheReleaseAndTheApiWireAndDriverVersions) {
+  const Outcome version = run_hapticd({"--version"});
+  EXPECT_EQ(version.exit_code, 0) << version.output;
+  EXPECT_EQ(version.output, std::string("hapticd ") + HAPTIC_VERSION + " (control API " +
+                                std::to_string(v1::API_VERSION_CURRENT) + ", wire " +
+                                std::to_string(wire::kWireVersion) + ", driver ABI " +
+                                std::to_string(HAPTIC_DRIVER_ABI_VERSION) + ")\n");
 }
 
 TEST(HapticdCli, WithTlsTooASecondServerOnTheBusyPortFailsWithOneClearLine) {

@@ -941,8 +941,11 @@ TEST(RpcSurface, ACancelledEventStreamFreesItsPlaceForTheNext) {
   const auto session = h.open("canceller");
   auto first = h.watch(session);
   ASSERT_EQ(next_event(*first).kind(), v1::Event::WATCH_STARTED);
-  const std::string full = "WatchEvents: session " + std::to_string(session.session_id()) +
-                           " already holds 1 event streams, the most one session may (1)";
+  // The message names the session as every log and tool does (hex), and the setting; not the
+  // call, which the client's own error names.
+  const std::string full = "session " + io::format_session_id(session.session_id()) +
+                           " already holds 1 event streams, the most one session may "
+                           "(max_event_streams_per_session = 1)";
   {
     auto refused = h.watch(session);
     EXPECT_EQ(next_event(*refused).kind(), v1::Event::KIND_UNSPECIFIED);

@@ -24,6 +24,8 @@
 #include <sstream>
 #include <thread>
 
+#include "haptic/version.hpp"
+#include "haptic/wire/datagram.hpp"
 #include "views.hpp"
 
 namespace {
@@ -56,6 +58,9 @@ int main(int argc, char** argv) {
   CLI::App cli{"hapticctl: look at and administer a running hapticd (the admin role where the "
                "server has tokens)"};
   cli.require_subcommand(1);
+  cli.set_version_flag("--version", std::string("hapticctl ") + HAPTIC_VERSION + " (control API " +
+                                        std::to_string(haptic::kApiVersion) + ", wire " +
+                                        std::to_string(haptic::wire::kWireVersion) + ")");
   haptic::ClientConfig config;
   config.client_name = "hapticctl";
   config.state_decimation = 0;  // it reads the server, not the device
@@ -135,7 +140,13 @@ int main(int argc, char** argv) {
   record_start->add_option("NAME", record_name, "the file's name (A-Z a-z 0-9 . _ -)")->required();
   CLI::App* record_stop = record->add_subcommand("stop", "stop the recording and show its totals");
 
-  CLI11_PARSE(cli, argc, argv);
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    // --help and --version are 0; any mistake on the command line is 2, whatever number CLI11
+    // gives its kind of error.
+    return cli.exit(error) == 0 ? 0 : 2;
+  }
 
   std::uint64_t target = 0;
   if (kick->parsed() && !parse_session(target_text, target)) {

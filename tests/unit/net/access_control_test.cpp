@@ -1,5 +1,10 @@
 // Bearer tokens and roles: the decision on one call's "authorization" metadata.
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <sstream>
 
 #include "net/access_control.hpp"
 
@@ -69,16 +74,45 @@ TEST(AccessControl, AnExpiredTokenIsUnauthenticatedFromItsExpiryOn) {
   const std::string header = "Bearer admin-secret-0000001";
   const grpc::Status late = access.authorize_header(&header, Permission::kObserve, "GetStats", nullptr, expiry);
   EXPECT_EQ(late.error_code(), grpc::StatusCode::UNAUTHENTICATED);
-  EXPECT_EQ(late.error_message(), "authorization: GetStats: token 'root' expired at 2023-11-14T22:13:20Z");
+  EXPECT_EQ(late.error_message(), "authorization: token 'root' expired at 2023-11-14T22:13:20Z");
 }
 
-TEST(AccessControl, ARefusalNamesTheCallTheRoleNeededAndTheTokensRole) {
+TEST(AccessControl, ARefusalNamesTheRoleNeededAndTheTokensRoleButNotTheCall) {
+  // The client's error already begins with the call's name ("CreateObject: ...").
   const AccessControl access = make_access();
   const std::string header = "Bearer observer-secret-0001";
   const grpc::Status status =
       access.authorize_header(&header, Permission::kControl, "CreateObject", nullptr, system_clock::now());
-  EXPECT_EQ(status.error_message(),
-            "CreateObject needs role CONTROLLER or above; token 'watcher' has role OBSERVER");
+  EXPECT_EQ(status.error_message(), "needs role CONTROLLER or above; token 'watcher' has role OBSERVER");
+}
+
+TEST(AccessControl, EveryRefusalIsLoggedWithThePeerTheTokenAndTheCallAtMostOnceASecond) {
+  const AccessControl access = make_access();
+  const AccessControl copy = access;  // the viewer's: one rate limit for both
+  std::ostringstream log_text;
+  auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(log_text);
+  const auto previous = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>("access-test", sink));
+  const std::string observer = "Bearer observer-secret-0001";
+  const std::string unknown = "Bearer not-a-token-at-all-000";
+  const system_clock::time_point start = system_clock::from_time_t(1'800'000'000);
+  (void)access.authorize_header(&observer, Permission::kAdmin, "KickSession", nullptr, start, "10.0.0.7");
+  for (int i = 0; i < 50; ++i) {  // a guesser, within the same second: held back, counted
+    (void)copy.authorize_header(&unknown, Permission::kObserve, "OpenSession", nullptr,
+                                start + std::chrono::milliseconds(10 * i), "10.0.0.9");
+  }
+  (void)access.authorize_header(nullptr, Permission::kObserve, "OpenSession", nullptr,
+                                start + std::chrono::milliseconds(1500), "10.0.0.9");
+  spdlog::set_default_logger(previous);
+  const std::string text = log_text.str();
+  EXPECT_NE(text.find("access: KickSession refused from 10.0.0.7, token 'watcher': needs role ADMIN"),
+            std::string::npos) << text;
+  EXPECT_NE(text.find("access: OpenSession refused from 10.0.0.9, token none: authorization: this server "
+                      "needs a bearer token"), std::string::npos) << text;
+  EXPECT_NE(text.find("(50 more refused since the last line)"), std::string::npos) << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 2) << text;
+  EXPECT_EQ(access.refusals(), 52u);
+  EXPECT_EQ(copy.refusals(), 52u);
 }
 
 }  // namespace

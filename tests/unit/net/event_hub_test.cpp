@@ -25,12 +25,13 @@ TEST(EventHub, WatchesAreCappedPerSessionAndInAllNamingTheLimit) {
   auto a2 = hub.watch(1, refusal);
   ASSERT_TRUE(a1 && a2);
   EXPECT_EQ(hub.watch(1, refusal), nullptr);
-  EXPECT_EQ(refusal, "WatchEvents: session 1 already holds 2 event streams, the most one session may (2)");
+  EXPECT_EQ(refusal, "session 0000000000000001 already holds 2 event streams, the most one session may "
+                     "(max_event_streams_per_session = 2)");
   auto b1 = hub.watch(2, refusal);
   ASSERT_TRUE(b1);
   EXPECT_EQ(hub.watch(3, refusal), nullptr);
   EXPECT_EQ(refusal,
-            "WatchEvents: the server already serves 3 event streams, its most (max_event_streams = 3)");
+            "the server already serves 3 event streams, its most (max_event_streams = 3)");
   hub.unwatch(a1);
   EXPECT_NE(hub.watch(3, refusal), nullptr);  // room again
   EXPECT_EQ(hub.size(), 3u);

@@ -131,7 +131,7 @@ TEST_F(ViewerEndpointTest, EachResourceNeedsTheRoleOfTheRpcThatReadsTheSame) {
   const HttpResponse none = endpoint.handle(get("/api/state"));
   EXPECT_EQ(none.status, 401);
   EXPECT_EQ(
-      none.body.rfind("hapticd viewer: authorization: GET /api/state: this server needs a bearer token", 0),
+      none.body.rfind("hapticd viewer: GET /api/state: authorization: this server needs a bearer token", 0),
       0u)
       << none.body;
   EXPECT_EQ(endpoint.handle(get("/api/state", "Bearer observer-secret-0001")).status, 200);
@@ -139,7 +139,7 @@ TEST_F(ViewerEndpointTest, EachResourceNeedsTheRoleOfTheRpcThatReadsTheSame) {
   const HttpResponse stats = endpoint.handle(get("/api/stats", "Bearer observer-secret-0001"));
   EXPECT_EQ(stats.status, 403);
   EXPECT_EQ(stats.body,
-            "hapticd viewer: GET /api/stats needs role ADMIN or above; token 'visitor' has role OBSERVER\n");
+            "hapticd viewer: GET /api/stats: needs role ADMIN or above; token 'visitor' has role OBSERVER\n");
   const HttpResponse admin = endpoint.handle(get("/api/stats", "Bearer admin-secret-0000001"));
   ASSERT_EQ(admin.status, 200);
   EXPECT_EQ(admin.content_type, "application/json");
