@@ -9,6 +9,8 @@
 #include <cctype>
 #include <cerrno>
 #include <exception>
+#include <map>
+#include <tuple>
 
 #include "net/tcp_listen.hpp"
 
@@ -121,6 +123,8 @@ std::string format_response(const HttpResponse& response, bool head_only, bool k
 struct HttpServer::Connection {
   int fd = -1;
   std::string host;  // the client's
+  std::uint64_t answered = 0;  // replies queued on it: its progress, with received.size()
+  std::chrono::steady_clock::time_point accepted_at;
   std::string received;
   std::string pending;  // the reply being sent
   std::size_t sent = 0;
@@ -223,17 +227,57 @@ void HttpServer::accept_from(int listening_fd, std::vector<Connection>& connecti
       }
       return;
     }
-    if (connections.size() >= limits_.max_connections) {
+    const std::string host = host_of_peer(peer, length);
+    if (!make_room(host, connections)) {
       refused_.fetch_add(1, std::memory_order_relaxed);  // counted before the peer sees the close
+      // Said in one try, never waited for: the refusal names the share it met.
+      const std::string why =
+          "hapticd " + name_ + ": " +
+          (std::count_if(connections.begin(), connections.end(),
+                         [&](const Connection& c) { return c.host == host; }) >=
+                   static_cast<std::ptrdiff_t>(limits_.max_connections_per_peer)
+               ? "this host holds " + std::to_string(limits_.max_connections_per_peer) +
+                     " connections, the most one host may"
+               : "the endpoint holds " + std::to_string(limits_.max_connections) +
+                     " connections, its most") +
+          "\n";
+      const std::string reply = "HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain; "
+                                "charset=utf-8\r\nContent-Length: " + std::to_string(why.size()) +
+                                "\r\nConnection: close\r\nRetry-After: 1\r\n\r\n" + why;
+      (void)::send(fd, reply.data(), reply.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
       ::close(fd);
       continue;
     }
     Connection connection;
     connection.fd = fd;
-    connection.host = host_of_peer(peer, length);
+    connection.host = host;
+    connection.accepted_at = std::chrono::steady_clock::now();
     connection.deadline = std::chrono::steady_clock::now() + limits_.timeout;
     connections.push_back(std::move(connection));
   }
+}
+
+bool HttpServer::make_room(const std::string& host, std::vector<Connection>& connections) {
+  std::map<std::string, std::size_t> per_host;
+  for (const Connection& c : connections) ++per_host[c.host];
+  const std::size_t from_host = per_host[host];
+  if (from_host >= limits_.max_connections_per_peer) return false;
+  if (connections.size() < limits_.max_connections) return true;
+  // Full: the least progress among the connections of hosts holding more than this one's, and
+  // not in the middle of a reply (its reader is waiting for it).
+  auto victim = connections.end();
+  const auto progress = [](const Connection& c) {
+    return std::tuple(c.answered, c.received.size(), c.accepted_at);
+  };
+  for (auto it = connections.begin(); it != connections.end(); ++it) {
+    if (!it->pending.empty() || per_host[it->host] <= from_host + 1) continue;
+    if (victim == connections.end() || progress(*it) < progress(*victim)) victim = it;
+  }
+  if (victim == connections.end()) return false;
+  ::close(victim->fd);
+  connections.erase(victim);
+  evicted_.fetch_add(1, std::memory_order_relaxed);
+  return true;
 }
 
 bool HttpServer::receive(Connection& connection) {
@@ -263,6 +307,7 @@ bool HttpServer::answer(Connection& connection) {
     connection.sent = 0;
     connection.close_when_sent = connection.close_when_sent || !keep_alive;
     connection.deadline = std::chrono::steady_clock::now() + limits_.timeout;
+    ++connection.answered;
     replies_.fetch_add(1, std::memory_order_relaxed);
   };
   const bool too_long = end == std::string::npos ? connection.received.size() > limits_.max_request_bytes

@@ -60,7 +60,12 @@ std::string parse_request_head(std::string_view head, HttpRequest& out);
 std::string format_response(const HttpResponse& response, bool head_only, bool keep_alive);
 
 struct HttpLimits {
-  std::size_t max_connections = 32;         // one more is accepted and closed at once
+  // Open at once, in all and from one host. Past the host's share a new connection is accepted
+  // and closed at once. At the cap in all, a newcomer from a host holding fewer displaces the
+  // connection making the least progress (fewest replies, then fewest bytes of its request so
+  // far, then the oldest) of a host holding more; if there is none, the newcomer is closed.
+  std::size_t max_connections = 32;
+  std::size_t max_connections_per_peer = 8;
   // For each request head to arrive, and for each reply to make progress (a large one read slowly
   // is not cut off; a reader that stops is).
   std::chrono::milliseconds timeout{2000};
@@ -87,9 +92,11 @@ class HttpServer {
   void start(Handler handler);
   void stop();
 
-  /// Replies sent, and connections closed at once because max_connections were open.
+  /// Replies sent, and connections closed at once because a cap was reached.
   std::uint64_t replies() const { return replies_.load(std::memory_order_relaxed); }
   std::uint64_t refused() const { return refused_.load(std::memory_order_relaxed); }
+  /// Connections closed to make room at max_connections for another host's.
+  std::uint64_t evicted() const { return evicted_.load(std::memory_order_relaxed); }
   /// Connections closed because a request head or a reply made no progress within the timeout.
   std::uint64_t timeouts() const { return timeouts_.load(std::memory_order_relaxed); }
 
@@ -97,6 +104,9 @@ class HttpServer {
   struct Connection;
   void serve_loop();
   void accept_from(int listening_fd, std::vector<Connection>& connections);
+  /// Whether a connection from `host` may be held, after displacing another host's if need be
+  /// (HttpLimits).
+  bool make_room(const std::string& host, std::vector<Connection>& connections);
   /// Reads what arrived; false when the connection is done with.
   bool receive(Connection& connection);
   /// Queues the reply to the next whole request in the connection's buffer; false when there is
@@ -115,6 +125,7 @@ class HttpServer {
   std::chrono::steady_clock::time_point accept_paused_until_{};
   std::atomic<std::uint64_t> replies_{0};
   std::atomic<std::uint64_t> refused_{0};
+  std::atomic<std::uint64_t> evicted_{0};
   std::atomic<std::uint64_t> timeouts_{0};
   std::thread thread_;
 };

@@ -6,9 +6,15 @@
 
 #include <haptic/haptic.hpp>
 
+#include <atomic>
+#include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "haptic/v1/viewer.pb.h"
 #include "integration/run_program.hpp"
@@ -186,6 +192,48 @@ TEST(Viewer, AStalledConnectionHoldsNoOneElseUp) {
   // The stalled one was served beside it all along: its request, finished now, is answered too.
   stalled.send("\r\n");
   EXPECT_EQ(stalled.read_reply().status, 200);
+}
+
+// One host's slowloris (64 connections each to the viewer and the metrics endpoint, trickling
+// request heads, made anew as they are dropped) leaves another host's requests answered: each
+// host has its share of the 32 connections (8). Bounded: 100 requests each, 30 s.
+TEST(Viewer, ASlowlorisFromOneHostLeavesAnotherHostsViewerAndMetricsRequestsAnswered) {
+  test::ServerProcess server(test::lockstep_config(R"("metrics_address": "127.0.0.1:0")"), "--http=0");
+  std::atomic<bool> stop{false};
+  std::thread slowloris([&] {
+    std::vector<std::unique_ptr<test::HttpConnection>> slow;
+    const std::string head = "GET /api/state HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: " + std::string(500, 'x');
+    for (std::size_t sent = 0; !stop.load(); ++sent) {
+      if (sent % 50 == 0) {  // every second, all of them anew (the server drops them after 2 s)
+        slow.clear();
+        for (int i = 0; i < 64; ++i) {
+          slow.push_back(std::make_unique<test::HttpConnection>(server.viewer_port(), "127.0.0.2"));
+          slow.push_back(std::make_unique<test::HttpConnection>(server.metrics_port(), "127.0.0.2"));
+        }
+      }
+      for (auto& connection : slow) connection->send(std::string(1, head[sent % head.size()]));
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  int viewer_answered = 0, metrics_answered = 0, attempts = 0;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  for (; attempts < 100 && std::chrono::steady_clock::now() < give_up; ++attempts) {
+    test::HttpConnection viewer(server.viewer_port(), "127.0.0.3");
+    viewer.send("GET /api/state HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
+    viewer_answered += viewer.read_reply().status == 200 ? 1 : 0;
+    test::HttpConnection metrics(server.metrics_port(), "127.0.0.3");
+    metrics.send("GET /metrics HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
+    metrics_answered += metrics.read_reply().status == 200 ? 1 : 0;
+  }
+  stop.store(true);
+  slowloris.join();
+  std::printf("  during a slowloris of 64 + 64 connections from one host: %d of %d viewer and %d of "
+              "%d metrics requests from another answered\n",
+              viewer_answered, attempts, metrics_answered, attempts);
+  EXPECT_EQ(attempts, 100);
+  EXPECT_GE(viewer_answered, 99);
+  EXPECT_GE(metrics_answered, 99);
 }
 
 TEST(Viewer, WithTokensTheDataNeedsTheRoleOfTheRpcsThatReadIt) {

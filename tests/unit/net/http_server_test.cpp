@@ -8,7 +8,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -132,7 +135,9 @@ TEST(HttpServer, ClosesAConnectionPastTheCapAndServesAgainOnceOneGoes) {
   ASSERT_EQ(second.read_reply().status, 200);
   test::HttpConnection third(server.http.port());
   third.send("GET /3 HTTP/1.1\r\n\r\n");
-  EXPECT_EQ(third.read_reply().status, 0);
+  const test::HttpReply refused = third.read_reply();
+  EXPECT_EQ(refused.status, 503);
+  EXPECT_EQ(refused.body, "hapticd test: the endpoint holds 2 connections, its most\n");
   EXPECT_EQ(server.http.refused(), 1u);
   first.reset();  // one goes: the next is served
   test::HttpReply fourth;
@@ -140,6 +145,93 @@ TEST(HttpServer, ClosesAConnectionPastTheCapAndServesAgainOnceOneGoes) {
     fourth = test::http_get(server.http.port(), "/4");  // once the server has seen the close
   }
   EXPECT_EQ(fourth.body, "/4");
+}
+
+/// Whether a request for `path` on `connection` is answered (with the path, as EchoServer does).
+bool answered(test::HttpConnection& connection, const std::string& path) {
+  connection.send("GET " + path + " HTTP/1.1\r\n\r\n");
+  return connection.read_reply().body == path;
+}
+
+TEST(HttpServer, OneHostGetsItsShareOfTheConnectionsAndNoMore) {
+  EchoServer server(HttpLimits{.max_connections = 32, .max_connections_per_peer = 3});
+  std::vector<std::unique_ptr<test::HttpConnection>> held;
+  for (int i = 0; i < 3; ++i) {
+    held.push_back(std::make_unique<test::HttpConnection>(server.http.port(), "127.0.0.2"));
+    ASSERT_TRUE(answered(*held.back(), "/" + std::to_string(i)));
+  }
+  test::HttpConnection fourth(server.http.port(), "127.0.0.2");
+  fourth.send("GET /4 HTTP/1.1\r\n\r\n");
+  const test::HttpReply refused = fourth.read_reply();
+  EXPECT_EQ(refused.status, 503);
+  EXPECT_EQ(refused.body, "hapticd test: this host holds 3 connections, the most one host may\n");
+  EXPECT_EQ(refused.header("Retry-After"), "1");
+  test::HttpConnection other_host(server.http.port(), "127.0.0.3");
+  EXPECT_TRUE(answered(other_host, "/other"));
+  EXPECT_EQ(server.http.refused(), 1u);
+}
+
+TEST(HttpServer, AtTheCapANewcomerDisplacesTheConnectionMakingTheLeastProgress) {
+  EchoServer server(HttpLimits{.max_connections = 4, .max_connections_per_peer = 4});
+  // One host holds all four: one has been answered, one has sent half a request, two nothing.
+  test::HttpConnection answered_once(server.http.port(), "127.0.0.2");
+  ASSERT_TRUE(answered(answered_once, "/done"));
+  test::HttpConnection half(server.http.port(), "127.0.0.2");
+  half.send("GET /ha");
+  test::HttpConnection silent_oldest(server.http.port(), "127.0.0.2");
+  test::HttpConnection silent(server.http.port(), "127.0.0.2");
+  // The server has them all once a fifth from that host is refused.
+  for (int attempt = 0; attempt < 200 && server.http.refused() == 0; ++attempt) {
+    test::HttpConnection probe(server.http.port(), "127.0.0.2");
+    probe.send("GET /probe HTTP/1.1\r\n\r\n");
+    (void)probe.read_reply();
+  }
+  ASSERT_EQ(server.http.refused(), 1u);
+  test::HttpConnection newcomer(server.http.port(), "127.0.0.3");
+  EXPECT_TRUE(answered(newcomer, "/newcomer"));
+  EXPECT_EQ(server.http.evicted(), 1u);
+  EXPECT_TRUE(silent_oldest.closed_by_server()) << "the oldest of those that said nothing goes";
+  half.send("lf HTTP/1.1\r\n\r\n");
+  EXPECT_EQ(half.read_reply().body, "/half");
+  EXPECT_TRUE(answered(answered_once, "/again"));
+}
+
+TEST(HttpServer, ASlowlorisFromOneHostLeavesAnotherHostsRequestsAnswered) {
+  // 64 connections from one host, each trickling a request head a byte at a time, reconnecting
+  // when dropped; meanwhile 200 requests from another host. Bounded: 200 requests, 20 s.
+  EchoServer server(HttpLimits{.timeout = std::chrono::milliseconds(500)});
+  std::atomic<bool> stop{false};
+  std::thread slowloris([&] {
+    std::vector<std::unique_ptr<test::HttpConnection>> slow;
+    const std::string head = "GET /slow HTTP/1.1\r\nX-Slow: " + std::string(200, 'x');
+    std::size_t sent = 0;
+    while (!stop.load()) {
+      while (slow.size() < 64) {
+        slow.push_back(std::make_unique<test::HttpConnection>(server.http.port(), "127.0.0.2"));
+      }
+      for (auto& connection : slow) connection->send(std::string(1, head[sent % head.size()]));
+      ++sent;
+      std::erase_if(slow, [](const std::unique_ptr<test::HttpConnection>& c) { return !c->connected(); });
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      if (sent % 25 == 0) slow.clear();  // and every half second all of them anew
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the flood in place first
+  int served = 0;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  int attempts = 0;
+  for (; attempts < 200 && std::chrono::steady_clock::now() < give_up; ++attempts) {
+    test::HttpConnection connection(server.http.port(), "127.0.0.3");
+    if (answered(connection, "/mine")) ++served;
+  }
+  stop.store(true);
+  slowloris.join();
+  std::printf("  %d of %d requests from another host answered during a 64-connection slowloris "
+              "(%llu refused, %llu evicted)\n", served, attempts,
+              static_cast<unsigned long long>(server.http.refused()),
+              static_cast<unsigned long long>(server.http.evicted()));
+  EXPECT_GE(served * 100, attempts * 99);
+  EXPECT_EQ(attempts, 200);
 }
 
 TEST(HttpServer, DropsAReaderThatStopsAndServesTheOthersMeanwhile) {
