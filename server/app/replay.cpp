@@ -2,11 +2,14 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <bit>
 #include <cstdio>
 #include <map>
 #include <utility>
+#include <vector>
 
 #include "app/server.hpp"
 #include "config/server_config.hpp"
@@ -14,7 +17,6 @@
 #include "haptic/v1/recording.pb.h"
 #include "haptic/v1/service.grpc.pb.h"
 #include "net/recording_file.hpp"
-#include "schema/scene_specs.hpp"
 
 namespace haptic::app {
 namespace {
@@ -47,16 +49,31 @@ struct ReplaySession {
   std::string secret;
 };
 
-std::string vec_text(const v1::Vec3& v) {
+/// What a recorded sample says, kept until the replay has run its tick (plain values: a few
+/// thousand are held at a time, none allocates).
+struct RecordedValues {
+  std::uint64_t tick = 0;
+  std::uint32_t port = 0;
+  engine::Vec3 force;
+  engine::Vec3 position;
+
+  explicit RecordedValues(const v1::RecordedSample& sample)
+      : tick(sample.tick()),
+        port(sample.port()),
+        force{sample.force().x(), sample.force().y(), sample.force().z()},
+        position{sample.position().x(), sample.position().y(), sample.position().z()} {}
+};
+
+std::string vec_text(const engine::Vec3& v) {
   char text[160];
-  std::snprintf(text, sizeof text, "(%.17g, %.17g, %.17g)", v.x(), v.y(), v.z());
+  std::snprintf(text, sizeof text, "(%.17g, %.17g, %.17g)", v.x, v.y, v.z);
   return text;
 }
 
-bool same_bits(const v1::Vec3& recorded, const engine::Vec3& replayed) {
-  return std::bit_cast<std::uint64_t>(recorded.x()) == std::bit_cast<std::uint64_t>(replayed.x) &&
-         std::bit_cast<std::uint64_t>(recorded.y()) == std::bit_cast<std::uint64_t>(replayed.y) &&
-         std::bit_cast<std::uint64_t>(recorded.z()) == std::bit_cast<std::uint64_t>(replayed.z);
+bool same_bits(const engine::Vec3& recorded, const engine::Vec3& replayed) {
+  return std::bit_cast<std::uint64_t>(recorded.x) == std::bit_cast<std::uint64_t>(replayed.x) &&
+         std::bit_cast<std::uint64_t>(recorded.y) == std::bit_cast<std::uint64_t>(replayed.y) &&
+         std::bit_cast<std::uint64_t>(recorded.z) == std::bit_cast<std::uint64_t>(replayed.z);
 }
 
 class Replay {
@@ -112,37 +129,37 @@ class Replay {
     }
   }
 
-  void compare(const v1::RecordedSample& recorded) {
-    advance_to(recorded.tick());
-    const auto found = replayed_.find({recorded.tick(), recorded.port()});
+  void compare(const RecordedValues& recorded) {
+    advance_to(recorded.tick);
+    const auto found = replayed_.find({recorded.tick, recorded.port});
     if (found == replayed_.end() && shut_down_) {
       ++report_.samples_not_replayed;  // the recorded ramp ran longer than the replay's
       return;
     }
     if (found == replayed_.end()) {
-      throw ReplayError("tick " + std::to_string(recorded.tick()) + " port " +
-                        std::to_string(recorded.port()) + ": the replay has no such sample (is the "
+      throw ReplayError("tick " + std::to_string(recorded.tick) + " port " +
+                        std::to_string(recorded.port) + ": the replay has no such sample (is the "
                         "recording's configuration another device?)");
     }
     const runtime::TickSample& replayed = found->second;
     ++report_.samples_compared;
-    const bool force_same = same_bits(recorded.force(), replayed.F_T_W);
-    const bool position_same = same_bits(recorded.position(), replayed.p_WT);
+    const bool force_same = same_bits(recorded.force, replayed.F_T_W);
+    const bool position_same = same_bits(recorded.position, replayed.p_WT);
     if (!force_same || !position_same) {
       if (report_.samples_differing == 0) {
         const char* what = force_same ? "position" : "force";
         report_.first_difference =
-            "tick " + std::to_string(recorded.tick()) + " port " + std::to_string(recorded.port()) +
+            "tick " + std::to_string(recorded.tick) + " port " + std::to_string(recorded.port) +
             ": " + what + " recorded " +
-            vec_text(force_same ? recorded.position() : recorded.force()) + ", replayed " +
-            vec_text(schema::to_proto(force_same ? replayed.p_WT : replayed.F_T_W));
+            vec_text(force_same ? recorded.position : recorded.force) + ", replayed " +
+            vec_text(force_same ? replayed.p_WT : replayed.F_T_W);
       }
       ++report_.samples_differing;
     }
     // What is compared is done with; anything older than a ring behind never will be.
     replayed_.erase(found);
     while (!replayed_.empty() &&
-           replayed_.begin()->first.first + runtime::SampleRing::kCapacity < recorded.tick()) {
+           replayed_.begin()->first.first + runtime::SampleRing::kCapacity < recorded.tick) {
       replayed_.erase(replayed_.begin());
     }
   }
@@ -316,28 +333,132 @@ ReplayReport replay_recording(const std::string& path,
   Replay replay(header);
   replay.on_progress(progress);
   replay.report().real_time = header.config().time_mode() != v1::LOCKSTEP;
+  // Samples are held until a change, the end or kAhead of them: the replay then runs their ticks
+  // in Steps of up to half a ring, not one Step a tick.
+  constexpr std::size_t kAhead = 4096;
+  std::vector<RecordedValues> ahead;
+  ahead.reserve(kAhead);
+  std::uint64_t ahead_through = 0;  // the last tick among them
+  const auto compare_ahead = [&] {
+    if (ahead.empty()) return;
+    replay.advance_to(ahead_through);
+    for (const RecordedValues& recorded : ahead) replay.compare(recorded);
+    ahead.clear();
+  };
+  // The last whole record, for a recording cut short: a sample (its tick and port), a change (the
+  // tick it followed) or the header.
+  enum class Last { kHeader, kSample, kChange } last = Last::kHeader;
+  std::uint64_t last_tick = 0;
+  std::uint32_t last_port = 0;
   bool ended = false;
   while (reader->next(record)) {
     if (record.has_sample()) {
-      replay.compare(record.sample());
+      ahead.emplace_back(record.sample());
+      ahead_through = std::max(ahead_through, record.sample().tick());
+      if (ahead.size() == kAhead) compare_ahead();
+      last = Last::kSample;
+      last_tick = record.sample().tick();
+      last_port = record.sample().port();
     } else if (record.has_change()) {
+      compare_ahead();
       replay.apply(record.change());
+      last = Last::kChange;
+      last_tick = record.change().after_tick();
     } else if (record.has_end()) {
+      compare_ahead();
       replay.report().samples_missed = record.end().samples_missed();
       replay.report().stopped_because = record.end().stopped_because();
       ended = true;
       break;
     }
   }
-  if (!ended) {
-    // A recorder killed with its server leaves no end record, and perhaps a block cut short:
-    // what was written is replayed all the same.
-    replay.report().stopped_because =
-        "the file ends without an end record (" +
-        (reader->error().empty() ? std::string("the recording server was killed?") : reader->error()) +
-        "): replayed as far as it goes";
+  compare_ahead();
+  if (ended) return replay.report();
+  // No end record. What was written is replayed all the same; but a whole run it is not.
+  const std::string last_record =
+      last == Last::kSample   ? "the sample of tick " + std::to_string(last_tick) + " port " +
+                                    std::to_string(last_port)
+      : last == Last::kChange ? "a change after tick " + std::to_string(last_tick)
+                              : std::string("the header");
+  const std::string where =
+      "stops after record " + std::to_string(reader->records()) + " (" + last_record +
+      "), at byte " + std::to_string(reader->offset()) + " of its records (" +
+      std::to_string(reader->file_bytes()) + " bytes of file)";
+  if (!reader->cut_short() && !reader->error().empty()) {
+    throw ReplayError("'" + path + "' is damaged: it " + where + ": " + reader->error());
   }
-  return replay.report();
+  replay.report().stopped_because = "was cut short";
+  throw ReplayCutShort(
+      "'" + path + "' is cut short: it " + where + ": " +
+          (reader->error().empty() ? "the file ends without the recording's end record"
+                                   : reader->error()) +
+          "; replayed as far as it goes",
+      replay.report());
+}
+
+const char* const kReplayHelp =
+    "replay a recording in lockstep and compare every tick's force with it, bit for bit; exit 0 "
+    "when all are the same, 1 when any differs, 2 when it cannot be replayed, 3 when it is cut "
+    "short (no end record: its recorder was killed, or its disk filled) and what it holds is the "
+    "same up to its last whole record";
+
+int replay_command(const std::string& path, std::FILE* out, std::FILE* err) {
+  // Progress on a terminal only: a log or a pipe gets the result alone.
+  const bool terminal = ::isatty(::fileno(err)) != 0;
+  const auto progress = [terminal, err](std::uint64_t ticks) {
+    if (terminal) std::fprintf(err, "\rreplay: %llu ticks", static_cast<unsigned long long>(ticks));
+  };
+  ReplayReport report;
+  std::string cut_short;
+  try {
+    report = replay_recording(path, progress);
+  } catch (const ReplayCutShort& cut) {
+    report = cut.report;
+    cut_short = cut.what();
+  } catch (const ReplayError& error) {
+    if (terminal) std::fprintf(err, "\r\x1b[K");
+    std::fprintf(err, "hapticd --replay: %s\n", error.what());
+    return kReplayRefused;
+  }
+  if (terminal) std::fprintf(err, "\r\x1b[K");
+  std::fprintf(out,
+               "replay of %s: %llu ticks, %llu changes, %llu samples compared, %llu differ; the "
+               "recording %s, %llu samples missed in it\n",
+               path.c_str(), static_cast<unsigned long long>(report.ticks),
+               static_cast<unsigned long long>(report.changes),
+               static_cast<unsigned long long>(report.samples_compared),
+               static_cast<unsigned long long>(report.samples_differing),
+               report.stopped_because.c_str(), static_cast<unsigned long long>(report.samples_missed));
+  if (!cut_short.empty()) {
+    std::fflush(out);
+    std::fprintf(err, "hapticd --replay: %s\n", cut_short.c_str());
+  }
+  const bool differs = report.samples_differing > 0 || report.samples_not_replayed > 0;
+  if (differs || (cut_short.empty() && !report.identical())) {
+    std::fprintf(out, "first difference: %s\n",
+                 !report.first_difference.empty() ? report.first_difference.c_str()
+                 : report.samples_not_replayed > 0
+                     ? "the recorded shutdown ramp ran longer than the replay's"
+                     : "nothing was compared");
+    if (report.real_time) {
+      std::fprintf(out,
+                   "(recorded in REAL_TIME: each change took effect at whatever tick the loop was "
+                   "on, and is replayed after the tick it was stamped with; only a LOCKSTEP "
+                   "recording is reproduced bit for bit)\n");
+    }
+    std::fflush(out);
+    return kReplayDiffers;
+  }
+  if (!cut_short.empty()) {
+    std::fprintf(out,
+                 "what the recording holds is the same, bit for bit, up to where it is cut short; "
+                 "the rest of the run is not in it\n");
+    std::fflush(out);
+    return kReplayCutShort;
+  }
+  std::fprintf(out, "every force and position is the same, bit for bit\n");
+  std::fflush(out);
+  return kReplaySame;
 }
 
 }  // namespace haptic::app

@@ -6,9 +6,11 @@
 // also shows that the same calls give the same run.
 
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace haptic::app {
 
@@ -33,9 +35,32 @@ struct ReplayReport {
   }
 };
 
+/// A recording cut short: no end record, because its recorder was killed (or the machine) or the
+/// file ends inside a record or a compressed block. Everything up to its last whole record was
+/// replayed: `report` says how that went; what() says where the recording stops (its last whole
+/// record's number and tick, the byte it ends at) and why.
+struct ReplayCutShort : ReplayError {
+  ReplayCutShort(const std::string& what, ReplayReport replayed)
+      : ReplayError(what), report(std::move(replayed)) {}
+  ReplayReport report;
+};
+
 /// Replays the recording at `path`. `progress` (may be empty) hears the ticks run so far now and
-/// then. Throws ReplayError.
+/// then. Throws ReplayCutShort (a ReplayError) for a recording cut short, ReplayError for one that
+/// cannot be replayed.
 ReplayReport replay_recording(const std::string& path,
                               const std::function<void(std::uint64_t ticks)>& progress = {});
+
+/// hapticd --replay's exit statuses.
+inline constexpr int kReplaySame = 0;      // every force and position the same, bit for bit
+inline constexpr int kReplayDiffers = 1;   // any differs (the first is named)
+inline constexpr int kReplayRefused = 2;   // cannot be replayed (not a recording, damaged, mid-run)
+inline constexpr int kReplayCutShort = 3;  // cut short (no end record), and all that is there the same
+/// hapticd --replay's help text, naming the exit statuses.
+extern const char* const kReplayHelp;
+
+/// hapticd --replay FILE: replays the recording, prints the result to `out` (what went wrong and
+/// where to `err`, and the progress too when `err` is a terminal) and returns the exit status.
+int replay_command(const std::string& path, std::FILE* out = stdout, std::FILE* err = stderr);
 
 }  // namespace haptic::app

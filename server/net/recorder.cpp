@@ -9,6 +9,9 @@ namespace haptic::net {
 namespace {
 
 constexpr auto kRound = std::chrono::milliseconds(2);  // a round per 2 ticks at 1 kHz; the ring holds 1024
+// The writer hands the file whole blocks every 64 kB of records (one to six seconds of a device
+// at 1 kHz); at least this often too, so that a recorder killed loses at most this much.
+constexpr auto kFlushPeriod = std::chrono::seconds(1);
 
 }  // namespace
 
@@ -41,6 +44,8 @@ std::string Recorder::start(const std::string& path, const v1::ServerConfig& con
   queued_.clear();
   totals_.Clear();
   next_tick_ = start_tick + 1;
+  flushed_at_ = std::chrono::steady_clock::now();
+  unflushed_ = true;  // the header: in the file within kFlushPeriod, were nothing else to come
   start_tick_.store(start_tick, std::memory_order_release);
   written_through_.store(start_tick, std::memory_order_release);
   stopping_ = false;
@@ -125,6 +130,7 @@ void Recorder::write_due() {
     totals_.set_changes(totals_.changes() + 1);
   }
   runtime::TickSample sample;
+  const std::uint64_t first_tick = next_tick_;
   for (; next_tick_ <= completed; ++next_tick_) {
     for (std::size_t port = 0; port < rings_.size(); ++port) {
       if (!rings_[port]->read(next_tick_, sample)) {
@@ -141,6 +147,12 @@ void Recorder::write_due() {
       writer.write(record);
       totals_.set_samples(totals_.samples() + 1);
     }
+  }
+  if (!changes.empty() || next_tick_ > first_tick) unflushed_ = true;
+  if (unflushed_ && std::chrono::steady_clock::now() - flushed_at_ >= kFlushPeriod) {
+    writer.flush();
+    flushed_at_ = std::chrono::steady_clock::now();
+    unflushed_ = false;
   }
   written_through_.store(completed, std::memory_order_release);
 }

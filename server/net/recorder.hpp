@@ -70,6 +70,8 @@ class Recorder {
   std::vector<v1::RecordedChange> queued_;
   bool stopping_ = false;
   std::uint64_t next_tick_ = 1;  // the recorder thread's: the next tick whose samples are due
+  std::chrono::steady_clock::time_point flushed_at_;  // the recorder thread's: its last flush()
+  bool unflushed_ = false;       // the recorder thread's: records written since
   v1::RecordEnd totals_;
   std::atomic<bool> active_{false};
   std::atomic<std::uint64_t> written_through_{0};

@@ -12,6 +12,7 @@ namespace {
 
 constexpr std::size_t kFlushBytes = 64 * 1024;  // records gathered before a compression step
 constexpr int kLevel = 3;                      // zstd's default: fast, and samples compress well
+constexpr std::size_t kBlockHeader = 3;        // a zstd block's header (RFC 8878)
 
 void append_varint(std::string& out, std::uint64_t value) {
   while (value >= 0x80) {
@@ -42,34 +43,43 @@ bool RecordingWriter::write(const v1::Record& record) {
   append_varint(pending_, record.ByteSizeLong());
   record.AppendToString(&pending_);
   if (pending_.size() < kFlushBytes) return true;
-  const bool ok = compress(pending_.data(), pending_.size(), false);
-  pending_.clear();
-  return ok;
+  return compress(Directive::kFlush);
 }
 
-bool RecordingWriter::compress(const void* data, std::size_t size, bool end) {
-  ZSTD_inBuffer in{data, size, 0};
+bool RecordingWriter::flush() {
+  if (!error_.empty() || file_ == nullptr) return false;
+  return compress(Directive::kFlush);
+}
+
+bool RecordingWriter::compress(Directive directive) {
+  // Whole blocks of whole records, handed to the file at once: a writer killed between two
+  // leaves a file that ends right after a record.
+  ZSTD_inBuffer in{pending_.data(), pending_.size(), 0};
+  const ZSTD_EndDirective mode = directive == Directive::kEnd ? ZSTD_e_end : ZSTD_e_flush;
   out_.resize(ZSTD_CStreamOutSize());
   for (;;) {
     ZSTD_outBuffer out{out_.data(), out_.size(), 0};
-    const std::size_t remaining =
-        ZSTD_compressStream2(context_, &out, &in, end ? ZSTD_e_end : ZSTD_e_continue);
+    const std::size_t remaining = ZSTD_compressStream2(context_, &out, &in, mode);
     if (ZSTD_isError(remaining)) {
       error_ = std::string("zstd: ") + ZSTD_getErrorName(remaining);
-      return false;
+      break;
     }
     if (out.pos > 0 && std::fwrite(out_.data(), 1, out.pos, file_) != out.pos) {
       error_ = "writing '" + path_ + "': " + std::strerror(errno);
-      return false;
+      break;
     }
-    if (end ? remaining == 0 : in.pos == in.size) return true;
+    if (remaining == 0) break;
   }
+  pending_.clear();
+  if (error_.empty() && std::fflush(file_) != 0) {
+    error_ = "writing '" + path_ + "': " + std::strerror(errno);
+  }
+  return error_.empty();
 }
 
 bool RecordingWriter::close() {
   if (file_ == nullptr) return error_.empty();
-  compress(pending_.data(), pending_.size(), true);
-  pending_.clear();
+  if (error_.empty()) compress(Directive::kEnd);  // after a failed write, the stream is broken
   if (std::fclose(file_) != 0 && error_.empty()) error_ = "closing '" + path_ + "': " + std::strerror(errno);
   file_ = nullptr;
   ZSTD_freeCCtx(context_);
@@ -108,6 +118,7 @@ bool RecordingReader::fill(std::size_t bytes) {
     } else if (unread > 0) {
       std::memmove(buffer_.get(), buffer_.get() + read_, unread);
     }
+    base_ += read_;
     size_ = unread;
     read_ = 0;
   }
@@ -120,9 +131,11 @@ bool RecordingReader::fill(std::size_t bytes) {
       if (file_done_) return false;
       in_size_ = std::fread(in_.get(), 1, in_capacity_, file_);
       in_used_ = 0;
+      file_bytes_ += in_size_;
       if (in_size_ == 0) {
         file_done_ = true;
-        if (!frame_done_) error_ = "recording '" + path_ + "': the file ends in the middle (truncated)";
+        // Mid-frame (or nothing at all): cut short, not ended. next() says where.
+        cut_short_ = !frame_done_ || file_bytes_ == 0;
         return false;
       }
     }
@@ -137,6 +150,7 @@ bool RecordingReader::fill(std::size_t bytes) {
       return false;
     }
     frame_done_ = result == 0;
+    hint_ = result;
     in_used_ = in.pos;
     size_ += out.pos;
   }
@@ -144,13 +158,41 @@ bool RecordingReader::fill(std::size_t bytes) {
 }
 
 bool RecordingReader::next(v1::Record& record) {
+  const std::uint64_t start = base_ + read_;  // where this record begins (fill() may move it)
+  // Why there is no whole record here: the file cut short (where, in the stream and in the
+  // record), or a frame that ended inside a record (damage). `length`: the record's, when known.
+  const auto stopped = [&](std::uint64_t length) {
+    if (!error_.empty()) return false;  // zstd's complaint
+    const std::uint64_t there = base_ + size_ - start;
+    if (!cut_short_) {
+      if (there > 0) error_ = "recording '" + path_ + "': the last record is cut short";
+      return false;  // else a clean end
+    }
+    if (file_bytes_ == 0) {
+      error_ = "recording '" + path_ + "': the file is empty (cut short: its writer was killed?)";
+      return false;
+    }
+    // zstd's hint is the input it wants next: at a block's end, the next block's header alone;
+    // inside a block, the rest of it too (the hint is that and the header after it).
+    error_ = "recording '" + path_ + "': the file ends in the middle";
+    error_ += hint_ == kBlockHeader
+                  ? " of its compressed stream, at the end of a block"
+                  : " of a compressed block (" +
+                        std::to_string(hint_ > kBlockHeader ? hint_ - kBlockHeader : hint_) +
+                        " more bytes were due; what it holds is lost)";
+    if (there == 0) {
+      error_ += ", after a whole record";
+    } else {
+      error_ += ", inside a record (" + std::to_string(there) +
+                (length > 0 ? " of its " + std::to_string(length) : std::string()) + " bytes are there)";
+    }
+    error_ += ": cut short (its writer killed?)";
+    return false;
+  };
   // The varint length: up to 10 bytes.
   std::uint64_t length = 0;
   for (int shift = 0;; shift += 7) {
-    if (!fill(1)) {
-      if (shift > 0 && error_.empty()) error_ = "recording '" + path_ + "': the last record is cut short";
-      return false;
-    }
+    if (!fill(1)) return stopped(0);
     const auto byte = static_cast<unsigned char>(buffer_[read_++]);
     length |= static_cast<std::uint64_t>(byte & 0x7f) << shift;
     if ((byte & 0x80) == 0) break;
@@ -164,15 +206,14 @@ bool RecordingReader::next(v1::Record& record) {
     error_ = "recording '" + path_ + "': a record claims " + std::to_string(length) + " bytes";
     return false;
   }
-  if (!fill(static_cast<std::size_t>(length))) {
-    if (error_.empty()) error_ = "recording '" + path_ + "': the last record is cut short";
-    return false;
-  }
+  if (!fill(static_cast<std::size_t>(length))) return stopped(base_ + read_ - start + length);
   if (!record.ParseFromArray(buffer_.get() + read_, static_cast<int>(length))) {
     error_ = "recording '" + path_ + "': a record does not parse";
     return false;
   }
   read_ += static_cast<std::size_t>(length);
+  ++records_;
+  offset_ = base_ + read_;
   return true;
 }
 

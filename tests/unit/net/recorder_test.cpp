@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <bit>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
@@ -120,6 +122,149 @@ TEST(RecordingFile, ReadingAllocatesNoMoreThanParsingDoes) {
   EXPECT_FALSE(reader.next(record));
   EXPECT_EQ(reader.error(), "");
   std::filesystem::remove(path);
+}
+
+/// Where each compressed block of the zstd frame in `bytes` ends (RFC 8878: frame header, then
+/// blocks of a 3-byte header and their content).
+std::vector<std::size_t> block_ends(const std::string& bytes) {
+  const auto byte = [&](std::size_t at) { return static_cast<unsigned char>(bytes.at(at)); };
+  const unsigned descriptor = byte(4);
+  const unsigned content_size_flag = descriptor >> 6;
+  const bool single_segment = ((descriptor >> 5) & 1) != 0;
+  const std::size_t dictionary_bytes[] = {0, 1, 2, 4};
+  std::size_t at = 5 + (single_segment ? 0 : 1) + dictionary_bytes[descriptor & 3] +
+                   (content_size_flag == 0 ? (single_segment ? 1 : 0) : std::size_t{1} << content_size_flag);
+  std::vector<std::size_t> ends;
+  while (at + 3 <= bytes.size()) {
+    const std::uint32_t header = byte(at) | byte(at + 1) << 8 | byte(at + 2) << 16;
+    const unsigned type = (header >> 1) & 3;
+    at += 3 + (type == 1 ? 1 : header >> 3);  // an RLE block holds one byte
+    ends.push_back(at);
+    if ((header & 1) != 0) break;  // the last block
+  }
+  return ends;
+}
+
+// A recording cut short (its writer killed): whatever the byte the file ends at, every whole record
+// before it reads back as written, and the reader says it was cut short and where: right after a
+// record, inside a compressed block, inside a record.
+TEST(RecordingFile, ACutFileReadsToItsLastWholeRecordAndSaysWhere) {
+  const std::string path = temp_path("whole");
+  std::vector<v1::Record> written;
+  std::vector<std::uint64_t> ends{0};  // where each record ends in the decompressed stream
+  std::uintmax_t after_100 = 0;        // the file's size once the first 100 records were flushed
+  std::uintmax_t after_big = 0;
+  {
+    RecordingWriter writer(path);
+    const auto write = [&](const v1::Record& record) {
+      const std::uint64_t size = record.ByteSizeLong();
+      std::uint64_t varint = 1;
+      while (size >> (7 * varint) != 0) ++varint;
+      ends.push_back(ends.back() + varint + size);
+      written.push_back(record);
+      ASSERT_TRUE(writer.write(record));
+    };
+    for (std::uint64_t tick = 1; tick <= 100; ++tick) write(sample_record(tick, 2.0 / tick));
+    ASSERT_TRUE(writer.flush());
+    after_100 = std::filesystem::file_size(path);
+    // A record of 400 kB that compresses little: several blocks.
+    std::string name(400'000, ' ');
+    std::uint32_t state = 12345;
+    for (char& c : name) c = static_cast<char>('a' + ((state = state * 1103515245u + 12345u) >> 16) % 26);
+    v1::Record big;
+    big.mutable_change()->mutable_opened()->set_client_name(name);
+    write(big);
+    ASSERT_TRUE(writer.flush());
+    after_big = std::filesystem::file_size(path);
+    for (std::uint64_t tick = 101; tick <= 200; ++tick) write(sample_record(tick, 3.0 / tick));
+    ASSERT_TRUE(writer.close()) << writer.error();
+  }
+  std::string bytes;
+  {
+    std::ifstream file(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(file), {});
+  }
+  ASSERT_EQ(bytes.size(), std::filesystem::file_size(path));
+
+  struct Read {
+    std::uint64_t records = 0;
+    std::uint64_t offset = 0;
+    bool cut_short = false;
+    std::string error;
+  };
+  const std::string cut = temp_path("cut");
+  const auto read_cut = [&](std::size_t size) {
+    std::ofstream(cut, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(size));
+    RecordingReader reader(cut);
+    v1::Record record;
+    Read read;
+    while (reader.next(record)) {
+      EXPECT_EQ(record.SerializeAsString(), written.at(read.records).SerializeAsString()) << read.records;
+      ++read.records;
+    }
+    EXPECT_EQ(reader.records(), read.records);
+    read.offset = reader.offset();
+    read.cut_short = reader.cut_short();
+    read.error = reader.error();
+    return read;
+  };
+  const auto has = [](const std::string& text, const std::string& part) {
+    return text.find(part) != std::string::npos;
+  };
+
+  // Right after a whole record: the file as the writer left it after a flush.
+  Read read = read_cut(after_100);
+  EXPECT_EQ(read.records, 100u);
+  EXPECT_EQ(read.offset, ends[100]);
+  EXPECT_TRUE(read.cut_short);
+  EXPECT_TRUE(has(read.error, "the file ends in the middle of its compressed stream, at the end of a "
+                              "block, after a whole record: cut short")) << read.error;
+
+  // Inside a compressed block: its records are lost, not misread.
+  read = read_cut(after_100 + 10);
+  EXPECT_EQ(read.records, 100u);
+  EXPECT_EQ(read.offset, ends[100]);
+  EXPECT_TRUE(read.cut_short);
+  EXPECT_TRUE(has(read.error, "ends in the middle of a compressed block (")) << read.error;
+
+  // Inside a record: at the end of a block that holds the big record's beginning only.
+  const std::vector<std::size_t> blocks = block_ends(bytes);
+  const auto inside = std::find_if(blocks.begin(), blocks.end(),
+                                   [&](std::size_t end) { return end > after_100 && end < after_big; });
+  ASSERT_NE(inside, blocks.end());
+  read = read_cut(*inside);
+  EXPECT_EQ(read.records, 100u);
+  EXPECT_TRUE(read.cut_short);
+  EXPECT_TRUE(has(read.error, "at the end of a block, inside a record (")) << read.error;
+  EXPECT_TRUE(has(read.error, " of its " + std::to_string(ends[101] - ends[100]) + " bytes are there)"))
+      << read.error;
+  read = read_cut(*inside + 7);  // and a few bytes into the next block
+  EXPECT_EQ(read.records, 100u);
+  EXPECT_TRUE(has(read.error, "ends in the middle of a compressed block (")) << read.error;
+  EXPECT_TRUE(has(read.error, "what it holds is lost), inside a record (")) << read.error;
+
+  // Nothing at all.
+  read = read_cut(0);
+  EXPECT_EQ(read.records, 0u);
+  EXPECT_TRUE(read.cut_short);
+  EXPECT_TRUE(has(read.error, "the file is empty")) << read.error;
+
+  // Any byte: whole records only, never fewer for more bytes, and always said to be cut short.
+  std::uint64_t before = 0;
+  for (std::size_t size = 1; size < bytes.size(); size += 97) {
+    read = read_cut(size);
+    EXPECT_GE(read.records, before) << size;
+    EXPECT_EQ(read.offset, ends[read.records]) << size;
+    EXPECT_TRUE(read.cut_short) << size;
+    EXPECT_TRUE(has(read.error, "cut short")) << size << ": " << read.error;
+    before = read.records;
+  }
+  read = read_cut(bytes.size());
+  EXPECT_EQ(read.records, 201u);
+  EXPECT_FALSE(read.cut_short);
+  EXPECT_EQ(read.error, "");
+  std::filesystem::remove(path);
+  std::filesystem::remove(cut);
 }
 
 TEST(RecordingFile, DamageIsNamedNotMistakenForAnEnd) {

@@ -1,0 +1,215 @@
+// A recording cut short: hapticd killed with SIGKILL while it records, and a whole recording cut
+// at chosen bytes. The replay runs every whole record there, says where the recording stops (its
+// last whole record's number and tick, the byte) and why, and exits with a status of its own (3):
+// neither the success of a whole run nor a refusal.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <haptic/haptic.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <optional>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "app/replay.hpp"
+#include "integration/run_program.hpp"
+#include "integration/sdk_harness.hpp"
+#include "integration/server_process.hpp"
+
+namespace haptic {
+namespace {
+
+std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() /
+          ("hapticd-" + name + "-" + std::to_string(::getpid()) + ".hrec"))
+      .string();
+}
+
+/// hapticd --replay as main() runs it (app::replay_command), in this process: the exit status and
+/// what it printed to stdout and to stderr.
+struct Replayed {
+  int status = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string read_back(std::FILE* file) {
+  std::rewind(file);
+  std::string text;
+  char buffer[4096];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, file)) > 0;) text.append(buffer, n);
+  std::fclose(file);
+  return text;
+}
+
+Replayed replay(const std::string& path) {
+  std::FILE* out = std::tmpfile();
+  std::FILE* err = std::tmpfile();
+  Replayed replayed;
+  replayed.status = app::replay_command(path, out, err);
+  replayed.out = read_back(out);
+  replayed.err = read_back(err);
+  return replayed;
+}
+
+/// Where the replay says the recording stops.
+struct Stop {
+  std::uint64_t record = 0;
+  std::uint64_t tick = 0;
+  std::uint64_t byte = 0;
+  std::string why;
+};
+
+std::optional<Stop> stop_of(const std::string& said) {
+  static const std::regex where(
+      R"(is cut short: it stops after record (\d+) \(the sample of tick (\d+) port 0\), at byte (\d+) of its records \(\d+ bytes of file\): recording '[^']*': (.*); replayed as far as it goes)");
+  std::smatch match;
+  if (!std::regex_search(said, match, where)) return std::nullopt;
+  return Stop{std::stoull(match[1]), std::stoull(match[2]), std::stoull(match[3]), match[4]};
+}
+
+/// Where each block of the zstd frame in `bytes` ends (RFC 8878: the frame header, then blocks of
+/// a 3-byte header and their content).
+std::vector<std::size_t> block_ends(const std::string& bytes) {
+  const auto byte = [&](std::size_t at) { return static_cast<unsigned char>(bytes.at(at)); };
+  const unsigned descriptor = byte(4);
+  const unsigned content_size_flag = descriptor >> 6;
+  const bool single_segment = ((descriptor >> 5) & 1) != 0;
+  const std::size_t dictionary_bytes[] = {0, 1, 2, 4};
+  std::size_t at = 5 + (single_segment ? 0 : 1) + dictionary_bytes[descriptor & 3] +
+                   (content_size_flag == 0 ? (single_segment ? 1 : 0) : std::size_t{1} << content_size_flag);
+  std::vector<std::size_t> ends;
+  while (at + 3 <= bytes.size()) {
+    const std::uint32_t header = byte(at) | byte(at + 1) << 8 | byte(at + 2) << 16;
+    at += 3 + (((header >> 1) & 3) == 1 ? 1 : header >> 3);  // an RLE block holds one byte
+    ends.push_back(at);
+    if ((header & 1) != 0) break;  // the last block
+  }
+  return ends;
+}
+
+void cut_file(const std::string& from, const std::string& to, std::uintmax_t size) {
+  std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::resize_file(to, size);
+}
+
+TEST(RecordingCutShort, AServerKilledWhileRecordingReplaysToItsLastWholeRecordAndSaysWhere) {
+  const std::string path = temp_path("killed");
+  std::uint64_t stepped = 0;
+  {
+    test::ServerProcess server(test::lockstep_config(), "--record=" + path);
+    {
+      Client client(test::config_for(server, "killed"));
+      ObjectHandle wall = client.add_wall(WallSpec{{0, 0, 0}, {0, 0, 1}, {1000.0, 1.0}});
+      client.set_operator(
+          OperatorInput::follow_line({0, 0, 0.02}, {0, 0, -0.01}, 1.5, OperatorInput::Grip::kLoose));
+      (void)client.step(2000);
+      wall.update(WallSpec{{0, 0, 0.001}, {0, 0, 1}, {1500.0, 2.0}});
+      stepped = client.step(20'000);  // the recorder has every tick's sample when Step returns
+      ASSERT_EQ(::kill(server.pid(), SIGKILL), 0);
+      EXPECT_EQ(server.wait(), 128 + SIGKILL);
+    }
+  }
+  ASSERT_EQ(stepped, 22'000u);
+
+  const Replayed replayed = replay(path);
+  EXPECT_EQ(replayed.status, app::kReplayCutShort) << replayed.out << replayed.err;
+  EXPECT_EQ(app::kReplayCutShort, 3);
+  const std::optional<Stop> stop = stop_of(replayed.err);
+  ASSERT_TRUE(stop.has_value()) << replayed.err;
+  // The writer hands the file whole blocks of records every 64 kB of them and every second: what
+  // was not yet handed over died with the server. Most of the second Step is there.
+  EXPECT_LE(stop->tick, stepped);
+  EXPECT_GT(stop->tick, 12'000u) << replayed.err;
+  // The header and 4 changes (the session opened, the wall, the operator input, the wall's
+  // change) beside the samples.
+  EXPECT_EQ(stop->record, stop->tick + 5) << replayed.err;
+  EXPECT_GT(stop->byte, 0u);
+  EXPECT_NE(stop->why.find("the file ends in the middle of "), std::string::npos) << stop->why;
+  EXPECT_NE(stop->why.find("cut short (its writer killed?)"), std::string::npos) << stop->why;
+  // Every tick there was replayed and compared; nothing claims a whole run.
+  EXPECT_NE(replayed.out.find(": " + std::to_string(stop->tick) + " ticks, 4 changes, " +
+                              std::to_string(stop->tick) + " samples compared, 0 differ; the "
+                              "recording was cut short"),
+            std::string::npos)
+      << replayed.out;
+  EXPECT_EQ(replayed.out.find("every force and position is the same"), std::string::npos) << replayed.out;
+
+  // hapticd --replay itself: never the success of a whole run; where it stops, said on stderr.
+  // (It exits 3 once main() returns app::replay_command's status; until then the cut is a
+  // refusal, 2.)
+  const test::Outcome outcome = test::run_program(HAPTICD_BINARY, {"--replay", path});
+  EXPECT_NE(outcome.exit_code, 0) << outcome.output;
+  EXPECT_NE(outcome.output.find("is cut short: it stops after record " + std::to_string(stop->record)),
+            std::string::npos)
+      << outcome.output;
+  EXPECT_EQ(outcome.output.find("every force and position is the same"), std::string::npos);
+  std::filesystem::remove(path);
+}
+
+// A whole recording (SIGTERM, end record), cut at chosen bytes: right after a whole record, inside
+// a compressed block, inside a record. Each replays as far as it goes and exits 3, saying so.
+TEST(RecordingCutShort, AWholeRecordingCutAtAnyByteIsReplayedAsFarAsItGoes) {
+  const std::string path = temp_path("whole");
+  {
+    test::ServerProcess server(test::lockstep_config(), "--record=" + path);
+    {
+      Client client(test::config_for(server, "whole"));
+      ObjectHandle wall = client.add_wall(WallSpec{{0, 0, 0}, {0, 0, 1}, {1000.0, 1.0}});
+      client.set_operator(
+          OperatorInput::follow_line({0, 0, 0.02}, {0, 0, -0.01}, 1.5, OperatorInput::Grip::kLoose));
+      (void)client.step(6000);
+    }
+    ASSERT_EQ(server.stop(), 0);
+  }
+  ASSERT_EQ(replay(path).status, app::kReplaySame);
+  std::string bytes;
+  {
+    std::ifstream file(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(file), {});
+  }
+  const std::vector<std::size_t> blocks = block_ends(bytes);
+  ASSERT_GE(blocks.size(), 4u);
+  ASSERT_EQ(blocks.back(), bytes.size() - 4);  // then the checksum
+  const std::string cut = temp_path("whole-cut");
+
+  // Inside a compressed block (the second, one in the middle, the last): what it holds is lost.
+  std::uint64_t previous_tick = 0;
+  for (const std::size_t block : {std::size_t{1}, blocks.size() / 2, blocks.size() - 1}) {
+    const std::size_t at = (blocks[block - 1] + blocks[block]) / 2;
+    cut_file(path, cut, at);
+    const Replayed replayed = replay(cut);
+    EXPECT_EQ(replayed.status, app::kReplayCutShort) << at << ": " << replayed.out << replayed.err;
+    const std::optional<Stop> stop = stop_of(replayed.err);
+    ASSERT_TRUE(stop.has_value()) << at << ": " << replayed.err;
+    EXPECT_GT(stop->tick, previous_tick);
+    previous_tick = stop->tick;
+    EXPECT_NE(replayed.out.find(std::to_string(stop->tick) + " samples compared, 0 differ"),
+              std::string::npos)
+        << replayed.out;
+    EXPECT_NE(stop->why.find("ends in the middle of a compressed block ("), std::string::npos)
+        << at << ": " << stop->why;
+  }
+
+  // Right after a whole record: where a block ends (the writer hands the file whole blocks of
+  // whole records).
+  cut_file(path, cut, blocks[blocks.size() / 2]);
+  const Replayed replayed = replay(cut);
+  EXPECT_EQ(replayed.status, app::kReplayCutShort) << replayed.out << replayed.err;
+  const std::optional<Stop> stop = stop_of(replayed.err);
+  ASSERT_TRUE(stop.has_value()) << replayed.err;
+  EXPECT_EQ(stop->why,
+            "the file ends in the middle of its compressed stream, at the end of a block, after a "
+            "whole record: cut short (its writer killed?)");
+  std::filesystem::remove(cut);
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace haptic
