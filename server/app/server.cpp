@@ -115,7 +115,8 @@ Server::Server(const v1::ServerConfig& config)
                                    std::chrono::milliseconds(config.lease_timeout_ms()),
                                    config.udp_any_source(), config.session_open_rate_per_peer(),
                                    config.session_open_burst_per_peer()}),
-      events_(net::WatchLimits{config.max_event_streams_per_session(), config.max_event_streams()}),
+      events_(net::WatchLimits{config.max_event_streams_per_session(), config.max_event_streams(),
+                               config.max_event_streams_per_peer()}),
       udp_(sessions_, ring_pointers(samples_)) {
   const double rate = config.loop_rate_hz();
   const auto ports = static_cast<std::uint32_t>(devices_.size());
@@ -162,7 +163,10 @@ Server::Server(const v1::ServerConfig& config)
       scenes_, [this] { return static_cast<std::int64_t>(loop_->completed_ticks() + 1); },
       tick.output_ramp_ticks, config.max_objects_per_session(), tick.period_s,
       config.session_force_budget(), ports,
-      net::SceneBudget{config.max_scene_triangles(), config.max_scene_bytes()});
+      net::SceneBudget{config.max_scene_triangles(), config.max_scene_bytes(),
+                       config.max_scene_triangles_per_session(), config.max_scene_bytes_per_session(),
+                       config.max_scene_triangles_per_peer(), config.max_scene_bytes_per_peer(),
+                       [this](std::uint64_t session_id) { return sessions_.peer_of(session_id); }});
 
   // The initial scene belongs to the server itself (session 0) and never expires.
   schema::SceneLimits limits;

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 #include <thread>
 
 #include "config/devices.hpp"
@@ -141,6 +142,19 @@ void fill_defaults(v1::ServerConfig& config) {
   if (config.handshake_timeout_ms() == 0) config.set_handshake_timeout_ms(5000);
   if (config.max_scene_triangles() == 0) config.set_max_scene_triangles(200'000);
   if (config.max_scene_bytes() == 0) config.set_max_scene_bytes(64ull << 20);
+  // The shares: half the whole of each, rounded up.
+  const auto half = [](std::uint64_t whole) { return (whole + 1) / 2; };
+  if (config.max_scene_triangles_per_session() == 0) {
+    config.set_max_scene_triangles_per_session(static_cast<std::uint32_t>(half(config.max_scene_triangles())));
+  }
+  if (config.max_scene_triangles_per_peer() == 0) {
+    config.set_max_scene_triangles_per_peer(static_cast<std::uint32_t>(half(config.max_scene_triangles())));
+  }
+  if (config.max_scene_bytes_per_session() == 0) config.set_max_scene_bytes_per_session(half(config.max_scene_bytes()));
+  if (config.max_scene_bytes_per_peer() == 0) config.set_max_scene_bytes_per_peer(half(config.max_scene_bytes()));
+  if (config.max_event_streams_per_peer() == 0) {
+    config.set_max_event_streams_per_peer(static_cast<std::uint32_t>(half(config.max_event_streams())));
+  }
 
   fill_point_mass_defaults(*config.mutable_simulated_point_mass());
   for (v1::DeviceConfig& extra : *config.mutable_extra_devices()) {
@@ -212,6 +226,22 @@ std::string validate(const v1::ServerConfig& config) {
   if (config.max_event_streams() > 1024) {
     return "max_event_streams: must be 1 to 1024 (each holds a thread), got " +
            std::to_string(config.max_event_streams());
+  }
+  for (const auto& [share, share_value, whole, whole_value] :
+       {std::tuple{"max_scene_triangles_per_session", std::uint64_t{config.max_scene_triangles_per_session()},
+                   "max_scene_triangles", std::uint64_t{config.max_scene_triangles()}},
+        std::tuple{"max_scene_triangles_per_peer", std::uint64_t{config.max_scene_triangles_per_peer()},
+                   "max_scene_triangles", std::uint64_t{config.max_scene_triangles()}},
+        std::tuple{"max_scene_bytes_per_session", config.max_scene_bytes_per_session(), "max_scene_bytes",
+                   config.max_scene_bytes()},
+        std::tuple{"max_scene_bytes_per_peer", config.max_scene_bytes_per_peer(), "max_scene_bytes",
+                   config.max_scene_bytes()},
+        std::tuple{"max_event_streams_per_peer", std::uint64_t{config.max_event_streams_per_peer()},
+                   "max_event_streams", std::uint64_t{config.max_event_streams()}}}) {
+    if (share_value > whole_value) {
+      return std::string(share) + ": must be at most " + whole + " (" + std::to_string(whole_value) +
+             "), got " + std::to_string(share_value);
+    }
   }
   if (config.max_event_streams_per_session() > config.max_event_streams()) {
     return "max_event_streams_per_session: must be at most max_event_streams (" +

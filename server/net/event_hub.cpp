@@ -20,7 +20,8 @@ bool EventHub::Watcher::finished() const {
   return closed_ && queue_.empty();
 }
 
-std::shared_ptr<EventHub::Watcher> EventHub::watch(std::uint64_t session_id, std::string& refusal) {
+std::shared_ptr<EventHub::Watcher> EventHub::watch(std::uint64_t session_id, std::string& refusal,
+                                                   const std::string& host) {
   std::lock_guard lock(mutex_);
   if (closed_) {
     refusal = "the server is shutting down";
@@ -40,8 +41,20 @@ std::shared_ptr<EventHub::Watcher> EventHub::watch(std::uint64_t session_id, std
               " event streams, its most (max_event_streams = " + std::to_string(limits_.total) + ")";
     return nullptr;
   }
+  if (limits_.per_peer > 0 && !host.empty()) {
+    const auto from_host = static_cast<std::size_t>(std::count_if(
+        watchers_.begin(), watchers_.end(),
+        [&](const std::shared_ptr<Watcher>& w) { return w->host_ == host; }));
+    if (from_host >= limits_.per_peer) {
+      refusal = "the sessions from " + host + " already hold " + std::to_string(from_host) +
+                " event streams, the most one host may (max_event_streams_per_peer = " +
+                std::to_string(limits_.per_peer) + ")";
+      return nullptr;
+    }
+  }
   auto watcher = std::make_shared<Watcher>();
   watcher->session_id_ = session_id;
+  watcher->host_ = host;
   watchers_.push_back(watcher);
   return watcher;
 }

@@ -1,6 +1,7 @@
 #include "net/scene_store.hpp"
 
 #include <algorithm>
+#include <map>
 #include <string>
 
 namespace haptic::net {
@@ -37,12 +38,31 @@ ItemCost cost_of(const std::variant<engine::ObjectSpec, engine::FieldSpec>& spec
   return cost;
 }
 
-grpc::Status SceneStore::check_budget(const ItemCost& added, const std::string& what) const {
-  ItemCost held;
-  const auto add = [&held](const Item& item) {
+grpc::Status SceneStore::check_budget(const ItemCost& added, const std::string& what,
+                                      std::uint64_t session_id) const {
+  const bool per_peer = session_id != 0 && budget_.host_of_session &&
+                        (budget_.max_triangles_per_peer > 0 || budget_.max_bytes_per_peer > 0);
+  const std::string host = per_peer ? budget_.host_of_session(session_id) : std::string();
+  std::map<std::uint64_t, std::string> hosts;  // each session's, looked up once
+  const auto same_host = [&](std::uint64_t owner) {
+    if (!per_peer || owner == 0) return false;
+    auto found = hosts.find(owner);
+    if (found == hosts.end()) found = hosts.emplace(owner, budget_.host_of_session(owner)).first;
+    return found->second == host;
+  };
+  ItemCost held, held_by_session, held_by_host;
+  const auto add = [&](const Item& item) {
     const ItemCost cost = cost_of(item.spec);
     held.triangles += cost.triangles;
     held.bytes += cost.bytes;
+    if (session_id != 0 && item.meta.session_id == session_id) {
+      held_by_session.triangles += cost.triangles;
+      held_by_session.bytes += cost.bytes;
+    }
+    if (same_host(item.meta.session_id)) {
+      held_by_host.triangles += cost.triangles;
+      held_by_host.bytes += cost.bytes;
+    }
   };
   for (const auto& [id, item] : items_) add(item);
   for (const Item& item : superseded_) add(item);
@@ -60,6 +80,36 @@ grpc::Status SceneStore::check_budget(const ItemCost& added, const std::string& 
                 "(every session's, fading items included) to " +
                 std::to_string(held.bytes + added.bytes) + " bytes, over max_scene_bytes (" +
                 std::to_string(budget_.max_bytes) + ")"};
+  }
+  // The shares: what one host's sessions, then what one session, may hold of the whole.
+  const auto over_share = [&](std::uint64_t limit, std::uint64_t add_amount, std::uint64_t holding,
+                              const char* unit, const std::string& whose, const char* field) {
+    return grpc::Status{grpc::StatusCode::RESOURCE_EXHAUSTED,
+                        what + ": " + std::to_string(add_amount) + " more " + unit + " would bring " +
+                            whose + " (fading items included) to " +
+                            std::to_string(holding + add_amount) + ", over " + field + " (" +
+                            std::to_string(limit) + ")"};
+  };
+  const std::string host_items = "the items of the sessions from " + host;
+  if (per_peer && budget_.max_triangles_per_peer > 0 && added.triangles > 0 &&
+      held_by_host.triangles + added.triangles > budget_.max_triangles_per_peer) {
+    return over_share(budget_.max_triangles_per_peer, added.triangles, held_by_host.triangles,
+                      "triangles", host_items, "max_scene_triangles_per_peer");
+  }
+  if (per_peer && budget_.max_bytes_per_peer > 0 &&
+      held_by_host.bytes + added.bytes > budget_.max_bytes_per_peer) {
+    return over_share(budget_.max_bytes_per_peer, added.bytes, held_by_host.bytes, "bytes",
+                      host_items, "max_scene_bytes_per_peer");
+  }
+  if (session_id != 0 && budget_.max_triangles_per_session > 0 && added.triangles > 0 &&
+      held_by_session.triangles + added.triangles > budget_.max_triangles_per_session) {
+    return over_share(budget_.max_triangles_per_session, added.triangles, held_by_session.triangles,
+                      "triangles", "this session's items", "max_scene_triangles_per_session");
+  }
+  if (session_id != 0 && budget_.max_bytes_per_session > 0 &&
+      held_by_session.bytes + added.bytes > budget_.max_bytes_per_session) {
+    return over_share(budget_.max_bytes_per_session, added.bytes, held_by_session.bytes, "bytes",
+                      "this session's items", "max_scene_bytes_per_session");
   }
   return grpc::Status::OK;
 }
@@ -113,7 +163,7 @@ grpc::Status SceneStore::create(std::uint64_t session_id, ItemKind kind,
             "session already has " + std::to_string(max_items_per_session_) +
                 " objects and fields (max_objects_per_session)"};
   }
-  if (auto status = check_budget(cost_of(spec), kind_name(kind)); !status.ok()) return status;
+  if (auto status = check_budget(cost_of(spec), kind_name(kind), session_id); !status.ok()) return status;
   id_out = next_id_++;
   items_.emplace(id_out, Item{appearing(session_id, id_out, next_tick_(), next_version_key_++),
                               kind, spec, std::move(source)});
@@ -128,7 +178,7 @@ grpc::Status SceneStore::update(std::uint64_t session_id, ItemKind kind, std::ui
   Item* item = nullptr;
   if (auto status = find_owned(session_id, kind, id, item, true); !status.ok()) return status;
   // The old version stays held while it fades out: the new one comes on top.
-  if (auto status = check_budget(cost_of(spec), kind_name(kind)); !status.ok()) return status;
+  if (auto status = check_budget(cost_of(spec), kind_name(kind), session_id); !status.ok()) return status;
   if (item->meta.session_id != session_id) {
     // Another session updates a shared object: it stays shared, and its owner's.
     const auto* updated = std::get_if<engine::ObjectSpec>(&spec);
@@ -214,7 +264,7 @@ grpc::Status SceneStore::replace_locked(std::uint64_t session_id,
     added.bytes += cost.bytes;
   }
   for (const auto& field : fields) added.bytes += cost_of(field).bytes;
-  if (auto status = check_budget(added, "scene"); !status.ok()) return status;
+  if (auto status = check_budget(added, "scene", session_id); !status.ok()) return status;
   const std::int64_t fade_begin = first_tick;
   for (auto& [id, item] : items_) {
     if (item.meta.session_id == session_id && is_live(item.meta)) {

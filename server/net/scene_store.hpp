@@ -28,10 +28,19 @@ namespace haptic::net {
 
 enum class ItemKind { kObject, kField };
 
-/// The whole scene's budget (every session's items, fading ones included): 0 means none.
+/// The whole scene's budget (every session's items, fading ones included), and the shares of it
+/// one session and the sessions of one host may hold, so one client cannot starve the rest (the
+/// server's own scene, session 0, is exempt from the shares): 0 means none.
 struct SceneBudget {
   std::uint64_t max_triangles = 0;
   std::uint64_t max_bytes = 0;  // Unit: bytes.
+  std::uint64_t max_triangles_per_session = 0;
+  std::uint64_t max_bytes_per_session = 0;
+  std::uint64_t max_triangles_per_peer = 0;
+  std::uint64_t max_bytes_per_peer = 0;
+  /// The host a session was opened from (SessionRegistry::peer_of); needed for the per-host
+  /// shares, none without them.
+  std::function<std::string(std::uint64_t session_id)> host_of_session;
 };
 
 /// What an item holds in memory.
@@ -138,7 +147,8 @@ class SceneStore {
   std::uint32_t live_items_of(std::uint64_t session_id) const;
   /// OK if the scene can take `added` more (besides what it holds), else RESOURCE_EXHAUSTED
   /// naming the budget; `what` names the addition in the message.
-  grpc::Status check_budget(const ItemCost& added, const std::string& what) const;
+  grpc::Status check_budget(const ItemCost& added, const std::string& what,
+                            std::uint64_t session_id) const;
   /// replace_session_scene's work, under the lock.
   grpc::Status replace_locked(std::uint64_t session_id, const std::vector<engine::ObjectSpec>& objects,
                               const std::vector<engine::FieldSpec>& fields,

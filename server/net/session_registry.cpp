@@ -197,6 +197,12 @@ std::optional<std::uint32_t> SessionRegistry::device_index_of(std::uint64_t sess
   return it->second.info.device_index;
 }
 
+std::string SessionRegistry::peer_of(std::uint64_t session_id) const {
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(session_id);
+  return it == sessions_.end() ? std::string() : it->second.info.peer;
+}
+
 std::string host_of(const UdpAddress& address) {
   char text[INET6_ADDRSTRLEN] = {};
   const auto* storage = &address.storage;

@@ -154,6 +154,8 @@ class SessionRegistry {
   std::optional<wire::Key> key_of(std::uint64_t session_id) const;
   /// The device port the session is bound to; nullopt if the session does not exist.
   std::optional<std::uint32_t> device_index_of(std::uint64_t session_id) const;
+  /// The host it was opened from (peer_host()'s form); "" if the session does not exist.
+  std::string peer_of(std::uint64_t session_id) const;
 
   /// A heartbeat authenticated with the session's key, from `from`. Renews the lease unless it is
   /// refused (see HeartbeatOutcome). State only ever goes to an address that has answered a

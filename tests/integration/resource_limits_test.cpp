@@ -42,7 +42,7 @@ class ResourceLimits : public ::testing::Test {
   // Real time, so that the loop asks for SCHED_FIFO and locks memory as a deployed server does.
   test::ServerProcess server_{R"({"time_mode": "REAL_TIME", "udp_address": "127.0.0.1",
     "status_period_s": 0, "real_time": {"use_fifo": true, "cpu": -1},
-    "max_event_streams": 8, "max_event_streams_per_session": 4,
+    "max_event_streams": 8, "max_event_streams_per_session": 4, "max_event_streams_per_peer": 8,
     "lease_timeout_ms": 10000})"};  // these raw clients send no heartbeats; a flood takes a while
   test::RawClient client_{server_.address()};
 
@@ -251,6 +251,77 @@ TEST(ResourceLimitsOfTheScene, OneHostsSessionsAndTheWholeScenesTrianglesAreBoun
   EXPECT_EQ(over.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   EXPECT_NE(over.error_message().find("over max_scene_triangles (3)"), std::string::npos)
       << over.error_message();
+}
+
+// One session cannot take the whole scene's triangle budget, nor one host every event stream: by
+// default each holds at most half (the refusals name the share).
+TEST(ResourceLimitsOfTheScene, OneSessionHoldsAtMostItsShareOfTheTriangles) {
+  test::ServerProcess server(test::lockstep_config(R"("max_scene_triangles": 8)"));
+  test::RawClient client(server.address());
+  v1::OpenSessionResponse session;
+  ASSERT_TRUE(client.open(session, "greedy").ok());
+  const auto add_plate = [&](double z) {
+    v1::CreateObjectRequest request;
+    request.set_session_id(session.session_id());
+    request.mutable_object()->mutable_impedance()->set_stiffness(1000.0);
+    auto* mesh = request.mutable_object()->mutable_mesh();
+    for (const auto& [x, y] : {std::pair{0.0, 0.0}, {0.01, 0.0}, {0.01, 0.01}, {0.0, 0.01}}) {
+      auto* vertex = mesh->add_vertices();
+      vertex->set_x(x);
+      vertex->set_y(y);
+      vertex->set_z(z);
+    }
+    for (const std::uint32_t index : {0u, 1u, 2u, 0u, 2u, 3u}) mesh->add_indices(index);
+    v1::ItemRef item;
+    return client.call(&v1::Haptic::Stub::CreateObject, request, item, session.session_secret());
+  };
+  ASSERT_TRUE(add_plate(0.0).ok());
+  ASSERT_TRUE(add_plate(0.01).ok());  // 4 triangles: half of the 8
+  const grpc::Status over = add_plate(0.02);
+  EXPECT_EQ(over.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(over.error_message(),
+            "object: 2 more triangles would bring the items of the sessions from 127.0.0.1 (fading "
+            "items included) to 6, over max_scene_triangles_per_peer (4)");
+}
+
+TEST(ResourceLimitsOfSessions, OneHostHoldsAtMostItsShareOfTheEventStreams) {
+  // The defaults: 32 streams in all, 4 a session, half of the 32 a host. Six sessions of one host
+  // ask for 4 streams each.
+  test::ServerProcess server(test::lockstep_config(R"("lease_timeout_ms": 10000)"));
+  test::RawClient client(server.address());
+  struct Stream {
+    grpc::ClientContext context;
+    std::unique_ptr<grpc::ClientReader<v1::Event>> reader;
+  };
+  std::vector<std::unique_ptr<Stream>> open;
+  int refused = 0;
+  std::string message;
+  for (int s = 0; s < 6; ++s) {
+    v1::OpenSessionResponse session;
+    ASSERT_TRUE(client.open(session, "watcher-" + std::to_string(s)).ok());
+    for (int i = 0; i < 4; ++i) {
+      auto stream = std::make_unique<Stream>();
+      stream->context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+      stream->context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
+      v1::WatchEventsRequest request;
+      request.set_session_id(session.session_id());
+      stream->reader = client.stub().WatchEvents(&stream->context, request);
+      v1::Event first;
+      if (stream->reader->Read(&first) && first.kind() == v1::Event::WATCH_STARTED) {
+        open.push_back(std::move(stream));
+        continue;
+      }
+      const grpc::Status status = stream->reader->Finish();
+      EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+      message = status.error_message();
+      ++refused;
+    }
+  }
+  EXPECT_EQ(open.size(), 16u);
+  EXPECT_EQ(refused, 8);
+  EXPECT_EQ(message, "the sessions from 127.0.0.1 already hold 16 event streams, the most one host "
+                     "may (max_event_streams_per_peer = 16)");
+  for (auto& stream : open) stream->context.TryCancel();
 }
 
 /// `count` TCP connections to `port` on loopback that never say a word.

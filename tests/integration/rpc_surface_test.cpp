@@ -605,7 +605,7 @@ TEST(RpcSurface, MaxSceneBytesBoundsTheWholeSceneFadingVersionsIncluded) {
   // and says its cost. Every item without a mesh costs the same.
   std::uint64_t cost = 0;
   {
-    Harness h(R"("max_scene_bytes": 1)");
+    Harness h(R"("max_scene_bytes": 1, "max_scene_bytes_per_session": 1, "max_scene_bytes_per_peer": 1)");
     const auto session = h.open("measure");
     v1::CreateObjectRequest create;
     create.set_session_id(session.session_id());
@@ -623,8 +623,11 @@ TEST(RpcSurface, MaxSceneBytesBoundsTheWholeSceneFadingVersionsIncluded) {
   }
   ASSERT_GT(cost, 0u);
 
-  // Room for exactly two items, in all sessions together.
-  Harness h("\"max_scene_bytes\": " + std::to_string(2 * cost));
+  // Room for exactly two items, in all sessions together (every session here is on one host, and
+  // the shares are the whole: this is the whole scene's budget).
+  const std::string two = std::to_string(2 * cost);
+  Harness h("\"max_scene_bytes\": " + two + ", \"max_scene_bytes_per_session\": " + two +
+            ", \"max_scene_bytes_per_peer\": " + two);
   const auto first = h.open("first");
   const auto second = h.open("second");
   const std::uint64_t kept = h.create_object(first, sphere(-0.05));

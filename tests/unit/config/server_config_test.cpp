@@ -86,6 +86,26 @@ TEST(Config, AnExplicitZeroRateOrSubstepCountIsRefusedNotTakenForTheDefault) {
   EXPECT_EQ(validate(config), "");
 }
 
+// One session, and one host's sessions, hold at most half of each server-wide budget unless told
+// otherwise; a share above its whole is refused naming both; the handshake deadline is bounded.
+TEST(Config, TheSharesOfTheBudgetsDefaultToHalfAndNeverExceedTheWhole) {
+  const v1::ServerConfig config = default_config();
+  EXPECT_EQ(config.max_scene_triangles_per_session(), 100'000u);
+  EXPECT_EQ(config.max_scene_triangles_per_peer(), 100'000u);
+  EXPECT_EQ(config.max_scene_bytes_per_session(), 32ull << 20);
+  EXPECT_EQ(config.max_scene_bytes_per_peer(), 32ull << 20);
+  EXPECT_EQ(config.max_event_streams_per_peer(), 16u);
+  EXPECT_EQ(config.handshake_timeout_ms(), 5000u);
+  EXPECT_NE(error_of(R"({"max_scene_triangles": 10, "max_scene_triangles_per_peer": 11})")
+                .find("max_scene_triangles_per_peer: must be at most max_scene_triangles (10), got 11"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"max_event_streams": 8, "max_event_streams_per_peer": 9})")
+                .find("max_event_streams_per_peer: must be at most max_event_streams (8), got 9"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"handshake_timeout_ms": 50})").find("handshake_timeout_ms: must be 100 to 60000, got 50"),
+            std::string::npos);
+}
+
 TEST(Config, BadValuesAreRejectedNamingTheField) {
   EXPECT_NE(error_of(R"({"loop_rate_hz": 20000})").find("loop_rate_hz"), std::string::npos);
   EXPECT_NE(error_of(R"({"simulated_point_mass": {"mass": -1}})").find("simulated_point_mass.mass"),

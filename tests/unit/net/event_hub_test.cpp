@@ -18,6 +18,23 @@ v1::Event event_of(v1::Event::Kind kind, std::uint64_t session_id) {
   return event;
 }
 
+TEST(EventHub, OneHostsSessionsHoldNoMoreThanTheHostsShareOfTheStreams) {
+  EventHub hub(WatchLimits{4, 32, 3});
+  std::string refusal;
+  // Three sessions from one host, one stream each, then a fourth: over the host's share.
+  std::vector<std::shared_ptr<EventHub::Watcher>> held;
+  for (std::uint64_t session = 1; session <= 3; ++session) {
+    held.push_back(hub.watch(session, refusal, "10.0.0.1"));
+    ASSERT_NE(held.back(), nullptr) << refusal;
+  }
+  EXPECT_EQ(hub.watch(4, refusal, "10.0.0.1"), nullptr);
+  EXPECT_EQ(refusal, "the sessions from 10.0.0.1 already hold 3 event streams, the most one host may "
+                     "(max_event_streams_per_peer = 3)");
+  EXPECT_NE(hub.watch(5, refusal, "10.0.0.2"), nullptr);  // another host has its own
+  hub.unwatch(held.front());
+  EXPECT_NE(hub.watch(4, refusal, "10.0.0.1"), nullptr);  // room again
+}
+
 TEST(EventHub, WatchesAreCappedPerSessionAndInAllNamingTheLimit) {
   EventHub hub(WatchLimits{2, 3});
   std::string refusal;

@@ -217,6 +217,36 @@ TEST(SceneStore, TheWholeScenesTriangleAndMemoryBudgetsHoldAcrossSessions) {
   EXPECT_EQ(scene.error_message().rfind("scene: 400 more triangles", 0), 0u) << scene.error_message();
 }
 
+TEST(SceneStore, OneSessionAndOneHostsSessionsHoldNoMoreThanTheirShares) {
+  runtime::SceneExchange exchange{std::make_unique<const engine::CompiledScene>()};
+  // Sessions 1 and 2 come from one host, 3 from another; 0 is the server's own.
+  const auto host_of = [](std::uint64_t session) { return session == 3 ? std::string("10.0.0.3") : std::string("10.0.0.1"); };
+  SceneBudget budget{2000, 0, 400, 0, 600, 0, host_of};
+  SceneStore store{exchange, [] { return std::int64_t{1}; }, 50, 256, 1e-3, 0.0, 1, budget};
+  std::uint64_t id = 0;
+  ASSERT_TRUE(store.create(1, ItemKind::kObject, mesh(400, 0.0), id).ok());  // the session's share
+  const grpc::Status session_over = store.create(1, ItemKind::kObject, mesh(2, 0.01), id);
+  EXPECT_EQ(session_over.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(session_over.error_message(),
+            "object: 2 more triangles would bring this session's items (fading items included) to 402, "
+            "over max_scene_triangles_per_session (400)");
+  ASSERT_TRUE(store.create(2, ItemKind::kObject, mesh(200, 0.02), id).ok());  // the host's 600
+  const grpc::Status host_over = store.create(2, ItemKind::kObject, mesh(2, 0.03), id);
+  EXPECT_EQ(host_over.error_message(),
+            "object: 2 more triangles would bring the items of the sessions from 10.0.0.1 (fading items "
+            "included) to 602, over max_scene_triangles_per_peer (600)");
+  // Another host still has room, up to its own shares and the whole.
+  EXPECT_TRUE(store.create(3, ItemKind::kObject, mesh(300, 0.04), id).ok());
+  // The server's own scene is held to the whole only.
+  EXPECT_TRUE(store.create(0, ItemKind::kObject, mesh(500, 0.05), id).ok());
+  // A whole scene at once is held to the same shares (the session's old items fade, still held).
+  std::vector<std::uint64_t> objects, fields;
+  const grpc::Status scene = store.replace_session_scene(3, {mesh(101, 0.06)}, {}, objects, fields);
+  EXPECT_EQ(scene.error_message(),
+            "scene: 101 more triangles would bring this session's items (fading items included) to "
+            "401, over max_scene_triangles_per_session (400)");
+}
+
 TEST(SceneStore, TheMemoryBudgetCountsAMeshAndItsHierarchy) {
   const ItemCost small = cost_of(mesh(2, 0.0));
   const ItemCost large = cost_of(mesh(2000, 0.0));
