@@ -46,6 +46,7 @@ std::string Recorder::start(const std::string& path, const v1::ServerConfig& con
   next_tick_ = start_tick + 1;
   flushed_at_ = std::chrono::steady_clock::now();
   unflushed_ = true;  // the header: in the file within kFlushPeriod, were nothing else to come
+  write_failed_ = false;
   start_tick_.store(start_tick, std::memory_order_release);
   written_through_.store(start_tick, std::memory_order_release);
   stopping_ = false;
@@ -69,9 +70,20 @@ std::optional<v1::RecordEnd> Recorder::stop(const std::string& why) {
   v1::Record end;
   *end.mutable_end() = totals_;
   writer_->write(end);
-  if (!writer_->close()) spdlog::error("recording: {}", writer_->error());
-  spdlog::info("recording '{}' {}: {} samples ({} missed), {} changes", writer_->path(), why,
-               totals_.samples(), totals_.samples_missed(), totals_.changes());
+  writer_->close();
+  // What a failed write cost: known only now (the end record is among it), so in the RecordEnd
+  // reported, not in the file, which ends before its end record then.
+  totals_.set_records_not_written(writer_->records_not_written());
+  totals_.set_write_error(writer_->error());
+  if (writer_->error().empty()) {
+    spdlog::info("recording '{}' {}: {} samples ({} missed), {} changes", writer_->path(), why,
+                 totals_.samples(), totals_.samples_missed(), totals_.changes());
+  } else {
+    spdlog::error("recording '{}' {}: {} samples ({} missed), {} changes; {} records not written "
+                  "({}): the file ends before them",
+                  writer_->path(), why, totals_.samples(), totals_.samples_missed(),
+                  totals_.changes(), totals_.records_not_written(), totals_.write_error());
+  }
   writer_.reset();
   active_.store(false, std::memory_order_release);
   return totals_;
@@ -147,6 +159,12 @@ void Recorder::write_due() {
       writer.write(record);
       totals_.set_samples(totals_.samples() + 1);
     }
+  }
+  if (!write_failed_ && !writer.error().empty()) {
+    write_failed_ = true;  // said once, now; stop() says what it cost
+    spdlog::error("recording '{}': {}: nothing more is written to it (the records not written "
+                  "are counted)",
+                  writer.path(), writer.error());
   }
   if (!changes.empty() || next_tick_ > first_tick) unflushed_ = true;
   if (unflushed_ && std::chrono::steady_clock::now() - flushed_at_ >= kFlushPeriod) {

@@ -5,6 +5,8 @@
 // (as the UDP sender does) and does all the encoding, compression and writing; a change is queued
 // by the control-plane thread that made it. A sample the ring overwrote before the recorder read
 // it is counted as missed (a lockstep Step waits for the recorder instead: see wait_written_through).
+// A write that fails (a full disk) ends what reaches the file: it is logged at once, and the
+// records not written and the first error are in the RecordEnd that stop() returns and logs.
 
 #include <atomic>
 #include <chrono>
@@ -40,7 +42,8 @@ class Recorder {
   /// its security section). Returns "" on success, else why not (already recording, the file).
   std::string start(const std::string& path, const v1::ServerConfig& config);
   /// Stops: what is due is written, then the end record; the file is closed. `why` goes into the
-  /// end record. Returns the end record; nullopt when not recording.
+  /// end record. Returns the end record (with the records a failed write kept out of the file and
+  /// its error, which the file's own end record cannot hold); nullopt when not recording.
   std::optional<v1::RecordEnd> stop(const std::string& why);
   bool active() const { return active_.load(std::memory_order_acquire); }
   /// The file being written ("" when not recording).
@@ -72,6 +75,7 @@ class Recorder {
   std::uint64_t next_tick_ = 1;  // the recorder thread's: the next tick whose samples are due
   std::chrono::steady_clock::time_point flushed_at_;  // the recorder thread's: its last flush()
   bool unflushed_ = false;       // the recorder thread's: records written since
+  bool write_failed_ = false;    // the recorder thread's: a write failed (and that was logged)
   v1::RecordEnd totals_;
   std::atomic<bool> active_{false};
   std::atomic<std::uint64_t> written_through_{0};

@@ -39,9 +39,11 @@ RecordingWriter::~RecordingWriter() {
 }
 
 bool RecordingWriter::write(const v1::Record& record) {
+  ++offered_;
   if (!error_.empty() || file_ == nullptr) return false;
   append_varint(pending_, record.ByteSizeLong());
   record.AppendToString(&pending_);
+  ++pending_records_;
   if (pending_.size() < kFlushBytes) return true;
   return compress(Directive::kFlush);
 }
@@ -65,15 +67,19 @@ bool RecordingWriter::compress(Directive directive) {
       break;
     }
     if (out.pos > 0 && std::fwrite(out_.data(), 1, out.pos, file_) != out.pos) {
-      error_ = "writing '" + path_ + "': " + std::strerror(errno);
+      const int why = errno;
+      error_ = "writing '" + path_ + "': " + std::strerror(why);
       break;
     }
     if (remaining == 0) break;
   }
   pending_.clear();
   if (error_.empty() && std::fflush(file_) != 0) {
-    error_ = "writing '" + path_ + "': " + std::strerror(errno);
+    const int why = errno;
+    error_ = "writing '" + path_ + "': " + std::strerror(why);
   }
+  if (error_.empty()) in_file_ += pending_records_;  // else they count as not written
+  pending_records_ = 0;
   return error_.empty();
 }
 

@@ -28,7 +28,8 @@ class RecordingWriter {
   RecordingWriter(const RecordingWriter&) = delete;
   RecordingWriter& operator=(const RecordingWriter&) = delete;
 
-  /// Appends one record; false (and error() says why) once a write has failed.
+  /// Appends one record; false (and error() says why) once a write has failed: after one, nothing
+  /// more is written (the compressed stream is broken there), and records_not_written() counts.
   bool write(const v1::Record& record);
   /// Hands the records written so far to the file, as whole compressed blocks: were the writer
   /// killed now, they could be read back. false once a write has failed.
@@ -37,6 +38,9 @@ class RecordingWriter {
   bool close();
   const std::string& error() const { return error_; }
   const std::string& path() const { return path_; }
+  /// Records given to write() that are not in the file because a write failed: those not yet
+  /// handed to the file by a flush that succeeded. 0 while none has failed.
+  std::uint64_t records_not_written() const { return error_.empty() ? 0 : offered_ - in_file_; }
 
  private:
   enum class Directive { kFlush, kEnd };  // kFlush: whole blocks; kEnd: the frame's end too
@@ -47,6 +51,9 @@ class RecordingWriter {
   std::FILE* file_ = nullptr;
   ZSTD_CCtx_s* context_ = nullptr;
   std::string pending_;   // records gathered before compression (a few kB at a time)
+  std::uint64_t offered_ = 0;  // records given to write()
+  std::uint64_t pending_records_ = 0;  // of those, in pending_
+  std::uint64_t in_file_ = 0;  // of those, handed to the file by a flush that succeeded
   std::string out_;       // compressed bytes
   std::string error_;
 };

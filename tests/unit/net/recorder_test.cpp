@@ -1,6 +1,10 @@
-// The recorder and its file: records read back as written (zstd, delimited), damage is named, and
-// recording every tick adds no allocation to the ticking thread while its own thread keeps up.
+// The recorder and its file: records read back as written (zstd, delimited), with buffers reused; a
+// file cut short reads to its last whole record and says where; damage is named; recording every
+// tick adds no allocation to the ticking thread while its own thread keeps up; a failed write (a
+// full disk) is counted and said.
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -9,6 +13,7 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -249,9 +254,9 @@ TEST(RecordingFile, ACutFileReadsToItsLastWholeRecordAndSaysWhere) {
   EXPECT_TRUE(read.cut_short);
   EXPECT_TRUE(has(read.error, "the file is empty")) << read.error;
 
-  // Any byte: whole records only, never fewer for more bytes, and always said to be cut short.
+  // Any byte (every 199th): whole records only, never fewer for more bytes, and always said to be cut short.
   std::uint64_t before = 0;
-  for (std::size_t size = 1; size < bytes.size(); size += 97) {
+  for (std::size_t size = 1; size < bytes.size(); size += 199) {
     read = read_cut(size);
     EXPECT_GE(read.records, before) << size;
     EXPECT_EQ(read.offset, ends[read.records]) << size;
@@ -376,6 +381,68 @@ TEST(Recorder, EveryTickIsRecordedWithoutAllocatingOnTheTickingThread) {
   EXPECT_EQ(recorder.start(path, v1::ServerConfig{}), "already recording to '" + path + "'");
   recorder.stop("stopped");
   std::filesystem::remove(path);
+}
+
+// A write that fails (a full disk: /dev/full fails every one with ENOSPC) is counted and said, at
+// once in the log and at the end in the RecordEnd and the end line, not reported as "0 missed".
+TEST(Recorder, AFailedWriteIsCountedAndReported) {
+  std::ostringstream log_text;
+  const auto previous = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>(
+      "recorder-test", std::make_shared<spdlog::sinks::ostream_sink_mt>(log_text)));
+
+  runtime::SampleRing ring;
+  std::atomic<std::uint64_t> completed{0};
+  Recorder recorder([&] { return completed.load(); }, {&ring});
+  ASSERT_EQ(recorder.start("/dev/full", v1::ServerConfig{}), "");
+  v1::RecordedChange change;
+  change.mutable_opened()->set_client_name("tester");
+  recorder.record(change);
+  for (std::uint64_t tick = 1; tick <= 5000; ++tick) {
+    runtime::TickSample sample;
+    sample.tick = tick;
+    sample.F_T_W = {0.0, 0.0, 1.0 / static_cast<double>(tick)};
+    sample.p_WT = {0.001 * static_cast<double>(tick), 0.0, 0.0};
+    ring.publish(sample);
+    completed.store(tick);
+    if (tick % 500 == 0) {
+      ASSERT_TRUE(recorder.wait_written_through(tick, std::chrono::seconds(5)));
+    }
+  }
+  const auto end = recorder.stop("stopped");
+  spdlog::set_default_logger(previous);
+  ASSERT_TRUE(end.has_value());
+  EXPECT_EQ(end->samples(), 5000u);
+  EXPECT_EQ(end->samples_missed(), 0u);  // the ring was read in time: what failed was the disk
+  EXPECT_EQ(end->changes(), 1u);
+  // Nothing reached the file: the header, the change, 5000 samples and the end record.
+  EXPECT_EQ(end->records_not_written(), 5003u);
+  EXPECT_EQ(end->write_error(), "writing '/dev/full': No space left on device");
+  const std::string said = log_text.str();
+  EXPECT_NE(said.find("recording '/dev/full': writing '/dev/full': No space left on device: nothing "
+                      "more is written to it"),
+            std::string::npos)
+      << said;
+  EXPECT_NE(said.find("recording '/dev/full' stopped: 5000 samples (0 missed), 1 changes; 5003 "
+                      "records not written (writing '/dev/full': No space left on device)"),
+            std::string::npos)
+      << said;
+}
+
+// A recording whose disk fills midway: what was handed to the file before reads back, the rest is
+// counted. (The file is cut short then: hapticd --replay says so.)
+TEST(RecordingFile, RecordsAfterAFailedWriteAreCountedNotWritten) {
+  RecordingWriter writer("/dev/full");
+  EXPECT_EQ(writer.records_not_written(), 0u);
+  ASSERT_TRUE(writer.write(sample_record(1, 1.0)));  // gathered, not yet handed to the file
+  EXPECT_FALSE(writer.flush());
+  EXPECT_EQ(writer.error(), "writing '/dev/full': No space left on device");
+  EXPECT_FALSE(writer.write(sample_record(2, 1.0)));
+  EXPECT_FALSE(writer.write(sample_record(3, 1.0)));
+  EXPECT_EQ(writer.records_not_written(), 3u);
+  EXPECT_FALSE(writer.close());
+  EXPECT_EQ(writer.records_not_written(), 3u);
+  EXPECT_EQ(writer.error(), "writing '/dev/full': No space left on device");  // the first error
 }
 
 }  // namespace
