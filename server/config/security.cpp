@@ -6,10 +6,12 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
 #include "config/server_config.hpp"
+#include "haptic/io/bounded_file.hpp"
 
 namespace haptic::config {
 namespace {
@@ -28,7 +30,8 @@ bool printable(const std::string& text, bool spaces_allowed) {
 
 /// Empty when every token is valid and none repeats another's name or secret.
 std::string validate_tokens(const v1::AccessTokens& tokens, const std::string& prefix) {
-  std::set<std::string> names, secrets;
+  std::set<std::string> names;
+  std::map<std::string, std::string> secrets;  // each secret, and the name of the token holding it
   for (int i = 0; i < tokens.tokens_size(); ++i) {
     const v1::AccessToken& token = tokens.tokens(i);
     const std::string at = prefix + "tokens[" + std::to_string(i) + "].";
@@ -48,22 +51,22 @@ std::string validate_tokens(const v1::AccessTokens& tokens, const std::string& p
       return at + "expires: must be after 1970-01-01T00:00:00Z";
     }
     if (!names.insert(token.name()).second) return at + "name: '" + token.name() + "' is given twice";
-    if (!secrets.insert(token.token()).second) {
-      return at + "token: the same secret as an earlier token's ('" + token.name() + "')";
+    if (const auto [earlier, fresh] = secrets.emplace(token.token(), token.name()); !fresh) {
+      return at + "token: '" + token.name() + "' has the same secret as token '" + earlier->second +
+             "'; each token needs its own";
     }
   }
   return {};
 }
 
 std::string read_file(const std::string& field, const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) {
-    throw ConfigError("security." + field + ": cannot read '" + path + "': " + std::strerror(errno));
+  std::string text;
+  if (std::string error = io::read_bounded_file(path, io::kMaxSecretFileBytes, "a tokens or PEM file", text);
+      !error.empty()) {
+    throw ConfigError("security." + field + ": " + error);
   }
-  std::stringstream text;
-  text << file.rdbuf();
-  if (text.str().empty()) throw ConfigError("security." + field + ": '" + path + "' is empty");
-  return text.str();
+  if (text.empty()) throw ConfigError("security." + field + ": '" + path + "' is empty");
+  return text;
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 
 #include "config/devices.hpp"
 #include "config/security.hpp"
+#include "haptic/io/bounded_file.hpp"
 #include "haptic/io/scene_file.hpp"
 #include "schema/scene_specs.hpp"
 
@@ -318,11 +319,12 @@ v1::ServerConfig parse_config(const std::string& json, const std::string& source
 }
 
 v1::ServerConfig load_config_file(const std::string& path, const ConfigEdit& edit) {
-  std::ifstream file(path);
-  if (!file) throw ConfigError(path + ": cannot open");
-  std::stringstream text;
-  text << file.rdbuf();
-  return parse_config(text.str(), path, edit);
+  std::string text;
+  if (std::string error = io::read_bounded_file(path, io::kMaxConfigFileBytes, "a configuration file", text);
+      !error.empty()) {
+    throw ConfigError("--config " + error);
+  }
+  return parse_config(text, path, edit);
 }
 
 v1::Scene load_scene_file(const std::string& path) {

@@ -39,7 +39,9 @@ class Exposition {
     family(name, type, help);
     sample(name, value);
   }
-  /// p50, p99 and p99.9 of a sliding-window distribution given in µs, written in seconds.
+  /// p50, p99 and p99.9 of a sliding-window distribution given in µs, written in seconds: a
+  /// summary's quantiles (its family typed "summary"). No _sum or _count: over a sliding window
+  /// neither would be the monotonic counter Prometheus takes them for.
   void quantiles_us(const char* name, double p50_us, double p99_us, double p999_us,
                     const std::string& labels = {}) {
     const std::string prefix = labels.empty() ? std::string() : labels + ",";
@@ -85,7 +87,7 @@ std::string prometheus_text(const v1::Stats& s) {
            s.achieved_rate_hz());
   e.single("hapticd_loop_overruns_total", "counter", "Loop periods missed because a tick ran late.",
            static_cast<double>(s.overruns()));
-  e.family("hapticd_loop_lateness_seconds", "gauge",
+  e.family("hapticd_loop_lateness_seconds", "summary",
            "How late the loop woke for its ticks, over the sliding window (quantiles).");
   e.quantiles_us("hapticd_loop_lateness_seconds", s.lateness_p50_us(), s.lateness_p99_us(),
                  s.lateness_p999_us());
@@ -94,7 +96,7 @@ std::string prometheus_text(const v1::Stats& s) {
   e.single("hapticd_stats_window_seconds", "gauge",
            "The sliding window of the lateness and send-delay quantiles (whole seconds before this one).",
            s.window_s());
-  e.family("hapticd_send_delay_seconds", "gauge",
+  e.family("hapticd_send_delay_seconds", "summary",
            "From a tick's time stamp to its first state datagram leaving, over the sliding window.");
   e.quantiles_us("hapticd_send_delay_seconds", s.send_delay_p50_us(), s.send_delay_p99_us(),
                  s.send_delay_p999_us());
@@ -179,7 +181,7 @@ std::string prometheus_text(const v1::Stats& s) {
       e.sample(metric.name, metric.value(client), client_labels(client));
     }
   }
-  e.family("hapticd_client_round_trip_seconds", "gauge",
+  e.family("hapticd_client_round_trip_seconds", "summary",
            "From a tick's stamp to the client and back, over its last 256 heartbeats (real time).");
   for (const v1::ClientStats& client : s.clients()) {
     if (client.round_trip_samples() == 0) continue;

@@ -2,17 +2,16 @@
 
 #include <google/protobuf/util/json_util.h>
 
-#include <fstream>
-#include <sstream>
+#include "haptic/io/bounded_file.hpp"
 
 namespace haptic::io {
 
 std::string read_scene_file(const std::string& path, v1::Scene& out) {
-  std::ifstream file(path);
-  if (!file) return path + ": cannot open";
-  std::stringstream text;
-  text << file.rdbuf();
-  return parse_scene_json(text.str(), path, out);
+  std::string text;
+  if (std::string error = read_bounded_file(path, kMaxSceneFileBytes, "a scene file", text); !error.empty()) {
+    return error;
+  }
+  return parse_scene_json(text, path, out);
 }
 
 std::string parse_scene_json(const std::string& text, const std::string& source, v1::Scene& out) {

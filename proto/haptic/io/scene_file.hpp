@@ -10,7 +10,8 @@
 namespace haptic::io {
 
 /// Parses the file at `path` into `out` (unknown fields are errors). Returns "" on success, else
-/// "<path>: cannot open" or "<path>: not a valid Scene: <parser's message>".
+/// "'<path>': cannot open: <why>", "'<path>': larger than 256 MiB, ..." or "<path>: not a valid
+/// Scene: <parser's message>".
 std::string read_scene_file(const std::string& path, v1::Scene& out);
 
 /// The same for text already read; `source` names it in the message.

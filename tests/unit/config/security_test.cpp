@@ -7,6 +7,7 @@
 
 #include "config/security.hpp"
 #include "config/server_config.hpp"
+#include "haptic/io/bounded_file.hpp"
 #include "parse_error.hpp"
 
 namespace haptic::config {
@@ -51,7 +52,7 @@ TEST(SecurityConfig, EveryTokenFieldIsChecked) {
             std::string::npos);
   EXPECT_NE(token_error(R"({"name": "a", "token": "0123456789abcdef", "role": "ADMIN"},
                            {"name": "b", "token": "0123456789abcdef", "role": "OBSERVER"})")
-                .find("security.tokens[1].token: the same secret"),
+                .find("security.tokens[1].token: 'b' has the same secret as token 'a'; each token needs its own"),
             std::string::npos);
   EXPECT_NE(error_of(R"({"security": {"tls": {"key_file": "k.pem"}}})").find("security.tls.cert_file: required"),
             std::string::npos);
@@ -65,8 +66,38 @@ TEST(SecurityConfig, LoadingNamesTheFileThatCannotBeRead) {
     (void)load_security(security);
     FAIL() << "no error";
   } catch (const ConfigError& error) {
-    EXPECT_NE(std::string(error.what()).find("security.tls.cert_file: cannot read '/nonexistent/server.pem'"),
+    EXPECT_NE(std::string(error.what()).find("security.tls.cert_file: '/nonexistent/server.pem': cannot open: "
+                                             "No such file or directory"),
               std::string::npos) << error.what();
+  }
+}
+
+// A file named by mistake (a device, a log) is refused at its bound, naming it, not read until
+// memory runs out: /dev/zero never ends.
+TEST(SecurityConfig, AFileWithoutEndIsRefusedAtItsBoundNamingIt) {
+  v1::SecurityConfig security;
+  security.mutable_tls()->set_cert_file("/dev/zero");
+  security.mutable_tls()->set_key_file("/dev/zero");
+  try {
+    (void)load_security(security);
+    FAIL() << "no error";
+  } catch (const ConfigError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "security.tls.cert_file: '/dev/zero': larger than 1 MiB, the most read for a tokens or PEM file");
+  }
+  std::string text;
+  EXPECT_EQ(io::read_bounded_file("/dev/zero", 4096, "a test file", text),
+            "'/dev/zero': larger than 0 MiB, the most read for a test file");
+  EXPECT_TRUE(text.empty());
+  EXPECT_EQ(io::read_bounded_file("/nonexistent/x", 4096, "a test file", text),
+            "'/nonexistent/x': cannot open: No such file or directory");
+  // `hapticd --config /dev/zero` once read 1.2 GB in 5 s.
+  try {
+    (void)load_config_file("/dev/zero");
+    FAIL() << "no error";
+  } catch (const ConfigError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "--config '/dev/zero': larger than 256 MiB, the most read for a configuration file");
   }
 }
 

@@ -86,6 +86,18 @@ TEST(PrometheusText, EveryFigureIsThereUnderItsConventionalName) {
   for (const auto& [name, type] : parsed.types) {
     EXPECT_EQ(name.rfind("hapticd_", 0), 0u) << name;
     EXPECT_EQ(type == "counter", name.size() > 6 && name.substr(name.size() - 6) == "_total") << name;
+    // Quantiles are a summary's samples, and a summary's are quantiles.
+    bool has_quantiles = false;
+    if (const auto family = parsed.samples.find(name); family != parsed.samples.end()) {
+      for (const auto& [labels, sample] : family->second) {
+        has_quantiles = has_quantiles || labels.find("quantile=") != std::string::npos;
+      }
+    }
+    EXPECT_EQ(type == "summary", has_quantiles) << name << " is typed " << type;
+  }
+  for (const char* name : {"hapticd_loop_lateness_seconds", "hapticd_send_delay_seconds",
+                           "hapticd_client_round_trip_seconds"}) {
+    EXPECT_EQ(parsed.types.at(name), "summary") << name;
   }
   const auto value = [&](const std::string& name, const std::string& labels = {}) {
     const auto family = parsed.samples.find(name);
