@@ -112,10 +112,7 @@ int main(int argc, char** argv) {
                  "record the run into FILE from its first tick: every change and every tick's "
                  "sample (zstd; hapticd --replay FILE reproduces it)");
   std::string replay_path;
-  cli.add_option("--replay", replay_path,
-                 "replay a recording in lockstep and compare every tick's force with it, bit for "
-                 "bit; exit 0 when all are the same, 1 when any differs, 2 when it cannot be "
-                 "replayed")
+  cli.add_option("--replay", replay_path, haptic::app::kReplayHelp)
       ->check(CLI::ExistingFile);
   try {
     cli.parse(argc, argv);
@@ -128,41 +125,7 @@ int main(int argc, char** argv) {
 
   if (!replay_path.empty()) {
     spdlog::set_level(spdlog::level::warn);  // the replay's own server need not announce itself
-    try {
-      // Progress on a terminal only: a log or a pipe gets the result alone.
-      const bool terminal = ::isatty(STDERR_FILENO) != 0;
-      const haptic::app::ReplayReport report = haptic::app::replay_recording(
-          replay_path, [terminal](std::uint64_t ticks) {
-            if (terminal) std::fprintf(stderr, "\rreplay: %llu ticks", static_cast<unsigned long long>(ticks));
-          });
-      if (terminal) std::fprintf(stderr, "\r\x1b[K");
-      std::printf("replay of %s: %llu ticks, %llu changes, %llu samples compared, %llu differ; "
-                  "the recording %s, %llu samples missed in it\n",
-                  replay_path.c_str(), static_cast<unsigned long long>(report.ticks),
-                  static_cast<unsigned long long>(report.changes),
-                  static_cast<unsigned long long>(report.samples_compared),
-                  static_cast<unsigned long long>(report.samples_differing),
-                  report.stopped_because.c_str(),
-                  static_cast<unsigned long long>(report.samples_missed));
-      if (!report.identical()) {
-        std::printf("first difference: %s\n",
-                    !report.first_difference.empty() ? report.first_difference.c_str()
-                    : report.samples_not_replayed > 0
-                        ? "the recorded shutdown ramp ran longer than the replay's"
-                        : "nothing was compared");
-        if (report.real_time) {
-          std::printf("(recorded in REAL_TIME: each change took effect at whatever tick the loop "
-                      "was on, and is replayed after the tick it was stamped with; only a LOCKSTEP "
-                      "recording is reproduced bit for bit)\n");
-        }
-        return 1;
-      }
-      std::printf("every force and position is the same, bit for bit\n");
-      return 0;
-    } catch (const haptic::app::ReplayError& error) {
-      std::fprintf(stderr, "hapticd --replay: %s\n", error.what());
-      return 2;
-    }
+    return haptic::app::replay_command(replay_path);
   }
 
   if (cli.count("--health-check") > 0) {

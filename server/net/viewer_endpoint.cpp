@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "net/read_back.hpp"
+#include "runtime/realtime.hpp"
 
 namespace haptic::net {
 namespace {
@@ -107,6 +108,7 @@ v1::ViewerStats viewer_stats(const ViewerSources& sources) {
   v1::ViewerStats out;
   runtime::LatenessHistogram::Counts counts;
   *out.mutable_stats() = sources.stats(counts);
+  out.set_read_at_s(static_cast<double>(runtime::monotonic_now_ns()) * 1e-9);
   v1::LatenessHistogram& histogram = *out.mutable_lateness();
   histogram.set_window_s(out.stats().window_s());
   histogram.set_samples(out.stats().lateness_samples());

@@ -141,11 +141,10 @@ TEST(RecordingCutShort, AServerKilledWhileRecordingReplaysToItsLastWholeRecordAn
       << replayed.out;
   EXPECT_EQ(replayed.out.find("every force and position is the same"), std::string::npos) << replayed.out;
 
-  // hapticd --replay itself: never the success of a whole run; where it stops, said on stderr.
-  // (It exits 3 once main() returns app::replay_command's status; until then the cut is a
-  // refusal, 2.)
+  // hapticd --replay itself: never the success of a whole run, a status of its own (3); where it
+  // stops, said on stderr.
   const test::Outcome outcome = test::run_program(HAPTICD_BINARY, {"--replay", path});
-  EXPECT_NE(outcome.exit_code, 0) << outcome.output;
+  EXPECT_EQ(outcome.exit_code, 3) << outcome.output;
   EXPECT_NE(outcome.output.find("is cut short: it stops after record " + std::to_string(stop->record)),
             std::string::npos)
       << outcome.output;

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "net/viewer_endpoint.hpp"
+#include "runtime/realtime.hpp"
 
 namespace haptic::net {
 namespace {
@@ -110,8 +111,13 @@ TEST_F(ViewerEndpointTest, TheStateIsEachPortsNewestSample) {
 TEST_F(ViewerEndpointTest, TheHistogramHoldsTheWindowsNonEmptyBinsInOrder) {
   for (int i = 0; i < 980; ++i) lateness_.record(10'000, kNow);    // 10 µs: a fine bin
   for (int i = 0; i < 20; ++i) lateness_.record(2'550'000, kNow);  // 2.55 ms: the coarse bin at 2.5 ms
+  const double before_s = static_cast<double>(runtime::monotonic_now_ns()) * 1e-9;
   const v1::ViewerStats stats = viewer_stats(sources());
+  const double after_s = static_cast<double>(runtime::monotonic_now_ns()) * 1e-9;
   EXPECT_EQ(stats.stats().ticks(), 42u);
+  // When they were read, on the server's clock: the page's rate now is timed by it.
+  EXPECT_GE(stats.read_at_s(), before_s);
+  EXPECT_LE(stats.read_at_s(), after_s);
   const v1::LatenessHistogram& histogram = stats.lateness();
   EXPECT_EQ(histogram.samples(), 1000u);
   EXPECT_EQ(stats.stats().lateness_samples(), 1000u);  // the figures and the bins: one reading
