@@ -1,16 +1,28 @@
 // touch_wall: the smallest program that feels something. It registers a wall (the half-space
 // z < 0) and a weak spring field, has the server's simulated hand push the tool into the wall, and
-// prints time, hand target, tool height and force at about 20 Hz.
+// prints time, hand target, tool height and force at about 20 Hz. On a device with no simulated
+// hand (a real one, behind a driver) the hand is the person's: it renders the same wall and prints
+// what the tool does for --seconds.
 //
-// Usage: touch_wall [host:port] [--lockstep]
+// Usage: touch_wall [host:port] [--lockstep] [--hand] [--seconds S]
+//                   [--token T | --token-file F] [--ca CA.pem [--cert C.pem --key K.pem]
+//                   [--server-name NAME]]
 //   --lockstep  the server runs in LOCKSTEP time: this program advances it with Step, and the
 //               output is the same on every run.
+//   --hand      do not move the simulated hand even where there is one: print what the tool does
+//               for --seconds (default 10). The same without a simulated hand (a driver device).
+//   --token, --token-file, --ca, --cert, --key, --server-name: a secured server
+//               (docs/deployment.md): its bearer token, the CA of its certificate, this client's
+//               certificate for mutual TLS, the name its certificate carries.
 #include <haptic/haptic.hpp>
 
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <optional>
 #include <string>
 #include <thread>
@@ -34,24 +46,83 @@ void print_row(double t, double target, const haptic::State& state) {
               state.force.z, state.contact_count > 0 ? "yes" : "no");
 }
 
+/// A row without a target: the hand is a person's, or the device's own.
+void print_hand_row(double t, const haptic::State& state) {
+  std::printf("%7.3f  %10s  %8.3f  %9.3f  %s\n", t, "-", state.position.z * 1e3, state.force.z,
+              state.contact_count > 0 ? "yes" : "no");
+}
+
+volatile std::sig_atomic_t interrupted = 0;
+void on_interrupt(int) { interrupted = 1; }
+
+int usage_error(const std::string& why) {
+  std::fprintf(stderr, "touch_wall: %s\nusage: touch_wall [host:port] [--lockstep] [--hand] [--seconds S] "
+                       "[--token T | --token-file F] [--ca CA.pem [--cert C.pem --key K.pem] "
+                       "[--server-name NAME]]\n", why.c_str());
+  return 2;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string address = "127.0.0.1:50051";
   bool lockstep = false;
+  bool hand = false;
+  double seconds = 10.0;
+  haptic::ClientConfig config;
+  haptic::TlsOptions tls;
+  std::string token_file;
   for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--lockstep") == 0) {
+    const std::string arg = argv[i];
+    const auto value = [&](std::string& out) {
+      if (i + 1 >= argc) return false;
+      out = argv[++i];
+      return true;
+    };
+    std::string text;
+    if (arg == "--lockstep") {
       lockstep = true;
-    } else if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
-      std::printf("usage: touch_wall [host:port] [--lockstep]\n");
+    } else if (arg == "--hand") {
+      hand = true;
+    } else if (arg == "--seconds") {
+      if (!value(text)) return usage_error("--seconds needs a number");
+      char* end = nullptr;
+      seconds = std::strtod(text.c_str(), &end);
+      if (end == text.c_str() || *end != '\0' || !(seconds > 0.0 && seconds <= 3600.0)) {
+        return usage_error("--seconds: '" + text + "' is not a time of 0 to 3600 s");
+      }
+    } else if (arg == "--token") {
+      if (!value(config.token)) return usage_error("--token needs the token");
+    } else if (arg == "--token-file") {
+      if (!value(token_file)) return usage_error("--token-file needs a file");
+    } else if (arg == "--ca") {
+      if (!value(tls.ca_file)) return usage_error("--ca needs a PEM file");
+    } else if (arg == "--cert") {
+      if (!value(tls.cert_file)) return usage_error("--cert needs a PEM file");
+    } else if (arg == "--key") {
+      if (!value(tls.key_file)) return usage_error("--key needs a PEM file");
+    } else if (arg == "--server-name") {
+      if (!value(tls.server_name)) return usage_error("--server-name needs a name");
+    } else if (arg == "--help" || arg == "-h") {
+      std::printf("usage: touch_wall [host:port] [--lockstep] [--hand] [--seconds S] [--token T | "
+                  "--token-file F] [--ca CA.pem [--cert C.pem --key K.pem] [--server-name NAME]]\n");
       return 0;
+    } else if (arg.rfind("--", 0) == 0) {
+      return usage_error("unknown option " + arg);
     } else {
-      address = argv[i];
+      address = arg;
     }
   }
-
+  if (!token_file.empty()) {
+    std::ifstream file(token_file);
+    if (!file || !std::getline(file, config.token)) return usage_error("--token-file: cannot read '" + token_file + "'");
+  }
+  if (!tls.ca_file.empty()) {
+    config.tls = tls;
+  } else if (!tls.cert_file.empty() || !tls.key_file.empty() || !tls.server_name.empty()) {
+    return usage_error("--cert, --key and --server-name need --ca (TLS)");
+  }
   try {
-    haptic::ClientConfig config;
     config.server_address = address;
     config.client_name = "touch_wall";
     haptic::Client client(config);
@@ -61,6 +132,55 @@ int main(int argc, char** argv) {
 
     auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1},
                                  .impedance = {.stiffness = 1000.0, .damping = 1.0}});
+    if (hand || !client.device_info().simulated) {
+      // No simulated hand to move (a real device), or asked not to: the wall is the person's to
+      // touch, or whatever the device's own hand does. Print what the tool does until --seconds
+      // have passed or Ctrl-C.
+      std::signal(SIGINT, on_interrupt);
+      std::signal(SIGTERM, on_interrupt);
+      std::printf("touch_wall: %s at %.0f Hz, %s time, %s; wall z < 0 with K = 1000 N/m, B = 1 N*s/m: "
+                  "push the tool down into it (%.0f s, Ctrl-C ends)\n",
+                  client.device_info().name.c_str(), rate, lockstep ? "lockstep" : "real",
+                  client.device_info().simulated ? "the simulated hand left still" : "no simulated hand",
+                  seconds);
+      std::printf("%7s  %10s  %8s  %9s  %s\n", "time_s", "target_mm", "z_mm", "force_N", "contact");
+      haptic::State state;
+      double deepest_mm = 0.0, strongest_n = 0.0;
+      const auto note = [&](double t) {
+        print_hand_row(t, state);
+        deepest_mm = std::min(deepest_mm, state.position.z * 1e3);
+        strongest_n = std::max(strongest_n, state.force.z);
+      };
+      if (lockstep) {  // the device's own dynamics, stepped: the same rows on every run
+        const auto ticks_per_step = std::max<std::uint32_t>(1, static_cast<std::uint32_t>(rate / 100.0));
+        std::optional<std::uint64_t> first_tick;
+        std::uint64_t next_row_tick = 0;
+        for (double t = 0.0; interrupted == 0 && t < seconds;) {
+          const std::uint64_t tick = client.step(ticks_per_step);
+          if (!first_tick) {
+            first_tick = tick;
+            next_row_tick = tick;
+          }
+          t = static_cast<double>(tick - *first_tick + ticks_per_step) / rate;
+          if (tick >= next_row_tick && client.wait_for_tick(tick, state, std::chrono::seconds(2))) {
+            note(t);
+            next_row_tick = tick + ticks_per_row;
+          }
+        }
+      } else {
+        double first_server_time = -1.0;
+        const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+        while (interrupted == 0 && std::chrono::steady_clock::now() < end) {
+          if (!client.poll_state(state, std::chrono::milliseconds(100))) continue;
+          if (first_server_time < 0) first_server_time = state.server_time;
+          note(state.server_time - first_server_time);
+        }
+      }
+      std::printf("touch_wall: done; deepest %.3f mm into the wall, largest push back %.3f N, %llu "
+                  "datagrams received\n", -deepest_mm, strongest_n,
+                  static_cast<unsigned long long>(client.receive_counters().accepted));
+      return 0;
+    }
     auto spring = client.add_spring_field(
         {.anchor = {0, 0, kStartZ}, .stiffness = 20.0, .damping = 0.0, .max_force = 2.0});
 
@@ -70,6 +190,7 @@ int main(int argc, char** argv) {
 
     const double duration = kDescent + kHold;
     haptic::State state;
+    std::uint64_t last_tick = 0;  // lockstep: the tick our last Step ended on
     if (lockstep) {
       // Advance the server in 10 ms steps, moving the hand's target between steps. Rows are
       // timed from our first step: the server's tick count may not start at zero.
@@ -82,6 +203,7 @@ int main(int argc, char** argv) {
         client.set_operator(haptic::OperatorInput::follow({0, 0, target}, kHandStiffness,
                                                           kHandDamping));
         const std::uint64_t tick = client.step(ticks_per_step);
+        last_tick = tick;
         if (!first_tick) {
           first_tick = tick;
           next_row_tick = tick;
@@ -111,20 +233,28 @@ int main(int argc, char** argv) {
       }
     }
     client.set_operator(haptic::OperatorInput::release());
-    const haptic::Stats stats = client.stats();
     if (lockstep) {
       std::printf("touch_wall: done; server at tick %llu, %llu datagrams received\n",
-                  static_cast<unsigned long long>(stats.ticks),
+                  static_cast<unsigned long long>(last_tick),
                   static_cast<unsigned long long>(client.receive_counters().accepted));
     } else {
-      std::printf("touch_wall: done; server loop %.1f Hz, lateness p99 %.0f us, %llu datagrams received\n",
-                  stats.achieved_rate_hz, stats.lateness_p99_us,
-                  static_cast<unsigned long long>(client.receive_counters().accepted));
+      try {
+        const haptic::Stats stats = client.stats();
+        std::printf("touch_wall: done; server loop %.1f Hz, lateness p99 %.0f us, %llu datagrams received\n",
+                    stats.achieved_rate_hz, stats.lateness_p99_us,
+                    static_cast<unsigned long long>(client.receive_counters().accepted));
+      } catch (const haptic::PermissionDeniedError&) {  // the loop's figures are an ADMIN's
+        std::printf("touch_wall: done; %llu datagrams received\n",
+                    static_cast<unsigned long long>(client.receive_counters().accepted));
+      }
     }
   } catch (const haptic::ConnectionError& error) {
     std::fprintf(stderr, "touch_wall: cannot reach hapticd at %s (%s). Is it running? "
                          "Start it with ./scripts/run\n", address.c_str(), error.what());
     return 1;
+  } catch (const haptic::InvalidArgumentError& error) {
+    std::fprintf(stderr, "touch_wall: %s\n", error.what());  // the options given (a token in clear, ...)
+    return 2;
   } catch (const haptic::Error& error) {
     std::fprintf(stderr, "touch_wall: %s\n", error.what());
     return 1;
