@@ -8,17 +8,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace haptic::runtime {
 namespace {
 
-std::string lock_directory() {
-  // /run/lock is a tmpfs every user may write on Debian; elsewhere the temporary directory.
-  if (::access("/run/lock", W_OK) == 0) return "/run/lock";
-  std::error_code error;
-  const std::filesystem::path temp = std::filesystem::temp_directory_path(error);
-  return error ? "/tmp" : temp.string();
-}
+/// /run/hapticd, which the installed tmpfiles.d entry makes at boot and hapticd.service keeps as
+/// its RuntimeDirectory (writable there under ProtectSystem=strict, where /run/lock is not).
+constexpr const char* kRuntimeDirectory = "/run/hapticd";
 
 pid_t read_pid(int fd) {
   char text[32] = {};
@@ -28,8 +25,21 @@ pid_t read_pid(int fd) {
 
 }  // namespace
 
+std::string lock_directory_among(const std::vector<std::string>& candidates) {
+  for (const std::string& directory : candidates) {
+    if (::access(directory.c_str(), W_OK) == 0) return directory;
+  }
+  std::error_code error;
+  const std::filesystem::path temp = std::filesystem::temp_directory_path(error);
+  return error ? "/tmp" : temp.string();
+}
+
 std::string LoopCpuClaim::lock_path(int cpu) {
-  return lock_directory() + "/hapticd-loop-cpu" + std::to_string(cpu) + ".lock";
+  // The first of these every hapticd on the host can write, so that all of them find one
+  // another's claims: /run/hapticd where installed, else /run/lock (a tmpfs every user may write
+  // on Debian), else the temporary directory.
+  static const std::string directory = lock_directory_among({kRuntimeDirectory, "/run/lock"});
+  return directory + "/hapticd-loop-cpu" + std::to_string(cpu) + ".lock";
 }
 
 std::optional<LoopCpuClaim> LoopCpuClaim::try_claim(int cpu, pid_t* holder) {

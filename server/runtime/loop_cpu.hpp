@@ -1,16 +1,22 @@
 #pragma once
 // Which CPU a real-time loop runs on, host-wide: several hapticd on one host (a lab with two
 // devices) must not put their loops on one core without saying so. Each loop claims its CPU with
-// an flock on a file named after it (in /run/lock, else the temporary directory); the lock goes
-// with the process, however it ends. Servers in containers with private /run and /tmp do not see
+// an flock on a file named after it (in /run/hapticd where the installed tmpfiles.d entry or
+// hapticd.service made it, else /run/lock, else the temporary directory); the lock goes with the
+// process, however it ends. Servers in containers with private /run and /tmp do not see
 // each other's claims: give each its `real_time.cpu` there.
 
 #include <functional>
 #include <optional>
 #include <string>
 #include <sys/types.h>
+#include <vector>
 
 namespace haptic::runtime {
+
+/// The first of `candidates` this process may write in, else the temporary directory: where the
+/// lock files go (LoopCpuClaim::lock_path asks with /run/hapticd, then /run/lock).
+std::string lock_directory_among(const std::vector<std::string>& candidates);
 
 /// A held claim on one CPU for a loop. Move-only; released when destroyed.
 class LoopCpuClaim {

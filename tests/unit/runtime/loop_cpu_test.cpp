@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <filesystem>
 #include <set>
 
 #include "runtime/loop_cpu.hpp"
@@ -40,6 +41,22 @@ struct Host {
     return LoopCpuClaim::try_claim(base + cpu, holder);
   }
 };
+
+// The lock files go to the first folder every hapticd can write: /run/hapticd where the installed
+// tmpfiles.d entry (or the unit's RuntimeDirectory) made it, else /run/lock.
+TEST(LoopCpuClaim, TheLockFilesGoToTheFirstWritableOfTheCandidates) {
+  const std::filesystem::path base = std::filesystem::temp_directory_path() /
+                                     ("hapticd-lockdir-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(base / "writable");
+  EXPECT_EQ(lock_directory_among({(base / "missing").string(), (base / "writable").string()}),
+            (base / "writable").string());
+  EXPECT_EQ(lock_directory_among({(base / "writable").string(), "/run/lock"}), (base / "writable").string());
+  EXPECT_EQ(lock_directory_among({(base / "missing").string()}),
+            std::filesystem::temp_directory_path().string());
+  std::filesystem::remove_all(base);
+  const std::string path = LoopCpuClaim::lock_path(3);
+  EXPECT_EQ(path.substr(path.rfind('/')), "/hapticd-loop-cpu3.lock");
+}
 
 TEST(ChooseLoopCpu, TheDefaultTakesTheHighestFreeCpuAndWarnsOnlyWhenNoneIsLeft) {
   EXPECT_EQ(choose_loop_cpu(std::nullopt, 4, Host{}).cpu, 3);
