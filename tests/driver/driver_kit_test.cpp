@@ -1,20 +1,20 @@
-// The driver test kit. DriverKit.* checks what any driver owes hapticd (it loads, its description
-// is sane, readings are finite and fresh, commands are taken, the safe state can be entered, the
-// axes of a Cartesian driver point the way W says); run it against your own driver with
-//   HAPTIC_DRIVER=/path/to/driver.so HAPTIC_DRIVER_PARAMS='{...}' driver_kit_test --gtest_filter='DriverKit.*'
-// (HAPTIC_DRIVER_MODEL=other skips the Cartesian checks). By default it runs the example driver
-// (driver/example/point_mass_driver.c). DriverFaults.* checks hapticd's side with the example's
-// injected faults: NaN readings, stale readings, a read that hangs, an ABI mismatch, a library
-// that is not a driver.
+// The driver test kit (driver/kit, the program haptic-driver-kit) and hapticd's handling of a
+// driver's faults. DriverKit.* runs the kit's checks against the example driver
+// (driver/example/point_mass_driver.c), where all pass, and against drivers that break what hapticd
+// needs, where the right check fails saying why; it also tests the example's own physics.
+// DriverFaults.* checks hapticd's side with the example's injected faults: NaN readings, stale
+// readings, a read that hangs, an ABI mismatch, a library that is not a driver.
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
+#include "driver_kit.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/device_port.hpp"
 #include "runtime/driver_device.hpp"
@@ -23,20 +23,6 @@ namespace haptic::runtime {
 namespace {
 
 constexpr double kT = 1e-3;  // s
-
-std::string env_or(const char* name, const std::string& fallback) {
-  const char* value = std::getenv(name);
-  return value != nullptr && *value != '\0' ? value : fallback;
-}
-
-DriverOptions kit_options() {
-  DriverOptions options;
-  options.library = env_or("HAPTIC_DRIVER", POINT_MASS_DRIVER);
-  options.params_json = env_or("HAPTIC_DRIVER_PARAMS", "{}");
-  return options;
-}
-
-bool cartesian() { return env_or("HAPTIC_DRIVER_MODEL", "cartesian") == "cartesian"; }
 
 DriverOptions example(const std::string& params) {
   DriverOptions options;
@@ -55,66 +41,44 @@ std::string refusal(const DriverOptions& options) {
   return {};
 }
 
-// ---- What any driver owes hapticd ----
-
-TEST(DriverKit, LoadsAndDescribesItselfSanely) {
-  DriverDevice device(kit_options());
-  const DeviceDescription& d = device.description();
-  std::printf("  %s: %u joints, %u DOF, %u buttons, max force %g N\n", d.name.c_str(), d.joints,
-              d.dof, d.buttons, d.max_force);
-  EXPECT_FALSE(d.name.empty());
-  EXPECT_EQ(d.model, "driver");
-  EXPECT_FALSE(d.simulated);
-  EXPECT_GE(d.joints, 1u);
-  EXPECT_LE(d.joints, kMaxJoints);
-  EXPECT_GT(d.max_force, 0.0);
-  EXPECT_LE(d.workspace_min.x, d.workspace_max.x);
-  EXPECT_LE(d.workspace_min.y, d.workspace_max.y);
-  EXPECT_LE(d.workspace_min.z, d.workspace_max.z);
-  if (cartesian()) {
-    EXPECT_GE(d.joints, 3u) << "a Cartesian driver's joints 0..2 are x, y, z";
-  }
+std::vector<driver_kit::CheckResult> kit(const std::string& library, const std::string& params = "{}") {
+  std::ostringstream log;
+  return driver_kit::run_kit({library, params, true}, log);
 }
 
-TEST(DriverKit, ReadingsAreFiniteAndFreshAndZeroCommandsAreTaken) {
-  DriverDevice device(kit_options());
-  ASSERT_EQ(device.start(), DeviceStatus::kOk);
-  DeviceReading reading;
-  for (int k = 0; k < 200; ++k) {
-    ASSERT_EQ(device.read(reading), DeviceStatus::kOk) << "tick " << k;
-    for (std::uint32_t j = 0; j < device.description().joints; ++j) {
-      ASSERT_TRUE(std::isfinite(reading.q[j]) && std::isfinite(reading.q_dot[j])) << "joint " << j;
-    }
-    ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk) << "tick " << k;
-  }
-  EXPECT_EQ(device.stale_readings(), 0u) << "the sequence number must move with every new sample";
-  device.enter_safe_state();  // callable at any time
-  device.stop();
+// ---- What any driver owes hapticd: the kit ----
+
+TEST(DriverKit, TheExampleDriverPassesEveryCheck) {
+  const auto results = kit(POINT_MASS_DRIVER);
+  ASSERT_EQ(results.size(), 3u);
+  for (const auto& result : results) EXPECT_TRUE(result.passed) << result.name << ": " << result.detail;
 }
 
-TEST(DriverKit, ACartesianDriversAxesAreThoseOfW) {
-  if (!cartesian()) GTEST_SKIP() << "not a Cartesian driver";
-  // A small force along each axis of W in turn moves the tool point along that axis, positively:
-  // a swapped or negated axis, or a force read as something else, shows here.
-  for (int axis = 0; axis < 3; ++axis) {
-    DriverDevice device(kit_options());
-    CartesianModel model;
-    DevicePort port(device, model);
-    ASSERT_EQ(device.start(), DeviceStatus::kOk);
-    ToolReading start, end;
-    ASSERT_EQ(port.read(start), DeviceStatus::kOk);
-    engine::Vec3 F;
-    (axis == 0 ? F.x : axis == 1 ? F.y : F.z) = 0.05 * device.description().max_force;
-    for (int k = 0; k < 20; ++k) {
-      ASSERT_EQ(port.write(ToolCommand{F}, kT), DeviceStatus::kOk);
-      ASSERT_EQ(port.read(end), DeviceStatus::kOk);
-    }
-    const engine::Vec3 moved = end.p_WT - start.p_WT;
-    const double along = axis == 0 ? moved.x : axis == 1 ? moved.y : moved.z;
-    EXPECT_GT(along, 0.0) << "axis " << axis;
-    EXPECT_GT(along, 0.9 * engine::norm(moved)) << "axis " << axis << " moved off its axis";
-    device.stop();
-  }
+TEST(DriverKit, ADriverReadingNaNFailsTheReadingsCheckSayingWhere) {
+  const auto results = kit(POINT_MASS_DRIVER, R"({"fault": "nan", "fault_after": 50})");
+  EXPECT_TRUE(results[0].passed) << results[0].detail;
+  EXPECT_FALSE(results[1].passed);
+  EXPECT_NE(results[1].detail.find("at tick 50"), std::string::npos) << results[1].detail;
+}
+
+TEST(DriverKit, ADriverWhoseSequenceStopsFailsAsStale) {
+  const auto results = kit(POINT_MASS_DRIVER, R"({"fault": "stale", "fault_after": 10})");
+  EXPECT_FALSE(results[1].passed);
+  EXPECT_NE(results[1].detail.find("stale"), std::string::npos) << results[1].detail;
+}
+
+TEST(DriverKit, ADriverThatPushesTheWrongWayFailsTheAxesCheck) {
+  // A push of its own along -x beats the kit's 5 % of max_force along +x: the tool moves the
+  // wrong way, as with a negated axis.
+  const auto results = kit(POINT_MASS_DRIVER, R"({"push": [-5, 0, 0], "max_force": 10})");
+  EXPECT_FALSE(results[2].passed);
+  EXPECT_NE(results[2].detail.find("not along +x"), std::string::npos) << results[2].detail;
+}
+
+TEST(DriverKit, ALibraryBuiltForAnotherAbiFailsToLoadNamingBothVersions) {
+  const auto results = kit(WRONG_ABI_DRIVER);
+  EXPECT_FALSE(results[0].passed);
+  EXPECT_NE(results[0].detail.find("ABI"), std::string::npos) << results[0].detail;
 }
 
 // ---- The example driver's physics: units ----

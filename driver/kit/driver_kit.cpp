@@ -1,0 +1,146 @@
+#include "driver_kit.hpp"
+
+#include <cmath>
+#include <exception>
+#include <sstream>
+
+#include "runtime/cartesian_model.hpp"
+#include "runtime/device_port.hpp"
+#include "runtime/driver_device.hpp"
+
+namespace haptic::driver_kit {
+namespace {
+
+constexpr double kT = 1e-3;  // the loop's period the kit calls at. Unit: s.
+
+runtime::DriverOptions driver_options(const KitOptions& options) {
+  runtime::DriverOptions out;
+  out.library = options.library;
+  out.params_json = options.params_json;
+  return out;
+}
+
+/// A check's body: returns "" when it holds, else what was wrong.
+using Body = std::string (*)(const KitOptions&, std::ostream&);
+
+std::string describes_itself(const KitOptions& options, std::ostream& log) {
+  runtime::DriverDevice device(driver_options(options));
+  const runtime::DeviceDescription& d = device.description();
+  log << "  " << d.name << ": " << d.joints << " joints, " << d.dof << " DOF, " << d.buttons
+      << " buttons, max force " << d.max_force << " N\n";
+  if (d.name.empty()) return "its description has no name";
+  if (d.joints < 1 || d.joints > runtime::kMaxJoints) {
+    return "joints: " + std::to_string(d.joints) + ", expected 1 to " + std::to_string(runtime::kMaxJoints);
+  }
+  if (!(d.max_force > 0.0)) return "max_force must be > 0, got " + std::to_string(d.max_force);
+  if (!(d.workspace_min.x <= d.workspace_max.x && d.workspace_min.y <= d.workspace_max.y &&
+        d.workspace_min.z <= d.workspace_max.z)) {
+    return "its workspace's minimum is not below its maximum on every axis";
+  }
+  if (options.cartesian && d.joints < 3) {
+    return "a Cartesian driver's joints 0..2 are x, y, z: it declares " + std::to_string(d.joints);
+  }
+  return {};
+}
+
+std::string reads_and_takes_commands(const KitOptions& options, std::ostream& /*log*/) {
+  runtime::DriverDevice device(driver_options(options));
+  if (device.start() != runtime::DeviceStatus::kOk) return "start() failed";
+  runtime::DeviceReading reading;
+  std::string why;
+  for (int k = 0; k < 200 && why.empty(); ++k) {
+    if (device.read(reading) != runtime::DeviceStatus::kOk) {
+      why = "read() failed at tick " + std::to_string(k);
+      if (device.stale_readings() > 0) {
+        why += ": its sample sequence stood still for " + std::to_string(device.stale_readings()) +
+               " readings (stale); it must move with every new sample";
+      }
+      break;
+    }
+    for (std::uint32_t j = 0; j < device.description().joints; ++j) {
+      if (!std::isfinite(reading.q[j]) || !std::isfinite(reading.q_dot[j])) {
+        why = "a reading that is not finite at tick " + std::to_string(k) + ", joint " + std::to_string(j);
+        break;
+      }
+    }
+    if (why.empty() && device.write(runtime::DeviceCommand{}, kT) != runtime::DeviceStatus::kOk) {
+      why = "write() of a zero command failed at tick " + std::to_string(k);
+    }
+  }
+  if (why.empty() && device.stale_readings() > 0) {
+    why = std::to_string(device.stale_readings()) +
+          " stale readings: the sample sequence must move with every new sample";
+  }
+  device.enter_safe_state();  // callable at any time
+  device.stop();
+  return why;
+}
+
+std::string axes_are_those_of_w(const KitOptions& options, std::ostream& log) {
+  // A small force along each axis of W in turn moves the tool point along that axis, positively:
+  // a swapped or negated axis, or a force read as something else, shows here.
+  static const char* const kAxis[] = {"x", "y", "z"};
+  for (int axis = 0; axis < 3; ++axis) {
+    runtime::DriverDevice device(driver_options(options));
+    runtime::CartesianModel model;
+    runtime::DevicePort port(device, model);
+    if (device.start() != runtime::DeviceStatus::kOk) return "start() failed";
+    runtime::ToolReading start, end;
+    if (port.read(start) != runtime::DeviceStatus::kOk) return "read() failed";
+    engine::Vec3 F;
+    (axis == 0 ? F.x : axis == 1 ? F.y : F.z) = 0.05 * device.description().max_force;
+    for (int k = 0; k < 20; ++k) {
+      if (port.write(runtime::ToolCommand{F}, kT) != runtime::DeviceStatus::kOk ||
+          port.read(end) != runtime::DeviceStatus::kOk) {
+        device.stop();
+        return std::string("a call failed while pushing along ") + kAxis[axis];
+      }
+    }
+    device.stop();
+    const engine::Vec3 moved = end.p_WT - start.p_WT;
+    const double along = axis == 0 ? moved.x : axis == 1 ? moved.y : moved.z;
+    std::ostringstream seen;
+    seen << "pushed along " << kAxis[axis] << ", the tool moved (" << moved.x << ", " << moved.y
+         << ", " << moved.z << ") m";
+    log << "  " << seen.str() << "\n";
+    if (!(along > 0.0)) return seen.str() + ": not along +" + kAxis[axis];
+    if (!(along > 0.9 * engine::norm(moved))) return seen.str() + ": mostly off the axis";
+  }
+  return {};
+}
+
+}  // namespace
+
+std::vector<CheckResult> run_kit(const KitOptions& options, std::ostream& log) {
+  struct Check {
+    const char* name;
+    Body body;
+    bool cartesian_only;
+  };
+  static const Check kChecks[] = {
+      {"it loads and describes itself sanely", describes_itself, false},
+      {"its readings are finite and fresh, zero commands are taken, the safe state can be entered",
+       reads_and_takes_commands, false},
+      {"a force along each axis of W moves the tool along that axis", axes_are_those_of_w, true},
+  };
+  std::vector<CheckResult> results;
+  for (const Check& check : kChecks) {
+    CheckResult result;
+    result.name = check.name;
+    if (check.cartesian_only && !options.cartesian) {
+      result.skipped = true;
+      result.detail = "not a Cartesian driver";
+    } else {
+      try {
+        result.detail = check.body(options, log);
+        result.passed = result.detail.empty();
+      } catch (const std::exception& error) {
+        result.detail = error.what();  // it did not load, or refused to be created
+      }
+    }
+    results.push_back(std::move(result));
+  }
+  return results;
+}
+
+}  // namespace haptic::driver_kit
