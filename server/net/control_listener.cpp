@@ -280,8 +280,8 @@ bool ControlListener::make_room(const std::string& host) {
   log_limited("control plane: a connection from " + victim->host + " (" +
               std::to_string(per_host[victim->host]) + " held, no HTTP/2 preface yet) closed to make "
               "room at max_connections for one from " + host);
+  counters_.evicted.fetch_add(1, std::memory_order_relaxed);  // counted before it is closed
   remove(victim_id);
-  counters_.evicted.fetch_add(1, std::memory_order_relaxed);
   return true;
 }
 
@@ -367,22 +367,22 @@ void ControlListener::watch_tls(std::uint64_t id, Connection& connection) {
 }
 
 void ControlListener::remove(std::uint64_t id) {
-  const auto it = connections_.find(id);
-  if (it == connections_.end()) return;
-  Connection& connection = it->second;
+  auto node = connections_.extract(id);
+  if (node.empty()) return;
+  // The count first, the sockets after: whoever sees a connection closed finds it counted.
+  update_open();
+  Connection& connection = node.mapped();
   switch (connection.state) {
     case Connection::State::kAwaitingPreface:
       ::close(connection.fd);  // closing also takes it out of epoll
       break;
     case Connection::State::kTls:
       if (connection.grpc_fd >= 0) forget_handed_out(connection.grpc_fd, 0);
-      break;  // the pump closes its sockets
+      break;  // the pump closes its sockets when the node goes, below
     case Connection::State::kServed:
       forget_handed_out(connection.fd, connection.inode);
       break;  // gRPC's to close
   }
-  connections_.erase(it);
-  update_open();
 }
 
 void ControlListener::expire_and_reap() {
@@ -399,9 +399,10 @@ void ControlListener::expire_and_reap() {
       ++expired;
     }
   }
+  // Counted before they are closed: whoever sees one closed finds it counted.
+  counters_.timed_out.fetch_add(expired, std::memory_order_relaxed);
   for (const std::uint64_t id : ended) remove(id);
   if (expired > 0) {
-    counters_.timed_out.fetch_add(expired, std::memory_order_relaxed);
     log_limited("control plane: " + std::to_string(expired) + " connection(s) closed: no " +
                 (tls_ ? "TLS handshake and " : "") + "HTTP/2 preface within handshake_timeout_ms (" +
                 std::to_string(limits_.handshake_timeout.count()) + ")");
@@ -413,8 +414,8 @@ void ControlListener::update_open() {
 }
 
 void ControlListener::refuse(int fd, const char* why, const std::string& host) {
+  counters_.refused.fetch_add(1, std::memory_order_relaxed);  // counted before the peer sees the close
   if (fd >= 0) ::close(fd);
-  counters_.refused.fetch_add(1, std::memory_order_relaxed);
   log_limited(std::string("control plane: connection") + (host.empty() ? "" : " from " + host) +
               " refused: " + why + " (" +
               std::to_string(counters_.refused.load(std::memory_order_relaxed)) + " refused so far, " +

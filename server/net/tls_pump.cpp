@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <optional>
 
 #include "net/tls_server_context.hpp"
 
@@ -33,6 +34,12 @@ PrefaceCheck check_http2_preface(std::string_view first_bytes) {
   const std::size_t n = std::min(first_bytes.size(), kHttp2Preface.size());
   if (first_bytes.substr(0, n) != kHttp2Preface.substr(0, n)) return PrefaceCheck::kNotHttp2;
   return n == kHttp2Preface.size() ? PrefaceCheck::kComplete : PrefaceCheck::kSoFar;
+}
+
+std::optional<TlsPump::Want> TlsPump::waits_for(int ssl_error) {
+  if (ssl_error == SSL_ERROR_WANT_READ) return Want::kReadable;
+  if (ssl_error == SSL_ERROR_WANT_WRITE) return Want::kWritable;
+  return std::nullopt;
 }
 
 void TlsPump::Queue::compact() {
@@ -94,10 +101,8 @@ void TlsPump::handshake() {
   }
   const int saved_errno = errno;
   const int error = SSL_get_error(ssl_, result);
-  if (error == SSL_ERROR_WANT_READ) {
-    reading_waits_for_ = Want::kReadable;
-  } else if (error == SSL_ERROR_WANT_WRITE) {
-    reading_waits_for_ = Want::kWritable;
+  if (const auto wait = waits_for(error)) {
+    reading_waits_for_ = *wait;
   } else {
     close(saved_errno == 0 && error == SSL_ERROR_SYSCALL ? "closed during the TLS handshake"
                                                          : tls_failure(error, saved_errno));
@@ -138,10 +143,8 @@ bool TlsPump::read_net() {
   }
   const int saved_errno = errno;
   const int error = SSL_get_error(ssl_, n);
-  if (error == SSL_ERROR_WANT_READ) {
-    reading_waits_for_ = Want::kReadable;
-  } else if (error == SSL_ERROR_WANT_WRITE) {
-    reading_waits_for_ = Want::kWritable;
+  if (const auto wait = waits_for(error)) {
+    reading_waits_for_ = *wait;
   } else if (error == SSL_ERROR_ZERO_RETURN || (error == SSL_ERROR_SYSCALL && saved_errno == 0)) {
     net_ended_ = true;  // close_notify, or the TCP stream's end
     reading_waits_for_ = Want::kNothing;
@@ -195,10 +198,8 @@ bool TlsPump::write_net() {
   }
   const int saved_errno = errno;
   const int error = SSL_get_error(ssl_, n);
-  if (error == SSL_ERROR_WANT_WRITE) {
-    writing_waits_for_ = Want::kWritable;
-  } else if (error == SSL_ERROR_WANT_READ) {
-    writing_waits_for_ = Want::kReadable;
+  if (const auto wait = waits_for(error)) {
+    writing_waits_for_ = *wait;
   } else {
     close(tls_failure(error, saved_errno));
   }

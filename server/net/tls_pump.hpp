@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -103,6 +104,9 @@ class TlsPump {
   /// What the last TLS read (the handshake's steps included) and the last TLS write wait for
   /// on the network socket: either may need the other direction (TLS 1.3 key updates).
   enum class Want { kNothing, kReadable, kWritable };
+  /// What a TLS call that failed with `ssl_error` (SSL_get_error) waits for on the socket;
+  /// nullopt when it is not waiting but ended or failed.
+  static std::optional<Want> waits_for(int ssl_error);
   Want reading_waits_for_ = Want::kReadable;
   Want writing_waits_for_ = Want::kNothing;
   std::string why_;

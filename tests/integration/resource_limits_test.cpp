@@ -217,6 +217,23 @@ TEST(ResourceLimitsOfSessions, OneHostsSessionOpeningsAreRateLimitedAfterABurst)
   EXPECT_TRUE(open_and_close().ok());
 }
 
+/// A 10 mm square plate at height `z`: a mesh of two triangles, created for `session`.
+grpc::Status add_plate_mesh(test::RawClient& client, const v1::OpenSessionResponse& session, double z) {
+  v1::CreateObjectRequest request;
+  request.set_session_id(session.session_id());
+  request.mutable_object()->mutable_impedance()->set_stiffness(1000.0);
+  auto* mesh = request.mutable_object()->mutable_mesh();
+  for (const auto& [x, y] : {std::pair{0.0, 0.0}, {0.01, 0.0}, {0.01, 0.01}, {0.0, 0.01}}) {
+    auto* vertex = mesh->add_vertices();
+    vertex->set_x(x);
+    vertex->set_y(y);
+    vertex->set_z(z);
+  }
+  for (const std::uint32_t index : {0u, 1u, 2u, 0u, 2u, 3u}) mesh->add_indices(index);
+  v1::ItemRef item;
+  return client.call(&v1::Haptic::Stub::CreateObject, request, item, session.session_secret());
+}
+
 TEST(ResourceLimitsOfTheScene, OneHostsSessionsAndTheWholeScenesTrianglesAreBounded) {
   test::ServerProcess server(test::lockstep_config(
       R"("max_sessions_per_peer": 2, "max_scene_triangles": 3)"));
@@ -232,19 +249,7 @@ TEST(ResourceLimitsOfTheScene, OneHostsSessionsAndTheWholeScenesTrianglesAreBoun
 
   // Two triangles from one session, two more from another: over the whole scene's three.
   const auto add_plate = [&](const v1::OpenSessionResponse& session, double z) {
-    v1::CreateObjectRequest request;
-    request.set_session_id(session.session_id());
-    request.mutable_object()->mutable_impedance()->set_stiffness(1000.0);
-    auto* mesh = request.mutable_object()->mutable_mesh();
-    for (const auto& [x, y] : {std::pair{0.0, 0.0}, {0.01, 0.0}, {0.01, 0.01}, {0.0, 0.01}}) {
-      auto* vertex = mesh->add_vertices();
-      vertex->set_x(x);
-      vertex->set_y(y);
-      vertex->set_z(z);
-    }
-    for (const std::uint32_t index : {0u, 1u, 2u, 0u, 2u, 3u}) mesh->add_indices(index);
-    v1::ItemRef item;
-    return client.call(&v1::Haptic::Stub::CreateObject, request, item, session.session_secret());
+    return add_plate_mesh(client, session, z);
   };
   ASSERT_TRUE(add_plate(first, 0.0).ok());
   const grpc::Status over = add_plate(second, 0.01);
@@ -260,21 +265,7 @@ TEST(ResourceLimitsOfTheScene, OneSessionHoldsAtMostItsShareOfTheTriangles) {
   test::RawClient client(server.address());
   v1::OpenSessionResponse session;
   ASSERT_TRUE(client.open(session, "greedy").ok());
-  const auto add_plate = [&](double z) {
-    v1::CreateObjectRequest request;
-    request.set_session_id(session.session_id());
-    request.mutable_object()->mutable_impedance()->set_stiffness(1000.0);
-    auto* mesh = request.mutable_object()->mutable_mesh();
-    for (const auto& [x, y] : {std::pair{0.0, 0.0}, {0.01, 0.0}, {0.01, 0.01}, {0.0, 0.01}}) {
-      auto* vertex = mesh->add_vertices();
-      vertex->set_x(x);
-      vertex->set_y(y);
-      vertex->set_z(z);
-    }
-    for (const std::uint32_t index : {0u, 1u, 2u, 0u, 2u, 3u}) mesh->add_indices(index);
-    v1::ItemRef item;
-    return client.call(&v1::Haptic::Stub::CreateObject, request, item, session.session_secret());
-  };
+  const auto add_plate = [&](double z) { return add_plate_mesh(client, session, z); };
   ASSERT_TRUE(add_plate(0.0).ok());
   ASSERT_TRUE(add_plate(0.01).ok());  // 4 triangles: half of the 8
   const grpc::Status over = add_plate(0.02);
