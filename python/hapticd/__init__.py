@@ -14,7 +14,8 @@ seconds.
 
 from ._native import *  # noqa: F401,F403  (the bound SDK)
 from . import _native
-from ._trajectory import Trajectory, record
+# `as`: re-exported, for type checkers.
+from ._trajectory import Trajectory as Trajectory, record as record
 
 # Classes print as hapticd.X, not hapticd._native.X.
 for _name in dir(_native):

@@ -1,8 +1,15 @@
 """A lockstep run sampled every tick into NumPy arrays (record())."""
 
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    from ._native import Client
 
 
 @dataclass(frozen=True)
@@ -10,20 +17,20 @@ class Trajectory:
     """Samples of one run, row i from the i-th step. Positions, velocities and forces are (N, 3)
     arrays in W (m, m/s, N); time is server time (s)."""
 
-    tick: np.ndarray           # (N,) uint64
-    time: np.ndarray           # (N,) s
-    position: np.ndarray       # (N, 3) m
-    velocity: np.ndarray       # (N, 3) m/s
-    force: np.ndarray          # (N, 3) N
-    proxy: np.ndarray          # (N, 3) m
-    contact_count: np.ndarray  # (N,) uint32
-    flags: np.ndarray          # (N,) uint32, StateFlag bits
+    tick: npt.NDArray[np.uint64]           # (N,)
+    time: npt.NDArray[np.float64]          # (N,) s
+    position: npt.NDArray[np.float64]      # (N, 3) m
+    velocity: npt.NDArray[np.float64]      # (N, 3) m/s
+    force: npt.NDArray[np.float64]         # (N, 3) N
+    proxy: npt.NDArray[np.float64]         # (N, 3) m
+    contact_count: npt.NDArray[np.uint32]  # (N,)
+    flags: npt.NDArray[np.uint32]          # (N,) StateFlag bits
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(self.tick)
 
 
-def record(client, ticks, every=1, timeout=5.0):
+def record(client: Client, ticks: int, every: int = 1, timeout: float = 5.0) -> Trajectory:
     """Steps a lockstep server `ticks` ticks, `every` ticks at a time, and returns a Trajectory of
     the sample each step ends on (the step's reply carries it, so none is lost). Raises ValueError
     for counts that are not positive whole numbers, TimeoutError if a sample does not arrive within

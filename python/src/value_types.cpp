@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -306,9 +307,9 @@ void bind_reports(py::module_& m) {
           "local receipt time, s on time.monotonic()'s clock")
       .readonly_property(
           "arrived_at",
-          [](const State& s) -> py::object {
-            if (!s.arrived_at) return py::none();
-            return py::float_(monotonic_seconds(*s.arrived_at));
+          [](const State& s) -> std::optional<double> {
+            if (!s.arrived_at) return std::nullopt;
+            return monotonic_seconds(*s.arrived_at);
           },
           "the kernel's receive stamp, s on time.monotonic()'s clock; None without one")
       .readonly_property(
