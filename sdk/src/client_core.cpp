@@ -14,10 +14,7 @@
 #include "tls_diagnosis.hpp"
 
 namespace haptic::detail {
-namespace {
 
-/// The host part of "host:port", "[v6]:port" or a gRPC target such as "dns:///host:port" or
-/// "ipv4:host:port": the UDP data plane lives on the same host as the control plane.
 std::string host_of(std::string address) {
   for (const char* scheme : {"dns:///", "dns:", "ipv4:", "ipv6:"}) {
     const std::string prefix(scheme);
@@ -33,6 +30,8 @@ std::string host_of(std::string address) {
   const auto colon = address.rfind(':');
   return colon == std::string::npos ? address : address.substr(0, colon);
 }
+
+namespace {
 
 /// The port of ClientConfig::udp_address ("host:port" or "[v6]:port").
 std::uint16_t udp_port_of(const std::string& address) {

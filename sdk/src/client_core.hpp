@@ -21,6 +21,10 @@
 
 namespace haptic::detail {
 
+/// The host part of "host:port", "[v6]:port" or a gRPC target such as "dns:///host:port" or
+/// "ipv4:host:port": the UDP data plane lives on the same host as the control plane.
+std::string host_of(std::string address);
+
 class ClientCore {
  public:
   explicit ClientCore(ClientConfig config);

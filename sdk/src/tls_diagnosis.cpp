@@ -13,6 +13,8 @@
 #include <cerrno>
 #include <memory>
 
+#include "client_core.hpp"
+
 namespace haptic::detail {
 namespace {
 
@@ -23,23 +25,13 @@ struct Target {
   std::string port;
 };
 
-/// "host:port", "[v6]:port", "dns:///host:port", "ipv4:host:port"; none for "unix:" targets.
-bool parse_target(std::string address, Target& target) {
+/// The host and port of the client's server address; none for "unix:" targets.
+bool parse_target(const std::string& address, Target& target) {
   if (address.rfind("unix:", 0) == 0) return false;
-  for (const char* scheme : {"dns:///", "dns:", "ipv4:", "ipv6:"}) {
-    const std::string prefix(scheme);
-    if (address.rfind(prefix, 0) == 0) {
-      address = address.substr(prefix.size());
-      break;
-    }
-  }
   const auto colon = address.rfind(':');
   if (colon == std::string::npos || colon + 1 == address.size()) return false;
   target.port = address.substr(colon + 1);
-  target.host = address.substr(0, colon);
-  if (target.host.size() >= 2 && target.host.front() == '[' && target.host.back() == ']') {
-    target.host = target.host.substr(1, target.host.size() - 2);
-  }
+  target.host = host_of(address);
   return !target.host.empty();
 }
 

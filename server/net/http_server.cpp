@@ -228,19 +228,10 @@ void HttpServer::accept_from(int listening_fd, std::vector<Connection>& connecti
       return;
     }
     const std::string host = host_of_peer(peer, length);
-    if (!make_room(host, connections)) {
+    if (const std::string share = make_room(host, connections); !share.empty()) {
       refused_.fetch_add(1, std::memory_order_relaxed);  // counted before the peer sees the close
       // Said in one try, never waited for: the refusal names the share it met.
-      const std::string why =
-          "hapticd " + name_ + ": " +
-          (std::count_if(connections.begin(), connections.end(),
-                         [&](const Connection& c) { return c.host == host; }) >=
-                   static_cast<std::ptrdiff_t>(limits_.max_connections_per_peer)
-               ? "this host holds " + std::to_string(limits_.max_connections_per_peer) +
-                     " connections, the most one host may"
-               : "the endpoint holds " + std::to_string(limits_.max_connections) +
-                     " connections, its most") +
-          "\n";
+      const std::string why = "hapticd " + name_ + ": " + share + "\n";
       const std::string reply = "HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain; "
                                 "charset=utf-8\r\nContent-Length: " + std::to_string(why.size()) +
                                 "\r\nConnection: close\r\nRetry-After: 1\r\n\r\n" + why;
@@ -257,12 +248,15 @@ void HttpServer::accept_from(int listening_fd, std::vector<Connection>& connecti
   }
 }
 
-bool HttpServer::make_room(const std::string& host, std::vector<Connection>& connections) {
+std::string HttpServer::make_room(const std::string& host, std::vector<Connection>& connections) {
   std::map<std::string, std::size_t> per_host;
   for (const Connection& c : connections) ++per_host[c.host];
   const std::size_t from_host = per_host[host];
-  if (from_host >= limits_.max_connections_per_peer) return false;
-  if (connections.size() < limits_.max_connections) return true;
+  if (from_host >= limits_.max_connections_per_peer) {
+    return "this host holds " + std::to_string(limits_.max_connections_per_peer) +
+           " connections, the most one host may";
+  }
+  if (connections.size() < limits_.max_connections) return {};
   // Full: the least progress among the connections of hosts holding more than this one's, and
   // not in the middle of a reply (its reader is waiting for it).
   auto victim = connections.end();
@@ -273,11 +267,13 @@ bool HttpServer::make_room(const std::string& host, std::vector<Connection>& con
     if (!it->pending.empty() || per_host[it->host] <= from_host + 1) continue;
     if (victim == connections.end() || progress(*it) < progress(*victim)) victim = it;
   }
-  if (victim == connections.end()) return false;
+  if (victim == connections.end()) {
+    return "the endpoint holds " + std::to_string(limits_.max_connections) + " connections, its most";
+  }
+  evicted_.fetch_add(1, std::memory_order_relaxed);  // counted before the peer sees the close
   ::close(victim->fd);
   connections.erase(victim);
-  evicted_.fetch_add(1, std::memory_order_relaxed);
-  return true;
+  return {};
 }
 
 bool HttpServer::receive(Connection& connection) {

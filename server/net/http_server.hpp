@@ -104,9 +104,9 @@ class HttpServer {
   struct Connection;
   void serve_loop();
   void accept_from(int listening_fd, std::vector<Connection>& connections);
-  /// Whether a connection from `host` may be held, after displacing another host's if need be
-  /// (HttpLimits).
-  bool make_room(const std::string& host, std::vector<Connection>& connections);
+  /// Makes room for a connection from `host`, displacing another host's if need be (HttpLimits);
+  /// "" when there is room, else the share that was met, for the 503.
+  std::string make_room(const std::string& host, std::vector<Connection>& connections);
   /// Reads what arrived; false when the connection is done with.
   bool receive(Connection& connection);
   /// Queues the reply to the next whole request in the connection's buffer; false when there is

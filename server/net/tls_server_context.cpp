@@ -100,24 +100,20 @@ TlsServerContext::TlsServerContext(const TlsServerMaterial& material)
   }
 
   if (mutual_) {
+    // Each CA verifies client certificates, and is named in the certificate request so that a
+    // client holding several certificates picks the right one.
     X509_STORE* store = SSL_CTX_get_cert_store(context_);
     auto ca_bio = memory_bio(material.client_ca_pem);
-    int added = 0;
-    while (X509* ca = PEM_read_bio_X509(ca_bio.get(), nullptr, nullptr, nullptr)) {
-      if (X509_STORE_add_cert(store, ca) == 1) ++added;
-      X509_free(ca);
-    }
-    ERR_clear_error();
-    if (added == 0) fail("security.tls.client_ca_file: no PEM certificate in it");
-    // Also name the acceptable CAs in the certificate request, so a client holding several
-    // certificates picks the right one.
-    auto names_bio = memory_bio(material.client_ca_pem);
     STACK_OF(X509_NAME)* names = sk_X509_NAME_new_null();
-    while (X509* ca = PEM_read_bio_X509(names_bio.get(), nullptr, nullptr, nullptr)) {
-      sk_X509_NAME_push(names, X509_NAME_dup(X509_get_subject_name(ca)));
+    while (X509* ca = PEM_read_bio_X509(ca_bio.get(), nullptr, nullptr, nullptr)) {
+      if (X509_STORE_add_cert(store, ca) == 1) sk_X509_NAME_push(names, X509_NAME_dup(X509_get_subject_name(ca)));
       X509_free(ca);
     }
     ERR_clear_error();
+    if (sk_X509_NAME_num(names) == 0) {
+      sk_X509_NAME_free(names);
+      fail("security.tls.client_ca_file: no PEM certificate in it");
+    }
     SSL_CTX_set_client_CA_list(context_, names);
     SSL_CTX_set_verify(context_, SSL_VERIFY_PEER | SSL_VERIFY_FAIL_IF_NO_PEER_CERT, nullptr);
   }

@@ -162,7 +162,6 @@ TEST(DescriptorFlood, AMutualTlsServerServesOtherHostsDuringAFloodAndEveryHostAf
   EXPECT_EQ(calls_ok, calls);
   EXPECT_TRUE(newcomer_served);
   EXPECT_GT(during.connections_refused(), 0u);
-  EXPECT_LE(fds_during, 256u);
 
   // The flood ends; every flooding host is served within 1 s (their checks run side by side).
   for (const int fd : flood) ::close(fd);
