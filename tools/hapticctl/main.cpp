@@ -193,8 +193,13 @@ int main(int argc, char** argv) {
       std::condition_variable arrived;
       int seen = 0;
       client.on_event([&](const haptic::Event& event) {
-        if (event.kind == haptic::Event::Kind::kWatchStarted) return;
         std::lock_guard lock(mutex);
+        if (event.kind == haptic::Event::Kind::kWatchStarted) {
+          // On stderr, so that a pipe reads events alone: a quiet server shows it is listening.
+          std::cerr << "hapticctl: watching " << config.server_address << "'s events"
+                    << (event_count == 0 && event_seconds == 0.0 ? "; Ctrl-C ends" : "") << std::endl;
+          return;
+        }
         std::cout << hapticctl::event_line(event) << std::endl;
         ++seen;
         arrived.notify_all();
