@@ -288,7 +288,11 @@ void Server::bind_http_endpoints(const net::AccessControl& access) {
   sources.host_name = config::host_of_address(config_.viewer_address());
   sources.loopback_only = config::is_loopback_host(sources.host_name);
   viewer_ = std::make_unique<net::ViewerEndpoint>(std::move(sources));
-  viewer_->load_page(viewer_root(config_));
+  try {
+    viewer_->load_page(viewer_root(config_));
+  } catch (const std::runtime_error& error) {
+    throw config::ConfigError(error.what());  // viewer_root names a folder without the page: exit 2
+  }
   viewer_->bind(config_.viewer_address());
 }
 

@@ -38,9 +38,14 @@ Attributes:
   expect=comments     python: the trailing comment of each print() line is the line it prints.
                       sh: each comment line after the first command is a line of the output.
                       In sh, a trailing `# expect: TEXT` requires TEXT in the output in any case.
+  output from=CMD     an output block of its own: CMD runs in the sandbox where the block stands
+                      in the group (a failing start, say), and what it prints must show the block's
+                      lines, anchored at neither end; status=N also requires its exit status.
   file=PATH           write the block to PATH (a configuration file, say); check=config then
                       has the group's hapticd read it (`--print-config`).
   timeout=SECONDS     for the snippet (default 120).
+
+Log lines are compared without the time stamp and level in front (`[2026-…] [info] `).
 
 Usage:
   doc_snippets.py check SOURCE               every block annotated, every reference resolved
@@ -70,9 +75,12 @@ ANNOTATION = re.compile(r"^\s*<!--\s*snippet:\s*(.*?)\s*-->\s*$")
 FENCE = re.compile(r"^(\s*)(```+)\s*([^\s`]*)")
 KINDS_RUN = {"sh", "python", "cpp"}
 KNOWN = {"run", "skip", "shows", "output", "group", "server", "server-user", "server-ready",
-         "before", "stream", "expect", "expect-lines", "file", "check", "wrap", "timeout"}
+         "before", "stream", "expect", "expect-lines", "file", "check", "wrap", "timeout", "from", "status"}
 # The docs' example hosts: names and addresses that must reach the sandbox's own server.
 EXAMPLE_HOSTS = {"192.168.10.20": ["haptics-server.lab"], "127.0.0.1": ["hapticd-host", "lab-server"]}
+
+
+LOG_STAMP = re.compile(r"^\[\d{4}-\d\d-\d\d [\d:.]+\] \[\w+\] ")
 
 
 class SnippetError(Exception):
@@ -190,7 +198,11 @@ def load(source: Path) -> tuple[list[Snippet], list[str]]:
         if s.run == "cpp" and s.attrs.get("wrap", "none") not in ("none", "main"):
             problems.append(f"{s.where}: wrap={s.attrs['wrap']}: main or none")
     for s in every:
-        if "output" in s.attrs and not any(t.doc == s.doc and t.attrs.get("expect") == s.name for t in every):
+        if "status" in s.attrs and "from" not in s.attrs:
+            problems.append(f"{s.where}: status= goes with from=")
+        if "from" in s.attrs and "output" not in s.attrs:
+            problems.append(f"{s.where}: from= belongs to an output block")
+        if "output" in s.attrs and "from" not in s.attrs and not any(t.doc == s.doc and t.attrs.get("expect") == s.name for t in every):
             problems.append(f"{s.where}: an output block that no snippet expects (expect={s.name})")
     return every, problems
 
@@ -198,7 +210,7 @@ def load(source: Path) -> tuple[list[Snippet], list[str]]:
 def groups(snippets: list[Snippet]) -> dict[tuple[str, str], list[Snippet]]:
     result: dict[tuple[str, str], list[Snippet]] = {}
     for s in snippets:
-        if s.run or "file" in s.attrs:
+        if s.run or "file" in s.attrs or "from" in s.attrs:
             result.setdefault((s.doc, s.group), []).append(s)
     return result
 
@@ -230,7 +242,7 @@ def cpp_program(s: Snippet) -> str:
 def compare(expected: str, actual: str, what: str) -> None:
     """Raises SnippetError unless `actual` shows `expected` (with `...` gaps)."""
     want = [ln.rstrip() for ln in expected.rstrip("\n").split("\n")]
-    got = [ln.rstrip() for ln in actual.rstrip("\n").split("\n")]
+    got = [LOG_STAMP.sub("", ln.rstrip()) for ln in actual.rstrip("\n").split("\n")]
     chunks, chunk = [], []
     for ln in want:
         if ln.strip() == "...":
@@ -272,7 +284,7 @@ def python_expectations(code: str) -> list[str]:
     out = []
     for ln in code.splitlines():
         if "print(" in ln and "#" in ln:
-            out.append(ln.split("#", 1)[1].strip())
+            out.append(re.sub(r"\s+\(.*\)$", "", ln.split("#", 1)[1].strip()))
     return out
 
 
@@ -440,6 +452,17 @@ class Group:
                              f"{s.where}: hapticd --config {path} --print-config")
             if not s.run:
                 return
+        if "from" in s.attrs:
+            command = s.attrs["from"]
+            done = subprocess.run(["bash", "-c", f"source {shlex.quote(str(self.state))}\n{command}"],
+                                  cwd=self.work, env=self.env, text=True, stdout=subprocess.PIPE,
+                                  stderr=subprocess.STDOUT, timeout=timeout)
+            if "status" in s.attrs and done.returncode != int(s.attrs["status"]):
+                raise SnippetError(f"{s.where}: `{command}` exit status {done.returncode}, the doc says "
+                                   f"{s.attrs['status']}; its output:\n{done.stdout}")
+            compare("...\n" + s.code + "...\n", done.stdout, f"{s.where} against `{command}`")
+            print(f"ok   {s.where}\n{indent(done.stdout)}", flush=True)
+            return
         output = ""
         if s.run == "sh":
             if "stream" in s.attrs:
@@ -489,7 +512,7 @@ class Group:
 
 
 def compare_lines(expected: list[str], output: str, where: str) -> None:
-    got = [ln.strip() for ln in output.splitlines()]
+    got = [LOG_STAMP.sub("", ln).strip() for ln in output.splitlines()]
     position = 0
     for line in expected:
         try:
@@ -551,7 +574,9 @@ def main(argv: list[str]) -> int:
                 print("skipped: the snippets run in a mount and network namespace of their own, "
                       "which needs root (CI runs as root)")
                 return SKIP
-            return subprocess.call(["unshare", "--mount", "--net", "--fork", sys.executable,
+            # Debian's interpreter: the sandbox's fresh /root hides an interpreter installed there.
+            python = "/usr/bin/python3" if Path("/usr/bin/python3").exists() else sys.executable
+            return subprocess.call(["unshare", "--mount", "--net", "--fork", python,
                                     str(Path(__file__).resolve()), "_inside", str(source), wanted]
                                    + argv[4:])
         group = Group(source, Path(options["--build"]).resolve(), Path(options["--programs"]).resolve(),

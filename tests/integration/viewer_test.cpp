@@ -292,10 +292,10 @@ TEST(Viewer, TheCommandLineAndTheConfigurationsRules) {
             std::string::npos)
       << remote.output;
 
-  // A folder without the page stops the server at start, naming it.
+  // A folder without the page stops the server at start, naming it: a configuration error (2).
   const test::Outcome no_page = run({"--lockstep", "--grpc-address", "127.0.0.1:0", "--udp-port", "0",
                                      "--http", "0", "--viewer-root", dir.string()});
-  EXPECT_EQ(no_page.exit_code, 1);
+  EXPECT_EQ(no_page.exit_code, 2);
   EXPECT_NE(no_page.output.find("viewer_root: no index.html in '" + dir.string() + "'"), std::string::npos)
       << no_page.output;
   std::filesystem::remove_all(dir);
