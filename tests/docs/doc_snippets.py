@@ -23,7 +23,7 @@ Attributes:
                       group's python snippets run one after another in one interpreter, as in a
                       notebook. cpp: the program CMake built from the snippet (wrap=main puts
                       statements into main()).
-  server=CMD          start CMD in the background before this snippet (kept until the group
+  server=CMD          start CMD in the background before this snippet (after its file=) (kept until the group
                       ends), waiting until `server-ready` (default 127.0.0.1:50051) accepts.
   server-user=USER    run the server as USER.
   before=CMD          a shell step the prose describes but shows no block for (copying a file
@@ -180,8 +180,9 @@ def load(source: Path) -> tuple[list[Snippet], list[str]]:
             problems.append(f"{s.where}: the name is taken by {seen[key].where}")
         seen[key] = s
         kinds = [k for k in ("run", "skip", "shows", "output") if k in s.attrs]
-        if len(kinds) != 1:
-            problems.append(f"{s.where}: give exactly one of run=, skip=, shows=, output (got {kinds or 'none'})")
+        if len(kinds) != 1 and not (not kinds and "file" in s.attrs):
+            problems.append(f"{s.where}: give exactly one of run=, skip=, shows=, output, or file= "
+                            f"(got {kinds or 'none'})")
         if s.run and s.run not in KINDS_RUN:
             problems.append(f"{s.where}: run={s.run}: one of {', '.join(sorted(KINDS_RUN))}")
         for reason in ("skip", "shows"):
@@ -439,19 +440,17 @@ class Group:
         timeout = float(s.attrs.get("timeout", "120"))
         if "before" in s.attrs:
             self.shell(s.attrs["before"], timeout, f"{s.where}: the step before it (`{s.attrs['before']}`)")
-        if "server" in s.attrs:
-            self.start_server(s.attrs["server"], s.attrs.get("server-user"),
-                              s.attrs.get("server-ready", "127.0.0.1:50051"))
         if "file" in s.attrs:
-            path = Path(s.attrs["file"])
+            path = self.work / s.attrs["file"]  # an absolute path stays as it is
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(s.code, encoding="utf-8")
             if s.attrs.get("check") == "config":
                 hapticd = self.build / "server" / "app" / "hapticd"
                 self.execute([str(hapticd), "--config", str(path), "--print-config"], timeout,
                              f"{s.where}: hapticd --config {path} --print-config")
-            if not s.run:
-                return
+        if "server" in s.attrs:
+            self.start_server(s.attrs["server"], s.attrs.get("server-user"),
+                              s.attrs.get("server-ready", "127.0.0.1:50051"))
         if "from" in s.attrs:
             command = s.attrs["from"]
             done = subprocess.run(["bash", "-c", f"source {shlex.quote(str(self.state))}\n{command}"],
@@ -464,6 +463,9 @@ class Group:
             print(f"ok   {s.where}\n{indent(done.stdout)}", flush=True)
             return
         output = ""
+        if not s.run:
+            print(f"ok   {s.where}", flush=True)
+            return
         if s.run == "sh":
             if "stream" in s.attrs:
                 output = self.streamed_lines(s, float(s.attrs["stream"]))
