@@ -7,8 +7,11 @@
 #include "client_core.hpp"
 #include "conversions.hpp"
 #include "haptic/io/scene_file.hpp"
+#include "haptic/io/session_id.hpp"
 
 namespace haptic {
+
+std::string session_id_text(std::uint64_t session_id) { return io::format_session_id(session_id); }
 namespace {
 
 // Client-side checks for obvious mistakes, so they fail fast with a clear message; the server

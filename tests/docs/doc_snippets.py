@@ -22,7 +22,8 @@ Attributes:
                       variables and umask carry on to the group's next sh snippet. python: the
                       group's python snippets run one after another in one interpreter, as in a
                       notebook. cpp: the program CMake built from the snippet (wrap=main puts
-                      statements into main()).
+                      statements into main(), wrap=fields designated initializers into a
+                      haptic::ClientConfig; helpers=NAME lends them what precedes main() in NAME).
   server=CMD          start CMD in the background before this snippet (after its file=) (kept until the group
                       ends), waiting until `server-ready` (default 127.0.0.1:50051) accepts.
   server-user=USER    run the server as USER.
@@ -43,6 +44,10 @@ Attributes:
                       lines, anchored at neither end; status=N also requires its exit status.
   file=PATH           write the block to PATH (a configuration file, say); check=config then
                       has the group's hapticd read it (`--print-config`).
+  in-tree             sh: start in the source tree's top (where the prose says so), whatever
+                      directory the group's earlier snippets left.
+  after=NAME          run it right after the group's snippet NAME rather than where it stands
+                      (an example that needs what a later section sets up).
   timeout=SECONDS     for the snippet (default 120).
 
 Log lines are compared without the time stamp and level in front (`[2026-…] [info] `).
@@ -74,7 +79,7 @@ SKIP = 77
 ANNOTATION = re.compile(r"^\s*<!--\s*snippet:\s*(.*?)\s*-->\s*$")
 FENCE = re.compile(r"^(\s*)(```+)\s*([^\s`]*)")
 KINDS_RUN = {"sh", "python", "cpp"}
-KNOWN = {"run", "skip", "shows", "output", "group", "server", "server-user", "server-ready",
+KNOWN = {"run", "skip", "shows", "output", "group", "server", "server-user", "server-ready", "helpers", "after", "in-tree",
          "before", "stream", "expect", "expect-lines", "file", "check", "wrap", "timeout", "from", "status"}
 # The docs' example hosts: names and addresses that must reach the sandbox's own server.
 EXAMPLE_HOSTS = {"192.168.10.20": ["haptics-server.lab"], "127.0.0.1": ["hapticd-host", "lab-server"]}
@@ -196,8 +201,11 @@ def load(source: Path) -> tuple[list[Snippet], list[str]]:
                 problems.append(f"{s.where}: expect={expect}: no `output` block of that name in {s.doc}")
         if s.attrs.get("check") == "config" and "file" not in s.attrs:
             problems.append(f"{s.where}: check=config needs file=PATH")
-        if s.run == "cpp" and s.attrs.get("wrap", "none") not in ("none", "main"):
-            problems.append(f"{s.where}: wrap={s.attrs['wrap']}: main or none")
+        if s.run == "cpp" and s.attrs.get("wrap", "none") not in ("none", "main", "fields"):
+            problems.append(f"{s.where}: wrap={s.attrs['wrap']}: main, fields or none")
+        helpers = s.attrs.get("helpers")
+        if helpers and not any(t.doc == s.doc and t.name == helpers and t.run == "cpp" for t in every):
+            problems.append(f"{s.where}: helpers={helpers}: no C++ snippet of that name in {s.doc}")
     for s in every:
         if "status" in s.attrs and "from" not in s.attrs:
             problems.append(f"{s.where}: status= goes with from=")
@@ -211,8 +219,15 @@ def load(source: Path) -> tuple[list[Snippet], list[str]]:
 def groups(snippets: list[Snippet]) -> dict[tuple[str, str], list[Snippet]]:
     result: dict[tuple[str, str], list[Snippet]] = {}
     for s in snippets:
-        if s.run or "file" in s.attrs or "from" in s.attrs:
+        if (s.run or "file" in s.attrs or "from" in s.attrs) and "after" not in s.attrs:
             result.setdefault((s.doc, s.group), []).append(s)
+    for s in snippets:  # each after=NAME right behind NAME
+        if "after" in s.attrs and (s.doc, s.group) in result:
+            members = result[(s.doc, s.group)]
+            index = next((i for i, m in enumerate(members) if m.name == s.attrs["after"]), None)
+            if index is None:
+                raise SystemExit(f"{s.where}: after={s.attrs['after']}: no snippet of that name in group {s.group}")
+            members.insert(index + 1, s)
     return result
 
 
@@ -224,12 +239,24 @@ def group_id(doc: str, group: str) -> str:
 # C++ programs
 
 
-def cpp_program(s: Snippet) -> str:
-    if s.attrs.get("wrap") != "main":
-        return f"#line 1 \"{s.doc}:{s.line + 1}\"\n" + s.code
+def cpp_program(s: Snippet, every: list[Snippet]) -> str:
+    """The program of a C++ snippet: as written, or (wrap=main) its statements in main(), or
+    (wrap=fields) its designated initializers in a haptic::ClientConfig; helpers=NAME puts what
+    precedes main() in the program NAME (its includes and functions) in front."""
+    wrap = s.attrs.get("wrap")
+    if wrap is None:
+        return f"#line {s.line + 1} \"{s.doc}\"\n" + s.code
+    prelude = "#include <haptic/haptic.hpp>\n"
+    if "helpers" in s.attrs:
+        helper = next(t for t in every if t.doc == s.doc and t.name == s.attrs["helpers"])
+        prelude = (f"#line {helper.line + 1} \"{helper.doc}\"\n" +
+                   helper.code.split("\nint main(", 1)[0] + "\n")
+    if wrap == "fields":
+        return (prelude + "\nint main() {\n  const haptic::ClientConfig config{\n"
+                f"#line {s.line + 1} \"{s.doc}\"\n" + s.code + "  };\n  return config.server_address.empty();\n}\n")
     includes = [ln for ln in s.code.splitlines() if ln.startswith("#include")]
     body = [ln if not ln.startswith("#include") else "" for ln in s.code.splitlines()]
-    return ("\n".join(includes) + "\n#include <exception>\n#include <iostream>\n\n"
+    return (prelude + "\n".join(includes) + "\n#include <exception>\n#include <iostream>\n\n"
             "int main() {\n  try {\n"
             f"#line {s.line + 1} \"{s.doc}\"\n" + "\n".join(body) +
             "\n  } catch (const std::exception& error) {\n"
@@ -412,7 +439,10 @@ class Group:
             line = raw.strip()
             if not line or line.startswith("#"):
                 continue
-            script = (f"source {shlex.quote(str(self.state))}\nset -eo pipefail\n{line}\n")
+            # A line that ends carries its exports and working directory to the next, as in shell().
+            script = (f"source {shlex.quote(str(self.state))}\nset -eo pipefail\n{line}\n"
+                      f"{{ echo \"cd $(printf %q \"$PWD\")\"; echo \"umask $(umask)\"; export -p; }} "
+                      f"> {shlex.quote(str(self.state))}.next\n")
             process = subprocess.Popen(["bash", "-c", script], cwd=self.work, env=self.env, text=True,
                                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                        start_new_session=True)
@@ -431,8 +461,10 @@ class Group:
             if process.returncode != 0:
                 raise SnippetError(f"{s.where}: `{line}` exit status {process.returncode}"
                                    f"{' after SIGINT' if interrupted else ''}; its output:\n{out}")
-            if not out.strip():
-                raise SnippetError(f"{s.where}: `{line}` printed nothing")
+            if not interrupted:
+                Path(f"{self.state}.next").replace(self.state)
+            if interrupted and not out.strip():
+                raise SnippetError(f"{s.where}: `{line}` printed nothing in {seconds:.0f} s")
             output += out
         return output
 
@@ -470,7 +502,8 @@ class Group:
             if "stream" in s.attrs:
                 output = self.streamed_lines(s, float(s.attrs["stream"]))
             else:
-                output = self.shell(s.code, timeout, s.where)
+                prefix = f"cd {shlex.quote(str(self.work))}\n" if "in-tree" in s.attrs else ""
+                output = self.shell(prefix + s.code, timeout, s.where)
             for m in re.finditer(r"#\s*expect:\s*(.+)$", s.code, re.MULTILINE):
                 if m.group(1).strip() not in output:
                     raise SnippetError(f"{s.where}: the doc expects '{m.group(1).strip()}' in the "
@@ -562,7 +595,7 @@ def main(argv: list[str]) -> int:
         if s is None:
             print(f"no C++ snippet {wanted}", file=sys.stderr)
             return 1
-        out.write_text(cpp_program(s), encoding="utf-8")
+        out.write_text(cpp_program(s, snippets), encoding="utf-8")
         return 0
     if command in ("run", "_inside"):
         wanted = argv[3]

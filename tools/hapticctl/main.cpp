@@ -72,22 +72,27 @@ int main(int argc, char** argv) {
       ->envname("HAPTICCTL_TOKEN");
   std::string token_file;
   cli.add_option("--token-file", token_file, "read the bearer token from this file (first line)")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->envname("HAPTICCTL_TOKEN_FILE");
   std::string ca_file;
   cli.add_option("--ca", ca_file, "speak TLS, trusting this PEM CA (a server with security.tls)")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->envname("HAPTICCTL_CA");
   haptic::TlsOptions tls;
   CLI::Option* cert = cli.add_option("--cert", tls.cert_file,
                                      "with --ca: present this PEM client certificate (a server with "
                                      "mutual TLS)")
-                          ->check(CLI::ExistingFile);
+                          ->check(CLI::ExistingFile)
+                          ->envname("HAPTICCTL_CERT");
   CLI::Option* key = cli.add_option("--key", tls.key_file, "with --cert: its PEM private key")
                          ->check(CLI::ExistingFile)
+                         ->envname("HAPTICCTL_KEY")
                          ->needs(cert);
   cert->needs(key);
   cli.add_option("--server-name", tls.server_name,
                  "with --ca: the name the server's certificate must carry (default: the host of "
-                 "--server)");
+                 "--server)")
+      ->envname("HAPTICCTL_SERVER_NAME");
   cli.add_flag("--allow-plaintext-token", config.allow_plaintext_token,
                "send the token without TLS to another host all the same (a network you trust; "
                "refused otherwise, since anyone on it could read the token)");
@@ -230,7 +235,7 @@ int main(int argc, char** argv) {
                 << stopped.samples_missed << " missed), " << stopped.changes << " changes\n";
     } else if (kick->parsed()) {
       client.kick_session(target, reason);
-      std::cout << "session " << hapticctl::session_text(target) << " ended\n";
+      std::cout << "session " << haptic::session_id_text(target) << " ended\n";
     }
     client.close();
   } catch (const haptic::Error& error) {

@@ -83,15 +83,9 @@ std::string describe(const haptic::SceneSpec::Field& field) {
       field);
 }
 
-std::string owner_text(std::uint64_t session) { return session == 0 ? "server" : session_text(session); }
+std::string owner_text(std::uint64_t session) { return session == 0 ? "server" : haptic::session_id_text(session); }
 
 }  // namespace
-
-std::string session_text(std::uint64_t id) {
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(id));
-  return text;
-}
 
 std::string table(const std::vector<std::vector<std::string>>& rows) {
   std::vector<std::size_t> widths;
@@ -139,7 +133,7 @@ std::string sessions_view(const std::vector<haptic::SessionSummary>& sessions, s
   std::vector<std::vector<std::string>> rows = {
       {"SESSION", "CLIENT", "DEVICE", "PEER", "TOKEN", "ROLE", "OPENED_S"}};
   for (const haptic::SessionSummary& s : sessions) {
-    rows.push_back({session_text(s.session_id) + (s.session_id == own ? "*" : ""), s.client_name,
+    rows.push_back({haptic::session_id_text(s.session_id) + (s.session_id == own ? "*" : ""), s.client_name,
                     std::to_string(s.device_index), s.peer.empty() ? "-" : s.peer,
                     s.token_name.empty() ? "-" : s.token_name, role_name(s.role),
                     fixed(s.opened_time, 3)});
@@ -154,7 +148,7 @@ std::string clients_view(const haptic::Stats& stats, std::uint64_t own) {
   for (const haptic::ClientStats& c : stats.clients) {
     const std::uint64_t reported = c.states_received + c.states_lost;
     const bool rtt = c.round_trip_samples > 0;
-    rows.push_back({session_text(c.session_id) + (c.session_id == own ? "*" : ""), c.client_name,
+    rows.push_back({haptic::session_id_text(c.session_id) + (c.session_id == own ? "*" : ""), c.client_name,
                     c.peer.empty() ? "-" : c.peer,
                     c.decimation == 0 ? "-" : std::to_string(c.decimation),
                     std::to_string(c.datagrams_sent), std::to_string(c.states_received),
@@ -171,7 +165,7 @@ std::string clients_view(const haptic::Stats& stats, std::uint64_t own) {
 
 std::string event_line(const haptic::Event& event) {
   std::string line = fixed(event.server_time, 3) + "  " + kind_name(event.kind) + "  " +
-                     (event.session_id == 0 ? std::string("server") : session_text(event.session_id));
+                     (event.session_id == 0 ? std::string("server") : haptic::session_id_text(event.session_id));
   if (!event.message.empty()) line += "  " + event.message;
   return line;
 }

@@ -26,9 +26,6 @@ std::string event_line(const haptic::Event& event);
 /// The registered scene as a table: id, owner, kind and the main dimensions of each item.
 std::string scene_view(const haptic::RegisteredScene& scene);
 
-/// "0000000000001234" (the log's form).
-std::string session_text(std::uint64_t id);
-
 /// Left-aligned columns separated by two spaces; the first row is the header.
 std::string table(const std::vector<std::vector<std::string>>& rows);
 

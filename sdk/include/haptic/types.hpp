@@ -297,7 +297,11 @@ struct RecordingStatus {
   std::uint64_t changes = 0;        ///< stop: changes written
 };
 
-/// One open session, as an admin sees it (Client::sessions).
+/// A session id as people read it: 16 lower-case hex digits, as the server's log, its events and
+/// hapticctl write it (`kick` takes it back).
+std::string session_id_text(std::uint64_t session_id);
+
+/// One open session, as an admin sees it (Client::sessions; session_id_text to print its id).
 struct SessionSummary {
   std::uint64_t session_id = 0;
   std::string client_name;
