@@ -54,7 +54,7 @@ Log lines are compared without the time stamp and level in front (`[2026-…] [i
 
 Usage:
   doc_snippets.py check SOURCE               every block annotated, every reference resolved
-  doc_snippets.py list SOURCE                the groups (for CMake)
+  doc_snippets.py list SOURCE                the groups (for CMake; ":install" marks one that installs)
   doc_snippets.py cpp-list SOURCE            the C++ programs (for CMake)
   doc_snippets.py extract SOURCE ID OUT.cpp  write one C++ program
   doc_snippets.py run SOURCE GROUP --build DIR --programs DIR
@@ -582,7 +582,9 @@ def main(argv: list[str]) -> int:
     # Problems elsewhere (doc.annotations names them) leave the well-formed groups runnable.
     if command == "list":
         for (doc, group), members in groups(snippets).items():
-            print(group_id(doc, group))
+            # Installs write the build's install_manifest.txt: CMake runs those one at a time.
+            installs = any("cmake --install" in m.code + m.attrs.get("before", "") for m in members)
+            print(group_id(doc, group) + (":install" if installs else ""))
         return 0
     if command == "cpp-list":
         for s in snippets:
