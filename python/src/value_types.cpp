@@ -435,6 +435,9 @@ void bind_reports(py::module_& m) {
       .readonly("samples", &RecordingStatus::samples, "")
       .readonly("samples_missed", &RecordingStatus::samples_missed, "")
       .readonly("changes", &RecordingStatus::changes, "")
+      .readonly("records_not_written", &RecordingStatus::records_not_written,
+                "records a failed write kept from the file (0: whole)")
+      .readonly("write_error", &RecordingStatus::write_error, "the first failed write; empty if none")
       .finish();
   StructBinder<ReceiveCounters>(m, "ReceiveCounters", "What the SDK's UDP receiver has seen.")
       .readonly("accepted", &ReceiveCounters::accepted, "")

@@ -357,7 +357,9 @@ void Client::kick_session(std::uint64_t target, const std::string& reason) {
 namespace {
 
 RecordingStatus from_proto(const v1::RecordingStatus& status) {
-  return {status.path(), status.start_tick(), status.samples(), status.samples_missed(), status.changes()};
+  return {status.path(),    status.start_tick(),          status.samples(),
+          status.samples_missed(), status.changes(), status.records_not_written(),
+          status.write_error()};
 }
 
 }  // namespace

@@ -557,6 +557,8 @@ grpc::Status HapticService::StopRecording(grpc::ServerContext* context, const v1
   response->set_samples(end->samples());
   response->set_samples_missed(end->samples_missed());
   response->set_changes(end->changes());
+  response->set_records_not_written(end->records_not_written());
+  response->set_write_error(end->write_error());
   return grpc::Status::OK;
 }
 

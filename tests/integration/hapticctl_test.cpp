@@ -210,6 +210,29 @@ TEST(Hapticctl, RecordStartAndStopMakeAReplayableRecording) {
   EXPECT_NE(refused.output.find("this server has no recording_dir"), std::string::npos) << refused.output;
 }
 
+
+// A recording whose writes fail (its name in recording_dir leads to /dev/full: a full disk) is
+// reported incomplete by StopRecording, with the count and the reason, and hapticctl exits 1.
+TEST(Hapticctl, RecordStopSaysARecordingIsIncompleteWhenItsWritesFailed) {
+  const auto dir = std::filesystem::temp_directory_path() / ("hapticctl-full-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::filesystem::create_symlink("/dev/full", dir / "full.hrec");
+  test::ServerProcess server(test::lockstep_config(R"("recording_dir": ")" + dir.string() + "\""));
+  Client driver(test::config_for(server, "driver"));
+  const Outcome started = hapticctl(server, {"record", "start", "full.hrec"});
+  ASSERT_EQ(started.exit_code, 0) << started.output;
+  (void)driver.step(2000);
+  const Outcome stopped = hapticctl(server, {"record", "stop"});
+  EXPECT_EQ(stopped.exit_code, 1) << stopped.output;
+  EXPECT_NE(stopped.output.find("stopped: 2000 samples (0 missed), "), std::string::npos) << stopped.output;
+  EXPECT_NE(stopped.output.find("hapticctl: the recording is incomplete: "), std::string::npos)
+      << stopped.output;
+  EXPECT_NE(stopped.output.find(" records not written (writing '" + (dir / "full.hrec").string() +
+                                "': No space left on device)"),
+            std::string::npos)
+      << stopped.output;
+  std::filesystem::remove_all(dir);
+}
 TEST(Hapticctl, EveryCommandHasHelp) {
   for (const char* command : {"status", "sessions", "stats", "events", "scene", "kick", "record"}) {
     const Outcome help = test::run_program(HAPTICCTL_BINARY, {command, "--help"});

@@ -233,6 +233,12 @@ int main(int argc, char** argv) {
       const haptic::RecordingStatus stopped = client.stop_recording();
       std::cout << "recording " << stopped.path << " stopped: " << stopped.samples << " samples ("
                 << stopped.samples_missed << " missed), " << stopped.changes << " changes\n";
+      if (stopped.records_not_written > 0) {  // the file is cut short: a script must notice
+        std::cerr << "hapticctl: the recording is incomplete: " << stopped.records_not_written
+                  << " records not written (" << stopped.write_error << ")\n";
+        client.close();
+        return 1;
+      }
     } else if (kick->parsed()) {
       client.kick_session(target, reason);
       std::cout << "session " << haptic::session_id_text(target) << " ended\n";

@@ -295,6 +295,10 @@ struct RecordingStatus {
   std::uint64_t samples = 0;        ///< stop: samples written
   std::uint64_t samples_missed = 0; ///< stop: samples the recorder could not read in time
   std::uint64_t changes = 0;        ///< stop: changes written
+  /// stop: records that never reached the file because a write failed (a full disk); 0 when the
+  /// file is whole. The file then ends before them and replays up to its last whole record.
+  std::uint64_t records_not_written = 0;
+  std::string write_error;          ///< stop: the first failed write's reason; empty if none
 };
 
 /// A session id as people read it: 16 lower-case hex digits, as the server's log, its events and
