@@ -12,7 +12,7 @@ is, so a new block cannot go untested by accident (`doc.annotations` fails on on
 The snippets of one `group` (default: the snippet alone) run in document order in one sandbox,
 as one ctest entry `doc.<file>.<group>`. The sandbox is a mount and network namespace of its own
 (root only; elsewhere the test is skipped): /etc, /usr, /opt and /var are copy-on-write overlays,
-/root, /home and /tmp/snippet-home fresh, loopback up with the docs' example addresses on it and
+/root (HOME) and /home fresh, loopback up with the docs' example addresses on it and
 their names in /etc/hosts, so a snippet runs as written (`useradd`, `/etc/hapticd`, port 50051,
 `haptics-server.lab`) and leaves nothing behind. The working directory holds the source tree's
 entries and `build` (the build directory under test).
@@ -24,13 +24,15 @@ Attributes:
                       notebook. cpp: the program CMake built from the snippet (wrap=main puts
                       statements into main(), wrap=fields designated initializers into a
                       haptic::ClientConfig; helpers=NAME lends them what precedes main() in NAME).
-  server=CMD          start CMD in the background before this snippet (after its file=) (kept until the group
-                      ends), waiting until `server-ready` (default 127.0.0.1:50051) accepts.
+  server=CMD          start CMD in the background before this snippet (after its file=), kept
+                      until the group ends; waits until `server-ready` (default 127.0.0.1:50051)
+                      accepts. Python snippets see the build's package (PYTHONPATH=build/python).
   server-user=USER    run the server as USER.
   before=CMD          a shell step the prose describes but shows no block for (copying a file
                       to the client, say); runs before the snippet.
-  stream=SECONDS      sh only: run line by line; a line still running after SECONDS is sent
-                      SIGINT and must then exit 0 having printed something (`--watch`, `events`).
+  stream=SECONDS      sh only: run line by line (each line's exports carry on); a line still
+                      running after SECONDS is sent SIGINT and must then exit 0 having printed
+                      something (`--watch`, `events`).
   expect=OUT          the snippet's output must match the `output` block OUT: each run of lines
                       between `...` lines appears in order, the first at the start and the last at
                       the end unless a `...` stands there. expect-lines=A-B compares the block's
@@ -57,7 +59,7 @@ Usage:
   doc_snippets.py list SOURCE                the groups (for CMake; ":install" marks one that installs)
   doc_snippets.py cpp-list SOURCE            the C++ programs (for CMake)
   doc_snippets.py extract SOURCE ID OUT.cpp  write one C++ program
-  doc_snippets.py run SOURCE GROUP --build DIR --programs DIR
+  doc_snippets.py run SOURCE GROUP --build DIR --programs DIR [--python-preload LIBS]
 """
 
 from __future__ import annotations
@@ -72,7 +74,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 SKIP = 77
@@ -100,7 +102,6 @@ class Snippet:
     attrs: dict[str, str]
     code: str
     lang: str
-    programs: dict = field(default_factory=dict)
 
     @property
     def where(self) -> str:
