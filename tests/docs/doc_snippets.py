@@ -541,6 +541,9 @@ class Group:
             print(f"FAIL {error}", flush=True)
             print(self.stop_servers(), flush=True)
             return 1
+        except BaseException:
+            self.stop_servers()
+            raise
         logs = self.stop_servers()
         if logs:
             print(logs, flush=True)
@@ -614,7 +617,10 @@ def main(argv: list[str]) -> int:
                 return SKIP
             # Debian's interpreter: the sandbox's fresh /root hides an interpreter installed there.
             python = "/usr/bin/python3" if Path("/usr/bin/python3").exists() else sys.executable
-            return subprocess.call(["unshare", "--mount", "--net", "--fork", python,
+            # A pid namespace too, whose first process dies with this one (--kill-child): a
+            # timed-out test leaves no server behind in a namespace nobody can reach.
+            return subprocess.call(["unshare", "--mount", "--net", "--pid", "--mount-proc", "--fork",
+                                    "--kill-child", python,
                                     str(Path(__file__).resolve()), "_inside", str(source), wanted]
                                    + argv[4:])
         group = Group(source, Path(options["--build"]).resolve(), Path(options["--programs"]).resolve(),
