@@ -372,9 +372,11 @@ class Group:
         self.env = dict(os.environ, HOME="/root", PYTHONDONTWRITEBYTECODE="1")
         self.env.pop("CDPATH", None)
         # Python snippets see the build's package, as docs/python.md's first command does.
-        self.python_env = dict(self.env, PYTHONPATH=str(self.work / "build" / "python"))
-        if preload:
-            self.python_env.update(LD_PRELOAD=preload, ASAN_OPTIONS="detect_leaks=0:halt_on_error=1")
+        # Under the sanitizers the module needs their runtime loaded first: Python snippets, and
+        # shell snippets that start Python, get it preloaded (leak checking off, as for pytest).
+        sanitizer = {"LD_PRELOAD": preload, "ASAN_OPTIONS": "detect_leaks=0:halt_on_error=1"} if preload else {}
+        self.python_env = dict(self.env, PYTHONPATH=str(self.work / "build" / "python"), **sanitizer)
+        self.python_shell_env = dict(self.env, **sanitizer)
 
     # -- servers
     def start_server(self, command: str, user: str | None, ready: str) -> None:
@@ -413,12 +415,12 @@ class Group:
         return logs
 
     # -- running
-    def shell(self, script: str, timeout: float, what: str) -> str:
+    def shell(self, script: str, timeout: float, what: str, env: dict | None = None) -> str:
         """Runs `script` in bash with the group's shell state; returns its output (stdout+stderr)."""
         wrapped = (f"source {shlex.quote(str(self.state))}\nset -eo pipefail\n{script}\n"
                    f"{{ echo \"cd $(printf %q \"$PWD\")\"; echo \"umask $(umask)\"; export -p; }} "
                    f"> {shlex.quote(str(self.state))}.next\n")
-        result = self.execute(["bash", "-c", wrapped], timeout, what)
+        result = self.execute(["bash", "-c", wrapped], timeout, what, env)
         Path(f"{self.state}.next").replace(self.state)
         return result
 
@@ -504,7 +506,9 @@ class Group:
                 output = self.streamed_lines(s, float(s.attrs["stream"]))
             else:
                 prefix = f"cd {shlex.quote(str(self.work))}\n" if "in-tree" in s.attrs else ""
-                output = self.shell(prefix + s.code, timeout, s.where)
+                starts_python = re.search(r"\bpython3?\b|/bin/python", s.code) is not None
+                output = self.shell(prefix + s.code, timeout, s.where,
+                                    self.python_shell_env if starts_python else None)
             for m in re.finditer(r"#\s*expect:\s*(.+)$", s.code, re.MULTILINE):
                 if m.group(1).strip() not in output:
                     raise SnippetError(f"{s.where}: the doc expects '{m.group(1).strip()}' in the "
