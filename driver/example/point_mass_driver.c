@@ -9,9 +9,16 @@
  *   "push": [fx, fy, fz] N, "max_force": 10 N, "button_period_s": 0 (0: no button; else button 0
  *   is pressed for every other period), "servo_rate_hz": 0 (nonzero: device-clocked at that rate),
  *   "turn_rate": 0 rad/s (nonzero: the tool reports an orientation turning about z at this rate)
- *   "fault": "none" | "nan" | "stale" | "hang" | "fail_start", "fault_after": 0 ticks}
+ *   "fault": "none" | "nan" | "stale" | "hang" | "fail_start", "fault_after": 0 ticks,
+ *   "reported_mass": [mx, my, mz] kg (ABI 2: the apparent mass it reports instead of its own, for
+ *   tests of what hapticd makes of a driver's model)}
  * The faults are for hapticd's driver test kit: from tick fault_after on, "nan" reads NaN,
  * "stale" stops the sample sequence, "hang" blocks read() until stop().
+ * ABI 2: it reports its mass and damping as the port's apparent mass-damper (so hapticd's
+ * stability report and passivity controller know the device), its angular velocity with the
+ * turning orientation, says in hapticd's log when it starts, and lists itself for
+ * `hapticd --list-devices`. Built against a version 1 header (HAPTIC_DRIVER_ABI_VERSION 1) it is
+ * a version 1 driver without those: the tests build it so, as an older driver.
  *
  * Build: cc -shared -fPIC -I<hapticd>/driver/include point_mass_driver.c -lm -o point_mass_driver.so
  */
@@ -27,6 +34,8 @@
 typedef struct {
   double mass, damping, max_force, button_period_s, servo_rate_hz, turn_rate;
   double p[3], v[3], push[3];
+  double reported_mass[3];
+  int reports_mass;  /* reported_mass was given */
   char fault[16];
   uint64_t fault_after;
   uint64_t ticks;     /* writes so far */
@@ -36,7 +45,22 @@ typedef struct {
   pthread_mutex_t lock;
   pthread_cond_t released;
   int stopping;
+#if HAPTIC_DRIVER_ABI_VERSION >= 2
+  haptic_driver_log_fn log;  /* hapticd's log (set_log), or NULL */
+  void* log_context;
+#endif
 } point_mass;
+
+/* Says `message` in hapticd's log where the ABI has one. */
+static void say(const point_mass* d, int level, const char* message) {
+#if HAPTIC_DRIVER_ABI_VERSION >= 2
+  if (d->log != NULL) d->log(d->log_context, level, message);
+#else
+  (void)d;
+  (void)level;
+  (void)message;
+#endif
+}
 
 /* A minimal reader for the flat JSON object hapticd passes: finds "key": and parses a number or
  * a [a, b, c] triple or a "string" after it. Returns 1 when found. */
@@ -101,7 +125,8 @@ static void* create(const char* params, char* error) {
       number(params, "servo_rate_hz", &d->servo_rate_hz) < 0 ||
       number(params, "turn_rate", &d->turn_rate) < 0 ||
       number(params, "fault_after", &fault_after) < 0 || triple(params, "initial", d->p) < 0 ||
-      triple(params, "push", d->push) < 0 || text(params, "fault", d->fault, sizeof d->fault) < 0) {
+      triple(params, "push", d->push) < 0 || text(params, "fault", d->fault, sizeof d->fault) < 0 ||
+      (d->reports_mass = triple(params, "reported_mass", d->reported_mass)) < 0) {
     snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "params: cannot parse %s", params);
     free(d);
     return NULL;
@@ -149,8 +174,28 @@ static int describe(void* driver, haptic_driver_info* info) {
     info->workspace_max[i] = 0.1;
   }
   info->servo_rate_hz = d->servo_rate_hz;
+#if HAPTIC_DRIVER_ABI_VERSION >= 2
+  for (int i = 0; i < 3; ++i) { /* the plant itself, exactly: it is what the loop pushes */
+    info->apparent_mass[i] = d->reports_mass ? d->reported_mass[i] : d->mass;
+    info->apparent_damping[i] = d->damping;
+  }
+#endif
   return HAPTIC_DRIVER_OK;
 }
+
+#if HAPTIC_DRIVER_ABI_VERSION >= 2
+static void set_log(void* driver, haptic_driver_log_fn log, void* context) {
+  point_mass* d = driver;
+  d->log = log;
+  d->log_context = context;
+}
+
+static int list_devices(const char* params, char* list, size_t size) {
+  (void)params;  /* a simulation: always exactly one, whatever the params */
+  snprintf(list, size, "{}\tpoint mass driver (example plugin, simulated)\n");
+  return 1;
+}
+#endif
 
 static int start(void* driver) {
   point_mass* d = driver;
@@ -158,7 +203,14 @@ static int start(void* driver) {
   pthread_mutex_lock(&d->lock);
   d->stopping = 0;
   pthread_mutex_unlock(&d->lock);
-  return strcmp(d->fault, "fail_start") == 0 ? HAPTIC_DRIVER_FAILED : HAPTIC_DRIVER_OK;
+  if (strcmp(d->fault, "fail_start") == 0) {
+    say(d, 2, "start refused (fault \"fail_start\")");
+    return HAPTIC_DRIVER_FAILED;
+  }
+  char message[128];
+  snprintf(message, sizeof message, "started: %g kg, %g N*s/m per axis", d->mass, d->damping);
+  say(d, 0, message);  /* 0, 2: HAPTIC_DRIVER_LOG_INFO, _ERROR of ABI 2 */
+  return HAPTIC_DRIVER_OK;
 }
 
 static void stop(void* driver) {
@@ -196,6 +248,9 @@ static int read_sensors(void* driver, haptic_driver_reading* reading) {
   /* A handle turning about z: R_WT = (cos(a/2), 0, 0, sin(a/2)), a = turn_rate t. */
   reading->orientation_W[0] = cos(0.5 * d->turn_rate * d->time_s);
   reading->orientation_W[3] = sin(0.5 * d->turn_rate * d->time_s);
+#if HAPTIC_DRIVER_ABI_VERSION >= 2
+  reading->angular_velocity_W[2] = d->turn_rate;
+#endif
   return HAPTIC_DRIVER_OK;
 }
 
@@ -255,6 +310,10 @@ static const haptic_driver_api kApi = {
     write_command,
     enter_safe_state,
     run_servo,
+#if HAPTIC_DRIVER_ABI_VERSION >= 2
+    set_log,
+    list_devices,
+#endif
 };
 
 const haptic_driver_api* haptic_driver_entry(void) { return &kApi; }

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include <google/protobuf/util/json_util.h>
+#include <spdlog/spdlog.h>
 
 #include "schema/scene_specs.hpp"
 #include "runtime/cartesian_model.hpp"
@@ -341,6 +342,12 @@ PortDevice driver_device(const v1::DriverConfig& config) {
   options.call_timeout_s = (config.has_call_timeout_ms() ? config.call_timeout_ms() : 20) * 1e-3;
   options.stale_after = config.has_stale_after() ? config.stale_after() : 3;
   options.device_clocked = config.clock() == v1::DriverConfig::DEVICE;
+  options.log = [library = config.library()](int level, const std::string& message) {
+    const auto severity = level >= HAPTIC_DRIVER_LOG_ERROR     ? spdlog::level::err
+                          : level == HAPTIC_DRIVER_LOG_WARNING ? spdlog::level::warn
+                                                               : spdlog::level::info;
+    spdlog::log(severity, "driver \"{}\": {}", library, message);
+  };
   auto device = std::make_unique<runtime::DriverDevice>(options);
   runtime::ServoClock* servo = options.device_clocked ? device.get() : nullptr;
   return {std::move(device), std::make_unique<runtime::CartesianModel>(), nullptr, servo};

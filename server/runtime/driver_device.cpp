@@ -5,7 +5,9 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstddef>
 #include <climits>
 #include <cmath>
 #include <cstring>
@@ -49,6 +51,39 @@ bool finite_box(const double lo[3], const double hi[3]) {
   return true;
 }
 
+bool finite_non_negative(const double values[], int n) {
+  for (int i = 0; i < n; ++i) {
+    if (!(std::isfinite(values[i]) && values[i] >= 0.0)) return false;
+  }
+  return true;
+}
+
+/// Empty when ABI 2's fields are usable (a version 1 driver's are all 0), else what is wrong.
+std::string check_info_v2(const haptic_driver_info& info) {
+  if (!finite_non_negative(info.apparent_mass, 3) || !finite_non_negative(info.apparent_damping, 3)) {
+    return "apparent_mass and apparent_damping must be finite and >= 0 on every axis (0: unknown)";
+  }
+  if (!finite_non_negative(info.apparent_inertia, 3) ||
+      !finite_non_negative(info.apparent_rotational_damping, 3)) {
+    return "apparent_inertia and apparent_rotational_damping must be finite and >= 0 on every axis";
+  }
+  if ((info.capabilities & HAPTIC_DRIVER_TORQUE_OUTPUT) != 0 &&
+      !(std::isfinite(info.max_torque) && info.max_torque > 0.0)) {
+    return "TORQUE_OUTPUT: max_torque must be finite and > 0 N*m, got " + std::to_string(info.max_torque);
+  }
+  if ((info.capabilities & HAPTIC_DRIVER_GRIPPER) != 0) {
+    if (!(std::isfinite(info.gripper_max_force) && info.gripper_max_force > 0.0)) {
+      return "GRIPPER: gripper_max_force must be finite and > 0 N, got " +
+             std::to_string(info.gripper_max_force);
+    }
+    if (!(std::isfinite(info.gripper_min) && std::isfinite(info.gripper_max) &&
+          info.gripper_min <= info.gripper_max)) {
+      return "GRIPPER: gripper_min/gripper_max must be finite with min <= max";
+    }
+  }
+  return {};
+}
+
 /// Empty when the description is usable, else what is wrong with it.
 std::string check_info(const haptic_driver_info& info, bool device_clocked, bool has_run_servo) {
   if (info.joints < 1 || info.joints > HAPTIC_DRIVER_MAX_JOINTS) {
@@ -71,10 +106,27 @@ std::string check_info(const haptic_driver_info& info, bool device_clocked, bool
              std::to_string(info.servo_rate_hz);
     }
   }
-  return {};
+  return check_info_v2(info);
 }
 
 }  // namespace
+
+DriverStructSizes driver_struct_sizes(std::uint32_t abi_version) {
+  switch (abi_version) {
+    case 1:  // version 2 appended to each struct: version 1's ends where version 2's fields begin
+      return {offsetof(haptic_driver_info, apparent_mass), offsetof(haptic_driver_reading, angular_velocity_W),
+              offsetof(haptic_driver_command, torque_W)};
+    case 2:
+      return {sizeof(haptic_driver_info), sizeof(haptic_driver_reading), sizeof(haptic_driver_command)};
+    default:
+      return {};
+  }
+}
+
+void DriverDevice::CallState::log_trampoline(void* self, int level, const char* message) {
+  const auto* state = static_cast<const CallState*>(self);
+  if (state->log && message != nullptr) state->log(level, message);
+}
 
 DriverDevice::DriverDevice(const DriverOptions& options) : options_(options) {
   const std::string where = "driver \"" + options.library + "\": ";
@@ -92,19 +144,20 @@ DriverDevice::DriverDevice(const DriverOptions& options) : options_(options) {
   std::string refused;
   if (api_ == nullptr) {
     refused = HAPTIC_DRIVER_ENTRY_SYMBOL "() returned NULL";
-  } else if (api_->abi_version != HAPTIC_DRIVER_ABI_VERSION) {
+  } else if (api_->abi_version < HAPTIC_DRIVER_ABI_VERSION_MIN ||
+             api_->abi_version > HAPTIC_DRIVER_ABI_VERSION) {
     refused = "built for driver ABI version " + std::to_string(api_->abi_version) +
-              ", this hapticd speaks version " + std::to_string(HAPTIC_DRIVER_ABI_VERSION) +
+              ", this hapticd speaks versions " + std::to_string(HAPTIC_DRIVER_ABI_VERSION_MIN) + " to " +
+              std::to_string(HAPTIC_DRIVER_ABI_VERSION) +
               "; rebuild the driver against this hapticd's haptic/driver.h";
-  } else if (api_->info_size != sizeof(haptic_driver_info) ||
-             api_->reading_size != sizeof(haptic_driver_reading) ||
-             api_->command_size != sizeof(haptic_driver_command)) {
-    refused = "its structs' sizes differ from this hapticd's haptic/driver.h (info " +
-              std::to_string(api_->info_size) + "/" + std::to_string(sizeof(haptic_driver_info)) +
-              ", reading " + std::to_string(api_->reading_size) + "/" +
-              std::to_string(sizeof(haptic_driver_reading)) + ", command " +
-              std::to_string(api_->command_size) + "/" + std::to_string(sizeof(haptic_driver_command)) +
-              " bytes); rebuild the driver against it";
+  } else if (const DriverStructSizes sizes = driver_struct_sizes(api_->abi_version);
+             api_->info_size != sizes.info || api_->reading_size != sizes.reading ||
+             api_->command_size != sizes.command) {
+    refused = "its structs' sizes differ from this hapticd's haptic/driver.h for ABI version " +
+              std::to_string(api_->abi_version) + " (info " + std::to_string(api_->info_size) + "/" +
+              std::to_string(sizes.info) + ", reading " + std::to_string(api_->reading_size) + "/" +
+              std::to_string(sizes.reading) + ", command " + std::to_string(api_->command_size) + "/" +
+              std::to_string(sizes.command) + " bytes); rebuild the driver against it";
   } else if (api_->create == nullptr || api_->destroy == nullptr || api_->describe == nullptr ||
              api_->start == nullptr || api_->stop == nullptr || api_->read == nullptr ||
              api_->write == nullptr || api_->enter_safe_state == nullptr) {
@@ -131,6 +184,10 @@ DriverDevice::DriverDevice(const DriverOptions& options) : options_(options) {
     dlclose(library_);
     throw std::runtime_error(where + refused);
   }
+  calls_->log = options.log;
+  if (api_->abi_version >= 2 && api_->set_log != nullptr) {
+    api_->set_log(driver_, &CallState::log_trampoline, calls_.get());
+  }
   calls_->api = api_;
   calls_->driver = driver_;
   description_.name = info_.name;
@@ -148,6 +205,14 @@ DriverDevice::DriverDevice(const DriverOptions& options) : options_(options) {
   c.gravity = (info_.capabilities & HAPTIC_DRIVER_GRAVITY) != 0;
   c.orientation = (info_.capabilities & HAPTIC_DRIVER_ORIENTATION) != 0;
   description_.simulated = false;
+  // The port's mass-damper for the stability report and passivity: the weakest axis (the least
+  // mass and the least damping), and only when the driver knows all three axes' masses.
+  const double* mass = info_.apparent_mass;
+  const double* damping = info_.apparent_damping;
+  if (mass[0] > 0.0 && mass[1] > 0.0 && mass[2] > 0.0) {
+    description_.apparent_mass = std::min({mass[0], mass[1], mass[2]});
+    description_.apparent_damping = std::min({damping[0], damping[1], damping[2]});
+  }
 }
 
 DriverDevice::~DriverDevice() {

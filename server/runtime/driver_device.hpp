@@ -16,6 +16,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
@@ -34,7 +35,17 @@ struct DriverOptions {
   /// Ticks a reading's sequence may stay still before it is a fault; 0: not checked.
   std::uint32_t stale_after = 3;
   bool device_clocked = false;     // the driver's run_servo() paces the loop
+  /// Where the driver's own messages go (ABI 2's set_log): level HAPTIC_DRIVER_LOG_*, the text.
+  /// Unset: dropped.
+  std::function<void(int level, const std::string& message)> log;
 };
+
+/// The sizes of the ABI's structs as a driver of `abi_version` has them (version 2 only appended
+/// to version 1's); 0 for a version hapticd does not load.
+struct DriverStructSizes {
+  std::size_t info = 0, reading = 0, command = 0;
+};
+DriverStructSizes driver_struct_sizes(std::uint32_t abi_version);
 
 class DriverDevice final : public Device, public ServoClock {
  public:
@@ -64,6 +75,10 @@ class DriverDevice final : public Device, public ServoClock {
   bool driver_thread_running() const { return thread_.joinable(); }
   /// Readings refused as stale so far.
   std::uint64_t stale_readings() const { return stale_readings_; }
+  /// The ABI version the library was built for (1 or 2).
+  std::uint32_t abi_version() const { return api_->abi_version; }
+  /// What the driver described (version 2 fields 0 for a version 1 driver).
+  const haptic_driver_info& info() const { return info_; }
 
  private:
   enum Call : std::uint32_t { kNone = 0, kRead = 1, kWrite = 2, kQuit = 3 };
@@ -79,6 +94,9 @@ class DriverDevice final : public Device, public ServoClock {
     int result = 0;
     std::atomic<std::uint32_t> request{kNone};
     std::atomic<std::uint32_t> done{0};  // bumped when a call completes (a futex word)
+    /// The driver's messages (set_log) go here; kept with the state, which outlives a hung call.
+    std::function<void(int level, const std::string& message)> log;
+    static void log_trampoline(void* self, int level, const char* message);
 
     int call_driver(Call what);
     void serve();  // the driver thread

@@ -175,8 +175,8 @@ TEST(DriverFaults, AnAbiMismatchIsRefusedNamingBothVersions) {
   options.library = WRONG_ABI_DRIVER;
   const std::string message = refusal(options);
   EXPECT_NE(message.find(WRONG_ABI_DRIVER), std::string::npos) << message;
-  EXPECT_NE(message.find("ABI version 2"), std::string::npos) << message;
-  EXPECT_NE(message.find("speaks version 1"), std::string::npos) << message;
+  EXPECT_NE(message.find("ABI version 3"), std::string::npos) << message;
+  EXPECT_NE(message.find("speaks versions 1 to 2"), std::string::npos) << message;
 }
 
 TEST(DriverFaults, WhatIsNotADriverIsRefusedNamingWhy) {
@@ -200,6 +200,69 @@ TEST(DriverFaults, WhatIsNotADriverIsRefusedNamingWhy) {
 TEST(DriverFaults, AStartThatFailsIsAnError) {
   DriverDevice device(example(R"({"fault": "fail_start"})"));
   EXPECT_EQ(device.start(), DeviceStatus::kError);
+}
+
+// ---- Both ABI versions ----
+
+// A driver built against the version 1 header (the example's source, frozen header) still loads,
+// runs, and passes the kit; what version 2 adds is absent: no mass-damper, so no stability report
+// or passivity on its port.
+TEST(DriverAbi, AVersion1DriverStillLoadsRunsAndPassesTheKit) {
+  DriverOptions options;
+  options.library = POINT_MASS_DRIVER_ABI1;
+  options.params_json = R"({"mass": 0.05, "damping": 0.5, "turn_rate": 1.0})";
+  DriverDevice device(options);
+  EXPECT_EQ(device.abi_version(), 1u);
+  EXPECT_EQ(device.description().apparent_mass, 0.0);
+  EXPECT_EQ(device.description().apparent_damping, 0.0);
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  for (int k = 0; k < 10; ++k) {
+    ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+    DeviceCommand command;
+    command.tau[0] = 0.1;
+    ASSERT_EQ(device.write(command, kT), DeviceStatus::kOk);
+  }
+  EXPECT_GT(reading.q[0], 0.0);  // pushed along +x
+  device.stop();
+  for (const auto& result : kit(POINT_MASS_DRIVER_ABI1)) {
+    EXPECT_TRUE(result.passed) << result.name << ": " << result.detail;
+  }
+}
+
+// A version 2 driver gives the port its mass-damper (the weakest axis), which turns on what needs
+// a device model, and its messages reach hapticd's log.
+TEST(DriverAbi, AVersion2DriverGivesItsMassDamperAndSpeaksInTheLog) {
+  DriverOptions options = example(R"({"mass": 0.05, "damping": 0.5})");
+  std::vector<std::string> said;
+  options.log = [&said](int level, const std::string& message) {
+    said.push_back(std::to_string(level) + " " + message);
+  };
+  DriverDevice device(options);
+  EXPECT_EQ(device.abi_version(), 2u);
+  EXPECT_EQ(device.description().apparent_mass, 0.05);
+  EXPECT_EQ(device.description().apparent_damping, 0.5);
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  device.stop();
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_EQ(said[0], "0 started: 0.05 kg, 0.5 N*s/m per axis");
+}
+
+// What version 2 adds is checked like the rest (a negative or NaN mass is refused naming the
+// fields), and a port whose axes differ is modelled by its weakest.
+TEST(DriverAbi, Version2FieldsAreCheckedAndTheWeakestAxisModelsThePort) {
+  for (const char* bad : {R"({"reported_mass": [0.05, -1, 0.05]})", R"({"reported_mass": [0.05, nan, 0.05]})"}) {
+    const std::string message = refusal(example(bad));
+    EXPECT_NE(message.find("describe(): apparent_mass and apparent_damping must be finite and >= 0"),
+              std::string::npos)
+        << bad << ": " << message;
+  }
+  DriverDevice uneven(example(R"({"damping": 0.3, "reported_mass": [0.05, 0.02, 0.08]})"));
+  EXPECT_EQ(uneven.description().apparent_mass, 0.02);
+  EXPECT_EQ(uneven.description().apparent_damping, 0.3);
+  // One axis unknown (0): the whole model is unknown, as for a version 1 driver.
+  DriverDevice partial(example(R"({"reported_mass": [0.05, 0, 0.05]})"));
+  EXPECT_EQ(partial.description().apparent_mass, 0.0);
 }
 
 }  // namespace

@@ -61,6 +61,26 @@ TEST(DriverDevice, APluginRunsHapticdEndToEndAndRestsOnAWall) {
   }
 }
 
+// An ABI version 2 driver gives its port a mass-damper, so a wall there gets the same stability
+// report as on a simulated device: known, with its largest stable stiffness, and a wall beyond it
+// is flagged with a warning.
+TEST(DriverDevice, AVersion2DriverPortGetsAStabilityReportFromItsMassDamper) {
+  test::ServerProcess server(driver_config(R"("mass": 0.05, "damping": 0.5)"));
+  Client client(config_for(server));
+  auto soft = client.add_wall({.point = {0, 0, -0.05}, .normal = {0, 0, 1}, .impedance = {500.0, 2.0}});
+  const StabilityReport& report = soft.stability();
+  EXPECT_TRUE(report.device_known);
+  EXPECT_EQ(report.device_mass, 0.05);
+  EXPECT_EQ(report.device_damping, 0.5);
+  EXPECT_TRUE(report.stable);
+  EXPECT_GT(report.max_stable_stiffness, 500.0);
+  auto stiff = client.add_wall({.point = {0, 0, -0.06}, .normal = {0, 0, 1},
+                                .impedance = {50.0 * report.max_stable_stiffness, 0.0}});
+  EXPECT_TRUE(stiff.stability().device_known);
+  EXPECT_FALSE(stiff.stability().stable);
+  EXPECT_FALSE(stiff.stability().warning.empty());
+}
+
 TEST(DriverDevice, ANaNFromTheDriverIsADeviceFaultWithZeroForceAndTheLastGoodState) {
   test::ServerProcess server(driver_config(R"("initial": [0, 0, -0.001], "push": [0, 0, -1],
                                               "fault": "nan", "fault_after": 100)"));

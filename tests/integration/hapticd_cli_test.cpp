@@ -193,7 +193,7 @@ TEST(HapticdCli, ADriverBuiltForAnotherAbiIsRefusedAtStartNamingTheLibraryAndBot
   const Outcome refused = run_hapticd({"--config", path});
   EXPECT_EQ(refused.exit_code, 1) << refused.output;
   EXPECT_NE(refused.output.find(WRONG_ABI_DRIVER), std::string::npos) << refused.output;
-  EXPECT_NE(refused.output.find("built for driver ABI version 2, this hapticd speaks version 1"),
+  EXPECT_NE(refused.output.find("built for driver ABI version 3, this hapticd speaks versions 1 to 2"),
             std::string::npos)
       << refused.output;
 }

@@ -1,4 +1,4 @@
-/* hapticd's device driver ABI, version 1: a device (real hardware, or a plant of one's own) in a
+/* hapticd's device driver ABI, version 2: a device (real hardware, or a plant of one's own) in a
  * shared library that hapticd loads at start ("driver": {"library": ..., "params": {...}} in its
  * configuration; docs/devices.md).
  *
@@ -22,6 +22,12 @@
  * amplifiers). In device-clocked mode (run_servo set) the driver's own servo thread calls back
  * hapticd once per cycle and hapticd calls read and write from inside that callback.
  * No function may throw a C++ exception across this boundary.
+ *
+ * Versions. Version 2 only appends: fields at the end of haptic_driver_info, _reading and
+ * _command, and functions at the end of haptic_driver_api. hapticd loads a version 1 driver as
+ * before (it passes the same structs; a version 1 driver fills and reads their first part, which
+ * is laid out as version 1 had it) and treats the version 2 fields as absent: no apparent mass or
+ * damping (so no stability report or passivity on that port), no torque, no gripper.
  */
 #ifndef HAPTIC_DRIVER_H
 #define HAPTIC_DRIVER_H
@@ -33,7 +39,8 @@
 extern "C" {
 #endif
 
-#define HAPTIC_DRIVER_ABI_VERSION 1u
+#define HAPTIC_DRIVER_ABI_VERSION 2u
+#define HAPTIC_DRIVER_ABI_VERSION_MIN 1u /* the oldest version hapticd still loads */
 #define HAPTIC_DRIVER_MAX_JOINTS 6
 #define HAPTIC_DRIVER_ERROR_SIZE 256
 
@@ -48,6 +55,14 @@ extern "C" {
 #define HAPTIC_DRIVER_BRAKES 0x08u         /* brake[] is applied */
 #define HAPTIC_DRIVER_GRAVITY 0x10u        /* the plant carries a gravity load */
 #define HAPTIC_DRIVER_ORIENTATION 0x20u    /* orientation_W is measured (a gimbal's encoders) */
+/* ABI 2 on: */
+#define HAPTIC_DRIVER_TORQUE_OUTPUT 0x40u  /* command.torque_W is applied (a 6-DOF device) */
+#define HAPTIC_DRIVER_GRIPPER 0x80u        /* reading.gripper is measured; gripper_force applied */
+
+/* Severity of a message a driver hands hapticd's log (set_log). */
+#define HAPTIC_DRIVER_LOG_INFO 0
+#define HAPTIC_DRIVER_LOG_WARNING 1
+#define HAPTIC_DRIVER_LOG_ERROR 2
 
 /* What the device is, filled in by describe(). */
 typedef struct haptic_driver_info {
@@ -61,6 +76,23 @@ typedef struct haptic_driver_info {
   double workspace_max[3];
   /* Device-clocked drivers: the rate run_servo calls back at. Unit: Hz. 0 for server-clocked. */
   double servo_rate_hz;
+
+  /* ABI 2 on (a version 1 driver leaves these 0). The device at its tool point, per axis of W,
+   * as a mass-damper: what hapticd's stability report and passivity controller model the port
+   * by (it takes the smallest of the three axes). 0: unknown, and both are off on the port. From
+   * the vendor's data or an identification; the values at the workspace's centre where they vary.
+   * Units: kg, N·s/m. */
+  double apparent_mass[3];
+  double apparent_damping[3];
+  /* TORQUE_OUTPUT: the largest torque at the tool the loop may command, > 0 (N·m); and the
+   * rotation about each axis of W as an inertia-damper (kg·m², N·m·s/rad; 0: unknown). */
+  double max_torque;
+  double apparent_inertia[3];
+  double apparent_rotational_damping[3];
+  /* GRIPPER: the largest gripping force, > 0 (N), and the opening's range (rad or m). */
+  double gripper_max_force;
+  double gripper_min;
+  double gripper_max;
 } haptic_driver_info;
 
 /* One sample of the device's sensors. */
@@ -77,18 +109,35 @@ typedef struct haptic_driver_reading {
   /* Increases with every new sample the device takes. A reading whose sequence has not moved for
    * the configured number of ticks is stale: a device fault. */
   uint64_t sequence;
+
+  /* ABI 2 on. The tool's angular velocity in W (ORIENTATION with MEASURED_RATES; else 0, and
+   * hapticd differentiates the orientation). Unit: rad/s. */
+  double angular_velocity_W[3];
+  /* GRIPPER: the opening and its rate. Units: rad or m; rad/s or m/s. */
+  double gripper;
+  double gripper_rate;
 } haptic_driver_reading;
 
 /* The efforts to hold over the next tick. */
 typedef struct haptic_driver_command {
   double tau[HAPTIC_DRIVER_MAX_JOINTS];   /* actuator efforts. Unit: N·m or N */
   double brake[HAPTIC_DRIVER_MAX_JOINTS]; /* brake effort limits, >= 0 (BRAKES). Unit: N·m or N */
+
+  /* ABI 2 on. TORQUE_OUTPUT: the torque about the tool point in W, within max_torque (else 0).
+   * Unit: N·m. GRIPPER: the force closing the gripper, within gripper_max_force. Unit: N. */
+  double torque_W[3];
+  double gripper_force;
 } haptic_driver_command;
 
 /* Device-clocked mode: hapticd's tick, called by the driver's servo loop once per cycle with the
  * cycle's time on CLOCK_MONOTONIC (ns). Returns nonzero when run_servo should return (hapticd is
  * stopping). */
 typedef int (*haptic_driver_tick_fn)(void* context, int64_t monotonic_ns);
+
+/* ABI 2 on: hapticd's log, for what a person at the device must know (calibration needed, a
+ * vendor warning). level: HAPTIC_DRIVER_LOG_*. Callable from any of the driver's threads but
+ * not from read or write (it may allocate). */
+typedef void (*haptic_driver_log_fn)(void* context, int level, const char* message);
 
 typedef struct haptic_driver_api {
   uint32_t abi_version;          /* HAPTIC_DRIVER_ABI_VERSION the driver was built against */
@@ -116,6 +165,16 @@ typedef struct haptic_driver_api {
    * tick once per cycle, until tick returns nonzero; returns HAPTIC_DRIVER_OK then, or
    * HAPTIC_DRIVER_FAILED if the servo loop could not run or ended on its own. */
   int (*run_servo)(void* driver, haptic_driver_tick_fn tick, void* context);
+
+  /* ABI 2 on; each may be NULL. */
+  /* Before start(): where the driver's messages go, until destroy(). */
+  void (*set_log)(void* driver, haptic_driver_log_fn log, void* context);
+  /* For `hapticd --list-devices`, without create(): the devices this driver can open on this
+   * host. Writes NUL-terminated text of at most size bytes into list, one device a line: the
+   * params (JSON) that open it, a tab, a description for people. Returns how many devices it
+   * found, or -1 with the reason in list when it cannot ask (the vendor's runtime is missing:
+   * say what to install). params_json: the configuration's params, "{}" when none. */
+  int (*list_devices)(const char* params_json, char* list, size_t size);
 } haptic_driver_api;
 
 /* The one symbol a driver library exports (visible even when the library hides the rest). */
