@@ -13,6 +13,7 @@
 
 #include "config/server_config.hpp"
 #include "app/health_check.hpp"
+#include "app/list_devices.hpp"
 #include "app/replay.hpp"
 #include "app/server.hpp"
 #include "haptic/driver.h"
@@ -114,6 +115,13 @@ int main(int argc, char** argv) {
   std::string replay_path;
   cli.add_option("--replay", replay_path, haptic::app::kReplayHelp)
       ->check(CLI::ExistingFile);
+  bool list_devices = false;
+  cli.add_flag("--list-devices", list_devices,
+               "ask every driver library found (installed beside hapticd, in its build tree, in "
+               "each --driver-dir) which devices it can open on this host, and exit");
+  std::vector<std::string> driver_dirs;
+  cli.add_option("--driver-dir", driver_dirs, "with --list-devices: also search this folder")
+      ->check(CLI::ExistingDirectory);
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
@@ -121,6 +129,10 @@ int main(int argc, char** argv) {
     // them) is 2, a configuration error, whatever number CLI11 gives its kind: the systemd unit
     // does not restart on 2 (RestartPreventExitStatus).
     return cli.exit(error) == 0 ? 0 : 2;
+  }
+
+  if (list_devices) {
+    return haptic::app::list_devices_command(haptic::app::driver_folders(driver_dirs), std::cout);
   }
 
   if (!replay_path.empty()) {

@@ -123,6 +123,53 @@ DriverStructSizes driver_struct_sizes(std::uint32_t abi_version) {
   }
 }
 
+DriverListing list_driver_devices(const std::string& library, const std::string& params_json) {
+  DriverListing listing;
+  void* handle = dlopen(library.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (handle == nullptr) {
+    const char* reason = dlerror();
+    listing.error = std::string("cannot load: ") + (reason != nullptr ? reason : "unknown");
+    return listing;
+  }
+  auto entry = reinterpret_cast<haptic_driver_entry_fn>(dlsym(handle, HAPTIC_DRIVER_ENTRY_SYMBOL));
+  const haptic_driver_api* api = entry != nullptr ? entry() : nullptr;
+  listing.is_driver = entry != nullptr;
+  if (api == nullptr) {
+    listing.error = "exports no " HAPTIC_DRIVER_ENTRY_SYMBOL "(); is it a hapticd driver?";
+  } else if (api->abi_version < HAPTIC_DRIVER_ABI_VERSION_MIN || api->abi_version > HAPTIC_DRIVER_ABI_VERSION) {
+    listing.error = "built for driver ABI version " + std::to_string(api->abi_version) +
+                    ", this hapticd speaks versions " + std::to_string(HAPTIC_DRIVER_ABI_VERSION_MIN) +
+                    " to " + std::to_string(HAPTIC_DRIVER_ABI_VERSION);
+  } else {
+    listing.abi_version = api->abi_version;
+    listing.can_list = api->abi_version >= 2 && api->list_devices != nullptr;
+  }
+  if (listing.can_list) {
+    std::string text(16384, '\0');
+    const int found = api->list_devices(params_json.c_str(), text.data(), text.size());
+    text.back() = '\0';
+    text.resize(std::strlen(text.c_str()));
+    if (found < 0) {
+      listing.error = text.empty() ? "list_devices() failed without a reason" : text;
+    } else {
+      std::size_t start = 0;
+      while (start < text.size()) {
+        std::size_t end = text.find('\n', start);
+        if (end == std::string::npos) end = text.size();
+        const std::string line = text.substr(start, end - start);
+        start = end + 1;
+        if (line.empty()) continue;
+        const std::size_t tab = line.find('\t');
+        listing.devices.push_back(tab == std::string::npos
+                                      ? DriverListing::Entry{"{}", line}
+                                      : DriverListing::Entry{line.substr(0, tab), line.substr(tab + 1)});
+      }
+    }
+  }
+  dlclose(handle);
+  return listing;
+}
+
 void DriverDevice::CallState::log_trampoline(void* self, int level, const char* message) {
   const auto* state = static_cast<const CallState*>(self);
   if (state->log && message != nullptr) state->log(level, message);

@@ -20,6 +20,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "haptic/driver.h"
 #include "runtime/device.hpp"
@@ -39,6 +40,23 @@ struct DriverOptions {
   /// Unset: dropped.
   std::function<void(int level, const std::string& message)> log;
 };
+
+/// What one driver library says it can open on this host (ABI 2's list_devices), for
+/// `hapticd --list-devices`.
+struct DriverListing {
+  bool is_driver = false;         // it exports haptic_driver_entry()
+  std::uint32_t abi_version = 0;  // 0: not one hapticd loads (`error` says why)
+  bool can_list = false;          // it has list_devices (version 2 drivers may leave it NULL)
+  struct Entry {
+    std::string params_json;  // what "params" must say to open it
+    std::string description;
+  };
+  std::vector<Entry> devices;
+  std::string error;  // it could not be asked, or could not ask its vendor's runtime (why)
+};
+/// Loads `library`, checks its entry and ABI version as DriverDevice does, and asks it (without
+/// create()). Never throws.
+DriverListing list_driver_devices(const std::string& library, const std::string& params_json = "{}");
 
 /// The sizes of the ABI's structs as a driver of `abi_version` has them (version 2 only appended
 /// to version 1's); 0 for a version hapticd does not load.

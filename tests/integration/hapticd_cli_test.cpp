@@ -198,6 +198,27 @@ TEST(HapticdCli, ADriverBuiltForAnotherAbiIsRefusedAtStartNamingTheLibraryAndBot
       << refused.output;
 }
 
+// --list-devices asks every driver it finds: the build tree's example lists itself with the params
+// that open it; in another folder (--driver-dir), a version 1 driver says it cannot list, and one
+// built for another ABI is named with the reason; a library that is no driver is passed over.
+TEST(HapticdCli, ListDevicesAsksEveryDriverItFinds) {
+  const std::string folder = std::filesystem::path(WRONG_ABI_DRIVER).parent_path().string();
+  const Outcome listed = run_hapticd({"--list-devices", "--driver-dir", folder});
+  EXPECT_EQ(listed.exit_code, 0) << listed.output;
+  EXPECT_NE(listed.output.find("point_mass_driver.so (driver ABI 2): 1 device\n"
+                               "  \"params\": {}   point mass driver (example plugin, simulated)\n"),
+            std::string::npos)
+      << listed.output;
+  EXPECT_NE(listed.output.find("point_mass_driver_abi1.so (driver ABI 1): cannot list its devices"),
+            std::string::npos)
+      << listed.output;
+  EXPECT_NE(listed.output.find("wrong_abi_driver.so: cannot ask: built for driver ABI version 3"),
+            std::string::npos)
+      << listed.output;
+  const Outcome missing = run_hapticd({"--list-devices", "--driver-dir", "/nonexistent-folder"});
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;  // a bad command line
+}
+
 TEST(HapticdCli, ADeviceClockedDriverMustRunAtTheLoopRateAndNotInLockstep) {
   const std::string path = ::testing::TempDir() + "/device_clocked_driver.json";
   std::ofstream(path) << R"({"grpc_address": "127.0.0.1:0", "udp_port": 0, "loop_rate_hz": 1000,
