@@ -184,6 +184,17 @@ static int describe(void* driver, haptic_driver_info* info) {
 }
 
 #if HAPTIC_DRIVER_ABI_VERSION >= 2
+/* Why a read or write failed: the injected fault (a real driver keeps its vendor's error). */
+static void last_error(void* driver, char* error) {
+  const point_mass* d = driver;
+  const uint64_t ticks = __atomic_load_n(&d->ticks, __ATOMIC_RELAXED); /* the loop writes it */
+  const int faulting_now = strcmp(d->fault, "none") != 0 && ticks >= d->fault_after;
+  snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", faulting_now ? d->fault : "");
+  if (faulting_now && strcmp(d->fault, "nan") == 0) {
+    snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "the example's injected fault: a NaN reading");
+  }
+}
+
 static void set_log(void* driver, haptic_driver_log_fn log, void* context) {
   point_mass* d = driver;
   d->log = log;
@@ -313,6 +324,7 @@ static const haptic_driver_api kApi = {
 #if HAPTIC_DRIVER_ABI_VERSION >= 2
     set_log,
     list_devices,
+    last_error,
 #endif
 };
 

@@ -658,11 +658,19 @@ void Server::housekeeping_loop() {
     }
     if (const auto faults = counters_.device_errors.load(std::memory_order_relaxed);
         faults != device_faults_reported) {
+      // The device's own words where it has them (a driver's last_error: "unplugged", ...).
+      std::string why;
+      for (std::size_t port = 0; port < devices_.size(); ++port) {
+        if (std::string reason = devices_[port].device->fault_reason(); !reason.empty()) {
+          why += (why.empty() ? "" : "; ") + std::string("device ") + std::to_string(port) + ": " + reason;
+        }
+      }
       service_->publish_event(v1::Event::DEVICE_FAULT, 0,
                               std::to_string(faults - device_faults_reported) +
-                                  " ticks with a failed or non-finite device reading; zero force");
-      spdlog::error("device: {} ticks with a failed or non-finite reading; zero force commanded",
-                    faults - device_faults_reported);
+                                  " ticks with a failed or non-finite device reading; zero force" +
+                                  (why.empty() ? "" : " (" + why + ")"));
+      spdlog::error("device: {} ticks with a failed or non-finite reading; zero force commanded{}",
+                    faults - device_faults_reported, why.empty() ? "" : " (" + why + ")");
       device_faults_reported = faults;
     }
     if (!servo_end_reported && loop_->servo_failed()) {

@@ -126,6 +126,10 @@ class Device {
   /// On the loop, when a read or write has failed: motors to zero, brakes on where the device
   /// has them. Must not throw.
   virtual void enter_safe_state() {}
+
+  /// Off the loop, while it runs: why the most recent read or write failed, in the device's own
+  /// words ("" when it cannot say), for the DEVICE_FAULT event and the log.
+  virtual std::string fault_reason() const { return {}; }
 };
 
 }  // namespace haptic::runtime

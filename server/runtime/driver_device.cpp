@@ -412,6 +412,18 @@ DeviceStatus DriverDevice::write(const DeviceCommand& command, double dt) {
 
 void DriverDevice::enter_safe_state() { api_->enter_safe_state(driver_); }
 
+std::string DriverDevice::fault_reason() const {
+  if (hung()) {
+    return "a driver call took longer than " + std::to_string(std::lround(options_.call_timeout_s * 1e3)) +
+           " ms (call_timeout_ms); the device stays faulted until hapticd restarts";
+  }
+  if (api_->abi_version < 2 || api_->last_error == nullptr) return {};
+  char error[HAPTIC_DRIVER_ERROR_SIZE] = {};
+  api_->last_error(driver_, error);
+  error[HAPTIC_DRIVER_ERROR_SIZE - 1] = '\0';
+  return error;
+}
+
 bool DriverDevice::run(Tick tick, void* context) {
   struct Trampoline {
     Tick tick;

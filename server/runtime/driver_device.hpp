@@ -81,6 +81,8 @@ class DriverDevice final : public Device, public ServoClock {
   DeviceStatus read(DeviceReading& reading) override;
   DeviceStatus write(const DeviceCommand& command, double dt) override;
   void enter_safe_state() override;
+  /// ABI 2's last_error (a call that hung: says so); "" for a version 1 driver.
+  std::string fault_reason() const override;
 
   /// Device-clocked: the driver's servo rate. Unit: Hz.
   double rate_hz() const override { return info_.servo_rate_hz; }

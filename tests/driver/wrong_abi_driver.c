@@ -15,7 +15,7 @@ static const haptic_driver_api kApi = {
     sizeof(haptic_driver_info),
     sizeof(haptic_driver_reading) + 16u,
     sizeof(haptic_driver_command),
-    create, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
+    create, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
 };
 
 const haptic_driver_api* haptic_driver_entry(void) { return &kApi; }

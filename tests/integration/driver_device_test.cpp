@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -85,6 +86,15 @@ TEST(DriverDevice, ANaNFromTheDriverIsADeviceFaultWithZeroForceAndTheLastGoodSta
   test::ServerProcess server(driver_config(R"("initial": [0, 0, -0.001], "push": [0, 0, -1],
                                               "fault": "nan", "fault_after": 100)"));
   Client client(config_for(server));
+  std::mutex mutex;
+  std::condition_variable arrived;
+  std::string fault_message;
+  client.on_event([&](const Event& event) {
+    if (event.kind != Event::Kind::kDeviceFault) return;
+    std::lock_guard lock(mutex);
+    fault_message = event.message;
+    arrived.notify_all();
+  });
   auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {500.0, 2.0}});
   State s = step_and_get(client, 50);
   EXPECT_EQ(s.flags & kDeviceFault, 0u);
@@ -94,6 +104,11 @@ TEST(DriverDevice, ANaNFromTheDriverIsADeviceFaultWithZeroForceAndTheLastGoodSta
   EXPECT_EQ(s.force, (Vec3{0, 0, 0}));
   EXPECT_TRUE(finite(s.position));
   EXPECT_GE(client.stats().device_faults, 49u);
+  // The event says why in the driver's own words (ABI 2's last_error).
+  std::unique_lock lock(mutex);
+  ASSERT_TRUE(arrived.wait_for(lock, std::chrono::seconds(5), [&] { return !fault_message.empty(); }));
+  EXPECT_NE(fault_message.find("(device 0: the example's injected fault: a NaN reading)"), std::string::npos)
+      << fault_message;
 }
 
 TEST(DriverDevice, ADriverThatHangsTimesOutTheLoopGoesOnSafeAndTheServerStopsCleanly) {

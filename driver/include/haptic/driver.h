@@ -175,6 +175,11 @@ typedef struct haptic_driver_api {
    * found, or -1 with the reason in list when it cannot ask (the vendor's runtime is missing:
    * say what to install). params_json: the configuration's params, "{}" when none. */
   int (*list_devices)(const char* params_json, char* list, size_t size);
+  /* Why the most recent read, write or start failed, for hapticd's DEVICE_FAULT event and log
+   * ("the device was unplugged (USB)", the vendor's error text): NUL-terminated, at most
+   * HAPTIC_DRIVER_ERROR_SIZE bytes into error; "" when nothing failed. Called off the loop while
+   * read and write may run on another thread: keep what it reads in atomics or fixed strings. */
+  void (*last_error)(void* driver, char* error);
 } haptic_driver_api;
 
 /* The one symbol a driver library exports (visible even when the library hides the rest). */
