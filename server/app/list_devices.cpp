@@ -8,27 +8,6 @@
 
 namespace haptic::app {
 
-std::vector<std::string> driver_folders(const std::vector<std::string>& extra) {
-  std::vector<std::string> candidates = extra;
-  std::error_code error;
-  const std::filesystem::path binary = std::filesystem::read_symlink("/proc/self/exe", error);
-  if (!error) {
-    candidates.push_back((binary.parent_path().parent_path() / HAPTIC_INSTALL_LIBDIR / "hapticd").string());
-    // A hapticd run from its build tree also finds the drivers built beside it.
-    if (binary.string().rfind(std::string(HAPTIC_BUILD_TREE) + "/", 0) == 0) {
-      candidates.push_back(std::string(HAPTIC_BUILD_TREE) + "/driver");
-    }
-  }
-  std::vector<std::string> folders;
-  for (const std::string& folder : candidates) {
-    std::error_code missing;
-    if (!std::filesystem::is_directory(folder, missing)) continue;
-    const std::string canonical = std::filesystem::weakly_canonical(folder, missing).string();
-    if (std::find(folders.begin(), folders.end(), canonical) == folders.end()) folders.push_back(canonical);
-  }
-  return folders;
-}
-
 int list_devices_command(const std::vector<std::string>& folders, std::ostream& out) {
   std::size_t libraries = 0, devices = 0;
   for (const std::string& folder : folders) {

@@ -14,6 +14,7 @@
 #include "config/server_config.hpp"
 #include "app/health_check.hpp"
 #include "app/list_devices.hpp"
+#include "runtime/driver_device.hpp"
 #include "app/replay.hpp"
 #include "app/server.hpp"
 #include "haptic/driver.h"
@@ -132,7 +133,7 @@ int main(int argc, char** argv) {
   }
 
   if (list_devices) {
-    return haptic::app::list_devices_command(haptic::app::driver_folders(driver_dirs), std::cout);
+    return haptic::app::list_devices_command(haptic::runtime::driver_folders(driver_dirs), std::cout);
   }
 
   if (!replay_path.empty()) {

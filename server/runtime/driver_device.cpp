@@ -12,7 +12,9 @@
 #include <cmath>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <stdexcept>
+#include <system_error>
 
 #include "runtime/realtime.hpp"
 
@@ -123,6 +125,37 @@ DriverStructSizes driver_struct_sizes(std::uint32_t abi_version) {
   }
 }
 
+std::vector<std::string> driver_folders(const std::vector<std::string>& extra) {
+  std::vector<std::string> candidates = extra;
+  std::error_code error;
+  const std::filesystem::path binary = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    candidates.push_back((binary.parent_path().parent_path() / HAPTIC_INSTALL_LIBDIR / "hapticd").string());
+    // A hapticd run from its build tree also finds the drivers built beside it.
+    if (binary.string().rfind(std::string(HAPTIC_BUILD_TREE) + "/", 0) == 0) {
+      candidates.push_back(std::string(HAPTIC_BUILD_TREE) + "/driver");
+    }
+  }
+  std::vector<std::string> folders;
+  for (const std::string& folder : candidates) {
+    std::error_code missing;
+    if (!std::filesystem::is_directory(folder, missing)) continue;
+    const std::string canonical = std::filesystem::weakly_canonical(folder, missing).string();
+    if (std::find(folders.begin(), folders.end(), canonical) == folders.end()) folders.push_back(canonical);
+  }
+  return folders;
+}
+
+std::string resolve_driver_library(const std::string& library) {
+  if (library.find('/') != std::string::npos) return library;
+  for (const std::string& folder : driver_folders()) {
+    const std::filesystem::path candidate = std::filesystem::path(folder) / library;
+    std::error_code error;
+    if (std::filesystem::is_regular_file(candidate, error)) return candidate.string();
+  }
+  return library;
+}
+
 DriverListing list_driver_devices(const std::string& library, const std::string& params_json) {
   DriverListing listing;
   void* handle = dlopen(library.c_str(), RTLD_NOW | RTLD_LOCAL);
@@ -177,7 +210,8 @@ void DriverDevice::CallState::log_trampoline(void* self, int level, const char* 
 
 DriverDevice::DriverDevice(const DriverOptions& options) : options_(options) {
   const std::string where = "driver \"" + options.library + "\": ";
-  library_ = dlopen(options.library.c_str(), RTLD_NOW | RTLD_LOCAL);
+  const std::string path = resolve_driver_library(options.library);
+  library_ = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (library_ == nullptr) {
     const char* reason = dlerror();
     throw std::runtime_error(where + "cannot load: " + (reason != nullptr ? reason : "unknown"));

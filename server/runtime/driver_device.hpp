@@ -41,6 +41,15 @@ struct DriverOptions {
   std::function<void(int level, const std::string& message)> log;
 };
 
+/// The folders holding hapticd's drivers, in order: each of `extra` (hapticd --driver-dir), the
+/// installed ones (<prefix>/<libdir>/hapticd beside the binary's bin/), and, for a hapticd run
+/// from its build tree, that tree's driver/. Missing folders are left out.
+std::vector<std::string> driver_folders(const std::vector<std::string>& extra = {});
+
+/// `library` as DriverDevice loads it: a name without a '/' found in driver_folders() becomes
+/// that file's path; anything else stays as it is (dlopen then searches as dlopen(3) does).
+std::string resolve_driver_library(const std::string& library);
+
 /// What one driver library says it can open on this host (ABI 2's list_devices), for
 /// `hapticd --list-devices`.
 struct DriverListing {
