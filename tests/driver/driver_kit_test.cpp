@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -263,6 +264,20 @@ TEST(DriverAbi, Version2FieldsAreCheckedAndTheWeakestAxisModelsThePort) {
   // One axis unknown (0): the whole model is unknown, as for a version 1 driver.
   DriverDevice partial(example(R"({"reported_mass": [0.05, 0, 0.05]})"));
   EXPECT_EQ(partial.description().apparent_mass, 0.0);
+}
+
+// A driver named without a folder is found among hapticd's drivers (here: the build tree's, since
+// this test runs from it), so a configuration can say "point_mass_driver.so" wherever it is
+// installed; a path, or a name found nowhere, is left to dlopen.
+TEST(DriverAbi, ABareNameIsFoundInTheDriverFolders) {
+  const std::string found = resolve_driver_library("point_mass_driver.so");
+  EXPECT_EQ(std::filesystem::canonical(found), std::filesystem::canonical(POINT_MASS_DRIVER)) << found;
+  EXPECT_EQ(resolve_driver_library("/x/y.so"), "/x/y.so");
+  EXPECT_EQ(resolve_driver_library("libnowhere.so"), "libnowhere.so");
+  DriverOptions options;
+  options.library = "point_mass_driver.so";
+  DriverDevice device(options);
+  EXPECT_EQ(device.abi_version(), 2u);
 }
 
 }  // namespace
