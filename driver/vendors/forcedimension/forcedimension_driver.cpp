@@ -231,6 +231,7 @@ struct Device {
   bool calibrate = true, gravity_compensation = true;
   double apparent_mass[3] = {0, 0, 0}, apparent_damping[3] = {0, 0, 0};
   std::uint64_t sequence = 0;
+  bool faulted = false;  // a call failed: forces are enabled again once the device answers
   // The most recent failure, for last_error (read off the loop): the vendor's code and the call.
   std::atomic<int> failed_code{0};
   std::atomic<const char*> failed_call{nullptr};
@@ -242,6 +243,7 @@ struct Device {
   }
   /// Records a failed call (a negative return, §1.4) for last_error; returns HAPTIC_DRIVER_FAILED.
   int failed(const char* call) {
+    faulted = true;
     failed_code.store(api.ErrorGetLast(), std::memory_order_relaxed);
     failed_call.store(call, std::memory_order_release);
     return HAPTIC_DRIVER_FAILED;
@@ -417,6 +419,11 @@ int read_sensors(void* driver, haptic_driver_reading* reading) {
     return device->failed("dhdGetGripperAngleRad");
   }
   reading->buttons = api.GetButtonMask(id);
+  // Back after a failure (a device plugged in again): the SDK leaves its forces off until asked.
+  if (device->faulted) {
+    if (api.EnableForce(kDhdOn, id) < 0) return device->failed("dhdEnableForce");
+    device->faulted = false;
+  }
   reading->sequence = ++device->sequence;  // each call reads the device afresh
   return HAPTIC_DRIVER_OK;
 }
