@@ -286,8 +286,10 @@ void* create(const char* params_json, char* error) {
         why = "no Force Dimension device found (" + (count < 0 ? vendor_error(api) : "0 connected") +
               "): is it plugged in and powered, and may this user open it (udev rules, docs/devices.md)?";
       } else if (!(index >= 0 && index < count && index == std::floor(index))) {
-        why = "params.index " + std::to_string(index) + ": " + std::to_string(count) +
-              " device(s) connected, index 0 to " + std::to_string(count - 1);
+        char shown[32];
+        std::snprintf(shown, sizeof shown, "%g", index);
+        why = "params.index " + std::string(shown) + ": " + std::to_string(count) +
+              (count == 1 ? " device connected, index 0" : " devices connected, index 0 to " + std::to_string(count - 1));
       } else {
         opened = api.OpenID(static_cast<char>(index));
         if (opened < 0) why = "opening device " + std::to_string(static_cast<int>(index)) + ": " + vendor_error(api);
