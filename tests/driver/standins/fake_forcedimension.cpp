@@ -567,6 +567,12 @@ int close_device(State& s, char ID) {
   d->force = false;
   d->regulating = false;
   d->hang_pending = false;
+  // The stand-in's plant moves only when forces are set, so no time passes between a close and
+  // the next open; on the bench a reopen takes far longer than the unpowered arm takes to come to
+  // rest. So a closed device is at rest where it was.
+  d->v = Vec3{};
+  d->w = Vec3{};
+  d->grip_v = 0;
   if (s.current == id) {
     s.current = -1;
     for (int i = 0; i < static_cast<int>(s.devices.size()); ++i)
