@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <condition_variable>
 #include <mutex>
 #include <optional>
@@ -80,6 +81,65 @@ TEST(DriverDevice, AVersion2DriverPortGetsAStabilityReportFromItsMassDamper) {
   EXPECT_TRUE(stiff.stability().device_known);
   EXPECT_FALSE(stiff.stability().stable);
   EXPECT_FALSE(stiff.stability().warning.empty());
+}
+
+// A Force Dimension device through its vendor's runtime (the driver in driver/vendors against the
+// stand-in of libdrd, tests/driver/standins), the whole server around it in lockstep: the
+// stand-in's 1 N hand rests on a 500 N/m wall 2 mm deep; unplugged the device faults (zero force,
+// the event naming the vendor's error), and once plugged in again it is driven again without a
+// restart.
+TEST(DriverDevice, AForceDimensionDeviceRestsOnAWallFaultsWhenUnpluggedAndComesBack) {
+  setenv("FAKE_DHD_DEVICES", "omega.3", 1);
+  setenv("FAKE_DHD_SCRIPT", "0 hand 0 0 0 -1;2000 unplug 0;2100 replug 0", 1);
+  test::ServerProcess server(R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
+      "real_time": {"use_fifo": false},
+      "driver": {"library": ")" FORCEDIMENSION_DRIVER R"(",
+                 "params": {"library": ")" FAKE_FORCEDIMENSION_LIBRARY R"("}}})");
+  unsetenv("FAKE_DHD_SCRIPT");
+  Client client(config_for(server));
+  EXPECT_NE(client.device_info().name.find("Force Dimension omega.3"), std::string::npos)
+      << client.device_info().name;
+  std::mutex mutex;
+  std::string fault_message;
+  client.on_event([&](const Event& event) {
+    std::lock_guard lock(mutex);
+    if (event.kind == Event::Kind::kDeviceFault && fault_message.empty()) fault_message = event.message;
+  });
+  auto wall = client.add_wall({.point = {0, 0, 0}, .normal = {0, 0, 1}, .impedance = {500.0, 5.0}});
+  State s = step_and_get(client, 1990);
+  EXPECT_EQ(s.flags & kDeviceFault, 0u);
+  EXPECT_EQ(s.contact_count, 1u);
+  EXPECT_NEAR(s.position.z, -1.0 / 500.0, 2e-5);
+  EXPECT_NEAR(s.force.z, 1.0, 1e-2);
+  // The script counts the runtime's force calls, not ticks: step until the fault shows, then
+  // until it clears (each bounded).
+  int steps = 0;
+  do {
+    s = step_and_get(client, 10);
+  } while ((s.flags & kDeviceFault) == 0 && ++steps < 300);
+  ASSERT_NE(s.flags & kDeviceFault, 0u) << "no fault within 3000 ticks of the unplug";
+  EXPECT_EQ(s.force, (Vec3{0, 0, 0}));
+  steps = 0;
+  do {
+    s = step_and_get(client, 10);
+  } while ((s.flags & kDeviceFault) != 0 && ++steps < 300);
+  ASSERT_EQ(s.flags & kDeviceFault, 0u) << "still faulted 3000 ticks after the replug";
+  s = step_and_get(client, 2000);  // driven again, without a restart: back on the wall
+  EXPECT_EQ(s.flags & kDeviceFault, 0u);
+  EXPECT_NEAR(s.position.z, -1.0 / 500.0, 2e-5);
+  EXPECT_NEAR(s.force.z, 1.0, 1e-2);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  for (;;) {
+    {
+      std::lock_guard lock(mutex);
+      if (!fault_message.empty() || std::chrono::steady_clock::now() > deadline) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  std::lock_guard lock(mutex);
+  // The runtime's own words for the call that met the unplugged device (DHD_ERROR_COM).
+  EXPECT_NE(fault_message.find("(device 0: dhd"), std::string::npos) << fault_message;
+  EXPECT_NE(fault_message.find("(DHD error 2)"), std::string::npos) << fault_message;
 }
 
 TEST(DriverDevice, ANaNFromTheDriverIsADeviceFaultWithZeroForceAndTheLastGoodState) {
