@@ -4,8 +4,12 @@
 // one run. Every device is driven by the same push of the simulated hand; costs are per 1 ms tick.
 #include <benchmark/benchmark.h>
 
+#include <dlfcn.h>
+
 #include <chrono>
+#include <cstdlib>
 #include <memory>
+#include <string>
 #include <thread>
 
 #include "engine/control/brake_rule.hpp"
@@ -129,6 +133,60 @@ void BM_Device_DriverPointMass(benchmark::State& state) {
 }
 BENCHMARK(BM_Device_DriverPointMass)->Arg(0)->Arg(1)->ArgName("driver_thread");
 BENCHMARK(BM_Device_DriverPointMass)->Arg(2)->Arg(3)->ArgName("driver_thread")->Iterations(1000);
+
+// The Force Dimension driver (driver/vendors) against the stand-in of its runtime
+// (tests/driver/standins), calls on the loop (0) or through the driver thread (1); and the same
+// runtime calls a tick makes (position, velocity, buttons, force) made straight on the stand-in, so
+// the driver's own cost is the difference: the stand-in's share (a mutex, its plant, its call log)
+// is not what a real runtime costs, whose USB round trip dominates on hardware.
+void BM_Device_DriverForceDimension(benchmark::State& state) {
+  setenv("FAKE_DHD_DEVICES", "omega.3", 1);
+  runtime::DriverOptions options;
+  options.library = FORCEDIMENSION_DRIVER;
+  options.params_json = std::string(R"({"library": ")") + FAKE_FORCEDIMENSION_LIBRARY + "\"}";
+  options.call_timeout_s = state.range(0) == 1 ? 0.02 : 0.0;
+  runtime::DriverDevice device(options);
+  runtime::CartesianModel model;
+  device.start();
+  run_device(state, device, model, {0, 0, 1e-4});
+  device.stop();
+}
+BENCHMARK(BM_Device_DriverForceDimension)->Arg(0)->Arg(1)->ArgName("driver_thread");
+
+void BM_Standin_ForceDimensionCallsAlone(benchmark::State& state) {
+  setenv("FAKE_DHD_DEVICES", "omega.3", 1);
+  void* runtime = dlopen(FAKE_FORCEDIMENSION_LIBRARY, RTLD_NOW | RTLD_LOCAL);
+  if (runtime == nullptr) {
+    state.SkipWithError("cannot load the stand-in");
+    return;
+  }
+  using Get3 = int (*)(double*, double*, double*, char);
+  using Set3 = int (*)(double, double, double, char);
+  const auto open = reinterpret_cast<int (*)(char)>(dlsym(runtime, "dhdOpenID"));
+  const auto auto_init = reinterpret_cast<int (*)(char)>(dlsym(runtime, "drdAutoInit"));
+  const auto stop_regulation = reinterpret_cast<int (*)(bool, char)>(dlsym(runtime, "drdStop"));
+  const auto enable = reinterpret_cast<int (*)(unsigned char, char)>(dlsym(runtime, "dhdEnableForce"));
+  const auto position = reinterpret_cast<Get3>(dlsym(runtime, "dhdGetPosition"));
+  const auto velocity = reinterpret_cast<Get3>(dlsym(runtime, "dhdGetLinearVelocity"));
+  const auto buttons = reinterpret_cast<unsigned (*)(char)>(dlsym(runtime, "dhdGetButtonMask"));
+  const auto force = reinterpret_cast<Set3>(dlsym(runtime, "dhdSetForce"));
+  const auto close = reinterpret_cast<int (*)(char)>(dlsym(runtime, "dhdClose"));
+  const char id = static_cast<char>(open(0));
+  auto_init(id);
+  stop_regulation(true, id);
+  enable(1, id);
+  double p[3], v[3];
+  for (auto _ : state) {
+    position(&p[0], &p[1], &p[2], id);
+    velocity(&v[0], &v[1], &v[2], id);
+    benchmark::DoNotOptimize(buttons(id));
+    benchmark::DoNotOptimize(p);
+    force(0.0, 0.0, 1e-4, id);
+  }
+  close(id);
+  dlclose(runtime);
+}
+BENCHMARK(BM_Standin_ForceDimensionCallsAlone);
 
 // ---- Controllers on their own: one tick's computation each.
 
