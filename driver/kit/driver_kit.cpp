@@ -1,8 +1,10 @@
 #include "driver_kit.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <sstream>
+#include <thread>
 
 #include "runtime/cartesian_model.hpp"
 #include "runtime/device_port.hpp"
@@ -12,6 +14,10 @@ namespace haptic::driver_kit {
 namespace {
 
 constexpr double kT = 1e-3;  // the loop's period the kit calls at. Unit: s.
+
+/// Waits out one period, as hapticd's loop would between ticks: a device that samples on its own
+/// clock (a vendor runtime's servo thread) must have a new sample for each tick, not for each call.
+void next_tick() { std::this_thread::sleep_for(std::chrono::duration<double>(kT)); }
 
 runtime::DriverOptions driver_options(const KitOptions& options) {
   runtime::DriverOptions out;
@@ -66,6 +72,7 @@ std::string reads_and_takes_commands(const KitOptions& options, std::ostream& /*
     if (why.empty() && device.write(runtime::DeviceCommand{}, kT) != runtime::DeviceStatus::kOk) {
       why = "write() of a zero command failed at tick " + std::to_string(k);
     }
+    next_tick();
   }
   if (why.empty() && device.stale_readings() > 0) {
     why = std::to_string(device.stale_readings()) +
@@ -90,6 +97,7 @@ std::string axes_are_those_of_w(const KitOptions& options, std::ostream& log) {
     engine::Vec3 F;
     (axis == 0 ? F.x : axis == 1 ? F.y : F.z) = 0.05 * device.description().max_force;
     for (int k = 0; k < 20; ++k) {
+      next_tick();
       if (port.write(runtime::ToolCommand{F}, kT) != runtime::DeviceStatus::kOk ||
           port.read(end) != runtime::DeviceStatus::kOk) {
         device.stop();
