@@ -16,6 +16,7 @@
 #include <string>
 
 #include "driver_kit.hpp"
+#include "driver_test_support.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/device_port.hpp"
 #include "runtime/driver_device.hpp"
@@ -25,22 +26,9 @@ namespace {
 
 constexpr double kT = 1e-3;  // s
 
-DriverOptions example(const std::string& params) {
-  DriverOptions options;
-  options.library = POINT_MASS_DRIVER;
-  options.params_json = params;
-  return options;
-}
+DriverOptions example(const std::string& params) { return test::driver_options(POINT_MASS_DRIVER, params); }
 
-/// The message DriverDevice's constructor throws, or "" when it does not.
-std::string refusal(const DriverOptions& options) {
-  try {
-    DriverDevice device(options);
-  } catch (const std::runtime_error& error) {
-    return error.what();
-  }
-  return {};
-}
+using test::refusal;
 
 std::vector<driver_kit::CheckResult> kit(const std::string& library, const std::string& params = "{}") {
   std::ostringstream log;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "driver_kit.hpp"
+#include "driver_test_support.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/device_port.hpp"
 #include "runtime/driver_device.hpp"
@@ -54,21 +55,9 @@ std::string params(const std::string& extra = {}) {
          (extra.empty() ? "" : ", " + extra) + "}";
 }
 
-DriverOptions fd(const std::string& extra = {}) {
-  DriverOptions options;
-  options.library = FORCEDIMENSION_DRIVER;
-  options.params_json = params(extra);
-  return options;
-}
+DriverOptions fd(const std::string& extra = {}) { return test::driver_options(FORCEDIMENSION_DRIVER, params(extra)); }
 
-std::string refusal(const DriverOptions& options) {
-  try {
-    DriverDevice device(options);
-  } catch (const std::runtime_error& error) {
-    return error.what();
-  }
-  return {};
-}
+using test::refusal;
 
 /// True when each of `wanted` starts a line of `log`, in this order.
 ::testing::AssertionResult in_order(const std::string& log, const std::vector<std::string>& wanted) {

@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "common/driver_params.hpp"
+#include "common/vendor_runtime.hpp"
 
 namespace {
 
@@ -124,38 +125,18 @@ const Model* model_of(int type) {
 
 /// Loads the runtime: `wanted`, or the default names of §1.1. Empty `error` on success.
 void* load_runtime(const std::string& wanted, std::string& error) {
-  std::vector<std::string> names;
-  if (!wanted.empty()) {
-    names.push_back(wanted);
-  } else {
-    names = {"libdrd.so.3", "libdrd.so", "libdhd.so.3", "libdhd.so"};
-    if (const char* sdk = std::getenv("FDSDK")) {
-      names.push_back(std::string(sdk) + "/lib/release/lin-x86_64-gcc/libdrd.so");
-    }
-  }
-  std::string tried;
-  for (const std::string& name : names) {
-    if (void* handle = dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL)) return handle;
-    // Absent: its name is enough. Present but unloadable (a missing libusb-1.0, say): the reason.
-    const char* why = dlerror();
-    const std::string reason = why != nullptr ? why : "";
-    const bool absent = reason.rfind(name + ": cannot open shared object file", 0) == 0;
-    tried += (tried.empty() ? "" : ", ") + (absent || reason.empty() ? name : reason);
-  }
-  error = (wanted.empty() ? "the Force Dimension runtime was not found (tried " + tried +
-                                "): install the Force Dimension SDK (its lib/release/lin-*-gcc files; "
-                                "it needs libusb-1.0), or set params.library to it"
-                          : "params.library: cannot load " + tried);
-  return nullptr;
+  std::vector<std::string> names = {"libdrd.so.3", "libdrd.so", "libdhd.so.3", "libdhd.so"};
+  if (const char* sdk = std::getenv("FDSDK")) names.push_back(std::string(sdk) + "/lib/release/lin-x86_64-gcc/libdrd.so");
+  return haptic::vendor::load_runtime(wanted, names, "Force Dimension runtime",
+                                      "install the Force Dimension SDK (its lib/release/lin-*-gcc files; "
+                                      "it needs libusb-1.0)",
+                                      error);
 }
 
 /// Resolves every function; empty on success, else the first missing one.
 std::string resolve(void* library, DhdApi& api) {
-  std::string missing;
-  auto need = [&](auto& slot, const char* name) {
-    slot = reinterpret_cast<std::remove_reference_t<decltype(slot)>>(dlsym(library, name));
-    if (slot == nullptr && missing.empty()) missing = name;
-  };
+  haptic::vendor::Symbols symbols(library);
+  auto need = [&symbols](auto& slot, const char* name) { symbols.need(slot, name); };
   need(api.GetDeviceCount, "dhdGetDeviceCount");
   need(api.OpenID, "dhdOpenID");
   need(api.OpenSerial, "dhdOpenSerial");
@@ -181,42 +162,11 @@ std::string resolve(void* library, DhdApi& api) {
   need(api.HasActiveGripper, "dhdHasActiveGripper");
   need(api.ErrorGetLast, "dhdErrorGetLast");
   need(api.ErrorGetStr, "dhdErrorGetStr");
-  if (!missing.empty()) return missing;
   // Optional: calibration needs libdrd.
-  api.drdIsInitialized = reinterpret_cast<decltype(api.drdIsInitialized)>(dlsym(library, "drdIsInitialized"));
-  api.drdAutoInit = reinterpret_cast<decltype(api.drdAutoInit)>(dlsym(library, "drdAutoInit"));
-  api.drdStop = reinterpret_cast<decltype(api.drdStop)>(dlsym(library, "drdStop"));
-  return {};
-}
-
-/// A rotation matrix (row-major, R(i,j) = matrix[i][j], §1.6) as a unit quaternion (w, x, y, z).
-void quaternion_of(const double m[3][3], double q[4]) {
-  const double trace = m[0][0] + m[1][1] + m[2][2];
-  if (trace > 0.0) {
-    const double s = 2.0 * std::sqrt(1.0 + trace);
-    q[0] = 0.25 * s;
-    q[1] = (m[2][1] - m[1][2]) / s;
-    q[2] = (m[0][2] - m[2][0]) / s;
-    q[3] = (m[1][0] - m[0][1]) / s;
-  } else if (m[0][0] > m[1][1] && m[0][0] > m[2][2]) {
-    const double s = 2.0 * std::sqrt(1.0 + m[0][0] - m[1][1] - m[2][2]);
-    q[0] = (m[2][1] - m[1][2]) / s;
-    q[1] = 0.25 * s;
-    q[2] = (m[0][1] + m[1][0]) / s;
-    q[3] = (m[0][2] + m[2][0]) / s;
-  } else if (m[1][1] > m[2][2]) {
-    const double s = 2.0 * std::sqrt(1.0 + m[1][1] - m[0][0] - m[2][2]);
-    q[0] = (m[0][2] - m[2][0]) / s;
-    q[1] = (m[0][1] + m[1][0]) / s;
-    q[2] = 0.25 * s;
-    q[3] = (m[1][2] + m[2][1]) / s;
-  } else {
-    const double s = 2.0 * std::sqrt(1.0 + m[2][2] - m[0][0] - m[1][1]);
-    q[0] = (m[1][0] - m[0][1]) / s;
-    q[1] = (m[0][2] + m[2][0]) / s;
-    q[2] = (m[1][2] + m[2][1]) / s;
-    q[3] = 0.25 * s;
-  }
+  symbols.may(api.drdIsInitialized, "drdIsInitialized");
+  symbols.may(api.drdAutoInit, "drdAutoInit");
+  symbols.may(api.drdStop, "drdStop");
+  return symbols.missing();
 }
 
 struct Device {
@@ -411,7 +361,7 @@ int read_sensors(void* driver, haptic_driver_reading* reading) {
   if (device->wrist) {
     double matrix[3][3];
     if (api.GetOrientationFrame(matrix, id) < 0) return device->failed("dhdGetOrientationFrame");
-    quaternion_of(matrix, reading->orientation_W);
+    haptic::vendor::quaternion_of(matrix, reading->orientation_W);  // R(i,j) = matrix[i][j] (§1.6)
     double* w = reading->angular_velocity_W;
     if (api.GetAngularVelocityRad(&w[0], &w[1], &w[2], id) < 0) return device->failed("dhdGetAngularVelocityRad");
   } else {

@@ -49,6 +49,7 @@
 #include <vector>
 
 #include "common/driver_params.hpp"
+#include "common/vendor_runtime.hpp"
 
 namespace {
 
@@ -116,30 +117,16 @@ struct HdApi {
 };
 
 void* load_runtime(const std::string& wanted, std::string& error) {
-  const std::vector<std::string> names =
-      wanted.empty() ? std::vector<std::string>{"libHD.so", "libHD.so.3.4", "libHD.so.3.4.0", "libHD.so.3.0"}
-                     : std::vector<std::string>{wanted};
-  std::string tried;
-  for (const std::string& name : names) {
-    if (void* handle = dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL)) return handle;
-    const char* why = dlerror();
-    const std::string reason = why != nullptr ? why : "";
-    const bool absent = reason.rfind(name + ": cannot open shared object file", 0) == 0;
-    tried += (tried.empty() ? "" : ", ") + (absent || reason.empty() ? name : reason);
-  }
-  error = wanted.empty() ? "the OpenHaptics runtime was not found (tried " + tried +
-                               "): install OpenHaptics (libHD.so in /usr/lib) and the device's driver "
-                               "(Touch: libPhantomIOLib42.so, GTDD_HOME), or set params.library to it"
-                         : "params.library: cannot load " + tried;
-  return nullptr;
+  return haptic::vendor::load_runtime(wanted, {"libHD.so", "libHD.so.3.4", "libHD.so.3.4.0", "libHD.so.3.0"},
+                                      "OpenHaptics runtime",
+                                      "install OpenHaptics (libHD.so in /usr/lib) and the device's driver "
+                                      "(Touch: libPhantomIOLib42.so, GTDD_HOME)",
+                                      error);
 }
 
 std::string resolve(void* library, HdApi& api) {
-  std::string missing;
-  auto need = [&](auto& slot, const char* name) {
-    slot = reinterpret_cast<std::remove_reference_t<decltype(slot)>>(dlsym(library, name));
-    if (slot == nullptr && missing.empty()) missing = name;
-  };
+  haptic::vendor::Symbols symbols(library);
+  auto need = [&symbols](auto& slot, const char* name) { symbols.need(slot, name); };
   need(api.InitDevice, "hdInitDevice");
   need(api.DisableDevice, "hdDisableDevice");
   need(api.MakeCurrentDevice, "hdMakeCurrentDevice");
@@ -160,7 +147,7 @@ std::string resolve(void* library, HdApi& api) {
   need(api.SetSchedulerRate, "hdSetSchedulerRate");
   need(api.ScheduleAsynchronous, "hdScheduleAsynchronous");
   need(api.Unschedule, "hdUnschedule");
-  return missing;
+  return symbols.missing();
 }
 
 /// The runtime's errors since the last call, the most recent first (§2.3: an error stack), as
@@ -203,32 +190,7 @@ void quaternion_in_w(const double t[16], double q[4]) {
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) m[i][j] = r_hd[kFrom[i]][kFrom[j]];
   }
-  const double trace = m[0][0] + m[1][1] + m[2][2];
-  if (trace > 0.0) {
-    const double s = 2.0 * std::sqrt(1.0 + trace);
-    q[0] = 0.25 * s;
-    q[1] = (m[2][1] - m[1][2]) / s;
-    q[2] = (m[0][2] - m[2][0]) / s;
-    q[3] = (m[1][0] - m[0][1]) / s;
-  } else if (m[0][0] > m[1][1] && m[0][0] > m[2][2]) {
-    const double s = 2.0 * std::sqrt(1.0 + m[0][0] - m[1][1] - m[2][2]);
-    q[0] = (m[2][1] - m[1][2]) / s;
-    q[1] = 0.25 * s;
-    q[2] = (m[0][1] + m[1][0]) / s;
-    q[3] = (m[0][2] + m[2][0]) / s;
-  } else if (m[1][1] > m[2][2]) {
-    const double s = 2.0 * std::sqrt(1.0 + m[1][1] - m[0][0] - m[2][2]);
-    q[0] = (m[0][2] - m[2][0]) / s;
-    q[1] = (m[0][1] + m[1][0]) / s;
-    q[2] = 0.25 * s;
-    q[3] = (m[1][2] + m[2][1]) / s;
-  } else {
-    const double s = 2.0 * std::sqrt(1.0 + m[2][2] - m[0][0] - m[1][1]);
-    q[0] = (m[1][0] - m[0][1]) / s;
-    q[1] = (m[0][2] + m[2][0]) / s;
-    q[2] = (m[1][2] + m[2][1]) / s;
-    q[3] = 0.25 * s;
-  }
+  haptic::vendor::quaternion_of(m, q);
 }
 
 /// One servo tick's sample, published by the scheduler's callback and read by read(): a seqlock
