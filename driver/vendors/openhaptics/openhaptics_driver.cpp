@@ -165,6 +165,12 @@ std::string drain_errors(const HdApi& api) {
   return text;
 }
 
+/// Pops what remains of the error stack without allocating (on the servo thread); bounded.
+void clear_errors(const HdApi& api) {
+  for (int guard = 0; guard < 16 && api.GetError().errorCode != kSuccess; ++guard) {
+  }
+}
+
 /// HD's device frame (x right, y up, z towards the user) to W (x towards the operator, y right,
 /// z up): (x, y, z)_W = (z, x, y)_hd (§2.5).
 void to_w(const double hd[3], double w[3], double scale) {
@@ -259,21 +265,34 @@ HDCallbackCode servo_tick(void* user_data) {
   auto* device = static_cast<Device*>(user_data);
   const HdApi& api = device->api;
   api.BeginFrame(device->handle);
-  double position[3], velocity[3], transform[16], angular[3];
+  double position[3] = {0, 0, 0}, velocity[3] = {0, 0, 0}, angular[3] = {0, 0, 0};
+  double transform[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   int buttons = 0;
   api.GetDoublev(kCurrentPosition, position);
   api.GetDoublev(kCurrentVelocity, velocity);
   api.GetDoublev(kCurrentTransform, transform);
   api.GetDoublev(kCurrentAngularVelocity, angular);
   api.GetIntegerv(kCurrentButtons, &buttons);
-  device->sample_version.fetch_add(1, std::memory_order_acq_rel);  // odd: writing
-  to_w(position, device->sample.position_W, 1e-3);
-  to_w(velocity, device->sample.velocity_W, 1e-3);
-  quaternion_in_w(transform, device->sample.orientation_W);
-  to_w(angular, device->sample.angular_velocity_W, 1.0);
-  device->sample.buttons = static_cast<std::uint32_t>(buttons) & ((1u << kButtonCount) - 1);
-  device->sample.tick = ++device->ticks;
-  device->sample_version.fetch_add(1, std::memory_order_release);  // even: done
+  // A frame the runtime could not read (an unplugged device: HD_COMM_ERROR) publishes nothing: read()
+  // then fails until a frame reads again.
+  const HDErrorInfo read_error = api.GetError();
+  if (read_error.errorCode != kSuccess) {
+    device->failed_code.store(read_error.errorCode, std::memory_order_relaxed);
+    device->failed.store(true, std::memory_order_release);
+    clear_errors(api);
+  } else {
+    device->sample_version.fetch_add(1, std::memory_order_acq_rel);  // odd: writing
+    to_w(position, device->sample.position_W, 1e-3);
+    to_w(velocity, device->sample.velocity_W, 1e-3);
+    quaternion_in_w(transform, device->sample.orientation_W);
+    to_w(angular, device->sample.angular_velocity_W, 1.0);
+    device->sample.buttons = static_cast<std::uint32_t>(buttons) & ((1u << kButtonCount) - 1);
+    device->sample.tick = ++device->ticks;
+    device->sample_version.fetch_add(1, std::memory_order_release);  // even: done
+    device->failed.store(false, std::memory_order_release);  // the device answers (again)
+  }
+  // Device-clocked: hapticd's tick, between the state and the force (a failed frame too, so the
+  // loop sees the fault).
   bool stop = false;
   if (haptic_driver_tick_fn tick = device->tick_fn.load(std::memory_order_acquire)) {
     timespec now{};
@@ -281,19 +300,18 @@ HDCallbackCode servo_tick(void* user_data) {
     stop = tick(device->tick_context, static_cast<int64_t>(now.tv_sec) * 1000000000LL + now.tv_nsec) != 0;
   }
   double force_w[3] = {0, 0, 0};
-  if (!device->safe.load(std::memory_order_acquire)) {
+  if (!device->safe.load(std::memory_order_acquire) && !device->failed.load(std::memory_order_acquire)) {
     for (int i = 0; i < 3; ++i) force_w[i] = load_double(device->force_bits[i]);
   }
   double force_hd[3];
   to_hd(force_w, force_hd);
   api.SetDoublev(kCurrentForce, force_hd);
   api.EndFrame(device->handle);
-  const HDErrorInfo error = api.GetError();
-  if (error.errorCode != kSuccess) {
-    device->failed_code.store(error.errorCode, std::memory_order_relaxed);
+  const HDErrorInfo write_error = api.GetError();
+  if (write_error.errorCode != kSuccess) {
+    device->failed_code.store(write_error.errorCode, std::memory_order_relaxed);
     device->failed.store(true, std::memory_order_release);
-  } else if (device->failed.load(std::memory_order_relaxed)) {
-    device->failed.store(false, std::memory_order_release);  // the device answers again
+    clear_errors(api);
   }
   if (stop) {
     std::lock_guard lock(device->servo_mutex);
