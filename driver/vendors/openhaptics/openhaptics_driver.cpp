@@ -289,7 +289,11 @@ HDCallbackCode servo_tick(void* user_data) {
     device->sample.buttons = static_cast<std::uint32_t>(buttons) & ((1u << kButtonCount) - 1);
     device->sample.tick = ++device->ticks;
     device->sample_version.fetch_add(1, std::memory_order_release);  // even: done
-    device->failed.store(false, std::memory_order_release);  // the device answers (again)
+    if (device->failed.load(std::memory_order_relaxed)) {
+      // The device answers again (plugged back in): its force output is off until enabled.
+      api.Enable(kForceOutput);
+      device->failed.store(false, std::memory_order_release);
+    }
   }
   // Device-clocked: hapticd's tick, between the state and the force (a failed frame too, so the
   // loop sees the fault).
@@ -478,6 +482,21 @@ void stop(void* driver) {
 int read_sensors(void* driver, haptic_driver_reading* reading) {
   auto* device = static_cast<Device*>(driver);
   if (device->failed.load(std::memory_order_acquire)) return HAPTIC_DRIVER_FAILED;
+  // Before the servo loop's first tick there is no sample: wait for it (two periods at most, only
+  // at the start), rather than report the device where it is not.
+  if (device->sample_version.load(std::memory_order_acquire) == 0) {
+    timespec start{};
+    clock_gettime(CLOCK_MONOTONIC, &start);
+    const double limit_s = 2.0 / device->rate_hz;
+    for (;;) {
+      if (device->sample_version.load(std::memory_order_acquire) != 0) break;
+      timespec now{};
+      clock_gettime(CLOCK_MONOTONIC, &now);
+      if ((now.tv_sec - start.tv_sec) + 1e-9 * (now.tv_nsec - start.tv_nsec) > limit_s) {
+        return HAPTIC_DRIVER_FAILED;
+      }
+    }
+  }
   Sample copy;
   for (;;) {  // the seqlock: retry while the servo thread writes
     const std::uint64_t before = device->sample_version.load(std::memory_order_acquire);

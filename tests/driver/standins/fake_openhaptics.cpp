@@ -958,6 +958,11 @@ FAKE_HD_EXPORT void hdDisableDevice(HHD hHD) {
   d->in_frame = false;
   d->hang_pending = false;
   cut_forces(*d);
+  // The plant moves only while the scheduler ticks, so no time passes between a release and the
+  // next hdInitDevice; on the bench a stylus left alone is at rest long before. So a released
+  // device is at rest where it was.
+  d->v = Vec3{};
+  d->gd = Vec3{};
   if (s.current == hHD) s.current = HD_INVALID_HANDLE;
 }
 
