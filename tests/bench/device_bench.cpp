@@ -188,6 +188,26 @@ void BM_Standin_ForceDimensionCallsAlone(benchmark::State& state) {
 }
 BENCHMARK(BM_Standin_ForceDimensionCallsAlone);
 
+// The OpenHaptics driver against the stand-in of the HD runtime, server-clocked: hapticd's read
+// and write only exchange the newest sample and force with the runtime's servo callback (running
+// on the stand-in's own 1 kHz thread meanwhile), calls on the loop (0) or through the driver
+// thread (1).
+void BM_Device_DriverOpenHaptics(benchmark::State& state) {
+  setenv("FAKE_HD_DEVICES", "rig=Touch", 1);
+  unsetenv("FAKE_HD_CLOCK");
+  runtime::DriverOptions options;
+  options.library = OPENHAPTICS_DRIVER;
+  options.params_json = std::string(R"({"device": "rig", "library": ")") + FAKE_OPENHAPTICS_LIBRARY + "\"}";
+  options.call_timeout_s = state.range(0) == 1 ? 0.02 : 0.0;
+  options.stale_after = 0;  // the benchmark reads far faster than the servo loop samples
+  runtime::DriverDevice device(options);
+  runtime::CartesianModel model;
+  device.start();
+  run_device(state, device, model, {0, 0, 1e-4});
+  device.stop();
+}
+BENCHMARK(BM_Device_DriverOpenHaptics)->Arg(0)->Arg(1)->ArgName("driver_thread");
+
 // ---- Controllers on their own: one tick's computation each.
 
 void BM_Controller_TorsionSpring000(benchmark::State& state) {
