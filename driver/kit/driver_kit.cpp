@@ -1,6 +1,7 @@
 #include "driver_kit.hpp"
 
 #include <chrono>
+#include <cstdint>
 #include <cmath>
 #include <exception>
 #include <sstream>
@@ -19,10 +20,16 @@ constexpr double kT = 1e-3;  // the loop's period the kit calls at. Unit: s.
 /// clock (a vendor runtime's servo thread) must have a new sample for each tick, not for each call.
 void next_tick() { std::this_thread::sleep_for(std::chrono::duration<double>(kT)); }
 
+/// Ticks without a new sample before the kit calls a reading stale: a device that samples on its
+/// own clock at the loop's rate may repeat one now and then on a busy machine (hapticd's own limit
+/// is the configuration's stale_after); a device that stopped sampling never moves again.
+constexpr std::uint32_t kStaleAfterTicks = 50;
+
 runtime::DriverOptions driver_options(const KitOptions& options) {
   runtime::DriverOptions out;
   out.library = options.library;
   out.params_json = options.params_json;
+  out.stale_after = kStaleAfterTicks;
   return out;
 }
 
@@ -58,7 +65,7 @@ std::string reads_and_takes_commands(const KitOptions& options, std::ostream& /*
     if (device.read(reading) != runtime::DeviceStatus::kOk) {
       why = "read() failed at tick " + std::to_string(k);
       if (device.stale_readings() > 0) {
-        why += ": its sample sequence stood still for " + std::to_string(device.stale_readings()) +
+        why += ": its sample sequence stood still for " + std::to_string(kStaleAfterTicks) +
                " readings (stale); it must move with every new sample";
       }
       break;
