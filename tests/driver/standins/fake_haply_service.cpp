@@ -670,7 +670,12 @@ struct Service::Impl {
   void on_close(Hdl hdl) {
     auto it = clients.find(hdl);
     if (it != clients.end()) {
-      if (!it->second.control) log_line("disconnect");
+      if (!it->second.control) {
+        log_line("disconnect");
+        // The plant steps only on messages, so no time passes between one client leaving and the
+        // next arriving; on the bench the idle arm is at rest long before. So it is at rest here.
+        for (Device& d : devices) d.v = Vec3{};
+      }
       clients.erase(it);
       --open_connections;
     }
