@@ -17,6 +17,7 @@
 #include "engine/control/disturbance_observer.hpp"
 #include "engine/control/joint_walls.hpp"
 #include "engine/control/state_estimator.hpp"
+#include "fake_haply_service.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/dc_motor_model.hpp"
 #include "runtime/device_port.hpp"
@@ -207,6 +208,32 @@ void BM_Device_DriverOpenHaptics(benchmark::State& state) {
   device.stop();
 }
 BENCHMARK(BM_Device_DriverOpenHaptics)->Arg(0)->Arg(1)->ArgName("driver_thread");
+
+// The Haply driver against the stand-in of the Inverse Service (in-process, loopback WebSocket):
+// each tick sends the force as JSON and takes the service's answer, so the figure is the round
+// trip through the service and back, on the driver thread (the driver's JSON allocates: it is
+// not meant to run on the loop).
+void BM_Device_DriverHaply(benchmark::State& state) {
+  fake_haply::Options service_options;
+  service_options.port = 0;
+  fake_haply::Service service(service_options);
+  std::string error;
+  if (!service.start(&error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  runtime::DriverOptions options;
+  options.library = HAPLY_DRIVER;
+  options.params_json = R"({"url": "ws://127.0.0.1:)" + std::to_string(service.port()) + "\"}";
+  options.call_timeout_s = 0.02;
+  runtime::DriverDevice device(options);
+  runtime::CartesianModel model;
+  device.start();
+  run_device(state, device, model, {0, 0, 1e-4});
+  device.stop();
+  service.stop();
+}
+BENCHMARK(BM_Device_DriverHaply);
 
 // ---- Controllers on their own: one tick's computation each.
 
