@@ -23,31 +23,16 @@ namespace {
 
 constexpr double kT = 1e-3;  // s
 
-/// The stand-in's control API (tests/driver/standins/README.md), on the instance the driver loads.
-class Standin {
+/// The stand-in with `devices` attached (FAKE_DHD_DEVICES, e.g. "omega.7,falcon"), reset.
+class Standin : public test::StandinLibrary {
  public:
-  /// `devices`: FAKE_DHD_DEVICES, the models attached (e.g. "omega.7,falcon").
-  explicit Standin(const std::string& devices) {
-    setenv("FAKE_DHD_DEVICES", devices.c_str(), 1);
-    handle_ = dlopen(FAKE_FORCEDIMENSION_LIBRARY, RTLD_NOW | RTLD_LOCAL);
-    if (handle_ == nullptr) throw std::runtime_error(dlerror());
-    control_ = reinterpret_cast<int (*)(const char*)>(dlsym(handle_, "fake_dhd_control"));
-    calls_ = reinterpret_cast<const char* (*)()>(dlsym(handle_, "fake_dhd_calls"));
-    clear_ = reinterpret_cast<void (*)()>(dlsym(handle_, "fake_dhd_clear_calls"));
-    if (control_ == nullptr || calls_ == nullptr || clear_ == nullptr) throw std::runtime_error("no control API");
-    EXPECT_EQ(control("reset"), 0);
-    clear_();
-  }
-  ~Standin() { dlclose(handle_); }
-  int control(const std::string& command) const { return control_(command.c_str()); }
-  std::string calls() const { return calls_(); }
-  void clear() const { clear_(); }
+  explicit Standin(const std::string& devices) : test::StandinLibrary(configure(devices), "fake_dhd") {}
 
  private:
-  void* handle_ = nullptr;
-  int (*control_)(const char*) = nullptr;
-  const char* (*calls_)() = nullptr;
-  void (*clear_)() = nullptr;
+  static const char* configure(const std::string& devices) {
+    setenv("FAKE_DHD_DEVICES", devices.c_str(), 1);  // read by the stand-in's reset
+    return FAKE_FORCEDIMENSION_LIBRARY;
+  }
 };
 
 std::string params(const std::string& extra = {}) {

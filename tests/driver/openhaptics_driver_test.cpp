@@ -27,36 +27,23 @@ namespace {
 
 constexpr double kT = 1e-3;  // s
 
-/// The stand-in's control API (tests/driver/standins/README.md), on the instance the driver loads.
-class Standin {
+/// The stand-in with `devices` attached (FAKE_HD_DEVICES, "name=model,..."), on its manual clock
+/// (FAKE_HD_CLOCK=manual) or its free-running scheduler, reset.
+class Standin : public test::StandinLibrary {
  public:
-  /// `devices`: FAKE_HD_DEVICES ("name=model,..."); `manual`: FAKE_HD_CLOCK=manual.
-  Standin(const std::string& devices, bool manual) {
+  Standin(const std::string& devices, bool manual)
+      : test::StandinLibrary(configure(devices, manual), "fake_hd") {}
+
+ private:
+  static const char* configure(const std::string& devices, bool manual) {
     setenv("FAKE_HD_DEVICES", devices.c_str(), 1);
     if (manual) {
       setenv("FAKE_HD_CLOCK", "manual", 1);
     } else {
       unsetenv("FAKE_HD_CLOCK");
     }
-    handle_ = dlopen(FAKE_OPENHAPTICS_LIBRARY, RTLD_NOW | RTLD_LOCAL);
-    if (handle_ == nullptr) throw std::runtime_error(dlerror());
-    control_ = reinterpret_cast<int (*)(const char*)>(dlsym(handle_, "fake_hd_control"));
-    calls_ = reinterpret_cast<const char* (*)()>(dlsym(handle_, "fake_hd_calls"));
-    clear_ = reinterpret_cast<void (*)()>(dlsym(handle_, "fake_hd_clear_calls"));
-    if (control_ == nullptr || calls_ == nullptr || clear_ == nullptr) throw std::runtime_error("no control API");
-    EXPECT_EQ(control("reset"), 0);
-    clear_();
+    return FAKE_OPENHAPTICS_LIBRARY;
   }
-  ~Standin() { dlclose(handle_); }
-  int control(const std::string& command) const { return control_(command.c_str()); }
-  std::string calls() const { return calls_(); }
-  void clear() const { clear_(); }
-
- private:
-  void* handle_ = nullptr;
-  int (*control_)(const char*) = nullptr;
-  const char* (*calls_)() = nullptr;
-  void (*clear_)() = nullptr;
 };
 
 std::string params(const std::string& extra = {}) {
