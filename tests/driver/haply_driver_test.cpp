@@ -43,8 +43,13 @@ std::string params(const Service& service, const std::string& extra = {}) {
   return R"({"url": ")" + service.url() + "\"" + (extra.empty() ? "" : ", " + extra) + "}";
 }
 
+/// The driver waiting for each answer of the service as long as it takes (a loaded machine, the
+/// sanitizers), so every read takes the answer to the tick before: exact, whatever the timing.
 DriverOptions haply(const Service& service, const std::string& extra = {}) {
-  return test::driver_options(HAPLY_DRIVER, params(service, extra));
+  DriverOptions options = test::driver_options(
+      HAPLY_DRIVER, params(service, std::string(R"("reply_timeout_ms": 2000)") + (extra.empty() ? "" : ", " + extra)));
+  options.call_timeout_s = 5.0;
+  return options;
 }
 
 using test::refusal;
