@@ -234,9 +234,9 @@ int main(int argc, char** argv) {
     }
     client.set_operator(haptic::OperatorInput::release());
     if (lockstep) {
-      std::printf("touch_wall: done; server at tick %llu, %llu datagrams received\n",
-                  static_cast<unsigned long long>(last_tick),
-                  static_cast<unsigned long long>(client.receive_counters().accepted));
+      // Only what lockstep makes exact: how many State datagrams have arrived by now depends on
+      // the network's timing, so it would differ between runs that are otherwise the same.
+      std::printf("touch_wall: done; server at tick %llu\n", static_cast<unsigned long long>(last_tick));
     } else {
       try {
         const haptic::Stats stats = client.stats();
