@@ -660,6 +660,7 @@ void Server::housekeeping_loop() {
         faults != device_faults_reported) {
       // The device's own words where it has them (a driver's last_error: "unplugged", ...).
       std::string why;
+      std::lock_guard devices_lock(devices_mutex_);  // a lockstep reset replaces the devices
       for (std::size_t port = 0; port < devices_.size(); ++port) {
         if (std::string reason = devices_[port].device->fault_reason(); !reason.empty()) {
           why += (why.empty() ? "" : "; ") + std::string("device ") + std::to_string(port) + ": " + reason;

@@ -356,8 +356,9 @@ def enter_sandbox(scratch: Path) -> None:
 
 class Group:
     def __init__(self, source: Path, build: Path, programs: Path, snippets: list[Snippet],
-                 preload: str | None = None):
+                 every: list[Snippet], preload: str | None = None):
         self.source, self.build, self.programs, self.snippets = source, build, programs, snippets
+        self.every = every  # all the documents' blocks: where an expect= names its output block
         self.scratch = Path(tempfile.mkdtemp(prefix="doc-snippet-"))
         self.work = self.scratch / "work"
         self.work.mkdir()
@@ -529,7 +530,7 @@ class Group:
             output = self.execute([str(program)], timeout, f"{s.where} (built as {program.name})")
         expect = s.attrs.get("expect")
         if expect and expect != "comments":
-            target = next(t for t in load(self.source)[0] if t.doc == s.doc and t.name == expect)
+            target = next(t for t in self.every if t.doc == s.doc and t.name == expect)
             wanted = target.code
             if "expect-lines" in s.attrs:
                 first, _, last = s.attrs["expect-lines"].partition("-")
@@ -628,7 +629,7 @@ def main(argv: list[str]) -> int:
                                     str(Path(__file__).resolve()), "_inside", str(source), wanted]
                                    + argv[4:])
         group = Group(source, Path(options["--build"]).resolve(), Path(options["--programs"]).resolve(),
-                      members, options.get("--python-preload"))
+                      members, snippets, options.get("--python-preload"))
         enter_sandbox(group.scratch)
         try:
             return group.run()

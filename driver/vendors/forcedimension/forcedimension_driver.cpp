@@ -39,7 +39,6 @@
 #include <exception>
 #include <memory>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 #include "common/driver_params.hpp"
@@ -206,15 +205,20 @@ std::string vendor_error(const DhdApi& api) {
   return (text != nullptr ? text : "error") + std::string(" (DHD error ") + std::to_string(code) + ")";
 }
 
+/// The params this driver takes (header comment), refusing any other.
+haptic::vendor::DriverParams read_params(const char* params_json) {
+  return haptic::vendor::DriverParams(params_json, {"library", "index", "serial", "calibrate",
+                                                    "gravity_compensation", "max_force", "workspace_radius",
+                                                    "apparent_mass", "apparent_damping"});
+}
+
 void* create(const char* params_json, char* error) {
   auto refuse = [error](const std::string& why) -> void* {
     std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", why.c_str());
     return nullptr;
   };
   try {
-    const haptic::vendor::DriverParams params(
-        params_json, {"library", "index", "serial", "calibrate", "gravity_compensation", "max_force",
-                      "workspace_radius", "apparent_mass", "apparent_damping"});
+    const haptic::vendor::DriverParams params = read_params(params_json);
     auto device = std::make_unique<Device>();
     std::string why;
     device->library = load_runtime(params.text("library").value_or(""), why);
@@ -417,10 +421,7 @@ int list_devices(const char* params_json, char* list, size_t size) {
   std::string out;
   int found = -1;
   try {
-    const haptic::vendor::DriverParams params(params_json, {"library", "index", "serial", "calibrate",
-                                                            "gravity_compensation", "max_force",
-                                                            "workspace_radius", "apparent_mass",
-                                                            "apparent_damping"});
+    const haptic::vendor::DriverParams params = read_params(params_json);
     std::string why;
     void* library = load_runtime(params.text("library").value_or(""), why);
     if (library == nullptr) {

@@ -34,7 +34,6 @@
 #include <websocketpp/config/asio_no_tls_client.hpp>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -269,15 +268,20 @@ std::string probe(Device& device) {
   return command_message(device, {{"probe_position", Json::object()}});
 }
 
+/// The params this driver takes (header comment), refusing any other.
+haptic::vendor::DriverParams read_params(const char* params_json) {
+  return haptic::vendor::DriverParams(params_json, {"url", "device_id", "grip_id", "force_key", "max_force",
+                                                    "workspace_radius", "reply_timeout_ms", "apparent_mass",
+                                                    "apparent_damping"});
+}
+
 void* create(const char* params_json, char* error) {
   auto refuse = [error](const std::string& why) -> void* {
     std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", why.c_str());
     return nullptr;
   };
   try {
-    const haptic::vendor::DriverParams params(
-        params_json, {"url", "device_id", "grip_id", "force_key", "max_force", "workspace_radius",
-                      "reply_timeout_ms", "apparent_mass", "apparent_damping"});
+    const haptic::vendor::DriverParams params = read_params(params_json);
     auto device = std::make_unique<Device>();
     device->url = params.text("url").value_or(kDefaultUrl);
     device->force_key = params.text("force_key").value_or("vector");
@@ -428,9 +432,7 @@ int list_devices(const char* params_json, char* list, size_t size) {
   std::string out;
   int found = -1;
   try {
-    const haptic::vendor::DriverParams params(
-        params_json, {"url", "device_id", "grip_id", "force_key", "max_force", "workspace_radius",
-                      "reply_timeout_ms", "apparent_mass", "apparent_damping"});
+    const haptic::vendor::DriverParams params = read_params(params_json);
     const std::string url = params.text("url").value_or(kDefaultUrl);
     Connection connection;
     if (std::string why = connection.open(url, std::chrono::milliseconds(1000)); !why.empty()) {

@@ -45,7 +45,6 @@
 #include <memory>
 #include <mutex>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 #include "common/driver_params.hpp"
@@ -326,14 +325,19 @@ HDCallbackCode servo_tick(void* user_data) {
   return kCallbackContinue;
 }
 
+/// The params this driver takes (header comment), refusing any other.
+haptic::vendor::DriverParams read_params(const char* params_json) {
+  return haptic::vendor::DriverParams(
+      params_json, {"library", "device", "rate", "calibrate", "apparent_mass", "apparent_damping"});
+}
+
 void* create(const char* params_json, char* error) {
   auto refuse = [error](const std::string& why) -> void* {
     std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", why.c_str());
     return nullptr;
   };
   try {
-    const haptic::vendor::DriverParams params(
-        params_json, {"library", "device", "rate", "calibrate", "apparent_mass", "apparent_damping"});
+    const haptic::vendor::DriverParams params = read_params(params_json);
     auto device = std::make_unique<Device>();
     std::string why;
     device->library = load_runtime(params.text("library").value_or(""), why);
@@ -549,8 +553,7 @@ int list_devices(const char* params_json, char* list, size_t size) {
   std::string out;
   int found = -1;
   try {
-    const haptic::vendor::DriverParams params(
-        params_json, {"library", "device", "rate", "calibrate", "apparent_mass", "apparent_damping"});
+    const haptic::vendor::DriverParams params = read_params(params_json);
     std::string why;
     void* library = load_runtime(params.text("library").value_or(""), why);
     if (library == nullptr) {
