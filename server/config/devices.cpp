@@ -9,6 +9,7 @@
 #include <google/protobuf/util/json_util.h>
 #include <spdlog/spdlog.h>
 
+#include "engine/core/rotation.hpp"
 #include "schema/scene_specs.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/dc_motor_model.hpp"
@@ -251,6 +252,14 @@ void fill_point_mass_defaults(v1::SimulatedPointMassConfig& mass) {
   if (!mass.has_workspace_min()) default_vec(mass.mutable_workspace_min(), -0.1, -0.1, -0.1);
   if (!mass.has_workspace_max()) default_vec(mass.mutable_workspace_max(), 0.1, 0.1, 0.1);
   if (mass.max_force() == 0.0) mass.set_max_force(20.0);
+  if (mass.has_rotation()) {
+    v1::SimulatedRotationConfig& rotation = *mass.mutable_rotation();
+    // A small handle: about a 5 cm, 100 g grip's inertia, lightly damped, with the torque of a
+    // desktop 6-DOF device's wrist.
+    if (!rotation.has_inertia()) rotation.set_inertia(1e-4);
+    if (!rotation.has_damping()) rotation.set_damping(5e-4);
+    if (!rotation.has_max_torque()) rotation.set_max_torque(0.2);
+  }
 }
 
 std::string validate_point_mass(const v1::SimulatedPointMassConfig& device) {
@@ -271,6 +280,20 @@ std::string validate_point_mass(const v1::SimulatedPointMassConfig& device) {
   if (p0.x() < lo.x() || p0.x() > hi.x() || p0.y() < lo.y() || p0.y() > hi.y() ||
       p0.z() < lo.z() || p0.z() > hi.z()) {
     return "simulated_point_mass.initial_position: must lie inside the workspace";
+  }
+  if (device.has_rotation()) {
+    const v1::SimulatedRotationConfig& rotation = device.rotation();
+    const std::string path = "simulated_point_mass.rotation";
+    if (auto e = check_positive(rotation.inertia(), 1e3, path + ".inertia"); !e.empty()) return e;
+    if (!std::isfinite(rotation.damping()) || rotation.damping() < 0.0) {
+      return path + ".damping: must be finite and >= 0";
+    }
+    if (auto e = check_positive(rotation.max_torque(), 1e3, path + ".max_torque"); !e.empty()) return e;
+    if (rotation.has_initial_orientation()) {
+      const v1::Quaternion& q = rotation.initial_orientation();
+      const engine::Quat R{q.w(), q.x(), q.y(), q.z()};
+      if (!engine::is_unit(R, 1e-3)) return path + ".initial_orientation: must be a unit quaternion";
+    }
   }
   return {};
 }
@@ -418,9 +441,22 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
   params.substeps = mass.substeps();
   params.workspace_min = schema::to_engine(mass.workspace_min());
   params.workspace_max = schema::to_engine(mass.workspace_max());
+  std::optional<runtime::SimulatedRotation> rotation;
+  if (mass.has_rotation()) {
+    const v1::SimulatedRotationConfig& config_rotation = mass.rotation();
+    rotation.emplace();
+    rotation->params.inertia = config_rotation.inertia();
+    rotation->params.damping = config_rotation.damping();
+    rotation->params.substeps = params.substeps;
+    rotation->max_torque = config_rotation.max_torque();
+    if (config_rotation.has_initial_orientation()) {
+      const v1::Quaternion& q = config_rotation.initial_orientation();
+      rotation->initial.R_WT = engine::normalized(engine::Quat{q.w(), q.x(), q.y(), q.z()});
+    }
+  }
   return simulated(std::make_unique<runtime::SimulatedPointMassDevice>(
                        params, engine::PointMassState{schema::to_engine(mass.initial_position()), {}},
-                       mass.max_force()),
+                       mass.max_force(), rotation),
                    std::make_unique<runtime::CartesianModel>());
 }
 

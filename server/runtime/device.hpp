@@ -38,6 +38,9 @@ struct DeviceReading {
   /// The tool's orientation in W as the device's gimbal measures it (capabilities.orientation),
   /// a unit quaternion; identity without one.
   engine::Quat R_WT;
+  /// The tool's angular velocity in W where the device measures orientation (capabilities.
+  /// orientation), else 0. Unit: rad/s.
+  engine::Vec3 w_WT;
   /// Pressed buttons, bit i for button i (DeviceDescription::buttons of them).
   std::uint32_t buttons = 0;
   /// The device holds its own safe state (a hardware watchdog or an emergency stop: motors off,
@@ -51,6 +54,9 @@ struct DeviceCommand {
   JointVector tau{};    // Actuator effort per joint: N·m or N.
   /// Brake effort limit per joint, >= 0 (devices with brakes; capabilities.brakes): N·m or N.
   JointVector brake{};
+  /// Torque on the handle about the tool point, in W (devices that take torques; capabilities.
+  /// torque), else 0. Unit: N·m.
+  engine::Vec3 tau_W;
 };
 
 /// The tool point's state the model computes from a reading. Frames: W (device world), T (tool).
@@ -58,14 +64,16 @@ struct ToolReading {
   engine::Vec3 p_WT;  // Unit: m.
   engine::Vec3 v_WT;  // Unit: m/s.
   engine::Quat R_WT;  // The tool's orientation (capabilities.orientation), else identity.
+  engine::Vec3 w_WT;  // Its angular velocity in W, else 0. Unit: rad/s.
   /// A device or model safe state (see DeviceReading::safe_state and DeviceModel).
   bool safe_state = false;
   std::uint32_t buttons = 0;
 };
 
-/// The force the scene asks of the tool point.
+/// The force (and, for a device that takes torques, the torque) the scene asks of the tool.
 struct ToolCommand {
-  engine::Vec3 F_T_W;  // Force on the tool, in W. Unit: N.
+  engine::Vec3 F_T_W;    // Force on the tool, in W. Unit: N.
+  engine::Vec3 tau_T_W;  // Torque on the tool, in W (capabilities.torque). Unit: N·m.
 };
 
 /// What a device has, so the tick and the device compute only those terms (a balanced device gets
@@ -81,7 +89,8 @@ struct DeviceCapabilities {
   bool state_estimator = false; // Velocities come from an observer rather than differences.
   bool disturbance_observer = false;  // Axes are shaped to a nominal model by a DOB.
   bool measured_rates = false;  // Joint rates come from tachometers (DeviceReading::q_dot).
-  bool orientation = false;     // The tool's orientation is measured (DeviceReading::R_WT).
+  bool orientation = false;     // The tool's orientation is measured (DeviceReading::R_WT, w_WT).
+  bool torque = false;          // The handle takes torques (DeviceCommand::tau_W); needs orientation.
 };
 
 struct DeviceDescription {
@@ -100,6 +109,11 @@ struct DeviceDescription {
   /// 0 when the device gives no such model. Units: kg, N·s/m.
   double apparent_mass = 0.0;
   double apparent_damping = 0.0;
+  /// The same for the handle's rotation (an inertia-damper per axis; capabilities.torque), for
+  /// the stability report of an orientation spring; 0 when unknown. Units: kg·m², N·m·s/rad.
+  double apparent_inertia = 0.0;
+  double apparent_rotational_damping = 0.0;
+  double max_torque = 0.0;     // capabilities.torque. Unit: N·m.
 };
 
 /// A device at its joints: a plant and its sensors and actuators, simulated or real. Everything

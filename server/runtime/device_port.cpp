@@ -26,7 +26,8 @@ DeviceStatus DevicePort::read_device() {
   const std::size_t n = joints_count_;
   const engine::Quat& R = reading_.R_WT;
   return finite(reading_.q, n) && finite(reading_.q_dot, n) && finite(reading_.tau_sensor, n) &&
-                 engine::is_finite(reading_.F_sensor_W) && std::isfinite(R.w) &&
+                 engine::is_finite(reading_.F_sensor_W) && engine::is_finite(reading_.w_WT) &&
+                 std::isfinite(R.w) &&
                  std::isfinite(R.x) && std::isfinite(R.y) && std::isfinite(R.z)
              ? DeviceStatus::kOk
              : DeviceStatus::kError;
@@ -41,6 +42,7 @@ void DevicePort::estimate() {
 bool DevicePort::kinematics() {
   // What the sensors give directly; a model that computes the orientation from joints overwrites it.
   tool_.R_WT = reading_.R_WT;
+  tool_.w_WT = reading_.w_WT;
   model_->kinematics(joints_, tool_);
   tool_.buttons = reading_.buttons;
   tool_.safe_state = reading_.safe_state || model_->holds_safe_state();
@@ -51,6 +53,7 @@ void DevicePort::enter_safe_state() {
   model_->enter_safe_state();
   device_->enter_safe_state();
   model_->safe_command(command_);
+  command_.tau_W = {};
 }
 
 DeviceStatus DevicePort::write_device(double dt) {

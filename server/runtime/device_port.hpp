@@ -31,7 +31,9 @@ class DevicePort {
   bool kinematics();
   /// The joint command for a tool force (the model's Jᵀ stage); kError when the model refuses it
   /// (the safe command is then in command()).
+  /// The torque passes through to the handle as it is (no model maps it to joints yet).
   DeviceStatus joint_command(const ToolCommand& command, double dt) {
+    command_.tau_W = command.tau_T_W;
     return model_->joint_command(command, reading_, joints_, dt, command_);
   }
   /// read_device, then (when it succeeded) estimate and kinematics: the tool point's state in

@@ -285,6 +285,18 @@ DriverDevice::DriverDevice(const DriverOptions& options) : options_(options) {
   c.brakes = (info_.capabilities & HAPTIC_DRIVER_BRAKES) != 0;
   c.gravity = (info_.capabilities & HAPTIC_DRIVER_GRAVITY) != 0;
   c.orientation = (info_.capabilities & HAPTIC_DRIVER_ORIENTATION) != 0;
+  // Torque and the angular velocity exist from ABI 2 on; a version 1 driver's structs end before.
+  c.torque = api_->abi_version >= 2 && c.orientation && (info_.capabilities & HAPTIC_DRIVER_TORQUE_OUTPUT) != 0;
+  if (c.torque) {
+    description_.max_torque = info_.max_torque;
+    const double* inertia = info_.apparent_inertia;
+    const double* rotational_damping = info_.apparent_rotational_damping;
+    if (inertia[0] > 0.0 && inertia[1] > 0.0 && inertia[2] > 0.0) {
+      description_.apparent_inertia = std::min({inertia[0], inertia[1], inertia[2]});
+      description_.apparent_rotational_damping =
+          std::min({rotational_damping[0], rotational_damping[1], rotational_damping[2]});
+    }
+  }
   description_.simulated = false;
   // The port's mass-damper for the stability report and passivity: the weakest axis (the least
   // mass and the least damping), and only when the driver knows all three axes' masses.
@@ -411,6 +423,10 @@ DeviceStatus DriverDevice::read(DeviceReading& reading) {
     const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     if (!(norm >= 0.5 && norm <= 2.0)) return DeviceStatus::kError;  // NaN lands here too
     reading.R_WT = {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
+    if (api_->abi_version >= 2 && description_.capabilities.measured_rates) {
+      const double* w = sample.angular_velocity_W;
+      reading.w_WT = {w[0], w[1], w[2]};  // DevicePort refuses a non-finite one
+    }
   }
   // A device that stopped sampling repeats its last reading: after stale_after still ticks, a fault.
   if (options_.stale_after > 0) {
@@ -433,6 +449,11 @@ DeviceStatus DriverDevice::write(const DeviceCommand& command, double dt) {
   for (std::uint32_t i = 0; i < HAPTIC_DRIVER_MAX_JOINTS; ++i) {
     calls_->command.tau[i] = command.tau[i];
     calls_->command.brake[i] = command.brake[i];
+  }
+  if (description_.capabilities.torque) {
+    calls_->command.torque_W[0] = command.tau_W.x;
+    calls_->command.torque_W[1] = command.tau_W.y;
+    calls_->command.torque_W[2] = command.tau_W.z;
   }
   calls_->dt = dt;
   int result = HAPTIC_DRIVER_FAILED;

@@ -4,7 +4,8 @@ namespace haptic::runtime {
 
 SimulatedPointMassDevice::SimulatedPointMassDevice(const engine::PointMassParams& params,
                                                    const engine::PointMassState& initial,
-                                                   double max_force)
+                                                   double max_force,
+                                                   const std::optional<SimulatedRotation>& rotation)
     : plant_(params, initial) {
   description_.name = "simulated point mass (3-DOF mass-damper)";
   description_.model = "point_mass";
@@ -17,12 +18,26 @@ SimulatedPointMassDevice::SimulatedPointMassDevice(const engine::PointMassParams
   description_.apparent_mass = params.mass;
   description_.apparent_damping = params.damping;
   description_.simulated = true;
+  if (rotation) {
+    rotation_.emplace(rotation->params, rotation->initial);
+    description_.name = "simulated point mass with a turning handle (6-DOF)";
+    description_.dof = 6;
+    description_.capabilities.orientation = true;
+    description_.capabilities.torque = true;
+    description_.max_torque = rotation->max_torque;
+    description_.apparent_inertia = rotation->params.inertia;
+    description_.apparent_rotational_damping = rotation->params.damping;
+  }
 }
 
 DeviceStatus SimulatedPointMassDevice::read(DeviceReading& reading) {
   const engine::PointMassState& s = plant_.state();
   reading.q = {s.p_WT.x, s.p_WT.y, s.p_WT.z};
   reading.q_dot = {s.v_WT.x, s.v_WT.y, s.v_WT.z};
+  if (rotation_) {
+    reading.R_WT = rotation_->state().R_WT;
+    reading.w_WT = rotation_->state().w_WT;
+  }
   return engine::is_finite(s.p_WT) && engine::is_finite(s.v_WT) ? DeviceStatus::kOk
                                                                 : DeviceStatus::kError;
 }
@@ -50,8 +65,15 @@ DeviceStatus SimulatedPointMassDevice::write(const DeviceCommand& command, doubl
     return F_hand;
   });
   hand_.end_tick(dt);
-  return command_ok && engine::is_finite(plant_.state().p_WT) ? DeviceStatus::kOk
-                                                              : DeviceStatus::kError;
+  bool torque_ok = true;
+  if (rotation_) {
+    // Likewise a non-finite torque: none this tick.
+    torque_ok = engine::is_finite(command.tau_W);
+    const engine::Vec3 tau_device = torque_ok ? command.tau_W : engine::Vec3{};
+    rotation_->step(tau_device, dt, [](const engine::Quat&, const engine::Vec3&) { return engine::Vec3{}; });
+  }
+  return command_ok && torque_ok && engine::is_finite(plant_.state().p_WT) ? DeviceStatus::kOk
+                                                                           : DeviceStatus::kError;
 }
 
 }  // namespace haptic::runtime

@@ -22,10 +22,15 @@ void TickRunner::make_ports(const std::vector<TickPort>& ports) {
   ports_.clear();
   ports_.reserve(ports.size());
   for (const TickPort& port : ports) {
+    const DeviceDescription& description = port.device->description();
     Port& out = ports_.emplace_back(Port{DevicePort(*port.device, *port.model), port.samples,
                                          std::nullopt, engine::ForceGuard(port.limits), ToolReading{},
-                                         port.device->description().capabilities.orientation});
+                                         description.capabilities.orientation, std::nullopt});
     if (port.passivity) out.passivity.emplace(*port.passivity);
+    if (description.capabilities.orientation && description.capabilities.torque &&
+        description.max_torque > 0.0) {
+      out.torque_guard.emplace(engine::force_limits_for(description.max_torque));
+    }
   }
 }
 
@@ -103,8 +108,11 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
       counters_.force_saturations.fetch_add(1, std::memory_order_relaxed);
     }
     F_command = guarded.F_T_W;
-    // Jᵀ: the joint command for that force.
-    command_ok = device.joint_command(ToolCommand{F_command}, config_.period_s) == DeviceStatus::kOk;
+    const engine::Vec3 tau_command = port_torque(scene, index, reading, tick, gain, sample);
+    // Jᵀ: the joint command for that force (the torque goes to the handle as it is).
+    command_ok = device.joint_command(ToolCommand{F_command, tau_command}, config_.period_s) ==
+                 DeviceStatus::kOk;
+    if (command_ok) sample.tau_T_W = tau_command;
     if (!command_ok) counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
   } else {
     // A failed or non-finite reading is a device fault: command zero at once (no ramp: nothing
@@ -118,6 +126,7 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
     }
     sample.p_WP = reading.p_WT;
     port.guard.reset();
+    if (port.torque_guard) port.torque_guard->reset();
   }
   if (!command_ok) {
     F_command = {};
@@ -136,6 +145,34 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
   sample.buttons = reading.buttons;
   sample.F_T_W = F_command;
   port.samples->publish(sample);
+}
+
+engine::Vec3 TickRunner::port_torque(const engine::CompiledScene& scene, std::uint32_t index,
+                                     const ToolReading& reading, std::uint64_t tick, double gain,
+                                     TickSample& sample) {
+  Port& port = ports_[index];
+  if (!port.torque_guard) return {};
+  const bool fields = (scene.stages & engine::kStageOrientation) != 0;
+  // Without orientation fields nothing is computed, but a torque left from a scene that had them
+  // still falls at the guard's rate, never as a step.
+  if (!fields && port.torque_guard->last() == engine::Vec3{}) return {};
+  engine::Vec3 tau_scene;
+  if (fields) {
+    const engine::SceneTorque torque = engine::evaluate_scene_orientation(
+        scene, index, reading.R_WT, reading.w_WT, static_cast<std::int64_t>(tick), config_.period_s);
+    if (torque.ramping) sample.flags |= wire::kFlagRampingOut;
+    tau_scene = torque.tau_T_W;
+  }
+  const engine::GuardedForce guarded = port.torque_guard->apply(tau_scene, config_.period_s, gain);
+  if (guarded.fault) {
+    sample.flags |= wire::kFlagForceFault;
+    counters_.force_faults.fetch_add(1, std::memory_order_relaxed);
+  }
+  if (guarded.saturated) {
+    sample.flags |= wire::kFlagForceSaturated;
+    counters_.force_saturations.fetch_add(1, std::memory_order_relaxed);
+  }
+  return guarded.F_T_W;
 }
 
 }  // namespace haptic::runtime

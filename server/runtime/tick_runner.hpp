@@ -90,12 +90,19 @@ class TickRunner {
     engine::ForceGuard guard;
     ToolReading last_good_reading;  // what the samples show while the device is faulted
     bool oriented;                  // the device measures the tool's orientation
+    /// The torque's guard (NaN to zero, the device's max_torque, its rate): only for a device
+    /// that measures orientation and takes torques up to a known max_torque; without one no orientation work is done.
+    std::optional<engine::ForceGuard> torque_guard;
   };
 
   double output_gain(std::uint64_t tick) const;
   void make_ports(const std::vector<TickPort>& ports);
   void run_port(const engine::CompiledScene& scene, std::uint32_t index, std::uint64_t tick,
                 std::int64_t time_ns, double gain);
+  /// The orientation fields' torque at this port, guarded; zero without them.
+  engine::Vec3 port_torque(const engine::CompiledScene& scene, std::uint32_t index,
+                           const ToolReading& reading, std::uint64_t tick, double gain,
+                           TickSample& sample);
 
   std::vector<Port> ports_;
   SceneExchange& scenes_;

@@ -13,6 +13,8 @@ struct TickSample {
   engine::Vec3 p_WT;            // Unit: m.
   engine::Vec3 v_WT;            // Unit: m/s.
   engine::Vec3 F_T_W;           // Commanded force after the safety stage. Unit: N.
+  engine::Vec3 tau_T_W;         // Commanded torque after the safety stage (devices that take
+                                // torques and scenes with orientation fields), else 0. Unit: N·m.
   engine::Vec3 p_WP;            // Proxy point. Unit: m.
   engine::Quat R_WT;            // Tool orientation (devices that measure one), else identity.
   bool has_orientation = false; // The port's device measures the orientation.

@@ -47,6 +47,25 @@ std::string check_positive_vec(const v1::Vec3& v, double max, const std::string&
   return {};
 }
 
+/// A law the enum names, and never TUSTIN with a damper (objects and orientation springs alike).
+std::string check_law(v1::Impedance::Law law, double damping, const std::string& path) {
+  switch (law) {
+    case v1::Impedance::VELOCITY:
+    case v1::Impedance::BACKWARD_DIFFERENCE:
+    case v1::Impedance::EXACT_ZOH:
+      return {};
+    case v1::Impedance::TUSTIN:
+      if (damping > 0.0) {
+        return path + ".law: TUSTIN with damping > 0 is unstable on every sampled device (its "
+                      "damper has a pole at z = -1); use EXACT_ZOH or BACKWARD_DIFFERENCE";
+      }
+      return {};
+    default:
+      return path + ".law: must be VELOCITY, BACKWARD_DIFFERENCE, EXACT_ZOH or TUSTIN, got " +
+             std::to_string(static_cast<int>(law));
+  }
+}
+
 std::string check_impedance(const v1::Impedance& impedance, const std::string& path,
                             const SceneLimits& limits) {
   if (auto e = check_range(impedance.stiffness(), 0.0, limits.max_stiffness, path + ".stiffness");
@@ -81,14 +100,9 @@ std::string check_impedance(const v1::Impedance& impedance, const std::string& p
       if (impedance.static_friction() > 0.0) {
         return path + ".static_friction: friction needs the VELOCITY law";
       }
-      if (impedance.law() == v1::Impedance::TUSTIN && impedance.damping() > 0.0) {
-        return path + ".law: TUSTIN with damping > 0 is unstable on every sampled device (its "
-                      "damper has a pole at z = -1); use EXACT_ZOH or BACKWARD_DIFFERENCE";
-      }
-      return {};
+      return check_law(impedance.law(), impedance.damping(), path);
     default:
-      return path + ".law: must be VELOCITY, BACKWARD_DIFFERENCE, EXACT_ZOH or TUSTIN, got " +
-             std::to_string(static_cast<int>(impedance.law()));
+      return check_law(impedance.law(), impedance.damping(), path);
   }
 }
 
@@ -137,10 +151,10 @@ std::string to_distance(const v1::Distance& d, const std::string& path, const Sc
 
 // An unset orientation is identity; a set one must be a unit quaternion to within 1e-3 and is
 // renormalised, so clients may send rounded values.
-std::string to_quat(const v1::Pose& pose, const std::string& path, engine::Quat& out) {
+std::string to_quat(const v1::Quaternion* set, const std::string& path, engine::Quat& out) {
   out = engine::Quat{};
-  if (!pose.has_orientation()) return {};
-  const auto& q = pose.orientation();
+  if (set == nullptr) return {};
+  const v1::Quaternion& q = *set;
   for (const auto& [value, axis] :
        {std::pair{q.w(), ".w"}, {q.x(), ".x"}, {q.y(), ".y"}, {q.z(), ".z"}}) {
     if (auto e = check_finite(value, path + axis); !e.empty()) return e;
@@ -151,6 +165,10 @@ std::string to_quat(const v1::Pose& pose, const std::string& path, engine::Quat&
   }
   out = engine::Quat{q.w() / n, q.x() / n, q.y() / n, q.z() / n};
   return {};
+}
+
+std::string to_quat(const v1::Pose& pose, const std::string& path, engine::Quat& out) {
+  return to_quat(pose.has_orientation() ? &pose.orientation() : nullptr, path, out);
 }
 
 }  // namespace
@@ -476,11 +494,65 @@ std::string to_field_spec(const v1::Field& field, const std::string& path,
       out.kind = spec;
       return {};
     }
+    case v1::Field::kOrientationSpring: {
+      const auto& spring = field.orientation_spring();
+      const std::string p = path + ".orientation_spring";
+      engine::OrientationSpringSpec spec;
+      if (auto e = to_quat(spring.has_target() ? &spring.target() : nullptr, p + ".target", spec.R_WG);
+          !e.empty()) {
+        return e;
+      }
+      if (auto e = check_range(spring.stiffness(), 0.0, limits.max_rotational_stiffness, p + ".stiffness");
+          !e.empty()) {
+        return e;
+      }
+      if (auto e = check_range(spring.damping(), 0.0, limits.max_rotational_damping, p + ".damping");
+          !e.empty()) {
+        return e;
+      }
+      if (auto e = check_range(spring.max_torque(), 0.0, limits.max_torque, p + ".max_torque"); !e.empty()) {
+        return e;
+      }
+      if (auto e = check_law(spring.law(), spring.damping(), p); !e.empty()) return e;
+      spec.stiffness = spring.stiffness();
+      spec.damping = spring.damping();
+      spec.max_torque = spring.max_torque();
+      spec.law = to_law(spring.law());
+      if (auto e = engine::validate_orientation_spring(spec, limits.period_s); !e.empty()) return p + "." + e;
+      out.kind = spec;
+      return {};
+    }
+    case v1::Field::kOrientationDetent: {
+      const auto& detent = field.orientation_detent();
+      const std::string p = path + ".orientation_detent";
+      engine::OrientationDetentSpec spec;
+      if (auto e = to_quat(detent.has_target() ? &detent.target() : nullptr, p + ".target", spec.R_WG);
+          !e.empty()) {
+        return e;
+      }
+      if (auto e = check_range(detent.depth(), 0.0, limits.max_field_energy, p + ".depth"); !e.empty()) return e;
+      if (auto e = check_range(detent.rim_height(), 0.0, limits.max_field_energy, p + ".rim_height");
+          !e.empty()) {
+        return e;
+      }
+      if (auto e = check_range(detent.damping(), 0.0, limits.max_rotational_damping, p + ".damping");
+          !e.empty()) {
+        return e;
+      }
+      spec.depth = detent.depth();
+      spec.radius = detent.radius();
+      spec.rim_height = detent.rim_height();
+      spec.rim_width = detent.rim_width();
+      spec.damping = detent.damping();
+      if (auto e = engine::validate_orientation_detent(spec); !e.empty()) return p + "." + e;
+      out.kind = spec;
+      return {};
+    }
     case v1::Field::KIND_NOT_SET:
       break;
   }
-  return path + ".kind: one of spring_to_point, spring, potential, linear, viscous, detent is "
-                "required";
+  return path + ".kind: one of spring_to_point, spring, potential, linear, viscous, detent, "
+                "orientation_spring, orientation_detent is required";
 }
 
 std::string to_scene_specs(const v1::Scene& scene, const std::string& prefix,

@@ -26,6 +26,10 @@ struct SceneLimits {
   double max_friction = 10.0;       // μ_s, μ_d.
   double max_impedance_mass = 100.0;  // Unit: kg.
   double max_object_mass = 1000.0;    // Virtual masses. Unit: kg.
+  double max_rotational_stiffness = 1.0e3;  // Orientation fields. Unit: N*m/rad.
+  double max_rotational_damping = 1.0e2;    // Unit: N*m*s/rad.
+  double max_torque = 1.0e3;                // Unit: N*m.
+  double max_field_energy = 1.0e3;          // An orientation detent's depth and rim. Unit: J.
   double period_s = 1e-3;             // The loop period, for the sampled-stability checks. Unit: s.
   /// The device as a mass-damper at its tool point (DeviceDescription::apparent_*); 0: unknown.
   double device_mass = 0.0;     // Unit: kg.

@@ -30,10 +30,7 @@ v1::StabilityReport stability_report(const engine::ObjectSpec& spec, const Devic
   report.set_passive(device.damping > report.colgate_min_damping());
   report.set_device_known(device.mass > 0.0);
   if (!report.device_known() || spec.stiffness <= 0.0) return report;
-  const auto discretization = spec.law == engine::ContactLaw::kExactZoh ? engine::ImpedanceDiscretization::kExactZoh
-                              : spec.law == engine::ContactLaw::kTustin
-                                  ? engine::ImpedanceDiscretization::kTustin
-                                  : engine::ImpedanceDiscretization::kBackwardDifference;
+  const engine::ImpedanceDiscretization discretization = engine::discretization_of(spec.law);
   const engine::SampledWallMargin margin = engine::sampled_wall_margin(
       engine::ImpedanceParams{spec.stiffness, spec.damping, spec.impedance_mass}, discretization,
       engine::MassDamperDevice{device.mass, device.damping}, period_s);

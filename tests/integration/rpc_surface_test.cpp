@@ -254,7 +254,8 @@ TEST(RpcSurface, UpdateFieldRefusesABadSpecAnUnknownIdAnObjectAndAnotherSessions
       {"negative stiffness", update(owner, field, spring(negative)), Code::INVALID_ARGUMENT,
        "field.spring.stiffness: must be finite and in [0, 1e+06], got -1"},
       {"no kind", update(owner, field, v1::Field{}), Code::INVALID_ARGUMENT,
-       "field.kind: one of spring_to_point, spring, potential, linear, viscous, detent is required"},
+       "field.kind: one of spring_to_point, spring, potential, linear, viscous, detent, "
+       "orientation_spring, orientation_detent is required"},
       {"unknown id", update(owner, 987654, spring(stronger)), Code::NOT_FOUND,
        "id: no field with id 987654"},
       {"an object's id", update(owner, object, spring(stronger)), Code::NOT_FOUND,

@@ -7,6 +7,7 @@
 #include <functional>
 
 #include "engine/core/vec3.hpp"
+#include "engine/device/exact_step.hpp"
 
 namespace haptic::engine {
 
@@ -41,7 +42,9 @@ class PointMassPlant {
   template <typename ExternalForce>
   void step(const Vec3& F_device, double dt, ExternalForce&& external_force) {
     const double h = dt / static_cast<double>(params_.substeps);
-    if (h != coefficients_.h) coefficients_ = coefficients_for(h);  // once, while dt is constant
+    if (h != coefficients_.h) {  // once, while dt is constant
+      coefficients_ = ExactMassDamperStep::of(params_.mass + added_mass_, params_.damping, h);
+    }
     for (std::uint32_t i = 0; i < params_.substeps; ++i) {
       const Vec3 F_total = F_device + external_force(state_.p_WT, state_.v_WT);
       advance_exact(F_total);
@@ -61,20 +64,11 @@ class PointMassPlant {
   const PointMassParams& params() const { return params_; }
 
  private:
-  /// The exact sub-step's weights for one h (they depend on b, m and h only):
-  /// v1 = decay v0 + (F/m) h phi;  x1 = x0 + h (v0 phi + (F/m) h g).
-  struct StepCoefficients {
-    double h = -1.0;  // the sub-step they are for; -1: none yet
-    double decay = 1.0;
-    double phi = 1.0;
-    double g = 0.5;
-  };
-  StepCoefficients coefficients_for(double h) const;
   void advance_exact(const Vec3& F);
 
   PointMassParams params_;
   PointMassState state_;
-  StepCoefficients coefficients_;
+  ExactMassDamperStep coefficients_;  // for the sub-step h while dt is constant
   double added_mass_ = 0.0;
 };
 

@@ -18,14 +18,6 @@ double contact_magnitude(double stiffness, double damping, double d, const Vec3&
   return std::max(0.0, stiffness * d - damping * dot(v, n));
 }
 
-ImpedanceDiscretization discretization_of(ContactLaw law) {
-  switch (law) {
-    case ContactLaw::kExactZoh: return ImpedanceDiscretization::kExactZoh;
-    case ContactLaw::kTustin: return ImpedanceDiscretization::kTustin;
-    default: return ImpedanceDiscretization::kBackwardDifference;
-  }
-}
-
 /// Whether a primitive can take the stateless fast path.
 bool is_fast(const ObjectSpec& object) {
   return object.law == ContactLaw::kVelocity && object.static_friction == 0.0 &&
@@ -93,9 +85,8 @@ void apply_mesh_friction(const CompiledMesh& mesh, const MeshPose& pose, MeshSta
 /// Records one item's contribution this tick in its meter and publishes the totals. An item that
 /// does no work now and did none at the last sample adds nothing: skipped, so idle items cost a
 /// dot product.
-inline void meter(SceneState& state, std::uint32_t index, const Vec3& F, const Vec3& v, double dt) {
+inline void meter_power(SceneState& state, std::uint32_t index, double power, double dt) {
   EnergyMeter& m = state.meters[index];
-  const double power = dot(F, v);
   if (power == 0.0 && m.last_power == 0.0) {
     m.has_last = true;
     return;
@@ -103,6 +94,10 @@ inline void meter(SceneState& state, std::uint32_t index, const Vec3& F, const V
   m.add_power(power, dt);
   state.work_out[index].store(m.work_out, std::memory_order_relaxed);
   state.work_in[index].store(m.work_in, std::memory_order_relaxed);
+}
+
+inline void meter(SceneState& state, std::uint32_t index, const Vec3& F, const Vec3& v, double dt) {
+  meter_power(state, index, dot(F, v), dt);
 }
 
 }  // namespace
@@ -291,17 +286,41 @@ struct SceneBuilder {
                                              slot_of(entry.meta.session_id)});
       return;
     }
+    if (add_orientation_field(entry, meter)) return;
     CompiledField compiled;
     std::visit(
         [&](const auto& kind) {
           using K = std::decay_t<decltype(kind)>;
-          if constexpr (!std::is_same_v<K, SpringToPointSpec>) compiled.spec = kind;
+          if constexpr (std::is_constructible_v<EnergyFieldSpec, K>) compiled.spec = kind;
         },
         entry.spec.kind);
     compiled.ramp = entry.meta.ramp();
     compiled.meter = meter;
     compiled.slot = slot_of(entry.meta.session_id);
     scene.fields.push_back(std::move(compiled));
+  }
+
+  /// Stage 7: an orientation field and port 0's fresh state for it; false for any other field.
+  bool add_orientation_field(const FieldEntry& entry, std::uint32_t meter) {
+    CompiledOrientationField compiled;
+    OrientationState orientation_state;
+    if (const auto* spring = std::get_if<OrientationSpringSpec>(&entry.spec.kind)) {
+      compiled.spec = *spring;
+      orientation_state.spring.set_weights(orientation_spring_weights(*spring, scene.period_s));
+    } else if (const auto* detent = std::get_if<OrientationDetentSpec>(&entry.spec.kind)) {
+      compiled.spec = *detent;
+    } else {
+      return false;
+    }
+    compiled.ramp = entry.meta.ramp();
+    compiled.state = static_cast<std::uint32_t>(state.orientations.size());
+    compiled.meter = meter;
+    compiled.slot = slot_of(entry.meta.session_id);
+    orientation_state.key = entry.meta.state_key();
+    orientation_state.id = entry.meta.id;
+    state.orientations.push_back(orientation_state);
+    scene.orientation_fields.push_back(std::move(compiled));
+    return true;
   }
 
   /// Once every item is in: carry_state's scratch and the budget's per-slot sums, sized here so
@@ -313,12 +332,17 @@ struct SceneBuilder {
     state.slot_fields.assign(state.slot_sessions.size(), Vec3{});
     state.contacts_per_port = static_cast<std::uint32_t>(state.contacts.size());
     state.meshes_per_port = static_cast<std::uint32_t>(state.meshes.size());
+    state.orientations_per_port = static_cast<std::uint32_t>(state.orientations.size());
+    state.orientations.reserve(state.orientations.size() * state.ports);
     state.meters_per_port = static_cast<std::uint32_t>(items);
     state.contacts.reserve(state.contacts.size() * state.ports);
     state.meshes.reserve(state.meshes.size() * state.ports);
     for (std::uint32_t port = 1; port < state.ports; ++port) {
       for (std::uint32_t i = 0; i < state.contacts_per_port; ++i) state.contacts.push_back(state.contacts[i]);
       for (std::uint32_t i = 0; i < state.meshes_per_port; ++i) state.meshes.push_back(state.meshes[i]);
+      for (std::uint32_t i = 0; i < state.orientations_per_port; ++i) {
+        state.orientations.push_back(state.orientations[i]);
+      }
     }
   }
 
@@ -375,7 +399,8 @@ struct SceneBuilder {
                    (scene.meshes.empty() ? 0u : kStageMeshes) |
                    (scene.springs.empty() ? 0u : kStageSprings) |
                    (scene.fields.empty() ? 0u : kStageFields) |
-                   (scene.sphere_grid.empty() ? 0u : kStageSphereGrid);
+                   (scene.sphere_grid.empty() ? 0u : kStageSphereGrid) |
+                   (scene.orientation_fields.empty() ? 0u : kStageOrientation);
   }
 };
 
@@ -490,6 +515,26 @@ void carry_contacts(std::span<const ContactState> old_contacts, std::span<Contac
   }
 }
 
+/// One port's orientation fields: each version's spring filters, and a new version of a spring
+/// continues from its item's newest old version's (no damper spike when a client moves the target).
+void carry_orientations(std::span<const OrientationState> old_fields,
+                        std::span<OrientationState> new_fields) {
+  carry_by_key(old_fields, new_fields, [](const OrientationState& a, OrientationState& b) {
+    b.spring.copy_history_from(a.spring);
+  });
+  for (OrientationState& fresh : new_fields) {
+    const OrientationState* newest = nullptr;
+    for (const OrientationState& old : old_fields) {
+      if (old.key == fresh.key) {
+        newest = nullptr;
+        break;
+      }
+      if (old.id == fresh.id && (!newest || old.key > newest->key)) newest = &old;
+    }
+    if (newest) fresh.spring.copy_history_from(newest->spring);
+  }
+}
+
 /// One port's meshes: each version's god object and friction anchor.
 void carry_meshes(std::span<const MeshState> old_meshes, std::span<MeshState> new_meshes) {
   carry_by_key(old_meshes, new_meshes, [](const MeshState& a, MeshState& b) {
@@ -586,6 +631,8 @@ void carry_state(const CompiledScene& from, const CompiledScene& to) {
                    port_slice(new_state.contacts, port, new_state.contacts_per_port));
     carry_meshes(port_slice(old_state.meshes, port, old_state.meshes_per_port),
                  port_slice(new_state.meshes, port, new_state.meshes_per_port));
+    carry_orientations(port_slice(old_state.orientations, port, old_state.orientations_per_port),
+                       port_slice(new_state.orientations, port, new_state.orientations_per_port));
     carry_meters(old_state, new_state, port);
   }
   publish_meters(new_state);
@@ -955,6 +1002,30 @@ struct PortPass {
 SceneForce evaluate_scene_port(const CompiledScene& scene, std::uint32_t port, const Vec3& p_WT,
                                const Vec3& v_WT, std::int64_t tick, double dt) {
   return evaluate_port(scene, port, p_WT, v_WT, tick, dt);
+}
+
+SceneTorque evaluate_scene_orientation(const CompiledScene& scene, std::uint32_t port,
+                                       const Quat& R_WT, const Vec3& w_WT, std::int64_t tick,
+                                       double dt) {
+  SceneState& state = *scene.state;
+  assert(port < state.ports);
+  OrientationState* states = state.orientations.data() + std::size_t{port} * state.orientations_per_port;
+  const std::uint32_t meters = port * state.meters_per_port;
+  SceneTorque out;
+  for (const CompiledOrientationField& field : scene.orientation_fields) {
+    if (is_fading_out(field.ramp, tick, scene.removal_ramp_ticks)) out.ramping = true;
+    const double gain = ramp_gain(field.ramp, tick, scene.removal_ramp_ticks);
+    OrientationState& field_state = states[field.state];
+    // A spring's filters run every tick, whatever its gain, so a fading one keeps its history.
+    const OrientationSample sample =
+        std::holds_alternative<OrientationSpringSpec>(field.spec)
+            ? field_state.spring.update(std::get<OrientationSpringSpec>(field.spec), R_WT, w_WT, dt)
+            : evaluate_orientation_detent(std::get<OrientationDetentSpec>(field.spec), R_WT, w_WT);
+    const Vec3 tau = gain * sample.tau_T_W;
+    meter_power(state, meters + field.meter, dot(tau, w_WT), dt);
+    out.tau_T_W += tau;
+  }
+  return out;
 }
 
 void advance_scene(const CompiledScene& scene, double dt) {

@@ -12,6 +12,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <variant>
 #include <vector>
 
 #include "engine/core/vec3.hpp"
@@ -19,6 +20,7 @@
 #include "engine/scene/fields.hpp"
 #include "engine/scene/god_object.hpp"
 #include "engine/scene/impedance.hpp"
+#include "engine/scene/orientation_fields.hpp"
 #include "engine/scene/scene_spec.hpp"
 #include "engine/scene/shapes.hpp"
 #include "engine/scene/sphere_grid.hpp"
@@ -106,6 +108,24 @@ struct CompiledField {
   std::uint32_t slot = 0;
 };
 
+/// Stage 7: orientation fields, torques on the tool's orientation (evaluate_scene_orientation;
+/// only for ports whose device measures orientation).
+struct CompiledOrientationField {
+  std::variant<OrientationSpringSpec, OrientationDetentSpec> spec;
+  ItemRamp ramp;
+  std::uint32_t state = 0;  // index into SceneState::orientations (per port)
+  std::uint32_t meter = 0;
+  std::uint32_t slot = 0;
+};
+
+/// Per item-version state of an orientation field that belongs to one tool (one per port): a
+/// spring's filters (a detent has none, but keeps its slot so indices stay simple).
+struct OrientationState {
+  std::uint64_t key = 0;
+  std::uint64_t id = 0;   // the item; a new version of it inherits the filters' history
+  OrientationSpringState spring;
+};
+
 /// Per item-version state of a stateful contact that belongs to one tool (one per port).
 struct ContactState {
   std::uint64_t key = 0;
@@ -145,7 +165,9 @@ struct SceneState {
   std::uint32_t contacts_per_port = 0;
   std::uint32_t meshes_per_port = 0;
   std::uint32_t meters_per_port = 0;
+  std::uint32_t orientations_per_port = 0;
   std::vector<ContactState> contacts;     // per port
+  std::vector<OrientationState> orientations;  // per port
   std::vector<ContactMotion> motions;     // per contact state, shared by the ports
   std::vector<ContactMotion> mesh_motions;  // per mesh state, shared by the ports
   std::unique_ptr<std::atomic<double>[]> mesh_motion;  // 6 per mesh, as `motion`
@@ -192,6 +214,7 @@ enum SceneStage : std::uint32_t {
   kStageSprings = 1u << 4,
   kStageFields = 1u << 5,
   kStageSphereGrid = 1u << 6,  // the sphere stage through its broad phase
+  kStageOrientation = 1u << 7,  // orientation fields (evaluate_scene_orientation)
 };
 
 struct CompiledScene {
@@ -201,6 +224,7 @@ struct CompiledScene {
   std::vector<CompiledMesh> meshes;
   std::vector<CompiledSpring> springs;
   std::vector<CompiledField> fields;
+  std::vector<CompiledOrientationField> orientation_fields;
   /// The contacts that are virtual masses (indices into `contacts`), which advance_scene moves.
   std::vector<std::uint32_t> masses;
   /// The meshes that are virtual masses (indices into `meshes`).
@@ -282,6 +306,21 @@ struct SceneForce {
 /// to this port's force alone. port < the scene's ports. Does not allocate.
 SceneForce evaluate_scene_port(const CompiledScene& scene, std::uint32_t port, const Vec3& p_WT,
                                const Vec3& v_WT, std::int64_t tick, double dt = 1e-3);
+
+/// What the scene's orientation fields ask of the tool at one tick.
+struct SceneTorque {
+  Vec3 tau_T_W;          // Torque on the tool, in W. Unit: N·m.
+  bool ramping = false;  // Some orientation field is fading out.
+};
+
+/// One tool's torque: sums the orientation fields at port `port`'s orientation R_WT and angular
+/// velocity w_WT (rad/s, in W), updating that port's spring filters and the fields' energy meters
+/// (power τ·ω). Only where the scene has orientation fields (kStageOrientation) and the port's
+/// device measures orientation; a scene without them does no orientation work at all. Torques
+/// are outside the per-session force budget. Does not allocate.
+SceneTorque evaluate_scene_orientation(const CompiledScene& scene, std::uint32_t port,
+                                       const Quat& R_WT, const Vec3& w_WT, std::int64_t tick,
+                                       double dt = 1e-3);
 
 /// Advances every virtual mass by dt under the reactions the ports accumulated this tick, held
 /// over the tick (000 eq. 7.1, integrated exactly), clears the accumulators and publishes the

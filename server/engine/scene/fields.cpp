@@ -219,30 +219,36 @@ FieldSample evaluate_field(const ViscousFieldSpec& spec, const Vec3& p_WT, const
 
 // ---- detent ----------------------------------------------------------------------------------
 
+PotentialProfile detent_profile(double depth, double radius, double rim_height, double rim_width,
+                                double rho) {
+  const double D = depth;
+  const double H = rim_height;
+  const double R = radius;
+  const double w = rim_width;
+  PotentialProfile out;
+  if (rho <= R) {
+    const double t = rho / R;
+    out.U = -D + (D + H) * smoothstep(t);
+    out.dU_df = (D + H) * smoothstep_slope(t) / R;
+  } else if (rho < R + w) {
+    const double t = (rho - R) / w;
+    out.U = H * (1.0 - smoothstep(t));
+    out.dU_df = -H * smoothstep_slope(t) / w;
+  }
+  return out;
+}
+
 FieldSample evaluate_field(const DetentFieldSpec& spec, const Vec3& p_WT, const Vec3&) {
   const DistanceSample d = evaluate_distance(spec.distance, p_WT);
   // ρ = |f|, ∇ρ = sign(f) ∇f (U′(0) = 0, so the sign at f = 0 does not matter).
   const double rho = std::abs(d.f);
   const Vec3 grad_rho = d.f < 0.0 ? -d.grad_f : d.grad_f;
-  const double D = spec.depth;
-  const double H = spec.rim_height;
-  const double R = spec.radius;
-  const double w = spec.rim_width;
-  double U = 0.0;
-  double dU_drho = 0.0;
-  if (rho <= R) {
-    const double t = rho / R;
-    U = -D + (D + H) * smoothstep(t);
-    dU_drho = (D + H) * smoothstep_slope(t) / R;
-  } else if (rho < R + w) {
-    const double t = (rho - R) / w;
-    U = H * (1.0 - smoothstep(t));
-    dU_drho = -H * smoothstep_slope(t) / w;
-  }
+  const PotentialProfile profile =
+      detent_profile(spec.depth, spec.radius, spec.rim_height, spec.rim_width, rho);
   FieldSample out;
-  out.U = U;
+  out.U = profile.U;
   out.has_potential = true;
-  out.F_T_W = -dU_drho * grad_rho;
+  out.F_T_W = -profile.dU_df * grad_rho;
   return out;
 }
 

@@ -216,6 +216,11 @@ struct DetentFieldSpec {
 /// Always has_potential.
 FieldSample evaluate_field(const DetentFieldSpec& spec, const Vec3& p_WT, const Vec3& v_WT);
 
+/// The detent's profile U(ρ) and dU/dρ (J, J per unit of ρ) over any ρ ≥ 0 — a distance (m) here,
+/// an angle (rad) for the orientation detent. depth, radius > 0; rim_width > 0 when rim_height > 0.
+PotentialProfile detent_profile(double depth, double radius, double rim_height, double rim_width,
+                                double rho);
+
 // ---------------------------------------------------------------------------------------------
 // Any field.
 

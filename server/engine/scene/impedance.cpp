@@ -8,6 +8,14 @@
 #include <numbers>
 
 namespace haptic::engine {
+
+ImpedanceDiscretization discretization_of(ContactLaw law) {
+  switch (law) {
+    case ContactLaw::kExactZoh: return ImpedanceDiscretization::kExactZoh;
+    case ContactLaw::kTustin: return ImpedanceDiscretization::kTustin;
+    default: return ImpedanceDiscretization::kBackwardDifference;
+  }
+}
 namespace {
 
 std::string format_value(double value) {

@@ -20,6 +20,7 @@
 #include <array>
 #include <complex>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "engine/control/dc_motor_control.hpp"
@@ -53,6 +54,23 @@ enum class ImpedanceDiscretization {
   /// sampled_wall_margin reports it; use it for analysis, or with B = 0.
   kTustin,
 };
+
+/// How a contact turns penetration into force along the normal (and an orientation spring its
+/// rotation error into torque, per axis).
+enum class ContactLaw : std::uint8_t {
+  /// F = max(0, K d − B v·n) with the device's measured velocity v (the default).
+  kVelocity,
+  /// F = K d + B ḋ + M d̈ on the sampled penetration, by backward differences (000 eq. 8.15).
+  kBackwardDifference,
+  /// The exact zero-order-hold form of 000 eq. 8.11 (weights a1 + a2 = K, eq. 8.12).
+  kExactZoh,
+  /// Tustin's bilinear form (unstable with B > 0 on a real device: see docs/scene.md).
+  kTustin,
+};
+
+/// The ImpedanceDiscretization of a discrete law; kVelocity maps to the backward difference, the
+/// discrete law closest to it (how the stability report models it).
+ImpedanceDiscretization discretization_of(ContactLaw law);
 
 /// Largest number of past samples any form keeps (kTustin with a mass uses d(k−3)).
 inline constexpr std::size_t kImpedanceHistory = 3;

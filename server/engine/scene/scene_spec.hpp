@@ -13,6 +13,7 @@
 #include "engine/core/vec3.hpp"
 #include "engine/scene/fields.hpp"
 #include "engine/scene/mesh.hpp"
+#include "engine/scene/orientation_fields.hpp"
 
 namespace haptic::engine {
 
@@ -62,18 +63,6 @@ struct MeshShapeSpec {
   std::shared_ptr<const MeshModel> model;
 };
 
-/// How a contact turns penetration into force along the normal.
-enum class ContactLaw : std::uint8_t {
-  /// F = max(0, K d − B v·n) with the device's measured velocity v (the default).
-  kVelocity,
-  /// F = K d + B ḋ + M d̈ on the sampled penetration, by backward differences (000 eq. 8.15).
-  kBackwardDifference,
-  /// The exact zero-order-hold form of 000 eq. 8.11 (weights a1 + a2 = K, eq. 8.12).
-  kExactZoh,
-  /// Tustin's bilinear form (unstable with B > 0 on a real device: see docs/scene.md).
-  kTustin,
-};
-
 struct ObjectSpec {
   Vec3 p_WO;           // Object origin in W. Unit: m.
   Quat R_WO;           // Object orientation in W (unit quaternion).
@@ -104,7 +93,7 @@ struct SpringToPointSpec {
 
 struct FieldSpec {
   std::variant<SpringToPointSpec, PotentialFieldSpec, SpringFieldSpec, LinearFieldSpec,
-               ViscousFieldSpec, DetentFieldSpec>
+               ViscousFieldSpec, DetentFieldSpec, OrientationSpringSpec, OrientationDetentSpec>
       kind;
 };
 

@@ -44,27 +44,6 @@ std::string non_finite_component(const std::string& field, const Vec3& v) {
 // ---------------------------------------------------------------------------------------------
 // Quaternions.
 
-bool is_unit(const Quat& q, double tol) {
-  if (!std::isfinite(q.w) || !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z)) {
-    return false;
-  }
-  return std::fabs(norm(q) - 1.0) <= tol;
-}
-
-Quat normalized(const Quat& q) {
-  const double n = norm(q);
-  if (!(n > 0.0) || !std::isfinite(n)) return Quat{};
-  return {q.w / n, q.x / n, q.y / n, q.z / n};
-}
-
-Quat quat_from_axis_angle(const Vec3& axis, double angle_rad) {
-  const double n = norm(axis);
-  if (!(n > 0.0) || !std::isfinite(n) || !std::isfinite(angle_rad)) return Quat{};
-  // q = (cos θ/2, sin θ/2 â): the rotation by θ about â (Rodrigues; Shoemake 1985).
-  const double s = std::sin(0.5 * angle_rad) / n;
-  return {std::cos(0.5 * angle_rad), s * axis.x, s * axis.y, s * axis.z};
-}
-
 // ---------------------------------------------------------------------------------------------
 // Queries in O.
 

@@ -13,43 +13,11 @@
 #include <string>
 #include <variant>
 
+#include "engine/core/rotation.hpp"
 #include "engine/core/vec3.hpp"
 #include "engine/scene/scene_spec.hpp"
 
 namespace haptic::engine {
-
-// ---------------------------------------------------------------------------------------------
-// Quaternion helpers. Quat is (w, x, y, z), Hamilton convention, as rotate() in vec3.hpp.
-
-/// Hamilton product a b: the rotation b followed by a (R(a b) = R(a) R(b)).
-constexpr Quat operator*(const Quat& a, const Quat& b) {
-  return {a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
-          a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-          a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
-          a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
-/// q* = (w, −x, −y, −z); for a unit quaternion, the inverse rotation.
-constexpr Quat conjugate(const Quat& q) { return {q.w, -q.x, -q.y, -q.z}; }
-
-/// Euclidean norm of the four components.
-inline double norm(const Quat& q) {
-  return std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
-}
-
-/// True when every component is finite and | |q| − 1 | <= tol. The server rejects a pose whose
-/// quaternion fails this rather than normalising it silently.
-bool is_unit(const Quat& q, double tol = 1e-6);
-
-/// q / |q|; the identity when |q| is zero or not finite (so the result is always a rotation).
-Quat normalized(const Quat& q);
-
-/// Rᵀ v for the rotation R of the unit quaternion q: the inverse of rotate(q, v).
-constexpr Vec3 rotate_inverse(const Quat& q, const Vec3& v) { return rotate(conjugate(q), v); }
-
-/// The rotation by angle_rad (unit: rad, right-handed) about axis (any length; normalised
-/// here). A zero or non-finite axis, or a non-finite angle, gives the identity.
-Quat quat_from_axis_angle(const Vec3& axis, double angle_rad);
 
 // ---------------------------------------------------------------------------------------------
 // Shapes. HalfSpaceSpec and SphereSpec are the scene's own (scene_spec.hpp):
