@@ -8,15 +8,19 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 #include <utility>
 #include <string>
 
 #include "engine/core/integrator.hpp"
+#include "engine/core/rotation.hpp"
+#include "engine/device/rigid_body_rotation.hpp"
 #include "engine/device/joint_friction.hpp"
 #include "engine/safety/force_guard.hpp"
 #include "engine/scene/fields.hpp"
 #include "engine/scene/impedance.hpp"
+#include "engine/scene/orientation_fields.hpp"
 #include "config/server_config.hpp"
 #include "lab/lab_run.hpp"
 #include "haptic/wire/datagram.hpp"
@@ -306,6 +310,58 @@ Trajectory sampled_wall(Scheme scheme, double period, const std::string& law, co
   return sample_run(c, period, 5.0, advance, observe);
 }
 
+// --- An orientation spring on the 6-DOF handle: each law at each tick period ------------------
+
+/// The 6-DOF point mass's handle (I = 1e-4 kg·m², b = 5e-4 N·m·s/rad: config/six_dof.json)
+/// turned 0.2 rad about z and held by an orientation spring (k = 0.3 N·m/rad, b_s = 2e-4
+/// N·m·s/rad) the loop renders at tick period T with each law (engine::OrientationSpringState: the
+/// impedance laws per axis of the rotation vector), the torque held over each tick and the handle
+/// stepped exactly (engine::RigidBodyRotation). The reference is the continuous coupling
+/// I θ̈ + (b + b_s) θ̇ + k θ = 0 in closed form.
+constexpr double kHandleInertia = 1e-4, kHandleDamping = 5e-4, kHandleSpringK = 0.3, kHandleSpringB = 2e-4;
+constexpr double kHandleAngle0 = 0.2;  // rad
+
+Trajectory orientation_spring(Scheme scheme, double period, const std::string& law, const StudyCase& c) {
+  if (scheme != Scheme::kExactZoh) {
+    throw std::invalid_argument(c.name + ": the handle is stepped exactly between ticks; scheme must be exact_zoh");
+  }
+  engine::OrientationSpringSpec spring;
+  spring.stiffness = kHandleSpringK;
+  spring.damping = kHandleSpringB;
+  if (law == "velocity") {
+    spring.law = engine::ContactLaw::kVelocity;
+  } else if (law == "backward_difference") {
+    spring.law = engine::ContactLaw::kBackwardDifference;
+  } else if (law == "exact_zoh") {
+    spring.law = engine::ContactLaw::kExactZoh;
+  } else if (law == "tustin") {
+    spring.law = engine::ContactLaw::kTustin;
+  } else {
+    throw std::invalid_argument(c.name + ": unknown law \"" + law + "\"");
+  }
+  engine::OrientationSpringState state;
+  state.set_weights(engine::orientation_spring_weights(spring, period));
+  engine::RigidBodyRotation handle(engine::RotationParams{kHandleInertia, kHandleDamping, 1},
+                                   engine::RotationState{engine::quat_from_axis_angle({0, 0, 1}, kHandleAngle0), {}});
+  const auto no_hand = [](const engine::Quat&, const engine::Vec3&) { return engine::Vec3{}; };
+  // The angle unwrapped across ±π tick by tick, so a run that rings up leaves the bound instead
+  // of folding back into [−π, π].
+  double angle = kHandleAngle0;
+  double wrapped = kHandleAngle0;
+  auto advance = [&](std::int64_t) {
+    const engine::RotationState& now = handle.state();
+    handle.step(state.update(spring, now.R_WT, now.w_WT, period).tau_T_W, period, no_hand);
+    const double next = engine::rotation_vector(handle.state().R_WT).z;
+    angle += std::remainder(next - wrapped, 2.0 * std::numbers::pi);
+    wrapped = next;
+  };
+  auto observe = [&] {
+    const double w = handle.state().w_WT.z;
+    return std::pair{angle, 0.5 * kHandleInertia * w * w + 0.5 * kHandleSpringK * angle * angle};
+  };
+  return sample_run(c, period, 3.0, advance, observe);
+}
+
 // --- A potential field: the gradient analytic or by central differences ----------------------
 
 /// A 0.01 kg tool pushed by a constant 0.5 N toward a plane that repels it with Khatib's field
@@ -517,6 +573,22 @@ std::vector<StudyCase> ode_cases(bool short_suite) {
   continuous.x0 = -0.005;
   laws.exact = [continuous, shape = laws] { return exact_solution(continuous, shape); };
   cases.push_back(std::move(laws));
+
+  StudyCase handle = describe("orientation_spring_laws",
+      "An orientation spring on the 6-DOF handle at tick period T by each law (I 1e-4 kg·m², k 0.3 N·m/rad)",
+      "000 eqs. 8.9-8.16 per axis of the rotation vector; the handle's rotation exact between ticks",
+      "handle angle about z, rad", "impedance", 4.0 * duration);  // long enough to see slow ringing up
+  handle.schemes = {Scheme::kExactZoh};
+  handle.steps_s = steps;  // here: the tick period T
+  handle.variants = {"velocity", "backward_difference", "exact_zoh", "tustin"};
+  set_simulation(handle, orientation_spring);
+  LinearOscillator turning;  // I θ̈ + (b + b_s) θ̇ + k θ = 0
+  turning.mass = kHandleInertia;
+  turning.damping = kHandleDamping + kHandleSpringB;
+  turning.stiffness = kHandleSpringK;
+  turning.x0 = kHandleAngle0;
+  handle.exact = [turning, shape = handle] { return exact_solution(turning, shape); };
+  cases.push_back(std::move(handle));
 
   StudyCase khatib = describe("khatib_field",
       "Khatib's potential field against a 0.5 N push: gradient analytic or by central differences",

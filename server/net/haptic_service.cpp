@@ -22,12 +22,17 @@ schema::DeviceMassDamper mass_damper(const runtime::DeviceDescription& device) {
   return {device.apparent_mass, device.apparent_damping};
 }
 
+/// The device's handle about each axis as an inertia-damper, for an orientation spring's report.
+schema::DeviceMassDamper inertia_damper(const runtime::DeviceDescription& device) {
+  return {device.apparent_inertia, device.apparent_rotational_damping};
+}
+
 /// An object accepted although its own report says it will not be stable: the client has the
 /// report; the operator sees it in the log.
 void log_if_unstable(const v1::StabilityReport& report, std::uint64_t session_id,
-                     std::uint64_t object_id) {
+                     std::uint64_t item_id, const char* kind = "object") {
   if (report.warning().empty()) return;
-  spdlog::warn("session {}: object {} accepted but {}", io::format_session_id(session_id), object_id,
+  spdlog::warn("session {}: {} {} accepted but {}", io::format_session_id(session_id), kind, item_id,
                report.warning());
 }
 
@@ -324,6 +329,11 @@ grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::
     return status;
   }
   response->set_id(id);
+  if (const auto* spring = std::get_if<engine::OrientationSpringSpec>(&spec.kind)) {
+    *response->mutable_stability() =
+        schema::stability_report(*spring, inertia_damper(*port_of(request->session_id()).device), period_s());
+    log_if_unstable(response->stability(), request->session_id(), id, "orientation spring");
+  }
   publish_item_change(request->session_id(), ItemKind::kField, id, "created");
   record_change(request->session_id(), [&](v1::RecordedChange& change) {
     change.mutable_field_created()->set_id(id);

@@ -24,4 +24,11 @@ v1::StabilityReport stability_report(const engine::ObjectSpec& spec, const Devic
                                      double period_s, bool optimal_damping = false,
                                      bool virtual_coupling = false);
 
+/// The report for an orientation spring on a device's handle, modelled about each axis as an
+/// inertia-damper (DeviceDescription::apparent_inertia, apparent_rotational_damping; inertia 0:
+/// unknown) — the same analysis, with the report's "mass" an inertia (kg·m²), its stiffnesses in
+/// N·m/rad and its dampings in N·m·s/rad.
+v1::StabilityReport stability_report(const engine::OrientationSpringSpec& spec,
+                                     const DeviceMassDamper& handle, double period_s);
+
 }  // namespace haptic::schema

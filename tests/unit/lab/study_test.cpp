@@ -235,6 +235,23 @@ TEST(StudyOdeCases, ImpedanceLawsAtTheTickPeriodAreFirstOrderAndFailAtCoarseRate
   EXPECT_GT(row(report, Scheme::kExactZoh, 1e-3, "backward_difference").relative_error, 0.1);
 }
 
+TEST(StudyOdeCases, OrientationSpringLawsAreFirstOrderAndRingUpWhereTheAnalysisSays) {
+  const StudyReport report = run_one(find_case("orientation_spring_laws"), {1e-5, 1e-4, 1e-3, 1e-2});
+  for (const std::string law : {"velocity", "backward_difference", "exact_zoh", "tustin"}) {
+    const double fine = row(report, Scheme::kExactZoh, 1e-5, law).error;
+    const double coarse = row(report, Scheme::kExactZoh, 1e-4, law).error;
+    EXPECT_NEAR(coarse / fine, 10.0, 1.0) << law;  // the held torque lags by T/2: first order in T
+    EXPECT_TRUE(row(report, Scheme::kExactZoh, 1e-3, law).stable) << law;
+    // At 10 ms k = 0.3 N·m/rad is past every law's largest stable stiffness on this handle
+    // (0.10–0.14 N·m/rad by the sampled analysis): the handle rings up out of its bound.
+    EXPECT_FALSE(row(report, Scheme::kExactZoh, 1e-2, law).stable) << law;
+  }
+  // 000 eq. 8.12's one-sample delay costs the exact-ZOH law twice the others' error, as on a wall.
+  EXPECT_NEAR(row(report, Scheme::kExactZoh, 1e-4, "exact_zoh").error /
+                  row(report, Scheme::kExactZoh, 1e-4, "backward_difference").error,
+              2.0, 0.1);
+}
+
 TEST(StudyOdeCases, KhatibFieldGradientByCentralDifferencesHasItsOwnErrorFloor) {
   const StudyReport report = run_one(find_case("khatib_field"), {1e-5, 1e-4}, {Scheme::kRk4, Scheme::kTrapezoidal});
   // Analytic gradient: RK4 converges far below either difference step's floor.
