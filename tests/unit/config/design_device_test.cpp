@@ -32,6 +32,22 @@ std::string virtual_coupling_error(const schema::SceneLimits& limits, engine::Ob
   return schema::to_object_spec(object, "object", limits, spec);
 }
 
+TEST(SixDofDevice, TheRotationMakesThePointMassTurnAndTakeTorques) {
+  const std::vector<PortDevice> devices =
+      devices_of(R"({"simulated_point_mass": {"rotation": {"inertia": 2e-4, "max_torque": 0.3}}})");
+  const runtime::DeviceDescription& six = devices[0].device->description();
+  EXPECT_EQ(six.dof, 6u);
+  EXPECT_TRUE(six.capabilities.orientation);
+  EXPECT_TRUE(six.capabilities.torque);
+  EXPECT_EQ(six.max_torque, 0.3);
+  EXPECT_EQ(six.apparent_inertia, 2e-4);
+  EXPECT_EQ(six.apparent_rotational_damping, 5e-4);
+  const runtime::DeviceDescription& three = devices_of("{}")[0].device->description();
+  EXPECT_EQ(three.dof, 3u);
+  EXPECT_FALSE(three.capabilities.torque);
+  EXPECT_EQ(three.apparent_inertia, 0.0);
+}
+
 TEST(DesignDevice, OnePortIsThatPortsDevice) {
   const DesignDevice design = scene_design_device(devices_of("{}"));
   EXPECT_EQ(design.port, 0);

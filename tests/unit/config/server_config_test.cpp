@@ -239,6 +239,26 @@ TEST(Config, TheDocumentsDevicesAreCheckedNamingTheField) {
   EXPECT_EQ(error_of(R"({"simulated_five_bar": {"velocity": "estimator", "coriolis": false}})"), "");
 }
 
+TEST(Config, TheSixDofPointMassTakesItsRotationsDefaultsAndNamesABadValue) {
+  const v1::ServerConfig six = load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/six_dof.json");
+  ASSERT_TRUE(six.simulated_point_mass().has_rotation());
+  EXPECT_EQ(six.simulated_point_mass().rotation().inertia(), 1e-4);
+  EXPECT_EQ(six.initial_scene().fields_size(), 2);
+  const v1::ServerConfig defaults = parse_config(R"({"simulated_point_mass": {"rotation": {}}})", "x");
+  EXPECT_EQ(defaults.simulated_point_mass().rotation().inertia(), 1e-4);
+  EXPECT_EQ(defaults.simulated_point_mass().rotation().damping(), 5e-4);
+  EXPECT_EQ(defaults.simulated_point_mass().rotation().max_torque(), 0.2);
+  EXPECT_EQ(parse_config(R"({"simulated_point_mass": {"rotation": {"damping": 0}}})", "x")
+                .simulated_point_mass().rotation().damping(),
+            0.0);  // zero damping is a choice, not a default
+  EXPECT_NE(error_of(R"({"simulated_point_mass": {"rotation": {"inertia": -1}}})")
+                .find("simulated_point_mass.rotation.inertia:"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_point_mass": {"rotation": {"initial_orientation": {"w": 2}}}})")
+                .find("simulated_point_mass.rotation.initial_orientation: must be a unit quaternion"),
+            std::string::npos);
+}
+
 TEST(Config, ExtraDevicesAreCheckedLikePortZerosNamingTheirIndex) {
   // Defaults fill an extra point mass like port 0's; any device may be an extra one.
   const v1::ServerConfig config = parse_config(
