@@ -126,7 +126,8 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
       record.ticks = ticks;
       runtime::TickSample& s = record.sample;
       if (!rings[p]->read(k, s)) continue;
-      const double power = engine::dot(s.F_T_W, s.v_WT);
+      // The force's power on the tool, and the torque's on the handle (zero but on a 6-DOF port).
+      const double power = engine::dot(s.F_T_W, s.v_WT) + engine::dot(s.tau_T_W, s.w_WT);
       const double work = k > 1 ? 0.5 * (last_power[p] + power) * period_s : 0.0;  // trapezoidal
       (work > 0.0 ? given_j[p] : taken_j[p]) += std::abs(work);
       last_power[p] = power;
@@ -159,7 +160,7 @@ RunSummary run_scene(const v1::ServerConfig& config, double duration_s, std::ost
     trace.precision(std::numeric_limits<double>::max_digits10);
     trace << "port,tick,time_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,fx_n,fy_n,fz_n,proxy_x_m,proxy_y_m,"
              "proxy_z_m,contacts,flags,energy_to_device_j,energy_from_device_j,q0,q1,q2,q0_dot,"
-             "q1_dot,q2_dot\n";
+             "q1_dot,q2_dot,qw,qx,qy,qz,tau_x_nm,tau_y_nm,tau_z_nm\n";
     header_written = true;
   };
   const RunSummary summary = simulate_scene(config, duration_s, [&](const TickRecord& r) {
@@ -178,7 +179,9 @@ RunSummary run_scene(const v1::ServerConfig& config, double duration_s, std::ost
       trace << ',';
       if (j < r.joints.count) trace << r.joints.q_dot[j];
     }
-    trace << '\n';
+    // The tool's orientation (identity where the device measures none) and the torque on it.
+    trace << ',' << s.R_WT.w << ',' << s.R_WT.x << ',' << s.R_WT.y << ',' << s.R_WT.z << ',' << s.tau_T_W.x
+          << ',' << s.tau_T_W.y << ',' << s.tau_T_W.z << '\n';
     if (progress && r.port == 0 && (s.tick % 1000 == 0 || s.tick == r.ticks)) progress(s.tick, r.ticks);
     return true;
   });

@@ -17,7 +17,7 @@ namespace haptic::lab {
 
 struct RunSummary {
   std::uint64_t ticks = 0;          // Ticks run (fewer than asked when the callback stopped the run).
-  double energy_to_device = 0.0;    // Work the scene's force did on the tool. Unit: J.
+  double energy_to_device = 0.0;    // Work the scene's force (and torque) did on the tool. Unit: J.
   double energy_from_device = 0.0;  // Work the tool did against it. Unit: J.
   std::uint64_t fault_ticks = 0;    // Ticks with a force or device fault flag.
   /// Every published state, and every device's joint state, was finite (the loop publishes the
@@ -66,7 +66,9 @@ RunSummary simulate_scene(const v1::ServerConfig& config, double duration_s, con
 ///   fx_n fy_n fz_n (F_T_W after the safety stage, N), proxy_x_m proxy_y_m proxy_z_m (p_WP, m),
 ///   contacts, flags, energy_to_device_j energy_from_device_j (J, so far),
 ///   q0 q1 q2 (the device's joints, rad or m: JointState) and q0_dot q1_dot q2_dot (rad/s or
-///   m/s); the joint cells past the device's joint count are empty. Numbers are written with
+///   m/s); the joint cells past the device's joint count are empty; qw qx qy qz (R_WT, identity
+///   where the device measures no orientation) and tau_x_nm tau_y_nm tau_z_nm (the torque on the
+///   tool after its guard, N·m; 0 but on a device that takes torques). Numbers are written with
 ///   max_digits10 significant digits (they read back to the same double).
 /// Throws std::invalid_argument naming what is wrong before any work starts (nothing written).
 RunSummary run_scene(const v1::ServerConfig& config, double duration_s, std::ostream& trace,

@@ -141,6 +141,7 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
   sample.p_WT = reading.p_WT;
   sample.v_WT = reading.v_WT;
   sample.R_WT = reading.R_WT;
+  sample.w_WT = reading.w_WT;
   sample.has_orientation = port.oriented;
   sample.buttons = reading.buttons;
   sample.F_T_W = F_command;

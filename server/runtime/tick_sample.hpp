@@ -17,6 +17,7 @@ struct TickSample {
                                 // torques and scenes with orientation fields), else 0. Unit: N·m.
   engine::Vec3 p_WP;            // Proxy point. Unit: m.
   engine::Quat R_WT;            // Tool orientation (devices that measure one), else identity.
+  engine::Vec3 w_WT;            // Its angular velocity in W (such devices), else 0. Unit: rad/s.
   bool has_orientation = false; // The port's device measures the orientation.
   std::uint32_t contact_count = 0;
   std::uint32_t flags = 0;      // haptic::wire::StateFlags bits.

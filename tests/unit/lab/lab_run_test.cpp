@@ -37,6 +37,7 @@ std::string first_row(const std::string& text) {
 
 // Joint columns of the trace (after the 19 of the tool, force, proxy, flags and energy).
 constexpr int kQ0 = 19, kQ1 = 20, kQ2 = 21, kQ0Dot = 22, kQ2Dot = 24;
+constexpr int kQw = 25, kQz = 28, kTauZ = 31;
 
 TEST(LabRun, AWallUnderAPushSettlesAtForceOverStiffnessAndTheTraceSaysSo) {
   // The default point mass at z = 20 mm, a 1000 N/m wall at z = 0, the hand pushing 2 N down.
@@ -52,7 +53,9 @@ TEST(LabRun, AWallUnderAPushSettlesAtForceOverStiffnessAndTheTraceSaysSo) {
   EXPECT_EQ(summary.fault_ticks, 0u);
   const std::string text = trace.str();
   EXPECT_EQ(text.rfind("port,tick,time_s,x_m", 0), 0u);
-  EXPECT_NE(text.find("energy_from_device_j,q0,q1,q2,q0_dot,q1_dot,q2_dot\n"), std::string::npos);
+  EXPECT_NE(text.find("energy_from_device_j,q0,q1,q2,q0_dot,q1_dot,q2_dot,qw,qx,qy,qz,tau_x_nm,tau_y_nm,"
+                      "tau_z_nm\n"),
+            std::string::npos);
   const std::string last = last_line(text);
   EXPECT_EQ(column(last, 1), 2000.0);                // tick
   EXPECT_NEAR(column(last, 5), -0.002, 1e-5);        // z: F/K under the surface
@@ -62,6 +65,23 @@ TEST(LabRun, AWallUnderAPushSettlesAtForceOverStiffnessAndTheTraceSaysSo) {
   EXPECT_EQ(column(last, kQ2Dot), column(last, 8));
   // The wall stored ½ K d² = 2 mJ and took the falling tool's work besides; it gave little back.
   EXPECT_GT(summary.energy_from_device, 0.002);
+}
+
+TEST(LabRun, TheSixDofConfigTracesTheHandlesOrientationAndTheSpringsTorque) {
+  const v1::ServerConfig config = config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/six_dof.json");
+  std::ostringstream trace;
+  const RunSummary summary = run_scene(config, 3.0, trace);
+  EXPECT_TRUE(summary.finite);
+  const std::string text = trace.str();
+  const std::string first = text.substr(text.find('\n') + 1, text.find('\n', text.find('\n') + 1) - text.find('\n') - 1);
+  // At the first tick the handle is 0.2 rad about z from the spring's target (identity), at rest:
+  // τ_z = −k θ = −0.05 × 0.2 N·m (the exact-ZOH law starts from the measured rate, 0).
+  EXPECT_NEAR(column(first, kTauZ), -0.01, 1e-12);
+  EXPECT_NEAR(column(first, kQz), std::sin(0.1), 1e-4);
+  // Three seconds later it has rung down onto the target.
+  const std::string last = last_line(text);
+  EXPECT_LT(std::abs(column(last, kQz)), 0.01);
+  EXPECT_NEAR(column(last, kQw), 1.0, 1e-4);
 }
 
 TEST(LabRun, BadInputIsRefusedBeforeAnyWork) {
