@@ -229,7 +229,7 @@ struct Device {
   std::atomic<std::uint64_t> sample_version{0};
   Sample sample;
   std::atomic<std::uint64_t> force_bits[3] = {{0}, {0}, {0}};
-  std::atomic<bool> safe{false};       // enter_safe_state: zero force until start
+  std::atomic<bool> safe{false};       // enter_safe_state: zero force until the next write
   std::atomic<bool> failed{false};     // the runtime reported an error on the servo thread
   std::atomic<HDerror> failed_code{kSuccess};
   std::uint64_t ticks = 0;              // servo ticks (servo thread only)
@@ -526,6 +526,10 @@ int write_command(void* driver, const haptic_driver_command* command, double /*d
     if (!std::isfinite(command->tau[i])) return HAPTIC_DRIVER_FAILED;
   }
   for (int i = 0; i < 3; ++i) store_double(device->force_bits[i], command->tau[i]);
+  // A command after the safe state is the loop driving the device again (it writes only after a
+  // good reading, and a zero command right after entering the safe state): forces flow again, as
+  // the Force Dimension driver's next dhdSetForce does, without a restart.
+  device->safe.store(false, std::memory_order_release);
   return device->failed.load(std::memory_order_acquire) ? HAPTIC_DRIVER_FAILED : HAPTIC_DRIVER_OK;
 }
 
