@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "haptic/wire/datagram.hpp"
+#include "runtime/flush_denormals.hpp"
 
 namespace haptic::runtime {
 
@@ -51,6 +52,7 @@ double TickRunner::output_gain(std::uint64_t tick) const {
 }
 
 void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
+  const FlushDenormals no_denormals;  // a state decaying to rest must not slow the loop down
   // A new scene takes over the contacts, filters and meters of the items it shares with the last.
   const engine::CompiledScene& scene = scenes_.adopt(
       [](const engine::CompiledScene& from, const engine::CompiledScene& to) {

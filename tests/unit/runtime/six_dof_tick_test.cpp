@@ -9,6 +9,7 @@
 
 #include "engine/core/rotation.hpp"
 #include "runtime/cartesian_model.hpp"
+#include "runtime/flush_denormals.hpp"
 #include "runtime/simulated_point_mass_device.hpp"
 #include "runtime/tick_runner.hpp"
 #include "support/allocation_counter.hpp"
@@ -175,6 +176,31 @@ TEST(SixDofTick, ATickWithOrientationFieldsAllocatesNothing) {
     for (int i = 0; i < 1000; ++i) rig.run_one();
   }
   EXPECT_EQ(haptic::test::allocations(), 0u);
+}
+
+}  // namespace
+}  // namespace haptic::runtime
+
+namespace haptic::runtime {
+namespace {
+
+double volatile_product(double a, double b) {
+  volatile double x = a;
+  volatile double y = b;
+  return x * y;
+}
+
+TEST(FlushDenormals, DenormalsAreZeroForTheTickAndTheModeIsRestoredAfter) {
+  const double tiny = 1e-310;  // below 2.2e-308: a denormal
+  ASSERT_GT(volatile_product(tiny, 1.0), 0.0);
+  {
+    const FlushDenormals scope;
+#if defined(__x86_64__) || defined(__i386__) || defined(__aarch64__)
+    EXPECT_EQ(volatile_product(tiny, 1.0), 0.0);
+    EXPECT_EQ(volatile_product(1e-300, 1e-10), 0.0);  // a result in the denormal range
+#endif
+  }
+  EXPECT_GT(volatile_product(tiny, 1.0), 0.0);  // the caller's mode again
 }
 
 }  // namespace
