@@ -302,6 +302,8 @@ void bind_reports(py::module_& m) {
       .readonly("flags", &State::flags, "StateFlag bits")
       .readonly("buttons", &State::buttons, "bit i: button i")
       .readonly("orientation", &State::orientation, "(w, x, y, z) or None")
+      .readonly("torque", &State::torque,
+                "torque commanded on the tool τ_T_W in W, N·m; None exactly when orientation is")
       .readonly_property(
           "received_at", [](const State& s) { return monotonic_seconds(s.received_at); },
           "local receipt time, s on time.monotonic()'s clock")

@@ -12,7 +12,23 @@ v1::Vec3 to_proto(const Vec3& v) {
 
 Vec3 from_proto(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
+v1::Quaternion to_proto(const Quaternion& q) {
+  v1::Quaternion out;
+  out.set_w(q.w);
+  out.set_x(q.x);
+  out.set_y(q.y);
+  out.set_z(q.z);
+  return out;
+}
+
+Quaternion from_proto(const v1::Quaternion& q) { return {q.w(), q.x(), q.y(), q.z()}; }
+
 namespace {
+// An unset Quaternion message means identity (types.proto), not its all-zero default.
+Quaternion orientation_from_proto(bool present, const v1::Quaternion& q) {
+  return present ? from_proto(q) : Quaternion{};
+}
+
 void set_impedance(v1::Object& object, const Impedance& impedance) {
   v1::Impedance& out = *object.mutable_impedance();
   out.set_stiffness(impedance.stiffness);
@@ -38,11 +54,7 @@ void set_dynamics(v1::Object& object, const Dynamics& dynamics) {
 
 void set_pose(v1::Object& object, const Pose& pose) {
   *object.mutable_pose()->mutable_position() = to_proto(pose.position);
-  auto* q = object.mutable_pose()->mutable_orientation();
-  q->set_w(pose.orientation.w);
-  q->set_x(pose.orientation.x);
-  q->set_y(pose.orientation.y);
-  q->set_z(pose.orientation.z);
+  *object.mutable_pose()->mutable_orientation() = to_proto(pose.orientation);
 }
 
 v1::Distance distance_to_proto(const Distance& distance) {
@@ -218,10 +230,7 @@ Dynamics dynamics_from_proto(const v1::Object& object) {
 Pose pose_from_proto(const v1::Object& object) {
   Pose pose;
   pose.position = from_proto(object.pose().position());
-  if (object.pose().has_orientation()) {
-    const auto& q = object.pose().orientation();
-    pose.orientation = {q.w(), q.x(), q.y(), q.z()};
-  }
+  pose.orientation = orientation_from_proto(object.pose().has_orientation(), object.pose().orientation());
   return pose;
 }
 
@@ -491,10 +500,8 @@ State from_proto(const v1::ToolState& s) {
   out.contact_count = s.contact_count();
   out.flags = s.flags();
   out.buttons = s.buttons();
-  if (s.has_orientation()) {
-    const v1::Quaternion& q = s.orientation();
-    out.orientation = Quaternion{q.w(), q.x(), q.y(), q.z()};
-  }
+  if (s.has_orientation()) out.orientation = from_proto(s.orientation());
+  if (s.has_torque()) out.torque = from_proto(s.torque());
   out.received_at = std::chrono::steady_clock::now();
   return out;
 }

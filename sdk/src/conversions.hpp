@@ -13,6 +13,9 @@ namespace haptic::detail {
 
 v1::Vec3 to_proto(const Vec3& v);
 Vec3 from_proto(const v1::Vec3& v);
+v1::Quaternion to_proto(const Quaternion& q);
+/// The message's values as they are; where an unset message means identity, check has_…() first.
+Quaternion from_proto(const v1::Quaternion& q);
 v1::Object to_proto(const WallSpec& wall);
 v1::Object to_proto(const SphereSpec& sphere);
 v1::Field to_proto(const SpringFieldSpec& spring);

@@ -369,8 +369,9 @@ void UdpLink::take(std::span<const std::uint8_t> datagram,
   state.contact_count = payload.contact_count;
   state.flags = payload.flags;
   state.buttons = payload.buttons;
-  if (payload.has_orientation) {
+  if (payload.has_orientation) {  // StateOriented: the orientation and the torque
     state.orientation = Quaternion{payload.R_WT.w, payload.R_WT.x, payload.R_WT.y, payload.R_WT.z};
+    state.torque = to_vec(payload.tau_T_W);
   }
   state.received_at = batch.received_at;
   state.arrived_at = arrived_at;

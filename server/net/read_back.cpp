@@ -15,7 +15,10 @@ v1::ToolState to_tool_state(const runtime::TickSample& sample) {
   state.set_contact_count(sample.contact_count);
   state.set_flags(sample.flags);
   state.set_buttons(sample.buttons);
-  if (sample.has_orientation) *state.mutable_orientation() = schema::to_proto(sample.R_WT);
+  if (sample.has_orientation) {  // as the datagram: orientation and torque, or neither
+    *state.mutable_orientation() = schema::to_proto(sample.R_WT);
+    *state.mutable_torque() = schema::to_proto(sample.tau_T_W);
+  }
   return state;
 }
 

@@ -10,8 +10,8 @@
 
 namespace haptic::net {
 
-/// A tick's sample: p_WT, v_WT, F_T_W, p_WP, contacts, flags, buttons, and R_WT for a device that
-/// measures it.
+/// A tick's sample: p_WT, v_WT, F_T_W, p_WP, contacts, flags, buttons, and R_WT and tau_T_W for a
+/// device that measures the orientation.
 v1::ToolState to_tool_state(const runtime::TickSample& sample);
 
 /// Items as SceneStore::read gives them, with their ids and owners alongside.

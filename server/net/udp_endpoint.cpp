@@ -283,8 +283,9 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns) {
       state.contact_count = sample.contact_count;
       state.flags = sample.flags;
       state.buttons = sample.buttons;
-      state.has_orientation = sample.has_orientation;  // only then the 32 bytes go out
+      state.has_orientation = sample.has_orientation;  // only then R_WT and tau_T_W go out
       state.R_WT = {sample.R_WT.w, sample.R_WT.x, sample.R_WT.y, sample.R_WT.z};
+      state.tau_T_W = {sample.tau_T_W.x, sample.tau_T_W.y, sample.tau_T_W.z};
       Outgoing& out = outgoing[count++];
       const std::size_t size = wire::encode_state(header, state, subscriber.key, out.bytes);
       out.iov = {out.bytes.data(), size};

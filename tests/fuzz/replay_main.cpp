@@ -54,7 +54,10 @@ class Generator {
     s.flags = static_cast<std::uint32_t>(bits());
     s.buttons = static_cast<std::uint32_t>(bits());
     s.has_orientation = oriented < 0 ? (bits() & 1) != 0 : oriented == 1;
-    if (s.has_orientation) s.R_WT = {any_vec().x, any_vec().y, any_vec().z, any_vec().x};
+    if (s.has_orientation) {
+      s.R_WT = {any_double(), any_double(), any_double(), any_double()};
+      s.tau_T_W = any_vec();
+    }
     std::vector<std::uint8_t> out(s.has_orientation ? kStateOrientedDatagramSize : kStateDatagramSize);
     encode_state(any_header(), s, kKey, out);
     return out;

@@ -214,7 +214,7 @@ TEST_F(WireLevel, InvalidRequestsNameTheFieldAndChangeNothing) {
   v1::OpenSessionResponse ignored;
   const grpc::Status mismatch = call(&v1::Haptic::Stub::OpenSession, old_client, ignored);
   EXPECT_EQ(mismatch.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
-  EXPECT_EQ(mismatch.error_message(), "api_version: client speaks 7, server speaks 4");
+  EXPECT_EQ(mismatch.error_message(), "api_version: client speaks 7, server speaks 5");
 
   v1::StepRequest step;
   step.set_session_id(session_.session_id());

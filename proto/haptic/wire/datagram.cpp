@@ -194,6 +194,7 @@ std::size_t encode_state(Header header, const StatePayload& state, const Key& ke
       w.f64(state.R_WT.x);
       w.f64(state.R_WT.y);
       w.f64(state.R_WT.z);
+      w.vec(state.tau_T_W);
     }
   });
 }
@@ -250,6 +251,7 @@ DecodeError decode_state(std::span<const std::uint8_t> datagram, const Key& key,
       decoded.R_WT.x = r.f64();
       decoded.R_WT.y = r.f64();
       decoded.R_WT.z = r.f64();
+      decoded.tau_T_W = r.vec();
     }
     return decoded;
   });

@@ -27,8 +27,9 @@ namespace haptic::wire {
 
 inline constexpr std::uint32_t kMagic = 0x43545048u;  // bytes "HPTC"
 // 2: path validation (PathChallenge/Response); 3: buttons in State, StateOriented; 4: the
-// client's receive report and the round-trip echo in Heartbeat.
-inline constexpr std::uint16_t kWireVersion = 4;
+// client's receive report and the round-trip echo in Heartbeat; 5: the torque on the tool,
+// tau_T_W, in StateOriented.
+inline constexpr std::uint16_t kWireVersion = 5;
 inline constexpr std::size_t kHeaderSize = 40;
 inline constexpr std::size_t kTagSize = 8;
 
@@ -39,8 +40,9 @@ enum class DatagramType : std::uint16_t {
   // here by echoing the nonce (so a client cannot aim the stream at a bystander by spoofing).
   kPathChallenge = 3,
   kPathResponse = 4,  // client -> server, from the challenged address: the nonce echoed
-  // server -> client, one tick's sample of a device that reports the tool's orientation: State
-  // and the orientation after it (a device without one sends State, 32 bytes shorter).
+  // server -> client, one tick's sample of a device that reports the tool's orientation: State,
+  // then the orientation and the torque on the tool (a device without one sends State, 56 bytes
+  // shorter).
   kStateOriented = 5,
 };
 
@@ -75,10 +77,13 @@ struct StatePayload {
   std::uint32_t contact_count = 0;  // Objects in contact this tick.
   std::uint32_t flags = 0;          // StateFlags bits.
   std::uint32_t buttons = 0;        // The device's buttons, bit i for button i.
-  /// Sent as kStateOriented when true: the tool's orientation R_WT; else kState, and R_WT is
-  /// identity.
+  /// Sent as kStateOriented when true: the tool's orientation R_WT and the torque tau_T_W; else
+  /// kState, R_WT is identity and tau_T_W zero.
   bool has_orientation = false;
   Quatd R_WT;
+  /// Commanded torque on the tool, after safety, expressed in W (zero for a device that takes no
+  /// torque). Only in kStateOriented: a device without orientation takes no torque. Unit: N·m.
+  Vec3d tau_T_W;
   friend bool operator==(const StatePayload&, const StatePayload&) = default;
 };
 
@@ -118,7 +123,8 @@ struct PathResponsePayload {
 };
 
 inline constexpr std::size_t kStatePayloadSize = 8 + 4 * 24 + 4 + 4 + 4;  // 116
-inline constexpr std::size_t kStateOrientedPayloadSize = kStatePayloadSize + 32;  // 148
+// R_WT (4 f64), then tau_T_W (3 f64).
+inline constexpr std::size_t kStateOrientedPayloadSize = kStatePayloadSize + 32 + 24;  // 172
 inline constexpr std::size_t kHeartbeatPayloadSize = 48;
 inline constexpr std::size_t kPathPayloadSize = 16;  // challenge and response alike
 inline constexpr std::size_t kStateDatagramSize = kHeaderSize + kStatePayloadSize + kTagSize;

@@ -30,7 +30,7 @@ struct WireScene;
 }
 
 /// The API version this SDK speaks (haptic.v1.API_VERSION_CURRENT).
-inline constexpr std::uint32_t kApiVersion = 4;
+inline constexpr std::uint32_t kApiVersion = 5;
 
 /// TLS for the control plane (the server's security.tls; docs/deployment.md). The UDP session
 /// key then reaches the client encrypted.

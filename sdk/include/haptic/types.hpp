@@ -224,6 +224,10 @@ struct State {
   std::uint32_t buttons = 0;     ///< The device's buttons, bit i for button i (DeviceInfo::buttons).
   /// The tool's orientation R_WT, for a device that measures one (capabilities.orientation).
   std::optional<Quaternion> orientation;
+  /// Torque commanded on the tool tau_T_W, after the server's safety stage, in W; present exactly
+  /// when `orientation` is (zero on a device that takes no torque, or with no orientation field).
+  /// Unit: N·m.
+  std::optional<Vec3> torque;
   std::chrono::steady_clock::time_point received_at;  ///< Local receipt time.
   /// When the datagram reached this host's socket, by the kernel's receive stamp (SO_TIMESTAMPNS)
   /// on steady_clock: received_at − arrived_at is the time the receiving thread took to run.

@@ -16,6 +16,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -106,19 +107,32 @@ class FakeDataPlane {
   /// A State datagram for `tick` with tool height `z` (m), tagged with `key`.
   void send_state(std::uint64_t tick, double z, std::uint64_t session_id = kSessionId,
                   const wire::Key& key = kKey) {
-    wire::Header header;
-    header.session_id = session_id;
-    header.sequence = ++sequence_;
-    header.time_ns = static_cast<std::int64_t>(tick) * 1'000'000;  // a 1 kHz loop
+    send_payload(state_at(tick, z), session_id, key);
+  }
+
+  /// The payload send_state sends: tool at height `z` (m), 1.5 N up, one contact.
+  static wire::StatePayload state_at(std::uint64_t tick, double z) {
     wire::StatePayload state;
     state.tick = tick;
     state.p_WT = {0.0, 0.0, z};
     state.p_WP = state.p_WT;
     state.F_T_W = {0.0, 0.0, 1.5};
     state.contact_count = 1;
-    std::array<std::uint8_t, wire::kStateDatagramSize> bytes{};
-    ASSERT_EQ(wire::encode_state(header, state, key, bytes), bytes.size());
-    send_to_client(bytes);
+    return state;
+  }
+
+  /// `state` as a State datagram, or StateOriented when it has the orientation, stamped as a
+  /// 1 kHz loop stamps its tick.
+  void send_payload(const wire::StatePayload& state, std::uint64_t session_id = kSessionId,
+                    const wire::Key& key = kKey) {
+    wire::Header header;
+    header.session_id = session_id;
+    header.sequence = ++sequence_;
+    header.time_ns = static_cast<std::int64_t>(state.tick) * 1'000'000;
+    std::array<std::uint8_t, wire::kMaxDatagramSize> bytes{};
+    const std::size_t size = wire::encode_state(header, state, key, bytes);
+    ASSERT_EQ(size, state.has_orientation ? wire::kStateOrientedDatagramSize : wire::kStateDatagramSize);
+    send_to_client(std::span<const std::uint8_t>(bytes.data(), size));
   }
 
  private:
@@ -407,14 +421,14 @@ TEST_F(FakeServerTest, ApplySceneNamesTheBadSpecAndSendsNothing) {
 
 TEST_F(FakeServerTest, AnotherApiVersionIsAVersionMismatchCarryingBoth) {
   service_.refuse_open_with({grpc::StatusCode::FAILED_PRECONDITION,
-                             "api_version: client speaks 4, server speaks 5"});
+                             "api_version: client speaks 5, server speaks 6"});
   try {
     Client client(config_);
     FAIL() << "no exception";
   } catch (const VersionMismatchError& error) {
     EXPECT_EQ(error.client_version(), kApiVersion);
-    EXPECT_EQ(error.client_version(), 4u);
-    EXPECT_EQ(error.server_version(), 5u);
+    EXPECT_EQ(error.client_version(), 5u);
+    EXPECT_EQ(error.server_version(), 6u);
   }
 }
 
@@ -625,6 +639,30 @@ TEST_F(FakeServerTest, ASamplesAgeIsHowMuchLongerItTookThanTheQuickestRecentOne)
   ASSERT_TRUE(client.wait_for_tick(101, state, seconds(2)));
   EXPECT_GE(state.age, milliseconds(29));
   EXPECT_LT(state.age, seconds(2));
+}
+
+// A device that measures the orientation streams StateOriented: State gets the orientation and
+// the torque together; a plain State has neither.
+TEST_F(FakeServerTest, AnOrientedSampleCarriesTheOrientationAndTheTorque) {
+  config_.state_decimation = 1;
+  Client client(config_);
+  wire::StatePayload oriented = FakeDataPlane::state_at(1, 0.002);
+  oriented.has_orientation = true;
+  oriented.R_WT = {0.5, 0.5, -0.5, 0.5};
+  oriented.tau_T_W = {0.0, 0.25, -1.0};
+  data_plane_.send_payload(oriented);
+  State state;
+  ASSERT_TRUE(client.wait_for_tick(1, state, seconds(2)));
+  ASSERT_TRUE(state.orientation.has_value());
+  EXPECT_EQ(*state.orientation, (Quaternion{0.5, 0.5, -0.5, 0.5}));
+  ASSERT_TRUE(state.torque.has_value());
+  EXPECT_EQ(*state.torque, (Vec3{0.0, 0.25, -1.0}));
+  EXPECT_EQ(state.position.z, 0.002);
+
+  data_plane_.send_state(2, 0.0);
+  ASSERT_TRUE(client.wait_for_tick(2, state, seconds(2)));
+  EXPECT_FALSE(state.orientation.has_value());
+  EXPECT_FALSE(state.torque.has_value());
 }
 
 TEST_F(FakeServerTest, PollReturnsTheFirstSampleEvenAtTickZero) {

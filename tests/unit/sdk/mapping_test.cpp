@@ -38,12 +38,12 @@ TEST(StatusMapping, EachCodeBecomesItsExceptionWithTheServersMessage) {
 TEST(StatusMapping, VersionMismatchCarriesBothVersions) {
   try {
     throw_if_failed(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                                 "api_version: client speaks 4, server speaks 5"),
+                                 "api_version: client speaks 5, server speaks 6"),
                     "OpenSession");
     FAIL();
   } catch (const VersionMismatchError& error) {
     EXPECT_EQ(error.client_version(), kApiVersion);
-    EXPECT_EQ(error.server_version(), 5u);
+    EXPECT_EQ(error.server_version(), 6u);
     EXPECT_EQ(error.code(), ErrorCode::kVersionMismatch);
   }
 }
@@ -111,6 +111,11 @@ TEST(Conversions, ToolStateAndStatsComeBackWhole) {
   vec(s.mutable_proxy(), 10.0, 11.0, 12.0);
   s.set_contact_count(13);
   s.set_flags(4);
+  s.set_buttons(5);
+  EXPECT_FALSE(from_proto(s).orientation.has_value());  // a point device: neither
+  EXPECT_FALSE(from_proto(s).torque.has_value());
+  *s.mutable_orientation() = to_proto(Quaternion{0.5, -0.5, 0.5, -0.5});
+  vec(s.mutable_torque(), 14.0, 15.0, 16.0);
   const State state = from_proto(s);
   EXPECT_EQ(state.tick, 42u);
   EXPECT_EQ(state.sequence, 0u);  // a Step reply's sample has no datagram sequence
@@ -121,6 +126,11 @@ TEST(Conversions, ToolStateAndStatsComeBackWhole) {
   EXPECT_EQ(state.proxy, (Vec3{10.0, 11.0, 12.0}));
   EXPECT_EQ(state.contact_count, 13u);
   EXPECT_EQ(state.flags, static_cast<std::uint32_t>(kRampingOut));
+  EXPECT_EQ(state.buttons, 5u);
+  EXPECT_EQ(state.orientation, (Quaternion{0.5, -0.5, 0.5, -0.5}));
+  EXPECT_EQ(state.torque, (Vec3{14.0, 15.0, 16.0}));
+  // One line above per ToolState field: a new one without its line here fails the count.
+  EXPECT_EQ(v1::ToolState::descriptor()->field_count(), 11);
 
   v1::Stats stats;
   const google::protobuf::Descriptor& descriptor = *v1::Stats::descriptor();

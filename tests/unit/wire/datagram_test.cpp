@@ -95,19 +95,34 @@ void resign(Bytes& bytes) {
 TEST(DatagramLayout, SizesMatchTheDocumentedLayout) {
   EXPECT_EQ(kHeaderSize, 40u);
   EXPECT_EQ(kStatePayloadSize, 116u);
-  EXPECT_EQ(kStateOrientedPayloadSize, 148u);
+  EXPECT_EQ(kStateOrientedPayloadSize, 172u);
   EXPECT_EQ(kHeartbeatPayloadSize, 48u);
   EXPECT_EQ(kStateDatagramSize, 164u);
-  EXPECT_EQ(kStateOrientedDatagramSize, 196u);
+  EXPECT_EQ(kStateOrientedDatagramSize, 220u);
   EXPECT_EQ(kHeartbeatDatagramSize, 96u);
-  EXPECT_EQ(kMaxDatagramSize, 196u);
+  EXPECT_EQ(kMaxDatagramSize, 220u);
 }
 
-// A complete heartbeat under key 00 01 .. 0f; the tag was computed by an independent SipHash-2-4
+// The golden datagrams' key, 00 01 .. 0f, and header (the type is the encoder's).
+Key golden_key() {
+  Key key;
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(i);
+  return key;
+}
+
+Header golden_header(std::uint64_t sequence, std::int64_t time_ns) {
+  Header h;
+  h.session_id = 0x0123456789abcdefull;
+  h.sequence = sequence;
+  h.time_ns = time_ns;
+  return h;
+}
+
+// A complete heartbeat under golden_key(); the tag was computed by an independent SipHash-2-4
 // implementation, so this pins layout and tag together.
 TEST(DatagramLayout, HeartbeatMatchesGoldenBytes) {
   constexpr std::array<std::uint8_t, kHeartbeatDatagramSize> kGolden = {
-      0x48, 0x50, 0x54, 0x43, 0x04, 0x00, 0x02, 0x00,  // "HPTC", version 4, type 2
+      0x48, 0x50, 0x54, 0x43, 0x05, 0x00, 0x02, 0x00,  // "HPTC", version 5, type 2
       0xef, 0xcd, 0xab, 0x89, 0x67, 0x45, 0x23, 0x01,  // session_id
       0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // sequence 1
       0xd6, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff,  // time_ns -42
@@ -118,16 +133,12 @@ TEST(DatagramLayout, HeartbeatMatchesGoldenBytes) {
       0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // states_lost 1
       0xc0, 0xb4, 0xb3, 0xff, 0xff, 0xff, 0xff, 0xff,  // echo_state_time_ns -5e6
       0x90, 0xd0, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00,  // echo_hold_ns 250000
-      0x24, 0x32, 0xd5, 0xc8, 0x87, 0x3d, 0xc1, 0xe0,  // SipHash-2-4 tag
+      0x65, 0x4d, 0xfb, 0xd0, 0x54, 0x6b, 0x45, 0xd0,  // SipHash-2-4 tag
   };
-  Key key;
-  for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(i);
-  Header h;
-  h.session_id = 0x0123456789abcdefull;
-  h.sequence = 1;
-  h.time_ns = -42;
+  const Key key = golden_key();
   std::array<std::uint8_t, kHeartbeatDatagramSize> out{};
-  ASSERT_EQ(encode_heartbeat(h, HeartbeatPayload{1'000'000'000, 7, 6, 1, -5'000'000, 250'000}, key, out),
+  ASSERT_EQ(encode_heartbeat(golden_header(1, -42),
+                             HeartbeatPayload{1'000'000'000, 7, 6, 1, -5'000'000, 250'000}, key, out),
             kHeartbeatDatagramSize);
   for (std::size_t i = 0; i < out.size(); ++i) EXPECT_EQ(out[i], kGolden[i]) << "offset " << i;
 
@@ -135,6 +146,65 @@ TEST(DatagramLayout, HeartbeatMatchesGoldenBytes) {
   HeartbeatPayload heartbeat;
   ASSERT_EQ(decode_heartbeat(kGolden, key, header, heartbeat), DecodeError::kNone);
   EXPECT_EQ(heartbeat, (HeartbeatPayload{1'000'000'000, 7, 6, 1, -5'000'000, 250'000}));
+}
+
+// A complete StateOriented under golden_key(), the tag again from an independent SipHash-2-4:
+// State's fields, then R_WT and tau_T_W (wire version 5).
+TEST(DatagramLayout, StateOrientedMatchesGoldenBytes) {
+  constexpr std::array<std::uint8_t, kStateOrientedDatagramSize> kGolden = {
+      0x48, 0x50, 0x54, 0x43,                           // "HPTC"
+      0x05, 0x00,                                       // version 5
+      0x05, 0x00,                                       // type 5, StateOriented
+      0xef, 0xcd, 0xab, 0x89, 0x67, 0x45, 0x23, 0x01,   // session_id
+      0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,   // sequence 3
+      0x40, 0x42, 0x0f, 0x00, 0x00, 0x00, 0x00, 0x00,   // time_ns 1e6
+      0xac, 0x00, 0x00, 0x00,                           // payload_size 172
+      0x00, 0x00, 0x00, 0x00,                           // reserved
+      0x07, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,   // tick 7
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xf0, 0x3f,   // p_WT (1, 0, 0)
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,   // v_WT 0
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,   // F_T_W (0, 0, -2)
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xc0,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xf0, 0x3f,   // p_WP (1, 0, 0)
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+      0x01, 0x00, 0x00, 0x00,                           // contact_count 1
+      0x00, 0x00, 0x00, 0x00,                           // flags 0
+      0x02, 0x00, 0x00, 0x00,                           // buttons 0b10
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xe0, 0x3f,   // R_WT (0.5, 0.5, -0.5, 0.5)
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xe0, 0x3f,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xe0, 0xbf,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xe0, 0x3f,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,   // tau_T_W (0, 0.25, -1)
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xd0, 0x3f,
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xf0, 0xbf,
+      0x6a, 0x97, 0x9e, 0x59, 0xd9, 0xe1, 0x89, 0xc8,   // SipHash-2-4 tag
+  };
+  const Key key = golden_key();
+  StatePayload s;
+  s.tick = 7;
+  s.p_WT = {1.0, 0.0, 0.0};
+  s.F_T_W = {0.0, 0.0, -2.0};
+  s.p_WP = {1.0, 0.0, 0.0};
+  s.contact_count = 1;
+  s.buttons = 0b10;
+  s.has_orientation = true;
+  s.R_WT = {0.5, 0.5, -0.5, 0.5};
+  s.tau_T_W = {0.0, 0.25, -1.0};
+  std::array<std::uint8_t, kStateOrientedDatagramSize> out{};
+  ASSERT_EQ(encode_state(golden_header(3, 1'000'000), s, key, out), kStateOrientedDatagramSize);
+  for (std::size_t i = 0; i < out.size(); ++i) EXPECT_EQ(out[i], kGolden[i]) << "offset " << i;
+
+  Header header;
+  StatePayload state;
+  ASSERT_EQ(decode_state(kGolden, key, header, state), DecodeError::kNone);
+  EXPECT_EQ(header.type, DatagramType::kStateOriented);
+  EXPECT_EQ(state, s);
 }
 
 TEST(DatagramLayout, PathChallengeAndResponseAreShorterThanAHeartbeat) {
@@ -243,16 +313,28 @@ TEST(DatagramRoundTrip, StateIsBitExact) {
   EXPECT_EQ(state.contact_count, expected.contact_count);
   EXPECT_EQ(state.flags, expected.flags);
   EXPECT_EQ(state.buttons, expected.buttons);
-  EXPECT_FALSE(state.has_orientation);  // a device without one: 32 bytes shorter, identity
+  // A device without orientation: 56 bytes shorter, identity and no torque.
+  EXPECT_FALSE(state.has_orientation);
   EXPECT_EQ(state.R_WT, Quatd{});
+  EXPECT_EQ(state.tau_T_W, Vec3d{});
+}
+
+// The torque travels only with the orientation: State leaves it out, whatever the payload held.
+TEST(DatagramRoundTrip, StateWithoutOrientationCarriesNoTorque) {
+  StatePayload s = sample_state();
+  s.tau_T_W = {1.0, 2.0, 3.0};
+  Bytes b(kStateDatagramSize);
+  ASSERT_EQ(encode_state(sample_header(), s, test_key(), b), kStateDatagramSize);
+  EXPECT_EQ(b, encoded_state());
 }
 
 // A device that measures the tool's orientation: StateOriented, State's fields at the same
-// offsets, then R_WT (w, x, y, z) at 156, then the tag.
-TEST(DatagramLayout, StateOrientedAppendsTheOrientation) {
+// offsets, then R_WT (w, x, y, z) at 156, tau_T_W (x, y, z) at 188, then the tag at 212.
+TEST(DatagramLayout, StateOrientedAppendsTheOrientationAndTheTorque) {
   StatePayload s = sample_state();
   s.has_orientation = true;
   s.R_WT = {0.5, -0.5, from_bits(0x7ff8'0000'0000'0abcull), -0.0};
+  s.tau_T_W = {-0.25, std::numeric_limits<double>::infinity(), from_bits(0x7ff0'0000'0000'0002ull)};
   Bytes b(kStateOrientedDatagramSize);
   ASSERT_EQ(encode_state(sample_header(), s, test_key(), b), kStateOrientedDatagramSize);
   EXPECT_EQ(b[6], 5);  // type StateOriented
@@ -262,6 +344,15 @@ TEST(DatagramLayout, StateOrientedAppendsTheOrientation) {
   EXPECT_EQ(b[156 + 6], 0xe0);
   EXPECT_EQ(b[164 + 7], 0xbf);  // x = -0.5
   EXPECT_EQ(b[180 + 7], 0x80);  // z = -0.0
+  EXPECT_EQ(b[188 + 7], 0xbf);  // tau_T_W.x = -0.25: 0xbfd0000000000000
+  EXPECT_EQ(b[188 + 6], 0xd0);
+  EXPECT_EQ(b[196 + 7], 0x7f);  // tau_T_W.y = +inf: 0x7ff0000000000000
+  EXPECT_EQ(b[196 + 6], 0xf0);
+  EXPECT_EQ(b[204], 0x02);      // tau_T_W.z, a signalling NaN's payload
+  const std::uint64_t tag = siphash24(test_key(), std::span(b).first(212));
+  for (std::size_t i = 0; i < 8; ++i) {
+    EXPECT_EQ(b[212 + i], static_cast<std::uint8_t>(tag >> (8 * i))) << "tag byte " << i;
+  }
   Header header;
   StatePayload state;
   ASSERT_EQ(decode_state(b, test_key(), header, state), DecodeError::kNone);
@@ -271,6 +362,7 @@ TEST(DatagramLayout, StateOrientedAppendsTheOrientation) {
   EXPECT_EQ(bits_of(state.R_WT.x), bits_of(s.R_WT.x));
   EXPECT_EQ(bits_of(state.R_WT.y), bits_of(s.R_WT.y));
   EXPECT_EQ(bits_of(state.R_WT.z), bits_of(s.R_WT.z));
+  expect_same_bits(state.tau_T_W, s.tau_T_W);
   EXPECT_EQ(state.buttons, s.buttons);
   // Too small a buffer for the oriented form writes nothing.
   Bytes small(kStateDatagramSize);
@@ -278,6 +370,11 @@ TEST(DatagramLayout, StateOrientedAppendsTheOrientation) {
   // The oriented header on State's length (or the reverse) is refused.
   Bytes cut(b.begin(), b.begin() + kStateDatagramSize);
   EXPECT_EQ(decode_as_state(cut), DecodeError::kBadPayloadSize);
+  // Version 4's StateOriented (148 payload bytes, no torque) under a version-5 header: refused.
+  Bytes v4(b.begin(), b.begin() + kHeaderSize + 148 + kTagSize);
+  v4[32] = 148;
+  resign(v4);
+  EXPECT_EQ(decode_as_state(v4), DecodeError::kBadPayloadSize);
 }
 
 TEST(DatagramRoundTrip, HeartbeatWithExtremeValues) {
@@ -361,8 +458,8 @@ TEST(DatagramReject, BadMagic) {
 
 TEST(DatagramReject, BadVersion) {
   // 1: before path validation; 2: before buttons and StateOriented; 3: before the heartbeat's
-  // receive report.
-  for (const std::uint16_t version : {0, 1, 2, 3, 5, 0x0100, 0xffff}) {
+  // receive report; 4: before the torque in StateOriented.
+  for (const std::uint16_t version : {0, 1, 2, 3, 4, 6, 0x0100, 0xffff}) {
     Bytes bytes = encoded_heartbeat();
     bytes[4] = static_cast<std::uint8_t>(version);
     bytes[5] = static_cast<std::uint8_t>(version >> 8);
