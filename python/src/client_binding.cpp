@@ -221,7 +221,7 @@ void bind_handles(py::module_& m) {
       m, "FieldHandle", "A registered energy field; owned as ObjectHandle's object is.");
   bind_item_handle(field);
   def_updates<SpringFieldSpec, DistanceSpringSpec, PotentialFieldSpec, LinearFieldSpec,
-              ViscousFieldSpec, DetentFieldSpec>(
+              ViscousFieldSpec, DetentFieldSpec, OrientationSpringSpec, OrientationDetentSpec>(
       field, "Replaces the field with `spec` (any field kind); on an error the old one stays.");
 
   py::class_<AppliedSceneHandles>(m, "AppliedScene",
@@ -281,8 +281,8 @@ void bind_client_class(py::module_& m) {
       "Registers a spring field; returns its FieldHandle.");
   const auto add_field = [](Client& c, const auto& spec) { return c.add_field(spec); };
   def_adders<DistanceSpringSpec, PotentialFieldSpec, LinearFieldSpec, ViscousFieldSpec,
-             DetentFieldSpec>(cls, "add_field", add_field,
-                              "Registers an energy field; returns its FieldHandle.");
+             DetentFieldSpec, OrientationSpringSpec, OrientationDetentSpec>(
+      cls, "add_field", add_field, "Registers an energy field; returns its FieldHandle.");
   def_adders<SpringFieldSpec>(
       cls, "add_field", [](Client& c, const SpringFieldSpec& s) { return c.add_spring_field(s); },
       "Registers a spring field; returns its FieldHandle.");
@@ -300,7 +300,7 @@ void bind_client_class(py::module_& m) {
   };
   def_adders<WallSpec, SphereSpec, BoxSpec, CapsuleSpec, TangentPlaneSpec, MeshSpec,
              SpringFieldSpec, DistanceSpringSpec, PotentialFieldSpec, LinearFieldSpec,
-             ViscousFieldSpec, DetentFieldSpec>(
+             ViscousFieldSpec, DetentFieldSpec, OrientationSpringSpec, OrientationDetentSpec>(
       cls, "add", add_any,
       "Registers any object or field spec; returns its ObjectHandle or FieldHandle.");
 

@@ -188,6 +188,25 @@ void bind_scene_specs(py::module_& m) {
       .field("rim_height", &DetentFieldSpec::rim_height, "J")
       .field("rim_width", &DetentFieldSpec::rim_width, "m")
       .finish();
+  StructBinder<OrientationSpringSpec>(m, "OrientationSpringSpec",
+                                      "A rotational spring-damper pulling the tool's orientation "
+                                      "towards target: τ = −K θ − B ω, in W.")
+      .field("target", &OrientationSpringSpec::target, "R_WG, unit quaternion (w, x, y, z)")
+      .field("stiffness", &OrientationSpringSpec::stiffness, "K, N·m/rad, finite, >= 0")
+      .field("damping", &OrientationSpringSpec::damping, "B, N·m·s/rad, finite, >= 0")
+      .field("max_torque", &OrientationSpringSpec::max_torque, "N·m; 0: no clip")
+      .field("law", &OrientationSpringSpec::law, "ImpedanceLaw (VELOCITY: the measured ω)")
+      .finish();
+  StructBinder<OrientationDetentSpec>(m, "OrientationDetentSpec",
+                                      "A potential well with a repulsive rim over the angle "
+                                      "between the tool's orientation and target.")
+      .field("target", &OrientationDetentSpec::target, "R_WG, unit quaternion (w, x, y, z)")
+      .field("depth", &OrientationDetentSpec::depth, "J, > 0")
+      .field("radius", &OrientationDetentSpec::radius, "rad, > 0")
+      .field("rim_height", &OrientationDetentSpec::rim_height, "J, >= 0")
+      .field("rim_width", &OrientationDetentSpec::rim_width, "rad")
+      .field("damping", &OrientationDetentSpec::damping, "N·m·s/rad, inside radius + rim_width")
+      .finish();
 
   StructBinder<SceneSpec>(m, "SceneSpec",
                           "A whole scene for Client.apply_scene. objects and fields are lists: "
@@ -196,7 +215,8 @@ void bind_scene_specs(py::module_& m) {
                                               "TangentPlaneSpec or MeshSpec, in order")
       .field("fields", &SceneSpec::fields, "SpringFieldSpec, DistanceSpringSpec, "
                                             "PotentialFieldSpec, LinearFieldSpec, "
-                                            "ViscousFieldSpec or DetentFieldSpec, in order")
+                                            "ViscousFieldSpec, DetentFieldSpec, "
+                                            "OrientationSpringSpec or OrientationDetentSpec, in order")
       .finish();
   StructBinder<RegisteredScene>(m, "RegisteredScene", "A scene read back from the server.")
       .readonly("scene", &RegisteredScene::scene, "SceneSpec, each item as last given")

@@ -37,6 +37,11 @@ def every_field_kind():
                                  fade_width=0.005),
         hapticd.DetentFieldSpec(distance=hapticd.Distance(origin=(-0.5, 0, 0)), depth=0.01,
                                 radius=0.01, rim_height=0.001, rim_width=0.005),
+        # Registered on the point mass too (they act on a device that measures the orientation).
+        hapticd.OrientationSpringSpec(target=(0.5, 0.5, -0.5, 0.5), stiffness=0.5, damping=0.01,
+                                      max_torque=0.1, law=hapticd.ImpedanceLaw.BACKWARD_DIFFERENCE),
+        hapticd.OrientationDetentSpec(target=(0, 0, 0, 1), depth=0.01, radius=0.2,
+                                      rim_height=0.002, rim_width=0.1, damping=0.001),
     ]
 
 
@@ -80,14 +85,17 @@ def test_every_object_and_field_kind_registers_reads_back_and_updates(client):
         assert type(held) is type(given)
     for given, held in zip(every_field_kind(), registered.scene.fields):
         assert type(held) is type(given)
+    assert registered.scene.fields[6:] == every_field_kind()[6:]  # as given, whole
     sphere = registered.scene.objects[1]
     assert sphere.radius == 0.01 and np.allclose(sphere.center, [0.2, 0, 0])
 
     objects[1].update(hapticd.SphereSpec(center=(0.2, 0, 0), radius=0.03, impedance=STIFF))
     fields[4].update(hapticd.ViscousFieldSpec(damping=1.5))
+    fields[7].update(hapticd.OrientationSpringSpec(stiffness=0.2))  # a detent becomes a spring
     registered = client.scene()
     assert registered.scene.objects[1].radius == 0.03
     assert registered.scene.fields[4].damping == 1.5
+    assert registered.scene.fields[7] == hapticd.OrientationSpringSpec(stiffness=0.2)
     for handle in objects + fields:
         handle.remove()
     assert client.scene().object_ids == [] and client.scene().field_ids == []
@@ -109,7 +117,7 @@ def test_a_refused_spec_names_the_field_and_changes_nothing(client):
 def test_a_scene_applies_whole_from_specs_and_from_a_file(client, tmp_path):
     scene = hapticd.SceneSpec(objects=every_object_kind(), fields=every_field_kind())
     with client.apply_scene(scene) as applied:
-        assert len(applied.objects) == 6 and len(applied.fields) == 6
+        assert len(applied.objects) == 6 and len(applied.fields) == 8
         assert len(client.last_scene_stability) == 6
         held = client.scene().scene
         assert held.objects == scene.objects and held.fields == scene.fields
@@ -178,6 +186,31 @@ def test_no_server_is_a_connection_error():
 def test_a_bad_option_is_named():
     with pytest.raises(TypeError, match="Client\\(\\) has no option 'adress'"):
         hapticd.Client(adress="127.0.0.1:1")
+
+
+def test_a_6dof_device_streams_the_torque_of_an_orientation_spring():
+    server = ServerProcess(lockstep_config(simulated_point_mass={
+        "initial_position": {"z": 0.02}, "rotation": {}}))  # the handle at identity
+    try:
+        with hapticd.Client(server.config(client_name="stepper", state_decimation=0)) as stepper, \
+             hapticd.Client(server.config(client_name="watcher")) as watcher:
+            assert stepper.device_info.capabilities.orientation
+            # The target 0.2 rad about +z: the spring turns the handle that way, |τ| <= K θ.
+            half = 0.1
+            spring = stepper.add_field(hapticd.OrientationSpringSpec(
+                target=(np.cos(half), 0, 0, np.sin(half)), stiffness=0.05))
+            last = stepper.step(20)
+            replied = stepper.wait_for_tick(last)  # from the Step reply
+            streamed = watcher.wait_for_tick(last)  # from the StateOriented datagram
+            for state in (replied, streamed):
+                assert state.orientation is not None and state.torque is not None
+                assert state.torque[2] > 0 and state.torque[2] <= 0.05 * 0.2
+                assert state.torque[0] == 0 and state.torque[1] == 0
+            np.testing.assert_array_equal(replied.torque, streamed.torque)
+            np.testing.assert_array_equal(replied.orientation, streamed.orientation)
+            spring.remove()
+    finally:
+        assert server.stop() == 0
 
 
 def test_two_users_on_two_device_ports_share_one_scene():

@@ -72,6 +72,31 @@ def test_operator_inputs_and_enums_read_as_in_cpp():
     np.testing.assert_array_equal(pose.orientation, [0, 1, 0, 0])  # (w, x, y, z)
 
 
+def test_orientation_specs_take_quaternions_and_laws_and_go_into_scenes():
+    spring = hapticd.OrientationSpringSpec(target=(0.5, 0.5, -0.5, 0.5), stiffness=0.8,
+                                           damping=0.02, max_torque=0.3,
+                                           law=hapticd.ImpedanceLaw.EXACT_ZOH)
+    np.testing.assert_array_equal(spring.target, [0.5, 0.5, -0.5, 0.5])  # (w, x, y, z)
+    assert (spring.stiffness, spring.damping, spring.max_torque) == (0.8, 0.02, 0.3)
+    assert spring.law == hapticd.ImpedanceLaw.EXACT_ZOH
+    np.testing.assert_array_equal(hapticd.OrientationSpringSpec().target, [1, 0, 0, 0])
+    assert hapticd.OrientationSpringSpec().law == hapticd.ImpedanceLaw.VELOCITY
+    detent = hapticd.OrientationDetentSpec(target=(0, 1, 0, 0), depth=0.01, radius=0.2,
+                                           rim_height=0.003, rim_width=0.1, damping=0.004)
+    assert hapticd.OrientationDetentSpec._fields == ("target", "depth", "radius", "rim_height",
+                                                     "rim_width", "damping")
+    assert copy.deepcopy(detent) == detent and copy.deepcopy(spring) == spring
+    assert detent != hapticd.OrientationDetentSpec(target=(0, 1, 0, 0), depth=0.01)
+    with pytest.raises(TypeError, match=r"OrientationSpringSpec.target: cannot take \(1, 0, 0\)"):
+        hapticd.OrientationSpringSpec(target=(1, 0, 0))
+
+    scene = hapticd.SceneSpec(fields=[spring, detent])
+    assert scene.fields == [spring, detent]  # back out of the C++ variant as the same specs
+    text = hapticd.scene_json(scene)
+    assert '"orientation_spring"' in text and '"orientation_detent"' in text
+    assert '"EXACT_ZOH"' in text and '"max_torque": 0.3' in text
+
+
 def test_scene_json_writes_a_scene_file():
     scene = hapticd.SceneSpec(
         objects=[hapticd.SphereSpec(center=(0, 0, 0.05), radius=0.02,

@@ -196,6 +196,14 @@ FieldHandle Client::add_field(const DetentFieldSpec& detent) {
   return register_field({detail::to_proto(detent)});
 }
 
+FieldHandle Client::add_field(const OrientationSpringSpec& spring) {
+  return register_field({detail::to_proto(spring)});
+}
+
+FieldHandle Client::add_field(const OrientationDetentSpec& detent) {
+  return register_field({detail::to_proto(detent)});
+}
+
 Client::FileScene Client::apply_scene_file(const std::string& path) {
   v1::Scene scene;
   if (const std::string error = io::read_scene_file(path, scene); !error.empty()) {
@@ -539,6 +547,8 @@ void FieldHandle::update(const PotentialFieldSpec& potential) { replace({detail:
 void FieldHandle::update(const LinearFieldSpec& linear) { replace({detail::to_proto(linear)}); }
 void FieldHandle::update(const ViscousFieldSpec& viscous) { replace({detail::to_proto(viscous)}); }
 void FieldHandle::update(const DetentFieldSpec& detent) { replace({detail::to_proto(detent)}); }
+void FieldHandle::update(const OrientationSpringSpec& spring) { replace({detail::to_proto(spring)}); }
+void FieldHandle::update(const OrientationDetentSpec& detent) { replace({detail::to_proto(detent)}); }
 
 void FieldHandle::replace(const detail::WireField& field) {
   current("UpdateField").update_field(key(), field.message);

@@ -24,6 +24,25 @@ v1::Quaternion to_proto(const Quaternion& q) {
 Quaternion from_proto(const v1::Quaternion& q) { return {q.w(), q.x(), q.y(), q.z()}; }
 
 namespace {
+v1::Impedance::Law law_to_proto(ImpedanceLaw law) {
+  switch (law) {
+    case ImpedanceLaw::kBackwardDifference: return v1::Impedance::BACKWARD_DIFFERENCE;
+    case ImpedanceLaw::kExactZoh: return v1::Impedance::EXACT_ZOH;
+    case ImpedanceLaw::kTustin: return v1::Impedance::TUSTIN;
+    case ImpedanceLaw::kVelocity: break;
+  }
+  return v1::Impedance::VELOCITY;
+}
+
+ImpedanceLaw law_from_proto(v1::Impedance::Law law) {
+  switch (law) {
+    case v1::Impedance::BACKWARD_DIFFERENCE: return ImpedanceLaw::kBackwardDifference;
+    case v1::Impedance::EXACT_ZOH: return ImpedanceLaw::kExactZoh;
+    case v1::Impedance::TUSTIN: return ImpedanceLaw::kTustin;
+    default: return ImpedanceLaw::kVelocity;
+  }
+}
+
 // An unset Quaternion message means identity (types.proto), not its all-zero default.
 Quaternion orientation_from_proto(bool present, const v1::Quaternion& q) {
   return present ? from_proto(q) : Quaternion{};
@@ -38,12 +57,7 @@ void set_impedance(v1::Object& object, const Impedance& impedance) {
   out.set_mass(impedance.mass);
   out.set_transparency_optimal_damping(impedance.transparency_optimal_damping);
   out.set_virtual_coupling(impedance.virtual_coupling);
-  switch (impedance.law) {
-    case ImpedanceLaw::kVelocity: out.set_law(v1::Impedance::VELOCITY); break;
-    case ImpedanceLaw::kBackwardDifference: out.set_law(v1::Impedance::BACKWARD_DIFFERENCE); break;
-    case ImpedanceLaw::kExactZoh: out.set_law(v1::Impedance::EXACT_ZOH); break;
-    case ImpedanceLaw::kTustin: out.set_law(v1::Impedance::TUSTIN); break;
-  }
+  out.set_law(law_to_proto(impedance.law));
 }
 
 void set_dynamics(v1::Object& object, const Dynamics& dynamics) {
@@ -174,6 +188,29 @@ v1::Field to_proto(const DetentFieldSpec& detent) {
   return field;
 }
 
+v1::Field to_proto(const OrientationSpringSpec& spring) {
+  v1::Field field;
+  auto* s = field.mutable_orientation_spring();
+  *s->mutable_target() = to_proto(spring.target);
+  s->set_stiffness(spring.stiffness);
+  s->set_damping(spring.damping);
+  s->set_max_torque(spring.max_torque);
+  s->set_law(law_to_proto(spring.law));
+  return field;
+}
+
+v1::Field to_proto(const OrientationDetentSpec& detent) {
+  v1::Field field;
+  auto* d = field.mutable_orientation_detent();
+  *d->mutable_target() = to_proto(detent.target);
+  d->set_depth(detent.depth);
+  d->set_radius(detent.radius);
+  d->set_rim_height(detent.rim_height);
+  d->set_rim_width(detent.rim_width);
+  d->set_damping(detent.damping);
+  return field;
+}
+
 v1::Object to_proto(const WallSpec& wall) {
   v1::Object object;
   *object.mutable_pose()->mutable_position() = to_proto(wall.point);
@@ -213,12 +250,7 @@ Impedance impedance_from_proto(const v1::Impedance& in) {
   out.mass = in.mass();
   out.transparency_optimal_damping = in.transparency_optimal_damping();
   out.virtual_coupling = in.virtual_coupling();
-  switch (in.law()) {
-    case v1::Impedance::BACKWARD_DIFFERENCE: out.law = ImpedanceLaw::kBackwardDifference; break;
-    case v1::Impedance::EXACT_ZOH: out.law = ImpedanceLaw::kExactZoh; break;
-    case v1::Impedance::TUSTIN: out.law = ImpedanceLaw::kTustin; break;
-    default: out.law = ImpedanceLaw::kVelocity; break;
-  }
+  out.law = law_from_proto(in.law());
   return out;
 }
 
@@ -333,6 +365,16 @@ SceneSpec::Field from_proto(const v1::Field& field) {
       return DetentFieldSpec{distance_from_proto(field.detent().distance()), field.detent().depth(),
                              field.detent().radius(), field.detent().rim_height(),
                              field.detent().rim_width()};
+    case v1::Field::kOrientationSpring: {
+      const auto& in = field.orientation_spring();
+      return OrientationSpringSpec{orientation_from_proto(in.has_target(), in.target()), in.stiffness(),
+                                   in.damping(), in.max_torque(), law_from_proto(in.law())};
+    }
+    case v1::Field::kOrientationDetent: {
+      const auto& in = field.orientation_detent();
+      return OrientationDetentSpec{orientation_from_proto(in.has_target(), in.target()), in.depth(),
+                                   in.radius(), in.rim_height(), in.rim_width(), in.damping()};
+    }
     default:  // spring_to_point
       return SpringFieldSpec{from_proto(field.spring_to_point().anchor()), field.spring_to_point().stiffness(),
                              field.spring_to_point().damping(), field.spring_to_point().max_force()};

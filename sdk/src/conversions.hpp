@@ -28,6 +28,8 @@ v1::Field to_proto(const PotentialFieldSpec& field);
 v1::Field to_proto(const LinearFieldSpec& field);
 v1::Field to_proto(const ViscousFieldSpec& field);
 v1::Field to_proto(const DetentFieldSpec& field);
+v1::Field to_proto(const OrientationSpringSpec& field);
+v1::Field to_proto(const OrientationDetentSpec& field);
 v1::OperatorInput to_proto(const OperatorInput& input);
 /// The inverses, for reading a scene back (GetScene): an object or field the server holds as the
 /// SDK spec that would make it. A wall's or a sphere's pose orientation is folded into its

@@ -156,6 +156,8 @@ class FieldHandle : public detail::ItemHandle {
   void update(const LinearFieldSpec& linear);
   void update(const ViscousFieldSpec& viscous);
   void update(const DetentFieldSpec& detent);
+  void update(const OrientationSpringSpec& spring);
+  void update(const OrientationDetentSpec& detent);
 
  private:
   friend class Client;
@@ -170,7 +172,8 @@ class FieldHandle : public detail::ItemHandle {
 struct SceneSpec {
   using Object = std::variant<WallSpec, SphereSpec, BoxSpec, CapsuleSpec, TangentPlaneSpec, MeshSpec>;
   using Field = std::variant<SpringFieldSpec, DistanceSpringSpec, PotentialFieldSpec, LinearFieldSpec,
-                             ViscousFieldSpec, DetentFieldSpec>;
+                             ViscousFieldSpec, DetentFieldSpec, OrientationSpringSpec,
+                             OrientationDetentSpec>;
   std::vector<Object> objects;
   std::vector<Field> fields;
 };
@@ -231,6 +234,10 @@ class Client {
   FieldHandle add_field(const LinearFieldSpec& linear);
   FieldHandle add_field(const ViscousFieldSpec& viscous);
   FieldHandle add_field(const DetentFieldSpec& detent);
+  /// Orientation fields act on a device that measures the tool's orientation; the torque reaches
+  /// the hand on one that takes torques (State::torque shows what was commanded).
+  FieldHandle add_field(const OrientationSpringSpec& spring);
+  FieldHandle add_field(const OrientationDetentSpec& detent);
   /// Replaces this session's scene with a scene file (protobuf's JSON mapping of haptic.v1.Scene,
   /// as hapticd --scene reads); all or nothing, like apply_scene. InvalidArgumentError names the
   /// file, or the server's path ("scene.objects[2].box.half_extents.y: …").

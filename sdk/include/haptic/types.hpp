@@ -202,6 +202,34 @@ struct DetentFieldSpec {
   friend bool operator==(const DetentFieldSpec&, const DetentFieldSpec&) = default;
 };
 
+/// A rotational spring-damper on the tool's orientation R_WT, for a device that measures one
+/// (DeviceCapabilities::orientation): the torque tau = −K θ − B ω pulls it towards `target`, θ the
+/// rotation vector from the target to the tool's orientation (rad, in W) and ω the tool's angular
+/// velocity (rad/s, in W). The torque reaches the hand on a device that takes torques
+/// (docs/scene.md, "Orientation fields").
+struct OrientationSpringSpec {
+  Quaternion target{};      ///< R_WG, the orientation pulled towards; the server normalises it.
+  double stiffness = 0.0;   ///< K. Unit: N·m/rad. Finite, >= 0.
+  double damping = 0.0;     ///< B. Unit: N·m·s/rad. Finite, >= 0.
+  double max_torque = 0.0;  ///< |tau| is clipped to this. Unit: N·m. 0: no clip.
+  /// How K and B are discretized, as for a contact's Impedance (kVelocity: the measured ω).
+  ImpedanceLaw law = ImpedanceLaw::kVelocity;
+  friend bool operator==(const OrientationSpringSpec&, const OrientationSpringSpec&) = default;
+};
+
+/// DetentFieldSpec's well and rim over the angle ρ = |θ| (rad) between the tool's orientation and
+/// `target`: the handle clicks into the target orientation. For a device that measures the
+/// orientation; the torque (in W) reaches the hand on a device that takes torques.
+struct OrientationDetentSpec {
+  Quaternion target{};      ///< R_WG, the orientation of the well; the server normalises it.
+  double depth = 0.0;       ///< Unit: J. > 0.
+  double radius = 0.0;      ///< Of the well. Unit: rad. > 0; radius + rim_width <= π.
+  double rim_height = 0.0;  ///< Unit: J. >= 0.
+  double rim_width = 0.0;   ///< Unit: rad. > 0 when rim_height > 0.
+  double damping = 0.0;     ///< On ω inside radius + rim_width. Unit: N·m·s/rad. Finite, >= 0.
+  friend bool operator==(const OrientationDetentSpec&, const OrientationDetentSpec&) = default;
+};
+
 /// Bits of State::flags.
 enum StateFlag : std::uint32_t {
   kForceSaturated = 1u << 0,  ///< the server's force limits cut the scene's force

@@ -408,6 +408,30 @@ TEST_F(FakeServerTest, ApplySceneSendsWallsThenSpheresAndStalesEarlierHandles) {
   EXPECT_EQ(service_.record().fields_deleted, std::vector<std::uint64_t>{kFirstSceneId + 2});
 }
 
+TEST_F(FakeServerTest, OrientationFieldsGoOutAsTheirOwnKinds) {
+  Client client(config_);
+  SceneSpec scene;
+  scene.fields.push_back(OrientationSpringSpec{.target = {0.0, 0.0, 1.0, 0.0}, .stiffness = 0.5,
+                                               .damping = 0.01, .max_torque = 0.2,
+                                               .law = ImpedanceLaw::kExactZoh});
+  scene.fields.push_back(OrientationDetentSpec{.depth = 0.01, .radius = 0.2, .rim_height = 0.002,
+                                               .rim_width = 0.1, .damping = 0.001});
+  const AppliedScene applied = client.apply_scene(scene);
+  ASSERT_EQ(applied.fields.size(), 2u);
+
+  const auto record = service_.record();
+  ASSERT_EQ(record.scenes.size(), 1u);
+  const v1::Scene& sent = record.scenes.front().scene();
+  ASSERT_EQ(sent.fields_size(), 2);
+  ASSERT_TRUE(sent.fields(0).has_orientation_spring());
+  EXPECT_EQ(sent.fields(0).orientation_spring().target().y(), 1.0);
+  EXPECT_EQ(sent.fields(0).orientation_spring().max_torque(), 0.2);
+  EXPECT_EQ(sent.fields(0).orientation_spring().law(), v1::Impedance::EXACT_ZOH);
+  ASSERT_TRUE(sent.fields(1).has_orientation_detent());
+  EXPECT_EQ(sent.fields(1).orientation_detent().target().w(), 1.0);  // identity by default
+  EXPECT_EQ(sent.fields(1).orientation_detent().rim_width(), 0.1);
+}
+
 TEST_F(FakeServerTest, ApplySceneNamesTheBadSpecAndSendsNothing) {
   Client client(config_);
   try {

@@ -3,6 +3,7 @@
 
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "conversions.hpp"
@@ -71,6 +72,45 @@ TEST(Conversions, SpecsBecomeTheSchemasMessages) {
   const v1::OperatorInput push = to_proto(OperatorInput::push({0, 0, -5.0}));
   EXPECT_EQ(push.mode(), v1::OperatorInput::APPLY_FORCE);
   EXPECT_EQ(push.force().z(), -5.0);
+}
+
+// Each orientation field comes back from its message as the spec that made it (GetScene reads
+// fields back through the same from_proto), every impedance law included.
+TEST(Conversions, OrientationFieldsRoundTrip) {
+  for (const ImpedanceLaw law : {ImpedanceLaw::kVelocity, ImpedanceLaw::kBackwardDifference,
+                                 ImpedanceLaw::kExactZoh, ImpedanceLaw::kTustin}) {
+    const OrientationSpringSpec spring{.target = {0.5, 0.5, -0.5, 0.5}, .stiffness = 0.8,
+                                       .damping = 0.02, .max_torque = 0.3, .law = law};
+    const v1::Field message = to_proto(spring);
+    ASSERT_TRUE(message.has_orientation_spring());
+    EXPECT_EQ(message.orientation_spring().target().y(), -0.5);
+    EXPECT_EQ(message.orientation_spring().stiffness(), 0.8);
+    EXPECT_EQ(message.orientation_spring().max_torque(), 0.3);
+    const SceneSpec::Field back = from_proto(message);
+    ASSERT_TRUE(std::holds_alternative<OrientationSpringSpec>(back));
+    EXPECT_EQ(std::get<OrientationSpringSpec>(back), spring);
+  }
+
+  const OrientationDetentSpec detent{.target = {0.0, 1.0, 0.0, 0.0}, .depth = 0.01, .radius = 0.2,
+                                     .rim_height = 0.003, .rim_width = 0.1, .damping = 0.004};
+  const v1::Field message = to_proto(detent);
+  ASSERT_TRUE(message.has_orientation_detent());
+  EXPECT_EQ(message.orientation_detent().target().x(), 1.0);
+  EXPECT_EQ(message.orientation_detent().depth(), 0.01);
+  EXPECT_EQ(message.orientation_detent().radius(), 0.2);
+  EXPECT_EQ(message.orientation_detent().rim_height(), 0.003);
+  EXPECT_EQ(message.orientation_detent().rim_width(), 0.1);
+  EXPECT_EQ(message.orientation_detent().damping(), 0.004);
+  const SceneSpec::Field back = from_proto(message);
+  ASSERT_TRUE(std::holds_alternative<OrientationDetentSpec>(back));
+  EXPECT_EQ(std::get<OrientationDetentSpec>(back), detent);
+
+  // A target left unset (as a scene file may) is identity, not the message's all-zero default.
+  v1::Field unset;
+  unset.mutable_orientation_spring()->set_stiffness(1.0);
+  EXPECT_EQ(std::get<OrientationSpringSpec>(from_proto(unset)).target, Quaternion{});
+  unset.mutable_orientation_detent()->set_depth(1.0);
+  EXPECT_EQ(std::get<OrientationDetentSpec>(from_proto(unset)).target, Quaternion{});
 }
 
 /// Sets every singular field of `message` to 100 + its field number, whatever its type (strings
