@@ -349,6 +349,7 @@ void bind_reports(py::module_& m) {
       .readonly("state_estimator", &DeviceCapabilities::state_estimator, "")
       .readonly("disturbance_observer", &DeviceCapabilities::disturbance_observer, "")
       .readonly("orientation", &DeviceCapabilities::orientation, "")
+      .readonly("torque", &DeviceCapabilities::torque, "")
       .finish();
   StructBinder<DeviceInfo>(m, "DeviceInfo", "The device, as reported when the session opened.")
       .readonly("name", &DeviceInfo::name, "")
@@ -361,6 +362,7 @@ void bind_reports(py::module_& m) {
       .readonly("loop_rate_hz", &DeviceInfo::loop_rate_hz, "Hz")
       .readonly("simulated", &DeviceInfo::simulated, "")
       .readonly("buttons", &DeviceInfo::buttons, "buttons reported in State.buttons")
+      .readonly("max_torque", &DeviceInfo::max_torque, "N·m (capabilities.torque)")
       .finish();
   StructBinder<StabilityReport>(m, "StabilityReport",
                                 "What the server can say about an object's impedance on its device.")

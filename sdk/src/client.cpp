@@ -142,7 +142,9 @@ ObjectHandle Client::register_object(const detail::WireObject& object) {
 FieldHandle Client::register_field(const detail::WireField& field) {
   detail::ClientCore& core = require(core_, "CreateField");
   const detail::ClientCore::Created made = core.create_field(field.message);
-  return FieldHandle(core_, made.key, made.ref.id(), core.scene_generation());
+  std::optional<StabilityReport> stability;
+  if (made.ref.has_stability()) stability = detail::from_proto(made.ref.stability());
+  return FieldHandle(core_, made.key, made.ref.id(), core.scene_generation(), std::move(stability));
 }
 
 ObjectHandle Client::add_wall(const WallSpec& wall) {

@@ -449,8 +449,9 @@ DeviceInfo from_proto(const v1::DeviceInfo& info) {
                       caps.flexible_modes(), caps.friction(),
                       caps.force_sensor(),   caps.quantized_position(),
                       caps.state_estimator(), caps.disturbance_observer(),
-                      caps.orientation()};
+                      caps.orientation(),    caps.torque()};
   out.buttons = info.buttons();
+  out.max_torque = info.max_torque();
   return out;
 }
 

@@ -188,7 +188,9 @@ v1::DeviceInfo HapticService::device_info(std::uint32_t port) const {
   caps.set_state_estimator(has.state_estimator);
   caps.set_disturbance_observer(has.disturbance_observer);
   caps.set_orientation(has.orientation);
+  caps.set_torque(has.torque);
   info.set_buttons(device.buttons);
+  info.set_max_torque(device.max_torque);
   return info;
 }
 

@@ -78,6 +78,8 @@ std::string describe(const haptic::SceneSpec::Field& field) {
         else if constexpr (std::is_same_v<T, haptic::PotentialFieldSpec>) return "potential field";
         else if constexpr (std::is_same_v<T, haptic::LinearFieldSpec>) return "linear field";
         else if constexpr (std::is_same_v<T, haptic::ViscousFieldSpec>) return "viscous field";
+        else if constexpr (std::is_same_v<T, haptic::OrientationSpringSpec>) return "orientation spring";
+        else if constexpr (std::is_same_v<T, haptic::OrientationDetentSpec>) return "orientation detent";
         else return "detent field";
       },
       field);

@@ -159,12 +159,18 @@ class FieldHandle : public detail::ItemHandle {
   void update(const OrientationSpringSpec& spring);
   void update(const OrientationDetentSpec& detent);
 
+  /// An orientation spring's stability report as registered, computed on the device's handle
+  /// (its inertia for the mass: kg·m², N·m/rad, N·m·s/rad; docs/scene.md "Orientation fields");
+  /// empty for every other field.
+  const std::optional<StabilityReport>& stability() const noexcept { return stability_; }
+
  private:
   friend class Client;
   void replace(const detail::WireField& field);
   FieldHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t key, std::uint64_t id,
-              std::uint64_t generation)
-      : ItemHandle(Kind::kField, std::move(core), key, id, generation) {}
+              std::uint64_t generation, std::optional<StabilityReport> stability = std::nullopt)
+      : ItemHandle(Kind::kField, std::move(core), key, id, generation), stability_(std::move(stability)) {}
+  std::optional<StabilityReport> stability_;
 };
 
 /// A whole scene of any objects and fields, for Client::apply_scene; the server numbers them in

@@ -359,6 +359,7 @@ struct DeviceCapabilities {
   bool state_estimator = false;       ///< Velocities from an observer.
   bool disturbance_observer = false;  ///< Axes shaped to a nominal mass-damper.
   bool orientation = false;           ///< The tool's orientation is measured (State::orientation).
+  bool torque = false;                ///< The handle takes torques (orientation fields; State::torque).
 };
 
 struct DeviceInfo {
@@ -372,6 +373,7 @@ struct DeviceInfo {
   double loop_rate_hz = 0.0; ///< Unit: Hz.
   bool simulated = false;
   std::uint32_t buttons = 0; ///< Buttons reported in State::buttons.
+  double max_torque = 0.0;   ///< Unit: N·m (capabilities.torque).
 };
 
 /// What the server can say about an object's impedance on its device (docs/scene.md): Colgate's
