@@ -100,16 +100,7 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
       F_scene = step.F_T_W + scene_force.F_fields_W;
       if (F_contacts == engine::Vec3{} && port.passivity->energy() > 0.0) port.passivity->reset();
     }
-    const engine::GuardedForce guarded = port.guard.apply(F_scene, config_.period_s, gain);
-    if (guarded.fault) {
-      sample.flags |= wire::kFlagForceFault;
-      counters_.force_faults.fetch_add(1, std::memory_order_relaxed);
-    }
-    if (guarded.saturated) {
-      sample.flags |= wire::kFlagForceSaturated;
-      counters_.force_saturations.fetch_add(1, std::memory_order_relaxed);
-    }
-    F_command = guarded.F_T_W;
+    F_command = guarded(port.guard.apply(F_scene, config_.period_s, gain), sample);
     const engine::Vec3 tau_command = port_torque(scene, index, reading, tick, gain, sample);
     // Jᵀ: the joint command for that force (the torque goes to the handle as it is).
     command_ok = device.joint_command(ToolCommand{F_command, tau_command}, config_.period_s) ==
@@ -166,16 +157,19 @@ engine::Vec3 TickRunner::port_torque(const engine::CompiledScene& scene, std::ui
     if (torque.ramping) sample.flags |= wire::kFlagRampingOut;
     tau_scene = torque.tau_T_W;
   }
-  const engine::GuardedForce guarded = port.torque_guard->apply(tau_scene, config_.period_s, gain);
-  if (guarded.fault) {
+  return guarded(port.torque_guard->apply(tau_scene, config_.period_s, gain), sample);
+}
+
+engine::Vec3 TickRunner::guarded(const engine::GuardedForce& out, TickSample& sample) {
+  if (out.fault) {
     sample.flags |= wire::kFlagForceFault;
     counters_.force_faults.fetch_add(1, std::memory_order_relaxed);
   }
-  if (guarded.saturated) {
+  if (out.saturated) {
     sample.flags |= wire::kFlagForceSaturated;
     counters_.force_saturations.fetch_add(1, std::memory_order_relaxed);
   }
-  return guarded.F_T_W;
+  return out.F_T_W;
 }
 
 }  // namespace haptic::runtime

@@ -99,6 +99,9 @@ class TickRunner {
   void make_ports(const std::vector<TickPort>& ports);
   void run_port(const engine::CompiledScene& scene, std::uint32_t index, std::uint64_t tick,
                 std::int64_t time_ns, double gain);
+  /// What a guard let through (force or torque), its fault and saturation flagged in the sample
+  /// and counted.
+  engine::Vec3 guarded(const engine::GuardedForce& out, TickSample& sample);
   /// The orientation fields' torque at this port, guarded; zero without them.
   engine::Vec3 port_torque(const engine::CompiledScene& scene, std::uint32_t index,
                            const ToolReading& reading, std::uint64_t tick, double gain,

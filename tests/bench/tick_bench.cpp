@@ -15,7 +15,7 @@ using namespace haptic;
 
 namespace {
 
-engine::CompiledScene scene_with(int walls, int spheres, int springs) {
+engine::CompiledScene scene_with(int walls, int spheres, int springs, int orientation_springs = 0) {
   engine::SceneDescription description;
   std::uint64_t id = 1;
   for (int i = 0; i < walls; ++i) {
@@ -37,52 +37,18 @@ engine::CompiledScene scene_with(int walls, int spheres, int springs) {
     description.fields.push_back({{1, id++, engine::kNeverTick, {}},
                                   engine::FieldSpec{engine::SpringToPointSpec{{0, 0, 0.02}, 20.0, 0.1, 0.0}}});
   }
-  return engine::compile_scene(description, 50, 1);
-}
-
-void BM_TickDefaultScene(benchmark::State& state) {
-  runtime::SimulatedPointMassDevice device(engine::PointMassParams{}, {{0, 0, -0.001}, {}}, 20.0);
-  runtime::SceneExchange scenes(std::make_unique<const engine::CompiledScene>(scene_with(1, 0, 1)));
-  runtime::SampleRing samples;
-  runtime::LoopCounters counters;
-  runtime::CartesianModel model;
-  runtime::TickRunner runner(device, model, scenes, samples, counters, runtime::TickConfig{});
-  engine::HandInput hand;
-  hand.mode = engine::HandInput::Mode::kApplyForce;
-  hand.force = {0.0, 0.0, -5.0};
-  device.set_hand(hand);
-  std::uint64_t tick = 0;
-  for (auto _ : state) {
-    ++tick;
-    runner.run(tick, static_cast<std::int64_t>(tick) * 1'000'000);
-  }
-}
-BENCHMARK(BM_TickDefaultScene);
-
-/// The default scene's whole tick on the 6-DOF point mass (its handle stepped with 10 sub-steps),
-/// without and with an orientation spring (Arg 1: exact-ZOH law): against BM_TickDefaultScene,
-/// what the turning handle costs, and what the orientation stage adds where a scene has it.
-void BM_TickSixDof(benchmark::State& state) {
-  runtime::SimulatedRotation rotation;
-  rotation.initial.R_WT = engine::quat_from_axis_angle({0, 0, 1}, 0.2);
-  runtime::SimulatedPointMassDevice device(engine::PointMassParams{}, {{0, 0, -0.001}, {}}, 20.0, rotation);
-  engine::CompiledScene scene = scene_with(1, 0, 1);
-  if (state.range(0) != 0) {
-    engine::SceneDescription description;
-    engine::ObjectSpec wall;
-    wall.stiffness = 1000.0;
-    wall.damping = 1.0;
-    wall.shape = engine::HalfSpaceSpec{{0.0, 0.0, 1.0}};
-    description.objects.push_back({{1, 1, engine::kNeverTick, {}}, wall});
-    description.fields.push_back({{1, 2, engine::kNeverTick, {}},
-                                  engine::FieldSpec{engine::SpringToPointSpec{{0, 0, 0.02}, 20.0, 0.1, 0.0}}});
+  for (int i = 0; i < orientation_springs; ++i) {
     engine::OrientationSpringSpec spring;
     spring.stiffness = 0.05;
     spring.damping = 2e-4;
     spring.law = engine::ContactLaw::kExactZoh;
-    description.fields.push_back({{1, 3, engine::kNeverTick, {}}, engine::FieldSpec{spring}});
-    scene = engine::compile_scene(description, 50, 1);
+    description.fields.push_back({{1, id++, engine::kNeverTick, {}}, engine::FieldSpec{spring}});
   }
+  return engine::compile_scene(description, 50, 1);
+}
+
+/// Runs whole ticks of `scene` on `device` (a 5 N hand pushing down) for the benchmark's loop.
+void run_ticks(benchmark::State& state, runtime::SimulatedPointMassDevice& device, engine::CompiledScene scene) {
   runtime::SceneExchange scenes(std::make_unique<const engine::CompiledScene>(std::move(scene)));
   runtime::SampleRing samples;
   runtime::LoopCounters counters;
@@ -97,6 +63,22 @@ void BM_TickSixDof(benchmark::State& state) {
     ++tick;
     runner.run(tick, static_cast<std::int64_t>(tick) * 1'000'000);
   }
+}
+
+void BM_TickDefaultScene(benchmark::State& state) {
+  runtime::SimulatedPointMassDevice device(engine::PointMassParams{}, {{0, 0, -0.001}, {}}, 20.0);
+  run_ticks(state, device, scene_with(1, 0, 1));
+}
+BENCHMARK(BM_TickDefaultScene);
+
+/// The default scene's whole tick on the 6-DOF point mass (its handle stepped with 10 sub-steps),
+/// without and with an orientation spring (Arg 1: exact-ZOH law): against BM_TickDefaultScene,
+/// what the turning handle costs, and what the orientation stage adds where a scene has it.
+void BM_TickSixDof(benchmark::State& state) {
+  runtime::SimulatedRotation rotation;
+  rotation.initial.R_WT = engine::quat_from_axis_angle({0, 0, 1}, 0.2);
+  runtime::SimulatedPointMassDevice device(engine::PointMassParams{}, {{0, 0, -0.001}, {}}, 20.0, rotation);
+  run_ticks(state, device, scene_with(1, 0, 1, static_cast<int>(state.range(0))));
 }
 BENCHMARK(BM_TickSixDof)->Arg(0)->Arg(1)->ArgName("orientation_spring");
 
