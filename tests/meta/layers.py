@@ -15,6 +15,7 @@ ALLOWED = {
     "schema": {"engine"},
     "config": {"engine", "runtime", "schema"},
     "net": {"engine", "runtime", "schema"},
+    "federation": {"engine", "runtime"},
     "app": {"engine", "runtime", "schema", "config", "net"},
     "lab": {"engine", "runtime", "schema", "config"},
 }

@@ -1,0 +1,52 @@
+#pragma once
+// A DDS domain participant of Eclipse Cyclone DDS (libddsc, Debian's cyclonedds-dev 0.10) for the
+// federation of hapticd sites (docs/federation.md): the domain configured from code, not from an
+// environment variable, so a site's network is what its hapticd configuration says.
+//
+// Off the loop: creating and closing participants allocates and may block on the network.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <dds/dds.h>
+
+namespace haptic::federation {
+
+struct DomainOptions {
+  std::uint32_t domain_id = 0;  // DDS domain, 0 ... 232 (the RTPS port mapping's range).
+  /// The one network interface the domain uses, by name ("lo", "eth0") or address.
+  std::string interface = "lo";
+  /// Unicast discovery: the addresses of the other sites' hosts. Empty: multicast discovery.
+  std::vector<std::string> peers;
+};
+
+/// "" or one message naming the bad option ("domain_id: must be 0 to 232, got 300").
+std::string validate(const DomainOptions& options);
+
+/// Cyclone's configuration XML for the options (the interface, multicast only without peers).
+std::string cyclone_config(const DomainOptions& options);
+
+/// One participant in a domain configured from DomainOptions; closes it (and everything created
+/// under it) when destroyed. Several participants of one domain in one process share the domain.
+class Participant {
+ public:
+  /// Throws std::runtime_error naming the domain and Cyclone's reason when it cannot be created.
+  explicit Participant(const DomainOptions& options);
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  dds_entity_t handle() const { return participant_; }
+  const DomainOptions& options() const { return options_; }
+
+ private:
+  DomainOptions options_;
+  dds_entity_t domain_ = 0;  // ours to delete when we created the domain, else 0
+  dds_entity_t participant_ = 0;
+};
+
+/// Cyclone's words for a return code ("DDS_RETCODE_TIMEOUT").
+std::string dds_error(dds_return_t code);
+
+}  // namespace haptic::federation

@@ -1,0 +1,126 @@
+#include "federation/tool_topic.hpp"
+
+#include <array>
+#include <cstring>
+#include <stdexcept>
+
+#include "haptic/dds/federation.h"
+
+namespace haptic::federation {
+
+namespace {
+
+using Sample = haptic_federation_ToolSample;
+
+haptic_federation_Vec3 to_dds(const engine::Vec3& v) { return {v.x, v.y, v.z}; }
+engine::Vec3 from_dds(const haptic_federation_Vec3& v) { return {v.x, v.y, v.z}; }
+
+/// Best effort, keep last 1, volatile: the newest state of each tool is all that matters.
+dds_qos_t* tool_qos() {
+  dds_qos_t* qos = dds_create_qos();
+  dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+  return qos;
+}
+
+dds_entity_t make_topic(const Participant& participant) {
+  const dds_entity_t topic =
+      dds_create_topic(participant.handle(), &haptic_federation_ToolSample_desc, kToolTopic, nullptr, nullptr);
+  if (topic < 0) throw std::runtime_error(std::string("DDS topic ") + kToolTopic + ": " + dds_error(topic));
+  return topic;
+}
+
+std::uint32_t matched(dds_entity_t entity, bool publication) {
+  dds_publication_matched_status_t pub{};
+  dds_subscription_matched_status_t sub{};
+  if (publication) {
+    return dds_get_publication_matched_status(entity, &pub) == DDS_RETCODE_OK ? pub.current_count : 0;
+  }
+  return dds_get_subscription_matched_status(entity, &sub) == DDS_RETCODE_OK ? sub.current_count : 0;
+}
+
+}  // namespace
+
+ToolPublisher::ToolPublisher(const Participant& participant) : topic_(make_topic(participant)) {
+  dds_qos_t* qos = tool_qos();
+  writer_ = dds_create_writer(participant.handle(), topic_, qos, nullptr);
+  dds_delete_qos(qos);
+  if (writer_ < 0) throw std::runtime_error(std::string("DDS writer of ") + kToolTopic + ": " + dds_error(writer_));
+}
+
+ToolPublisher::~ToolPublisher() {
+  if (writer_ > 0) dds_delete(writer_);
+}
+
+bool ToolPublisher::publish(const ToolState& tool) {
+  Sample sample{};
+  if (tool.site.size() >= sizeof sample.site) {
+    error_ = "site: at most 64 characters, got " + std::to_string(tool.site.size());
+    return false;
+  }
+  std::memcpy(sample.site, tool.site.data(), tool.site.size());
+  sample.port = tool.port;
+  sample.tick = tool.tick;
+  sample.time_ns = tool.time_ns;
+  sample.position = to_dds(tool.p_WT);
+  sample.velocity = to_dds(tool.v_WT);
+  sample.force = to_dds(tool.F_T_W);
+  sample.orientation = {tool.R_WT.w, tool.R_WT.x, tool.R_WT.y, tool.R_WT.z};
+  sample.buttons = tool.buttons;
+  const dds_return_t done = dds_write(writer_, &sample);
+  if (done != DDS_RETCODE_OK) {
+    error_ = "dds_write: " + dds_error(done);
+    return false;
+  }
+  return true;
+}
+
+std::uint32_t ToolPublisher::matched_readers() const { return matched(writer_, true); }
+
+ToolSubscriber::ToolSubscriber(const Participant& participant) : topic_(make_topic(participant)) {
+  dds_qos_t* qos = tool_qos();
+  reader_ = dds_create_reader(participant.handle(), topic_, qos, nullptr);
+  dds_delete_qos(qos);
+  if (reader_ < 0) throw std::runtime_error(std::string("DDS reader of ") + kToolTopic + ": " + dds_error(reader_));
+}
+
+ToolSubscriber::~ToolSubscriber() {
+  if (reader_ > 0) dds_delete(reader_);
+}
+
+std::size_t ToolSubscriber::take(std::vector<ToolState>& out, const std::string& own_site) {
+  constexpr std::size_t kBatch = 16;
+  std::array<Sample, kBatch> samples{};
+  std::array<void*, kBatch> pointers{};
+  std::array<dds_sample_info_t, kBatch> infos{};
+  for (std::size_t i = 0; i < kBatch; ++i) pointers[i] = &samples[i];
+  std::size_t taken = 0;
+  for (;;) {
+    const dds_return_t n = dds_take(reader_, pointers.data(), infos.data(), kBatch, kBatch);
+    if (n <= 0) break;
+    for (dds_return_t i = 0; i < n; ++i) {
+      if (!infos[static_cast<std::size_t>(i)].valid_data) continue;
+      const Sample& s = samples[static_cast<std::size_t>(i)];
+      ToolState tool;
+      tool.site.assign(s.site, strnlen(s.site, sizeof s.site));
+      if (!own_site.empty() && tool.site == own_site) continue;
+      tool.port = s.port;
+      tool.tick = s.tick;
+      tool.time_ns = s.time_ns;
+      tool.p_WT = from_dds(s.position);
+      tool.v_WT = from_dds(s.velocity);
+      tool.F_T_W = from_dds(s.force);
+      tool.R_WT = {s.orientation.w, s.orientation.x, s.orientation.y, s.orientation.z};
+      tool.buttons = s.buttons;
+      out.push_back(std::move(tool));
+      ++taken;
+    }
+    if (static_cast<std::size_t>(n) < kBatch) break;
+  }
+  return taken;
+}
+
+std::uint32_t ToolSubscriber::matched_writers() const { return matched(reader_, false); }
+
+}  // namespace haptic::federation

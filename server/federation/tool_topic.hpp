@@ -1,0 +1,78 @@
+#pragma once
+// The federation's tool topic (proto/haptic/dds/federation.idl, ToolSample): every site publishes
+// each of its device ports' tool state at loop rate, and reads the other sites' (docs/federation.md).
+// QoS: best effort, keep last one per (site, port), volatile — a tool's state is only worth its
+// newest sample, and a late or lost one is never resent.
+//
+// Off the loop: a sender thread publishes from the loop's sample rings, and a receiver thread
+// takes what arrived (Cyclone's write and take may allocate).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <dds/dds.h>
+
+#include "engine/core/vec3.hpp"
+#include "federation/dds_participant.hpp"
+
+namespace haptic::federation {
+
+/// Topic name in the domain.
+inline constexpr const char* kToolTopic = "haptic_federation_tool";
+
+/// One site's tool at one tick. Frames and units as TickSample's (W, m, m/s, N).
+struct ToolState {
+  std::string site;          // the publishing site (at most 64 characters)
+  std::uint32_t port = 0;    // its device port
+  std::uint64_t tick = 0;
+  std::int64_t time_ns = 0;  // its server time at the tick
+  engine::Vec3 p_WT;
+  engine::Vec3 v_WT;
+  engine::Vec3 F_T_W;
+  engine::Quat R_WT;
+  std::uint32_t buttons = 0;
+};
+
+/// Publishes this site's tools.
+class ToolPublisher {
+ public:
+  /// Throws std::runtime_error naming what Cyclone refused.
+  explicit ToolPublisher(const Participant& participant);
+  ~ToolPublisher();
+  ToolPublisher(const ToolPublisher&) = delete;
+  ToolPublisher& operator=(const ToolPublisher&) = delete;
+
+  /// Sends one sample; false (and error() says why) when Cyclone refused it or the site's name
+  /// is longer than 64 characters.
+  bool publish(const ToolState& tool);
+  const std::string& error() const { return error_; }
+  /// How many readers of the topic have been matched so far (discovery).
+  std::uint32_t matched_readers() const;
+
+ private:
+  dds_entity_t topic_ = 0;
+  dds_entity_t writer_ = 0;
+  std::string error_;
+};
+
+/// Reads the other sites' tools.
+class ToolSubscriber {
+ public:
+  explicit ToolSubscriber(const Participant& participant);
+  ~ToolSubscriber();
+  ToolSubscriber(const ToolSubscriber&) = delete;
+  ToolSubscriber& operator=(const ToolSubscriber&) = delete;
+
+  /// Appends every sample that arrived since the last take (at most the newest per tool), oldest
+  /// first; returns how many. Samples of `own_site` (this site's own, echoed by the domain) are
+  /// left out.
+  std::size_t take(std::vector<ToolState>& out, const std::string& own_site = {});
+  std::uint32_t matched_writers() const;
+
+ private:
+  dds_entity_t topic_ = 0;
+  dds_entity_t reader_ = 0;
+};
+
+}  // namespace haptic::federation

@@ -1,0 +1,117 @@
+// The federation's tool topic over real Cyclone DDS on loopback: two participants of one domain
+// (as two sites would be, here in one process), the options' checks and the configuration they
+// make. Bounded: every wait has a deadline.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "federation/dds_participant.hpp"
+#include "federation/tool_topic.hpp"
+
+namespace haptic::federation {
+namespace {
+
+/// A domain of this test process's own (ctest runs tests in parallel; loopback discovery would
+/// otherwise mix their samples).
+DomainOptions loopback_domain() {
+  DomainOptions options;
+  options.domain_id = 100 + static_cast<std::uint32_t>(getpid() % 120);
+  options.interface = "lo";
+  options.peers = {"127.0.0.1"};
+  return options;
+}
+
+template <class Condition>
+bool eventually(Condition&& condition, std::chrono::milliseconds limit = std::chrono::seconds(10)) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (condition()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return condition();
+}
+
+TEST(ToolTopic, ASitesToolReachesAnotherParticipantAndItsOwnIsLeftOut) {
+  const DomainOptions options = loopback_domain();
+  Participant site_a(options);
+  Participant site_b(options);
+  ToolPublisher publisher(site_a);
+  ToolSubscriber subscriber(site_b);
+  ASSERT_TRUE(eventually([&] { return publisher.matched_readers() > 0; })) << "no reader matched in 10 s";
+  ToolState tool;
+  tool.site = "bench-a";
+  tool.port = 1;
+  tool.time_ns = 42'000'000;
+  tool.p_WT = {0.01, -0.02, 0.03};
+  tool.v_WT = {0.1, 0.0, -0.1};
+  tool.F_T_W = {0.0, 0.0, 1.5};
+  tool.R_WT = {0.0, 0.0, 0.0, 1.0};
+  tool.buttons = 2;
+  std::vector<ToolState> received;
+  // Best effort: publish until one arrives (bounded), each tick a new sample as the loop would.
+  ASSERT_TRUE(eventually([&] {
+    ++tool.tick;
+    EXPECT_TRUE(publisher.publish(tool)) << publisher.error();
+    subscriber.take(received);
+    return !received.empty();
+  })) << "no sample in 10 s";
+  const ToolState& got = received.back();
+  EXPECT_EQ(got.site, "bench-a");
+  EXPECT_EQ(got.port, 1u);
+  EXPECT_GE(got.tick, 1u);
+  EXPECT_EQ(got.time_ns, 42'000'000);
+  EXPECT_EQ(got.p_WT, tool.p_WT);
+  EXPECT_EQ(got.v_WT, tool.v_WT);
+  EXPECT_EQ(got.F_T_W, tool.F_T_W);
+  EXPECT_EQ(got.R_WT.z, 1.0);
+  EXPECT_EQ(got.buttons, 2u);
+  // A site reading the topic leaves its own samples out.
+  received.clear();
+  ASSERT_TRUE(publisher.publish(tool));
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  subscriber.take(received, "bench-a");
+  EXPECT_TRUE(received.empty());
+}
+
+TEST(ToolTopic, ASiteNameLongerThanTheTypeAllowsIsRefusedNamingIt) {
+  Participant site(loopback_domain());
+  ToolPublisher publisher(site);
+  ToolState tool;
+  tool.site = std::string(65, 'x');
+  EXPECT_FALSE(publisher.publish(tool));
+  EXPECT_EQ(publisher.error(), "site: at most 64 characters, got 65");
+}
+
+TEST(DomainOptions, BadOptionsAreNamedAndNothingCanBeInjectedIntoTheConfiguration) {
+  DomainOptions options;
+  EXPECT_EQ(validate(options), "");
+  options.domain_id = 300;
+  EXPECT_EQ(validate(options), "domain_id: must be 0 to 232, got 300");
+  options.domain_id = 0;
+  options.interface = "lo\"/><Tracing";
+  EXPECT_NE(validate(options).find("interface: must be an interface name or address"), std::string::npos);
+  options.interface = "eth0";
+  options.peers = {"10.0.0.2", "host name"};
+  EXPECT_EQ(validate(options), "peers[1]: must be a host name or address, got \"host name\"");
+  try {
+    Participant refused(options);
+    ADD_FAILURE() << "a bad peer was accepted";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("federation.peers[1]"), std::string::npos) << error.what();
+  }
+  options.peers = {"10.0.0.2"};
+  const std::string xml = cyclone_config(options);
+  EXPECT_NE(xml.find("<NetworkInterface name=\"eth0\"/>"), std::string::npos) << xml;
+  EXPECT_NE(xml.find("<Peer address=\"10.0.0.2\"/>"), std::string::npos) << xml;
+  EXPECT_NE(xml.find("<AllowMulticast>false</AllowMulticast>"), std::string::npos) << xml;
+  options.interface = "192.168.1.5";
+  EXPECT_NE(cyclone_config(options).find("<NetworkInterface address=\"192.168.1.5\"/>"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace haptic::federation
