@@ -1,0 +1,124 @@
+#include "federation/ros2_topics.hpp"
+
+#include <stdexcept>
+#include <vector>
+
+#include "haptic/dds/ros2.h"
+
+namespace haptic::federation {
+
+namespace {
+
+enum Topic { kPose, kTwist, kWrench, kJoy };
+
+struct TopicKind {
+  const char* suffix;
+  const dds_topic_descriptor_t* type;
+};
+const TopicKind kTopics[] = {{"/pose", &geometry_msgs_msg_dds__PoseStamped__desc},
+                             {"/twist", &geometry_msgs_msg_dds__TwistStamped__desc},
+                             {"/wrench", &geometry_msgs_msg_dds__WrenchStamped__desc},
+                             {"/joy", &sensor_msgs_msg_dds__Joy__desc}};
+
+bool name_char(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_'; }
+
+std_msgs_msg_dds__Header_ header(const ToolState& tool, const std::string& frame_id) {
+  std_msgs_msg_dds__Header_ out{};
+  // builtin_interfaces/Time: seconds and nanoseconds in [0, 1e9), for negative times too.
+  std::int64_t sec = tool.time_ns / 1'000'000'000;
+  std::int64_t nanosec = tool.time_ns % 1'000'000'000;
+  if (nanosec < 0) {
+    nanosec += 1'000'000'000;
+    --sec;
+  }
+  out.stamp.sec = static_cast<int32_t>(sec);
+  out.stamp.nanosec = static_cast<uint32_t>(nanosec);
+  out.frame_id = const_cast<char*>(frame_id.c_str());  // written, never freed: the writer copies
+  return out;
+}
+
+geometry_msgs_msg_dds__Vector3_ vector(const engine::Vec3& v) { return {v.x, v.y, v.z}; }
+
+}  // namespace
+
+std::string validate(const Ros2Options& options) {
+  const std::string& ns = options.ros_namespace;
+  bool ok = ns.size() >= 2 && ns.size() <= 200 && ns.front() == '/' && ns.back() != '/';
+  for (std::size_t i = 1; ok && i < ns.size(); ++i) {
+    ok = name_char(ns[i]) || (ns[i] == '/' && ns[i - 1] != '/');
+  }
+  if (!ok) {
+    return "ros_namespace: must be '/' and names of letters, digits and '_' separated by '/', got \"" + ns + "\"";
+  }
+  if (options.frame_id.empty() || options.frame_id.size() > 200) {
+    return "frame_id: must be 1 to 200 characters, got " + std::to_string(options.frame_id.size());
+  }
+  if (options.buttons > 32) return "buttons: at most 32, got " + std::to_string(options.buttons);
+  return {};
+}
+
+std::string dds_topic_of(const std::string& ros_topic) { return "rt" + ros_topic; }
+
+Ros2ToolPublisher::Ros2ToolPublisher(const Participant& participant, const Ros2Options& options)
+    : options_(options) {
+  if (std::string error = validate(options); !error.empty()) throw std::runtime_error("ros2." + error);
+  dds_qos_t* qos = dds_create_qos();
+  dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+  for (int i = 0; i < 4; ++i) {
+    const std::string name = dds_topic_of(options.ros_namespace + kTopics[i].suffix);
+    const dds_entity_t topic = dds_create_topic(participant.handle(), kTopics[i].type, name.c_str(), nullptr, nullptr);
+    writers_[i] = topic < 0 ? topic : dds_create_writer(participant.handle(), topic, qos, nullptr);
+    if (writers_[i] < 0) {
+      const std::string reason = dds_error(writers_[i]);
+      dds_delete_qos(qos);
+      throw std::runtime_error("DDS topic " + name + ": " + reason);
+    }
+  }
+  dds_delete_qos(qos);
+}
+
+Ros2ToolPublisher::~Ros2ToolPublisher() {
+  for (const dds_entity_t writer : writers_) {
+    if (writer > 0) dds_delete(writer);
+  }
+}
+
+bool Ros2ToolPublisher::publish(const ToolState& tool) {
+  const std_msgs_msg_dds__Header_ stamp = header(tool, options_.frame_id);
+  geometry_msgs_msg_dds__PoseStamped_ pose{};
+  pose.header = stamp;
+  pose.pose.position = {tool.p_WT.x, tool.p_WT.y, tool.p_WT.z};
+  pose.pose.orientation = {tool.R_WT.x, tool.R_WT.y, tool.R_WT.z, tool.R_WT.w};  // ROS: x, y, z, w
+  geometry_msgs_msg_dds__TwistStamped_ twist{};
+  twist.header = stamp;
+  twist.twist.linear = vector(tool.v_WT);
+  geometry_msgs_msg_dds__WrenchStamped_ wrench{};
+  wrench.header = stamp;
+  wrench.wrench.force = vector(tool.F_T_W);
+  int32_t pressed[32] = {};
+  for (std::uint32_t b = 0; b < options_.buttons; ++b) pressed[b] = (tool.buttons >> b) & 1u;
+  sensor_msgs_msg_dds__Joy_ joy{};
+  joy.header = stamp;
+  joy.buttons._length = options_.buttons;
+  joy.buttons._maximum = options_.buttons;
+  joy.buttons._buffer = pressed;
+  joy.buttons._release = false;
+  const void* messages[4] = {&pose, &twist, &wrench, &joy};
+  for (int i = 0; i < 4; ++i) {
+    const dds_return_t done = dds_write(writers_[i], messages[i]);
+    if (done != DDS_RETCODE_OK) {
+      error_ = std::string("dds_write on ") + kTopics[i].suffix + ": " + dds_error(done);
+      return false;
+    }
+  }
+  return true;
+}
+
+std::uint32_t Ros2ToolPublisher::matched_readers() const {
+  dds_publication_matched_status_t status{};
+  return dds_get_publication_matched_status(writers_[kPose], &status) == DDS_RETCODE_OK ? status.current_count : 0;
+}
+
+}  // namespace haptic::federation
