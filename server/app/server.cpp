@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include "app/health_check.hpp"
+#include "config/federation_options.hpp"
 #include "config/security.hpp"
 #include "config/server_config.hpp"
 #include "schema/scene_specs.hpp"
@@ -269,6 +270,20 @@ Server::Server(const v1::ServerConfig& config)
   grpc_port_ = listener_->port();
   listener_->start([server = grpc_server_.get()](int fd) { grpc::AddInsecureChannelFromFd(server, fd); });
   bind_http_endpoints(access);
+  join_federation();
+}
+
+void Server::join_federation() {
+  if (!config_.has_federation()) return;
+  std::vector<federation::RelayPort> ports;
+  for (std::size_t port = 0; port < samples_.size(); ++port) {
+    ports.push_back({samples_[port].get(), descriptions_[port].buttons});
+  }
+  try {
+    relay_ = std::make_unique<federation::SampleRelay>(config::relay_options(config_.federation()), ports);
+  } catch (const std::runtime_error& error) {
+    throw config::ConfigError(std::string("federation: ") + error.what());
+  }
 }
 
 void Server::bind_http_endpoints(const net::AccessControl& access) {
@@ -369,6 +384,15 @@ void Server::start() {
   }
   status_last_ns_ = runtime::monotonic_now_ns();
   housekeeping_ = std::thread([this] { housekeeping_loop(); });
+  if (relay_) {
+    relay_->start();
+    const v1::FederationConfig& federation = config_.federation();
+    spdlog::info("hapticd: federation site \"{}\" in DDS domain {} on {}{}", federation.site(),
+                 federation.domain_id(), federation.interface(),
+                 federation.has_ros2() ? fmt::format(", ROS 2 topics under {} at {:g} Hz",
+                                                     federation.ros2().ros_namespace(), federation.ros2().rate_hz())
+                                       : std::string());
+  }
   if (metrics_) {
     metrics_->start([this] { return net::prometheus_text(stats()); });
     spdlog::info("hapticd: metrics at http://{}/metrics (port {})", config_.metrics_address(),
@@ -461,6 +485,7 @@ void Server::shutdown() {
   }
   housekeeping_wake_.notify_all();
   if (housekeeping_.joinable()) housekeeping_.join();
+  if (relay_) relay_->stop();
   udp_.stop();
   spdlog::info("hapticd: stopped after {} ticks", counters_.ticks.load());
 }

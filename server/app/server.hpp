@@ -22,6 +22,7 @@
 #include "net/recorder.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
+#include "federation/sample_relay.hpp"
 #include "net/udp_endpoint.hpp"
 #include "net/viewer_endpoint.hpp"
 #include "runtime/loop_cpu.hpp"
@@ -78,6 +79,8 @@ class Server {
  private:
   void housekeeping_loop();
   /// The metrics endpoint and the viewer, when configured (`access`: the control plane's tokens).
+  /// With a federation section: joins its DDS domain and makes the relay (started with the loop).
+  void join_federation();
   void bind_http_endpoints(const net::AccessControl& access);
   void log_status();
 
@@ -111,6 +114,7 @@ class Server {
   std::unique_ptr<net::MetricsEndpoint> metrics_;  // when metrics_address is set
   std::unique_ptr<net::ViewerEndpoint> viewer_;    // when viewer_address is set
   std::unique_ptr<net::Recorder> recorder_;
+  std::unique_ptr<federation::SampleRelay> relay_;  // when federation is configured
 
   std::thread housekeeping_;
   std::mutex housekeeping_mutex_;

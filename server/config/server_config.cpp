@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "config/devices.hpp"
+#include "config/federation_options.hpp"
 #include "config/security.hpp"
 #include "haptic/io/bounded_file.hpp"
 #include "haptic/io/scene_file.hpp"
@@ -124,6 +125,7 @@ std::uint32_t default_spin_us(double rate_hz) {
 
 void fill_defaults(v1::ServerConfig& config) {
   if (config.grpc_address().empty()) config.set_grpc_address("127.0.0.1:50051");
+  if (config.has_federation()) fill_federation_defaults(*config.mutable_federation());
   if (config.udp_address().empty()) config.set_udp_address("127.0.0.1");
   if (!config.has_udp_port()) config.set_udp_port(50052);
   if (!config.has_loop_rate_hz()) config.set_loop_rate_hz(1000.0);
@@ -205,6 +207,9 @@ std::string validate(const v1::ServerConfig& config) {
     return "time_mode: must be REAL_TIME or LOCKSTEP";
   }
   if (auto e = validate_security(config.security()); !e.empty()) return e;
+  if (config.has_federation()) {
+    if (auto e = validate_federation(config.federation(), config.loop_rate_hz()); !e.empty()) return e;
+  }
   if (auto e = check_exposure(config); !e.empty()) return e;
   if (config.max_sessions_per_peer() > config.max_sessions()) {
     return "max_sessions_per_peer: must be at most max_sessions (" +

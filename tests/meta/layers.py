@@ -13,10 +13,10 @@ ALLOWED = {
     "engine": set(),
     "runtime": {"engine"},
     "schema": {"engine"},
-    "config": {"engine", "runtime", "schema"},
+    "config": {"engine", "runtime", "schema", "federation"},
     "net": {"engine", "runtime", "schema"},
     "federation": {"engine", "runtime"},
-    "app": {"engine", "runtime", "schema", "config", "net"},
+    "app": {"engine", "runtime", "schema", "config", "net", "federation"},
     "lab": {"engine", "runtime", "schema", "config"},
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/')

@@ -259,6 +259,31 @@ TEST(Config, TheSixDofPointMassTakesItsRotationsDefaultsAndNamesABadValue) {
             std::string::npos);
 }
 
+TEST(Config, TheFederationSectionTakesItsDefaultsAndNamesABadField) {
+  const v1::ServerConfig config = parse_config(R"({"federation": {"site": "bench-a.lab", "ros2": {}}})", "x");
+  EXPECT_EQ(config.federation().interface(), "lo");
+  EXPECT_EQ(config.federation().ros2().ros_namespace(), "/hapticd/bench_a_lab");
+  EXPECT_EQ(config.federation().ros2().rate_hz(), 100.0);
+  EXPECT_EQ(config.federation().ros2().frame_id(), "hapticd_world");
+  EXPECT_NE(error_of(R"({"federation": {}})").find("federation.site: must be 1 to 64 characters"), std::string::npos);
+  EXPECT_NE(error_of(R"({"federation": {"site": "a", "domain_id": 500}})")
+                .find("federation.domain_id: must be 0 to 232, got 500"),
+            std::string::npos);
+  // Off this host only with the explicit flag (no DDS Security yet).
+  EXPECT_NE(error_of(R"({"federation": {"site": "a", "interface": "eth0"}})")
+                .find("federation.interface: \"eth0\" leaves this host"),
+            std::string::npos);
+  EXPECT_EQ(parse_config(R"({"federation": {"site": "a", "interface": "eth0", "allow_insecure": true}})", "x")
+                .federation().interface(),
+            "eth0");
+  EXPECT_NE(error_of(R"({"federation": {"site": "a", "ros2": {"rate_hz": 5000}}})")
+                .find("federation.ros2.rate_hz: must be 1 to 1000 and at most the loop rate"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"federation": {"site": "a", "ros2": {"ros_namespace": "no-slash"}}})")
+                .find("federation.ros2.ros_namespace:"),
+            std::string::npos);
+}
+
 TEST(Config, ExtraDevicesAreCheckedLikePortZerosNamingTheirIndex) {
   // Defaults fill an extra point mass like port 0's; any device may be an extra one.
   const v1::ServerConfig config = parse_config(

@@ -1,0 +1,82 @@
+#include "config/federation_options.hpp"
+
+#include <cmath>
+
+namespace haptic::config {
+
+namespace {
+
+federation::DomainOptions domain_of(const v1::FederationConfig& federation) {
+  federation::DomainOptions domain;
+  domain.domain_id = federation.domain_id();
+  domain.interface = federation.interface();
+  domain.peers.assign(federation.peers().begin(), federation.peers().end());
+  return domain;
+}
+
+federation::Ros2Options ros2_of(const v1::Ros2Config& ros2) {
+  federation::Ros2Options out;
+  out.ros_namespace = ros2.ros_namespace();
+  out.frame_id = ros2.frame_id();
+  return out;
+}
+
+/// A loopback interface: the federation stays on this host.
+bool loopback(const std::string& interface) {
+  return interface == "lo" || interface == "::1" || interface.rfind("127.", 0) == 0;
+}
+
+}  // namespace
+
+void fill_federation_defaults(v1::FederationConfig& federation) {
+  if (federation.interface().empty()) federation.set_interface("lo");
+  if (!federation.has_ros2()) return;
+  v1::Ros2Config& ros2 = *federation.mutable_ros2();
+  if (ros2.ros_namespace().empty()) {
+    std::string name = federation.site();
+    for (char& c : name) {
+      if (c == '-' || c == '.') c = '_';
+    }
+    ros2.set_ros_namespace("/hapticd/" + name);
+  }
+  if (ros2.rate_hz() == 0.0) ros2.set_rate_hz(100.0);
+  if (ros2.frame_id().empty()) ros2.set_frame_id("hapticd_world");
+}
+
+std::string validate_federation(const v1::FederationConfig& federation, double loop_rate_hz) {
+  const std::string& site = federation.site();
+  if (site.empty() || site.size() > 64) {
+    return "federation.site: must be 1 to 64 characters (this site's name in the domain), got " +
+           std::to_string(site.size());
+  }
+  if (std::string e = federation::validate(domain_of(federation)); !e.empty()) return "federation." + e;
+  if (!loopback(federation.interface()) && !federation.allow_insecure()) {
+    return "federation.interface: \"" + federation.interface() +
+           "\" leaves this host, and the federation has no DDS Security yet: anyone on that network "
+           "could read the tools and join the domain; use \"lo\", or accept that with "
+           "federation.allow_insecure: true";
+  }
+  if (federation.has_ros2()) {
+    const v1::Ros2Config& ros2 = federation.ros2();
+    if (std::string e = federation::validate(ros2_of(ros2)); !e.empty()) return "federation.ros2." + e;
+    const double rate = ros2.rate_hz();
+    if (!std::isfinite(rate) || rate < 1.0 || rate > 1000.0 || rate > loop_rate_hz) {
+      return "federation.ros2.rate_hz: must be 1 to 1000 and at most the loop rate (" +
+             std::to_string(loop_rate_hz) + " Hz), got " + std::to_string(rate);
+    }
+  }
+  return {};
+}
+
+federation::RelayOptions relay_options(const v1::FederationConfig& federation) {
+  federation::RelayOptions options;
+  options.site = federation.site();
+  options.domain = domain_of(federation);
+  if (federation.has_ros2()) {
+    options.ros2 = ros2_of(federation.ros2());
+    options.rate_hz = federation.ros2().rate_hz();
+  }
+  return options;
+}
+
+}  // namespace haptic::config

@@ -1,0 +1,21 @@
+#pragma once
+// The configuration's federation section (haptic.v1.FederationConfig) → the federation's options:
+// defaults, validation naming the field ("federation.domain_id: …"), and what a SampleRelay takes.
+
+#include <string>
+
+#include "federation/sample_relay.hpp"
+#include "haptic/v1/config.pb.h"
+
+namespace haptic::config {
+
+/// Fills the federation section's defaults (interface "lo", the ROS 2 namespace, rate and frame).
+void fill_federation_defaults(v1::FederationConfig& federation);
+
+/// "" or one message naming the bad field. loop_rate_hz: the loop's rate (the ROS 2 rate is at most it).
+std::string validate_federation(const v1::FederationConfig& federation, double loop_rate_hz);
+
+/// The relay's options from a valid, defaulted section.
+federation::RelayOptions relay_options(const v1::FederationConfig& federation);
+
+}  // namespace haptic::config

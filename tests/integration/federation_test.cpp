@@ -1,0 +1,75 @@
+// hapticd as a federation site (docs/federation.md) in lockstep, its device port's tool on ROS 2
+// topics over real Cyclone DDS on loopback, read as a ROS 2 subscription's middleware reads them:
+// after a Step, the newest pose is the stepped tool's, stamped with its server time. Bounded waits.
+#include <gtest/gtest.h>
+
+#include <haptic/haptic.hpp>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <thread>
+
+#include "federation/dds_participant.hpp"
+#include "federation/ros2_topics.hpp"
+#include "haptic/dds/ros2.h"
+#include "integration/sdk_harness.hpp"
+#include "integration/server_process.hpp"
+
+namespace haptic {
+namespace {
+
+using test::config_for;
+using test::step_and_get;
+
+TEST(Federation, ASitesToolIsOnRos2TopicsAsItsNewestTick) {
+  const std::uint32_t domain = 100 + static_cast<std::uint32_t>(getpid() % 120);
+  test::ServerProcess server(R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
+      "real_time": {"use_fifo": false},
+      "federation": {"site": "bench-a", "domain_id": )" + std::to_string(domain) + R"(, "peers": ["127.0.0.1"],
+                     "ros2": {"rate_hz": 1000}}})");
+  federation::DomainOptions options;
+  options.domain_id = domain;
+  options.peers = {"127.0.0.1"};
+  federation::Participant node(options);
+  const dds_entity_t topic = dds_create_topic(node.handle(), &geometry_msgs_msg_dds__PoseStamped__desc,
+                                              "rt/hapticd/bench_a/port0/pose", nullptr, nullptr);
+  ASSERT_GT(topic, 0) << federation::dds_error(topic);
+  const dds_entity_t reader = dds_create_reader(node.handle(), topic, nullptr, nullptr);
+  ASSERT_GT(reader, 0) << federation::dds_error(reader);
+
+  Client client(config_for(server));
+  client.set_operator(OperatorInput::push({0.0, 0.0, -0.5}));
+  const State stepped = step_and_get(client, 100);
+  // The loop stands still between Steps: the relay's newest sample is tick 100's, published once
+  // (best effort, so the reader may come late to it: step one tick more per try, bounded).
+  bool matched = false;
+  State last = stepped;
+  for (int attempt = 0; attempt < 200 && !matched; ++attempt) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    void* samples[4] = {};
+    dds_sample_info_t infos[4];
+    const dds_return_t n = dds_take(reader, samples, infos, 4, 4);
+    for (dds_return_t i = 0; i < n; ++i) {
+      if (!infos[i].valid_data) continue;
+      const auto& pose = *static_cast<const geometry_msgs_msg_dds__PoseStamped_*>(samples[i]);
+      const double stamp = pose.header.stamp.sec + 1e-9 * pose.header.stamp.nanosec;
+      if (std::abs(stamp - last.server_time) < 1e-9) {
+        EXPECT_EQ(pose.pose.position.z, last.position.z);
+        EXPECT_EQ(pose.pose.position.x, last.position.x);
+        EXPECT_EQ(pose.pose.orientation.w, 1.0);  // a 3-DOF device: identity
+        EXPECT_STREQ(pose.header.frame_id, "hapticd_world");
+        matched = true;
+      }
+    }
+    if (n > 0) dds_return_loan(reader, samples, n);
+    if (!matched && attempt % 10 == 9) last = step_and_get(client, 1);  // discovery may have been late
+  }
+  EXPECT_TRUE(matched) << "no pose of the stepped tick within 4 s";
+  EXPECT_LT(last.position.z, 0.02);  // the hand pushed the tool down
+}
+
+}  // namespace
+}  // namespace haptic
