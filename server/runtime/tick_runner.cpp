@@ -28,6 +28,9 @@ void TickRunner::make_ports(const std::vector<TickPort>& ports) {
                                          std::nullopt, engine::ForceGuard(port.limits), ToolReading{},
                                          description.capabilities.orientation, std::nullopt});
     if (port.passivity) out.passivity.emplace(*port.passivity);
+    out.remote = port.remote;
+    out.ledger = port.ledger;
+    out.avatar = port.avatar;
     if (description.capabilities.orientation && description.capabilities.torque &&
         description.max_torque > 0.0) {
       out.torque_guard.emplace(engine::force_limits_for(description.max_torque));
@@ -100,6 +103,9 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
       F_scene = step.F_T_W + scene_force.F_fields_W;
       if (F_contacts == engine::Vec3{} && port.passivity->energy() > 0.0) port.passivity->reset();
     }
+    // Other sites' tools (federation): each through its own network passivity layer, after the
+    // port's controller (which watches this site's contacts) and before the guard.
+    if (port.remote) F_scene += avatar_force(port, reading);
     F_command = guarded(port.guard.apply(F_scene, config_.period_s, gain), sample);
     const engine::Vec3 tau_command = port_torque(scene, index, reading, tick, gain, sample);
     // Jᵀ: the joint command for that force (the torque goes to the handle as it is).
@@ -158,6 +164,44 @@ engine::Vec3 TickRunner::port_torque(const engine::CompiledScene& scene, std::ui
     tau_scene = torque.tau_T_W;
   }
   return guarded(port.torque_guard->apply(tau_scene, config_.period_s, gain), sample);
+}
+
+engine::Vec3 TickRunner::avatar_force(Port& port, const ToolReading& reading) {
+  const RemoteToolSet remote = port.remote->load();
+  const double mass = port.device.description().apparent_mass;
+  engine::Vec3 total;
+  for (std::size_t slot = 0; slot < kMaxRemoteTools; ++slot) {
+    const RemoteTool& tool = remote.tools[slot];
+    if (tool.key != port.coupling_keys[slot]) {
+      // Another remote tool in this slot (or none): a new coupling, with nothing booked.
+      port.coupling_keys[slot] = tool.key;
+      port.couplings[slot].reset();
+      if (tool.key != 0) {
+        engine::NetworkPassivityParams params;
+        params.period = config_.period_s;
+        // The device port's cap: the damper that stops the tool's mass in one period.
+        params.max_damping = mass > 0.0 ? mass / config_.period_s : params.max_damping;
+        port.couplings[slot].emplace(params);
+      }
+    }
+    if (!port.couplings[slot]) continue;
+    engine::NetworkPassivity& coupling = *port.couplings[slot];
+    coupling.receive(tool.energy_sent_to_us);
+    const engine::Vec3 apart = reading.p_WT - tool.p_WT;
+    const double distance = engine::norm(apart);
+    const double depth = port.avatar.radius - distance;
+    engine::Vec3 F;
+    double stored = 0.0;
+    if (depth > 0.0 && distance > 0.0) {
+      const engine::Vec3 n = (1.0 / distance) * apart;
+      const double push = port.avatar.stiffness * depth - port.avatar.damping * engine::dot(reading.v_WT - tool.v_WT, n);
+      F = std::max(0.0, push) * n;
+      stored = 0.5 * port.avatar.stiffness * depth * depth;
+    }
+    total += coupling.apply(F, reading.v_WT, reading.p_WT, stored).F_T_W;
+    if (port.ledger) port.ledger->record(slot, tool.key, coupling.sent());
+  }
+  return total;
 }
 
 engine::Vec3 TickRunner::guarded(const engine::GuardedForce& out, TickSample& sample) {

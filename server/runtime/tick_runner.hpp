@@ -6,6 +6,7 @@
 // Separate from the thread that paces it so tests can run ticks directly (lockstep, allocation
 // counting) and both time modes share exactly this code.
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <optional>
@@ -19,7 +20,10 @@
 #include "runtime/loop_stats.hpp"
 #include "runtime/sample_ring.hpp"
 #include "runtime/snapshot_exchange.hpp"
+#include "engine/safety/network_passivity.hpp"
 #include "engine/safety/passivity.hpp"
+#include "runtime/latest_value.hpp"
+#include "runtime/remote_tools.hpp"
 
 namespace haptic::runtime {
 
@@ -48,6 +52,11 @@ struct TickPort {
   SampleRing* samples = nullptr;
   engine::ForceLimits limits;
   std::optional<engine::PassivityControllerParams> passivity;  // absent: off
+  /// Other sites' tools (federation), rendered as avatars through each coupling's network
+  /// passivity layer; null: none, and no avatar work at all. Not owned.
+  const LatestValue<RemoteToolSet>* remote = nullptr;
+  CouplingLedger* ledger = nullptr;  // with remote: what each coupling sent. Not owned.
+  AvatarParams avatar;
 };
 
 class TickRunner {
@@ -93,6 +102,12 @@ class TickRunner {
     /// The torque's guard (NaN to zero, the device's max_torque, its rate): only for a device
     /// that measures orientation and takes torques up to a known max_torque; without one no orientation work is done.
     std::optional<engine::ForceGuard> torque_guard;
+    /// Federation: the remote tools, this port's coupling with each (by slot), their keys.
+    const LatestValue<RemoteToolSet>* remote = nullptr;
+    CouplingLedger* ledger = nullptr;
+    AvatarParams avatar;
+    std::array<std::optional<engine::NetworkPassivity>, kMaxRemoteTools> couplings{};
+    std::array<std::uint64_t, kMaxRemoteTools> coupling_keys{};
   };
 
   double output_gain(std::uint64_t tick) const;
@@ -102,6 +117,8 @@ class TickRunner {
   /// What a guard let through (force or torque), its fault and saturation flagged in the sample
   /// and counted.
   engine::Vec3 guarded(const engine::GuardedForce& out, TickSample& sample);
+  /// The other sites' tools' force on this port's tool, each through its coupling's layer.
+  engine::Vec3 avatar_force(Port& port, const ToolReading& reading);
   /// The orientation fields' torque at this port, guarded; zero without them.
   engine::Vec3 port_torque(const engine::CompiledScene& scene, std::uint32_t index,
                            const ToolReading& reading, std::uint64_t tick, double gain,

@@ -1,0 +1,133 @@
+// Two sites' loops in lockstep, each the server's own TickRunner with a simulated device, joined
+// as the federation joins them: each port's mailbox of remote tools (written here by a delay line
+// with seeded loss, as the receiver thread would), its avatars rendered through each coupling's
+// network passivity layer, and the ledger of what each coupling sent going back the other way.
+// The scripted hands push the tools into each other for 60 s.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <memory>
+#include <random>
+
+#include "runtime/cartesian_model.hpp"
+#include "runtime/remote_tools.hpp"
+#include "runtime/simulated_point_mass_device.hpp"
+#include "runtime/tick_runner.hpp"
+#include "support/allocation_counter.hpp"
+
+namespace haptic::runtime {
+namespace {
+
+constexpr double kPeriod = 1e-3;
+
+/// One site: its device held by a hand whose target moves from `start` to `end` over 1.5 s.
+struct Site {
+  Site(const engine::Vec3& start, const engine::Vec3& end, std::uint64_t key)
+      : device(params(), engine::PointMassState{start, {}}, 20.0),
+        scenes(std::make_unique<const engine::CompiledScene>(engine::compile_scene({}, 50, 1, kPeriod))),
+        runner({TickPort{&device, &model, &samples, engine::force_limits_for(20.0), std::nullopt, &remote, &ledger,
+                         AvatarParams{0.01, 1000.0, 0.0}}},
+               scenes, counters, TickConfig{kPeriod, {}, 50, {}}),
+        key(key) {
+    engine::HandInput hand;
+    hand.mode = engine::HandInput::Mode::kFollowTarget;
+    hand.target = start;
+    hand.stiffness = 200.0;
+    hand.damping = 2.0;
+    hand.trajectory.shape = engine::TargetTrajectory::Shape::kLine;
+    hand.trajectory.end = end;
+    hand.trajectory.duration_s = 1.5;
+    device.set_hand(hand);
+  }
+  static engine::PointMassParams params() {
+    engine::PointMassParams p;
+    p.mass = 0.05;
+    p.damping = 0.1;
+    p.workspace_min = {-1, -1, -1};
+    p.workspace_max = {1, 1, 1};
+    return p;
+  }
+
+  SimulatedPointMassDevice device;
+  CartesianModel model;
+  SceneExchange scenes;
+  SampleRing samples;
+  LoopCounters counters;
+  LatestValue<RemoteToolSet> remote;
+  CouplingLedger ledger;
+  TickRunner runner;
+  std::uint64_t key;
+};
+
+struct Message {
+  engine::Vec3 p_WT, v_WT;
+  double sent = 0.0;
+  std::uint64_t arrives = 0;
+  bool lost = false;
+};
+
+/// Runs both sites for `ticks` ticks with `delay` ticks one way; returns the lowest channel
+/// energy (the work both users did on the couplings minus what they got back, from the samples).
+double run(Site& a, Site& b, std::uint64_t delay, double loss, std::uint64_t ticks) {
+  Site* sites[2] = {&a, &b};
+  std::deque<Message> lines[2];
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  double channel = 0.0, lowest = 0.0;
+  TickSample previous[2];
+  for (std::uint64_t tick = 1; tick <= ticks; ++tick) {
+    for (int i = 0; i < 2; ++i) {
+      // Deliver what has arrived into this site's mailbox (the receiver thread's job).
+      RemoteToolSet set = sites[i]->remote.load();
+      while (!lines[1 - i].empty() && lines[1 - i].front().arrives <= tick) {
+        const Message m = lines[1 - i].front();
+        lines[1 - i].pop_front();
+        if (m.lost) continue;
+        set.tools[0] = RemoteTool{sites[1 - i]->key, m.p_WT, m.v_WT, m.sent};
+      }
+      sites[i]->remote.store(set);
+      sites[i]->runner.run(tick, static_cast<std::int64_t>(tick - 1) * 1'000'000);
+      TickSample sample;
+      sites[i]->samples.read(tick, sample);
+      if (tick > 1) channel -= engine::dot(previous[i].F_T_W, sample.p_WT - previous[i].p_WT);
+      previous[i] = sample;
+      lines[i].push_back({sample.p_WT, sample.v_WT, sites[i]->ledger.sent(0), tick + delay, uniform(random) < loss});
+    }
+    lowest = std::min(lowest, channel);
+  }
+  return lowest;
+}
+
+TEST(RemoteTools, TwoSitesLoopsTouchEachOtherPassivelyAcrossDelayAndLoss) {
+  Site still_a({-0.02, 0, 0}, {0.01, 0, 0}, 0xA), still_b({0.02, 0, 0}, {-0.01, 0, 0}, 0xB);
+  run(still_a, still_b, 0, 0.0, 60'000);
+  const double rest_a = still_a.device.plant().state().p_WT.x;
+  ASSERT_LT(rest_a, -0.002);  // blocked by the other tool, not passed through
+  for (const std::uint64_t delay : {10u, 50u, 100u}) {
+    for (const double loss : {0.0, 0.1}) {
+      Site a({-0.02, 0, 0}, {0.01, 0, 0}, 0xA), b({0.02, 0, 0}, {-0.01, 0, 0}, 0xB);
+      const double lowest = run(a, b, delay, loss, 60'000);
+      std::printf("two loops, %llu ms one way, %.0f %% loss: channel energy down to %.6f J\n",
+                  static_cast<unsigned long long>(delay), 100.0 * loss, lowest);
+      EXPECT_GT(lowest, -2e-3) << delay << " ms, " << loss;
+      EXPECT_NEAR(a.device.plant().state().p_WT.x, rest_a, 2e-4) << delay << " ms, " << loss;
+      EXPECT_EQ(a.counters.force_faults.load(), 0u);
+    }
+  }
+}
+
+TEST(RemoteTools, ATickWithRemoteToolsAllocatesNothing) {
+  Site a({-0.02, 0, 0}, {0.01, 0, 0}, 0xA), b({0.02, 0, 0}, {-0.01, 0, 0}, 0xB);
+  run(a, b, 10, 0.0, 1000);  // the couplings exist
+  haptic::test::reset_allocations();
+  {
+    haptic::test::CountAllocations counting;
+    for (std::uint64_t tick = 1001; tick <= 2000; ++tick) a.runner.run(tick, static_cast<std::int64_t>(tick) * 1'000'000);
+  }
+  EXPECT_EQ(haptic::test::allocations(), 0u);
+}
+
+}  // namespace
+}  // namespace haptic::runtime
