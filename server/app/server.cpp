@@ -127,8 +127,14 @@ Server::Server(const v1::ServerConfig& config)
   for (const config::PortDevice& port : devices_) descriptions_.push_back(port.device->description());
   tick.output_ramp_ticks = ms_to_ticks(config.removal_ramp_ms(), rate);
   // Each port's force limit and passivity controller follow its own device.
+  if (config.has_federation()) {
+    for (std::size_t port = 0; port < devices_.size(); ++port) {
+      remote_tools_.push_back(std::make_unique<runtime::LatestValue<runtime::RemoteToolSet>>());
+      ledgers_.push_back(std::make_unique<runtime::CouplingLedger>());
+    }
+  }
   const std::vector<runtime::TickPort> tick_ports =
-      config::tick_ports(config, devices_, ring_pointers(samples_), tick.period_s);
+      federated(config::tick_ports(config, devices_, ring_pointers(samples_), tick.period_s));
   runner_ = std::make_unique<runtime::TickRunner>(tick_ports, scenes_, counters_, tick);
 
   runtime::LoopConfig loop;
@@ -273,14 +279,23 @@ Server::Server(const v1::ServerConfig& config)
   join_federation();
 }
 
+std::vector<runtime::TickPort> Server::federated(std::vector<runtime::TickPort> ports) const {
+  for (std::size_t port = 0; port < ports.size() && port < remote_tools_.size(); ++port) {
+    ports[port].remote = remote_tools_[port].get();
+    ports[port].ledger = ledgers_[port].get();
+  }
+  return ports;
+}
+
 void Server::join_federation() {
   if (!config_.has_federation()) return;
   std::vector<federation::RelayPort> ports;
   for (std::size_t port = 0; port < samples_.size(); ++port) {
-    ports.push_back({samples_[port].get(), descriptions_[port].buttons});
+    ports.push_back({samples_[port].get(), descriptions_[port].buttons, remote_tools_[port].get(), ledgers_[port].get()});
   }
   try {
-    relay_ = std::make_unique<federation::SampleRelay>(config::relay_options(config_.federation()), ports);
+    relay_ = std::make_unique<federation::SampleRelay>(
+        config::relay_options(config_.federation(), config_.loop_rate_hz()), ports);
   } catch (const std::runtime_error& error) {
     throw config::ConfigError(std::string("federation: ") + error.what());
   }
@@ -539,7 +554,7 @@ grpc::Status Server::reset_lockstep(std::uint64_t session_id) {
                              for (config::PortDevice& port : devices_) port.device->stop();
                              devices_ = std::move(fresh);
                              runner_->replace_ports(
-                                 config::tick_ports(config_, devices_, ring_pointers(samples_), period_s_));
+                                 federated(config::tick_ports(config_, devices_, ring_pointers(samples_), period_s_)));
                              for (const auto& ring : samples_) ring->restart();
                              sessions_.restart_ticks();
                            });

@@ -115,6 +115,11 @@ class Server {
   std::unique_ptr<net::ViewerEndpoint> viewer_;    // when viewer_address is set
   std::unique_ptr<net::Recorder> recorder_;
   std::unique_ptr<federation::SampleRelay> relay_;  // when federation is configured
+  /// Federation: each port's mailbox of other sites' tools and its couplings' ledger.
+  std::vector<std::unique_ptr<runtime::LatestValue<runtime::RemoteToolSet>>> remote_tools_;
+  std::vector<std::unique_ptr<runtime::CouplingLedger>> ledgers_;
+  /// The loop's ports with the federation's mailboxes and ledgers (none without a federation).
+  std::vector<runtime::TickPort> federated(std::vector<runtime::TickPort> ports) const;
 
   std::thread housekeeping_;
   std::mutex housekeeping_mutex_;

@@ -1,5 +1,6 @@
 #include "config/federation_options.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace haptic::config {
@@ -68,13 +69,14 @@ std::string validate_federation(const v1::FederationConfig& federation, double l
   return {};
 }
 
-federation::RelayOptions relay_options(const v1::FederationConfig& federation) {
+federation::RelayOptions relay_options(const v1::FederationConfig& federation, double loop_rate_hz) {
   federation::RelayOptions options;
   options.site = federation.site();
   options.domain = domain_of(federation);
+  options.rate_hz = loop_rate_hz;  // every site's tools at loop rate
   if (federation.has_ros2()) {
     options.ros2 = ros2_of(federation.ros2());
-    options.rate_hz = federation.ros2().rate_hz();
+    options.ros2_every = static_cast<std::uint32_t>(std::max(1.0, std::round(loop_rate_hz / federation.ros2().rate_hz())));
   }
   return options;
 }

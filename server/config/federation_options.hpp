@@ -15,7 +15,7 @@ void fill_federation_defaults(v1::FederationConfig& federation);
 /// "" or one message naming the bad field. loop_rate_hz: the loop's rate (the ROS 2 rate is at most it).
 std::string validate_federation(const v1::FederationConfig& federation, double loop_rate_hz);
 
-/// The relay's options from a valid, defaulted section.
-federation::RelayOptions relay_options(const v1::FederationConfig& federation);
+/// The relay's options from a valid, defaulted section, for a loop at loop_rate_hz.
+federation::RelayOptions relay_options(const v1::FederationConfig& federation, double loop_rate_hz);
 
 }  // namespace haptic::config

@@ -1,12 +1,31 @@
 #include "federation/sample_relay.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 namespace haptic::federation {
 
+std::uint64_t remote_key(const std::string& site, std::uint32_t port) {
+  // FNV-1a over the site's name and the port: the same key at every site, 0 never.
+  std::uint64_t hash = 1469598103934665603ull;
+  const auto mix = [&](unsigned char byte) {
+    hash ^= byte;
+    hash *= 1099511628211ull;
+  };
+  for (const char c : site) mix(static_cast<unsigned char>(c));
+  mix(0);
+  for (int shift = 0; shift < 32; shift += 8) mix(static_cast<unsigned char>(port >> shift));
+  return hash == 0 ? 1 : hash;
+}
+
 SampleRelay::SampleRelay(const RelayOptions& options, const std::vector<RelayPort>& ports)
     : options_(options), ports_(ports), participant_(std::make_unique<Participant>(options.domain)) {
   last_tick_.assign(ports_.size(), 0);
+  slots_.resize(ports_.size());
+  if (options_.tools) {
+    tools_out_ = std::make_unique<ToolPublisher>(*participant_);
+    tools_in_ = std::make_unique<ToolSubscriber>(*participant_);
+  }
   if (options_.ros2) {
     for (std::size_t port = 0; port < ports_.size(); ++port) {
       Ros2Options ros2 = *options_.ros2;
@@ -35,34 +54,90 @@ void SampleRelay::run() {
       std::chrono::duration<double>(1.0 / options_.rate_hz));
   auto next = std::chrono::steady_clock::now();
   while (!stopping_.load(std::memory_order_acquire)) {
-    for (std::size_t port = 0; port < ports_.size(); ++port) {
-      const std::uint64_t newest = ports_[port].samples->newest();
-      if (newest == 0 || newest == last_tick_[port]) continue;  // nothing new: nothing converted
-      runtime::TickSample sample;
-      if (!ports_[port].samples->read(newest, sample)) continue;  // overwritten meanwhile: next period
-      last_tick_[port] = newest;
-      ToolState tool;
-      tool.site = options_.site;
-      tool.port = static_cast<std::uint32_t>(port);
-      tool.tick = sample.tick;
-      tool.time_ns = sample.time_ns;
-      tool.p_WT = sample.p_WT;
-      tool.v_WT = sample.v_WT;
-      tool.F_T_W = sample.F_T_W;
-      tool.R_WT = sample.R_WT;
-      tool.buttons = sample.buttons;
-      if (!ros2_.empty()) {
-        if (ros2_[port]->publish(tool)) {
-          published_.fetch_add(1, std::memory_order_relaxed);
-        } else {
-          failed_.fetch_add(1, std::memory_order_relaxed);
-        }
-      }
-    }
+    if (tools_in_) receive();
+    publish();
+    ++periods_;
     next += period;
     const auto now = std::chrono::steady_clock::now();
     if (next < now) next = now;  // behind (a slow host): skip, never burst
     std::this_thread::sleep_until(next);
+  }
+}
+
+void SampleRelay::receive() {
+  received_.clear();
+  tools_in_->take(received_, options_.site);
+  const auto now = std::chrono::steady_clock::now();
+  const auto silence = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options_.silence_s));
+  for (std::size_t port = 0; port < ports_.size(); ++port) {
+    if (ports_[port].remote == nullptr) continue;
+    runtime::RemoteToolSet set = ports_[port].remote->load();
+    bool changed = !received_.empty();
+    for (std::size_t i = 0; i < runtime::kMaxRemoteTools; ++i) {
+      Slot& s = slots_[port][i];
+      if (s.used && now - s.heard > silence) {  // gone quiet: no ghost left in the scene
+        s = Slot{};
+        set.tools[i] = runtime::RemoteTool{};
+        changed = true;
+      }
+    }
+    if (!changed) continue;
+    for (const ToolState& tool : received_) {
+      // This remote tool's slot, or a free one (a ninth remote tool is not rendered).
+      std::size_t slot = runtime::kMaxRemoteTools;
+      for (std::size_t i = 0; i < runtime::kMaxRemoteTools && slot == runtime::kMaxRemoteTools; ++i) {
+        const Slot& s = slots_[port][i];
+        if (s.used && s.site == tool.site && s.port == tool.port) slot = i;
+      }
+      for (std::size_t i = 0; i < runtime::kMaxRemoteTools && slot == runtime::kMaxRemoteTools; ++i) {
+        if (!slots_[port][i].used) {
+          slots_[port][i] = Slot{tool.site, tool.port, true, now};
+          slot = i;
+        }
+      }
+      if (slot == runtime::kMaxRemoteTools) continue;
+      slots_[port][slot].heard = now;
+      double sent_to_us = 0.0;
+      for (const CouplingEnergy& energy : tool.energy) {
+        if (energy.site == options_.site && energy.port == port) sent_to_us = energy.sent;
+      }
+      set.tools[slot] = runtime::RemoteTool{remote_key(tool.site, tool.port), tool.p_WT, tool.v_WT, sent_to_us};
+    }
+    ports_[port].remote->store(set);
+  }
+}
+
+void SampleRelay::publish() {
+  for (std::size_t port = 0; port < ports_.size(); ++port) {
+    const std::uint64_t newest = ports_[port].samples->newest();
+    if (newest == 0 || newest == last_tick_[port]) continue;  // nothing new: nothing converted
+    runtime::TickSample sample;
+    if (!ports_[port].samples->read(newest, sample)) continue;  // overwritten meanwhile: next period
+    last_tick_[port] = newest;
+    ToolState tool;
+    tool.site = options_.site;
+    tool.port = static_cast<std::uint32_t>(port);
+    tool.tick = sample.tick;
+    tool.time_ns = sample.time_ns;
+    tool.p_WT = sample.p_WT;
+    tool.v_WT = sample.v_WT;
+    tool.F_T_W = sample.F_T_W;
+    tool.R_WT = sample.R_WT;
+    tool.buttons = sample.buttons;
+    if (const runtime::CouplingLedger* ledger = ports_[port].ledger) {
+      for (std::size_t slot = 0; slot < runtime::kMaxRemoteTools; ++slot) {
+        const Slot& s = slots_[port][slot];
+        if (s.used && ledger->key(slot) == remote_key(s.site, s.port)) {
+          tool.energy.push_back({s.site, s.port, ledger->sent(slot)});
+        }
+      }
+    }
+    bool ok = true;
+    if (tools_out_) ok = tools_out_->publish(tool) && ok;
+    const bool ros2_period = periods_ % std::max<std::uint32_t>(1, options_.ros2_every) == 0;
+    if (!ros2_.empty() && ros2_period) ok = ros2_[port]->publish(tool) && ok;
+    (ok ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);
   }
 }
 

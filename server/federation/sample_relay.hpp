@@ -1,10 +1,15 @@
 #pragma once
-// Carries the loop's tick samples to DDS at a configured rate (docs/federation.md): on a thread
-// of its own, every period it reads each device port's newest sample from its SampleRing and, when
-// the port has ticked since, publishes it — as ROS 2 topics (ros2_topics) where configured. The
-// loop never waits on it, and a sample nobody asked for is never converted.
+// The federation's thread between the loop and DDS (docs/federation.md). Every period it
+//   - takes the other sites' tools from the tool topic into each port's mailbox of remote tools
+//     (a slot per remote tool, kept while it stays), with the energy each one's coupling sent us;
+//   - reads each device port's newest sample from its SampleRing and, when the port has ticked
+//     since, publishes it on the tool topic with what this port's couplings sent (the ledger), and
+//     as ROS 2 topics (ros2_topics) where configured.
+// The loop never waits on it, and a sample nobody asked for is never converted.
 
+#include <array>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -14,6 +19,9 @@
 
 #include "federation/dds_participant.hpp"
 #include "federation/ros2_topics.hpp"
+#include "federation/tool_topic.hpp"
+#include "runtime/latest_value.hpp"
+#include "runtime/remote_tools.hpp"
 #include "runtime/sample_ring.hpp"
 
 namespace haptic::federation {
@@ -22,14 +30,25 @@ struct RelayOptions {
   std::string site;                 // this site's name (1 ... 64 characters)
   DomainOptions domain;
   std::optional<Ros2Options> ros2;  // ros2.ros_namespace is the site's; ports add "/port<N>"
-  double rate_hz = 100.0;           // publications per second, per port. Unit: Hz.
+  double rate_hz = 1000.0;          // the relay's periods per second (the loop's rate). Unit: Hz.
+  std::uint32_t ros2_every = 10;    // ROS 2 topics every this many periods (≥ 1)
+  bool tools = true;                // the tool topic: publish this site's tools, render the others'
+  /// A remote tool not heard from for this long is dropped from the mailboxes (its site stopped
+  /// or left the network): its avatar goes, through the force guard's rate limit. Unit: s.
+  double silence_s = 0.5;
 };
 
-/// One port's ring and the buttons its device reports.
+/// One port's ring, the buttons its device reports, and (with the tool topic) its mailbox of
+/// remote tools and the ledger of its couplings. Not owned.
 struct RelayPort {
   const runtime::SampleRing* samples = nullptr;
   std::uint32_t buttons = 0;
+  runtime::LatestValue<runtime::RemoteToolSet>* remote = nullptr;
+  const runtime::CouplingLedger* ledger = nullptr;
 };
+
+/// The key a remote tool has in the mailboxes: nonzero, the same at every site.
+std::uint64_t remote_key(const std::string& site, std::uint32_t port);
 
 class SampleRelay {
  public:
@@ -48,12 +67,27 @@ class SampleRelay {
 
  private:
   void run();
+  void receive();
+  void publish();
+
+  /// Which remote tool each mailbox slot of a port holds.
+  struct Slot {
+    std::string site;
+    std::uint32_t port = 0;
+    bool used = false;
+    std::chrono::steady_clock::time_point heard;  // its newest sample's arrival
+  };
 
   RelayOptions options_;
   std::vector<RelayPort> ports_;
   std::unique_ptr<Participant> participant_;
   std::vector<std::unique_ptr<Ros2ToolPublisher>> ros2_;  // per port, when configured
+  std::unique_ptr<ToolPublisher> tools_out_;              // with options.tools
+  std::unique_ptr<ToolSubscriber> tools_in_;
+  std::vector<std::array<Slot, runtime::kMaxRemoteTools>> slots_;  // per port
+  std::vector<ToolState> received_;                                 // scratch
   std::vector<std::uint64_t> last_tick_;                  // per port: the newest tick published
+  std::uint64_t periods_ = 0;                             // run()'s periods so far
   std::thread thread_;
   std::atomic<bool> stopping_{false};
   std::atomic<std::uint64_t> published_{0};

@@ -68,6 +68,25 @@ bool ToolPublisher::publish(const ToolState& tool) {
   sample.force = to_dds(tool.F_T_W);
   sample.orientation = {tool.R_WT.w, tool.R_WT.x, tool.R_WT.y, tool.R_WT.z};
   sample.buttons = tool.buttons;
+  if (tool.energy.size() > kMaxCouplings) {
+    error_ = "energy: at most " + std::to_string(kMaxCouplings) + " couplings, got " + std::to_string(tool.energy.size());
+    return false;
+  }
+  haptic_federation_CouplingEnergy couplings[kMaxCouplings]{};
+  for (std::size_t i = 0; i < tool.energy.size(); ++i) {
+    const CouplingEnergy& e = tool.energy[i];
+    if (e.site.size() >= sizeof couplings[i].site) {
+      error_ = "energy[" + std::to_string(i) + "].site: at most 64 characters";
+      return false;
+    }
+    std::memcpy(couplings[i].site, e.site.data(), e.site.size());
+    couplings[i].port = e.port;
+    couplings[i].sent = e.sent;
+  }
+  sample.energy._length = static_cast<uint32_t>(tool.energy.size());
+  sample.energy._maximum = static_cast<uint32_t>(kMaxCouplings);
+  sample.energy._buffer = couplings;
+  sample.energy._release = false;
   const dds_return_t done = dds_write(writer_, &sample);
   if (done != DDS_RETCODE_OK) {
     error_ = "dds_write: " + dds_error(done);
@@ -91,17 +110,16 @@ ToolSubscriber::~ToolSubscriber() {
 
 std::size_t ToolSubscriber::take(std::vector<ToolState>& out, const std::string& own_site) {
   constexpr std::size_t kBatch = 16;
-  std::array<Sample, kBatch> samples{};
-  std::array<void*, kBatch> pointers{};
-  std::array<dds_sample_info_t, kBatch> infos{};
-  for (std::size_t i = 0; i < kBatch; ++i) pointers[i] = &samples[i];
   std::size_t taken = 0;
   for (;;) {
+    // Loaned samples: Cyclone owns their sequences' buffers until the loan is returned.
+    std::array<void*, kBatch> pointers{};
+    std::array<dds_sample_info_t, kBatch> infos{};
     const dds_return_t n = dds_take(reader_, pointers.data(), infos.data(), kBatch, kBatch);
     if (n <= 0) break;
     for (dds_return_t i = 0; i < n; ++i) {
       if (!infos[static_cast<std::size_t>(i)].valid_data) continue;
-      const Sample& s = samples[static_cast<std::size_t>(i)];
+      const Sample& s = *static_cast<const Sample*>(pointers[static_cast<std::size_t>(i)]);
       ToolState tool;
       tool.site.assign(s.site, strnlen(s.site, sizeof s.site));
       if (!own_site.empty() && tool.site == own_site) continue;
@@ -113,9 +131,14 @@ std::size_t ToolSubscriber::take(std::vector<ToolState>& out, const std::string&
       tool.F_T_W = from_dds(s.force);
       tool.R_WT = {s.orientation.w, s.orientation.x, s.orientation.y, s.orientation.z};
       tool.buttons = s.buttons;
+      for (std::uint32_t k = 0; k < s.energy._length && k < kMaxCouplings; ++k) {
+        const haptic_federation_CouplingEnergy& e = s.energy._buffer[k];
+        tool.energy.push_back({std::string(e.site, strnlen(e.site, sizeof e.site)), e.port, e.sent});
+      }
       out.push_back(std::move(tool));
       ++taken;
     }
+    dds_return_loan(reader_, pointers.data(), n);
     if (static_cast<std::size_t>(n) < kBatch) break;
   }
   return taken;

@@ -21,6 +21,16 @@ namespace haptic::federation {
 /// Topic name in the domain.
 inline constexpr const char* kToolTopic = "haptic_federation_tool";
 
+/// What one tool's coupling with another site's tool has sent it, cumulative. Unit: J.
+struct CouplingEnergy {
+  std::string site;
+  std::uint32_t port = 0;
+  double sent = 0.0;
+};
+
+/// Most couplings a ToolSample carries (the IDL's bound).
+inline constexpr std::size_t kMaxCouplings = 8;
+
 /// One site's tool at one tick. Frames and units as TickSample's (W, m, m/s, N).
 struct ToolState {
   std::string site;          // the publishing site (at most 64 characters)
@@ -32,6 +42,7 @@ struct ToolState {
   engine::Vec3 F_T_W;
   engine::Quat R_WT;
   std::uint32_t buttons = 0;
+  std::vector<CouplingEnergy> energy;  // at most kMaxCouplings
 };
 
 /// Publishes this site's tools.

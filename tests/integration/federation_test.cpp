@@ -9,6 +9,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <memory>
 #include <string>
 #include <thread>
 
@@ -69,6 +71,60 @@ TEST(Federation, ASitesToolIsOnRos2TopicsAsItsNewestTick) {
   }
   EXPECT_TRUE(matched) << "no pose of the stepped tick within 4 s";
   EXPECT_LT(last.position.z, 0.02);  // the hand pushed the tool down
+}
+
+/// A real-time site on loopback: its point mass starts at x0 (m), in DDS domain `domain`.
+std::string site_config(const std::string& site, std::uint32_t domain, double x0) {
+  return R"({"udp_address": "127.0.0.1", "grpc_address": "127.0.0.1:0", "udp_port": 0, "status_period_s": 0,
+             "real_time": {"use_fifo": false},
+             "simulated_point_mass": {"mass": 0.05, "damping": 0.1, "initial_position": {"x": )" +
+         std::to_string(x0) + R"(, "y": 0, "z": 0}},
+             "federation": {"site": ")" + site + R"(", "domain_id": )" + std::to_string(domain) +
+         R"(, "peers": ["127.0.0.1"]}})";
+}
+
+/// Two hands' targets pass through each other: A's from −2 cm to +1 cm, B's from +2 cm to −1 cm,
+/// over 1.5 s (200 N/m, 2 N·s/m). Returns A's position after `seconds` of real time.
+double push_past_each_other(Client& a, Client& b, double seconds) {
+  OperatorInput hand_a = OperatorInput::follow_line({-0.02, 0, 0}, {0.01, 0, 0}, 1.5, OperatorInput::Grip::kCustom);
+  hand_a.stiffness = 200.0;
+  hand_a.damping = 2.0;
+  OperatorInput hand_b = OperatorInput::follow_line({0.02, 0, 0}, {-0.01, 0, 0}, 1.5, OperatorInput::Grip::kCustom);
+  hand_b.stiffness = 200.0;
+  hand_b.damping = 2.0;
+  a.set_operator(hand_a);
+  b.set_operator(hand_b);
+  std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+  State s;
+  EXPECT_TRUE(a.poll_state(s, std::chrono::seconds(5)));
+  return s.position.x;
+}
+
+// Two real-time sites on loopback DDS: each renders the other's tool as a sphere (its avatar,
+// through the coupling's passivity layer); the hands' targets pass through each other, the tools
+// do not (behaviour, not timing: where A rests, not when).
+TEST(Federation, TwoSitesToolsTouchEachOtherOverDds) {
+  const std::uint32_t domain = 100 + static_cast<std::uint32_t>((getpid() + 60) % 120);
+  test::ServerProcess site_a(site_config("bench-a", domain, -0.02));
+  auto site_b = std::make_unique<test::ServerProcess>(site_config("bench-b", domain, 0.02));
+  Client a(config_for(site_a));
+  auto b = std::make_unique<Client>(config_for(*site_b));
+  const double x = push_past_each_other(a, *b, 4.0);
+  std::printf("two sites over DDS: tool A rests at x = %.4f m (its hand's target: +0.0100 m)\n", x);
+  State s;
+  ASSERT_TRUE(a.poll_state(s, std::chrono::seconds(5)));
+  // With no other tool, A's hand would take it to +1 cm; blocked by B's avatar (10 mm, 500 N/m)
+  // and B pushing back, it rests short of the middle.
+  EXPECT_LT(x, -0.002) << "tool A passed into B's avatar";
+  EXPECT_GT(x, -0.02);
+  EXPECT_EQ(s.flags & kForceFault, 0u);
+  // Site B stops: once it has been quiet for 0.5 s its avatar leaves A's scene, and A's hand
+  // takes the tool on to its target.
+  b.reset();
+  site_b.reset();
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  ASSERT_TRUE(a.poll_state(s, std::chrono::seconds(5)));
+  EXPECT_NEAR(s.position.x, 0.01, 1e-3) << "B's avatar stayed after B stopped";
 }
 
 }  // namespace

@@ -52,6 +52,7 @@ TEST(ToolTopic, ASitesToolReachesAnotherParticipantAndItsOwnIsLeftOut) {
   tool.F_T_W = {0.0, 0.0, 1.5};
   tool.R_WT = {0.0, 0.0, 0.0, 1.0};
   tool.buttons = 2;
+  tool.energy = {{"bench-b", 0, 0.125}, {"bench-c", 1, 2.5e-3}};
   std::vector<ToolState> received;
   // Best effort: publish until one arrives (bounded), each tick a new sample as the loop would.
   ASSERT_TRUE(eventually([&] {
@@ -70,6 +71,11 @@ TEST(ToolTopic, ASitesToolReachesAnotherParticipantAndItsOwnIsLeftOut) {
   EXPECT_EQ(got.F_T_W, tool.F_T_W);
   EXPECT_EQ(got.R_WT.z, 1.0);
   EXPECT_EQ(got.buttons, 2u);
+  ASSERT_EQ(got.energy.size(), 2u);  // what its couplings sent, per other tool
+  EXPECT_EQ(got.energy[0].site, "bench-b");
+  EXPECT_EQ(got.energy[0].sent, 0.125);
+  EXPECT_EQ(got.energy[1].port, 1u);
+  EXPECT_EQ(got.energy[1].sent, 2.5e-3);
   // A site reading the topic leaves its own samples out.
   received.clear();
   ASSERT_TRUE(publisher.publish(tool));
