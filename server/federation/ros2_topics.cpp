@@ -62,10 +62,7 @@ std::string dds_topic_of(const std::string& ros_topic) { return "rt" + ros_topic
 Ros2ToolPublisher::Ros2ToolPublisher(const Participant& participant, const Ros2Options& options)
     : options_(options) {
   if (std::string error = validate(options); !error.empty()) throw std::runtime_error("ros2." + error);
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
-  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
-  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+  dds_qos_t* qos = newest_only_qos();  // ROS 2's sensor-data profile
   for (int i = 0; i < 4; ++i) {
     const std::string name = dds_topic_of(options.ros_namespace + kTopics[i].suffix);
     const dds_entity_t topic = dds_create_topic(participant.handle(), kTopics[i].type, name.c_str(), nullptr, nullptr);

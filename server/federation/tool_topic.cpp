@@ -15,15 +15,6 @@ using Sample = haptic_federation_ToolSample;
 haptic_federation_Vec3 to_dds(const engine::Vec3& v) { return {v.x, v.y, v.z}; }
 engine::Vec3 from_dds(const haptic_federation_Vec3& v) { return {v.x, v.y, v.z}; }
 
-/// Best effort, keep last 1, volatile: the newest state of each tool is all that matters.
-dds_qos_t* tool_qos() {
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
-  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
-  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
-  return qos;
-}
-
 dds_entity_t make_topic(const Participant& participant) {
   const dds_entity_t topic =
       dds_create_topic(participant.handle(), &haptic_federation_ToolSample_desc, kToolTopic, nullptr, nullptr);
@@ -43,7 +34,7 @@ std::uint32_t matched(dds_entity_t entity, bool publication) {
 }  // namespace
 
 ToolPublisher::ToolPublisher(const Participant& participant) : topic_(make_topic(participant)) {
-  dds_qos_t* qos = tool_qos();
+  dds_qos_t* qos = newest_only_qos();
   writer_ = dds_create_writer(participant.handle(), topic_, qos, nullptr);
   dds_delete_qos(qos);
   if (writer_ < 0) throw std::runtime_error(std::string("DDS writer of ") + kToolTopic + ": " + dds_error(writer_));
@@ -98,7 +89,7 @@ bool ToolPublisher::publish(const ToolState& tool) {
 std::uint32_t ToolPublisher::matched_readers() const { return matched(writer_, true); }
 
 ToolSubscriber::ToolSubscriber(const Participant& participant) : topic_(make_topic(participant)) {
-  dds_qos_t* qos = tool_qos();
+  dds_qos_t* qos = newest_only_qos();
   reader_ = dds_create_reader(participant.handle(), topic_, qos, nullptr);
   dds_delete_qos(qos);
   if (reader_ < 0) throw std::runtime_error(std::string("DDS reader of ") + kToolTopic + ": " + dds_error(reader_));
