@@ -28,7 +28,8 @@ std::string validate(const DomainOptions& options);
 std::string cyclone_config(const DomainOptions& options);
 
 /// One participant in a domain configured from DomainOptions; closes it (and everything created
-/// under it) when destroyed. Several participants of one domain in one process share the domain.
+/// under it) when destroyed. Several participants of one domain in one process share the domain,
+/// configured by the first, which owns it: destroy that one last.
 class Participant {
  public:
   /// Throws std::runtime_error naming the domain and Cyclone's reason when it cannot be created.
