@@ -42,7 +42,8 @@ TEST(SixDofDevice, TheRotationMakesThePointMassTurnAndTakeTorques) {
   EXPECT_EQ(six.max_torque, 0.3);
   EXPECT_EQ(six.apparent_inertia, 2e-4);
   EXPECT_EQ(six.apparent_rotational_damping, 5e-4);
-  const runtime::DeviceDescription& three = devices_of("{}")[0].device->description();
+  const std::vector<PortDevice> point_mass = devices_of("{}");
+  const runtime::DeviceDescription& three = point_mass[0].device->description();
   EXPECT_EQ(three.dof, 3u);
   EXPECT_FALSE(three.capabilities.torque);
   EXPECT_EQ(three.apparent_inertia, 0.0);
