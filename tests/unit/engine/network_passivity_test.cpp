@@ -132,6 +132,24 @@ TEST(NetworkPassivity, WithoutTheLayerTheDelayedContactCreatesEnergyAndTheToolsP
   }
 }
 
+TEST(NetworkPassivity, WithoutTheLayerTheContactTurnsActiveAtAFewMillisecondsOfDelay) {
+  // The stability boundary without the layer: the shortest one-way delay at which the delayed
+  // contact creates more than 10 mJ over the run (the sampled contact alone stays near 1e-5 J).
+  long boundary = -1;
+  for (long delay = 0; delay <= 10 && boundary < 0; ++delay) {
+    Scenario scenario;
+    scenario.delay_ticks = delay;
+    scenario.layer = false;
+    scenario.ticks = 20'000;
+    const Outcome outcome = run(scenario);
+    std::printf("no layer, %ld ms one way: channel energy down to %.6f J\n", delay, outcome.min_channel_energy);
+    if (outcome.min_channel_energy < -1e-2) boundary = delay;
+  }
+  std::printf("no layer: active from %ld ms one way\n", boundary);
+  EXPECT_GE(boundary, 1);   // with no delay the contact is passive (up to its sampling)
+  EXPECT_LE(boundary, 10);  // and a few milliseconds make it active
+}
+
 TEST(NetworkPassivity, WithTheLayerTheChannelStaysPassiveForEveryDelayAndLoss) {
   const Outcome still = run(Scenario{});  // no delay, no loss: where the tools come to rest
   ASSERT_LT(still.end[0].x, still.end[1].x);
