@@ -9,6 +9,7 @@
 // Control (for tests): fake_dhd_control("command ..."), fake_dhd_calls(), fake_dhd_clear_calls(),
 // fake_dhd_blocked(); environment: FAKE_DHD_DEVICES, FAKE_DHD_SCRIPT.
 #include "fake_forcedimension.hpp"
+#include "standin_call_log.hpp"
 
 #include <array>
 #include <chrono>
@@ -165,14 +166,6 @@ struct ScriptItem {
   std::string command;
 };
 
-struct LogEntry {
-  std::string line;
-  long count;
-  bool countable;
-};
-
-constexpr std::size_t kLogMaxEntries = 50000;  // beyond this, calls are only counted
-
 struct State {
   std::mutex mu;
   std::condition_variable cv;
@@ -188,10 +181,8 @@ struct State {
   std::size_t script_next = 0;
   bool in_script = false;            // a script item is running (it may not `reset`)
   int sdk[4] = {kSdkMajor, kSdkMinor, kSdkRelease, kSdkRevision};
-  std::vector<LogEntry> log;
-  long log_dropped = 0;
+  standin::CallLog log;
   bool logging = true;  // `log off`: calls are not logged (a test counting a driver's allocations)
-  std::string calls_text;            // what fake_dhd_calls() last returned
 };
 
 // Never destroyed: a call may still be blocked in a hang when the process exits, and waiting on a
@@ -212,15 +203,7 @@ void log_call(State& s, const char* name, std::initializer_list<double> args, bo
     std::snprintf(buf, sizeof buf, " %g", a);
     line += buf;
   }
-  if (!s.log.empty() && countable && s.log.back().countable && s.log.back().line == line) {
-    ++s.log.back().count;
-    return;
-  }
-  if (s.log.size() >= kLogMaxEntries) {
-    ++s.log_dropped;
-    return;
-  }
-  s.log.push_back({std::move(line), 1, countable});
+  s.log.add(std::move(line), countable);
 }
 
 double id_arg(char ID) { return static_cast<double>(static_cast<signed char>(ID)); }
@@ -258,7 +241,6 @@ void load_locked(State& s) {
   s.script_next = 0;
   s.sdk[0] = kSdkMajor, s.sdk[1] = kSdkMinor, s.sdk[2] = kSdkRelease, s.sdk[3] = kSdkRevision;
   s.log.clear();
-  s.log_dropped = 0;
 
   const char* env = std::getenv("FAKE_DHD_DEVICES");
   const std::string list = env ? env : "omega.3";
@@ -1179,30 +1161,13 @@ FAKE_DHD_EXPORT int fake_dhd_control(const char* command) {
 FAKE_DHD_EXPORT const char* fake_dhd_calls() {
   std::unique_lock<std::mutex> lock;
   State& s = loaded_state(lock);
-  std::string text;
-  char buf[80];
-  for (const LogEntry& e : s.log) {
-    text += e.line;
-    if (e.count > 1) {
-      std::snprintf(buf, sizeof buf, " x%ld", e.count);
-      text += buf;
-    }
-    text += '\n';
-  }
-  if (s.log_dropped > 0) {
-    std::snprintf(buf, sizeof buf, "fake_dhd_calls: log full, %ld more calls\n", s.log_dropped);
-    text += buf;
-  }
-  s.calls_text = std::move(text);
-  return s.calls_text.c_str();  // valid until the next fake_dhd_calls/fake_dhd_clear_calls
+  return s.log.text("fake_dhd_calls");  // valid until the next fake_dhd_calls/fake_dhd_clear_calls
 }
 
 FAKE_DHD_EXPORT void fake_dhd_clear_calls() {
   std::unique_lock<std::mutex> lock;
   State& s = loaded_state(lock);
   s.log.clear();
-  s.log_dropped = 0;
-  s.calls_text.clear();
 }
 
 FAKE_DHD_EXPORT int fake_dhd_blocked() {

@@ -9,6 +9,7 @@
 // Control (for tests): fake_hd_control("command ..."), fake_hd_calls(), fake_hd_clear_calls(),
 // fake_hd_blocked(); environment: FAKE_HD_DEVICES, FAKE_HD_CLOCK, FAKE_HD_SCRIPT.
 #include "fake_openhaptics.hpp"
+#include "standin_call_log.hpp"
 
 #include <algorithm>
 #include <array>
@@ -43,7 +44,6 @@ constexpr double kGimbalDamping = 1e-3;  // N·m·s/rad per gimbal joint
 constexpr double kMaxBoxFactor = 1.2;    // HD_MAX_WORKSPACE_DIMENSIONS = 1.2 × the usable box
 constexpr std::size_t kMaxErrors = 32;   // per-thread error stack depth; the oldest are dropped
 constexpr std::size_t kMaxCallbacks = 256;  // more scheduled at once: HD_SCHEDULER_FULL
-constexpr std::size_t kLogMaxEntries = 50000;  // beyond this, calls are only counted
 constexpr int kFirstSerial = 10001;            // "10001", "10002", ... in list order
 constexpr HDint kButtons = HD_DEVICE_BUTTON_1 | HD_DEVICE_BUTTON_2;  // two buttons (§2.4 bits)
 constexpr const char* kVersionString = "3.4.0";       // HD_VERSION: the 3.4 runtime (§2.1)
@@ -176,12 +176,6 @@ struct ScriptItem {
   std::string command;
 };
 
-struct LogEntry {
-  std::string line;
-  long count;
-  bool countable;
-};
-
 struct State {
   std::mutex mu;
   std::condition_variable cv;        // hangs, completions, ticks, unschedules
@@ -211,9 +205,7 @@ struct State {
   std::size_t script_next = 0;
   bool in_script = false;
   // Log.
-  std::vector<LogEntry> log;
-  long log_dropped = 0;
-  std::string calls_text;
+  standin::CallLog log;
   // Interned serial-number strings (stable for the process: hdGetString's pointers stay valid).
   std::map<int, std::string> serials;
 };
@@ -245,15 +237,7 @@ std::string hex(HDenum e) {
 }
 
 void log_line(State& s, std::string line, bool countable) {
-  if (!s.log.empty() && countable && s.log.back().countable && s.log.back().line == line) {
-    ++s.log.back().count;
-    return;
-  }
-  if (s.log.size() >= kLogMaxEntries) {
-    ++s.log_dropped;
-    return;
-  }
-  s.log.push_back({std::move(line), 1, countable});
+  s.log.add(std::move(line), countable);
 }
 
 // ---- Text helpers ----
@@ -307,7 +291,6 @@ void load_locked(State& s) {
   s.script.clear();
   s.script_next = 0;
   s.log.clear();
-  s.log_dropped = 0;
 
   const char* env = std::getenv("FAKE_HD_DEVICES");
   const std::string list = env ? env : "Default Device=Touch";
@@ -1402,30 +1385,13 @@ FAKE_HD_EXPORT int fake_hd_control(const char* command) {
 FAKE_HD_EXPORT const char* fake_hd_calls() {
   std::unique_lock<std::mutex> lock;
   State& s = loaded_state(lock);
-  std::string text;
-  char buf[80];
-  for (const LogEntry& e : s.log) {
-    text += e.line;
-    if (e.count > 1) {
-      std::snprintf(buf, sizeof buf, " x%ld", e.count);
-      text += buf;
-    }
-    text += '\n';
-  }
-  if (s.log_dropped > 0) {
-    std::snprintf(buf, sizeof buf, "fake_hd_calls: log full, %ld more calls\n", s.log_dropped);
-    text += buf;
-  }
-  s.calls_text = std::move(text);
-  return s.calls_text.c_str();  // valid until the next fake_hd_calls/fake_hd_clear_calls
+  return s.log.text("fake_hd_calls");  // valid until the next fake_hd_calls/fake_hd_clear_calls
 }
 
 FAKE_HD_EXPORT void fake_hd_clear_calls() {
   std::unique_lock<std::mutex> lock;
   State& s = loaded_state(lock);
   s.log.clear();
-  s.log_dropped = 0;
-  s.calls_text.clear();
 }
 
 FAKE_HD_EXPORT int fake_hd_blocked() {
