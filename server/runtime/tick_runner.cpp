@@ -168,7 +168,6 @@ engine::Vec3 TickRunner::port_torque(const engine::CompiledScene& scene, std::ui
 
 engine::Vec3 TickRunner::avatar_force(Port& port, const ToolReading& reading) {
   const RemoteToolSet remote = port.remote->load();
-  const double mass = port.device.description().apparent_mass;
   engine::Vec3 total;
   for (std::size_t slot = 0; slot < kMaxRemoteTools; ++slot) {
     const RemoteTool& tool = remote.tools[slot];
@@ -180,6 +179,7 @@ engine::Vec3 TickRunner::avatar_force(Port& port, const ToolReading& reading) {
         engine::NetworkPassivityParams params;
         params.period = config_.period_s;
         // The device port's cap: the damper that stops the tool's mass in one period.
+        const double mass = port.device.description().apparent_mass;
         params.max_damping = mass > 0.0 ? mass / config_.period_s : params.max_damping;
         port.couplings[slot].emplace(params);
       }

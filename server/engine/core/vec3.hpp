@@ -27,6 +27,12 @@ constexpr Vec3 cross(const Vec3& a, const Vec3& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 inline double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
+/// v scaled down to |v| <= limit when limit > 0 (0: no limit), keeping its direction.
+inline Vec3 clip_norm(const Vec3& v, double limit) {
+  if (!(limit > 0.0)) return v;
+  const double magnitude = norm(v);
+  return magnitude > limit ? (limit / magnitude) * v : v;
+}
 inline bool is_finite(const Vec3& a) {
   return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }

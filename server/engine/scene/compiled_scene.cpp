@@ -918,11 +918,8 @@ struct PortPass {
     if (is_fading_out(spring.ramp, pass.tick, pass.ramp_ticks)) pass.out.ramping = true;
     const double gain = ramp_gain(spring.ramp, pass.tick, pass.ramp_ticks);
     // F = −∇U − b v with U = ½ k |p − anchor|².
-    Vec3 F = -spring.stiffness * (pass.p_WT - spring.anchor_W) - spring.damping * pass.v_WT;
-    if (spring.max_force > 0.0) {
-      const double magnitude = norm(F);
-      if (magnitude > spring.max_force) F *= spring.max_force / magnitude;
-    }
+    Vec3 F = clip_norm(-spring.stiffness * (pass.p_WT - spring.anchor_W) - spring.damping * pass.v_WT,
+                       spring.max_force);
     F *= gain;
     meter(pass.state, pass.meters + spring.meter, F, pass.v_WT, pass.dt);
     pass.contribute(spring.slot, F, true);

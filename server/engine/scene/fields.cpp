@@ -166,12 +166,8 @@ FieldSample evaluate_field(const SpringFieldSpec& spec, const Vec3& p_WT, const 
   const double k = spec.stiffness;
   FieldSample out;
   out.has_potential = true;
-  out.F_T_W = -k * e - spec.damping * v_c;
   const double F_max = spec.max_force;
-  if (F_max > 0.0) {
-    const double magnitude = norm(out.F_T_W);
-    if (magnitude > F_max) out.F_T_W *= F_max / magnitude;
-  }
+  out.F_T_W = clip_norm(-k * e - spec.damping * v_c, F_max);
   // Potential of the clipped elastic force magnitude min(k f, F_max).
   if (F_max > 0.0 && k * f > F_max) {
     out.U = F_max * f - F_max * F_max / (2.0 * k);

@@ -18,12 +18,6 @@ std::string check_target(const Quat& R_WG) {
   return {};
 }
 
-/// Scales τ down to |τ| ≤ limit when limit > 0.
-Vec3 clip(const Vec3& tau, double limit) {
-  if (limit <= 0.0) return tau;
-  const double magnitude = norm(tau);
-  return magnitude > limit ? (limit / magnitude) * tau : tau;
-}
 
 }  // namespace
 
@@ -69,7 +63,7 @@ OrientationSample OrientationSpringState::update(const OrientationSpringSpec& sp
   out.has_potential = true;
   out.U = 0.5 * spec.stiffness * dot(theta, theta);
   if (spec.law == ContactLaw::kVelocity) {
-    out.tau_T_W = clip(-spec.stiffness * theta - spec.damping * w_WT, spec.max_torque);
+    out.tau_T_W = clip_norm(-spec.stiffness * theta - spec.damping * w_WT, spec.max_torque);
   } else {
     // The log map's branch flips where |θ| passes π; a jump that large is never a real motion
     // within one tick, so the filters restart there as they start: from the measured rate.
@@ -81,7 +75,7 @@ OrientationSample OrientationSpringState::update(const OrientationSpringSpec& sp
       if (restart) filters[i].reset(d[i] - T * rate[i], rate[i]);
       f[i] = filters[i].update(d[i]);
     }
-    out.tau_T_W = clip(Vec3{f[0], f[1], f[2]}, spec.max_torque);
+    out.tau_T_W = clip_norm(Vec3{f[0], f[1], f[2]}, spec.max_torque);
     started = true;
   }
   theta_previous = theta;
