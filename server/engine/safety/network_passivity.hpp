@@ -12,7 +12,9 @@
 //     arrives; energy this site sends is taken out;
 //   - its user is never given more than R: when the force about to be applied would deliver more
 //     than R over the coming period (predicted T F·v), a damper along v takes the excess out
-//     (Hannaford and Ryu's passivity controller, capped at max_damping like theirs);
+//     (Hannaford and Ryu's passivity controller), capped at max_damping like theirs (or, for a
+//     simulated body, at cancelling the force's component along v where that is more); a
+//     reservoir in deficit (a period gave more than predicted) is paid back the same way;
 //   - what R holds beyond the energy stored in this site's own coupling spring (which its user may
 //     take back on release, so a contact does not feel plastic) is sent to the other site, as a
 //     cumulative total: a lost message is made good by the next, and nothing is counted twice.
@@ -39,6 +41,11 @@ struct NetworkPassivityParams {
   /// PassivityControllerParams::max_damping). Unit: N·s/m. ≥ 0.
   double max_damping = 50.0;
   double velocity_threshold = 1e-4;  // below it the damper does nothing. Unit: m/s.
+  /// Lets the damper cancel the whole force along v where max_damping cannot: a spring the budget
+  /// cannot pay for then stops pulling along v, whatever its force. For simulated bodies (shared
+  /// masses), whose velocity holds over a period; on a light device pushed by a hand the velocity
+  /// reverses within a period and the cancelled force chatters, so devices keep the cap alone.
+  bool cancel_along_velocity = false;
 };
 
 /// One tick of the layer.
@@ -68,10 +75,15 @@ class NetworkPassivity {
     NetworkPassivityStep step;
     step.F_T_W = F_T_W;
     const double predicted = params_.period * dot(F_T_W, v_WT);  // work about to be given
-    const double budget = std::max(reservoir_, 0.0);
+    // A reservoir in deficit (the last period gave more than predicted) is paid back by the next.
+    const double budget = reservoir_;
     const double v2 = dot(v_WT, v_WT);
     if (predicted > budget && v2 >= params_.velocity_threshold * params_.velocity_threshold) {
-      step.alpha = std::min(params_.max_damping, (predicted - budget) / (params_.period * v2));
+      // The damper is capped at max_damping (a held damper is stable on mass m only below 2m/T),
+      // or, with cancel_along_velocity, at cancelling the force's component along v where that is
+      // more (α_cancel v = (F·v̂) v̂ only takes back force that was asked for, never reverses it).
+      const double cancel = params_.cancel_along_velocity ? std::max(dot(F_T_W, v_WT), 0.0) / v2 : 0.0;
+      step.alpha = std::min(std::max(cancel, params_.max_damping), (predicted - budget) / (params_.period * v2));
       step.F_T_W -= step.alpha * v_WT;
     }
     F_previous_ = step.F_T_W;
@@ -94,6 +106,9 @@ class NetworkPassivity {
       received_ = remote_sent_total;
     }
   }
+
+  /// Changes the damper's cap (N·s/m, ≥ 0): several couplings on one body share its M/T.
+  void set_max_damping(double max_damping) { params_.max_damping = max_damping; }
 
   double sent() const { return sent_; }          // J sent to the other site, cumulative
   double received() const { return received_; } // J received from it, cumulative
