@@ -1,0 +1,298 @@
+// DDS Security for the federation over real Cyclone DDS on loopback: files from
+// scripts/federation-certs (made into a temporary folder when the test starts), sites as domains
+// of their own in this process (local_domain_id), all in one DDS domain on the network. Bounded:
+// every wait has a deadline.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "federation/dds_participant.hpp"
+#include "federation/tool_topic.hpp"
+#include "haptic/dds/federation.h"
+
+namespace haptic::federation {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Runs scripts/federation-certs once per test process: CA "lab" with members bench-a and
+/// bench-c and observer bench-b; CA "other" with member bench-a (the same name, another CA).
+class Certs {
+ public:
+  static const Certs& get() {
+    static const Certs certs;
+    return certs;
+  }
+  ~Certs() {
+    std::error_code ignored;
+    if (!root_.empty()) fs::remove_all(root_, ignored);
+  }
+
+  const std::string& error() const { return error_; }
+
+  /// The files of `site` from the CA in folder `ca`.
+  SecurityFiles site(const std::string& ca, const std::string& site) const {
+    const std::string dir = root_ + "/" + ca;
+    SecurityFiles files;
+    files.identity_ca = dir + "/ca.pem";
+    files.identity_certificate = dir + "/" + site + "/identity.pem";
+    files.identity_private_key = dir + "/" + site + "/identity.key";
+    files.permissions_ca = dir + "/ca.pem";
+    files.governance = dir + "/governance.p7s";
+    files.permissions = dir + "/" + site + "/permissions.p7s";
+    return files;
+  }
+
+ private:
+  Certs() {
+    std::string pattern = (fs::temp_directory_path() / "hapticd-dds-security-XXXXXX").string();
+    if (mkdtemp(pattern.data()) == nullptr) {
+      error_ = "mkdtemp failed";
+      return;
+    }
+    root_ = pattern;
+    const std::string script = std::string(HAPTIC_SOURCE_DIR) + "/scripts/federation-certs";
+    for (const std::string& args : {" --out " + root_ + "/lab bench-a bench-b:observer bench-c",
+                                   " --out " + root_ + "/other bench-a"}) {
+      const std::string command = script + args + " > " + root_ + "/log 2>&1";
+      const int status = std::system(command.c_str());
+      if (status != 0) {
+        std::ifstream log(root_ + "/log");
+        error_ = command + " failed:\n" + std::string(std::istreambuf_iterator<char>(log), {});
+        return;
+      }
+    }
+  }
+
+  std::string root_;
+  std::string error_;
+};
+
+/// A DDS domain of this test process's own (ctest runs tests in parallel), on loopback; each site
+/// a Cyclone domain of its own in it (local_domain_id `local`).
+DomainOptions site_domain(std::uint32_t local, std::optional<SecurityFiles> security) {
+  DomainOptions options;
+  options.domain_id = 100 + static_cast<std::uint32_t>(getpid() % 120);
+  options.interface = "lo";
+  options.peers = {"127.0.0.1"};
+  options.local_domain_id = local;
+  options.security = std::move(security);
+  return options;
+}
+
+template <class Condition>
+bool eventually(Condition&& condition, std::chrono::milliseconds limit) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (condition()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return condition();
+}
+
+ToolState a_tool() {
+  ToolState tool;
+  tool.site = "bench-a";
+  tool.port = 0;
+  tool.p_WT = {0.01, -0.02, 0.03};
+  tool.R_WT = {1.0, 0.0, 0.0, 0.0};
+  return tool;
+}
+
+/// Skips the test without Cyclone's plugins; fails it when the files could not be made.
+#define REQUIRE_SECURITY()                                                                          \
+  do {                                                                                              \
+    if (!security_plugins_available()) {                                                            \
+      GTEST_SKIP() << "Cyclone's DDS Security plugins are not installed (looked in \""              \
+                   << security_plugin_dir() << "\"; Debian: libddsc0debian)";                       \
+    }                                                                                               \
+    ASSERT_EQ(Certs::get().error(), "");                                                            \
+  } while (false)
+
+/// Site A publishes until site B has a sample (the handshake takes a few hundred ms), then goes on
+/// for `after` while `outsider` (if any) must receive nothing.
+void exchange(Participant& a, Participant& b, Participant* outsider, std::chrono::milliseconds after) {
+  ToolPublisher publisher(a);
+  ToolSubscriber subscriber(b);
+  std::optional<ToolSubscriber> outside;
+  if (outsider != nullptr) outside.emplace(*outsider);
+  ToolState tool = a_tool();
+  std::vector<ToolState> received;
+  std::vector<ToolState> overheard;
+  ASSERT_TRUE(eventually(
+      [&] {
+        ++tool.tick;
+        EXPECT_TRUE(publisher.publish(tool)) << publisher.error();
+        subscriber.take(received);
+        return !received.empty();
+      },
+      std::chrono::seconds(20)))
+      << "no sample between two sites of one CA in 20 s";
+  EXPECT_EQ(received.back().site, "bench-a");
+  EXPECT_EQ(received.back().p_WT, tool.p_WT);
+  if (!outside) return;
+  // The outsider has had the whole handshake time and `after` more (the channel demonstrably
+  // carrying samples all along): it must have nothing.
+  eventually(
+      [&] {
+        ++tool.tick;
+        EXPECT_TRUE(publisher.publish(tool)) << publisher.error();
+        outside->take(overheard);
+        return !overheard.empty();
+      },
+      after);
+  received.clear();
+  subscriber.take(received);
+  EXPECT_FALSE(received.empty()) << "the members stopped hearing each other";
+  EXPECT_TRUE(overheard.empty()) << "a site outside the federation read " << overheard.size() << " samples";
+}
+
+TEST(FederationSecurity, TwoSitesWithIdentitiesFromOneCaExchangeATool) {
+  REQUIRE_SECURITY();
+  const Certs& certs = Certs::get();
+  Participant a(site_domain(1, certs.site("lab", "bench-a")));
+  Participant b(site_domain(2, certs.site("lab", "bench-c")));
+  exchange(a, b, nullptr, {});
+}
+
+TEST(FederationSecurity, ASiteWithoutSecurityReadsNothing) {
+  REQUIRE_SECURITY();
+  const Certs& certs = Certs::get();
+  Participant a(site_domain(1, certs.site("lab", "bench-a")));
+  Participant b(site_domain(2, certs.site("lab", "bench-c")));
+  Participant plain(site_domain(3, std::nullopt));
+  exchange(a, b, &plain, std::chrono::seconds(2));
+}
+
+TEST(FederationSecurity, ASiteWithACertificateFromAnotherCaReadsNothing) {
+  REQUIRE_SECURITY();
+  const Certs& certs = Certs::get();
+  Participant a(site_domain(1, certs.site("lab", "bench-a")));
+  Participant b(site_domain(2, certs.site("lab", "bench-c")));
+  // Its files are consistent among themselves (same name, its own CA's governance): only trust
+  // in the lab's CA is missing.
+  Participant stranger(site_domain(3, certs.site("other", "bench-a")));
+  exchange(a, b, &stranger, std::chrono::seconds(2));
+}
+
+/// A ToolSample topic named `name` (access control looks at the name, not the type).
+dds_entity_t topic_on(const Participant& site, const char* name) {
+  return dds_create_topic(site.handle(), &haptic_federation_ToolSample_desc, name, nullptr, nullptr);
+}
+
+TEST(FederationSecurity, AnObserversPermissionsRefuseWritingItemsAndMassesAndAMembersAllowIt) {
+  REQUIRE_SECURITY();
+  const Certs& certs = Certs::get();
+  Participant observer(site_domain(1, certs.site("lab", "bench-b")));
+  for (const char* name : {"haptic_federation_items", "haptic_federation_masses"}) {
+    const dds_entity_t topic = topic_on(observer, name);
+    ASSERT_GT(topic, 0) << name << ": an observer may make the topic (it subscribes to it)";
+    EXPECT_EQ(dds_create_writer(observer.handle(), topic, nullptr, nullptr), DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
+        << name;
+    EXPECT_GT(dds_create_reader(observer.handle(), topic, nullptr, nullptr), 0) << name;
+  }
+  const dds_entity_t tools = topic_on(observer, "haptic_federation_tool");
+  ASSERT_GT(tools, 0);
+  EXPECT_GT(dds_create_writer(observer.handle(), tools, nullptr, nullptr), 0) << "an observer shares its tools";
+  const dds_entity_t pose = topic_on(observer, "rt/hapticd/bench_b/port0/pose");
+  ASSERT_GT(pose, 0);
+  EXPECT_GT(dds_create_writer(observer.handle(), pose, nullptr, nullptr), 0) << "ROS 2 topics are open to both";
+  EXPECT_LT(topic_on(observer, "some_other_topic"), 0) << "what is not granted is denied";
+
+  Participant member(site_domain(2, certs.site("lab", "bench-a")));
+  for (const char* name : {"haptic_federation_items", "haptic_federation_masses", "haptic_federation_tool"}) {
+    const dds_entity_t topic = topic_on(member, name);
+    ASSERT_GT(topic, 0) << name;
+    EXPECT_GT(dds_create_writer(member.handle(), topic, nullptr, nullptr), 0) << name;
+    EXPECT_GT(dds_create_reader(member.handle(), topic, nullptr, nullptr), 0) << name;
+  }
+}
+
+TEST(FederationSecurity, PermissionsOfAnotherSiteAreRefusedWhenTheParticipantIsMade) {
+  REQUIRE_SECURITY();
+  const Certs& certs = Certs::get();
+  SecurityFiles files = certs.site("lab", "bench-a");
+  files.permissions = certs.site("lab", "bench-c").permissions;  // grants CN=bench-c, not bench-a
+  try {
+    Participant refused(site_domain(1, files));
+    ADD_FAILURE() << "a site with another site's permissions was made";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("DDS Security refused this site's files"), std::string::npos)
+        << error.what();
+  }
+}
+
+TEST(DomainOptions, SecurityFilesAreCheckedAndNamedAndGoIntoTheConfigurationAsFileUris) {
+  DomainOptions options;
+  const std::string missing = "/nonexistent/hapticd/gov.p7s";
+  SecurityFiles files;
+  const std::string here = (fs::path(HAPTIC_SOURCE_DIR) / "scripts" / "federation-certs").string();
+  files.identity_ca = files.identity_certificate = files.identity_private_key = here;
+  files.permissions_ca = files.permissions = here;
+  files.governance = missing;
+  options.security = files;
+  EXPECT_EQ(validate(options), "security.governance: cannot read " + missing);
+  options.security->governance = HAPTIC_SOURCE_DIR;  // a folder
+  EXPECT_EQ(validate(options), std::string("security.governance: cannot read ") + HAPTIC_SOURCE_DIR);
+  options.security->governance = here;
+  EXPECT_EQ(validate(options), "");
+  options.security->permissions = "";
+  EXPECT_EQ(validate(options), "security.permissions: required with security (a file's absolute path)");
+  options.security->permissions = "relative/permissions.p7s";
+  EXPECT_NE(validate(options).find("security.permissions: must be an absolute path"), std::string::npos);
+  options.security->identity_ca = "/x/ca.pem</IdentityCA><Tracing>";
+  EXPECT_EQ(validate(options),
+            "security.identity_ca: must be an absolute path of letters, digits and / . _ - +, got "
+            "\"/x/ca.pem</IdentityCA><Tracing>\"");
+  try {
+    Participant refused(options);
+    ADD_FAILURE() << "a bad security file was accepted";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("federation.security.identity_ca"), std::string::npos) << error.what();
+  }
+
+  options.security = SecurityFiles{"/s/ca.pem", "/s/a/identity.pem", "/s/a/identity.key",
+                                   "/s/ca.pem", "/s/governance.p7s", "/s/a/permissions.p7s"};
+  const std::string xml = cyclone_config(options);
+  for (const char* part : {"<IdentityCA>file:/s/ca.pem</IdentityCA>",
+                           "<IdentityCertificate>file:/s/a/identity.pem</IdentityCertificate>",
+                           "<PrivateKey>file:/s/a/identity.key</PrivateKey>",
+                           "<PermissionsCA>file:/s/ca.pem</PermissionsCA>",
+                           "<Governance>file:/s/governance.p7s</Governance>",
+                           "<Permissions>file:/s/a/permissions.p7s</Permissions>",
+                           "initFunction=\"init_authentication\"", "initFunction=\"init_access_control\"",
+                           "initFunction=\"init_crypto\""}) {
+    EXPECT_NE(xml.find(part), std::string::npos) << part << " not in " << xml;
+  }
+  if (!security_plugin_dir().empty()) {
+    EXPECT_NE(xml.find("<Library path=\"" + security_plugin_dir() + "/libdds_security_auth.so\""), std::string::npos)
+        << xml;
+  }
+  EXPECT_EQ(cyclone_config(DomainOptions{}).find("<Security>"), std::string::npos) << "none without security";
+}
+
+TEST(DomainOptions, ALocalDomainIdPutsTheDomainOnTheNetworkAsItsExternalId) {
+  DomainOptions options;
+  options.domain_id = 7;
+  EXPECT_EQ(cyclone_config(options).find("ExternalDomainId"), std::string::npos);
+  options.local_domain_id = 3;
+  EXPECT_NE(cyclone_config(options).find("<Discovery><ExternalDomainId>7</ExternalDomainId></Discovery>"),
+            std::string::npos)
+      << cyclone_config(options);
+  options.peers = {"127.0.0.1"};
+  EXPECT_NE(cyclone_config(options).find("</Peers><ExternalDomainId>7</ExternalDomainId></Discovery>"),
+            std::string::npos)
+      << cyclone_config(options);
+}
+
+}  // namespace
+}  // namespace haptic::federation
