@@ -12,6 +12,12 @@ federation::DomainOptions domain_of(const v1::FederationConfig& federation) {
   domain.domain_id = federation.domain_id();
   domain.interface = federation.interface();
   domain.peers.assign(federation.peers().begin(), federation.peers().end());
+  if (federation.has_security()) {
+    const v1::FederationSecurityConfig& security = federation.security();
+    domain.security = federation::SecurityFiles{security.identity_ca(),    security.identity_certificate(),
+                                                security.identity_private_key(), security.permissions_ca(),
+                                                security.governance(),     security.permissions()};
+  }
   return domain;
 }
 
@@ -51,11 +57,11 @@ std::string validate_federation(const v1::FederationConfig& federation, double l
            std::to_string(site.size());
   }
   if (std::string e = federation::validate(domain_of(federation)); !e.empty()) return "federation." + e;
-  if (!loopback(federation.interface()) && !federation.allow_insecure()) {
+  if (!loopback(federation.interface()) && !federation.has_security() && !federation.allow_insecure()) {
     return "federation.interface: \"" + federation.interface() +
-           "\" leaves this host, and the federation has no DDS Security yet: anyone on that network "
-           "could read the tools and join the domain; use \"lo\", or accept that with "
-           "federation.allow_insecure: true";
+           "\" leaves this host without DDS Security: anyone on that network could read the tools and "
+           "join the domain; set federation.security (scripts/federation-certs makes its files), use "
+           "\"lo\", or accept that with federation.allow_insecure: true";
   }
   if (federation.has_ros2()) {
     const v1::Ros2Config& ros2 = federation.ros2();

@@ -3,6 +3,7 @@
 
 #include <fstream>
 
+#include "config/federation_options.hpp"
 #include "config/server_config.hpp"
 #include "parse_error.hpp"
 
@@ -269,10 +270,12 @@ TEST(Config, TheFederationSectionTakesItsDefaultsAndNamesABadField) {
   EXPECT_NE(error_of(R"({"federation": {"site": "a", "domain_id": 500}})")
                 .find("federation.domain_id: must be 0 to 232, got 500"),
             std::string::npos);
-  // Off this host only with the explicit flag (no DDS Security yet).
-  EXPECT_NE(error_of(R"({"federation": {"site": "a", "interface": "eth0"}})")
-                .find("federation.interface: \"eth0\" leaves this host"),
-            std::string::npos);
+  // Off this host only with DDS Security or the explicit flag, and the message says both.
+  const std::string leaves = error_of(R"({"federation": {"site": "a", "interface": "eth0"}})");
+  EXPECT_NE(leaves.find("federation.interface: \"eth0\" leaves this host without DDS Security"), std::string::npos)
+      << leaves;
+  EXPECT_NE(leaves.find("set federation.security"), std::string::npos) << leaves;
+  EXPECT_NE(leaves.find("federation.allow_insecure: true"), std::string::npos) << leaves;
   EXPECT_EQ(parse_config(R"({"federation": {"site": "a", "interface": "eth0", "allow_insecure": true}})", "x")
                 .federation().interface(),
             "eth0");
@@ -281,6 +284,47 @@ TEST(Config, TheFederationSectionTakesItsDefaultsAndNamesABadField) {
             std::string::npos);
   EXPECT_NE(error_of(R"({"federation": {"site": "a", "ros2": {"ros_namespace": "no-slash"}}})")
                 .find("federation.ros2.ros_namespace:"),
+            std::string::npos);
+}
+
+/// A federation section on eth0 with DDS Security, every file `file` but the governance.
+std::string secure_federation(const std::string& file, const std::string& governance, const std::string& extra = "") {
+  return R"({"federation": {"site": "a", "interface": "eth0", )" + extra + R"("security": {"identity_ca": ")" + file +
+         R"(", "identity_certificate": ")" + file + R"(", "identity_private_key": ")" + file +
+         R"(", "permissions_ca": ")" + file + R"(", "governance": ")" + governance + R"(", "permissions": ")" +
+         file + R"("}}})";
+}
+
+TEST(Config, FederationSecurityLetsTheFederationLeaveThisHostAndEachOfItsFilesIsChecked) {
+  // Any readable file passes the load's checks; what is in it is Cyclone's to judge (the
+  // federation's tests give it real ones).
+  const std::string file = std::string(HAPTIC_SOURCE_DIR) + "/scripts/federation-certs";
+  const v1::ServerConfig config = parse_config(secure_federation(file, file), "x");
+  EXPECT_EQ(config.federation().security().governance(), file);
+  const federation::RelayOptions relay = relay_options(config.federation(), 1000.0);
+  ASSERT_TRUE(relay.domain.security.has_value());
+  EXPECT_EQ(relay.domain.security->identity_certificate, file);
+  EXPECT_EQ(relay.domain.security->governance, file);
+  EXPECT_FALSE(relay_options(parse_config(R"({"federation": {"site": "a"}})", "x").federation(), 1000.0)
+                   .domain.security.has_value());
+
+  EXPECT_NE(error_of(secure_federation(file, "/x/gov.p7s")).find("federation.security.governance: cannot read /x/gov.p7s"),
+            std::string::npos)
+      << error_of(secure_federation(file, "/x/gov.p7s"));
+  EXPECT_NE(error_of(secure_federation(file, "gov.p7s"))
+                .find("federation.security.governance: must be an absolute path of letters, digits and / . _ - +"),
+            std::string::npos);
+  EXPECT_NE(error_of(secure_federation(file, "/x/gov.p7s</Governance>"))
+                .find("federation.security.governance: must be an absolute path"),
+            std::string::npos);
+  EXPECT_NE(error_of(secure_federation(file, "")).find("federation.security.governance: required with security"),
+            std::string::npos);
+  EXPECT_NE(error_of(secure_federation("/x/ca.pem", file)).find("federation.security.identity_ca: cannot read /x/ca.pem"),
+            std::string::npos);
+  EXPECT_NE(error_of(secure_federation(file, file, R"("domain_id": 231, )"))
+                .find("federation.domain_id: must be 0 to 230 with security"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"federation": {"site": "a", "security": {}}})").find("federation.security.identity_ca: required"),
             std::string::npos);
 }
 
