@@ -4,6 +4,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "federation/dds_status.hpp"
 #include "haptic/dds/federation.h"
 
 namespace haptic::federation {
@@ -20,15 +21,6 @@ dds_entity_t make_topic(const Participant& participant) {
       dds_create_topic(participant.handle(), &haptic_federation_ToolSample_desc, kToolTopic, nullptr, nullptr);
   if (topic < 0) throw std::runtime_error(std::string("DDS topic ") + kToolTopic + ": " + dds_error(topic));
   return topic;
-}
-
-std::uint32_t matched(dds_entity_t entity, bool publication) {
-  dds_publication_matched_status_t pub{};
-  dds_subscription_matched_status_t sub{};
-  if (publication) {
-    return dds_get_publication_matched_status(entity, &pub) == DDS_RETCODE_OK ? pub.current_count : 0;
-  }
-  return dds_get_subscription_matched_status(entity, &sub) == DDS_RETCODE_OK ? sub.current_count : 0;
 }
 
 }  // namespace
@@ -86,7 +78,7 @@ bool ToolPublisher::publish(const ToolState& tool) {
   return true;
 }
 
-std::uint32_t ToolPublisher::matched_readers() const { return matched(writer_, true); }
+std::uint32_t ToolPublisher::matched_readers() const { return matched_count(writer_, true); }
 
 ToolSubscriber::ToolSubscriber(const Participant& participant) : topic_(make_topic(participant)) {
   dds_qos_t* qos = newest_only_qos();
@@ -135,6 +127,6 @@ std::size_t ToolSubscriber::take(std::vector<ToolState>& out, const std::string&
   return taken;
 }
 
-std::uint32_t ToolSubscriber::matched_writers() const { return matched(reader_, false); }
+std::uint32_t ToolSubscriber::matched_writers() const { return matched_count(reader_, false); }
 
 }  // namespace haptic::federation

@@ -1,0 +1,104 @@
+#include "federation/item_replicator.hpp"
+
+#include <set>
+
+namespace haptic::federation {
+
+ItemReplicator::ItemReplicator(const ReplicatorOptions& options, ReplicatedScene& scene)
+    : options_(options), scene_(scene) {
+  participant_ = std::make_unique<Participant>(options.domain);
+  writer_ = std::make_unique<ItemPublisher>(*participant_);
+  reader_ = std::make_unique<ItemSubscriber>(*participant_);
+}
+
+ItemReplicator::~ItemReplicator() {
+  stop();
+  reader_.reset();
+  writer_.reset();  // disposes nothing: the other sites see the writer go and ramp our items out
+  participant_.reset();
+}
+
+void ItemReplicator::start() {
+  if (thread_.joinable()) return;
+  stopping_.store(false);
+  thread_ = std::thread([this] {
+    while (!stopping_.load(std::memory_order_relaxed)) {
+      poll();
+      std::this_thread::sleep_for(options_.period);
+    }
+  });
+}
+
+void ItemReplicator::stop() {
+  stopping_.store(true);
+  if (thread_.joinable()) thread_.join();
+}
+
+void ItemReplicator::poll() {
+  publish_changes();
+  apply_arrivals();
+}
+
+void ItemReplicator::log(const std::string& line) const {
+  if (options_.log) options_.log(line);
+}
+
+void ItemReplicator::publish_changes() {
+  const std::uint64_t generation = scene_.generation();
+  if (generation == seen_generation_) return;
+  seen_generation_ = generation;
+  std::set<std::uint64_t> live;
+  for (const LocalSharedItem& item : scene_.shared_items()) {
+    live.insert(item.id);
+    Published& published = published_items_[item.id];
+    if (published.version_key == item.version_key) continue;
+    SharedItemState state{options_.site, item.id, published.version + 1, item.kind, scene_.describe(item.id)};
+    if (state.spec.empty()) continue;  // gone since shared_items(); the next round removes it
+    if (writer_->put(state)) {
+      published.version_key = item.version_key;
+      published.version = state.version;
+      published_.fetch_add(1, std::memory_order_relaxed);
+    } else {
+      log("federation: item " + std::to_string(item.id) + " not shared: " + writer_->error());
+    }
+  }
+  for (auto it = published_items_.begin(); it != published_items_.end();) {
+    if (live.count(it->first) != 0) {
+      ++it;
+      continue;
+    }
+    if (it->second.version > 0 && !writer_->remove(options_.site, it->first)) {
+      log("federation: item " + std::to_string(it->first) + " removal not sent: " + writer_->error());
+    }
+    it = published_items_.erase(it);
+  }
+}
+
+void ItemReplicator::apply_arrivals() {
+  events_.clear();
+  reader_->take(events_, options_.site);
+  for (const SharedItemEvent& event : events_) {
+    const std::string which = "site " + event.state.site + " item " + std::to_string(event.state.item);
+    switch (event.what) {
+      case SharedItemEvent::What::kPut: {
+        const std::string error = scene_.put_remote(event.state);
+        if (error.empty()) {
+          applied_.fetch_add(1, std::memory_order_relaxed);
+        } else {
+          refused_.fetch_add(1, std::memory_order_relaxed);
+          log("federation: " + which + " (version " + std::to_string(event.state.version) + ") refused: " + error);
+        }
+        break;
+      }
+      case SharedItemEvent::What::kRemoved:
+        scene_.remove_remote(event.state.site, event.state.item);
+        break;
+      case SharedItemEvent::What::kLost:
+        log("federation: " + which + " ramps out: its site is no longer heard");
+        scene_.remove_remote(event.state.site, event.state.item);
+        break;
+    }
+  }
+}
+
+}  // namespace haptic::federation

@@ -1,0 +1,143 @@
+#include "federation/item_topic.hpp"
+
+#include <array>
+#include <cstring>
+#include <stdexcept>
+
+#include "federation/dds_status.hpp"
+#include "haptic/dds/federation.h"
+
+namespace haptic::federation {
+
+namespace {
+
+using Sample = haptic_federation_SharedItem;
+
+dds_entity_t make_topic(const Participant& participant) {
+  const dds_entity_t topic =
+      dds_create_topic(participant.handle(), &haptic_federation_SharedItem_desc, kItemTopic, nullptr, nullptr);
+  if (topic < 0) throw std::runtime_error(std::string("DDS topic ") + kItemTopic + ": " + dds_error(topic));
+  return topic;
+}
+
+/// Reliable, transient-local, keep last one per item, liveliness automatic with kItemLease.
+dds_qos_t* item_qos() {
+  dds_qos_t* qos = dds_create_qos();
+  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+  dds_qset_liveliness(qos, DDS_LIVELINESS_AUTOMATIC, DDS_MSECS(kItemLease.count()));
+  return qos;
+}
+
+/// The key of a sample: false where the site's name does not fit.
+bool fill_key(Sample& sample, const std::string& site, std::uint64_t item, std::string& error) {
+  if (site.empty() || site.size() >= sizeof sample.site) {
+    error = "site: 1 to 64 characters, got " + std::to_string(site.size());
+    return false;
+  }
+  std::memcpy(sample.site, site.data(), site.size());
+  sample.item = item;
+  return true;
+}
+
+}  // namespace
+
+ItemPublisher::ItemPublisher(const Participant& participant) : topic_(make_topic(participant)) {
+  dds_qos_t* qos = item_qos();
+  writer_ = dds_create_writer(participant.handle(), topic_, qos, nullptr);
+  dds_delete_qos(qos);
+  if (writer_ < 0) throw std::runtime_error(std::string("DDS writer of ") + kItemTopic + ": " + dds_error(writer_));
+}
+
+ItemPublisher::~ItemPublisher() {
+  if (writer_ > 0) dds_delete(writer_);
+}
+
+bool ItemPublisher::put(const SharedItemState& item) {
+  Sample sample{};
+  if (!fill_key(sample, item.site, item.item, error_)) return false;
+  if (item.spec.size() > kMaxItemBytes) {
+    error_ = "spec: at most " + std::to_string(kMaxItemBytes) + " bytes, got " + std::to_string(item.spec.size());
+    return false;
+  }
+  sample.version = item.version;
+  sample.kind = static_cast<std::uint8_t>(item.kind);
+  // Cyclone serializes from the buffer during the write and keeps nothing of it.
+  sample.spec._buffer = reinterpret_cast<std::uint8_t*>(const_cast<char*>(item.spec.data()));
+  sample.spec._length = static_cast<std::uint32_t>(item.spec.size());
+  sample.spec._maximum = sample.spec._length;
+  sample.spec._release = false;
+  const dds_return_t done = dds_write(writer_, &sample);
+  if (done != DDS_RETCODE_OK) {
+    error_ = "dds_write: " + dds_error(done);
+    return false;
+  }
+  return true;
+}
+
+bool ItemPublisher::remove(const std::string& site, std::uint64_t item) {
+  Sample sample{};
+  if (!fill_key(sample, site, item, error_)) return false;
+  const dds_return_t done = dds_dispose(writer_, &sample);
+  if (done != DDS_RETCODE_OK) {
+    error_ = "dds_dispose: " + dds_error(done);
+    return false;
+  }
+  return true;
+}
+
+std::uint32_t ItemPublisher::matched_readers() const { return matched_count(writer_, true); }
+
+ItemSubscriber::ItemSubscriber(const Participant& participant) : topic_(make_topic(participant)) {
+  dds_qos_t* qos = item_qos();
+  reader_ = dds_create_reader(participant.handle(), topic_, qos, nullptr);
+  dds_delete_qos(qos);
+  if (reader_ < 0) throw std::runtime_error(std::string("DDS reader of ") + kItemTopic + ": " + dds_error(reader_));
+}
+
+ItemSubscriber::~ItemSubscriber() {
+  if (reader_ > 0) dds_delete(reader_);
+}
+
+std::size_t ItemSubscriber::take(std::vector<SharedItemEvent>& out, const std::string& own_site) {
+  constexpr std::size_t kBatch = 16;
+  std::size_t taken = 0;
+  for (;;) {
+    std::array<void*, kBatch> pointers{};
+    std::array<dds_sample_info_t, kBatch> infos{};
+    const dds_return_t n = dds_take(reader_, pointers.data(), infos.data(), kBatch, kBatch);
+    if (n <= 0) break;
+    for (dds_return_t i = 0; i < n; ++i) {
+      const dds_sample_info_t& info = infos[static_cast<std::size_t>(i)];
+      const Sample& s = *static_cast<const Sample*>(pointers[static_cast<std::size_t>(i)]);
+      SharedItemEvent event;
+      // An invalid sample (no data) still carries the instance's key.
+      event.state.site.assign(s.site, strnlen(s.site, sizeof s.site));
+      event.state.item = s.item;
+      if (event.state.site == own_site) continue;
+      if (info.valid_data) {
+        event.what = SharedItemEvent::What::kPut;
+        event.state.version = s.version;
+        event.state.kind = s.kind == 1 ? SharedItemKind::kField : SharedItemKind::kObject;
+        if (s.kind > 1 || s.spec._length > kMaxItemBytes) continue;  // not ours to read
+        event.state.spec.assign(reinterpret_cast<const char*>(s.spec._buffer), s.spec._length);
+      } else if (info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED) {
+        event.what = SharedItemEvent::What::kRemoved;
+      } else if (info.instance_state == DDS_IST_NOT_ALIVE_NO_WRITERS) {
+        event.what = SharedItemEvent::What::kLost;
+      } else {
+        continue;
+      }
+      out.push_back(std::move(event));
+      ++taken;
+    }
+    dds_return_loan(reader_, pointers.data(), n);
+    if (static_cast<std::size_t>(n) < kBatch) break;
+  }
+  return taken;
+}
+
+std::uint32_t ItemSubscriber::matched_writers() const { return matched_count(reader_, false); }
+
+}  // namespace haptic::federation
