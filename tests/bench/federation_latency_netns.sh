@@ -8,34 +8,42 @@
 #   hfedlat-0 .. hfedlat-7  10.81.0.10 .. 10.81.0.17  the sites
 #
 # Usage: federation_latency_netns.sh BENCH_BINARY [--seconds S] [--rounds R] [--sites "2 8"]
-#                                    [--transports "udp dds"]
+#                                    [--transports "udp dds"] [--fifo PRIORITY]
 #   --seconds: measured per configuration (default 3); --rounds: times through all (default 2);
 #   --transports: udp (the floor), dds (taken in a listener), dds-waitset (taken in a thread a
-#   waitset wakes); the first should be udp, the others' ratios are to it.
+#   waitset wakes); the first should be udp, the others' ratios are to it; --fifo: every site's
+#   process (its threads and Cyclone's) SCHED_FIFO at PRIORITY, as a real-time loop would run,
+#   so that this host's other work delays the senders and receivers less.
 # Exit 77 (ctest: skipped) where it cannot run: not root, no ip, no network namespaces. Everything
 # it makes is removed on exit. Traffic stays inside these namespaces.
 set -euo pipefail
 
 skip() { echo "federation_latency: skipped: $*"; exit 77; }
-[ $# -ge 1 ] || { echo "usage: $0 BENCH_BINARY [--seconds S] [--rounds R] [--sites \"2 8\"] [--transports \"udp dds\"]" >&2; exit 2; }
+[ $# -ge 1 ] || { echo "usage: $0 BENCH_BINARY [--seconds S] [--rounds R] [--sites \"2 8\"] [--transports \"udp dds\"] [--fifo PRIORITY]" >&2; exit 2; }
 binary="$1"
 shift
 seconds=3
 rounds=2
 site_counts="2 8"
 transports="udp dds"
+fifo=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds="$2"; shift 2 ;;
     --rounds) rounds="$2"; shift 2 ;;
     --sites) site_counts="$2"; shift 2 ;;
     --transports) transports="$2"; shift 2 ;;
+    --fifo) fifo=(chrt -f "$2"); shift 2 ;;
     *) echo "federation_latency: unknown argument $1" >&2; exit 2 ;;
   esac
 done
 
 [ "$(id -u)" -eq 0 ] || skip "needs root (network namespaces)"
 command -v ip >/dev/null || skip "needs ip (iproute2)"
+if [ ${#fifo[@]} -gt 0 ]; then
+  chrt -f 1 true 2>/dev/null || skip "cannot run SCHED_FIFO (--fifo)"
+  echo "federation_latency: every site's process SCHED_FIFO, priority ${fifo[2]}"
+fi
 
 most=0
 for n in $site_counts; do [ "$n" -gt "$most" ] && most="$n"; done
@@ -91,7 +99,7 @@ run_configuration() {
   echo "federation_latency: round $round, $sites sites over $transport: ${seconds} s at 1 kHz each ..."
   site_pids=()
   for ((i = 0; i < sites; i++)); do
-    ip netns exec "${namespaces[$i]}" "$binary" site --transport "$transport" --index "$i" \
+    ip netns exec "${namespaces[$i]}" "${fifo[@]}" "$binary" site --transport "$transport" --index "$i" \
       --addresses "$list" --start-ns "$start" --seconds "$seconds" --round "$round" \
       --out "$dir/site-$i.txt" &
     site_pids+=($!)
