@@ -497,8 +497,11 @@ int run_site(const SiteOptions& o) {
   std::thread sender([&] {
     std::int64_t previous = 0;
     ToolState tool = tool_of(o.index, sites);
-    // Publishes from now (discovery meets a live writer), on the period grid of the start time.
-    std::int64_t next = o.start_ns - ((o.start_ns - now_ns()) / kPeriodNs) * kPeriodNs;
+    // Publishes from now (discovery meets a live writer). Sites' loops are not synchronized: each
+    // site's grid is offset by index/sites of a period, spread evenly (no burst of every site's
+    // sample at once; up to (sites - 1)/sites of a period between sites' newest samples).
+    const std::int64_t origin = o.start_ns + o.index * kPeriodNs / sites;
+    std::int64_t next = origin - ((origin - now_ns()) / kPeriodNs) * kPeriodNs;
     while (next < end_ns) {
       sleep_until_ns(next);
       const std::int64_t t = now_ns();
@@ -558,6 +561,8 @@ int run_site(const SiteOptions& o) {
                static_cast<unsigned long long>(send_failed), static_cast<unsigned long long>(send_gaps));
   if (!matched_at_start.empty()) std::fprintf(file, "matched %s\n", matched_at_start.c_str());
   std::fprintf(file, "cpu %lld\n", static_cast<long long>(cpu_ns));
+  std::uint8_t sample[2048];
+  std::fprintf(file, "bytes %zu\n", encode(tool_of(o.index, sites), sample, sizeof sample));
   for (int s = 0; s < sites; ++s) {
     if (s != o.index) std::fprintf(file, "received %d %llu\n", s, static_cast<unsigned long long>(received.received(s)));
   }
@@ -581,6 +586,7 @@ struct Configuration {
   std::uint64_t sent = 0, send_failed = 0, send_gaps = 0, received = 0, foreign = 0;
   std::uint64_t loop_periods = 0, missing_periods = 0, silent_streams = 0;
   std::int64_t cpu_ns = 0;  // all sites' processes over the window
+  std::size_t bytes = 0;    // a sample's CDR (the UDP datagram; DDS adds its RTPS headers)
   std::vector<std::int64_t> latency_ns, staleness_ns;
   std::vector<std::string> unmatched;  // "site-3: 5 readers 6 writers"
 };
@@ -637,6 +643,8 @@ Configuration read_configuration(const std::string& dir) {
         words >> n >> missing;
         c.loop_periods += n;
         c.missing_periods += missing;
+      } else if (key == "bytes") {
+        words >> c.bytes;
       } else if (key == "cpu") {
         std::int64_t n = 0;
         words >> n;
@@ -690,8 +698,8 @@ int report(const std::vector<std::string>& dirs) {
               "one tool at 1 kHz and receives every other site's; UDP: the same samples (same CDR size), unicast\n"
               "to each peer. Staleness: a 1 kHz loop per site, newest sent time received minus the oldest\n"
               "newest-per-site in hand.\n\n");
-  std::printf("%-5s %-11s %5s %7s %8s %7s %7s %7s %8s %8s %9s %12s %12s %8s\n", "round", "via", "sites",
-              "streams", "samples", "p50_us", "p99_us", "max_us", "rate_Hz", "received", "stale>2ms",
+  std::printf("%-5s %-11s %5s %5s %7s %8s %7s %7s %7s %8s %8s %9s %12s %12s %8s\n", "round", "via", "sites",
+              "bytes", "streams", "samples", "p50_us", "p99_us", "max_us", "rate_Hz", "received", "stale>2ms",
               "stale_p99_us", "stale_max_us", "cpu/site");
   for (const Configuration& c : all) {
     const double rate_hz = static_cast<double>(c.received) / streams(c) / c.seconds;
@@ -701,13 +709,13 @@ int report(const std::vector<std::string>& dirs) {
                                          : 100.0 * static_cast<double>(stale_periods(c)) /
                                                static_cast<double>(c.staleness_ns.size()));
     const double cpu_percent = 100.0 * static_cast<double>(c.cpu_ns) / 1e9 / c.seconds / c.files;
-    std::printf("%-5d %-11s %5d %7d %8zu %7.0f %7.0f %7.0f %8.1f %7.1f%% %9s %12.0f %12.0f %7.1f%%\n", c.round,
-                c.transport.c_str(), c.sites, streams(c), c.latency_ns.size(), quantile_us(c.latency_ns, 0.5),
+    std::printf("%-5d %-11s %5d %5zu %7d %8zu %7.0f %7.0f %7.0f %8.1f %7.1f%% %9s %12.0f %12.0f %7.1f%%\n",
+                c.round, c.transport.c_str(), c.sites, c.bytes, streams(c), c.latency_ns.size(), quantile_us(c.latency_ns, 0.5),
                 quantile_us(c.latency_ns, 0.99), quantile_us(c.latency_ns, 1.0), rate_hz, received_percent(c), stale,
                 quantile_us(c.staleness_ns, 0.99), quantile_us(c.staleness_ns, 1.0), cpu_percent);
   }
-  std::printf("\ncpu/site: one site's process (every thread) over the window, in %% of one core; all sites share\n"
-              "this host's cores.\n");
+  std::printf("\nbytes: a sample's CDR, the UDP datagram's payload (DDS adds its RTPS headers); cpu/site: one\n"
+              "site's process (every thread) over the window, in %% of one core; all sites share this host's cores.\n");
   std::printf("\nDDS against the UDP floor of the same round and size (targets: p50 <= %.0fx, p99 <= %.0fx; no sample\n"
               "in hand more than 2 ms older than the newest; with 2 sites one remote site is in hand, so 0 by\n"
               "construction):\n",
