@@ -26,7 +26,7 @@ struct SecurityFiles {
 };
 
 struct DomainOptions {
-  std::uint32_t domain_id = 0;  // DDS domain, 0 ... 232 (the RTPS port mapping's range).
+  std::uint32_t domain_id = 0;  // DDS domain, 0 ... 232 (the RTPS port mapping's range); with security 0 ... 230.
   /// The one network interface the domain uses, by name ("lo", "eth0") or address.
   std::string interface = "lo";
   /// Unicast discovery: the addresses of the other sites' hosts. Empty: multicast discovery.
@@ -52,12 +52,13 @@ std::string cyclone_config(const DomainOptions& options);
 /// when hapticd was configured; "" when none was (the loader's search path is then used).
 std::string security_plugin_dir();
 
-/// Whether the three plugins are where cyclone_config() names them.
+/// Whether the plugins' folder is known and holds all three (tests skip without them).
 bool security_plugins_available();
 
 /// One participant in a domain configured from DomainOptions; closes it (and everything created
-/// under it) when destroyed. Several participants of one domain in one process share the domain,
-/// configured by the first, which owns it: destroy that one last.
+/// under it) when destroyed. Several participants of one domain (local_domain_id, else domain_id) in
+/// one process share the domain, configured by the first (its security included), which owns it:
+/// destroy that one last.
 class Participant {
  public:
   /// Throws std::runtime_error naming the domain and Cyclone's reason when it cannot be created.

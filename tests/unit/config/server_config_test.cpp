@@ -308,24 +308,19 @@ TEST(Config, FederationSecurityLetsTheFederationLeaveThisHostAndEachOfItsFilesIs
   EXPECT_FALSE(relay_options(parse_config(R"({"federation": {"site": "a"}})", "x").federation(), 1000.0)
                    .domain.security.has_value());
 
-  EXPECT_NE(error_of(secure_federation(file, "/x/gov.p7s")).find("federation.security.governance: cannot read /x/gov.p7s"),
-            std::string::npos)
-      << error_of(secure_federation(file, "/x/gov.p7s"));
-  EXPECT_NE(error_of(secure_federation(file, "gov.p7s"))
-                .find("federation.security.governance: must be an absolute path of letters, digits and / . _ - +"),
-            std::string::npos);
-  EXPECT_NE(error_of(secure_federation(file, "/x/gov.p7s</Governance>"))
-                .find("federation.security.governance: must be an absolute path"),
-            std::string::npos);
-  EXPECT_NE(error_of(secure_federation(file, "")).find("federation.security.governance: required with security"),
-            std::string::npos);
-  EXPECT_NE(error_of(secure_federation("/x/ca.pem", file)).find("federation.security.identity_ca: cannot read /x/ca.pem"),
-            std::string::npos);
-  EXPECT_NE(error_of(secure_federation(file, file, R"("domain_id": 231, )"))
-                .find("federation.domain_id: must be 0 to 230 with security"),
-            std::string::npos);
-  EXPECT_NE(error_of(R"({"federation": {"site": "a", "security": {}}})").find("federation.security.identity_ca: required"),
-            std::string::npos);
+  // Each message names the field and says what is wrong with it.
+  const auto refused = [](const std::string& json, const std::string& message) {
+    const std::string error = error_of(json);
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  };
+  refused(secure_federation(file, "/x/gov.p7s"), "federation.security.governance: cannot read /x/gov.p7s");
+  refused(secure_federation(file, "gov.p7s"),
+          "federation.security.governance: must be an absolute path of letters, digits and / . _ - +");
+  refused(secure_federation(file, "/x/gov.p7s</Governance>"), "federation.security.governance: must be an absolute path");
+  refused(secure_federation(file, ""), "federation.security.governance: required with security");
+  refused(secure_federation("/x/ca.pem", file), "federation.security.identity_ca: cannot read /x/ca.pem");
+  refused(secure_federation(file, file, R"("domain_id": 231, )"), "federation.domain_id: must be 0 to 230 with security");
+  refused(R"({"federation": {"site": "a", "security": {}}})", "federation.security.identity_ca: required");
 }
 
 TEST(Config, ExtraDevicesAreCheckedLikePortZerosNamingTheirIndex) {
