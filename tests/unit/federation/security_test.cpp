@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "federation/dds_participant.hpp"
+#include "federation/item_topic.hpp"
 #include "federation/tool_topic.hpp"
 #include "haptic/dds/federation.h"
 
@@ -215,6 +216,29 @@ TEST(FederationSecurity, AnObserversPermissionsRefuseWritingItemsAndMassesAndAMe
     EXPECT_GT(dds_create_writer(member.handle(), topic, nullptr, nullptr), 0) << name;
     EXPECT_GT(dds_create_reader(member.handle(), topic, nullptr, nullptr), 0) << name;
   }
+}
+
+TEST(FederationSecurity, AnObserverReadsAMembersSharedItemButCannotPublishOne) {
+  REQUIRE_SECURITY();
+  const Certs& certs = Certs::get();
+  Participant member(site_domain(1, certs.site("lab", "bench-a")));
+  Participant observer(site_domain(2, certs.site("lab", "bench-b")));
+  EXPECT_THROW(ItemPublisher refused(observer), std::runtime_error);
+  ItemPublisher publisher(member);
+  ItemSubscriber subscriber(observer);
+  SharedItemState item;
+  item.site = "bench-a";
+  item.item = 7;
+  item.version = 1;
+  item.spec = "a wall";
+  ASSERT_TRUE(publisher.put(item)) << publisher.error();  // reliable, transient-local: sent once
+  std::vector<SharedItemEvent> events;
+  ASSERT_TRUE(eventually([&] { return subscriber.take(events, "bench-b") > 0 || !events.empty(); },
+                         std::chrono::seconds(20)))
+      << "the observer did not get the member's item in 20 s";
+  EXPECT_EQ(events.front().what, SharedItemEvent::What::kPut);
+  EXPECT_EQ(events.front().state.site, "bench-a");
+  EXPECT_EQ(events.front().state.spec, "a wall");
 }
 
 TEST(FederationSecurity, PermissionsOfAnotherSiteAreRefusedWhenTheParticipantIsMade) {
