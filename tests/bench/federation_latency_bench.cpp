@@ -7,10 +7,11 @@
 // (Cyclone DDS, unicast discovery between the namespaces' addresses) or over plain UDP sockets,
 // one datagram to each peer carrying the same fields in the same encoding (the sample's CDR, so
 // the same size). The send time goes in the sample (ToolState::time_ns, CLOCK_MONOTONIC, which the
-// namespaces share); a receiving thread waits for samples and stamps each once it is in hand.
-// A 1 kHz loop reads the newest sample per remote site as the receiving thread leaves it (the
-// relay's mailboxes, sample_relay.hpp) and records how far the oldest in hand is behind the
-// newest sent time received so far ("staleness").
+// namespaces share); the receiving side stamps each sample once it is in hand: UDP's receiving
+// thread after recv, DDS's listener after take on Cyclone's receive thread (one thread woken per
+// datagram either way). A 1 kHz loop reads the newest sample per remote site as the receiving
+// side leaves it (the relay's mailboxes, sample_relay.hpp) and records how far the oldest in hand
+// is behind the newest sent time received so far ("staleness").
 //
 // Roles:
 //   clock    prints CLOCK_MONOTONIC in ns (the script's common start time)
