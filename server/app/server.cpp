@@ -238,7 +238,8 @@ Server::Server(const v1::ServerConfig& config)
       sessions_, *scene_, events_, *loop_, std::move(service_ports), udp_.port(), limits,
       [this] { return stats(); }, access,
       [this](std::uint64_t session_id) { return reset_lockstep(session_id); }, recorder_.get(),
-      config.recording_dir(), [this](const std::string& path) { return start_recording(path); }});
+      config.recording_dir(), [this](const std::string& path) { return start_recording(path); },
+      config.has_federation()});
   const std::uint32_t fd_limit = raise_fd_limit();
   // A TLS connection takes three descriptors once served (the TCP socket and both ends of the
   // socket pair to gRPC), a plaintext one one.
@@ -276,7 +277,7 @@ Server::Server(const v1::ServerConfig& config)
   grpc_port_ = listener_->port();
   listener_->start([server = grpc_server_.get()](int fd) { grpc::AddInsecureChannelFromFd(server, fd); });
   bind_http_endpoints(access);
-  join_federation();
+  join_federation(limits);
 }
 
 std::vector<runtime::TickPort> Server::federated(std::vector<runtime::TickPort> ports) const {
@@ -287,15 +288,21 @@ std::vector<runtime::TickPort> Server::federated(std::vector<runtime::TickPort> 
   return ports;
 }
 
-void Server::join_federation() {
+void Server::join_federation(const schema::SceneLimits& limits) {
   if (!config_.has_federation()) return;
   std::vector<federation::RelayPort> ports;
   for (std::size_t port = 0; port < samples_.size(); ++port) {
     ports.push_back({samples_[port].get(), descriptions_[port].buttons, remote_tools_[port].get(), ledgers_[port].get()});
   }
+  const federation::RelayOptions relay = config::relay_options(config_.federation(), config_.loop_rate_hz());
+  federated_scene_ = std::make_unique<FederatedScene>(*scene_, limits);
+  federation::ReplicatorOptions shared_scene;
+  shared_scene.site = relay.site;
+  shared_scene.domain = relay.domain;
+  shared_scene.log = [](const std::string& line) { spdlog::warn("{}", line); };
   try {
-    relay_ = std::make_unique<federation::SampleRelay>(
-        config::relay_options(config_.federation(), config_.loop_rate_hz()), ports);
+    relay_ = std::make_unique<federation::SampleRelay>(relay, ports);
+    replicator_ = std::make_unique<federation::ItemReplicator>(shared_scene, *federated_scene_);
   } catch (const std::runtime_error& error) {
     throw config::ConfigError(std::string("federation: ") + error.what());
   }
@@ -401,6 +408,7 @@ void Server::start() {
   housekeeping_ = std::thread([this] { housekeeping_loop(); });
   if (relay_) {
     relay_->start();
+    replicator_->start();
     const v1::FederationConfig& federation = config_.federation();
     spdlog::info("hapticd: federation site \"{}\" in DDS domain {} on {}{}", federation.site(),
                  federation.domain_id(), federation.interface(),
@@ -500,6 +508,7 @@ void Server::shutdown() {
   }
   housekeeping_wake_.notify_all();
   if (housekeeping_.joinable()) housekeeping_.join();
+  if (replicator_) replicator_->stop();
   if (relay_) relay_->stop();
   udp_.stop();
   spdlog::info("hapticd: stopped after {} ticks", counters_.ticks.load());

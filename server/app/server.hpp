@@ -22,6 +22,8 @@
 #include "net/recorder.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
+#include "app/federated_scene.hpp"
+#include "federation/item_replicator.hpp"
 #include "federation/sample_relay.hpp"
 #include "net/udp_endpoint.hpp"
 #include "net/viewer_endpoint.hpp"
@@ -80,7 +82,7 @@ class Server {
   void housekeeping_loop();
   /// The metrics endpoint and the viewer, when configured (`access`: the control plane's tokens).
   /// With a federation section: joins its DDS domain and makes the relay (started with the loop).
-  void join_federation();
+  void join_federation(const schema::SceneLimits& limits);
   void bind_http_endpoints(const net::AccessControl& access);
   void log_status();
 
@@ -115,6 +117,10 @@ class Server {
   std::unique_ptr<net::ViewerEndpoint> viewer_;    // when viewer_address is set
   std::unique_ptr<net::Recorder> recorder_;
   std::unique_ptr<federation::SampleRelay> relay_;  // when federation is configured
+  /// The shared scene across sites (with the federation; after relay_, whose participant owns
+  /// the domain, so it goes first).
+  std::unique_ptr<FederatedScene> federated_scene_;
+  std::unique_ptr<federation::ItemReplicator> replicator_;
   /// Federation: each port's mailbox of other sites' tools and its couplings' ledger.
   std::vector<std::unique_ptr<runtime::LatestValue<runtime::RemoteToolSet>>> remote_tools_;
   std::vector<std::unique_ptr<runtime::CouplingLedger>> ledgers_;

@@ -54,6 +54,12 @@ grpc::Status invalid(const std::string& message) {
   return {grpc::StatusCode::INVALID_ARGUMENT, message};
 }
 
+/// An item marked across_sites on a server outside any federation: FAILED_PRECONDITION naming it.
+grpc::Status not_federated(const std::string& path) {
+  return {grpc::StatusCode::FAILED_PRECONDITION,
+          path + ".across_sites: this server is not in a federation (its configuration has no federation section)"};
+}
+
 std::string check_client_name(const std::string& name) {
   if (name.empty() || name.size() > 64) {
     return "client_name: must be 1 to 64 characters, got " + std::to_string(name.size());
@@ -252,6 +258,7 @@ grpc::Status HapticService::CloseSession(grpc::ServerContext* context, const v1:
 grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1::CreateObjectRequest* request,
                                          v1::ItemRef* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "CreateObject"); !status.ok()) return status;
+  if (request->object().across_sites() && !deps_.federated) return not_federated("object");
   engine::ObjectSpec spec;
   if (auto error = schema::to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -279,6 +286,7 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1:
 grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1::UpdateObjectRequest* request,
                                          v1::ItemRef* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "UpdateObject"); !status.ok()) return status;
+  if (request->object().across_sites() && !deps_.federated) return not_federated("object");
   engine::ObjectSpec spec;
   if (auto error = schema::to_object_spec(request->object(), "object", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -320,6 +328,7 @@ grpc::Status HapticService::DeleteObject(grpc::ServerContext* context, const v1:
 grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::CreateFieldRequest* request,
                                         v1::ItemRef* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "CreateField"); !status.ok()) return status;
+  if (request->field().across_sites() && !deps_.federated) return not_federated("field");
   engine::FieldSpec spec;
   if (auto error = schema::to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -347,6 +356,7 @@ grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::
 grpc::Status HapticService::UpdateField(grpc::ServerContext* context, const v1::UpdateFieldRequest* request,
                                         v1::Empty*) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "UpdateField"); !status.ok()) return status;
+  if (request->field().across_sites() && !deps_.federated) return not_federated("field");
   engine::FieldSpec spec;
   if (auto error = schema::to_field_spec(request->field(), "field", deps_.limits, spec); !error.empty()) {
     return invalid(error);
@@ -410,6 +420,12 @@ grpc::Status HapticService::GetScene(grpc::ServerContext* context, const v1::Get
 grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::ApplySceneRequest* request,
                                        v1::ApplySceneResponse* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "ApplyScene"); !status.ok()) return status;
+  for (int i = 0; i < request->scene().objects_size() && !deps_.federated; ++i) {
+    if (request->scene().objects(i).across_sites()) return not_federated("scene.objects[" + std::to_string(i) + "]");
+  }
+  for (int i = 0; i < request->scene().fields_size() && !deps_.federated; ++i) {
+    if (request->scene().fields(i).across_sites()) return not_federated("scene.fields[" + std::to_string(i) + "]");
+  }
   // Validate everything first: one bad item rejects the whole scene and changes nothing.
   schema::SceneSpecs specs;
   if (auto error = schema::to_scene_specs(request->scene(), "scene.", deps_.limits, specs); !error.empty()) {

@@ -44,6 +44,8 @@ struct ServiceDependencies {
   /// StartRecording's folder ("" refuses it) and how a recording starts (the header's config).
   std::string recording_dir;
   std::function<std::string(const std::string& path)> start_recording;
+  /// In a federation: items may be marked across_sites (else that is refused).
+  bool federated = false;
 };
 
 class HapticService final : public v1::Haptic::Service {

@@ -368,7 +368,7 @@ std::vector<SceneEntry> SceneStore::read(std::uint64_t session_id, bool all_sess
   std::vector<SceneEntry> entries;
   for (const auto& [id, item] : items_) {
     if (!is_live(item.meta) || (!all_sessions && item.meta.session_id != session_id)) continue;
-    entries.push_back(SceneEntry{id, item.meta.session_id, item.source});
+    entries.push_back(SceneEntry{id, item.meta.session_id, item.source, item.meta.version_key});
   }
   return entries;
 }

@@ -62,6 +62,7 @@ struct SceneEntry {
   std::uint64_t id = 0;
   std::uint64_t session_id = 0;  // 0: the server's own scene
   ItemSource source;
+  std::uint64_t version_key = 0;  // changes with every update of the item
 };
 
 struct SceneCounts {

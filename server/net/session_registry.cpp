@@ -93,7 +93,7 @@ std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
   }
   Session session;
   do {
-    session.info.id = random64();
+    session.info.id = random64() & ~kRemoteSiteOwnerBit;
   } while (session.info.id == 0 || sessions_.contains(session.info.id));
   session.info.client_name = client_name;
   session.info.device_index = device_index;

@@ -34,6 +34,10 @@ struct UdpAddress {
 /// The control plane's capability for a session (haptic/io/session_secret.hpp).
 using SessionSecret = std::array<std::uint8_t, 16>;
 
+/// Scene owners with this bit set are other sites of a federation (docs/federation.md), whose
+/// shared items this site holds; no session of this server gets such an id.
+inline constexpr std::uint64_t kRemoteSiteOwnerBit = std::uint64_t{1} << 63;
+
 struct SessionInfo {
   std::uint64_t id = 0;            // a handle: shown to others (events, energy), grants nothing
   std::string client_name;

@@ -279,6 +279,46 @@ TEST(RpcSurface, UpdateFieldRefusesABadSpecAnUnknownIdAnObjectAndAnotherSessions
 
 // ---- GetDeviceInfo -------------------------------------------------------------------------
 
+TEST(RpcSurface, AnItemAcrossSitesIsRefusedOutsideAFederationAndNothingChanges) {
+  Harness h;
+  const auto session = h.open("lab");
+  const std::uint64_t kept = h.create_object(session, sphere(-0.05));
+  const auto before = h.scene(session);
+  v1::Object object = sphere(0.05);
+  object.set_across_sites(true);
+  v1::CreateObjectRequest create;
+  create.set_session_id(session.session_id());
+  *create.mutable_object() = object;
+  v1::ItemRef item;
+  grpc::Status status = h.call(&Stub::CreateObject, create, item, session);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_EQ(status.error_message(),
+            "object.across_sites: this server is not in a federation (its configuration has no federation section)");
+  v1::UpdateObjectRequest update;
+  update.set_session_id(session.session_id());
+  update.set_object_id(kept);
+  *update.mutable_object() = object;
+  status = h.call(&Stub::UpdateObject, update, item, session);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  v1::Field field = spring({vec(0.0, 0.0, 0.0), 20.0, 0.5});
+  field.set_across_sites(true);
+  v1::CreateFieldRequest create_field;
+  create_field.set_session_id(session.session_id());
+  *create_field.mutable_field() = field;
+  status = h.call(&Stub::CreateField, create_field, item, session);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_EQ(status.error_message().rfind("field.across_sites: ", 0), 0u) << status.error_message();
+  v1::ApplySceneRequest apply;
+  apply.set_session_id(session.session_id());
+  *apply.mutable_scene()->add_objects() = sphere(0.05);
+  *apply.mutable_scene()->add_fields() = field;
+  v1::ApplySceneResponse applied;
+  status = h.call(&Stub::ApplyScene, apply, applied, session);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_EQ(status.error_message().rfind("scene.fields[0].across_sites: ", 0), 0u) << status.error_message();
+  EXPECT_EQ(h.scene(session), before);
+}
+
 TEST(RpcSurface, GetDeviceInfoRepeatsOpenSessionsDeviceForTheSessionsPort) {
   // A second port with its own point mass (max force 5 N), to show the reply follows the session.
   Harness h(R"("extra_devices": [{"simulated_point_mass": {"max_force": 5}}])");
