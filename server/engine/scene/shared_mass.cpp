@@ -37,9 +37,14 @@ Vec3 SharedMass::touch(const Vec3& p_WT) {
   return F;
 }
 
-void SharedMass::step(std::span<const RemoteMassCopy> remotes) {
-  Vec3 F_total = F_contacts_;
-  F_contacts_ = {};
+void CopyCouplings::clear() {
+  keys_ = {};
+  for (auto& coupling : couplings_) coupling.reset();
+  forces_ = {};
+}
+
+Vec3 CopyCouplings::force(std::span<const RemoteMassCopy> remotes, const SharedMassState& copy, double mass,
+                          const SharedMassParams& params) {
   // The couplings' dampers act on one copy together, each explicitly over the period: their sum
   // stays at M/T (a held damper α on mass M is stable only for α T / M < 2), so each coupling gets
   // its share of it.
@@ -47,7 +52,8 @@ void SharedMass::step(std::span<const RemoteMassCopy> remotes) {
   for (std::size_t slot = 0; slot < std::min(remotes.size(), kMaxRemoteCopies); ++slot) {
     if (remotes[slot].key != 0) ++active;
   }
-  const double max_damping = params_.mass / params_.period / static_cast<double>(std::max<std::size_t>(active, 1));
+  const double max_damping = mass / params.period / static_cast<double>(std::max<std::size_t>(active, 1));
+  Vec3 total;
   for (std::size_t slot = 0; slot < kMaxRemoteCopies; ++slot) {
     const RemoteMassCopy empty;
     const RemoteMassCopy& remote = slot < remotes.size() ? remotes[slot] : empty;
@@ -57,7 +63,7 @@ void SharedMass::step(std::span<const RemoteMassCopy> remotes) {
       couplings_[slot].reset();
       if (remote.key != 0) {
         NetworkPassivityParams layer;
-        layer.period = params_.period;
+        layer.period = params.period;
         // A copy is no device with sensor noise: the damper acts down to µm/s, or the delayed
         // couplings keep a small oscillation going just below the threshold.
         layer.velocity_threshold = 1e-6;
@@ -68,22 +74,28 @@ void SharedMass::step(std::span<const RemoteMassCopy> remotes) {
         couplings_[slot].emplace(layer);
       }
     }
-    coupling_forces_[slot] = {};
+    forces_[slot] = {};
     if (!couplings_[slot]) continue;
     // A non-finite copy from the network (a faulty site) couples nothing this period.
     if (!is_finite(remote.p_WM) || !is_finite(remote.v_WM) || !std::isfinite(remote.energy_sent_to_us)) continue;
     NetworkPassivity& coupling = *couplings_[slot];
     coupling.set_max_damping(max_damping);
     coupling.receive(remote.energy_sent_to_us);
-    const Vec3 stretch = remote.p_WM - state_.p_WM;
-    Vec3 F = params_.coupling_stiffness * stretch + params_.coupling_damping * (remote.v_WM - state_.v_WM);
-    if (params_.passivity_layer) {
-      const double stored = 0.5 * params_.coupling_stiffness * dot(stretch, stretch);
-      F = coupling.apply(F, state_.v_WM, state_.p_WM, stored).F_T_W;
+    const Vec3 stretch = remote.p_WM - copy.p_WM;
+    Vec3 F = params.coupling_stiffness * stretch + params.coupling_damping * (remote.v_WM - copy.v_WM);
+    if (params.passivity_layer) {
+      const double stored = 0.5 * params.coupling_stiffness * dot(stretch, stretch);
+      F = coupling.apply(F, copy.v_WM, copy.p_WM, stored).F_T_W;
     }
-    coupling_forces_[slot] = F;
-    F_total += F;
+    forces_[slot] = F;
+    total += F;
   }
+  return total;
+}
+
+void SharedMass::step(std::span<const RemoteMassCopy> remotes) {
+  const Vec3 F_total = F_contacts_ + couplings_.force(remotes, state_, params_.mass, params_);
+  F_contacts_ = {};
   const Vec3 accel = (1.0 / params_.mass) * F_total;
   weights_.advance(state_.p_WM.x, state_.v_WM.x, accel.x);
   weights_.advance(state_.p_WM.y, state_.v_WM.y, accel.y);

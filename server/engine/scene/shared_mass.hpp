@@ -65,6 +65,33 @@ struct SharedMassState {
   Vec3 v_WM;  // Unit: m/s.
 };
 
+/// The couplings of one copy to the other sites' copies, each through its own network passivity
+/// layer: what SharedMass steps with, and what the loop adds to a scene's virtual mass shared
+/// across sites (runtime/shared_masses). No allocation, no throw.
+class CopyCouplings {
+ public:
+  /// The coupling force on a copy of mass `mass` (kg) at `copy` over the coming period, from
+  /// `remotes` (slot i is remote i; at most kMaxRemoteCopies), with params' coupling stiffness,
+  /// damping, period and layer switch. Books each coupling's layer.
+  Vec3 force(std::span<const RemoteMassCopy> remotes, const SharedMassState& copy, double mass,
+             const SharedMassParams& params);
+
+  std::uint64_t key(std::size_t slot) const { return keys_[slot]; }
+  double energy_sent(std::size_t slot) const { return couplings_[slot] ? couplings_[slot]->sent() : 0.0; }
+  const NetworkPassivity* coupling(std::size_t slot) const {
+    return couplings_[slot] ? &*couplings_[slot] : nullptr;
+  }
+  /// The force slot i applied over the last period (after its layer). Unit: N.
+  const Vec3& force_of(std::size_t slot) const { return forces_[slot]; }
+  /// Ends every coupling (the copy went).
+  void clear();
+
+ private:
+  std::array<std::uint64_t, kMaxRemoteCopies> keys_{};
+  std::array<std::optional<NetworkPassivity>, kMaxRemoteCopies> couplings_{};
+  std::array<Vec3, kMaxRemoteCopies> forces_{};
+};
+
 class SharedMass {
  public:
   SharedMass(const SharedMassParams& params, const SharedMassState& initial);
@@ -82,22 +109,18 @@ class SharedMass {
 
   /// Slot i's coupling: the remote copy it couples to (0: none), what it sent (cumulative, J),
   /// and its layer's books. The energy sent goes to that remote site with this copy's state.
-  std::uint64_t coupling_key(std::size_t slot) const { return keys_[slot]; }
-  double energy_sent(std::size_t slot) const { return couplings_[slot] ? couplings_[slot]->sent() : 0.0; }
-  const NetworkPassivity* coupling(std::size_t slot) const {
-    return couplings_[slot] ? &*couplings_[slot] : nullptr;
-  }
+  std::uint64_t coupling_key(std::size_t slot) const { return couplings_.key(slot); }
+  double energy_sent(std::size_t slot) const { return couplings_.energy_sent(slot); }
+  const NetworkPassivity* coupling(std::size_t slot) const { return couplings_.coupling(slot); }
   /// The force slot i's coupling applied over the last period (after its layer). Unit: N.
-  const Vec3& coupling_force(std::size_t slot) const { return coupling_forces_[slot]; }
+  const Vec3& coupling_force(std::size_t slot) const { return couplings_.force_of(slot); }
 
  private:
   SharedMassParams params_;
   SharedMassState state_;
   ExactMassDamperStep weights_;
   Vec3 F_contacts_;  // the tools' reactions booked this period. Unit: N.
-  std::array<std::uint64_t, kMaxRemoteCopies> keys_{};
-  std::array<std::optional<NetworkPassivity>, kMaxRemoteCopies> couplings_{};
-  std::array<Vec3, kMaxRemoteCopies> coupling_forces_{};
+  CopyCouplings couplings_;
 };
 
 }  // namespace haptic::engine
