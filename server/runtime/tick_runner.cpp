@@ -64,6 +64,8 @@ void TickRunner::run(std::uint64_t tick, std::int64_t time_ns) {
   const double gain = output_gain(tick);
   const auto ports = static_cast<std::uint32_t>(ports_.size());
   for (std::uint32_t index = 0; index < ports; ++index) run_port(scene, index, tick, time_ns, gain);
+  // Federation: the masses shared across sites are pulled towards the other sites' copies.
+  if (config_.shared_masses != nullptr) config_.shared_masses->run(scene, tick);
   // The virtual masses move once, under the reactions of every port (000 eq. 7.1).
   if (!scene.masses.empty() || !scene.mesh_masses.empty()) engine::advance_scene(scene, config_.period_s);
   if (gain == 0.0) output_zero_.store(true, std::memory_order_release);

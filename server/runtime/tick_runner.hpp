@@ -24,6 +24,7 @@
 #include "engine/safety/passivity.hpp"
 #include "runtime/latest_value.hpp"
 #include "runtime/remote_tools.hpp"
+#include "runtime/shared_masses.hpp"
 
 namespace haptic::runtime {
 
@@ -42,6 +43,9 @@ struct TickConfig {
   /// a field a client turns on under the tool, or a non-conservative first-order field, is a
   /// deliberate source of energy (metered and reported per field).
   std::optional<engine::PassivityControllerParams> passivity;
+  /// Federation: couples the scene's masses shared across sites to the other sites' copies
+  /// before they advance; null: none. Not owned.
+  SharedMassStage* shared_masses = nullptr;
 };
 
 /// One device port: a device (one user's tool) and its model, evaluated against the shared scene,

@@ -203,6 +203,7 @@ std::string to_object_spec(const v1::Object& object, const std::string& path,
   if (!object.has_impedance()) return path + ".impedance: is required";
   if (auto e = check_impedance(object.impedance(), path + ".impedance", limits); !e.empty()) return e;
   out.shared = object.shared();
+  out.across_sites = object.across_sites();
   const v1::Impedance& impedance = object.impedance();
   out.stiffness = impedance.stiffness();
   out.damping = impedance.damping();

@@ -239,6 +239,13 @@ struct SceneBuilder {
     compiled.object_mass = object.object_mass;
     if (object.object_mass > 0.0) scene.masses.push_back(static_cast<std::uint32_t>(scene.contacts.size()));
     compiled.object_damping = object.object_damping;
+    const bool live = entry.meta.fade_begin_tick == kNeverTick && entry.meta.ramps.superseded_at[0] == kNeverTick;
+    if (object.object_mass > 0.0 && object.across_sites && live) {
+      // Only the live version is coupled: a fading one goes its own way out.
+      scene.shared_masses.push_back(static_cast<std::uint32_t>(scene.contacts.size()));
+      compiled.origin_site = object.origin_site;
+      compiled.origin_id = object.origin_id != 0 ? object.origin_id : entry.meta.id;
+    }
     compiled.ramp = entry.meta.ramp();
     compiled.state = static_cast<std::uint32_t>(state.contacts.size());
     compiled.meter = meter;
@@ -1023,6 +1030,16 @@ SceneTorque evaluate_scene_orientation(const CompiledScene& scene, std::uint32_t
     out.tau_T_W += tau;
   }
   return out;
+}
+
+MassNow mass_now(const CompiledScene& scene, std::uint32_t contact) {
+  const CompiledContact& compiled = scene.contacts[contact];
+  const ContactMotion& m = scene.state->motions[compiled.state];
+  return {compiled.X_WO.p_WO + m.displacement_W, m.velocity_W};
+}
+
+void push_mass(const CompiledScene& scene, std::uint32_t contact, const Vec3& F) {
+  scene.state->motions[scene.contacts[contact].state].reaction_W += F;
 }
 
 void advance_scene(const CompiledScene& scene, double dt) {

@@ -68,6 +68,10 @@ struct CompiledContact {
   double tangential_damping = 0.0;    // Unit: N·s/m.
   double object_mass = 0.0;     // > 0: a virtual mass that moves (000 eq. 7.1). Unit: kg.
   double object_damping = 0.0;  // B_V. Unit: N·s/m.
+  /// A virtual mass shared across sites: its key (ObjectSpec::origin_site, origin_id, the id
+  /// resolved to the item's own where 0).
+  std::uint64_t origin_site = 0;
+  std::uint64_t origin_id = 0;
   ItemRamp ramp;
   std::uint32_t state = 0;   // index into SceneState::contacts
   std::uint32_t meter = 0;
@@ -229,6 +233,9 @@ struct CompiledScene {
   std::vector<std::uint32_t> masses;
   /// The meshes that are virtual masses (indices into `meshes`).
   std::vector<std::uint32_t> mesh_masses;
+  /// The virtual masses shared across sites (indices into `contacts`, live versions only), which
+  /// the loop couples to the other sites' copies before advance_scene (runtime/shared_masses).
+  std::vector<std::uint32_t> shared_masses;
   /// The spheres' broad phase: built from kSphereGridMinSpheres spheres on (kStageSphereGrid);
   /// with it a tick looks only at the spheres listed where the tool is, those it touched last
   /// tick, and those fading out (fading_spheres, for SceneForce::ramping).
@@ -321,6 +328,16 @@ struct SceneTorque {
 SceneTorque evaluate_scene_orientation(const CompiledScene& scene, std::uint32_t port,
                                        const Quat& R_WT, const Vec3& w_WT, std::int64_t tick,
                                        double dt = 1e-3);
+
+/// On the loop: virtual mass `contact` (an index into scene.contacts that is in scene.masses):
+/// where its origin is and how fast it moves now (W; m, m/s).
+struct MassNow {
+  Vec3 p_WO;
+  Vec3 v_WO;
+};
+MassNow mass_now(const CompiledScene& scene, std::uint32_t contact);
+/// On the loop: adds F (N, W) to what moves virtual mass `contact` at the next advance_scene.
+void push_mass(const CompiledScene& scene, std::uint32_t contact, const Vec3& F);
 
 /// Advances every virtual mass by dt under the reactions the ports accumulated this tick, held
 /// over the tick (000 eq. 7.1, integrated exactly), clears the accumulators and publishes the

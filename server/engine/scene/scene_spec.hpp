@@ -81,6 +81,13 @@ struct ObjectSpec {
   /// its owner may delete it, and it goes when the owner's session does. Not shared: only the
   /// owner changes it. Every tool feels every object either way.
   bool shared = false;
+  /// A virtual mass shared across the sites of a federation (docs/federation.md, "Shared
+  /// masses"): each site's copy is coupled to the others'. Its key at every site: the site that
+  /// made it (origin_site, a site key; 0: this site) and its id there (origin_id; 0: this item's
+  /// own id).
+  bool across_sites = false;
+  std::uint64_t origin_site = 0;
+  std::uint64_t origin_id = 0;
 };
 
 /// Potential U = 1/2 k |p - anchor|^2; F = -k (p - anchor) - b v, clipped to max_force if > 0.

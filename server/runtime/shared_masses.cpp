@@ -1,0 +1,87 @@
+#include "runtime/shared_masses.hpp"
+
+#include <span>
+
+namespace haptic::runtime {
+
+std::uint64_t site_key(std::string_view site) {
+  std::uint64_t hash = 14695981039346656037ull;  // FNV-1a, 64 bit
+  for (const char c : site) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 1099511628211ull;
+  }
+  return hash != 0 ? hash : 1;
+}
+
+std::uint64_t shared_mass_key(std::uint64_t origin_site, std::uint64_t origin_id) {
+  // splitmix64's finaliser over the pair: distinct pairs give distinct keys but for a 2^-64 chance.
+  std::uint64_t z = origin_site ^ (origin_id + 0x9e3779b97f4a7c15ull + (origin_site << 6) + (origin_site >> 2));
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  z ^= z >> 31;
+  return z != 0 ? z : 1;
+}
+
+SharedMassStage::SharedMassStage(std::uint64_t own_site, const MassCouplingParams& coupling, double period_s,
+                                 const LatestValue<RemoteMassTable>* in, LatestValue<LocalMassTable>* out)
+    : own_site_(own_site), in_(in), out_(out) {
+  params_.coupling_stiffness = coupling.stiffness;
+  params_.coupling_damping = coupling.damping;
+  params_.period = period_s;
+}
+
+void SharedMassStage::run(const engine::CompiledScene& scene, std::uint64_t tick) {
+  if (scene.shared_masses.empty() && !any_) return;
+  const RemoteMassTable remote = in_->load();
+  LocalMassTable local;
+  local.tick = tick;
+  std::array<bool, kMaxSharedMasses> seen{};
+  for (const std::uint32_t contact : scene.shared_masses) {
+    const engine::CompiledContact& compiled = scene.contacts[contact];
+    const std::uint64_t key =
+        shared_mass_key(compiled.origin_site != 0 ? compiled.origin_site : own_site_, compiled.origin_id);
+    std::size_t slot = kMaxSharedMasses;
+    for (std::size_t i = 0; i < kMaxSharedMasses && slot == kMaxSharedMasses; ++i) {
+      if (slots_[i].mass_key == key) slot = i;
+    }
+    for (std::size_t i = 0; i < kMaxSharedMasses && slot == kMaxSharedMasses; ++i) {
+      if (slots_[i].mass_key == 0) {
+        slot = i;
+        slots_[i].mass_key = key;
+        slots_[i].couplings.clear();
+      }
+    }
+    if (slot == kMaxSharedMasses) {
+      ++over_capacity_;
+      continue;
+    }
+    seen[slot] = true;
+    std::span<const engine::RemoteMassCopy> copies;
+    for (const RemoteMassCopies& entry : remote.masses) {
+      if (entry.mass_key == key) copies = entry.copies;
+    }
+    const engine::MassNow now = engine::mass_now(scene, contact);
+    const engine::Vec3 F = slots_[slot].couplings.force(copies, {now.p_WO, now.v_WO}, compiled.object_mass, params_);
+    engine::push_mass(scene, contact, F);
+    LocalMassCopy& out = local.masses[slot];
+    out.mass_key = key;
+    out.p_WM = now.p_WO;
+    out.v_WM = now.v_WO;
+    for (std::size_t i = 0; i < engine::kMaxRemoteCopies; ++i) {
+      out.coupled_site[i] = slots_[slot].couplings.key(i);
+      out.sent[i] = slots_[slot].couplings.energy_sent(i);
+    }
+  }
+  any_ = false;
+  for (std::size_t i = 0; i < kMaxSharedMasses; ++i) {
+    if (!seen[i] && slots_[i].mass_key != 0) {
+      // The mass left the scene (removed, or its site went): its couplings end.
+      slots_[i].mass_key = 0;
+      slots_[i].couplings.clear();
+    }
+    any_ = any_ || slots_[i].mass_key != 0;
+  }
+  out_->store(local);
+}
+
+}  // namespace haptic::runtime
