@@ -101,40 +101,29 @@ ItemSubscriber::~ItemSubscriber() {
 }
 
 std::size_t ItemSubscriber::take(std::vector<SharedItemEvent>& out, const std::string& own_site) {
-  constexpr std::size_t kBatch = 16;
   std::size_t taken = 0;
-  for (;;) {
-    std::array<void*, kBatch> pointers{};
-    std::array<dds_sample_info_t, kBatch> infos{};
-    const dds_return_t n = dds_take(reader_, pointers.data(), infos.data(), kBatch, kBatch);
-    if (n <= 0) break;
-    for (dds_return_t i = 0; i < n; ++i) {
-      const dds_sample_info_t& info = infos[static_cast<std::size_t>(i)];
-      const Sample& s = *static_cast<const Sample*>(pointers[static_cast<std::size_t>(i)]);
-      SharedItemEvent event;
-      // An invalid sample (no data) still carries the instance's key.
-      event.state.site.assign(s.site, strnlen(s.site, sizeof s.site));
-      event.state.item = s.item;
-      if (event.state.site == own_site) continue;
-      if (info.valid_data) {
-        event.what = SharedItemEvent::What::kPut;
-        event.state.version = s.version;
-        event.state.kind = s.kind == 1 ? SharedItemKind::kField : SharedItemKind::kObject;
-        if (s.kind > 1 || s.spec._length > kMaxItemBytes) continue;  // not ours to read
-        event.state.spec.assign(reinterpret_cast<const char*>(s.spec._buffer), s.spec._length);
-      } else if (info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED) {
-        event.what = SharedItemEvent::What::kRemoved;
-      } else if (info.instance_state == DDS_IST_NOT_ALIVE_NO_WRITERS) {
-        event.what = SharedItemEvent::What::kLost;
-      } else {
-        continue;
-      }
-      out.push_back(std::move(event));
-      ++taken;
+  take_each<Sample>(reader_, [&](const Sample& s, const dds_sample_info_t& info) {
+    SharedItemEvent event;
+    // An invalid sample (no data) still carries the instance's key.
+    event.state.site.assign(s.site, strnlen(s.site, sizeof s.site));
+    event.state.item = s.item;
+    if (event.state.site == own_site) return;
+    if (info.valid_data) {
+      if (s.kind > 1 || s.spec._length > kMaxItemBytes) return;  // not ours to read
+      event.what = SharedItemEvent::What::kPut;
+      event.state.version = s.version;
+      event.state.kind = s.kind == 1 ? SharedItemKind::kField : SharedItemKind::kObject;
+      event.state.spec.assign(reinterpret_cast<const char*>(s.spec._buffer), s.spec._length);
+    } else if (info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED) {
+      event.what = SharedItemEvent::What::kRemoved;
+    } else if (info.instance_state == DDS_IST_NOT_ALIVE_NO_WRITERS) {
+      event.what = SharedItemEvent::What::kLost;
+    } else {
+      return;
     }
-    dds_return_loan(reader_, pointers.data(), n);
-    if (static_cast<std::size_t>(n) < kBatch) break;
-  }
+    out.push_back(std::move(event));
+    ++taken;
+  });
   return taken;
 }
 

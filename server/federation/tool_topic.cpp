@@ -92,38 +92,27 @@ ToolSubscriber::~ToolSubscriber() {
 }
 
 std::size_t ToolSubscriber::take(std::vector<ToolState>& out, const std::string& own_site) {
-  constexpr std::size_t kBatch = 16;
   std::size_t taken = 0;
-  for (;;) {
-    // Loaned samples: Cyclone owns their sequences' buffers until the loan is returned.
-    std::array<void*, kBatch> pointers{};
-    std::array<dds_sample_info_t, kBatch> infos{};
-    const dds_return_t n = dds_take(reader_, pointers.data(), infos.data(), kBatch, kBatch);
-    if (n <= 0) break;
-    for (dds_return_t i = 0; i < n; ++i) {
-      if (!infos[static_cast<std::size_t>(i)].valid_data) continue;
-      const Sample& s = *static_cast<const Sample*>(pointers[static_cast<std::size_t>(i)]);
-      ToolState tool;
-      tool.site.assign(s.site, strnlen(s.site, sizeof s.site));
-      if (!own_site.empty() && tool.site == own_site) continue;
-      tool.port = s.port;
-      tool.tick = s.tick;
-      tool.time_ns = s.time_ns;
-      tool.p_WT = from_dds(s.position);
-      tool.v_WT = from_dds(s.velocity);
-      tool.F_T_W = from_dds(s.force);
-      tool.R_WT = {s.orientation.w, s.orientation.x, s.orientation.y, s.orientation.z};
-      tool.buttons = s.buttons;
-      for (std::uint32_t k = 0; k < s.energy._length && k < kMaxCouplings; ++k) {
-        const haptic_federation_CouplingEnergy& e = s.energy._buffer[k];
-        tool.energy.push_back({std::string(e.site, strnlen(e.site, sizeof e.site)), e.port, e.sent});
-      }
-      out.push_back(std::move(tool));
-      ++taken;
+  take_each<Sample>(reader_, [&](const Sample& s, const dds_sample_info_t& info) {
+    if (!info.valid_data) return;
+    ToolState tool;
+    tool.site.assign(s.site, strnlen(s.site, sizeof s.site));
+    if (!own_site.empty() && tool.site == own_site) return;
+    tool.port = s.port;
+    tool.tick = s.tick;
+    tool.time_ns = s.time_ns;
+    tool.p_WT = from_dds(s.position);
+    tool.v_WT = from_dds(s.velocity);
+    tool.F_T_W = from_dds(s.force);
+    tool.R_WT = {s.orientation.w, s.orientation.x, s.orientation.y, s.orientation.z};
+    tool.buttons = s.buttons;
+    for (std::uint32_t k = 0; k < s.energy._length && k < kMaxCouplings; ++k) {
+      const haptic_federation_CouplingEnergy& e = s.energy._buffer[k];
+      tool.energy.push_back({std::string(e.site, strnlen(e.site, sizeof e.site)), e.port, e.sent});
     }
-    dds_return_loan(reader_, pointers.data(), n);
-    if (static_cast<std::size_t>(n) < kBatch) break;
-  }
+    out.push_back(std::move(tool));
+    ++taken;
+  });
   return taken;
 }
 
