@@ -1,5 +1,7 @@
 #include "conversions.hpp"
 
+#include <variant>
+
 namespace haptic::detail {
 
 v1::Vec3 to_proto(const Vec3& v) {
@@ -60,6 +62,21 @@ void set_impedance(v1::Object& object, const Impedance& impedance) {
   out.set_law(law_to_proto(impedance.law));
 }
 
+// Who may change an item and where it goes, the flags beside every spec's shape: `shared` (not on
+// tangent planes or fields) and `across_sites`.
+template <class Message, class Spec>
+void set_sharing(Message& message, const Spec& spec) {
+  if constexpr (requires { spec.shared; }) message.set_shared(spec.shared);
+  message.set_across_sites(spec.across_sites);
+}
+
+// set_sharing's inverse, for a spec read back.
+template <class Spec, class Message>
+void read_sharing(Spec& spec, const Message& message) {
+  if constexpr (requires { spec.shared; }) spec.shared = message.shared();
+  spec.across_sites = message.across_sites();
+}
+
 void set_dynamics(v1::Object& object, const Dynamics& dynamics) {
   if (dynamics.mass == 0.0 && dynamics.damping == 0.0) return;
   object.mutable_dynamics()->set_mass(dynamics.mass);
@@ -92,7 +109,7 @@ v1::Object to_proto(const BoxSpec& box) {
   set_impedance(object, box.impedance);
   *object.mutable_box()->mutable_half_extents() = to_proto(box.half_extents);
   set_dynamics(object, box.dynamics);
-  object.set_shared(box.shared);
+  set_sharing(object, box);
   return object;
 }
 
@@ -105,6 +122,7 @@ v1::Object to_proto(const TangentPlaneSpec& plane) {
   *out->mutable_reference() = to_proto(plane.reference);
   out->set_tangential_stiffness(plane.tangential_stiffness);
   out->set_tangential_damping(plane.tangential_damping);
+  set_sharing(object, plane);
   return object;
 }
 
@@ -115,7 +133,7 @@ v1::Object to_proto(const CapsuleSpec& capsule) {
   object.mutable_capsule()->set_radius(capsule.radius);
   object.mutable_capsule()->set_half_length(capsule.half_length);
   set_dynamics(object, capsule.dynamics);
-  object.set_shared(capsule.shared);
+  set_sharing(object, capsule);
   return object;
 }
 
@@ -126,7 +144,7 @@ v1::Object to_proto(const MeshSpec& mesh) {
   auto* out = object.mutable_mesh();
   for (const Vec3& v : mesh.vertices) *out->add_vertices() = to_proto(v);
   for (const std::uint32_t i : mesh.indices) out->add_indices(i);
-  object.set_shared(mesh.shared);
+  set_sharing(object, mesh);
   return object;
 }
 
@@ -137,6 +155,7 @@ v1::Field to_proto(const DistanceSpringSpec& spring) {
   s->set_stiffness(spring.stiffness);
   s->set_damping(spring.damping);
   s->set_max_force(spring.max_force);
+  set_sharing(field, spring);
   return field;
 }
 
@@ -153,6 +172,7 @@ v1::Field to_proto(const PotentialFieldSpec& potential) {
   p->set_min_distance(potential.min_distance);
   p->set_gradient(potential.central_differences ? v1::PotentialField::CENTRAL_DIFFERENCE
                                                 : v1::PotentialField::ANALYTIC);
+  set_sharing(field, potential);
   return field;
 }
 
@@ -164,6 +184,7 @@ v1::Field to_proto(const LinearFieldSpec& linear) {
   for (const Vec3& row : linear.jacobian) *l->add_jacobian() = to_proto(row);
   l->set_radius(linear.radius);
   l->set_fade_width(linear.fade_width);
+  set_sharing(field, linear);
   return field;
 }
 
@@ -174,6 +195,7 @@ v1::Field to_proto(const ViscousFieldSpec& viscous) {
   *v->mutable_center() = to_proto(viscous.center);
   v->set_radius(viscous.radius);
   v->set_fade_width(viscous.fade_width);
+  set_sharing(field, viscous);
   return field;
 }
 
@@ -185,6 +207,7 @@ v1::Field to_proto(const DetentFieldSpec& detent) {
   d->set_radius(detent.radius);
   d->set_rim_height(detent.rim_height);
   d->set_rim_width(detent.rim_width);
+  set_sharing(field, detent);
   return field;
 }
 
@@ -196,6 +219,7 @@ v1::Field to_proto(const OrientationSpringSpec& spring) {
   s->set_damping(spring.damping);
   s->set_max_torque(spring.max_torque);
   s->set_law(law_to_proto(spring.law));
+  set_sharing(field, spring);
   return field;
 }
 
@@ -208,6 +232,7 @@ v1::Field to_proto(const OrientationDetentSpec& detent) {
   d->set_rim_height(detent.rim_height);
   d->set_rim_width(detent.rim_width);
   d->set_damping(detent.damping);
+  set_sharing(field, detent);
   return field;
 }
 
@@ -216,7 +241,7 @@ v1::Object to_proto(const WallSpec& wall) {
   *object.mutable_pose()->mutable_position() = to_proto(wall.point);
   set_impedance(object, wall.impedance);
   *object.mutable_half_space()->mutable_normal() = to_proto(wall.normal);
-  object.set_shared(wall.shared);
+  set_sharing(object, wall);
   return object;
 }
 
@@ -226,7 +251,7 @@ v1::Object to_proto(const SphereSpec& sphere) {
   set_impedance(object, sphere.impedance);
   object.mutable_sphere()->set_radius(sphere.radius);
   set_dynamics(object, sphere.dynamics);
-  object.set_shared(sphere.shared);
+  set_sharing(object, sphere);
   return object;
 }
 
@@ -237,6 +262,7 @@ v1::Field to_proto(const SpringFieldSpec& spring) {
   s->set_stiffness(spring.stiffness);
   s->set_damping(spring.damping);
   s->set_max_force(spring.max_force);
+  set_sharing(field, spring);
   return field;
 }
 
@@ -287,28 +313,26 @@ Distance distance_from_proto(const v1::Distance& in) {
   out.radius = in.radius();
   return out;
 }
-}  // namespace
 
-SceneSpec::Object from_proto(const v1::Object& object) {
+// The object's shape, impedance, pose and dynamics as its spec; from_proto adds the flags.
+SceneSpec::Object object_shape_from_proto(const v1::Object& object) {
   const Impedance impedance = impedance_from_proto(object.impedance());
   switch (object.shape_case()) {
     case v1::Object::kSphere:
       return SphereSpec{from_proto(object.pose().position()), object.sphere().radius(), impedance,
-                        dynamics_from_proto(object), object.shared()};
+                        dynamics_from_proto(object)};
     case v1::Object::kBox:
       return BoxSpec{pose_from_proto(object), from_proto(object.box().half_extents()), impedance,
-                     dynamics_from_proto(object), object.shared()};
+                     dynamics_from_proto(object)};
     case v1::Object::kCapsule:
       return CapsuleSpec{pose_from_proto(object), object.capsule().radius(),
-                         object.capsule().half_length(), impedance, dynamics_from_proto(object),
-                         object.shared()};
+                         object.capsule().half_length(), impedance, dynamics_from_proto(object)};
     case v1::Object::kMesh: {
       MeshSpec mesh;
       mesh.pose = pose_from_proto(object);
       for (const auto& v : object.mesh().vertices()) mesh.vertices.push_back(from_proto(v));
       mesh.indices.assign(object.mesh().indices().begin(), object.mesh().indices().end());
       mesh.impedance = impedance;
-      mesh.shared = object.shared();
       return mesh;
     }
     case v1::Object::kTangentPlane: {
@@ -324,12 +348,13 @@ SceneSpec::Object from_proto(const v1::Object& object) {
     default: {  // a half-space: its normal is in the object frame
       const Pose pose = pose_from_proto(object);
       return WallSpec{pose.position, rotate(pose.orientation, from_proto(object.half_space().normal())),
-                      impedance, object.shared()};
+                      impedance};
     }
   }
 }
 
-SceneSpec::Field from_proto(const v1::Field& field) {
+// The field's kind and parameters as its spec; from_proto adds the flags.
+SceneSpec::Field field_kind_from_proto(const v1::Field& field) {
   switch (field.kind_case()) {
     case v1::Field::kSpring:
       return DistanceSpringSpec{distance_from_proto(field.spring().anchor()), field.spring().stiffness(),
@@ -379,6 +404,19 @@ SceneSpec::Field from_proto(const v1::Field& field) {
       return SpringFieldSpec{from_proto(field.spring_to_point().anchor()), field.spring_to_point().stiffness(),
                              field.spring_to_point().damping(), field.spring_to_point().max_force()};
   }
+}
+}  // namespace
+
+SceneSpec::Object from_proto(const v1::Object& object) {
+  SceneSpec::Object out = object_shape_from_proto(object);
+  std::visit([&](auto& spec) { read_sharing(spec, object); }, out);
+  return out;
+}
+
+SceneSpec::Field from_proto(const v1::Field& field) {
+  SceneSpec::Field out = field_kind_from_proto(field);
+  std::visit([&](auto& spec) { read_sharing(spec, field); }, out);
+  return out;
 }
 
 v1::OperatorInput to_proto(const OperatorInput& input) {

@@ -65,6 +65,7 @@ struct WallSpec {
   Vec3 normal{0, 0, 1};     ///< Non-zero; the server normalises it.
   Impedance impedance{};
   bool shared = false;      ///< any session may update it; only its owner deletes it
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const WallSpec&, const WallSpec&) = default;
 };
 
@@ -82,6 +83,7 @@ struct SphereSpec {
   Impedance impedance{};
   Dynamics dynamics{};      ///< mass > 0: the sphere can be pushed around
   bool shared = false;      ///< any session may update it; only its owner deletes it
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const SphereSpec&, const SphereSpec&) = default;
 };
 
@@ -91,6 +93,7 @@ struct SpringFieldSpec {
   double stiffness = 0.0;   ///< Unit: N/m.
   double damping = 0.0;     ///< Unit: N·s/m.
   double max_force = 0.0;   ///< Unit: N. 0: no clip.
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const SpringFieldSpec&, const SpringFieldSpec&) = default;
 };
 
@@ -101,6 +104,7 @@ struct BoxSpec {
   Impedance impedance{};
   Dynamics dynamics{};      ///< mass > 0: the box can be pushed around
   bool shared = false;      ///< any session may update it; only its owner deletes it
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const BoxSpec&, const BoxSpec&) = default;
 };
 
@@ -112,6 +116,7 @@ struct CapsuleSpec {
   Impedance impedance{};
   Dynamics dynamics{};
   bool shared = false;      ///< any session may update it; only its owner deletes it
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const CapsuleSpec&, const CapsuleSpec&) = default;
 };
 
@@ -122,6 +127,7 @@ struct MeshSpec {
   std::vector<std::uint32_t> indices;  ///< Three per triangle.
   Impedance impedance{};
   bool shared = false;      ///< any session may update it; only its owner deletes it
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const MeshSpec&, const MeshSpec&) = default;
 };
 
@@ -136,6 +142,7 @@ struct TangentPlaneSpec {
   double tangential_stiffness = 0.0; ///< Unit: N/m.
   double tangential_damping = 0.0;   ///< Unit: N·s/m.
   Impedance impedance{};
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const TangentPlaneSpec&, const TangentPlaneSpec&) = default;
 };
 
@@ -155,6 +162,7 @@ struct DistanceSpringSpec {
   double stiffness = 0.0;   ///< Unit: N/m.
   double damping = 0.0;     ///< Unit: N·s/m.
   double max_force = 0.0;   ///< Unit: N. 0: no clip.
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const DistanceSpringSpec&, const DistanceSpringSpec&) = default;
 };
 
@@ -170,6 +178,7 @@ struct PotentialFieldSpec {
   double influence_distance = 0.0;  ///< f0 (Khatib). Unit: m.
   double min_distance = 0.0;        ///< Khatib's force is capped below this. Unit: m.
   bool central_differences = false; ///< gradient by central differences instead of analytic
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const PotentialFieldSpec&, const PotentialFieldSpec&) = default;
 };
 
@@ -180,6 +189,7 @@ struct LinearFieldSpec {
   Vec3 jacobian[3]{};       ///< Rows of K. Unit: N/m.
   double radius = 0.0;      ///< Unit: m.
   double fade_width = 0.0;  ///< Unit: m.
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const LinearFieldSpec&, const LinearFieldSpec&) = default;
 };
 
@@ -189,6 +199,7 @@ struct ViscousFieldSpec {
   Vec3 center{};
   double radius = 0.0;      ///< Unit: m. 0: everywhere.
   double fade_width = 0.0;  ///< Unit: m.
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const ViscousFieldSpec&, const ViscousFieldSpec&) = default;
 };
 
@@ -199,6 +210,7 @@ struct DetentFieldSpec {
   double radius = 0.0;      ///< Unit: m.
   double rim_height = 0.0;  ///< Unit: J.
   double rim_width = 0.0;   ///< Unit: m.
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const DetentFieldSpec&, const DetentFieldSpec&) = default;
 };
 
@@ -214,6 +226,7 @@ struct OrientationSpringSpec {
   double max_torque = 0.0;  ///< |tau| is clipped to this. Unit: N·m. 0: no clip.
   /// How K and B are discretized, as for a contact's Impedance (kVelocity: the measured ω).
   ImpedanceLaw law = ImpedanceLaw::kVelocity;
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const OrientationSpringSpec&, const OrientationSpringSpec&) = default;
 };
 
@@ -227,6 +240,7 @@ struct OrientationDetentSpec {
   double rim_height = 0.0;  ///< Unit: J. >= 0.
   double rim_width = 0.0;   ///< Unit: rad. > 0 when rim_height > 0.
   double damping = 0.0;     ///< On ω inside radius + rim_width. Unit: N·m·s/rad. Finite, >= 0.
+  bool across_sites = false;  ///< shared with the other sites of a federation; refused by a server not in one
   friend bool operator==(const OrientationDetentSpec&, const OrientationDetentSpec&) = default;
 };
 
