@@ -200,6 +200,32 @@ TEST_F(SdkIntegration, ErrorsAreTypedAndCarryTheServersMessage) {
   EXPECT_EQ(client.stats().objects, 0u);
 }
 
+// An item marked across_sites is for the other sites of a federation; this server is in none, so
+// it refuses the item and the SDK's error carries its message: nothing is created, alone or in a
+// whole scene.
+TEST_F(SdkIntegration, AnAcrossSitesSphereIsRefusedOutsideAFederationAndNothingIsCreated) {
+  Client client(config_for(server_, "across_sites"));
+  const SphereSpec sphere{.center = {0.05, 0, 0}, .radius = 0.01, .impedance = {kK, 0.0},
+                          .across_sites = true};
+  const std::string not_federated =
+      ".across_sites: this server is not in a federation (its configuration has no federation section)";
+  try {
+    (void)client.add_sphere(sphere);
+    ADD_FAILURE() << "an across_sites sphere was created outside a federation";
+  } catch (const FailedPreconditionError& error) {
+    EXPECT_EQ(std::string(error.what()), "CreateObject: object" + not_federated);
+    EXPECT_EQ(error.code(), ErrorCode::kFailedPrecondition);
+  }
+  try {
+    (void)client.apply_scene(SceneSpec{.objects = {sphere}});
+    ADD_FAILURE() << "a scene with an across_sites sphere was applied outside a federation";
+  } catch (const FailedPreconditionError& error) {
+    EXPECT_EQ(std::string(error.what()), "ApplyScene: scene.objects[0]" + not_federated);
+  }
+  EXPECT_TRUE(client.scene(true).object_ids.empty());
+  EXPECT_EQ(client.stats().objects, 0u);
+}
+
 TEST(SdkIntegrationRealTime, StepIsRefusedOutsideLockstepAndStateStreams) {
   test::ServerProcess server(R"({"time_mode": "REAL_TIME", "udp_address": "127.0.0.1",
       "status_period_s": 0, "real_time": {"use_fifo": false}})");
