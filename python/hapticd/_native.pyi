@@ -22,6 +22,7 @@ class AppliedScene:
 class BoxSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     dynamics: Dynamics
     @property
     def half_extents(self) -> NDArray[numpy.float64]: ...
@@ -38,6 +39,7 @@ class BoxSpec:
         impedance: Impedance = ...,
         dynamics: Dynamics = ...,
         shared: bool = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> BoxSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> BoxSpec: ...
@@ -46,6 +48,7 @@ class BoxSpec:
 class CapsuleSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     dynamics: Dynamics
     half_length: float
     impedance: Impedance
@@ -61,6 +64,7 @@ class CapsuleSpec:
         impedance: Impedance = ...,
         dynamics: Dynamics = ...,
         shared: bool = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> CapsuleSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> CapsuleSpec: ...
@@ -284,6 +288,7 @@ class ConnectionError(Error): ...
 class DetentFieldSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     depth: float
     distance: Distance
     radius: float
@@ -297,6 +302,7 @@ class DetentFieldSpec:
         radius: float = ...,
         rim_height: float = ...,
         rim_width: float = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> DetentFieldSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> DetentFieldSpec: ...
@@ -402,6 +408,7 @@ class Distance:
 class DistanceSpringSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     anchor: Distance
     damping: float
     max_force: float
@@ -413,6 +420,7 @@ class DistanceSpringSpec:
         stiffness: float = ...,
         damping: float = ...,
         max_force: float = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> DistanceSpringSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> DistanceSpringSpec: ...
@@ -591,6 +599,7 @@ class ItemEnergy:
 class LinearFieldSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     fade_width: float
     @property
     def force(self) -> NDArray[numpy.float64]: ...
@@ -613,6 +622,7 @@ class LinearFieldSpec:
         jacobian: ArrayLike = ...,
         radius: float = ...,
         fade_width: float = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> LinearFieldSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> LinearFieldSpec: ...
@@ -621,6 +631,7 @@ class LinearFieldSpec:
 class MeshSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     impedance: Impedance
     @property
     def indices(self) -> NDArray[numpy.uint32]: ...
@@ -640,6 +651,7 @@ class MeshSpec:
         indices: ArrayLike = ...,
         impedance: Impedance = ...,
         shared: bool = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> MeshSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> MeshSpec: ...
@@ -869,6 +881,7 @@ class OperatorInput:
 class OrientationDetentSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     damping: float
     depth: float
     radius: float
@@ -887,6 +900,7 @@ class OrientationDetentSpec:
         rim_height: float = ...,
         rim_width: float = ...,
         damping: float = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> OrientationDetentSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> OrientationDetentSpec: ...
@@ -895,6 +909,7 @@ class OrientationDetentSpec:
 class OrientationSpringSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     damping: float
     law: ImpedanceLaw
     max_torque: float
@@ -911,6 +926,7 @@ class OrientationSpringSpec:
         damping: float = ...,
         max_torque: float = ...,
         law: ImpedanceLaw = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> OrientationSpringSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> OrientationSpringSpec: ...
@@ -953,6 +969,7 @@ class PotentialFieldSpec:
         def value(self) -> int: ...
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     central_differences: bool
     distance: Distance
     gain: float
@@ -972,6 +989,7 @@ class PotentialFieldSpec:
         influence_distance: float = ...,
         min_distance: float = ...,
         central_differences: bool = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> PotentialFieldSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> PotentialFieldSpec: ...
@@ -1094,6 +1112,7 @@ class SessionSummary:
 class SphereSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     @property
     def center(self) -> NDArray[numpy.float64]: ...
     @center.setter
@@ -1110,6 +1129,7 @@ class SphereSpec:
         impedance: Impedance = ...,
         dynamics: Dynamics = ...,
         shared: bool = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> SphereSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> SphereSpec: ...
@@ -1118,6 +1138,7 @@ class SphereSpec:
 class SpringFieldSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     @property
     def anchor(self) -> NDArray[numpy.float64]: ...
     @anchor.setter
@@ -1132,6 +1153,7 @@ class SpringFieldSpec:
         stiffness: float = ...,
         damping: float = ...,
         max_force: float = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> SpringFieldSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> SpringFieldSpec: ...
@@ -1308,6 +1330,7 @@ class Stats:
 class TangentPlaneSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     impedance: Impedance
     @property
     def normal(self) -> NDArray[numpy.float64]: ...
@@ -1329,6 +1352,7 @@ class TangentPlaneSpec:
         tangential_stiffness: float = ...,
         tangential_damping: float = ...,
         impedance: Impedance = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> TangentPlaneSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> TangentPlaneSpec: ...
@@ -1360,6 +1384,7 @@ class VersionMismatchError(Error):
 class ViscousFieldSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     @property
     def center(self) -> NDArray[numpy.float64]: ...
     @center.setter
@@ -1374,6 +1399,7 @@ class ViscousFieldSpec:
         center: ArrayLike = ...,
         radius: float = ...,
         fade_width: float = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> ViscousFieldSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> ViscousFieldSpec: ...
@@ -1382,6 +1408,7 @@ class ViscousFieldSpec:
 class WallSpec:
     _fields: ClassVar[Tuple[str, ...]]
     __hash__: ClassVar[None]  # type: ignore[assignment]
+    across_sites: bool
     impedance: Impedance
     @property
     def normal(self) -> NDArray[numpy.float64]: ...
@@ -1399,6 +1426,7 @@ class WallSpec:
         normal: ArrayLike = ...,
         impedance: Impedance = ...,
         shared: bool = ...,
+        across_sites: bool = ...,
     ) -> None: ...
     def __copy__(self) -> WallSpec: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> WallSpec: ...

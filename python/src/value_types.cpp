@@ -35,6 +35,10 @@ void bind_enums(py::module_& m) {
       .value("DEVICE_FAULT", kDeviceFault);
 }
 
+// The doc of every spec's across_sites (types.hpp).
+constexpr const char* kAcrossSites =
+    "shared with the other sites of a federation; refused by a server not in one";
+
 void bind_scene_specs(py::module_& m) {
   StructBinder<Impedance>(m, "Impedance", "A virtual spring-damper with optional Coulomb friction.")
       .field("stiffness", &Impedance::stiffness, "N/m, finite, >= 0")
@@ -61,6 +65,7 @@ void bind_scene_specs(py::module_& m) {
       .field("normal", &WallSpec::normal, "non-zero; normalised by the server")
       .field("impedance", &WallSpec::impedance, "Impedance")
       .field("shared", &WallSpec::shared, "any session may update it")
+      .field("across_sites", &WallSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<SphereSpec>(m, "SphereSpec", "A solid sphere the tool is pushed out of.")
       .field("center", &SphereSpec::center, "m")
@@ -68,6 +73,7 @@ void bind_scene_specs(py::module_& m) {
       .field("impedance", &SphereSpec::impedance, "Impedance")
       .field("dynamics", &SphereSpec::dynamics, "mass > 0: it can be pushed around")
       .field("shared", &SphereSpec::shared, "any session may update it")
+      .field("across_sites", &SphereSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<BoxSpec>(m, "BoxSpec", "A solid box centred on its pose.")
       .field("pose", &BoxSpec::pose, "Pose")
@@ -75,6 +81,7 @@ void bind_scene_specs(py::module_& m) {
       .field("impedance", &BoxSpec::impedance, "Impedance")
       .field("dynamics", &BoxSpec::dynamics, "Dynamics")
       .field("shared", &BoxSpec::shared, "any session may update it")
+      .field("across_sites", &BoxSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<CapsuleSpec>(m, "CapsuleSpec", "A solid capsule along its pose's z axis.")
       .field("pose", &CapsuleSpec::pose, "Pose")
@@ -83,6 +90,7 @@ void bind_scene_specs(py::module_& m) {
       .field("impedance", &CapsuleSpec::impedance, "Impedance")
       .field("dynamics", &CapsuleSpec::dynamics, "Dynamics")
       .field("shared", &CapsuleSpec::shared, "any session may update it")
+      .field("across_sites", &CapsuleSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<MeshSpec>(m, "MeshSpec", "A triangle mesh in its pose's frame (god-object rendering).")
       .field("pose", &MeshSpec::pose, "Pose")
@@ -105,6 +113,7 @@ void bind_scene_specs(py::module_& m) {
           "three vertex indices per triangle: (3T,) or (T, 3) array")
       .field("impedance", &MeshSpec::impedance, "Impedance")
       .field("shared", &MeshSpec::shared, "any session may update it")
+      .field("across_sites", &MeshSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<TangentPlaneSpec>(m, "TangentPlaneSpec",
                                  "Russo's tangent-plane local model (004), for a slow host.")
@@ -114,6 +123,7 @@ void bind_scene_specs(py::module_& m) {
       .field("tangential_stiffness", &TangentPlaneSpec::tangential_stiffness, "N/m")
       .field("tangential_damping", &TangentPlaneSpec::tangential_damping, "N·s/m")
       .field("impedance", &TangentPlaneSpec::impedance, "Impedance")
+      .field("across_sites", &TangentPlaneSpec::across_sites, kAcrossSites)
       .finish();
 
   StructBinder<SpringFieldSpec>(m, "SpringFieldSpec", "F = −k (p − anchor) − b v, clipped to max_force.")
@@ -121,6 +131,7 @@ void bind_scene_specs(py::module_& m) {
       .field("stiffness", &SpringFieldSpec::stiffness, "N/m")
       .field("damping", &SpringFieldSpec::damping, "N·s/m")
       .field("max_force", &SpringFieldSpec::max_force, "N; 0: no clip")
+      .field("across_sites", &SpringFieldSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<Distance> distance(m, "Distance", "A distance function the fields are built on.");
   py::enum_<Distance::Kind>(distance.cls(), "Kind")
@@ -138,6 +149,7 @@ void bind_scene_specs(py::module_& m) {
       .field("stiffness", &DistanceSpringSpec::stiffness, "N/m")
       .field("damping", &DistanceSpringSpec::damping, "N·s/m")
       .field("max_force", &DistanceSpringSpec::max_force, "N; 0: no clip")
+      .field("across_sites", &DistanceSpringSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<PotentialFieldSpec> potential(
       m, "PotentialFieldSpec", "F = −∇U over a distance: polynomial or Khatib (004 eqs. 5.6–5.7).");
@@ -153,6 +165,7 @@ void bind_scene_specs(py::module_& m) {
       .field("min_distance", &PotentialFieldSpec::min_distance, "Khatib's force is capped below, m")
       .field("central_differences", &PotentialFieldSpec::central_differences,
              "gradient by central differences instead of analytic")
+      .field("across_sites", &PotentialFieldSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<LinearFieldSpec>(m, "LinearFieldSpec",
                                 "F = F0 + K (p − origin) inside radius, fading to zero.")
@@ -174,12 +187,14 @@ void bind_scene_specs(py::module_& m) {
           "K as a (3, 3) array of rows, N/m")
       .field("radius", &LinearFieldSpec::radius, "m")
       .field("fade_width", &LinearFieldSpec::fade_width, "m")
+      .field("across_sites", &LinearFieldSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<ViscousFieldSpec>(m, "ViscousFieldSpec", "F = −B v, everywhere or inside a sphere.")
       .field("damping", &ViscousFieldSpec::damping, "N·s/m")
       .field("center", &ViscousFieldSpec::center, "m")
       .field("radius", &ViscousFieldSpec::radius, "m; 0: everywhere")
       .field("fade_width", &ViscousFieldSpec::fade_width, "m")
+      .field("across_sites", &ViscousFieldSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<DetentFieldSpec>(m, "DetentFieldSpec", "A potential well with a repulsive rim.")
       .field("distance", &DetentFieldSpec::distance, "Distance")
@@ -187,6 +202,7 @@ void bind_scene_specs(py::module_& m) {
       .field("radius", &DetentFieldSpec::radius, "m")
       .field("rim_height", &DetentFieldSpec::rim_height, "J")
       .field("rim_width", &DetentFieldSpec::rim_width, "m")
+      .field("across_sites", &DetentFieldSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<OrientationSpringSpec>(m, "OrientationSpringSpec",
                                       "A rotational spring-damper pulling the tool's orientation "
@@ -196,6 +212,7 @@ void bind_scene_specs(py::module_& m) {
       .field("damping", &OrientationSpringSpec::damping, "B, N·m·s/rad, finite, >= 0")
       .field("max_torque", &OrientationSpringSpec::max_torque, "N·m; 0: no clip")
       .field("law", &OrientationSpringSpec::law, "ImpedanceLaw (VELOCITY: the measured ω)")
+      .field("across_sites", &OrientationSpringSpec::across_sites, kAcrossSites)
       .finish();
   StructBinder<OrientationDetentSpec>(m, "OrientationDetentSpec",
                                       "A potential well with a repulsive rim over the angle "
@@ -206,6 +223,7 @@ void bind_scene_specs(py::module_& m) {
       .field("rim_height", &OrientationDetentSpec::rim_height, "J, >= 0")
       .field("rim_width", &OrientationDetentSpec::rim_width, "rad")
       .field("damping", &OrientationDetentSpec::damping, "N·m·s/rad, inside radius + rim_width")
+      .field("across_sites", &OrientationDetentSpec::across_sites, kAcrossSites)
       .finish();
 
   StructBinder<SceneSpec>(m, "SceneSpec",

@@ -114,6 +114,24 @@ def test_a_refused_spec_names_the_field_and_changes_nothing(client):
         assert client.scene().object_ids == [sphere.id]
 
 
+def test_an_item_across_sites_is_refused_outside_a_federation_and_nothing_is_created(client):
+    not_federated = (r"across_sites: this server is not in a federation \(its configuration has "
+                     r"no federation section\)")
+    with pytest.raises(hapticd.FailedPreconditionError,
+                       match=r"^CreateObject: object\." + not_federated) as refused:
+        client.add_sphere(hapticd.SphereSpec(center=(0, 0, 0.1), radius=0.01, impedance=STIFF,
+                                             across_sites=True))
+    assert refused.value.code == hapticd.ErrorCode.FAILED_PRECONDITION
+    with pytest.raises(hapticd.FailedPreconditionError, match=r"^CreateField: field\." + not_federated):
+        client.add(hapticd.ViscousFieldSpec(damping=0.5, across_sites=True))
+    with pytest.raises(hapticd.FailedPreconditionError,
+                       match=r"^ApplyScene: scene\.fields\[0\]\." + not_federated):
+        client.apply_scene(hapticd.SceneSpec(objects=every_object_kind()[:1],
+                                             fields=[hapticd.ViscousFieldSpec(across_sites=True)]))
+    registered = client.scene(all_sessions=True)
+    assert registered.object_ids == [] and registered.field_ids == []
+
+
 def test_a_scene_applies_whole_from_specs_and_from_a_file(client, tmp_path):
     scene = hapticd.SceneSpec(objects=every_object_kind(), fields=every_field_kind())
     with client.apply_scene(scene) as applied:
