@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "net/session_registry.hpp"
+#include "runtime/shared_masses.hpp"
 
 namespace haptic::app {
 
@@ -52,6 +53,9 @@ std::string FederatedScene::put_remote(const federation::SharedItemState& item) 
     if (std::string error = schema::to_object_spec(*object, "object", limits_, converted); !error.empty()) return error;
     // Only its site changes it: here it is no session's to update.
     converted.shared = false;
+    // A mass shared across sites keeps its key from its site: this copy couples to that one's.
+    converted.origin_site = runtime::site_key(item.site);
+    converted.origin_id = item.item;
     spec = std::move(converted);
     source.object = std::move(object);
   } else {

@@ -132,6 +132,10 @@ Server::Server(const v1::ServerConfig& config)
       remote_tools_.push_back(std::make_unique<runtime::LatestValue<runtime::RemoteToolSet>>());
       ledgers_.push_back(std::make_unique<runtime::CouplingLedger>());
     }
+    mass_stage_ = std::make_unique<runtime::SharedMassStage>(
+        runtime::site_key(config.federation().site()), config::mass_coupling(config.federation()), tick.period_s,
+        &remote_masses_, &local_masses_);
+    tick.shared_masses = mass_stage_.get();
   }
   const std::vector<runtime::TickPort> tick_ports =
       federated(config::tick_ports(config, devices_, ring_pointers(samples_), tick.period_s));
@@ -284,6 +288,7 @@ std::vector<runtime::TickPort> Server::federated(std::vector<runtime::TickPort> 
   for (std::size_t port = 0; port < ports.size() && port < remote_tools_.size(); ++port) {
     ports[port].remote = remote_tools_[port].get();
     ports[port].ledger = ledgers_[port].get();
+    ports[port].avatar = config::avatar_params(config_.federation());
   }
   return ports;
 }
@@ -301,7 +306,7 @@ void Server::join_federation(const schema::SceneLimits& limits) {
   shared_scene.domain = relay.domain;
   shared_scene.log = [](const std::string& line) { spdlog::warn("{}", line); };
   try {
-    relay_ = std::make_unique<federation::SampleRelay>(relay, ports);
+    relay_ = std::make_unique<federation::SampleRelay>(relay, ports, federation::RelayMasses{&local_masses_, &remote_masses_});
     replicator_ = std::make_unique<federation::ItemReplicator>(shared_scene, *federated_scene_);
   } catch (const std::runtime_error& error) {
     throw config::ConfigError(std::string("federation: ") + error.what());

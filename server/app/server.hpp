@@ -124,6 +124,11 @@ class Server {
   /// Federation: each port's mailbox of other sites' tools and its couplings' ledger.
   std::vector<std::unique_ptr<runtime::LatestValue<runtime::RemoteToolSet>>> remote_tools_;
   std::vector<std::unique_ptr<runtime::CouplingLedger>> ledgers_;
+  /// Federation: masses shared across sites — the other sites' copies in, this site's out, and the
+  /// loop's stage that couples them.
+  runtime::LatestValue<runtime::RemoteMassTable> remote_masses_;
+  runtime::LatestValue<runtime::LocalMassTable> local_masses_;
+  std::unique_ptr<runtime::SharedMassStage> mass_stage_;
   /// The loop's ports with the federation's mailboxes and ledgers (none without a federation).
   std::vector<runtime::TickPort> federated(std::vector<runtime::TickPort> ports) const;
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 namespace haptic::config {
 
@@ -37,6 +38,15 @@ bool loopback(const std::string& interface) {
 
 void fill_federation_defaults(v1::FederationConfig& federation) {
   if (federation.interface().empty()) federation.set_interface("lo");
+  const runtime::AvatarParams avatar;
+  v1::AvatarConfig& avatar_config = *federation.mutable_avatar();
+  if (!avatar_config.has_radius()) avatar_config.set_radius(avatar.radius);
+  if (!avatar_config.has_stiffness()) avatar_config.set_stiffness(avatar.stiffness);
+  if (!avatar_config.has_damping()) avatar_config.set_damping(avatar.damping);
+  const runtime::MassCouplingParams coupling;
+  v1::SharedMassConfig& masses = *federation.mutable_shared_masses();
+  if (!masses.has_coupling_stiffness()) masses.set_coupling_stiffness(coupling.stiffness);
+  if (!masses.has_coupling_damping()) masses.set_coupling_damping(coupling.damping);
   if (!federation.has_ros2()) return;
   v1::Ros2Config& ros2 = *federation.mutable_ros2();
   if (ros2.ros_namespace().empty()) {
@@ -63,6 +73,21 @@ std::string validate_federation(const v1::FederationConfig& federation, double l
            "join the domain; set federation.security (scripts/federation-certs makes its files), use "
            "\"lo\", or accept that with federation.allow_insecure: true";
   }
+  const auto in_range = [](const char* field, double value, double low, double high, bool low_open) {
+    const bool ok = std::isfinite(value) && (low_open ? value > low : value >= low) && value <= high;
+    if (ok) return std::string();
+    std::ostringstream out;
+    out << "federation." << field << ": must be " << (low_open ? "> " : "") << low << (low_open ? " and at most " : " to ")
+        << high << ", got " << value;
+    return out.str();
+  };
+  for (const std::string& e : {in_range("avatar.radius", federation.avatar().radius(), 0.0, 0.5, true),
+                               in_range("avatar.stiffness", federation.avatar().stiffness(), 0.0, 1e5, false),
+                               in_range("avatar.damping", federation.avatar().damping(), 0.0, 1e3, false),
+                               in_range("shared_masses.coupling_stiffness", federation.shared_masses().coupling_stiffness(), 0.0, 1e5, false),
+                               in_range("shared_masses.coupling_damping", federation.shared_masses().coupling_damping(), 0.0, 1e3, false)}) {
+    if (!e.empty()) return e;
+  }
   if (federation.has_ros2()) {
     const v1::Ros2Config& ros2 = federation.ros2();
     if (std::string e = federation::validate(ros2_of(ros2)); !e.empty()) return "federation.ros2." + e;
@@ -85,6 +110,20 @@ federation::RelayOptions relay_options(const v1::FederationConfig& federation, d
     options.ros2_every = static_cast<std::uint32_t>(std::max(1.0, std::round(loop_rate_hz / federation.ros2().rate_hz())));
   }
   return options;
+}
+
+}  // namespace haptic::config
+
+namespace haptic::config {
+
+runtime::AvatarParams avatar_params(const v1::FederationConfig& federation) {
+  const v1::AvatarConfig& avatar = federation.avatar();
+  return runtime::AvatarParams{avatar.radius(), avatar.stiffness(), avatar.damping()};
+}
+
+runtime::MassCouplingParams mass_coupling(const v1::FederationConfig& federation) {
+  const v1::SharedMassConfig& masses = federation.shared_masses();
+  return runtime::MassCouplingParams{masses.coupling_stiffness(), masses.coupling_damping()};
 }
 
 }  // namespace haptic::config

@@ -5,6 +5,8 @@
 #include <string>
 
 #include "federation/sample_relay.hpp"
+#include "runtime/remote_tools.hpp"
+#include "runtime/shared_masses.hpp"
 #include "haptic/v1/config.pb.h"
 
 namespace haptic::config {
@@ -17,5 +19,10 @@ std::string validate_federation(const v1::FederationConfig& federation, double l
 
 /// The relay's options from a valid, defaulted section, for a loop at loop_rate_hz.
 federation::RelayOptions relay_options(const v1::FederationConfig& federation, double loop_rate_hz);
+
+/// How other sites' tools are rendered, and the couplings of shared masses, from a valid,
+/// defaulted section.
+runtime::AvatarParams avatar_params(const v1::FederationConfig& federation);
+runtime::MassCouplingParams mass_coupling(const v1::FederationConfig& federation);
 
 }  // namespace haptic::config

@@ -18,8 +18,12 @@ std::uint64_t remote_key(const std::string& site, std::uint32_t port) {
   return hash == 0 ? 1 : hash;
 }
 
-SampleRelay::SampleRelay(const RelayOptions& options, const std::vector<RelayPort>& ports)
-    : options_(options), ports_(ports), participant_(std::make_unique<Participant>(options.domain)) {
+SampleRelay::SampleRelay(const RelayOptions& options, const std::vector<RelayPort>& ports, RelayMasses masses)
+    : options_(options), ports_(ports), participant_(std::make_unique<Participant>(options.domain)), masses_(masses) {
+  if (masses_.local != nullptr && masses_.remote != nullptr) {
+    masses_out_ = std::make_unique<MassPublisher>(*participant_);
+    masses_in_ = std::make_unique<MassSubscriber>(*participant_);
+  }
   last_tick_.assign(ports_.size(), 0);
   slots_.resize(ports_.size());
   if (options_.tools) {
@@ -56,6 +60,10 @@ void SampleRelay::run() {
   while (!stopping_.load(std::memory_order_acquire)) {
     if (tools_in_) receive();
     publish();
+    if (masses_in_) {
+      receive_masses();
+      publish_masses();
+    }
     ++periods_;
     next += period;
     const auto now = std::chrono::steady_clock::now();
@@ -138,6 +146,85 @@ void SampleRelay::publish() {
     const bool ros2_period = periods_ % std::max<std::uint32_t>(1, options_.ros2_every) == 0;
     if (!ros2_.empty() && ros2_period) ok = ros2_[port]->publish(tool) && ok;
     (ok ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+}  // namespace haptic::federation
+
+namespace haptic::federation {
+
+void SampleRelay::receive_masses() {
+  received_masses_.clear();
+  masses_in_->take(received_masses_, options_.site);
+  const auto now = std::chrono::steady_clock::now();
+  const auto silence = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options_.silence_s));
+  const std::uint64_t own = runtime::site_key(options_.site);
+  runtime::RemoteMassTable table = masses_.remote->load();
+  bool changed = !received_masses_.empty();
+  for (const MassState& mass : received_masses_) {
+    // The mass's entry, or a free one (a fifth mass is not coupled).
+    std::size_t entry = runtime::kMaxSharedMasses;
+    for (std::size_t i = 0; i < runtime::kMaxSharedMasses && entry == runtime::kMaxSharedMasses; ++i) {
+      if (table.masses[i].mass_key == mass.mass) entry = i;
+    }
+    for (std::size_t i = 0; i < runtime::kMaxSharedMasses && entry == runtime::kMaxSharedMasses; ++i) {
+      if (table.masses[i].mass_key == 0) {
+        entry = i;
+        table.masses[i] = runtime::RemoteMassCopies{};
+        table.masses[i].mass_key = mass.mass;
+      }
+    }
+    if (entry == runtime::kMaxSharedMasses) continue;
+    const std::uint64_t site = runtime::site_key(mass.site);
+    auto& copies = table.masses[entry].copies;
+    std::size_t slot = engine::kMaxRemoteCopies;
+    for (std::size_t i = 0; i < engine::kMaxRemoteCopies && slot == engine::kMaxRemoteCopies; ++i) {
+      if (copies[i].key == site) slot = i;
+    }
+    for (std::size_t i = 0; i < engine::kMaxRemoteCopies && slot == engine::kMaxRemoteCopies; ++i) {
+      if (copies[i].key == 0) slot = i;
+    }
+    if (slot == engine::kMaxRemoteCopies) continue;
+    double sent_to_us = 0.0;
+    for (const auto& [to, sent] : mass.sent) {
+      if (to == own) sent_to_us = sent;
+    }
+    copies[slot] = engine::RemoteMassCopy{site, mass.p_WM, mass.v_WM, sent_to_us};
+    mass_heard_[entry][slot] = now;
+  }
+  for (std::size_t i = 0; i < runtime::kMaxSharedMasses; ++i) {
+    if (table.masses[i].mass_key == 0) continue;
+    bool any = false;
+    for (std::size_t k = 0; k < engine::kMaxRemoteCopies; ++k) {
+      engine::RemoteMassCopy& copy = table.masses[i].copies[k];
+      if (copy.key != 0 && now - mass_heard_[i][k] > silence) {  // its site went quiet: uncoupled
+        copy = engine::RemoteMassCopy{};
+        changed = true;
+      }
+      any = any || copy.key != 0;
+    }
+    if (!any) table.masses[i].mass_key = 0;
+  }
+  if (changed) masses_.remote->store(table);
+}
+
+void SampleRelay::publish_masses() {
+  const runtime::LocalMassTable local = masses_.local->load();
+  if (local.tick == last_mass_tick_) return;  // the loop has not moved them since
+  last_mass_tick_ = local.tick;
+  for (const runtime::LocalMassCopy& copy : local.masses) {
+    if (copy.mass_key == 0) continue;
+    MassState mass;
+    mass.site = options_.site;
+    mass.mass = copy.mass_key;
+    mass.tick = local.tick;
+    mass.p_WM = copy.p_WM;
+    mass.v_WM = copy.v_WM;
+    for (std::size_t k = 0; k < engine::kMaxRemoteCopies; ++k) {
+      if (copy.coupled_site[k] != 0) mass.sent.emplace_back(copy.coupled_site[k], copy.sent[k]);
+    }
+    (masses_out_->publish(mass) ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);
   }
 }
 

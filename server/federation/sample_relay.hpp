@@ -18,11 +18,13 @@
 #include <vector>
 
 #include "federation/dds_participant.hpp"
+#include "federation/mass_topic.hpp"
 #include "federation/ros2_topics.hpp"
 #include "federation/tool_topic.hpp"
 #include "runtime/latest_value.hpp"
 #include "runtime/remote_tools.hpp"
 #include "runtime/sample_ring.hpp"
+#include "runtime/shared_masses.hpp"
 
 namespace haptic::federation {
 
@@ -47,6 +49,14 @@ struct RelayPort {
   const runtime::CouplingLedger* ledger = nullptr;
 };
 
+/// The masses shared across sites (runtime/shared_masses): the loop's table of this site's copies
+/// (read and published) and its mailbox of the other sites' copies (written). Not owned; both
+/// null: no mass topic.
+struct RelayMasses {
+  const runtime::LatestValue<runtime::LocalMassTable>* local = nullptr;
+  runtime::LatestValue<runtime::RemoteMassTable>* remote = nullptr;
+};
+
 /// The key a remote tool has in the mailboxes: nonzero, the same at every site.
 std::uint64_t remote_key(const std::string& site, std::uint32_t port);
 
@@ -54,7 +64,7 @@ class SampleRelay {
  public:
   /// Joins the domain and makes the writers (off the loop). Throws std::runtime_error naming what
   /// was refused.
-  SampleRelay(const RelayOptions& options, const std::vector<RelayPort>& ports);
+  SampleRelay(const RelayOptions& options, const std::vector<RelayPort>& ports, RelayMasses masses = {});
   ~SampleRelay();
   SampleRelay(const SampleRelay&) = delete;
   SampleRelay& operator=(const SampleRelay&) = delete;
@@ -69,6 +79,8 @@ class SampleRelay {
   void run();
   void receive();
   void publish();
+  void receive_masses();
+  void publish_masses();
 
   /// Which remote tool each mailbox slot of a port holds.
   struct Slot {
@@ -87,6 +99,14 @@ class SampleRelay {
   std::vector<std::array<Slot, runtime::kMaxRemoteTools>> slots_;  // per port
   std::vector<ToolState> received_;                                 // scratch
   std::vector<std::uint64_t> last_tick_;                  // per port: the newest tick published
+  RelayMasses masses_;
+  std::unique_ptr<MassPublisher> masses_out_;              // with masses
+  std::unique_ptr<MassSubscriber> masses_in_;
+  std::vector<MassState> received_masses_;                 // scratch
+  /// When each copy in the mailbox of remote masses was last heard ([mass][copy]).
+  std::array<std::array<std::chrono::steady_clock::time_point, engine::kMaxRemoteCopies>, runtime::kMaxSharedMasses>
+      mass_heard_{};
+  std::uint64_t last_mass_tick_ = 0;
   std::uint64_t periods_ = 0;                             // run()'s periods so far
   std::thread thread_;
   std::atomic<bool> stopping_{false};
