@@ -127,5 +127,44 @@ TEST(Federation, TwoSitesToolsTouchEachOtherOverDds) {
   EXPECT_NEAR(s.position.x, 0.01, 1e-3) << "B's avatar stayed after B stopped";
 }
 
+// Two real-time sites on loopback DDS share one virtual mass: a client at A makes it across_sites,
+// B gets its copy through the shared scene, A's hand pushes A's copy, and B's copy follows through
+// the coupling (the mass topic and both sites' network passivity layers); once the hand holds
+// still, the copies rest together (behaviour, not timing: where they rest, not when).
+TEST(Federation, TwoSitesShareOneMassThatOneSitesHandPushes) {
+  const std::uint32_t domain = 100 + static_cast<std::uint32_t>((getpid() + 30) % 120);
+  test::ServerProcess site_a(site_config("mass-a", domain, -0.08));
+  test::ServerProcess site_b(site_config("mass-b", domain, 0.08));
+  Client a(config_for(site_a));
+  Client b(config_for(site_b));
+  SphereSpec sphere;
+  sphere.radius = 0.02;
+  sphere.impedance.stiffness = 200.0;
+  sphere.dynamics = {0.5, 1.0};
+  sphere.across_sites = true;
+  const ObjectHandle mass = a.add_sphere(sphere);  // held: the object lives as long as its handle
+  const auto copies = [](Client& client) { return client.object_states(); };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (copies(b).empty() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(copies(b).size(), 1u) << "B did not get the shared mass in 10 s; B holds " << b.scene(true).object_ids.size() << " objects, A " << a.scene(true).object_ids.size() << " and " << copies(a).size() << " masses";
+  // A's hand takes its tool from -8 cm to +1 cm over 2 s: the sphere (radius 2 cm) goes ahead of it.
+  OperatorInput hand = OperatorInput::follow_line({-0.08, 0, 0}, {0.01, 0, 0}, 2.0, OperatorInput::Grip::kCustom);
+  hand.stiffness = 200.0;
+  hand.damping = 2.0;
+  a.set_operator(hand);
+  std::this_thread::sleep_for(std::chrono::seconds(6));
+  const ObjectState at_a = copies(a).at(0);
+  const ObjectState at_b = copies(b).at(0);
+  std::printf("shared mass over DDS: A's copy at x = %.5f m, B's at x = %.5f m (%.1e m apart)\n", at_a.position.x, at_b.position.x, std::abs(at_a.position.x - at_b.position.x));
+  EXPECT_GT(at_a.position.x, 0.01) << "A's hand did not push the mass";
+  EXPECT_NEAR(at_b.position.x, at_a.position.x, 1e-3) << "B's copy did not follow A's";
+  EXPECT_LT(std::abs(at_b.velocity.x), 1e-3);
+  State s;
+  ASSERT_TRUE(a.poll_state(s, std::chrono::seconds(5)));
+  EXPECT_EQ(s.flags & kForceFault, 0u);
+}
+
 }  // namespace
 }  // namespace haptic
