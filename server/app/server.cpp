@@ -307,7 +307,7 @@ void Server::join_federation(const schema::SceneLimits& limits) {
   shared_scene.log = [](const std::string& line) { spdlog::warn("{}", line); };
   try {
     relay_ = std::make_unique<federation::SampleRelay>(relay, ports, federation::RelayMasses{&local_masses_, &remote_masses_});
-    replicator_ = std::make_unique<federation::ItemReplicator>(shared_scene, *federated_scene_);
+    replicator_ = std::make_unique<federation::ItemReplicator>(shared_scene, *federated_scene_, relay_->participant());
   } catch (const std::runtime_error& error) {
     throw config::ConfigError(std::string("federation: ") + error.what());
   }

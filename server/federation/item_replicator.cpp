@@ -5,10 +5,15 @@
 namespace haptic::federation {
 
 ItemReplicator::ItemReplicator(const ReplicatorOptions& options, ReplicatedScene& scene)
-    : options_(options), scene_(scene) {
-  participant_ = std::make_unique<Participant>(options.domain);
+    : options_(options), scene_(scene), participant_(std::make_unique<Participant>(options.domain)) {
   writer_ = std::make_unique<ItemPublisher>(*participant_);
   reader_ = std::make_unique<ItemSubscriber>(*participant_);
+}
+
+ItemReplicator::ItemReplicator(const ReplicatorOptions& options, ReplicatedScene& scene, const Participant& participant)
+    : options_(options), scene_(scene) {
+  writer_ = std::make_unique<ItemPublisher>(participant);
+  reader_ = std::make_unique<ItemSubscriber>(participant);
 }
 
 ItemReplicator::~ItemReplicator() {

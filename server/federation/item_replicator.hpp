@@ -61,6 +61,9 @@ class ItemReplicator {
   /// Joins the domain and makes the topic's writer and reader (off the loop). Throws
   /// std::runtime_error naming what was refused.
   ItemReplicator(const ReplicatorOptions& options, ReplicatedScene& scene);
+  /// The same on a participant the caller holds (a hapticd's one, which its relay made): one
+  /// participant per site, so one identity and one set of ports. `participant` outlives this.
+  ItemReplicator(const ReplicatorOptions& options, ReplicatedScene& scene, const Participant& participant);
   ~ItemReplicator();
   ItemReplicator(const ItemReplicator&) = delete;
   ItemReplicator& operator=(const ItemReplicator&) = delete;
@@ -87,7 +90,7 @@ class ItemReplicator {
 
   ReplicatorOptions options_;
   ReplicatedScene& scene_;
-  std::unique_ptr<Participant> participant_;
+  std::unique_ptr<Participant> participant_;  // ours, when none was given
   std::unique_ptr<ItemPublisher> writer_;
   std::unique_ptr<ItemSubscriber> reader_;
   std::uint64_t seen_generation_ = ~std::uint64_t{0};

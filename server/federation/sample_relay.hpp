@@ -71,6 +71,8 @@ class SampleRelay {
 
   void start();
   void stop();
+  /// The site's participant in the domain (the shared scene's replicator joins through it).
+  const Participant& participant() const { return *participant_; }
   /// Samples published so far (all ports), and publications DDS refused.
   std::uint64_t published() const { return published_.load(std::memory_order_relaxed); }
   std::uint64_t failed() const { return failed_.load(std::memory_order_relaxed); }
