@@ -4,7 +4,6 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "federation/dds_status.hpp"
 #include "haptic/dds/federation.h"
 
 namespace haptic::federation {
@@ -12,13 +11,6 @@ namespace haptic::federation {
 namespace {
 
 using Sample = haptic_federation_SharedItem;
-
-dds_entity_t make_topic(const Participant& participant) {
-  const dds_entity_t topic =
-      dds_create_topic(participant.handle(), &haptic_federation_SharedItem_desc, kItemTopic, nullptr, nullptr);
-  if (topic < 0) throw std::runtime_error(std::string("DDS topic ") + kItemTopic + ": " + dds_error(topic));
-  return topic;
-}
 
 /// Reliable, transient-local, keep last one per item, liveliness automatic with kItemLease.
 dds_qos_t* item_qos() {
@@ -43,16 +35,8 @@ bool fill_key(Sample& sample, const std::string& site, std::uint64_t item, std::
 
 }  // namespace
 
-ItemPublisher::ItemPublisher(const Participant& participant) : topic_(make_topic(participant)) {
-  dds_qos_t* qos = item_qos();
-  writer_ = dds_create_writer(participant.handle(), topic_, qos, nullptr);
-  dds_delete_qos(qos);
-  if (writer_ < 0) throw std::runtime_error(std::string("DDS writer of ") + kItemTopic + ": " + dds_error(writer_));
-}
-
-ItemPublisher::~ItemPublisher() {
-  if (writer_ > 0) dds_delete(writer_);
-}
+ItemPublisher::ItemPublisher(const Participant& participant)
+    : writer_(participant, &haptic_federation_SharedItem_desc, kItemTopic, Endpoint::Kind::kWriter, item_qos()) {}
 
 bool ItemPublisher::put(const SharedItemState& item) {
   Sample sample{};
@@ -63,23 +47,15 @@ bool ItemPublisher::put(const SharedItemState& item) {
   }
   sample.version = item.version;
   sample.kind = static_cast<std::uint8_t>(item.kind);
-  // Cyclone serializes from the buffer during the write and keeps nothing of it.
-  sample.spec._buffer = reinterpret_cast<std::uint8_t*>(const_cast<char*>(item.spec.data()));
-  sample.spec._length = static_cast<std::uint32_t>(item.spec.size());
-  sample.spec._maximum = sample.spec._length;
-  sample.spec._release = false;
-  const dds_return_t done = dds_write(writer_, &sample);
-  if (done != DDS_RETCODE_OK) {
-    error_ = "dds_write: " + dds_error(done);
-    return false;
-  }
-  return true;
+  lend(sample.spec, reinterpret_cast<std::uint8_t*>(const_cast<char*>(item.spec.data())), item.spec.size(),
+       item.spec.size());
+  return write_sample(writer_, &sample, error_);
 }
 
 bool ItemPublisher::remove(const std::string& site, std::uint64_t item) {
   Sample sample{};
   if (!fill_key(sample, site, item, error_)) return false;
-  const dds_return_t done = dds_dispose(writer_, &sample);
+  const dds_return_t done = dds_dispose(writer_.handle(), &sample);
   if (done != DDS_RETCODE_OK) {
     error_ = "dds_dispose: " + dds_error(done);
     return false;
@@ -87,22 +63,14 @@ bool ItemPublisher::remove(const std::string& site, std::uint64_t item) {
   return true;
 }
 
-std::uint32_t ItemPublisher::matched_readers() const { return matched_count(writer_, true); }
+std::uint32_t ItemPublisher::matched_readers() const { return writer_.matched(); }
 
-ItemSubscriber::ItemSubscriber(const Participant& participant) : topic_(make_topic(participant)) {
-  dds_qos_t* qos = item_qos();
-  reader_ = dds_create_reader(participant.handle(), topic_, qos, nullptr);
-  dds_delete_qos(qos);
-  if (reader_ < 0) throw std::runtime_error(std::string("DDS reader of ") + kItemTopic + ": " + dds_error(reader_));
-}
-
-ItemSubscriber::~ItemSubscriber() {
-  if (reader_ > 0) dds_delete(reader_);
-}
+ItemSubscriber::ItemSubscriber(const Participant& participant)
+    : reader_(participant, &haptic_federation_SharedItem_desc, kItemTopic, Endpoint::Kind::kReader, item_qos()) {}
 
 std::size_t ItemSubscriber::take(std::vector<SharedItemEvent>& out, const std::string& own_site) {
   std::size_t taken = 0;
-  take_each<Sample>(reader_, [&](const Sample& s, const dds_sample_info_t& info) {
+  take_each<Sample>(reader_.handle(), [&](const Sample& s, const dds_sample_info_t& info) {
     SharedItemEvent event;
     // An invalid sample (no data) still carries the instance's key.
     event.state.site.assign(s.site, strnlen(s.site, sizeof s.site));
@@ -127,6 +95,6 @@ std::size_t ItemSubscriber::take(std::vector<SharedItemEvent>& out, const std::s
   return taken;
 }
 
-std::uint32_t ItemSubscriber::matched_writers() const { return matched_count(reader_, false); }
+std::uint32_t ItemSubscriber::matched_writers() const { return reader_.matched(); }
 
 }  // namespace haptic::federation

@@ -15,7 +15,7 @@
 
 #include <dds/dds.h>
 
-#include "federation/dds_participant.hpp"
+#include "federation/dds_endpoint.hpp"
 
 namespace haptic::federation {
 
@@ -53,7 +53,6 @@ class ItemPublisher {
  public:
   /// Throws std::runtime_error naming what Cyclone refused.
   explicit ItemPublisher(const Participant& participant);
-  ~ItemPublisher();
   ItemPublisher(const ItemPublisher&) = delete;
   ItemPublisher& operator=(const ItemPublisher&) = delete;
 
@@ -65,15 +64,13 @@ class ItemPublisher {
   std::uint32_t matched_readers() const;
 
  private:
-  dds_entity_t topic_ = 0;
-  dds_entity_t writer_ = 0;
+  Endpoint writer_;
   std::string error_;
 };
 
 class ItemSubscriber {
  public:
   explicit ItemSubscriber(const Participant& participant);
-  ~ItemSubscriber();
   ItemSubscriber(const ItemSubscriber&) = delete;
   ItemSubscriber& operator=(const ItemSubscriber&) = delete;
 
@@ -83,8 +80,7 @@ class ItemSubscriber {
   std::uint32_t matched_writers() const;
 
  private:
-  dds_entity_t topic_ = 0;
-  dds_entity_t reader_ = 0;
+  Endpoint reader_;
 };
 
 }  // namespace haptic::federation

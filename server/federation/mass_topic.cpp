@@ -3,7 +3,6 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "federation/dds_status.hpp"
 #include "haptic/dds/federation.h"
 
 namespace haptic::federation {
@@ -12,25 +11,10 @@ namespace {
 
 using Sample = haptic_federation_MassSample;
 
-dds_entity_t make_topic(const Participant& participant) {
-  const dds_entity_t topic =
-      dds_create_topic(participant.handle(), &haptic_federation_MassSample_desc, kMassTopic, nullptr, nullptr);
-  if (topic < 0) throw std::runtime_error(std::string("DDS topic ") + kMassTopic + ": " + dds_error(topic));
-  return topic;
-}
-
 }  // namespace
 
-MassPublisher::MassPublisher(const Participant& participant) : topic_(make_topic(participant)) {
-  dds_qos_t* qos = newest_only_qos();
-  writer_ = dds_create_writer(participant.handle(), topic_, qos, nullptr);
-  dds_delete_qos(qos);
-  if (writer_ < 0) throw std::runtime_error(std::string("DDS writer of ") + kMassTopic + ": " + dds_error(writer_));
-}
-
-MassPublisher::~MassPublisher() {
-  if (writer_ > 0) dds_delete(writer_);
-}
+MassPublisher::MassPublisher(const Participant& participant)
+    : writer_(participant, &haptic_federation_MassSample_desc, kMassTopic, Endpoint::Kind::kWriter, newest_only_qos()) {}
 
 bool MassPublisher::publish(const MassState& mass) {
   Sample sample{};
@@ -49,34 +33,18 @@ bool MassPublisher::publish(const MassState& mass) {
   sample.velocity = {mass.v_WM.x, mass.v_WM.y, mass.v_WM.z};
   haptic_federation_MassCoupling couplings[kMaxMassCouplings]{};
   for (std::size_t i = 0; i < mass.sent.size(); ++i) couplings[i] = {mass.sent[i].first, mass.sent[i].second};
-  sample.energy._length = static_cast<std::uint32_t>(mass.sent.size());
-  sample.energy._maximum = static_cast<std::uint32_t>(kMaxMassCouplings);
-  sample.energy._buffer = couplings;
-  sample.energy._release = false;
-  const dds_return_t done = dds_write(writer_, &sample);
-  if (done != DDS_RETCODE_OK) {
-    error_ = "dds_write: " + dds_error(done);
-    return false;
-  }
-  return true;
+  lend(sample.energy, couplings, mass.sent.size(), kMaxMassCouplings);
+  return write_sample(writer_, &sample, error_);
 }
 
-std::uint32_t MassPublisher::matched_readers() const { return matched_count(writer_, true); }
+std::uint32_t MassPublisher::matched_readers() const { return writer_.matched(); }
 
-MassSubscriber::MassSubscriber(const Participant& participant) : topic_(make_topic(participant)) {
-  dds_qos_t* qos = newest_only_qos();
-  reader_ = dds_create_reader(participant.handle(), topic_, qos, nullptr);
-  dds_delete_qos(qos);
-  if (reader_ < 0) throw std::runtime_error(std::string("DDS reader of ") + kMassTopic + ": " + dds_error(reader_));
-}
-
-MassSubscriber::~MassSubscriber() {
-  if (reader_ > 0) dds_delete(reader_);
-}
+MassSubscriber::MassSubscriber(const Participant& participant)
+    : reader_(participant, &haptic_federation_MassSample_desc, kMassTopic, Endpoint::Kind::kReader, newest_only_qos()) {}
 
 std::size_t MassSubscriber::take(std::vector<MassState>& out, const std::string& own_site) {
   std::size_t taken = 0;
-  take_each<Sample>(reader_, [&](const Sample& s, const dds_sample_info_t& info) {
+  take_each<Sample>(reader_.handle(), [&](const Sample& s, const dds_sample_info_t& info) {
     if (!info.valid_data) return;
     MassState mass;
     mass.site.assign(s.site, strnlen(s.site, sizeof s.site));
@@ -94,6 +62,6 @@ std::size_t MassSubscriber::take(std::vector<MassState>& out, const std::string&
   return taken;
 }
 
-std::uint32_t MassSubscriber::matched_writers() const { return matched_count(reader_, false); }
+std::uint32_t MassSubscriber::matched_writers() const { return reader_.matched(); }
 
 }  // namespace haptic::federation

@@ -14,7 +14,7 @@
 #include <dds/dds.h>
 
 #include "engine/core/vec3.hpp"
-#include "federation/dds_participant.hpp"
+#include "federation/dds_endpoint.hpp"
 
 namespace haptic::federation {
 
@@ -39,7 +39,6 @@ class MassPublisher {
  public:
   /// Throws std::runtime_error naming what Cyclone refused.
   explicit MassPublisher(const Participant& participant);
-  ~MassPublisher();
   MassPublisher(const MassPublisher&) = delete;
   MassPublisher& operator=(const MassPublisher&) = delete;
 
@@ -49,15 +48,13 @@ class MassPublisher {
   std::uint32_t matched_readers() const;
 
  private:
-  dds_entity_t topic_ = 0;
-  dds_entity_t writer_ = 0;
+  Endpoint writer_;
   std::string error_;
 };
 
 class MassSubscriber {
  public:
   explicit MassSubscriber(const Participant& participant);
-  ~MassSubscriber();
   MassSubscriber(const MassSubscriber&) = delete;
   MassSubscriber& operator=(const MassSubscriber&) = delete;
 
@@ -67,8 +64,7 @@ class MassSubscriber {
   std::uint32_t matched_writers() const;
 
  private:
-  dds_entity_t topic_ = 0;
-  dds_entity_t reader_ = 0;
+  Endpoint reader_;
 };
 
 }  // namespace haptic::federation

@@ -4,7 +4,6 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "federation/dds_status.hpp"
 #include "haptic/dds/federation.h"
 
 namespace haptic::federation {
@@ -16,25 +15,10 @@ using Sample = haptic_federation_ToolSample;
 haptic_federation_Vec3 to_dds(const engine::Vec3& v) { return {v.x, v.y, v.z}; }
 engine::Vec3 from_dds(const haptic_federation_Vec3& v) { return {v.x, v.y, v.z}; }
 
-dds_entity_t make_topic(const Participant& participant) {
-  const dds_entity_t topic =
-      dds_create_topic(participant.handle(), &haptic_federation_ToolSample_desc, kToolTopic, nullptr, nullptr);
-  if (topic < 0) throw std::runtime_error(std::string("DDS topic ") + kToolTopic + ": " + dds_error(topic));
-  return topic;
-}
-
 }  // namespace
 
-ToolPublisher::ToolPublisher(const Participant& participant) : topic_(make_topic(participant)) {
-  dds_qos_t* qos = newest_only_qos();
-  writer_ = dds_create_writer(participant.handle(), topic_, qos, nullptr);
-  dds_delete_qos(qos);
-  if (writer_ < 0) throw std::runtime_error(std::string("DDS writer of ") + kToolTopic + ": " + dds_error(writer_));
-}
-
-ToolPublisher::~ToolPublisher() {
-  if (writer_ > 0) dds_delete(writer_);
-}
+ToolPublisher::ToolPublisher(const Participant& participant)
+    : writer_(participant, &haptic_federation_ToolSample_desc, kToolTopic, Endpoint::Kind::kWriter, newest_only_qos()) {}
 
 bool ToolPublisher::publish(const ToolState& tool) {
   Sample sample{};
@@ -66,34 +50,18 @@ bool ToolPublisher::publish(const ToolState& tool) {
     couplings[i].port = e.port;
     couplings[i].sent = e.sent;
   }
-  sample.energy._length = static_cast<uint32_t>(tool.energy.size());
-  sample.energy._maximum = static_cast<uint32_t>(kMaxCouplings);
-  sample.energy._buffer = couplings;
-  sample.energy._release = false;
-  const dds_return_t done = dds_write(writer_, &sample);
-  if (done != DDS_RETCODE_OK) {
-    error_ = "dds_write: " + dds_error(done);
-    return false;
-  }
-  return true;
+  lend(sample.energy, couplings, tool.energy.size(), kMaxCouplings);
+  return write_sample(writer_, &sample, error_);
 }
 
-std::uint32_t ToolPublisher::matched_readers() const { return matched_count(writer_, true); }
+std::uint32_t ToolPublisher::matched_readers() const { return writer_.matched(); }
 
-ToolSubscriber::ToolSubscriber(const Participant& participant) : topic_(make_topic(participant)) {
-  dds_qos_t* qos = newest_only_qos();
-  reader_ = dds_create_reader(participant.handle(), topic_, qos, nullptr);
-  dds_delete_qos(qos);
-  if (reader_ < 0) throw std::runtime_error(std::string("DDS reader of ") + kToolTopic + ": " + dds_error(reader_));
-}
-
-ToolSubscriber::~ToolSubscriber() {
-  if (reader_ > 0) dds_delete(reader_);
-}
+ToolSubscriber::ToolSubscriber(const Participant& participant)
+    : reader_(participant, &haptic_federation_ToolSample_desc, kToolTopic, Endpoint::Kind::kReader, newest_only_qos()) {}
 
 std::size_t ToolSubscriber::take(std::vector<ToolState>& out, const std::string& own_site) {
   std::size_t taken = 0;
-  take_each<Sample>(reader_, [&](const Sample& s, const dds_sample_info_t& info) {
+  take_each<Sample>(reader_.handle(), [&](const Sample& s, const dds_sample_info_t& info) {
     if (!info.valid_data) return;
     ToolState tool;
     tool.site.assign(s.site, strnlen(s.site, sizeof s.site));
@@ -116,6 +84,6 @@ std::size_t ToolSubscriber::take(std::vector<ToolState>& out, const std::string&
   return taken;
 }
 
-std::uint32_t ToolSubscriber::matched_writers() const { return matched_count(reader_, false); }
+std::uint32_t ToolSubscriber::matched_writers() const { return reader_.matched(); }
 
 }  // namespace haptic::federation

@@ -14,7 +14,7 @@
 #include <dds/dds.h>
 
 #include "engine/core/vec3.hpp"
-#include "federation/dds_participant.hpp"
+#include "federation/dds_endpoint.hpp"
 
 namespace haptic::federation {
 
@@ -50,7 +50,6 @@ class ToolPublisher {
  public:
   /// Throws std::runtime_error naming what Cyclone refused.
   explicit ToolPublisher(const Participant& participant);
-  ~ToolPublisher();
   ToolPublisher(const ToolPublisher&) = delete;
   ToolPublisher& operator=(const ToolPublisher&) = delete;
 
@@ -62,8 +61,7 @@ class ToolPublisher {
   std::uint32_t matched_readers() const;
 
  private:
-  dds_entity_t topic_ = 0;
-  dds_entity_t writer_ = 0;
+  Endpoint writer_;
   std::string error_;
 };
 
@@ -71,7 +69,6 @@ class ToolPublisher {
 class ToolSubscriber {
  public:
   explicit ToolSubscriber(const Participant& participant);
-  ~ToolSubscriber();
   ToolSubscriber(const ToolSubscriber&) = delete;
   ToolSubscriber& operator=(const ToolSubscriber&) = delete;
 
@@ -82,8 +79,7 @@ class ToolSubscriber {
   std::uint32_t matched_writers() const;
 
  private:
-  dds_entity_t topic_ = 0;
-  dds_entity_t reader_ = 0;
+  Endpoint reader_;
 };
 
 }  // namespace haptic::federation
