@@ -1,0 +1,52 @@
+#pragma once
+// What the relay sends to and takes from the other sites, at loop rate: tools and shared masses'
+// copies (docs/federation.md). Over DDS in a server (DdsTransport); over a delay line with seeded
+// loss in the lockstep tests, which step whole sites' loops and relays together.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "federation/dds_participant.hpp"
+#include "federation/mass_topic.hpp"
+#include "federation/tool_topic.hpp"
+
+namespace haptic::federation {
+
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  /// Sends one sample to every other site; false (and error() says why) when refused.
+  virtual bool publish_tool(const ToolState& tool) = 0;
+  virtual bool publish_mass(const MassState& mass) = 0;
+  /// Appends what arrived from the other sites since the last take, oldest first (own_site's
+  /// samples left out).
+  virtual void take_tools(std::vector<ToolState>& out, const std::string& own_site) = 0;
+  virtual void take_masses(std::vector<MassState>& out, const std::string& own_site) = 0;
+  virtual std::string error() const = 0;
+};
+
+/// The tool and mass topics on a participant.
+class DdsTransport final : public Transport {
+ public:
+  /// masses: make the mass topic's endpoints too. Throws std::runtime_error naming what Cyclone
+  /// refused.
+  DdsTransport(const Participant& participant, bool masses);
+
+  bool publish_tool(const ToolState& tool) override;
+  bool publish_mass(const MassState& mass) override;
+  void take_tools(std::vector<ToolState>& out, const std::string& own_site) override { tools_in_.take(out, own_site); }
+  void take_masses(std::vector<MassState>& out, const std::string& own_site) override {
+    if (masses_in_) masses_in_->take(out, own_site);
+  }
+  std::string error() const override { return error_; }
+
+ private:
+  ToolPublisher tools_out_;
+  ToolSubscriber tools_in_;
+  std::unique_ptr<MassPublisher> masses_out_;
+  std::unique_ptr<MassSubscriber> masses_in_;
+  std::string error_;  // the last refusal's
+};
+
+}  // namespace haptic::federation
