@@ -2,7 +2,7 @@
 // the network passivity layer (docs/federation.md, "Transparency"; scripts/plot_federation.py
 // draws the chart):
 //
-//   federation_transparency --out DIR [--delays 0,1,2,5,...] [--losses 0,0.1] [--seconds 15]
+//   federation_transparency --out DIR [--delays 0,1,2,5,...] [--losses 0,0.1] [--seconds 30]
 //                           [--boundary-seconds 20] [--boundary-max-ms 200]
 //
 // Sites in lockstep at 1 kHz, each a 0.05 kg, 0.1 N·s/m device held by a scripted hand (200 N/m,
@@ -26,6 +26,8 @@
 //                    F_A,ref the same with no network at all: one site simulating the mass for
 //                    both tools;
 //   position error = RMS_t |p_copy_A(t) − p_copy_B(t)|.
+// Both: RMS over the whole run (30 s: the hands let go at 11 s, and what lingers after counts),
+// and how long after the let-go some user still feels more than 0.1 N (lingers_s).
 // A run is unstable when a state goes non-finite or the couplings create more than 10 mJ (the
 // most, over the run, of what they gave their users minus what the users put in, by the study's
 // own books as in the tests); its figures are written but not charted.
@@ -35,7 +37,8 @@
 // holds its tool still, clear of the mass), and the same for the tool contact.
 //
 // Writes DIR/transparency.csv and DIR/boundary.csv; a progress line per configuration on
-// standard error. Exit status: 0 done; 2 bad input.
+// standard error. Exit status: 0 done; 2 a file that could not be written; CLI11's own codes
+// (> 100) for malformed command lines.
 
 #include <CLI/CLI.hpp>
 
@@ -66,6 +69,8 @@ constexpr double kMaxForce = 20.0;        // the devices' limit (the force guard
 constexpr double kAvatarRadius = 0.01;    // AvatarParams' default. m
 constexpr double kAvatarStiffness = 500;  // AvatarParams' default. N/m
 constexpr double kUnstableEnergy = 1e-2;  // created energy above which a run is unstable. J
+constexpr double kLetGo = 11.0;           // when the scripted hands let go. s
+constexpr double kFelt = 0.1;             // a force a user still feels after the let-go. N
 
 PointMassParams device_params() {
   PointMassParams device;
@@ -96,14 +101,15 @@ struct HandScript {
   }
 };
 
-/// Tool contact: A and B press their tools together (2.5 N with no network), A pushes B back 5 mm
-/// at 1 cm/s, eases off, shoves it back at 5 cm/s, eases again, and from 11 s both let go. Within
-/// what the avatar holds (K r = 5 N): with no network the tools stay 4.5 mm or more apart.
+/// Tool contact: A and B press their tools together (1.7 N with no network), A's hand pushes B back
+/// 4 mm (its target at 1 cm/s; 2.5 N), eases off, shoves B back again (its target at 5 cm/s), eases
+/// again, and from 11 s both let go. Within what the avatar holds (K r = 5 N): with no network the
+/// tools stay 5 mm or more apart.
 std::vector<HandScript> contact_hands() {
   return {
       {{{0, 0, {-0.02, 0, 0}}, {0, 1.5, {0.005, 0, 0}}, {3, 1.0, {0.015, 0, 0}}, {5, 1.0, {0.0, 0, 0}},
-        {7, 0.3, {0.015, 0, 0}}, {9, 1.0, {0.005, 0, 0}}, {11, 1.5, {-0.03, 0, 0}}}},
-      {{{0, 0, {0.02, 0, 0}}, {0, 1.5, {-0.005, 0, 0}}, {11, 1.5, {0.03, 0, 0}}}},
+        {7, 0.3, {0.015, 0, 0}}, {9, 1.0, {0.005, 0, 0}}, {kLetGo, 1.5, {-0.03, 0, 0}}}},
+      {{{0, 0, {0.02, 0, 0}}, {0, 1.5, {-0.005, 0, 0}}, {kLetGo, 1.5, {0.03, 0, 0}}}},
   };
 }
 
@@ -112,7 +118,7 @@ std::vector<HandScript> contact_hands() {
 std::vector<HandScript> mass_hands(int sites) {
   std::vector<HandScript> hands = {
       {{{0, 0, {-0.05, 0, 0}}, {1, 1.5, {-0.01, 0, 0}}, {4, 1.5, {0.02, 0, 0}}, {7, 1.5, {0.05, 0, 0}},
-        {11, 1.5, {-0.05, 0, 0}}}},
+        {kLetGo, 1.5, {-0.05, 0, 0}}}},
       {{{0, 0, {0.065, 0, 0}}}},
       {{{0, 0, {0.0, -0.08, 0}}}},
   };
@@ -180,7 +186,24 @@ struct Outcome {
   double position_error_m = 0.0;
   double max_position_error_m = 0.0;
   double largest_force_N = 0.0;
+  /// From the let-go until no user feels more than kFelt any more: how long a contact lingers.
+  /// NaN: the run ended before the let-go; infinity: still felt at the end. Unit: s.
+  double lingers_s = NAN;
   bool stable() const { return finite && energy_created_J <= kUnstableEnergy; }
+};
+
+/// The last tick at which a user felt more than kFelt, for Outcome::lingers_s.
+struct Lingering {
+  long last_felt = -1;
+  void book(long k, const Vec3& F) {
+    if (norm(F) > kFelt) last_felt = std::max(last_felt, k);
+  }
+  double seconds(long ticks_run) const {
+    const double end = static_cast<double>(ticks_run) * kT;
+    if (end <= kLetGo) return NAN;
+    if (last_felt >= ticks_run - 1) return INFINITY;
+    return std::max(0.0, static_cast<double>(last_felt + 1) * kT - kLetGo);
+  }
 };
 
 /// Root mean squares accumulated over a run.
@@ -219,9 +242,11 @@ Outcome run_contact(const Network& network, long ticks, const ContactTrace* refe
   Vec3 F_previous[2], p_previous[2];
   EnergyBooks books;
   Rms action_reaction, felt_A, position;
+  Lingering lingering;
   Outcome outcome;
+  long k = 0;
   if (trace != nullptr) trace->apart.assign(static_cast<std::size_t>(ticks), Vec3{});
-  for (long k = 0; k < ticks; ++k) {
+  for (; k < ticks; ++k) {
     // Each site publishes its tool and its ledger at the start of the tick.
     for (int i = 0; i < 2; ++i) lines[i].send(k, {plants[i].state().p_WT, layers[i].sent()});
     Vec3 F[2];
@@ -246,6 +271,7 @@ Outcome run_contact(const Network& network, long ticks, const ContactTrace* refe
       if (network.layer) F[i] = layers[i].apply(F[i], state.v_WT, state.p_WT, stored).F_T_W;
       F[i] = clip_norm(F[i], kMaxForce);  // the force guard
       outcome.largest_force_N = std::max(outcome.largest_force_N, norm(F[i]));
+      lingering.book(k, F[i]);
       F_previous[i] = F[i];
       p_previous[i] = state.p_WT;
     }
@@ -272,6 +298,7 @@ Outcome run_contact(const Network& network, long ticks, const ContactTrace* refe
     }
   }
   outcome.energy_created_J = books.created;
+  outcome.lingers_s = lingering.seconds(k);
   outcome.force_error = felt_A.value() > 0.0 ? action_reaction.value() / felt_A.value() : 0.0;
   outcome.position_error_m = position.value();
   return outcome;
@@ -316,9 +343,11 @@ Outcome run_mass(int sites, const Network& network, long ticks, const MassTrace*
   std::vector<Vec3> F_tool(static_cast<std::size_t>(tools_n));
   EnergyBooks books;
   Rms force_difference, felt_reference, apart;
+  Lingering lingering;
   Outcome outcome;
+  long k = 0;
   if (trace != nullptr) trace->F_A.assign(static_cast<std::size_t>(ticks), Vec3{});
-  for (long k = 0; k < ticks; ++k) {
+  for (; k < ticks; ++k) {
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < n; ++j) {
         if (j != i) {
@@ -348,6 +377,7 @@ Outcome run_mass(int sites, const Network& network, long ticks, const MassTrace*
         const Vec3 F = copy.touch(tools[ut].state().p_WT);
         F_tool[ut] = clip_norm(F, kMaxForce);  // the force guard
         outcome.largest_force_N = std::max(outcome.largest_force_N, norm(F));
+        lingering.book(k, F_tool[ut]);
       }
       copy.step(received[ui]);
       for (std::size_t s = 0; s + 1 < static_cast<std::size_t>(n); ++s) {
@@ -381,6 +411,7 @@ Outcome run_mass(int sites, const Network& network, long ticks, const MassTrace*
     }
   }
   outcome.energy_created_J = books.created;
+  outcome.lingers_s = lingering.seconds(k);
   outcome.force_error = felt_reference.value() > 0.0 ? force_difference.value() / felt_reference.value() : 0.0;
   outcome.position_error_m = apart.value();
   return outcome;
@@ -392,7 +423,7 @@ struct Options {
   std::string out;
   std::vector<long> delays_ms = {0, 1, 2, 5, 10, 20, 50, 100, 200};
   std::vector<double> losses = {0.0, 0.1};
-  double seconds = 15.0;
+  double seconds = 30.0;
   double boundary_seconds = 20.0;
   long boundary_max_ms = 200;
 };
@@ -418,8 +449,8 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 void progress(int index, int total, const char* coupling, const Network& network, const Outcome& o, double wall_s) {
   char figures[160];
   if (o.stable()) {
-    std::snprintf(figures, sizeof figures, "force error %.3g, position error %.3g mm, created %.3g mJ", o.force_error,
-                  1e3 * o.position_error_m, 1e3 * o.energy_created_J);
+    std::snprintf(figures, sizeof figures, "force error %.3g, position error %.3g mm, created %.3g mJ, lingers %.3g s",
+                  o.force_error, 1e3 * o.position_error_m, 1e3 * o.energy_created_J, o.lingers_s);
   } else {
     std::snprintf(figures, sizeof figures, "unstable (%s)", note_of(o).c_str());
   }
@@ -471,7 +502,7 @@ int run_study(const Options& options) {
   const std::string csv_path = options.out + "/transparency.csv";
   std::ofstream csv(csv_path);
   csv << "coupling,sites,delay_ms,loss,layer,stable,force_error,position_error_m,max_position_error_m,"
-         "energy_created_J,largest_force_N,note\n";
+         "energy_created_J,largest_force_N,lingers_s,note\n";
   int index = 0;
   for (const char* coupling : {"tool_contact", "shared_mass"}) {
     const bool contact = coupling[0] == 't';
@@ -484,9 +515,9 @@ int run_study(const Options& options) {
                                     : run_mass(2, network, ticks, &mass_reference, nullptr);
           progress(++index, total, contact ? "tool contact" : "shared mass", network, o, seconds_since(start));
           char row[400];
-          std::snprintf(row, sizeof row, "%s,2,%ld,%g,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%s\n", coupling, delay, loss,
-                        layer ? 1 : 0, o.stable() ? 1 : 0, o.force_error, o.position_error_m, o.max_position_error_m,
-                        o.energy_created_J, o.largest_force_N, note_of(o).c_str());
+          std::snprintf(row, sizeof row, "%s,2,%ld,%g,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%s\n", coupling, delay,
+                        loss, layer ? 1 : 0, o.stable() ? 1 : 0, o.force_error, o.position_error_m,
+                        o.max_position_error_m, o.energy_created_J, o.largest_force_N, o.lingers_s, note_of(o).c_str());
           csv << row;
         }
       }
