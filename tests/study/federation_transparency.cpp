@@ -320,7 +320,7 @@ struct MassTrace {
 /// the no-network run's trace for the force error; `trace` (may be null) records this run's.
 Outcome run_mass(int sites, const Network& network, long ticks, const MassTrace* reference, MassTrace* trace) {
   const bool alone = sites == 1;
-  const int n = alone ? 1 : sites;
+  const int n = sites;  // copies
   const int tools_n = alone ? 2 : sites;
   const std::vector<HandScript> hands = mass_hands(tools_n);
   const PointMassParams device = device_params();
