@@ -30,7 +30,8 @@
 // and how long after the let-go some user still feels more than 0.1 N (lingers_s).
 // A run is unstable when a state goes non-finite or the couplings create more than 10 mJ (the
 // most, over the run, of what they gave their users minus what the users put in, by the study's
-// own books as in the tests); its figures are written but not charted.
+// own books as in the tests); its figures are written but not charted, and one whose couplings
+// have created 1 kJ is stopped there (its figures cover the run up to then).
 //
 // The boundary: the smallest one-way delay (1 ms steps) at which the shared mass's coupled copies
 // without the layer create more than 10 mJ in --boundary-seconds, for 2 and 3 sites (the third
@@ -69,6 +70,7 @@ constexpr double kMaxForce = 20.0;        // the devices' limit (the force guard
 constexpr double kAvatarRadius = 0.01;    // AvatarParams' default. m
 constexpr double kAvatarStiffness = 500;  // AvatarParams' default. N/m
 constexpr double kUnstableEnergy = 1e-2;  // created energy above which a run is unstable. J
+constexpr double kRunaway = 1e3;          // created energy at which an unstable run is stopped. J
 constexpr double kLetGo = 11.0;           // when the scripted hands let go. s
 constexpr double kFelt = 0.1;             // a force a user still feels after the let-go. N
 
@@ -180,7 +182,8 @@ struct EnergyBooks {
 
 struct Outcome {
   bool finite = true;
-  double blew_up_at_s = -1.0;
+  double blew_up_at_s = -1.0;  // s: when a state went non-finite; -1: never
+  double runaway_at_s = -1.0;  // s: when the couplings had created kRunaway and the run stopped
   double energy_created_J = 0.0;
   double force_error = 0.0;
   double position_error_m = 0.0;
@@ -296,6 +299,11 @@ Outcome run_contact(const Network& network, long ticks, const ContactTrace* refe
       outcome.blew_up_at_s = t;
       break;
     }
+    if (books.created > kRunaway) {
+      outcome.runaway_at_s = t;
+      ++k;
+      break;
+    }
   }
   outcome.energy_created_J = books.created;
   outcome.lingers_s = lingering.seconds(k);
@@ -409,6 +417,11 @@ Outcome run_mass(int sites, const Network& network, long ticks, const MassTrace*
       outcome.blew_up_at_s = t;
       break;
     }
+    if (books.created > kRunaway) {
+      outcome.runaway_at_s = t;
+      ++k;
+      break;
+    }
   }
   outcome.energy_created_J = books.created;
   outcome.lingers_s = lingering.seconds(k);
@@ -434,6 +447,8 @@ std::string note_of(const Outcome& o) {
   char text[96];
   if (!o.finite) {
     std::snprintf(text, sizeof text, "non-finite at %.3f s", o.blew_up_at_s);
+  } else if (o.runaway_at_s >= 0.0) {
+    std::snprintf(text, sizeof text, "runaway: created %.3g J by %.3f s (stopped)", o.energy_created_J, o.runaway_at_s);
   } else if (o.energy_created_J > kUnstableEnergy) {
     std::snprintf(text, sizeof text, "created %.3g J", o.energy_created_J);
   } else {
