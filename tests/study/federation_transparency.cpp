@@ -35,7 +35,8 @@
 //
 // The boundary: the smallest one-way delay (1 ms steps) at which the shared mass's coupled copies
 // without the layer create more than 10 mJ in --boundary-seconds, for 2 and 3 sites (the third
-// holds its tool still, clear of the mass), and the same for the tool contact.
+// holds its tool still, clear of the mass), beside the continuous-time model's (the copies'
+// characteristic equation), and the same for the tool contact.
 //
 // Writes DIR/transparency.csv and DIR/boundary.csv; a progress line per configuration on
 // standard error. Exit status: 0 done; 2 a file that could not be written; CLI11's own codes
@@ -51,6 +52,7 @@
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <random>
 #include <span>
 #include <string>
@@ -478,8 +480,40 @@ struct Boundary {
   int sites = 0;
   long delay_ms = -1;  // -1: none up to the scan's end
   double energy_J = 0.0;
+  double predicted_ms = NAN;  // the continuous-time model's, where there is one
   std::string note;
 };
+
+/// The shared mass's boundary in continuous time: the smallest one-way delay τ at which the copies'
+/// non-common modes reach the imaginary axis. With n copies of mass M (friction b), each coupled to
+/// the other n − 1 by K_s, B_s at their delayed positions, a mode whose copies sum to zero obeys
+///   M s² + ((n−1) B_s + b) s + (n−1) K_s + (K_s + B_s s) e^{−sτ} = 0
+/// (the other copies' sum is minus its own). On s = jω the magnitudes must match, a quadratic in ω²;
+/// each root gives the delays that match the phase, the first one is the boundary. NaN: none.
+/// A check on the lockstep runs, which hold each force over the 1 ms period and so cross a little
+/// later.
+double predicted_boundary_ms(int sites, const SharedMassParams& p) {
+  const double a = (sites - 1) * p.coupling_stiffness;
+  const double c = (sites - 1) * p.coupling_damping + p.damping;
+  const double K = p.coupling_stiffness, B = p.coupling_damping, M = p.mass;
+  // M² w² + (c² − 2aM − B²) w + (a² − K²) = 0 in w = ω².
+  const double qa = M * M, qb = c * c - 2.0 * a * M - B * B, qc = a * a - K * K;
+  const double discriminant = qb * qb - 4.0 * qa * qc;
+  if (discriminant < 0.0) return NAN;
+  double best = NAN;
+  for (const double sign : {-1.0, 1.0}) {
+    const double w = (-qb + sign * std::sqrt(discriminant)) / (2.0 * qa);
+    if (!(w > 0.0)) continue;
+    const double omega = std::sqrt(w);
+    // e^{−jωτ} = −(a − Mω² + j c ω) / (K + j B ω)
+    const double phase = std::atan2(-c * omega, -(a - M * w)) - std::atan2(B * omega, K);
+    double tau = std::fmod(-phase, 2.0 * std::numbers::pi);
+    if (tau < 0.0) tau += 2.0 * std::numbers::pi;
+    tau /= omega;
+    if (std::isnan(best) || tau < best) best = tau;
+  }
+  return 1e3 * best;
+}
 
 /// The smallest one-way delay (1 ms steps up to max_ms) at which the run without the layer creates
 /// more than kUnstableEnergy (or goes non-finite).
@@ -550,24 +584,31 @@ int run_study(const Options& options) {
     boundaries.push_back(find_boundary("shared_mass", sites, options.boundary_max_ms, [&](const Network& network) {
       return run_mass(sites, network, boundary_ticks, nullptr, nullptr);
     }));
+    boundaries.back().predicted_ms = predicted_boundary_ms(sites, SharedMassParams{});
   }
   boundaries.push_back(find_boundary("tool_contact", 2, options.boundary_max_ms, [&](const Network& network) {
     return run_contact(network, boundary_ticks, nullptr, nullptr);
   }));
   const std::string boundary_path = options.out + "/boundary.csv";
   std::ofstream boundary_csv(boundary_path);
-  boundary_csv << "coupling,sites,seconds,searched_up_to_ms,boundary_delay_ms,energy_created_J,note\n";
+  boundary_csv << "coupling,sites,seconds,searched_up_to_ms,boundary_delay_ms,energy_created_J,predicted_ms,note\n";
   for (const Boundary& b : boundaries) {
+    char predicted[32] = "";
+    char predicted_text[64] = "";
+    if (std::isfinite(b.predicted_ms)) {
+      std::snprintf(predicted, sizeof predicted, "%.4g", b.predicted_ms);
+      std::snprintf(predicted_text, sizeof predicted_text, "; %.1f ms in continuous time", b.predicted_ms);
+    }
     char row[300];
-    std::snprintf(row, sizeof row, "%s,%d,%g,%ld,%ld,%.6g,%s\n", b.coupling, b.sites, options.boundary_seconds,
-                  options.boundary_max_ms, b.delay_ms, b.energy_J, b.note.c_str());
+    std::snprintf(row, sizeof row, "%s,%d,%g,%ld,%ld,%.6g,%s,%s\n", b.coupling, b.sites, options.boundary_seconds,
+                  options.boundary_max_ms, b.delay_ms, b.energy_J, predicted, b.note.c_str());
     boundary_csv << row;
     if (b.delay_ms >= 0) {
-      std::printf("stability boundary without the layer, %s, %d sites: active from %ld ms one way (%s in %g s)\n",
-                  b.coupling, b.sites, b.delay_ms, b.note.c_str(), options.boundary_seconds);
+      std::printf("stability boundary without the layer, %s, %d sites: active from %ld ms one way (%s in %g s%s)\n",
+                  b.coupling, b.sites, b.delay_ms, b.note.c_str(), options.boundary_seconds, predicted_text);
     } else {
-      std::printf("stability boundary without the layer, %s, %d sites: passive up to %ld ms one way (%g s)\n",
-                  b.coupling, b.sites, options.boundary_max_ms, options.boundary_seconds);
+      std::printf("stability boundary without the layer, %s, %d sites: passive up to %ld ms one way (%g s%s)\n",
+                  b.coupling, b.sites, options.boundary_max_ms, options.boundary_seconds, predicted_text);
     }
   }
   boundary_csv.close();
