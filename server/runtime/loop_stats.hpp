@@ -93,6 +93,7 @@ struct LoopCounters {
   std::atomic<std::uint64_t> force_saturations{0};
   std::atomic<std::uint64_t> device_errors{0};
   std::atomic<std::uint64_t> passivity_active_ticks{0};  // ticks the passivity controller damped
+  std::atomic<std::uint64_t> robot_wrenches_refused{0};  // non-finite ROS 2 wrenches the loop refused
 };
 
 }  // namespace haptic::runtime

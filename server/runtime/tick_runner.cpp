@@ -1,6 +1,8 @@
 #include "runtime/tick_runner.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "haptic/wire/datagram.hpp"
 #include "runtime/flush_denormals.hpp"
@@ -31,6 +33,16 @@ void TickRunner::make_ports(const std::vector<TickPort>& ports) {
     out.remote = port.remote;
     out.ledger = port.ledger;
     out.avatar = port.avatar;
+    out.robot = port.robot;
+    out.robot_params = port.robot_params;
+    if (port.robot) {
+      engine::NetworkPassivityParams params;
+      params.period = config_.period_s;
+      // The device port's cap, as for the avatars: the damper that stops the tool's mass in one period.
+      const double mass = description.apparent_mass;
+      params.max_damping = mass > 0.0 ? mass / config_.period_s : params.max_damping;
+      out.robot_layer.emplace(params);
+    }
     if (description.capabilities.orientation && description.capabilities.torque &&
         description.max_torque > 0.0) {
       out.torque_guard.emplace(engine::force_limits_for(description.max_torque));
@@ -108,6 +120,8 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
     // Other sites' tools (federation): each through its own network passivity layer, after the
     // port's controller (which watches this site's contacts) and before the guard.
     if (port.remote) F_scene += avatar_force(port, reading);
+    // A ROS 2 node's wrench (a robot's), through a layer of its own, before the guard too.
+    if (port.robot) F_scene += robot_force(port, reading);
     F_command = guarded(port.guard.apply(F_scene, config_.period_s, gain), sample);
     const engine::Vec3 tau_command = port_torque(scene, index, reading, tick, gain, sample);
     // Jᵀ: the joint command for that force (the torque goes to the handle as it is).
@@ -204,6 +218,53 @@ engine::Vec3 TickRunner::avatar_force(Port& port, const ToolReading& reading) {
     if (port.ledger) port.ledger->record(slot, tool.key, coupling.sent());
   }
   return total;
+}
+
+engine::Vec3 TickRunner::robot_force(Port& port, const ToolReading& reading) {
+  const RobotWrench wrench = port.robot->load();
+  if (wrench.sequence != port.robot_sequence) {
+    port.robot_sequence = wrench.sequence;
+    const engine::Vec3 F = port.robot_params.force_scale * wrench.F_T_W;
+    if (std::isfinite(F.x) && std::isfinite(F.y) && std::isfinite(F.z)) {
+      port.robot_F_T_W = F;
+      port.robot_age_ticks = 0;
+    } else {
+      // Refused: the last good force stays and ages as if nothing had come.
+      counters_.robot_wrenches_refused.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+  if (port.robot_sequence == 0) return {};  // nothing has come yet: no work to book
+  // Fresh: the gain ramps (back) in; stale: out, over the loop's output ramp either way.
+  const bool stale = static_cast<double>(port.robot_age_ticks) * config_.period_s > port.robot_params.stale_s;
+  const double step = 1.0 / static_cast<double>(config_.output_ramp_ticks);
+  port.robot_gain = stale ? std::max(0.0, port.robot_gain - step) : std::min(1.0, port.robot_gain + step);
+  ++port.robot_age_ticks;
+  // The robot's side books no energy and sends none: nothing is ever received, and the reservoir
+  // keeps all it holds (an unbounded keep), so it holds exactly the work this port's user did
+  // against the force less what the force gave back. The layer runs on after a ramp-out: a
+  // deficit left by the last period is paid back, and the reservoir stays for the next wrench.
+  engine::Vec3 F = port.robot_gain * port.robot_F_T_W;
+  // A held force pushes the tool's mass through ½ (F/m) T² over the period whatever the tool's
+  // velocity, which the layer's T F·v does not predict: against a hand holding still, each such
+  // period gives the hand up to F²T²/2m the layer cannot take back, and they add up (with the
+  // layer alone a held hand let a 3 N push creep the tool out 1.5 cm, and got 23 mJ it never put
+  // in; 1 cm and 11 mJ with cancel_along_velocity). So the force is first scaled (s in [0, 1]) to
+  // what the reservoir R pays for over the coming period, its own push included:
+  //   s T F·v + s² T² |F|² / 2m ≤ R,
+  // with m the device's apparent mass (the hand's adds to it: the real push is smaller, so this
+  // errs towards less force). The layer then books what was done and damps any remainder.
+  const double mass = port.device.description().apparent_mass;
+  const double F2 = engine::dot(F, F);
+  if (mass > 0.0 && F2 > 0.0) {
+    const double T = config_.period_s;
+    const double a = T * T * F2 / (2.0 * mass);
+    const double b = T * engine::dot(F, reading.v_WT);
+    const double R = port.robot_layer->reservoir();
+    const double discriminant = b * b + 4.0 * a * R;
+    const double s = discriminant < 0.0 ? 0.0 : std::clamp((-b + std::sqrt(discriminant)) / (2.0 * a), 0.0, 1.0);
+    F = s * F;
+  }
+  return port.robot_layer->apply(F, reading.v_WT, reading.p_WT, std::numeric_limits<double>::infinity()).F_T_W;
 }
 
 engine::Vec3 TickRunner::guarded(const engine::GuardedForce& out, TickSample& sample) {

@@ -24,6 +24,7 @@
 #include "engine/safety/passivity.hpp"
 #include "runtime/latest_value.hpp"
 #include "runtime/remote_tools.hpp"
+#include "runtime/robot_wrench.hpp"
 #include "runtime/shared_masses.hpp"
 
 namespace haptic::runtime {
@@ -61,6 +62,14 @@ struct TickPort {
   const LatestValue<RemoteToolSet>* remote = nullptr;
   CouplingLedger* ledger = nullptr;  // with remote: what each coupling sent. Not owned.
   AvatarParams avatar;
+  /// A ROS 2 node's wrench for this tool (federation.ros2.wrench_input): its force, scaled, through
+  /// a network passivity layer of its own whose reservoir holds only what this port's user did
+  /// against it (first scaled down to what that pays for over the coming period, its push on the
+  /// device's apparent mass included), after the avatars and before the guard; ramped out when
+  /// stale; a non-finite one is refused (counted in robot_wrenches_refused). The torque is not
+  /// rendered, on 3-DOF and 6-DOF ports alike. Null: none. Not owned.
+  const LatestValue<RobotWrench>* robot = nullptr;
+  RobotWrenchParams robot_params{};
 };
 
 class TickRunner {
@@ -112,6 +121,14 @@ class TickRunner {
     AvatarParams avatar;
     std::array<std::optional<engine::NetworkPassivity>, kMaxRemoteTools> couplings{};
     std::array<std::uint64_t, kMaxRemoteTools> coupling_keys{};
+    /// Federation: a ROS 2 node's wrench, and its layer (made with the port).
+    const LatestValue<RobotWrench>* robot = nullptr;
+    RobotWrenchParams robot_params{};
+    std::optional<engine::NetworkPassivity> robot_layer{};
+    std::uint64_t robot_sequence = 0;  // the newest wrench seen
+    engine::Vec3 robot_F_T_W{};        // the newest finite one's force, scaled. Unit: N.
+    std::int64_t robot_age_ticks = 0;  // ticks since it came
+    double robot_gain = 0.0;           // its ramp: 0 ... 1
   };
 
   double output_gain(std::uint64_t tick) const;
@@ -123,6 +140,8 @@ class TickRunner {
   engine::Vec3 guarded(const engine::GuardedForce& out, TickSample& sample);
   /// The other sites' tools' force on this port's tool, each through its coupling's layer.
   engine::Vec3 avatar_force(Port& port, const ToolReading& reading);
+  /// The ROS 2 node's force on this port's tool, ramped by staleness, through its layer.
+  engine::Vec3 robot_force(Port& port, const ToolReading& reading);
   /// The orientation fields' torque at this port, guarded; zero without them.
   engine::Vec3 port_torque(const engine::CompiledScene& scene, std::uint32_t index,
                            const ToolReading& reading, std::uint64_t tick, double gain,
