@@ -30,6 +30,7 @@
 // Runs on the loop: no allocation, no throw.
 
 #include <algorithm>
+#include <cmath>
 
 #include "engine/core/vec3.hpp"
 
@@ -46,6 +47,11 @@ struct NetworkPassivityParams {
   /// masses), whose velocity holds over a period; on a light device pushed by a hand the velocity
   /// reverses within a period and the cancelled force chatters, so devices keep the cap alone.
   bool cancel_along_velocity = false;
+  /// τ: what the reservoir holds beyond `stored_J` goes out as a first-order lag of this time
+  /// constant instead of at once, so a site can use energy it holds while it flows to the other.
+  /// For the copies of a shared mass (which keep nothing for their own springs: the pair's storage
+  /// exists once). 0: at once (avatars). Unit: s. ≥ 0.
+  double send_time_constant = 0.0;
 };
 
 /// One tick of the layer.
@@ -56,7 +62,9 @@ struct NetworkPassivityStep {
 
 class NetworkPassivity {
  public:
-  explicit NetworkPassivity(const NetworkPassivityParams& params) : params_(params) {}
+  explicit NetworkPassivity(const NetworkPassivityParams& params)
+      : params_(params),
+        send_fraction_(params.send_time_constant > 0.0 ? -std::expm1(-params.period / params.send_time_constant) : 1.0) {}
 
   /// The coupling force F_T_W requested for the tool at p_WT moving at v_WT (the tick's reading);
   /// stored_J: the energy the coupling spring at this site holds now (½ K d² for a contact; J),
@@ -92,8 +100,9 @@ class NetworkPassivity {
     // The excess over what this site's own spring may return goes to the other site.
     const double keep = std::max(stored_J, 0.0);
     if (reservoir_ > keep) {
-      sent_ += reservoir_ - keep;
-      reservoir_ = keep;
+      const double excess = send_fraction_ * (reservoir_ - keep);
+      sent_ += excess;
+      reservoir_ -= excess;
     }
     return step;
   }
@@ -118,6 +127,7 @@ class NetworkPassivity {
 
  private:
   NetworkPassivityParams params_;
+  double send_fraction_;  // of the excess sent each period: 1 − e^{−T/τ}, 1 without τ
   double reservoir_ = 0.0;
   double sent_ = 0.0;
   double received_ = 0.0;

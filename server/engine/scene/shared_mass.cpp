@@ -71,6 +71,11 @@ Vec3 CopyCouplings::force(std::span<const RemoteMassCopy> remotes, const SharedM
         // a coupling's whole pull along v, which the damper's cap alone cannot when a stretched
         // spring is let go.
         layer.cancel_along_velocity = true;
+        // The copies' springs are the two ends of one coupling, whose storage exists once: neither
+        // keeps energy for its own spring (each would keep ½ K d² of it, and a released copy would
+        // wait seconds for energy the other holds back). What a copy's layer holds flows out to the
+        // other over 50 ms instead of at once, so it can use what it holds while it flows.
+        layer.send_time_constant = 0.05;
         couplings_[slot].emplace(layer);
       }
     }
@@ -83,10 +88,7 @@ Vec3 CopyCouplings::force(std::span<const RemoteMassCopy> remotes, const SharedM
     coupling.receive(remote.energy_sent_to_us);
     const Vec3 stretch = remote.p_WM - copy.p_WM;
     Vec3 F = params.coupling_stiffness * stretch + params.coupling_damping * (remote.v_WM - copy.v_WM);
-    if (params.passivity_layer) {
-      const double stored = 0.5 * params.coupling_stiffness * dot(stretch, stretch);
-      F = coupling.apply(F, copy.v_WM, copy.p_WM, stored).F_T_W;
-    }
+    if (params.passivity_layer) F = coupling.apply(F, copy.v_WM, copy.p_WM, 0.0).F_T_W;
     forces_[slot] = F;
     total += F;
   }
