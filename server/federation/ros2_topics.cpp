@@ -1,8 +1,11 @@
 #include "federation/ros2_topics.hpp"
 
+#include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <vector>
 
+#include "federation/dds_endpoint.hpp"
 #include "haptic/dds/ros2.h"
 
 namespace haptic::federation {
@@ -54,6 +57,22 @@ std::string validate(const Ros2Options& options) {
     return "frame_id: must be 1 to 200 characters, got " + std::to_string(options.frame_id.size());
   }
   if (options.buttons > 32) return "buttons: at most 32, got " + std::to_string(options.buttons);
+  if (!options.wrench_topic.empty()) {
+    const std::string& topic = options.wrench_topic;
+    bool relative = topic.size() <= 200 && topic.front() != '/' && topic.back() != '/';
+    for (std::size_t i = 0; relative && i < topic.size(); ++i) {
+      relative = name_char(topic[i]) || (topic[i] == '/' && topic[i - 1] != '/');
+    }
+    if (!relative) {
+      return "wrench_topic: must be names of letters, digits and '_' separated by '/' (under the namespace), got \"" +
+             topic + "\"";
+    }
+    for (const TopicKind& published : kTopics) {
+      if ("/" + topic == published.suffix) {
+        return "wrench_topic: \"" + topic + "\" is one hapticd publishes";
+      }
+    }
+  }
   return {};
 }
 
@@ -117,5 +136,49 @@ std::uint32_t Ros2ToolPublisher::matched_readers() const {
   dds_publication_matched_status_t status{};
   return dds_get_publication_matched_status(writers_[kPose], &status) == DDS_RETCODE_OK ? status.current_count : 0;
 }
+
+Ros2WrenchSubscriber::Ros2WrenchSubscriber(const Participant& participant, const std::string& ros_topic,
+                                           const std::string& frame_id)
+    : ros_topic_(ros_topic), frame_id_(frame_id) {
+  const std::string name = dds_topic_of(ros_topic);
+  topic_ = dds_create_topic(participant.handle(), &geometry_msgs_msg_dds__WrenchStamped__desc, name.c_str(), nullptr,
+                            nullptr);
+  dds_qos_t* qos = newest_only_qos();  // best effort: matches a reliable or a best-effort node
+  reader_ = topic_ < 0 ? topic_ : dds_create_reader(participant.handle(), topic_, qos, nullptr);
+  dds_delete_qos(qos);
+  if (reader_ < 0) throw std::runtime_error("DDS reader of " + name + ": " + dds_error(reader_));
+}
+
+Ros2WrenchSubscriber::~Ros2WrenchSubscriber() {
+  if (reader_ > 0) dds_delete(reader_);
+}
+
+WrenchTaken Ros2WrenchSubscriber::take() {
+  WrenchTaken out;
+  using Sample = geometry_msgs_msg_dds__WrenchStamped_;
+  take_each<Sample>(reader_, [&](const Sample& s, const dds_sample_info_t& info) {
+    if (!info.valid_data) return;
+    const char* frame = s.header.frame_id != nullptr ? s.header.frame_id : "";
+    if (std::strcmp(frame, frame_id_.c_str()) != 0) {
+      ++out.wrong_frame;
+      out.refused_frame = frame;
+      return;
+    }
+    const geometry_msgs_msg_dds__Wrench_& w = s.wrench;
+    const double values[6] = {w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z};
+    for (const double v : values) {
+      if (!std::isfinite(v)) {
+        ++out.not_finite;
+        return;
+      }
+    }
+    out.accepted = true;
+    out.F_T_W = {w.force.x, w.force.y, w.force.z};
+    out.tau_T_W = {w.torque.x, w.torque.y, w.torque.z};
+  });
+  return out;
+}
+
+std::uint32_t Ros2WrenchSubscriber::matched_writers() const { return matched_count(reader_, false); }
 
 }  // namespace haptic::federation

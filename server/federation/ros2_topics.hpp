@@ -9,11 +9,24 @@
 //   <namespace>/joy     sensor_msgs/msg/Joy             the buttons, 1 pressed (no axes)
 // QoS as ROS 2's sensor-data profile: best effort, keep last 1, volatile.
 // Off the loop (Cyclone's write may allocate): a sender thread publishes at the configured rate.
+//
+// And, where configured, one topic a ROS 2 node publishes to (Ros2WrenchSubscriber):
+//   <namespace>/<wrench_topic>  geometry_msgs/msg/WrenchStamped  F_T_W (N), the force the node
+//                               asks for on the tool (a robot's measured wrench, say); torque read,
+//                               not rendered
+// which a node publishes as to any ROS 2 topic, e.g. with the default name:
+//   ros2 topic pub -r 100 /hapticd/lab_a/port0/wrench_command geometry_msgs/msg/WrenchStamped
+//     "{header: {frame_id: hapticd_world}, wrench: {force: {x: 0.0, y: 0.0, z: 2.0}}}"
+// (one command line).
+// Its reader is best effort (keep last 1), so it matches a node's reliable or best-effort writer.
 
+#include <cstdint>
+#include <memory>
 #include <string>
 
 #include <dds/dds.h>
 
+#include "engine/core/vec3.hpp"
 #include "federation/dds_participant.hpp"
 #include "federation/tool_topic.hpp"
 
@@ -25,6 +38,9 @@ struct Ros2Options {
   std::string ros_namespace = "/hapticd";
   std::string frame_id = "hapticd_world";  // header.frame_id: the device's W
   std::uint32_t buttons = 0;               // how many buttons Joy reports
+  /// The topic a ROS 2 node sends the tool's force on, under ros_namespace ("wrench_command":
+  /// <namespace>/wrench_command): a relative ROS name, not one of the four published. "": none.
+  std::string wrench_topic;
 };
 
 /// "" or one message naming the bad option.
@@ -52,6 +68,42 @@ class Ros2ToolPublisher {
   Ros2Options options_;
   dds_entity_t writers_[4] = {0, 0, 0, 0};  // pose, twist, wrench, joy
   std::string error_;
+};
+
+/// What one Ros2WrenchSubscriber::take found.
+struct WrenchTaken {
+  bool accepted = false;       // a wrench was accepted: the newest one's force and torque below
+  engine::Vec3 F_T_W;          // Unit: N, in W (header.frame_id).
+  engine::Vec3 tau_T_W;        // Unit: N·m.
+  std::uint32_t wrong_frame = 0;  // refused: header.frame_id is not the configured frame_id
+  std::uint32_t not_finite = 0;   // refused: a NaN or infinite force or torque component
+  std::string refused_frame;      // the frame_id of the last one refused for its frame
+};
+
+/// A ROS 2 node's geometry_msgs/msg/WrenchStamped for the tool, read as ROS 2's middleware writes
+/// it (the ROS 2 type on "rt/" + the ROS topic). A wrench whose header.frame_id is not frame_id
+/// (the W hapticd publishes in) is refused: hapticd does not transform between frames; so is one
+/// with a NaN or infinite component. Off the loop.
+class Ros2WrenchSubscriber {
+ public:
+  /// ros_topic: the full ROS name ("/hapticd/lab_a/port0/wrench_command"). Throws
+  /// std::runtime_error naming the topic and what Cyclone refused.
+  Ros2WrenchSubscriber(const Participant& participant, const std::string& ros_topic, const std::string& frame_id);
+  ~Ros2WrenchSubscriber();
+  Ros2WrenchSubscriber(const Ros2WrenchSubscriber&) = delete;
+  Ros2WrenchSubscriber& operator=(const Ros2WrenchSubscriber&) = delete;
+
+  /// Takes every wrench that arrived; the newest accepted one wins.
+  WrenchTaken take();
+  /// Writers (ROS 2 publishers) matched so far.
+  std::uint32_t matched_writers() const;
+  const std::string& ros_topic() const { return ros_topic_; }
+
+ private:
+  std::string ros_topic_;
+  std::string frame_id_;
+  dds_entity_t topic_ = 0;
+  dds_entity_t reader_ = 0;
 };
 
 }  // namespace haptic::federation

@@ -36,7 +36,12 @@ SampleRelay::SampleRelay(const RelayOptions& options, const std::vector<RelayPor
       ros2.ros_namespace += "/port" + std::to_string(port);
       ros2.buttons = ports_[port].buttons;
       ros2_.push_back(std::make_unique<Ros2ToolPublisher>(*participant_, ros2));
+      const bool wrench = !ros2.wrench_topic.empty() && ports_[port].robot != nullptr;
+      wrenches_in_.push_back(wrench ? std::make_unique<Ros2WrenchSubscriber>(
+                                          *participant_, ros2.ros_namespace + "/" + ros2.wrench_topic, ros2.frame_id)
+                                    : nullptr);
     }
+    wrench_logged_.assign(ports_.size(), {false, false});
   }
 }
 
@@ -64,6 +69,7 @@ void SampleRelay::run() {
       receive_masses();
       publish_masses();
     }
+    if (!wrenches_in_.empty()) receive_wrenches();
     ++periods_;
     next += period;
     const auto now = std::chrono::steady_clock::now();
@@ -225,6 +231,40 @@ void SampleRelay::publish_masses() {
       if (copy.coupled_site[k] != 0) mass.sent.emplace_back(copy.coupled_site[k], copy.sent[k]);
     }
     (masses_out_->publish(mass) ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+}  // namespace haptic::federation
+
+namespace haptic::federation {
+
+void SampleRelay::receive_wrenches() {
+  for (std::size_t port = 0; port < wrenches_in_.size(); ++port) {
+    if (!wrenches_in_[port]) continue;
+    const WrenchTaken taken = wrenches_in_[port]->take();
+    if (taken.wrong_frame + taken.not_finite > 0) {
+      wrenches_refused_.fetch_add(taken.wrong_frame + taken.not_finite, std::memory_order_relaxed);
+      // Once per port and reason: a node that keeps sending them would otherwise fill the log.
+      const std::string& topic = wrenches_in_[port]->ros_topic();
+      if (taken.wrong_frame > 0 && !wrench_logged_[port][0] && options_.log) {
+        options_.log("federation: a wrench on " + topic + " in frame \"" + taken.refused_frame +
+                     "\" refused: it must be in \"" + options_.ros2->frame_id + "\" (hapticd does not transform " +
+                     "frames); further ones are counted, not logged");
+        wrench_logged_[port][0] = true;
+      }
+      if (taken.not_finite > 0 && !wrench_logged_[port][1] && options_.log) {
+        options_.log("federation: a wrench on " + topic + " with a NaN or an infinity refused; further ones are " +
+                     "counted, not logged");
+        wrench_logged_[port][1] = true;
+      }
+    }
+    if (!taken.accepted) continue;
+    runtime::RobotWrench wrench = ports_[port].robot->load();
+    ++wrench.sequence;
+    wrench.F_T_W = taken.F_T_W;
+    wrench.tau_T_W = taken.tau_T_W;
+    ports_[port].robot->store(wrench);
+    wrenches_accepted_.fetch_add(1, std::memory_order_relaxed);
   }
 }
 

@@ -4,13 +4,16 @@
 //     (a slot per remote tool, kept while it stays), with the energy each one's coupling sent us;
 //   - reads each device port's newest sample from its SampleRing and, when the port has ticked
 //     since, publishes it on the tool topic with what this port's couplings sent (the ledger), and
-//     as ROS 2 topics (ros2_topics) where configured.
+//     as ROS 2 topics (ros2_topics) where configured;
+//   - with ros2.wrench_topic, takes each port's ROS 2 wrench (a robot's) into its mailbox, refusing
+//     one in another frame or with a NaN or infinity (counted, and logged once per port and reason).
 // The loop never waits on it, and a sample nobody asked for is never converted.
 
 #include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -23,6 +26,7 @@
 #include "federation/tool_topic.hpp"
 #include "runtime/latest_value.hpp"
 #include "runtime/remote_tools.hpp"
+#include "runtime/robot_wrench.hpp"
 #include "runtime/sample_ring.hpp"
 #include "runtime/shared_masses.hpp"
 
@@ -38,6 +42,8 @@ struct RelayOptions {
   /// A remote tool not heard from for this long is dropped from the mailboxes (its site stopped
   /// or left the network): its avatar goes, through the force guard's rate limit. Unit: s.
   double silence_s = 0.5;
+  /// Where the relay says what it refused (a ROS 2 wrench's frame, ...); unset: nowhere.
+  std::function<void(const std::string&)> log;
 };
 
 /// One port's ring, the buttons its device reports, and (with the tool topic) its mailbox of
@@ -47,6 +53,8 @@ struct RelayPort {
   std::uint32_t buttons = 0;
   runtime::LatestValue<runtime::RemoteToolSet>* remote = nullptr;
   const runtime::CouplingLedger* ledger = nullptr;
+  /// With ros2.wrench_topic: the mailbox of the ROS 2 node's wrench for this port's tool.
+  runtime::LatestValue<runtime::RobotWrench>* robot = nullptr;
 };
 
 /// The masses shared across sites (runtime/shared_masses): the loop's table of this site's copies
@@ -76,6 +84,10 @@ class SampleRelay {
   /// Samples published so far (all ports), and publications DDS refused.
   std::uint64_t published() const { return published_.load(std::memory_order_relaxed); }
   std::uint64_t failed() const { return failed_.load(std::memory_order_relaxed); }
+  /// ROS 2 wrenches taken into the mailboxes so far (all ports), and those refused (another
+  /// frame_id, a NaN or an infinity).
+  std::uint64_t wrenches_accepted() const { return wrenches_accepted_.load(std::memory_order_relaxed); }
+  std::uint64_t wrenches_refused() const { return wrenches_refused_.load(std::memory_order_relaxed); }
 
  private:
   void run();
@@ -83,6 +95,7 @@ class SampleRelay {
   void publish();
   void receive_masses();
   void publish_masses();
+  void receive_wrenches();
 
   /// Which remote tool each mailbox slot of a port holds.
   struct Slot {
@@ -96,6 +109,10 @@ class SampleRelay {
   std::vector<RelayPort> ports_;
   std::unique_ptr<Participant> participant_;
   std::vector<std::unique_ptr<Ros2ToolPublisher>> ros2_;  // per port, when configured
+  /// Per port, with ros2.wrench_topic and a mailbox (else null); whether each port has logged a
+  /// refusal for its frame, and for a NaN.
+  std::vector<std::unique_ptr<Ros2WrenchSubscriber>> wrenches_in_;
+  std::vector<std::array<bool, 2>> wrench_logged_;
   std::unique_ptr<ToolPublisher> tools_out_;              // with options.tools
   std::unique_ptr<ToolSubscriber> tools_in_;
   std::vector<std::array<Slot, runtime::kMaxRemoteTools>> slots_;  // per port
@@ -114,6 +131,8 @@ class SampleRelay {
   std::atomic<bool> stopping_{false};
   std::atomic<std::uint64_t> published_{0};
   std::atomic<std::uint64_t> failed_{0};
+  std::atomic<std::uint64_t> wrenches_accepted_{0};
+  std::atomic<std::uint64_t> wrenches_refused_{0};
 };
 
 }  // namespace haptic::federation
