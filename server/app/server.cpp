@@ -131,6 +131,9 @@ Server::Server(const v1::ServerConfig& config)
     for (std::size_t port = 0; port < devices_.size(); ++port) {
       remote_tools_.push_back(std::make_unique<runtime::LatestValue<runtime::RemoteToolSet>>());
       ledgers_.push_back(std::make_unique<runtime::CouplingLedger>());
+      if (config.federation().ros2().has_wrench_input()) {
+        robot_wrenches_.push_back(std::make_unique<runtime::LatestValue<runtime::RobotWrench>>());
+      }
     }
     mass_stage_ = std::make_unique<runtime::SharedMassStage>(
         runtime::site_key(config.federation().site()), config::mass_coupling(config.federation()), tick.period_s,
@@ -289,6 +292,10 @@ std::vector<runtime::TickPort> Server::federated(std::vector<runtime::TickPort> 
     ports[port].remote = remote_tools_[port].get();
     ports[port].ledger = ledgers_[port].get();
     ports[port].avatar = config::avatar_params(config_.federation());
+    if (port < robot_wrenches_.size()) {
+      ports[port].robot = robot_wrenches_[port].get();
+      ports[port].robot_params = config::robot_wrench_params(config_.federation());
+    }
   }
   return ports;
 }
@@ -297,9 +304,11 @@ void Server::join_federation(const schema::SceneLimits& limits) {
   if (!config_.has_federation()) return;
   std::vector<federation::RelayPort> ports;
   for (std::size_t port = 0; port < samples_.size(); ++port) {
-    ports.push_back({samples_[port].get(), descriptions_[port].buttons, remote_tools_[port].get(), ledgers_[port].get()});
+    ports.push_back({samples_[port].get(), descriptions_[port].buttons, remote_tools_[port].get(), ledgers_[port].get(),
+                     port < robot_wrenches_.size() ? robot_wrenches_[port].get() : nullptr});
   }
-  const federation::RelayOptions relay = config::relay_options(config_.federation(), config_.loop_rate_hz());
+  federation::RelayOptions relay = config::relay_options(config_.federation(), config_.loop_rate_hz());
+  relay.log = [](const std::string& line) { spdlog::warn("{}", line); };
   federated_scene_ = std::make_unique<FederatedScene>(*scene_, limits);
   federation::ReplicatorOptions shared_scene;
   shared_scene.site = relay.site;
@@ -417,8 +426,12 @@ void Server::start() {
     const v1::FederationConfig& federation = config_.federation();
     spdlog::info("hapticd: federation site \"{}\" in DDS domain {} on {}{}", federation.site(),
                  federation.domain_id(), federation.interface(),
-                 federation.has_ros2() ? fmt::format(", ROS 2 topics under {} at {:g} Hz",
-                                                     federation.ros2().ros_namespace(), federation.ros2().rate_hz())
+                 federation.has_ros2() ? fmt::format(", ROS 2 topics under {} at {:g} Hz{}",
+                                                     federation.ros2().ros_namespace(), federation.ros2().rate_hz(),
+                                                     federation.ros2().has_wrench_input()
+                                                         ? ", each tool's force from port<N>/" +
+                                                               federation.ros2().wrench_input().topic()
+                                                         : std::string())
                                        : std::string());
   }
   if (metrics_) {

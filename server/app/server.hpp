@@ -124,6 +124,8 @@ class Server {
   /// Federation: each port's mailbox of other sites' tools and its couplings' ledger.
   std::vector<std::unique_ptr<runtime::LatestValue<runtime::RemoteToolSet>>> remote_tools_;
   std::vector<std::unique_ptr<runtime::CouplingLedger>> ledgers_;
+  /// Federation with ros2.wrench_input: each port's mailbox of a ROS 2 node's wrench.
+  std::vector<std::unique_ptr<runtime::LatestValue<runtime::RobotWrench>>> robot_wrenches_;
   /// Federation: masses shared across sites — the other sites' copies in, this site's out, and the
   /// loop's stage that couples them.
   runtime::LatestValue<runtime::RemoteMassTable> remote_masses_;

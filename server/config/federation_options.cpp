@@ -26,6 +26,7 @@ federation::Ros2Options ros2_of(const v1::Ros2Config& ros2) {
   federation::Ros2Options out;
   out.ros_namespace = ros2.ros_namespace();
   out.frame_id = ros2.frame_id();
+  if (ros2.has_wrench_input()) out.wrench_topic = ros2.wrench_input().topic();
   return out;
 }
 
@@ -58,6 +59,13 @@ void fill_federation_defaults(v1::FederationConfig& federation) {
   }
   if (ros2.rate_hz() == 0.0) ros2.set_rate_hz(100.0);
   if (ros2.frame_id().empty()) ros2.set_frame_id("hapticd_world");
+  if (ros2.has_wrench_input()) {
+    v1::Ros2WrenchInputConfig& input = *ros2.mutable_wrench_input();
+    const runtime::RobotWrenchParams defaults;
+    if (input.topic().empty()) input.set_topic("wrench_command");
+    if (!input.has_force_scale()) input.set_force_scale(defaults.force_scale);
+    if (!input.has_stale_s()) input.set_stale_s(defaults.stale_s);
+  }
 }
 
 std::string validate_federation(const v1::FederationConfig& federation, double loop_rate_hz) {
@@ -90,11 +98,22 @@ std::string validate_federation(const v1::FederationConfig& federation, double l
   }
   if (federation.has_ros2()) {
     const v1::Ros2Config& ros2 = federation.ros2();
-    if (std::string e = federation::validate(ros2_of(ros2)); !e.empty()) return "federation.ros2." + e;
+    if (std::string e = federation::validate(ros2_of(ros2)); !e.empty()) {
+      const std::string topic = "wrench_topic";  // the relay's name for wrench_input.topic
+      if (e.rfind(topic, 0) == 0) e = "wrench_input.topic" + e.substr(topic.size());
+      return "federation.ros2." + e;
+    }
     const double rate = ros2.rate_hz();
     if (!std::isfinite(rate) || rate < 1.0 || rate > 1000.0 || rate > loop_rate_hz) {
       return "federation.ros2.rate_hz: must be 1 to 1000 and at most the loop rate (" +
              std::to_string(loop_rate_hz) + " Hz), got " + std::to_string(rate);
+    }
+    if (ros2.has_wrench_input()) {
+      const v1::Ros2WrenchInputConfig& input = ros2.wrench_input();
+      for (const std::string& e : {in_range("ros2.wrench_input.force_scale", input.force_scale(), 0.0, 10.0, false),
+                                   in_range("ros2.wrench_input.stale_s", input.stale_s(), 0.01, 5.0, false)}) {
+        if (!e.empty()) return e;
+      }
     }
   }
   return {};
@@ -124,6 +143,15 @@ runtime::AvatarParams avatar_params(const v1::FederationConfig& federation) {
 runtime::MassCouplingParams mass_coupling(const v1::FederationConfig& federation) {
   const v1::SharedMassConfig& masses = federation.shared_masses();
   return runtime::MassCouplingParams{masses.coupling_stiffness(), masses.coupling_damping()};
+}
+
+}  // namespace haptic::config
+
+namespace haptic::config {
+
+runtime::RobotWrenchParams robot_wrench_params(const v1::FederationConfig& federation) {
+  const v1::Ros2WrenchInputConfig& input = federation.ros2().wrench_input();
+  return runtime::RobotWrenchParams{input.force_scale(), input.stale_s()};
 }
 
 }  // namespace haptic::config

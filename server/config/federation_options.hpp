@@ -6,6 +6,7 @@
 
 #include "federation/sample_relay.hpp"
 #include "runtime/remote_tools.hpp"
+#include "runtime/robot_wrench.hpp"
 #include "runtime/shared_masses.hpp"
 #include "haptic/v1/config.pb.h"
 
@@ -24,5 +25,7 @@ federation::RelayOptions relay_options(const v1::FederationConfig& federation, d
 /// defaulted section.
 runtime::AvatarParams avatar_params(const v1::FederationConfig& federation);
 runtime::MassCouplingParams mass_coupling(const v1::FederationConfig& federation);
+/// How a ROS 2 node's wrench is rendered (ros2.wrench_input), from a valid, defaulted section.
+runtime::RobotWrenchParams robot_wrench_params(const v1::FederationConfig& federation);
 
 }  // namespace haptic::config

@@ -287,6 +287,30 @@ TEST(Config, TheFederationSectionTakesItsDefaultsAndNamesABadField) {
             std::string::npos);
 }
 
+TEST(Config, AFederationsRos2WrenchInputIsOffUnlessSetAndTakesItsDefaults) {
+  const v1::ServerConfig off = parse_config(R"({"federation": {"site": "a", "ros2": {}}})", "x");
+  EXPECT_FALSE(off.federation().ros2().has_wrench_input());
+  EXPECT_EQ(relay_options(off.federation(), 1000.0).ros2->wrench_topic, "");
+  const v1::ServerConfig on = parse_config(R"({"federation": {"site": "a", "ros2": {"wrench_input": {}}}})", "x");
+  const v1::Ros2WrenchInputConfig& input = on.federation().ros2().wrench_input();
+  EXPECT_EQ(input.topic(), "wrench_command");
+  EXPECT_EQ(input.force_scale(), 1.0);
+  EXPECT_EQ(input.stale_s(), 0.2);
+  EXPECT_EQ(relay_options(on.federation(), 1000.0).ros2->wrench_topic, "wrench_command");
+  const runtime::RobotWrenchParams params = robot_wrench_params(on.federation());
+  EXPECT_EQ(params.force_scale, 1.0);
+  EXPECT_EQ(params.stale_s, 0.2);
+  const auto refused = [](const std::string& input_json, const std::string& message) {
+    const std::string error = error_of(R"({"federation": {"site": "a", "ros2": {"wrench_input": )" + input_json + "}}}");
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  };
+  refused(R"({"force_scale": 20})", "federation.ros2.wrench_input.force_scale: must be 0 to 10, got 20");
+  refused(R"({"force_scale": -1})", "federation.ros2.wrench_input.force_scale: must be 0 to 10");
+  refused(R"({"stale_s": 0})", "federation.ros2.wrench_input.stale_s: must be 0.01 to 5, got 0");
+  refused(R"({"topic": "wrench"})", "federation.ros2.wrench_input.topic: \"wrench\" is one hapticd publishes");
+  refused(R"({"topic": "/abs"})", "federation.ros2.wrench_input.topic: must be names");
+}
+
 /// A federation section on eth0 with DDS Security, every file `file` but the governance.
 std::string secure_federation(const std::string& file, const std::string& governance, const std::string& extra = "") {
   return R"({"federation": {"site": "a", "interface": "eth0", )" + extra + R"("security": {"identity_ca": ")" + file +
