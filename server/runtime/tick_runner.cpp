@@ -252,10 +252,13 @@ engine::Vec3 TickRunner::robot_force(Port& port, const ToolReading& reading) {
   // what the reservoir R pays for over the coming period, its own push included:
   //   s T F·v + s² T² |F|² / 2m ≤ R,
   // with m the device's apparent mass (the hand's adds to it: the real push is smaller, so this
-  // errs towards less force). The layer then books what was done and damps any remainder.
-  const double mass = port.device.description().apparent_mass;
+  // errs towards less force; a device that does not know its mass is taken as 0.05 kg at 1 kHz,
+  // the mass of the layer's default damper cap). The layer then books what was done and damps
+  // any remainder.
+  const double apparent = port.device.description().apparent_mass;
+  const double mass = apparent > 0.0 ? apparent : engine::NetworkPassivityParams{}.max_damping * config_.period_s;
   const double F2 = engine::dot(F, F);
-  if (mass > 0.0 && F2 > 0.0) {
+  if (F2 > 0.0) {
     const double T = config_.period_s;
     const double a = T * T * F2 / (2.0 * mass);
     const double b = T * engine::dot(F, reading.v_WT);
