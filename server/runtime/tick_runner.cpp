@@ -42,6 +42,10 @@ void TickRunner::make_ports(const std::vector<TickPort>& ports) {
       const double mass = description.apparent_mass;
       params.max_damping = mass > 0.0 ? mass / config_.period_s : params.max_damping;
       out.robot_layer.emplace(params);
+      // What is in the mailbox already (before a lockstep reset) is not rendered again: stale
+      // until a new wrench comes.
+      out.robot_sequence = port.robot->load().sequence;
+      out.robot_age_ticks = std::numeric_limits<std::int64_t>::max();
     }
     if (description.capabilities.orientation && description.capabilities.torque &&
         description.max_torque > 0.0) {
@@ -238,7 +242,7 @@ engine::Vec3 TickRunner::robot_force(Port& port, const ToolReading& reading) {
   const bool stale = static_cast<double>(port.robot_age_ticks) * config_.period_s > port.robot_params.stale_s;
   const double step = 1.0 / static_cast<double>(config_.output_ramp_ticks);
   port.robot_gain = stale ? std::max(0.0, port.robot_gain - step) : std::min(1.0, port.robot_gain + step);
-  ++port.robot_age_ticks;
+  if (!stale) ++port.robot_age_ticks;
   // The robot's side books no energy and sends none: nothing is ever received, and the reservoir
   // keeps all it holds (an unbounded keep), so it holds exactly the work this port's user did
   // against the force less what the force gave back. The layer runs on after a ramp-out: a

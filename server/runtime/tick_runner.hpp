@@ -127,7 +127,7 @@ class TickRunner {
     std::optional<engine::NetworkPassivity> robot_layer{};
     std::uint64_t robot_sequence = 0;  // the newest wrench seen
     engine::Vec3 robot_F_T_W{};        // the newest finite one's force, scaled. Unit: N.
-    std::int64_t robot_age_ticks = 0;  // ticks since it came
+    std::int64_t robot_age_ticks = 0;  // ticks since it came (counted until it is stale)
     double robot_gain = 0.0;           // its ramp: 0 ... 1
   };
 

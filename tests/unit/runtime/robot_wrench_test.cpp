@@ -218,6 +218,25 @@ TEST(RobotWrench, ANonFiniteWrenchNeverReachesTheDevice) {
   EXPECT_TRUE(std::isfinite(bench.device.plant().state().p_WT.x));
 }
 
+// A lockstep reset (fresh ports) does not render again the wrench left in the mailbox; the next
+// one that comes is.
+TEST(RobotWrench, AfterAResetOnlyANewWrenchIsRendered) {
+  Bench bench(pushing({-0.03, 0, 0}, 1.5));
+  for (int i = 0; i < 200; ++i) {
+    if (i % 10 == 0) bench.send({2.0, 0, 0});
+    bench.tick();
+  }
+  ASSERT_GT(bench.previous.F_T_W.x, 0.5);
+  bench.runner.replace_ports({bench.port({})});
+  bench.ticks = 0;
+  for (int i = 0; i < 100; ++i) EXPECT_EQ(bench.tick().F_T_W.x, 0.0) << "the wrench from before the reset came back";
+  for (int i = 0; i < 100; ++i) {
+    if (i % 10 == 0) bench.send({2.0, 0, 0});
+    bench.tick();
+  }
+  EXPECT_GT(bench.previous.F_T_W.x, 0.5);
+}
+
 // force_scale scales the wrench before the layer: 4 N at 0.5 is felt as 2 N is.
 TEST(RobotWrench, ScaledByForceScale) {
   RobotWrenchParams half;
