@@ -6,14 +6,24 @@ namespace haptic::federation {
 
 ItemReplicator::ItemReplicator(const ReplicatorOptions& options, ReplicatedScene& scene)
     : options_(options), scene_(scene), participant_(std::make_unique<Participant>(options.domain)) {
-  writer_ = std::make_unique<ItemPublisher>(*participant_);
-  reader_ = std::make_unique<ItemSubscriber>(*participant_);
+  open(*participant_);
 }
 
 ItemReplicator::ItemReplicator(const ReplicatorOptions& options, ReplicatedScene& scene, const Participant& participant)
     : options_(options), scene_(scene) {
-  writer_ = std::make_unique<ItemPublisher>(participant);
+  open(participant);
+}
+
+void ItemReplicator::open(const Participant& participant) {
   reader_ = std::make_unique<ItemSubscriber>(participant);
+  try {
+    writer_ = std::make_unique<ItemPublisher>(participant);
+  } catch (const std::runtime_error& error) {
+    // Under DDS Security an observer's permissions refuse the writer: the site still gets the
+    // others' items, and says once why its own are not shared.
+    refusal_ = error.what();
+    log("federation: this site shares no items (" + refusal_ + "); it still receives the other sites'");
+  }
 }
 
 ItemReplicator::~ItemReplicator() {
@@ -57,6 +67,11 @@ void ItemReplicator::publish_changes() {
     live.insert(item.id);
     Published& published = published_items_[item.id];
     if (published.version_key == item.version_key) continue;
+    if (!writer_) {
+      published.version_key = item.version_key;  // said once per version
+      log("federation: item " + std::to_string(item.id) + " not shared: " + refusal_);
+      continue;
+    }
     SharedItemState state{options_.site, item.id, published.version + 1, item.kind, scene_.describe(item.id)};
     if (state.spec.empty()) continue;  // gone since shared_items(); the next round removes it
     if (writer_->put(state)) {
@@ -72,7 +87,7 @@ void ItemReplicator::publish_changes() {
       ++it;
       continue;
     }
-    if (it->second.version > 0 && !writer_->remove(options_.site, it->first)) {
+    if (it->second.version > 0 && writer_ && !writer_->remove(options_.site, it->first)) {
       log("federation: item " + std::to_string(it->first) + " removal not sent: " + writer_->error());
     }
     it = published_items_.erase(it);

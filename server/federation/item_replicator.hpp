@@ -59,7 +59,8 @@ struct ReplicatorOptions {
 class ItemReplicator {
  public:
   /// Joins the domain and makes the topic's writer and reader (off the loop). Throws
-  /// std::runtime_error naming what was refused.
+  /// std::runtime_error naming what was refused; a writer that DDS Security's permissions refuse
+  /// (an observer) leaves the replicator receiving only, and the log says so.
   ItemReplicator(const ReplicatorOptions& options, ReplicatedScene& scene);
   /// The same on a participant the caller holds (a hapticd's one, which its relay made): one
   /// participant per site, so one identity and one set of ports. `participant` outlives this.
@@ -79,6 +80,7 @@ class ItemReplicator {
   std::uint64_t refused() const { return refused_.load(std::memory_order_relaxed); }
 
  private:
+  void open(const Participant& participant);
   void publish_changes();
   void apply_arrivals();
   void log(const std::string& line) const;
@@ -91,7 +93,8 @@ class ItemReplicator {
   ReplicatorOptions options_;
   ReplicatedScene& scene_;
   std::unique_ptr<Participant> participant_;  // ours, when none was given
-  std::unique_ptr<ItemPublisher> writer_;
+  std::unique_ptr<ItemPublisher> writer_;  // null where this site's permissions refuse it
+  std::string refusal_;                    // why, then
   std::unique_ptr<ItemSubscriber> reader_;
   std::uint64_t seen_generation_ = ~std::uint64_t{0};
   std::map<std::uint64_t, Published> published_items_;  // by local id

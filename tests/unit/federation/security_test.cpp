@@ -10,12 +10,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "federation/dds_participant.hpp"
+#include "federation/item_replicator.hpp"
 #include "federation/item_topic.hpp"
 #include "federation/tool_topic.hpp"
 #include "haptic/dds/federation.h"
@@ -239,6 +242,65 @@ TEST(FederationSecurity, AnObserverReadsAMembersSharedItemButCannotPublishOne) {
   EXPECT_EQ(events.front().what, SharedItemEvent::What::kPut);
   EXPECT_EQ(events.front().state.site, "bench-a");
   EXPECT_EQ(events.front().state.spec, "a wall");
+}
+
+/// A shared scene in memory, for the replicators below: its own items and what it received.
+class TinyScene : public ReplicatedScene {
+ public:
+  std::uint64_t generation() const override { return own_.size(); }
+  std::vector<LocalSharedItem> shared_items() const override {
+    std::vector<LocalSharedItem> items;
+    for (const auto& [id, spec] : own_) items.push_back({id, SharedItemKind::kObject, id});
+    return items;
+  }
+  std::string describe(std::uint64_t id) const override { return own_.count(id) ? own_.at(id) : std::string(); }
+  std::string put_remote(const SharedItemState& item) override {
+    std::lock_guard lock(mutex_);
+    received_.push_back(item.site + ":" + item.spec);
+    return {};
+  }
+  void remove_remote(const std::string&, std::uint64_t) override {}
+  std::vector<std::string> received() {
+    std::lock_guard lock(mutex_);
+    return received_;
+  }
+  std::map<std::uint64_t, std::string> own_;
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::string> received_;
+};
+
+TEST(FederationSecurity, AnObserversReplicatorReceivesTheSharedSceneAndSaysWhyItSharesNothing) {
+  REQUIRE_SECURITY();
+  const Certs& certs = Certs::get();
+  Participant member(site_domain(1, certs.site("lab", "bench-a")));
+  Participant observer(site_domain(2, certs.site("lab", "bench-b")));
+  TinyScene at_member, at_observer;
+  at_member.own_[7] = "a wall";
+  at_observer.own_[9] = "a box";
+  std::vector<std::string> log;
+  ReplicatorOptions member_options, observer_options;
+  member_options.site = "bench-a";
+  observer_options.site = "bench-b";
+  observer_options.log = [&log](const std::string& line) { log.push_back(line); };
+  ItemReplicator from_member(member_options, at_member, member);
+  ItemReplicator from_observer(observer_options, at_observer, observer);  // made: receiving only
+  ASSERT_FALSE(log.empty());
+  EXPECT_NE(log.front().find("this site shares no items"), std::string::npos) << log.front();
+  EXPECT_NE(log.front().find("Not Allowed By Security"), std::string::npos) << log.front();
+  ASSERT_TRUE(eventually(
+      [&] {
+        from_member.poll();
+        from_observer.poll();
+        return !at_observer.received().empty();
+      },
+      std::chrono::seconds(20)))
+      << "the observer did not get the member's item in 20 s";
+  EXPECT_EQ(at_observer.received().front(), "bench-a:a wall");
+  EXPECT_EQ(from_observer.published(), 0u);
+  EXPECT_TRUE(at_member.received().empty());  // nothing came from the observer
+  EXPECT_NE(log.back().find("item 9 not shared"), std::string::npos) << log.back();
 }
 
 TEST(FederationSecurity, PermissionsOfAnotherSiteAreRefusedWhenTheParticipantIsMade) {
