@@ -12,8 +12,8 @@
 //
 // And, where configured, one topic a ROS 2 node publishes to (Ros2WrenchSubscriber):
 //   <namespace>/<wrench_topic>  geometry_msgs/msg/WrenchStamped  F_T_W (N), the force the node
-//                               asks for on the tool (a robot's measured wrench, say); torque read,
-//                               not rendered
+//                               asks for on the tool (a robot's measured wrench, say), and tau_T_W
+//                               (N·m), the torque on the handle about the tool point
 // which a node publishes as to any ROS 2 topic, e.g. with the default name:
 //   ros2 topic pub -r 100 /hapticd/lab_a/port0/wrench_command geometry_msgs/msg/WrenchStamped
 //     "{header: {frame_id: hapticd_world}, wrench: {force: {x: 0.0, y: 0.0, z: 2.0}}}"

@@ -4,10 +4,43 @@
 #include <cmath>
 #include <limits>
 
+#include "engine/core/rotation.hpp"
 #include "haptic/wire/datagram.hpp"
 #include "runtime/flush_denormals.hpp"
 
 namespace haptic::runtime {
+
+namespace {
+
+/// A force F (or a torque) from a source that books no energy, on a body of `mass` (or inertia)
+/// at p moving at v (or its summed rotation and angular velocity), through `layer`, whose
+/// reservoir R then holds only what the user did against it.
+///
+/// A held force pushes the mass through ½ (F/m) T² over the period whatever its velocity, which
+/// the layer's T F·v does not predict: against a hand holding still, each such period gives the
+/// hand up to F²T²/2m the layer cannot take back, and they add up (with the layer alone a held
+/// hand let a 3 N push creep the tool out 1.5 cm and got 23 mJ it never put in; 1 cm and 11 mJ
+/// with cancel_along_velocity). So F is first scaled (s in [0, 1]) to what R pays for over the
+/// coming period, its own push included:
+///   s T F·v + s² T² |F|² / 2m ≤ R,
+/// with m the device's apparent mass (the hand's adds to it: the real push is smaller, so this
+/// errs towards less force). The layer then books what was done and damps any remainder. Nothing
+/// is received from the source and all R holds is kept (an unbounded keep): nothing is sent.
+engine::Vec3 from_passive_source(engine::NetworkPassivity& layer, const engine::Vec3& F_requested,
+                                 const engine::Vec3& v, const engine::Vec3& p, double mass, double T) {
+  engine::Vec3 F = F_requested;
+  const double F2 = engine::dot(F, F);
+  if (F2 > 0.0) {
+    const double a = T * T * F2 / (2.0 * mass);
+    const double b = T * engine::dot(F, v);
+    const double discriminant = b * b + 4.0 * a * layer.reservoir();
+    const double s = discriminant < 0.0 ? 0.0 : std::clamp((-b + std::sqrt(discriminant)) / (2.0 * a), 0.0, 1.0);
+    F = s * F;
+  }
+  return layer.apply(F, v, p, std::numeric_limits<double>::infinity()).F_T_W;
+}
+
+}  // namespace
 
 TickRunner::TickRunner(Device& device, DeviceModel& model, SceneExchange& scenes,
                        SampleRing& samples, LoopCounters& counters, const TickConfig& config)
@@ -50,6 +83,13 @@ void TickRunner::make_ports(const std::vector<TickPort>& ports) {
     if (description.capabilities.orientation && description.capabilities.torque &&
         description.max_torque > 0.0) {
       out.torque_guard.emplace(engine::force_limits_for(description.max_torque));
+      // The robot's torque on the handle, where the device takes torques and knows its inertia.
+      if (port.robot && description.apparent_inertia > 0.0) {
+        engine::NetworkPassivityParams params;
+        params.period = config_.period_s;
+        params.max_damping = description.apparent_inertia / config_.period_s;  // N·m·s/rad
+        out.robot_torque_layer.emplace(params);
+      }
     }
   }
 }
@@ -173,15 +213,17 @@ engine::Vec3 TickRunner::port_torque(const engine::CompiledScene& scene, std::ui
   Port& port = ports_[index];
   if (!port.torque_guard) return {};
   const bool fields = (scene.stages & engine::kStageOrientation) != 0;
+  // A ROS 2 node's torque (with its force), through its own layer.
+  const engine::Vec3 tau_robot = port.robot_torque_layer ? robot_torque(port, reading) : engine::Vec3{};
   // Without orientation fields nothing is computed, but a torque left from a scene that had them
   // still falls at the guard's rate, never as a step.
-  if (!fields && port.torque_guard->last() == engine::Vec3{}) return {};
-  engine::Vec3 tau_scene;
+  if (!fields && tau_robot == engine::Vec3{} && port.torque_guard->last() == engine::Vec3{}) return {};
+  engine::Vec3 tau_scene = tau_robot;
   if (fields) {
     const engine::SceneTorque torque = engine::evaluate_scene_orientation(
         scene, index, reading.R_WT, reading.w_WT, static_cast<std::int64_t>(tick), config_.period_s);
     if (torque.ramping) sample.flags |= wire::kFlagRampingOut;
-    tau_scene = torque.tau_T_W;
+    tau_scene += torque.tau_T_W;
   }
   return guarded(port.torque_guard->apply(tau_scene, config_.period_s, gain), sample);
 }
@@ -229,8 +271,11 @@ engine::Vec3 TickRunner::robot_force(Port& port, const ToolReading& reading) {
   if (wrench.sequence != port.robot_sequence) {
     port.robot_sequence = wrench.sequence;
     const engine::Vec3 F = port.robot_params.force_scale * wrench.F_T_W;
-    if (std::isfinite(F.x) && std::isfinite(F.y) && std::isfinite(F.z)) {
+    const engine::Vec3 tau = port.robot_params.force_scale * wrench.tau_T_W;
+    if (std::isfinite(F.x) && std::isfinite(F.y) && std::isfinite(F.z) && std::isfinite(tau.x) &&
+        std::isfinite(tau.y) && std::isfinite(tau.z)) {
       port.robot_F_T_W = F;
+      port.robot_tau_T_W = tau;
       port.robot_age_ticks = 0;
     } else {
       // Refused: the last good force stays and ages as if nothing had come.
@@ -243,35 +288,28 @@ engine::Vec3 TickRunner::robot_force(Port& port, const ToolReading& reading) {
   const double step = 1.0 / static_cast<double>(config_.output_ramp_ticks);
   port.robot_gain = stale ? std::max(0.0, port.robot_gain - step) : std::min(1.0, port.robot_gain + step);
   if (!stale) ++port.robot_age_ticks;
-  // The robot's side books no energy and sends none: nothing is ever received, and the reservoir
-  // keeps all it holds (an unbounded keep), so it holds exactly the work this port's user did
+  // The robot's side books no energy: the reservoir holds exactly the work this port's user did
   // against the force less what the force gave back. The layer runs on after a ramp-out: a
   // deficit left by the last period is paid back, and the reservoir stays for the next wrench.
-  engine::Vec3 F = port.robot_gain * port.robot_F_T_W;
-  // A held force pushes the tool's mass through ½ (F/m) T² over the period whatever the tool's
-  // velocity, which the layer's T F·v does not predict: against a hand holding still, each such
-  // period gives the hand up to F²T²/2m the layer cannot take back, and they add up (with the
-  // layer alone a held hand let a 3 N push creep the tool out 1.5 cm, and got 23 mJ it never put
-  // in; 1 cm and 11 mJ with cancel_along_velocity). So the force is first scaled (s in [0, 1]) to
-  // what the reservoir R pays for over the coming period, its own push included:
-  //   s T F·v + s² T² |F|² / 2m ≤ R,
-  // with m the device's apparent mass (the hand's adds to it: the real push is smaller, so this
-  // errs towards less force; a device that does not know its mass is taken as 0.05 kg at 1 kHz,
-  // the mass of the layer's default damper cap). The layer then books what was done and damps
-  // any remainder.
+  // A device that does not know its mass is taken as the one the layer's default damper cap
+  // stops in a period (0.05 kg at 1 kHz).
   const double apparent = port.device.description().apparent_mass;
   const double mass = apparent > 0.0 ? apparent : engine::NetworkPassivityParams{}.max_damping * config_.period_s;
-  const double F2 = engine::dot(F, F);
-  if (F2 > 0.0) {
-    const double T = config_.period_s;
-    const double a = T * T * F2 / (2.0 * mass);
-    const double b = T * engine::dot(F, reading.v_WT);
-    const double R = port.robot_layer->reservoir();
-    const double discriminant = b * b + 4.0 * a * R;
-    const double s = discriminant < 0.0 ? 0.0 : std::clamp((-b + std::sqrt(discriminant)) / (2.0 * a), 0.0, 1.0);
-    F = s * F;
+  return from_passive_source(*port.robot_layer, port.robot_gain * port.robot_F_T_W, reading.v_WT, reading.p_WT,
+                             mass, config_.period_s);
+}
+
+engine::Vec3 TickRunner::robot_torque(Port& port, const ToolReading& reading) {
+  // The handle's rotation since the last tick, in W (R_k = ΔR R_k−1), summed: the "position" whose
+  // change the layer books the torque's work on.
+  if (port.robot_R_known) {
+    port.robot_theta_W += engine::rotation_vector(reading.R_WT * engine::conjugate(port.robot_R_previous));
   }
-  return port.robot_layer->apply(F, reading.v_WT, reading.p_WT, std::numeric_limits<double>::infinity()).F_T_W;
+  port.robot_R_previous = reading.R_WT;
+  port.robot_R_known = true;
+  if (port.robot_sequence == 0) return {};
+  return from_passive_source(*port.robot_torque_layer, port.robot_gain * port.robot_tau_T_W, reading.w_WT,
+                             port.robot_theta_W, port.device.description().apparent_inertia, config_.period_s);
 }
 
 engine::Vec3 TickRunner::guarded(const engine::GuardedForce& out, TickSample& sample) {

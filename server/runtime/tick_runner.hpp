@@ -66,8 +66,10 @@ struct TickPort {
   /// a network passivity layer of its own whose reservoir holds only what this port's user did
   /// against it (first scaled down to what that pays for over the coming period, its push on the
   /// device's apparent mass included), after the avatars and before the guard; ramped out when
-  /// stale; a non-finite one is refused (counted in robot_wrenches_refused). The torque is not
-  /// rendered, on 3-DOF and 6-DOF ports alike. Null: none. Not owned.
+  /// stale; a non-finite one is refused (counted in robot_wrenches_refused). Its torque, taken as
+  /// the torque on the handle about the tool point in W, goes the same way to a port that takes
+  /// torques and knows its apparent inertia; elsewhere (3-DOF ports) it is ignored. Null: none.
+  /// Not owned.
   const LatestValue<RobotWrench>* robot = nullptr;
   RobotWrenchParams robot_params{};
 };
@@ -129,6 +131,13 @@ class TickRunner {
     engine::Vec3 robot_F_T_W{};        // the newest finite one's force, scaled. Unit: N.
     std::int64_t robot_age_ticks = 0;  // ticks since it came (counted until it is stale)
     double robot_gain = 0.0;           // its ramp: 0 ... 1
+    /// Its torque, where the device takes torques and knows its inertia: the layer, the newest
+    /// finite torque (scaled; N·m), and the handle's rotation summed since the port was made (rad).
+    std::optional<engine::NetworkPassivity> robot_torque_layer{};
+    engine::Vec3 robot_tau_T_W{};
+    engine::Vec3 robot_theta_W{};
+    engine::Quat robot_R_previous{};
+    bool robot_R_known = false;
   };
 
   double output_gain(std::uint64_t tick) const;
@@ -142,6 +151,8 @@ class TickRunner {
   engine::Vec3 avatar_force(Port& port, const ToolReading& reading);
   /// The ROS 2 node's force on this port's tool, ramped by staleness, through its layer.
   engine::Vec3 robot_force(Port& port, const ToolReading& reading);
+  /// Its torque on the handle, with the force's ramp, through a layer of its own.
+  engine::Vec3 robot_torque(Port& port, const ToolReading& reading);
   /// The orientation fields' torque at this port, guarded; zero without them.
   engine::Vec3 port_torque(const engine::CompiledScene& scene, std::uint32_t index,
                            const ToolReading& reading, std::uint64_t tick, double gain,

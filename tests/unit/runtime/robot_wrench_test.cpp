@@ -10,6 +10,7 @@
 #include <limits>
 #include <memory>
 
+#include "engine/core/rotation.hpp"
 #include "haptic/wire/datagram.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/five_bar_estimator.hpp"
@@ -304,6 +305,75 @@ TEST(RobotWrench, OnTheFiveBarsEncodersTheChannelStaysPassive) {
     EXPECT_GE(channel, 0.0) << amplitude;
     if (amplitude > 0.0) EXPECT_GT(injected, 0.1);
     EXPECT_EQ(counters.force_faults.load(), 0u);
+  }
+}
+
+// The wrench's torque on the 6-DOF device's handle (1e-4 kg·m², 5e-4 N·m·s/rad; no hand grips
+// its rotation), through a layer of its own: 0.05 N·m on a handle at rest never turns it (alone it
+// would spin it up towards 100 rad/s); on a handle spinning at 20 rad/s against it, the torque is
+// felt, takes its 20 mJ and gives them back (it turns the handle the other way), never more than
+// that by the one-period prediction error (measured 8.3 µJ: the spin changes within a period by
+// more than a tool's velocity does). On a 3-DOF port it is ignored.
+TEST(RobotWrench, ItsTorqueTurnsA6DofHandleOnlyWithEnergyTheHandlePutIn) {
+  for (const double w0 : {0.0, -20.0}) {
+    SimulatedRotation rotation;
+    rotation.params = engine::RotationParams{1e-4, 5e-4, 10};
+    rotation.initial.w_WT = {0, 0, w0};
+    rotation.max_torque = 0.2;
+    SimulatedPointMassDevice device(point_mass(), engine::PointMassState{}, kMaxForce, rotation);
+    CartesianModel model;
+    SceneExchange scenes(std::make_unique<const engine::CompiledScene>(engine::compile_scene({}, 50, 1, kPeriod)));
+    SampleRing samples;
+    LoopCounters counters;
+    LatestValue<RobotWrench> robot;
+    TickPort port{&device, &model, &samples, engine::force_limits_for(kMaxForce), std::nullopt};
+    port.robot = &robot;
+    TickRunner runner({port}, scenes, counters, TickConfig{kPeriod, {}, 50, {}});
+    device.set_hand(hand());
+    RobotWrench wrench;
+    TickSample previous;
+    double channel = 0.0, lowest = 0.0, strongest = 0.0;
+    for (std::uint64_t tick = 1; tick <= 3000; ++tick) {
+      if (tick % 10 == 1) {
+        ++wrench.sequence;
+        wrench.tau_T_W = {0, 0, 0.05};
+        robot.store(wrench);
+      }
+      runner.run(tick, static_cast<std::int64_t>(tick - 1) * 1'000'000);
+      TickSample s;
+      samples.read(tick, s);
+      ASSERT_TRUE(s.has_orientation);
+      if (tick > 1) {
+        // The torque's work over the tick, on the handle's rotation in W.
+        const engine::Vec3 turned = engine::rotation_vector(s.R_WT * engine::conjugate(previous.R_WT));
+        channel -= engine::dot(previous.tau_T_W, turned);
+      }
+      lowest = std::min(lowest, channel);
+      strongest = std::max(strongest, s.tau_T_W.z);
+      previous = s;
+    }
+    const double angle = engine::rotation_vector(device.rotation()->state().R_WT).z;
+    std::printf("handle from %.0f rad/s: torque felt up to %.3f N·m, channel energy down to %.3g J, turned %.3g rad\n",
+                w0, strongest, lowest, angle);
+    EXPECT_GT(lowest, -2e-5) << w0;
+    EXPECT_LE(strongest, 0.05 + 1e-12) << w0;
+    if (w0 == 0.0) {
+      EXPECT_EQ(strongest, 0.0);
+      EXPECT_EQ(angle, 0.0);
+    } else {
+      EXPECT_GT(strongest, 0.02) << "the torque against the spin was not felt";
+    }
+    EXPECT_EQ(counters.force_faults.load(), 0u);
+  }
+  Bench three_dof(hand());
+  for (int i = 0; i < 100; ++i) {
+    RobotWrench w = three_dof.robot.load();
+    ++w.sequence;
+    w.tau_T_W = {0.05, 0, 0};
+    three_dof.robot.store(w);
+    const TickSample s = three_dof.tick();
+    EXPECT_FALSE(s.has_orientation);
+    EXPECT_EQ(s.tau_T_W, engine::Vec3{});
   }
 }
 
