@@ -423,6 +423,10 @@ void Server::start() {
   if (relay_) {
     relay_->start();
     replicator_->start();
+    if (!relay_->masses_refused().empty()) {
+      spdlog::warn("federation: this site's copies of shared masses are not published ({}); it still couples to "
+                   "the other sites'", relay_->masses_refused());
+    }
     const v1::FederationConfig& federation = config_.federation();
     spdlog::info("hapticd: federation site \"{}\" in DDS domain {} on {}{}", federation.site(),
                  federation.domain_id(), federation.interface(),

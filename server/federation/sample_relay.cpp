@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <stdexcept>
 
 namespace haptic::federation {
 
@@ -21,8 +22,14 @@ std::uint64_t remote_key(const std::string& site, std::uint32_t port) {
 SampleRelay::SampleRelay(const RelayOptions& options, const std::vector<RelayPort>& ports, RelayMasses masses)
     : options_(options), ports_(ports), participant_(std::make_unique<Participant>(options.domain)), masses_(masses) {
   if (masses_.local != nullptr && masses_.remote != nullptr) {
-    masses_out_ = std::make_unique<MassPublisher>(*participant_);
     masses_in_ = std::make_unique<MassSubscriber>(*participant_);
+    try {
+      masses_out_ = std::make_unique<MassPublisher>(*participant_);
+    } catch (const std::runtime_error& error) {
+      // An observer's permissions refuse it: this site's copies are not published (it still
+      // couples to the others'), and hapticd says so at start.
+      masses_refused_ = error.what();
+    }
   }
   last_tick_.assign(ports_.size(), 0);
   slots_.resize(ports_.size());
@@ -230,7 +237,7 @@ void SampleRelay::publish_masses() {
     for (std::size_t k = 0; k < engine::kMaxRemoteCopies; ++k) {
       if (copy.coupled_site[k] != 0) mass.sent.emplace_back(copy.coupled_site[k], copy.sent[k]);
     }
-    (masses_out_->publish(mass) ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);
+    (masses_out_ && masses_out_->publish(mass) ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);
   }
 }
 

@@ -79,6 +79,9 @@ class SampleRelay {
 
   void start();
   void stop();
+  /// Why this site's mass copies are not published ("" when they are): an observer's
+  /// permissions refuse the mass topic's writer.
+  const std::string& masses_refused() const { return masses_refused_; }
   /// The site's participant in the domain (the shared scene's replicator joins through it).
   const Participant& participant() const { return *participant_; }
   /// Samples published so far (all ports), and publications DDS refused.
@@ -119,7 +122,8 @@ class SampleRelay {
   std::vector<ToolState> received_;                                 // scratch
   std::vector<std::uint64_t> last_tick_;                  // per port: the newest tick published
   RelayMasses masses_;
-  std::unique_ptr<MassPublisher> masses_out_;              // with masses
+  std::unique_ptr<MassPublisher> masses_out_;              // with masses, unless refused
+  std::string masses_refused_;
   std::unique_ptr<MassSubscriber> masses_in_;
   std::vector<MassState> received_masses_;                 // scratch
   /// When each copy in the mailbox of remote masses was last heard ([mass][copy]).

@@ -20,6 +20,7 @@
 #include "federation/dds_participant.hpp"
 #include "federation/item_replicator.hpp"
 #include "federation/item_topic.hpp"
+#include "federation/sample_relay.hpp"
 #include "federation/tool_topic.hpp"
 #include "haptic/dds/federation.h"
 
@@ -301,6 +302,22 @@ TEST(FederationSecurity, AnObserversReplicatorReceivesTheSharedSceneAndSaysWhyIt
   EXPECT_EQ(from_observer.published(), 0u);
   EXPECT_TRUE(at_member.received().empty());  // nothing came from the observer
   EXPECT_NE(log.back().find("item 9 not shared"), std::string::npos) << log.back();
+}
+
+TEST(FederationSecurity, AnObserversRelayCouplesToSharedMassesWithoutPublishingItsCopies) {
+  REQUIRE_SECURITY();
+  const Certs& certs = Certs::get();
+  runtime::LatestValue<runtime::LocalMassTable> local;
+  runtime::LatestValue<runtime::RemoteMassTable> remote;
+  RelayOptions options;
+  options.site = "bench-b";
+  options.domain = site_domain(3, certs.site("lab", "bench-b"));
+  SampleRelay observer(options, {}, RelayMasses{&local, &remote});  // made, not refused
+  EXPECT_NE(observer.masses_refused().find("haptic_federation_masses"), std::string::npos) << observer.masses_refused();
+  options.site = "bench-a";
+  options.domain = site_domain(4, certs.site("lab", "bench-a"));
+  SampleRelay member(options, {}, RelayMasses{&local, &remote});
+  EXPECT_EQ(member.masses_refused(), "");
 }
 
 TEST(FederationSecurity, PermissionsOfAnotherSiteAreRefusedWhenTheParticipantIsMade) {
