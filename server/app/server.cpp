@@ -683,7 +683,48 @@ v1::Stats Server::stats(runtime::LatenessHistogram::Counts* lateness_bins) const
   for (const net::ClientStatistics& client : sessions_.client_statistics()) {
     *stats.add_clients() = to_proto(client);
   }
+  if (relay_) federation_stats(*stats.mutable_federation());
   return stats;
+}
+
+void Server::federation_stats(v1::FederationStats& out) const {
+  out.set_samples_published(relay_->published());
+  out.set_samples_failed(relay_->failed());
+  out.set_items_published(replicator_->published());
+  out.set_items_applied(replicator_->applied());
+  out.set_items_refused(replicator_->refused());
+  out.set_wrenches_accepted(relay_->wrenches_accepted());
+  out.set_wrenches_refused(relay_->wrenches_refused() + counters_.robot_wrenches_refused.load(std::memory_order_relaxed));
+  for (std::size_t port = 0; port < ledgers_.size(); ++port) {
+    for (std::size_t slot = 0; slot < runtime::kMaxRemoteTools; ++slot) {
+      const runtime::CouplingBooks books = ledgers_[port]->books(slot);
+      if (books.key == 0) continue;
+      v1::CouplingStats& coupling = *out.add_couplings();
+      coupling.set_kind(v1::CouplingStats::TOOL);
+      coupling.set_port(static_cast<std::uint32_t>(port));
+      coupling.set_remote(books.key);
+      coupling.set_injected_j(books.injected);
+      coupling.set_given_j(books.given);
+      coupling.set_sent_j(books.sent);
+      coupling.set_received_j(books.received);
+      coupling.set_reservoir_j(books.reservoir);
+    }
+  }
+  const runtime::LocalMassTable masses = local_masses_.load();
+  for (const runtime::LocalMassCopy& copy : masses.masses) {
+    for (std::size_t i = 0; copy.mass_key != 0 && i < engine::kMaxRemoteCopies; ++i) {
+      if (copy.coupled_site[i] == 0) continue;
+      v1::CouplingStats& coupling = *out.add_couplings();
+      coupling.set_kind(v1::CouplingStats::MASS);
+      coupling.set_remote(copy.coupled_site[i]);
+      coupling.set_mass(copy.mass_key);
+      coupling.set_injected_j(copy.injected[i]);
+      coupling.set_given_j(copy.given[i]);
+      coupling.set_sent_j(copy.sent[i]);
+      coupling.set_received_j(copy.received[i]);
+      coupling.set_reservoir_j(copy.reservoir[i]);
+    }
+  }
 }
 
 void Server::log_status() {

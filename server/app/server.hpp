@@ -59,6 +59,8 @@ class Server {
   /// GetStats' figures; with `lateness_bins`, also the lateness histogram they summarize, bin by
   /// bin, from the same reading (the web viewer's plot).
   v1::Stats stats(runtime::LatenessHistogram::Counts* lateness_bins = nullptr) const;
+  /// The federation's part of the stats (with a federation).
+  void federation_stats(v1::FederationStats& out) const;
   /// Starts recording the run into `path` (net::Recorder): before start(), from the first tick.
   /// Returns "" or why not.
   std::string start_recording(const std::string& path);

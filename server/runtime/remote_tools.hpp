@@ -37,20 +37,44 @@ struct AvatarParams {
   double damping = 0.0;      // B. Unit: N·s/m. ≥ 0.
 };
 
-/// What each coupling has sent to its remote tool (cumulative, J), for the sender thread: written
-/// by the loop, read anywhere (relaxed atomics).
+/// Each coupling's books (its network passivity layer's, cumulative, J), for the sender thread
+/// (what it sent goes to the remote tool's site) and the stats: written by the loop, read anywhere
+/// (relaxed atomics; a reader may see one field a tick newer than another).
+struct CouplingBooks {
+  std::uint64_t key = 0;  // the remote tool; 0: no coupling in the slot
+  double sent = 0.0;
+  double received = 0.0;
+  double injected = 0.0;  // what this port's user put in
+  double given = 0.0;     // what the coupling gave this port's user
+  double reservoir = 0.0;
+};
+
 class CouplingLedger {
  public:
-  void record(std::size_t slot, std::uint64_t key, double sent) {
-    keys_[slot].store(key, std::memory_order_relaxed);
-    sent_[slot].store(sent, std::memory_order_relaxed);
+  void record(std::size_t slot, const CouplingBooks& books) {
+    Slot& s = slots_[slot];
+    s.key.store(books.key, std::memory_order_relaxed);
+    s.sent.store(books.sent, std::memory_order_relaxed);
+    s.received.store(books.received, std::memory_order_relaxed);
+    s.injected.store(books.injected, std::memory_order_relaxed);
+    s.given.store(books.given, std::memory_order_relaxed);
+    s.reservoir.store(books.reservoir, std::memory_order_relaxed);
   }
-  std::uint64_t key(std::size_t slot) const { return keys_[slot].load(std::memory_order_relaxed); }
-  double sent(std::size_t slot) const { return sent_[slot].load(std::memory_order_relaxed); }
+  std::uint64_t key(std::size_t slot) const { return slots_[slot].key.load(std::memory_order_relaxed); }
+  double sent(std::size_t slot) const { return slots_[slot].sent.load(std::memory_order_relaxed); }
+  CouplingBooks books(std::size_t slot) const {
+    const Slot& s = slots_[slot];
+    return {s.key.load(std::memory_order_relaxed),      s.sent.load(std::memory_order_relaxed),
+            s.received.load(std::memory_order_relaxed), s.injected.load(std::memory_order_relaxed),
+            s.given.load(std::memory_order_relaxed),    s.reservoir.load(std::memory_order_relaxed)};
+  }
 
  private:
-  std::array<std::atomic<std::uint64_t>, kMaxRemoteTools> keys_{};
-  std::array<std::atomic<double>, kMaxRemoteTools> sent_{};
+  struct Slot {
+    std::atomic<std::uint64_t> key{0};
+    std::atomic<double> sent{0.0}, received{0.0}, injected{0.0}, given{0.0}, reservoir{0.0};
+  };
+  std::array<Slot, kMaxRemoteTools> slots_{};
 };
 
 }  // namespace haptic::runtime

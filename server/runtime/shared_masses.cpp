@@ -69,7 +69,13 @@ void SharedMassStage::run(const engine::CompiledScene& scene, std::uint64_t tick
     out.v_WM = now.v_WO;
     for (std::size_t i = 0; i < engine::kMaxRemoteCopies; ++i) {
       out.coupled_site[i] = slots_[slot].couplings.key(i);
-      out.sent[i] = slots_[slot].couplings.energy_sent(i);
+      if (const engine::NetworkPassivity* layer = slots_[slot].couplings.coupling(i)) {
+        out.sent[i] = layer->sent();
+        out.received[i] = layer->received();
+        out.injected[i] = layer->injected();
+        out.given[i] = layer->given();
+        out.reservoir[i] = layer->reservoir();
+      }
     }
   }
   any_ = false;

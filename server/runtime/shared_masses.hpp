@@ -42,6 +42,11 @@ struct LocalMassCopy {
   engine::Vec3 v_WM;           // Unit: m/s.
   std::array<std::uint64_t, engine::kMaxRemoteCopies> coupled_site{};  // 0: no coupling in the slot
   std::array<double, engine::kMaxRemoteCopies> sent{};                 // cumulative. Unit: J.
+  /// The rest of each coupling's books (cumulative, J), for the stats.
+  std::array<double, engine::kMaxRemoteCopies> received{};
+  std::array<double, engine::kMaxRemoteCopies> injected{};
+  std::array<double, engine::kMaxRemoteCopies> given{};
+  std::array<double, engine::kMaxRemoteCopies> reservoir{};
 };
 struct LocalMassTable {
   std::uint64_t tick = 0;  // the tick that moved them

@@ -232,9 +232,19 @@ engine::Vec3 TickRunner::avatar_force(Port& port, const ToolReading& reading) {
   const RemoteToolSet remote = port.remote->load();
   engine::Vec3 total;
   for (std::size_t slot = 0; slot < kMaxRemoteTools; ++slot) {
-    const RemoteTool& tool = remote.tools[slot];
-    if (tool.key != port.coupling_keys[slot]) {
-      // Another remote tool in this slot (or none): a new coupling, with nothing booked.
+    RemoteTool tool = remote.tools[slot];
+    if (tool.key == 0 && port.coupling_keys[slot] != 0 && port.fade_left[slot] == 0) {
+      // Its site went quiet: the avatar fades out over the output ramp, as a removed item does,
+      // held where the tool was last heard and still limited by the coupling's layer.
+      port.fade_left[slot] = config_.output_ramp_ticks;
+    }
+    if (port.fade_left[slot] > 0 && tool.key == 0) {
+      tool = port.last_heard[slot];
+      tool.v_WT = {};
+    } else if (tool.key != port.coupling_keys[slot] || (tool.key != 0 && port.fade_left[slot] > 0)) {
+      // Another remote tool in this slot (or the same one back while fading): a new coupling,
+      // with nothing booked.
+      port.fade_left[slot] = 0;
       port.coupling_keys[slot] = tool.key;
       port.couplings[slot].reset();
       if (tool.key != 0) {
@@ -246,7 +256,22 @@ engine::Vec3 TickRunner::avatar_force(Port& port, const ToolReading& reading) {
         port.couplings[slot].emplace(params);
       }
     }
-    if (!port.couplings[slot]) continue;
+    if (!port.couplings[slot]) {
+      if (port.ledger) port.ledger->record(slot, CouplingBooks{});
+      continue;
+    }
+    double gain = 1.0;
+    if (port.fade_left[slot] > 0) {
+      gain = static_cast<double>(port.fade_left[slot]) / static_cast<double>(config_.output_ramp_ticks);
+      if (--port.fade_left[slot] == 0) {  // faded: the coupling ends
+        port.coupling_keys[slot] = 0;
+        port.couplings[slot].reset();
+        if (port.ledger) port.ledger->record(slot, CouplingBooks{});
+        continue;
+      }
+    } else {
+      port.last_heard[slot] = tool;
+    }
     engine::NetworkPassivity& coupling = *port.couplings[slot];
     coupling.receive(tool.energy_sent_to_us);
     const engine::Vec3 apart = reading.p_WT - tool.p_WT;
@@ -257,11 +282,14 @@ engine::Vec3 TickRunner::avatar_force(Port& port, const ToolReading& reading) {
     if (depth > 0.0 && distance > 0.0) {
       const engine::Vec3 n = (1.0 / distance) * apart;
       const double push = port.avatar.stiffness * depth - port.avatar.damping * engine::dot(reading.v_WT - tool.v_WT, n);
-      F = std::max(0.0, push) * n;
-      stored = 0.5 * port.avatar.stiffness * depth * depth;
+      F = gain * std::max(0.0, push) * n;
+      stored = gain * 0.5 * port.avatar.stiffness * depth * depth;
     }
     total += coupling.apply(F, reading.v_WT, reading.p_WT, stored).F_T_W;
-    if (port.ledger) port.ledger->record(slot, tool.key, coupling.sent());
+    if (port.ledger) {
+      port.ledger->record(slot, CouplingBooks{port.coupling_keys[slot], coupling.sent(), coupling.received(),
+                                              coupling.injected(), coupling.given(), coupling.reservoir()});
+    }
   }
   return total;
 }

@@ -123,6 +123,11 @@ class TickRunner {
     AvatarParams avatar;
     std::array<std::optional<engine::NetworkPassivity>, kMaxRemoteTools> couplings{};
     std::array<std::uint64_t, kMaxRemoteTools> coupling_keys{};
+    /// A remote tool that left its slot fades out over the output ramp, its avatar held where it
+    /// was last heard and still through its coupling's layer: ticks left (0: not fading), and
+    /// the tool as last heard.
+    std::array<std::int64_t, kMaxRemoteTools> fade_left{};
+    std::array<RemoteTool, kMaxRemoteTools> last_heard{};
     /// Federation: a ROS 2 node's wrench, and its layer (made with the port).
     const LatestValue<RobotWrench>* robot = nullptr;
     RobotWrenchParams robot_params{};

@@ -18,6 +18,7 @@
 #include "federation/dds_participant.hpp"
 #include "federation/ros2_topics.hpp"
 #include "haptic/dds/ros2.h"
+#include "integration/raw_client.hpp"
 #include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
 
@@ -207,6 +208,19 @@ TEST(Federation, TwoSitesToolsTouchEachOtherOverDds) {
   EXPECT_LT(x, -0.002) << "tool A passed into B's avatar";
   EXPECT_GT(x, -0.02);
   EXPECT_EQ(s.flags & kForceFault, 0u);
+  {  // A's stats hold its coupling with B's tool, and its books balance (read a tick apart: 1 mJ)
+    test::RawClient raw(site_a.address());
+    v1::OpenSessionResponse session;
+    ASSERT_TRUE(raw.open(session, "stats").ok());
+    const v1::FederationStats federation = raw.stats(session).federation();
+    ASSERT_EQ(federation.couplings_size(), 1);
+    const v1::CouplingStats& coupling = federation.couplings(0);
+    EXPECT_EQ(coupling.kind(), v1::CouplingStats::TOOL);
+    EXPECT_EQ(coupling.port(), 0u);
+    EXPECT_GT(coupling.injected_j(), 0.0);  // A's hand pushed into B's avatar
+    EXPECT_NEAR(coupling.reservoir_j(),
+                coupling.injected_j() - coupling.given_j() + coupling.received_j() - coupling.sent_j(), 1e-3);
+  }
   // Site B stops: once it has been quiet for 0.5 s its avatar leaves A's scene, and A's hand
   // takes the tool on to its target.
   b.reset();
@@ -250,6 +264,25 @@ TEST(Federation, TwoSitesShareOneMassThatOneSitesHandPushes) {
   EXPECT_GT(at_a.position.x, 0.01) << "A's hand did not push the mass";
   EXPECT_NEAR(at_b.position.x, at_a.position.x, 1e-3) << "B's copy did not follow A's";
   EXPECT_LT(std::abs(at_b.velocity.x), 1e-3);
+  // The coupling's books in A's stats: A's copy put energy into the coupling (A's hand pushed
+  // it) and the layer holds what its books say it must (read at slightly different ticks: 1 mJ).
+  test::RawClient raw(site_a.address());
+  v1::OpenSessionResponse session;
+  ASSERT_TRUE(raw.open(session, "stats").ok());
+  const v1::FederationStats federation = raw.stats(session).federation();
+  EXPECT_GT(federation.samples_published(), 1000u);
+  EXPECT_EQ(federation.items_published(), 1u);
+  int masses = 0;
+  for (const v1::CouplingStats& coupling : federation.couplings()) {
+    if (coupling.kind() != v1::CouplingStats::MASS) continue;
+    ++masses;
+    std::printf("A's mass coupling: injected %.4f J, given %.4f J, sent %.4f J, received %.4f J, held %.4f J\n",
+                coupling.injected_j(), coupling.given_j(), coupling.sent_j(), coupling.received_j(), coupling.reservoir_j());
+    EXPECT_GT(coupling.injected_j(), 0.0);
+    EXPECT_NEAR(coupling.reservoir_j(),
+                coupling.injected_j() - coupling.given_j() + coupling.received_j() - coupling.sent_j(), 1e-3);
+  }
+  EXPECT_EQ(masses, 1);
   State s;
   ASSERT_TRUE(a.poll_state(s, std::chrono::seconds(5)));
   EXPECT_EQ(s.flags & kForceFault, 0u);

@@ -10,6 +10,7 @@
 #include <deque>
 #include <memory>
 #include <random>
+#include <vector>
 
 #include "runtime/cartesian_model.hpp"
 #include "runtime/remote_tools.hpp"
@@ -116,6 +117,50 @@ TEST(RemoteTools, TwoSitesLoopsTouchEachOtherPassivelyAcrossDelayAndLoss) {
       EXPECT_EQ(a.counters.force_faults.load(), 0u);
     }
   }
+}
+
+TEST(RemoteTools, ARemoteToolThatLeavesFadesOutOverTheRemovalRampAndItsBooksAreKept) {
+  // A's hand holds its tool 5 mm inside the avatar of a remote tool that then leaves the mailbox
+  // (its site went quiet): the avatar's force falls over the 50-tick output ramp, never a step.
+  Site a({-0.005, 0, 0}, {-0.005, 0, 0}, 0xA);
+  // A stiff, well-damped grip: the tool stays within 0.3 mm of where it is held, so the force
+  // shows the ramp (a soft hand would follow the fading avatar in, as into any fading item).
+  engine::HandInput grip;
+  grip.mode = engine::HandInput::Mode::kFollowTarget;
+  grip.target = {-0.005, 0, 0};
+  grip.stiffness = 20000.0;
+  grip.damping = 200.0;
+  a.device.set_hand(grip);
+  RemoteToolSet set;
+  set.tools[0] = RemoteTool{0xB, {0, 0, 0}, {}, 0.0};
+  a.remote.store(set);
+  TickSample sample;
+  std::uint64_t tick = 1;
+  for (; tick <= 2000; ++tick) a.runner.run(tick, static_cast<std::int64_t>(tick) * 1'000'000);
+  a.samples.read(tick - 1, sample);
+  const double held = engine::norm(sample.F_T_W);
+  ASSERT_GT(held, 4.0);  // pressed 5 mm into the avatar (1000 N/m)
+  const CouplingBooks books = a.ledger.books(0);
+  EXPECT_EQ(books.key, 0xBu);
+  EXPECT_GE(books.injected - books.given + books.received - books.sent, books.reservoir - 1e-12);
+  a.remote.store(RemoteToolSet{});
+  double previous = held, largest_step = 0.0;
+  std::vector<double> forces;
+  for (int k = 0; k < 60; ++k, ++tick) {
+    a.runner.run(tick, static_cast<std::int64_t>(tick) * 1'000'000);
+    a.samples.read(tick, sample);
+    const double now = engine::norm(sample.F_T_W);
+    largest_step = std::max(largest_step, std::abs(now - previous));
+    forces.push_back(now);
+    previous = now;
+  }
+  std::printf("avatar fade-out: %.3f N held, largest step %.3f N a tick, %.3f N after 25 ticks\n", held, largest_step,
+              forces[24]);
+  EXPECT_GT(forces[0], 0.9 * held);              // not dropped at once
+  EXPECT_NEAR(forces[24], 0.5 * held, 0.15 * held);  // half way down the ramp
+  EXPECT_EQ(forces[55], 0.0);                    // gone once the ramp has run
+  EXPECT_LT(largest_step, 0.1 * held);           // never a step
+  EXPECT_EQ(a.ledger.books(0).key, 0u);          // the coupling ended
 }
 
 TEST(RemoteTools, ATickWithRemoteToolsAllocatesNothing) {
