@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <stdexcept>
 
 namespace haptic::federation {
 
@@ -20,23 +19,18 @@ std::uint64_t remote_key(const std::string& site, std::uint32_t port) {
 }
 
 SampleRelay::SampleRelay(const RelayOptions& options, const std::vector<RelayPort>& ports, RelayMasses masses)
-    : options_(options), ports_(ports), participant_(std::make_unique<Participant>(options.domain)), masses_(masses) {
-  if (masses_.local != nullptr && masses_.remote != nullptr) {
-    masses_in_ = std::make_unique<MassSubscriber>(*participant_);
-    try {
-      masses_out_ = std::make_unique<MassPublisher>(*participant_);
-    } catch (const std::runtime_error& error) {
-      // An observer's permissions refuse it: this site's copies are not published (it still
-      // couples to the others'), and hapticd says so at start.
-      masses_refused_ = error.what();
-    }
-  }
+    : options_(options),
+      ports_(ports),
+      participant_(std::make_unique<Participant>(options.domain)),
+      masses_(masses),
+      masses_on_(masses.local != nullptr && masses.remote != nullptr) {
+  dds_ = std::make_unique<DdsTransport>(*participant_, options_.tools, masses_on_);
+  transport_ = dds_.get();
+  // An observer's permissions refuse the mass topic's writer: this site's copies are not
+  // published (it still couples to the others'), and hapticd says so at start.
+  masses_refused_ = dds_->masses_refused();
   last_tick_.assign(ports_.size(), 0);
   slots_.resize(ports_.size());
-  if (options_.tools) {
-    tools_out_ = std::make_unique<ToolPublisher>(*participant_);
-    tools_in_ = std::make_unique<ToolSubscriber>(*participant_);
-  }
   if (options_.ros2) {
     for (std::size_t port = 0; port < ports_.size(); ++port) {
       Ros2Options ros2 = *options_.ros2;
@@ -50,6 +44,18 @@ SampleRelay::SampleRelay(const RelayOptions& options, const std::vector<RelayPor
     }
     wrench_logged_.assign(ports_.size(), {false, false});
   }
+}
+
+SampleRelay::SampleRelay(const RelayOptions& options, Transport& transport, const std::vector<RelayPort>& ports,
+                         RelayMasses masses)
+    : options_(options),
+      ports_(ports),
+      transport_(&transport),
+      masses_(masses),
+      masses_on_(masses.local != nullptr && masses.remote != nullptr) {
+  options_.ros2.reset();
+  last_tick_.assign(ports_.size(), 0);
+  slots_.resize(ports_.size());
 }
 
 SampleRelay::~SampleRelay() { stop(); }
@@ -70,14 +76,7 @@ void SampleRelay::run() {
       std::chrono::duration<double>(1.0 / options_.rate_hz));
   auto next = std::chrono::steady_clock::now();
   while (!stopping_.load(std::memory_order_acquire)) {
-    if (tools_in_) receive();
-    publish();
-    if (masses_in_) {
-      receive_masses();
-      publish_masses();
-    }
-    if (!wrenches_in_.empty()) receive_wrenches();
-    ++periods_;
+    step(std::chrono::steady_clock::now());
     next += period;
     const auto now = std::chrono::steady_clock::now();
     if (next < now) next = now;  // behind (a slow host): skip, never burst
@@ -85,10 +84,20 @@ void SampleRelay::run() {
   }
 }
 
-void SampleRelay::receive() {
+void SampleRelay::step(std::chrono::steady_clock::time_point now) {
+  if (options_.tools) receive(now);
+  publish();
+  if (masses_on_) {
+    receive_masses(now);
+    publish_masses();
+  }
+  if (!wrenches_in_.empty()) receive_wrenches();
+  ++periods_;
+}
+
+void SampleRelay::receive(std::chrono::steady_clock::time_point now) {
   received_.clear();
-  tools_in_->take(received_, options_.site);
-  const auto now = std::chrono::steady_clock::now();
+  transport_->take_tools(received_, options_.site);
   const auto silence = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
       std::chrono::duration<double>(options_.silence_s));
   for (std::size_t port = 0; port < ports_.size(); ++port) {
@@ -155,7 +164,7 @@ void SampleRelay::publish() {
       }
     }
     bool ok = true;
-    if (tools_out_) ok = tools_out_->publish(tool) && ok;
+    if (options_.tools) ok = transport_->publish_tool(tool) && ok;
     const bool ros2_period = periods_ % std::max<std::uint32_t>(1, options_.ros2_every) == 0;
     if (!ros2_.empty() && ros2_period) ok = ros2_[port]->publish(tool) && ok;
     (ok ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);
@@ -166,10 +175,9 @@ void SampleRelay::publish() {
 
 namespace haptic::federation {
 
-void SampleRelay::receive_masses() {
+void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
   received_masses_.clear();
-  masses_in_->take(received_masses_, options_.site);
-  const auto now = std::chrono::steady_clock::now();
+  transport_->take_masses(received_masses_, options_.site);
   const auto silence = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
       std::chrono::duration<double>(options_.silence_s));
   const std::uint64_t own = runtime::site_key(options_.site);
@@ -237,7 +245,8 @@ void SampleRelay::publish_masses() {
     for (std::size_t k = 0; k < engine::kMaxRemoteCopies; ++k) {
       if (copy.coupled_site[k] != 0) mass.sent.emplace_back(copy.coupled_site[k], copy.sent[k]);
     }
-    (masses_out_ && masses_out_->publish(mass) ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);
+    const bool ok = masses_refused_.empty() && transport_->publish_mass(mass);
+    (ok ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);
   }
 }
 

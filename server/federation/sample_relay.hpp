@@ -1,10 +1,12 @@
 #pragma once
 // The federation's thread between the loop and DDS (docs/federation.md). Every period it
-//   - takes the other sites' tools from the tool topic into each port's mailbox of remote tools
+//   - takes the other sites' tools from its transport into each port's mailbox of remote tools
 //     (a slot per remote tool, kept while it stays), with the energy each one's coupling sent us;
 //   - reads each device port's newest sample from its SampleRing and, when the port has ticked
-//     since, publishes it on the tool topic with what this port's couplings sent (the ledger), and
-//     as ROS 2 topics (ros2_topics) where configured;
+//     since, publishes it through the transport with what this port's couplings sent (the
+//     ledger), and as ROS 2 topics (ros2_topics) where configured;
+//   - takes the other sites' copies of the shared masses into the loop's mailbox, and publishes
+//     this site's copies when the loop has moved them;
 //   - with ros2.wrench_topic, takes each port's ROS 2 wrench (a robot's) into its mailbox, refusing
 //     one in another frame or with a NaN or infinity (counted, and logged once per port and reason).
 // The loop never waits on it, and a sample nobody asked for is never converted.
@@ -24,6 +26,7 @@
 #include "federation/mass_topic.hpp"
 #include "federation/ros2_topics.hpp"
 #include "federation/tool_topic.hpp"
+#include "federation/transport.hpp"
 #include "runtime/latest_value.hpp"
 #include "runtime/remote_tools.hpp"
 #include "runtime/robot_wrench.hpp"
@@ -39,8 +42,8 @@ struct RelayOptions {
   double rate_hz = 1000.0;          // the relay's periods per second (the loop's rate). Unit: Hz.
   std::uint32_t ros2_every = 10;    // ROS 2 topics every this many periods (≥ 1)
   bool tools = true;                // the tool topic: publish this site's tools, render the others'
-  /// A remote tool not heard from for this long is dropped from the mailboxes (its site stopped
-  /// or left the network): its avatar goes, through the force guard's rate limit. Unit: s.
+  /// A remote tool or mass copy not heard from for this long is dropped from the mailboxes (its
+  /// site stopped or left the network): its avatar and its coupling go. Unit: s.
   double silence_s = 0.5;
   /// Where the relay says what it refused (a ROS 2 wrench's frame, ...); unset: nowhere.
   std::function<void(const std::string&)> log;
@@ -70,19 +73,30 @@ std::uint64_t remote_key(const std::string& site, std::uint32_t port);
 
 class SampleRelay {
  public:
-  /// Joins the domain and makes the writers (off the loop). Throws std::runtime_error naming what
-  /// was refused.
+  /// Joins the domain and makes the writers (off the loop): a DdsTransport on the site's
+  /// participant, and the ROS 2 topics where configured. Throws std::runtime_error naming what
+  /// was refused, except the mass topic's writer (masses_refused()).
   SampleRelay(const RelayOptions& options, const std::vector<RelayPort>& ports, RelayMasses masses = {});
+  /// Over `transport` (not owned), without a participant or ROS 2 topics (options.domain and
+  /// options.ros2 are not used): lockstep tests step it with their own clock.
+  SampleRelay(const RelayOptions& options, Transport& transport, const std::vector<RelayPort>& ports,
+              RelayMasses masses = {});
   ~SampleRelay();
   SampleRelay(const SampleRelay&) = delete;
   SampleRelay& operator=(const SampleRelay&) = delete;
 
+  /// The thread: step(steady_clock::now()) once a period.
   void start();
   void stop();
+  /// One period at time `now` (remote tools and copies silent since before now − silence_s are
+  /// dropped): receive, publish, the masses, the ROS 2 wrenches. While start() has no thread
+  /// running (lockstep tests).
+  void step(std::chrono::steady_clock::time_point now);
   /// Why this site's mass copies are not published ("" when they are): an observer's
   /// permissions refuse the mass topic's writer.
   const std::string& masses_refused() const { return masses_refused_; }
-  /// The site's participant in the domain (the shared scene's replicator joins through it).
+  /// The site's participant in the domain (the shared scene's replicator joins through it); only
+  /// from the first constructor.
   const Participant& participant() const { return *participant_; }
   /// Samples published so far (all ports), and publications DDS refused.
   std::uint64_t published() const { return published_.load(std::memory_order_relaxed); }
@@ -94,9 +108,9 @@ class SampleRelay {
 
  private:
   void run();
-  void receive();
+  void receive(std::chrono::steady_clock::time_point now);
   void publish();
-  void receive_masses();
+  void receive_masses(std::chrono::steady_clock::time_point now);
   void publish_masses();
   void receive_wrenches();
 
@@ -110,21 +124,20 @@ class SampleRelay {
 
   RelayOptions options_;
   std::vector<RelayPort> ports_;
-  std::unique_ptr<Participant> participant_;
+  std::unique_ptr<Participant> participant_;    // from the first constructor
+  std::unique_ptr<DdsTransport> dds_;            // over participant_
+  Transport* transport_ = nullptr;               // dds_, or the caller's
   std::vector<std::unique_ptr<Ros2ToolPublisher>> ros2_;  // per port, when configured
   /// Per port, with ros2.wrench_topic and a mailbox (else null); whether each port has logged a
   /// refusal for its frame, and for a NaN.
   std::vector<std::unique_ptr<Ros2WrenchSubscriber>> wrenches_in_;
   std::vector<std::array<bool, 2>> wrench_logged_;
-  std::unique_ptr<ToolPublisher> tools_out_;              // with options.tools
-  std::unique_ptr<ToolSubscriber> tools_in_;
   std::vector<std::array<Slot, runtime::kMaxRemoteTools>> slots_;  // per port
   std::vector<ToolState> received_;                                 // scratch
   std::vector<std::uint64_t> last_tick_;                  // per port: the newest tick published
   RelayMasses masses_;
-  std::unique_ptr<MassPublisher> masses_out_;              // with masses, unless refused
+  bool masses_on_ = false;                                 // both mailboxes given
   std::string masses_refused_;
-  std::unique_ptr<MassSubscriber> masses_in_;
   std::vector<MassState> received_masses_;                 // scratch
   /// When each copy in the mailbox of remote masses was last heard ([mass][copy]).
   std::array<std::array<std::chrono::steady_clock::time_point, engine::kMaxRemoteCopies>, runtime::kMaxSharedMasses>

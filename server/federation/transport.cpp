@@ -1,24 +1,40 @@
 #include "federation/transport.hpp"
 
+#include <stdexcept>
+
 namespace haptic::federation {
 
-DdsTransport::DdsTransport(const Participant& participant, bool masses)
-    : tools_out_(participant), tools_in_(participant) {
+DdsTransport::DdsTransport(const Participant& participant, bool tools, bool masses) {
   if (masses) {
-    masses_out_ = std::make_unique<MassPublisher>(participant);
     masses_in_ = std::make_unique<MassSubscriber>(participant);
+    try {
+      masses_out_ = std::make_unique<MassPublisher>(participant);
+    } catch (const std::runtime_error& error) {
+      // An observer's permissions refuse it: this site's copies are not published, but it still
+      // takes the others' (and its relay couples to them).
+      masses_refused_ = error.what();
+    }
+  }
+  if (tools) {
+    tools_out_ = std::make_unique<ToolPublisher>(participant);
+    tools_in_ = std::make_unique<ToolSubscriber>(participant);
   }
 }
 
 bool DdsTransport::publish_tool(const ToolState& tool) {
-  if (tools_out_.publish(tool)) return true;
-  error_ = tools_out_.error();
+  if (!tools_out_) {
+    error_ = "the tool topic is not open on this transport";
+    return false;
+  }
+  if (tools_out_->publish(tool)) return true;
+  error_ = tools_out_->error();
   return false;
 }
 
 bool DdsTransport::publish_mass(const MassState& mass) {
   if (!masses_out_) {
-    error_ = "the mass topic is not open on this transport";
+    error_ = masses_refused_.empty() ? "the mass topic is not open on this transport"
+                                     : "the mass topic's writer was refused: " + masses_refused_;
     return false;
   }
   if (masses_out_->publish(mass)) return true;

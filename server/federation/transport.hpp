@@ -29,23 +29,30 @@ class Transport {
 /// The tool and mass topics on a participant.
 class DdsTransport final : public Transport {
  public:
-  /// masses: make the mass topic's endpoints too. Throws std::runtime_error naming what Cyclone
-  /// refused.
-  DdsTransport(const Participant& participant, bool masses);
+  /// tools, masses: make that topic's endpoints (without them, nothing is taken and a publication
+  /// is refused). An observer's permissions may refuse the mass topic's writer: the reader is
+  /// still made, masses_refused() says why, and every mass publication is refused. Throws
+  /// std::runtime_error naming anything else Cyclone refused.
+  DdsTransport(const Participant& participant, bool tools, bool masses);
 
   bool publish_tool(const ToolState& tool) override;
   bool publish_mass(const MassState& mass) override;
-  void take_tools(std::vector<ToolState>& out, const std::string& own_site) override { tools_in_.take(out, own_site); }
+  void take_tools(std::vector<ToolState>& out, const std::string& own_site) override {
+    if (tools_in_) tools_in_->take(out, own_site);
+  }
   void take_masses(std::vector<MassState>& out, const std::string& own_site) override {
     if (masses_in_) masses_in_->take(out, own_site);
   }
   std::string error() const override { return error_; }
+  /// Why the mass topic's writer was refused ("" when it was made, or masses were not asked for).
+  const std::string& masses_refused() const { return masses_refused_; }
 
  private:
-  ToolPublisher tools_out_;
-  ToolSubscriber tools_in_;
+  std::unique_ptr<ToolPublisher> tools_out_;
+  std::unique_ptr<ToolSubscriber> tools_in_;
   std::unique_ptr<MassPublisher> masses_out_;
   std::unique_ptr<MassSubscriber> masses_in_;
+  std::string masses_refused_;
   std::string error_;  // the last refusal's
 };
 
