@@ -567,6 +567,22 @@ Stats from_proto(const v1::Stats& s) {
     client.round_trip_p99_us = c.round_trip_p99_us();
     client.round_trip_p999_us = c.round_trip_p999_us();
   }
+  if (s.has_federation()) {
+    const v1::FederationStats& f = s.federation();
+    FederationStats& federation = out.federation.emplace();
+    federation.samples_published = f.samples_published();
+    federation.samples_failed = f.samples_failed();
+    federation.items_published = f.items_published();
+    federation.items_applied = f.items_applied();
+    federation.items_refused = f.items_refused();
+    federation.wrenches_accepted = f.wrenches_accepted();
+    federation.wrenches_refused = f.wrenches_refused();
+    for (const v1::CouplingStats& c : f.couplings()) {
+      federation.couplings.push_back(
+          {c.kind() == v1::CouplingStats::MASS ? CouplingStats::Kind::kMass : CouplingStats::Kind::kTool, c.port(),
+           c.remote(), c.mass(), c.injected_j(), c.given_j(), c.sent_j(), c.received_j(), c.reservoir_j()});
+    }
+  }
   return out;
 }
 

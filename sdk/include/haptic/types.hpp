@@ -447,6 +447,36 @@ struct ClientStats {
   double round_trip_p999_us = 0.0;
 };
 
+/// One coupling across the network of a federation (docs/federation.md, "The passivity layer"):
+/// its network passivity layer's books at this site, cumulative since it began. Unit: J.
+struct CouplingStats {
+  enum class Kind {
+    kTool,  ///< this site's tool at `port` and another site's tool (`remote`)
+    kMass,  ///< this site's copy of shared mass `mass` and another site's copy (`remote`: its site)
+  };
+  Kind kind = Kind::kTool;
+  std::uint32_t port = 0;    ///< kTool: this site's device port
+  std::uint64_t remote = 0;  ///< kTool: the remote tool's key; kMass: the other site's key
+  std::uint64_t mass = 0;    ///< kMass: the mass's key
+  double injected_j = 0.0;   ///< put into the coupling by this site's user (or copy)
+  double given_j = 0.0;      ///< given to this site's user (or copy)
+  double sent_j = 0.0;       ///< sent to the other site
+  double received_j = 0.0;   ///< received from it
+  double reservoir_j = 0.0;  ///< held here now: injected − given + received − sent
+};
+
+/// What crossed between the sites of a federation (docs/federation.md).
+struct FederationStats {
+  std::uint64_t samples_published = 0;  ///< tool and mass-copy samples this site published
+  std::uint64_t samples_failed = 0;     ///< publications DDS refused
+  std::uint64_t items_published = 0;    ///< versions of this site's across_sites items sent
+  std::uint64_t items_applied = 0;      ///< other sites' item versions applied here
+  std::uint64_t items_refused = 0;      ///< refused by this site's checks
+  std::uint64_t wrenches_accepted = 0;  ///< ROS 2 wrenches taken in
+  std::uint64_t wrenches_refused = 0;   ///< refused (frame, NaN)
+  std::vector<CouplingStats> couplings;
+};
+
 struct Stats {
   std::uint64_t ticks = 0;
   double achieved_rate_hz = 0.0;
@@ -484,6 +514,7 @@ struct Stats {
   std::uint64_t connections_evicted = 0;
   std::uint64_t tls_handshakes_failed = 0;  ///< no or a wrong client certificate, not TLS, ...
   std::vector<ClientStats> clients;  ///< every open session, in id order
+  std::optional<FederationStats> federation;  ///< with a federation section (docs/federation.md)
 };
 
 /// What the server's simulated operator (a hand holding the tool) does. Profiles and trajectories

@@ -155,8 +155,8 @@ TEST(Conversions, AcrossSitesGoesToTheWireAndComesBackForEveryObjectAndFieldSpec
   }
 }
 
-/// Sets every singular field of `message` to 100 + its field number, whatever its type (strings
-/// as that number's digits).
+/// Sets every singular scalar field of `message` to 100 + its field number, whatever its type
+/// (strings as that number's digits; an enum to its value 2; messages are left to the caller).
 void fill_by_number(google::protobuf::Message& message) {
   const google::protobuf::Descriptor& descriptor = *message.GetDescriptor();
   const google::protobuf::Reflection& reflection = *message.GetReflection();
@@ -171,6 +171,8 @@ void fill_by_number(google::protobuf::Message& message) {
       case google::protobuf::FieldDescriptor::CPPTYPE_STRING:
         reflection.SetString(&message, &field, std::to_string(value));
         break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_MESSAGE: break;  // filled by the test itself
+      case google::protobuf::FieldDescriptor::CPPTYPE_ENUM: reflection.SetEnumValue(&message, &field, 2); break;
       default:
         ADD_FAILURE() << descriptor.name() << "." << field.name() << " has a type this test does not set";
     }
@@ -257,8 +259,8 @@ TEST(Conversions, ToolStateAndStatsComeBackWhole) {
       {"connections_evicted", static_cast<double>(out.connections_evicted)},
       {"tls_handshakes_failed", static_cast<double>(out.tls_handshakes_failed)},
   };
-  // Every field but the repeated `clients`, checked below.
-  EXPECT_EQ(seen.size() + 1, static_cast<std::size_t>(descriptor.field_count()));
+  // Every field but the repeated `clients` and the `federation` part, checked below.
+  EXPECT_EQ(seen.size() + 2, static_cast<std::size_t>(descriptor.field_count()));
   for (const auto& [name, value] : seen) {
     const google::protobuf::FieldDescriptor* field = descriptor.FindFieldByName(name);
     ASSERT_NE(field, nullptr) << name;
@@ -289,6 +291,49 @@ TEST(Conversions, ToolStateAndStatsComeBackWhole) {
     const google::protobuf::FieldDescriptor* field = client_descriptor.FindFieldByName(name);
     ASSERT_NE(field, nullptr) << name;
     EXPECT_EQ(value, 100.0 + field->number()) << "ClientStats." << name;
+  }
+}
+
+TEST(Conversions, TheFederationsStatsComeBackWholeAndOnlyWithAFederation) {
+  v1::Stats stats;
+  EXPECT_FALSE(from_proto(stats).federation.has_value());  // no federation section: none
+  fill_by_number(*stats.mutable_federation());
+  v1::CouplingStats& coupling = *stats.mutable_federation()->add_couplings();
+  fill_by_number(coupling);  // kind: its value 2, MASS
+  const Stats out = from_proto(stats);
+  ASSERT_TRUE(out.federation.has_value());
+  const FederationStats& f = *out.federation;
+  const std::vector<std::pair<const char*, double>> seen = {
+      {"samples_published", static_cast<double>(f.samples_published)},
+      {"samples_failed", static_cast<double>(f.samples_failed)},
+      {"items_published", static_cast<double>(f.items_published)},
+      {"items_applied", static_cast<double>(f.items_applied)},
+      {"items_refused", static_cast<double>(f.items_refused)},
+      {"wrenches_accepted", static_cast<double>(f.wrenches_accepted)},
+      {"wrenches_refused", static_cast<double>(f.wrenches_refused)},
+  };
+  const google::protobuf::Descriptor& descriptor = *v1::FederationStats::descriptor();
+  EXPECT_EQ(seen.size() + 1, static_cast<std::size_t>(descriptor.field_count()));  // + couplings
+  for (const auto& [name, value] : seen) {
+    const google::protobuf::FieldDescriptor* field = descriptor.FindFieldByName(name);
+    ASSERT_NE(field, nullptr) << name;
+    EXPECT_EQ(value, 100.0 + field->number()) << "FederationStats." << name;
+  }
+  ASSERT_EQ(f.couplings.size(), 1u);
+  const CouplingStats& c = f.couplings[0];
+  EXPECT_EQ(c.kind, CouplingStats::Kind::kMass);
+  const std::vector<std::pair<const char*, double>> coupling_seen = {
+      {"port", static_cast<double>(c.port)},         {"remote", static_cast<double>(c.remote)},
+      {"mass", static_cast<double>(c.mass)},         {"injected_j", c.injected_j},
+      {"given_j", c.given_j},                        {"sent_j", c.sent_j},
+      {"received_j", c.received_j},                  {"reservoir_j", c.reservoir_j},
+  };
+  const google::protobuf::Descriptor& coupling_descriptor = *v1::CouplingStats::descriptor();
+  EXPECT_EQ(coupling_seen.size() + 1, static_cast<std::size_t>(coupling_descriptor.field_count()));  // + kind
+  for (const auto& [name, value] : coupling_seen) {
+    const google::protobuf::FieldDescriptor* field = coupling_descriptor.FindFieldByName(name);
+    ASSERT_NE(field, nullptr) << name;
+    EXPECT_EQ(value, 100.0 + field->number()) << "CouplingStats." << name;
   }
 }
 
