@@ -110,9 +110,11 @@ bool Ros2ToolPublisher::publish(const ToolState& tool) {
   geometry_msgs_msg_dds__TwistStamped_ twist{};
   twist.header = stamp;
   twist.twist.linear = vector(tool.v_WT);
+  twist.twist.angular = vector(tool.w_WT);
   geometry_msgs_msg_dds__WrenchStamped_ wrench{};
   wrench.header = stamp;
   wrench.wrench.force = vector(tool.F_T_W);
+  wrench.wrench.torque = vector(tool.tau_T_W);
   int32_t pressed[32] = {};
   for (std::uint32_t b = 0; b < options_.buttons; ++b) pressed[b] = (tool.buttons >> b) & 1u;
   sensor_msgs_msg_dds__Joy_ joy{};

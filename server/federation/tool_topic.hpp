@@ -41,6 +41,10 @@ struct ToolState {
   engine::Vec3 v_WT;
   engine::Vec3 F_T_W;
   engine::Quat R_WT;
+  /// The tool's angular velocity and the torque on it (W; rad/s, N·m), for the ROS 2 topics only
+  /// (the tool topic does not carry them); zero on a device without orientation.
+  engine::Vec3 w_WT;
+  engine::Vec3 tau_T_W;
   std::uint32_t buttons = 0;
   std::vector<CouplingEnergy> energy;  // at most kMaxCouplings
 };

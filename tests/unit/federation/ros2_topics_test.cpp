@@ -87,6 +87,8 @@ TEST(Ros2Topics, TheToolArrivesAsPoseTwistWrenchAndJoyUnderRos2sOwnNames) {
   tool.R_WT = {0.5, 0.5, 0.5, 0.5};  // w, x, y, z
   tool.v_WT = {-0.1, 0.0, 0.2};
   tool.F_T_W = {0.0, 1.5, -2.0};
+  tool.w_WT = {0.0, 3.0, 0.0};      // a turning handle (6-DOF)
+  tool.tau_T_W = {0.0, 0.0, 0.25};  // and the torque on it
   tool.buttons = 0b10;
   bool got_pose = false, got_twist = false, got_wrench = false, got_joy = false;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
@@ -103,11 +105,13 @@ TEST(Ros2Topics, TheToolArrivesAsPoseTwistWrenchAndJoyUnderRos2sOwnNames) {
     got_twist |= twist.take<geometry_msgs_msg_dds__TwistStamped_>([&](const auto& m) {
       EXPECT_EQ(m.twist.linear.x, -0.1);
       EXPECT_EQ(m.twist.linear.z, 0.2);
+      EXPECT_EQ(m.twist.angular.y, 3.0);
     });
     got_wrench |= wrench.take<geometry_msgs_msg_dds__WrenchStamped_>([&](const auto& m) {
       EXPECT_EQ(m.wrench.force.y, 1.5);
       EXPECT_EQ(m.wrench.force.z, -2.0);
       EXPECT_EQ(m.wrench.torque.x, 0.0);
+      EXPECT_EQ(m.wrench.torque.z, 0.25);
     });
     got_joy |= joy.take<sensor_msgs_msg_dds__Joy_>([&](const auto& m) {
       ASSERT_EQ(m.buttons._length, 2u);
