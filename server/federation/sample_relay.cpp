@@ -154,6 +154,8 @@ void SampleRelay::publish() {
     tool.v_WT = sample.v_WT;
     tool.F_T_W = sample.F_T_W;
     tool.R_WT = sample.R_WT;
+    tool.w_WT = sample.w_WT;
+    tool.tau_T_W = sample.tau_T_W;
     tool.buttons = sample.buttons;
     if (const runtime::CouplingLedger* ledger = ports_[port].ledger) {
       for (std::size_t slot = 0; slot < runtime::kMaxRemoteTools; ++slot) {
