@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "haptic/io/session_id.hpp"
@@ -58,6 +59,62 @@ class Exposition {
 std::string client_labels(const v1::ClientStats& client) {
   return "session=\"" + io::format_session_id(client.session_id()) + "\",client=\"" +
          escape_label_value(client.client_name()) + "\"";
+}
+
+/// A coupling's labels: its kind, and for a tool this site's port and the remote tool's key, for a
+/// shared mass the other site's key and the mass's key (keys as 16 hex digits, as session ids).
+std::string coupling_labels(const v1::CouplingStats& coupling) {
+  const std::string remote = "remote=\"" + io::format_session_id(coupling.remote()) + "\"";
+  if (coupling.kind() == v1::CouplingStats::MASS) {
+    return "kind=\"mass\"," + remote + ",mass=\"" + io::format_session_id(coupling.mass()) + "\"";
+  }
+  return "kind=\"tool\",port=\"" + std::to_string(coupling.port()) + "\"," + remote;
+}
+
+/// The federation's counters and every coupling's books; written only by a server in one.
+void federation_metrics(Exposition& e, const v1::FederationStats& f) {
+  e.single("hapticd_federation_samples_published_total", "counter",
+           "Tool and mass-copy samples this site published.",
+           static_cast<double>(f.samples_published()));
+  e.single("hapticd_federation_samples_failed_total", "counter",
+           "Tool and mass-copy publications DDS refused.", static_cast<double>(f.samples_failed()));
+  e.single("hapticd_federation_items_published_total", "counter",
+           "Versions of this site's across_sites items sent.",
+           static_cast<double>(f.items_published()));
+  e.single("hapticd_federation_items_applied_total", "counter",
+           "Other sites' item versions applied to this site's scene.",
+           static_cast<double>(f.items_applied()));
+  e.single("hapticd_federation_items_refused_total", "counter",
+           "Other sites' item versions this site's checks refused.",
+           static_cast<double>(f.items_refused()));
+  e.single("hapticd_federation_wrenches_accepted_total", "counter",
+           "ROS 2 wrenches taken into the ports' mailboxes.",
+           static_cast<double>(f.wrenches_accepted()));
+  e.single("hapticd_federation_wrenches_refused_total", "counter",
+           "ROS 2 wrenches refused (frame, not finite).", static_cast<double>(f.wrenches_refused()));
+  // The four books only grow while a coupling lasts (a new coupling starts them at 0); what its
+  // layer holds goes up and down.
+  e.family("hapticd_federation_coupling_energy_joules_total", "counter",
+           "A coupling's books at this site: put in by this site's user (book=injected), given to "
+           "it (given), sent to the other site (sent), received from it (received).");
+  for (const v1::CouplingStats& coupling : f.couplings()) {
+    const std::string labels = coupling_labels(coupling) + ",book=";
+    e.sample("hapticd_federation_coupling_energy_joules_total", coupling.injected_j(),
+             labels + "\"injected\"");
+    e.sample("hapticd_federation_coupling_energy_joules_total", coupling.given_j(),
+             labels + "\"given\"");
+    e.sample("hapticd_federation_coupling_energy_joules_total", coupling.sent_j(),
+             labels + "\"sent\"");
+    e.sample("hapticd_federation_coupling_energy_joules_total", coupling.received_j(),
+             labels + "\"received\"");
+  }
+  e.family("hapticd_federation_coupling_reservoir_joules", "gauge",
+           "What a coupling's passivity layer holds at this site now: injected - given + received "
+           "- sent.");
+  for (const v1::CouplingStats& coupling : f.couplings()) {
+    e.sample("hapticd_federation_coupling_reservoir_joules", coupling.reservoir_j(),
+             coupling_labels(coupling));
+  }
 }
 
 }  // namespace
@@ -188,6 +245,7 @@ std::string prometheus_text(const v1::Stats& s) {
     e.quantiles_us("hapticd_client_round_trip_seconds", client.round_trip_p50_us(),
                    client.round_trip_p99_us(), client.round_trip_p999_us(), client_labels(client));
   }
+  if (s.has_federation()) federation_metrics(e, s.federation());
   return e.take();
 }
 

@@ -3,6 +3,9 @@
 // Names follow Prometheus' conventions: the `hapticd_` prefix, base units in the name (seconds,
 // hertz), `_total` on counters; per-client series carry `session` (16 hex digits, as the log writes
 // it) and `client` labels. Percentiles over the sliding window are gauges with a `quantile` label.
+// A server in a federation adds the `hapticd_federation_` families: its counters, and per coupling
+// across the network its layer's books, labelled `kind` (tool or mass), `port` (a tool's), `remote`
+// and `mass` (a mass's; keys as 16 hex digits); a server without one writes none of them.
 
 #include <string>
 

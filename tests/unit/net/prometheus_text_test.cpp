@@ -138,6 +138,88 @@ TEST(PrometheusText, EveryFigureIsThereUnderItsConventionalName) {
   EXPECT_EQ(parsed.samples.at("hapticd_client_round_trip_seconds").size(), 3u);
 }
 
+/// `name`{`labels`} in `parsed`; fails the test (and gives -1) when it is not there.
+double value_of(const Parsed& parsed, const std::string& name, const std::string& labels = {}) {
+  const auto family = parsed.samples.find(name);
+  if (family == parsed.samples.end()) {
+    ADD_FAILURE() << "no " << name;
+    return -1.0;
+  }
+  const auto found = family->second.find(labels);
+  if (found == family->second.end()) {
+    ADD_FAILURE() << "no " << name << "{" << labels << "}";
+    return -1.0;
+  }
+  return found->second;
+}
+
+TEST(PrometheusText, AFederationsCountersAndEachCouplingsBooks) {
+  v1::Stats stats;
+  v1::FederationStats& federation = *stats.mutable_federation();
+  federation.set_samples_published(5000);
+  federation.set_samples_failed(1);
+  federation.set_items_published(2);
+  federation.set_items_applied(3);
+  federation.set_items_refused(4);
+  federation.set_wrenches_accepted(60);
+  federation.set_wrenches_refused(7);
+  v1::CouplingStats& tool = *federation.add_couplings();
+  tool.set_kind(v1::CouplingStats::TOOL);
+  tool.set_port(1);
+  tool.set_remote(0xa1b2c3d4e5f60718ull);
+  tool.set_injected_j(0.25);
+  tool.set_given_j(0.125);
+  tool.set_sent_j(0.0625);
+  tool.set_received_j(0.5);
+  tool.set_reservoir_j(0.5625);  // 0.25 − 0.125 + 0.5 − 0.0625
+  v1::CouplingStats& mass = *federation.add_couplings();
+  mass.set_kind(v1::CouplingStats::MASS);
+  mass.set_remote(0x2a);
+  mass.set_mass(0xffffffff00000007ull);
+  mass.set_injected_j(1.5);
+  mass.set_reservoir_j(1.5);
+
+  const Parsed parsed = parse(prometheus_text(stats));
+  for (const auto& [name, type] : parsed.types) {
+    EXPECT_EQ(type == "counter", name.size() > 6 && name.substr(name.size() - 6) == "_total") << name;
+  }
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_samples_published_total"), 5000.0);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_samples_failed_total"), 1.0);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_items_published_total"), 2.0);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_items_applied_total"), 3.0);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_items_refused_total"), 4.0);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_wrenches_accepted_total"), 60.0);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_wrenches_refused_total"), 7.0);
+
+  const std::string energy = "hapticd_federation_coupling_energy_joules_total";
+  const std::string tool_labels = R"(kind="tool",port="1",remote="a1b2c3d4e5f60718")";
+  EXPECT_EQ(value_of(parsed, energy, tool_labels + R"(,book="injected")"), 0.25);
+  EXPECT_EQ(value_of(parsed, energy, tool_labels + R"(,book="given")"), 0.125);
+  EXPECT_EQ(value_of(parsed, energy, tool_labels + R"(,book="sent")"), 0.0625);
+  EXPECT_EQ(value_of(parsed, energy, tool_labels + R"(,book="received")"), 0.5);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_coupling_reservoir_joules", tool_labels), 0.5625);
+  const std::string mass_labels = R"(kind="mass",remote="000000000000002a",mass="ffffffff00000007")";
+  EXPECT_EQ(value_of(parsed, energy, mass_labels + R"(,book="injected")"), 1.5);
+  EXPECT_EQ(value_of(parsed, energy, mass_labels + R"(,book="given")"), 0.0);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_coupling_reservoir_joules", mass_labels), 1.5);
+  EXPECT_EQ(parsed.samples.at(energy).size(), 8u);  // four books of each coupling
+  EXPECT_EQ(parsed.types.at("hapticd_federation_coupling_reservoir_joules"), "gauge");
+}
+
+TEST(PrometheusText, NoFederationNoFederationFamilies) {
+  v1::Stats stats;
+  stats.set_ticks(1);
+  const std::string text = prometheus_text(stats);
+  EXPECT_EQ(text.find("federation"), std::string::npos) << text;
+
+  // A federation with no coupling yet: its counters, and the books' families with no sample.
+  stats.mutable_federation();
+  const Parsed parsed = parse(prometheus_text(stats));
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_samples_published_total"), 0.0);
+  EXPECT_EQ(parsed.samples.count("hapticd_federation_coupling_energy_joules_total"), 0u);
+  EXPECT_EQ(parsed.types.at("hapticd_federation_coupling_energy_joules_total"), "counter");
+}
+
 TEST(PrometheusText, LabelValuesAreEscaped) {
   EXPECT_EQ(escape_label_value(R"(a"b\c)" "\n"), R"(a\"b\\c\n)");
   EXPECT_EQ(escape_label_value("plain name-1"), "plain name-1");
