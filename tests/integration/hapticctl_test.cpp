@@ -48,6 +48,7 @@ TEST(Hapticctl, StatusSessionsAndStatsShowTheServer) {
   EXPECT_EQ(status.exit_code, 0) << status.output;
   EXPECT_NE(status.output.find("loop      10 ticks"), std::string::npos) << status.output;
   EXPECT_NE(status.output.find("sessions  2 open"), std::string::npos) << status.output;  // with its own
+  EXPECT_EQ(status.output.find("federation"), std::string::npos) << status.output;  // none
 
   const Outcome sessions = hapticctl(server, {"sessions"});
   EXPECT_EQ(sessions.exit_code, 0) << sessions.output;
@@ -61,6 +62,17 @@ TEST(Hapticctl, StatusSessionsAndStatsShowTheServer) {
   EXPECT_EQ(stats.exit_code, 0) << stats.output;
   EXPECT_EQ(count_of(stats.output, "SESSION "), 2u) << stats.output;
   EXPECT_EQ(count_of(stats.output, hex(viewer.session_id())), 2u) << stats.output;
+}
+
+// A site of a federation (alone in its DDS domain): status adds the federation's block.
+TEST(Hapticctl, StatusShowsTheFederationOfASite) {
+  const std::uint32_t domain = 100 + static_cast<std::uint32_t>((getpid() + 15) % 120);
+  test::ServerProcess server(test::lockstep_config(R"("federation": {"site": "ctl-a", "domain_id": )" +
+                                                   std::to_string(domain) + R"(, "peers": ["127.0.0.1"]})"));
+  const Outcome status = hapticctl(server, {"status"});
+  EXPECT_EQ(status.exit_code, 0) << status.output;
+  EXPECT_NE(status.output.find("\nfederation  "), std::string::npos) << status.output;
+  EXPECT_NE(status.output.find("\n  no coupling across the network\n"), std::string::npos) << status.output;
 }
 
 TEST(Hapticctl, TheSceneItDumpsReadsBackAsTheSameScene) {

@@ -85,6 +85,9 @@ std::string describe(const haptic::SceneSpec::Field& field) {
       field);
 }
 
+/// A site's, tool's or mass's key of a federation, written as a session id is (16 hex digits).
+std::string key_text(std::uint64_t key) { return haptic::session_id_text(key); }
+
 std::string owner_text(std::uint64_t session) { return session == 0 ? "server" : haptic::session_id_text(session); }
 
 }  // namespace
@@ -128,6 +131,28 @@ std::string status_view(const haptic::Stats& s) {
       << "faults    " << s.force_faults << " force, " << s.device_faults << " device, "
       << s.force_saturations << " saturated ticks, " << s.passivity_active_ticks
       << " passivity ticks\n";
+  if (s.federation) out << federation_view(*s.federation);
+  return out.str();
+}
+
+std::string federation_view(const haptic::FederationStats& f) {
+  std::ostringstream out;
+  out << "federation  " << f.samples_published << " samples published, " << f.samples_failed
+      << " failed; items " << f.items_published << " published, " << f.items_applied
+      << " applied, " << f.items_refused << " refused; wrenches " << f.wrenches_accepted
+      << " accepted, " << f.wrenches_refused << " refused\n";
+  if (f.couplings.empty()) out << "  no coupling across the network\n";
+  const auto mj = [](double joules) { return fixed(joules * 1e3, 3) + " mJ"; };
+  for (const haptic::CouplingStats& c : f.couplings) {
+    if (c.kind == haptic::CouplingStats::Kind::kMass) {
+      out << "  mass " << key_text(c.mass) << " with site " << key_text(c.remote);
+    } else {
+      out << "  tool port " << c.port << " with tool " << key_text(c.remote);
+    }
+    out << ": injected " << mj(c.injected_j) << ", given " << mj(c.given_j) << ", sent "
+        << mj(c.sent_j) << ", received " << mj(c.received_j) << ", held " << mj(c.reservoir_j)
+        << "\n";
+  }
   return out.str();
 }
 

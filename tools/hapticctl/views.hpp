@@ -11,8 +11,13 @@
 
 namespace hapticctl {
 
-/// The server at a glance (GetStats): the loop, the scene, the traffic, the faults.
+/// The server at a glance (GetStats): the loop, the scene, the traffic, the faults, and with a
+/// federation its federation_view.
 std::string status_view(const haptic::Stats& stats);
+
+/// What crossed the network (the counts), then one line per coupling across it with its layer's
+/// books at this site in mJ (keys as 16 hex digits).
+std::string federation_view(const haptic::FederationStats& federation);
 
 /// Every open session (ListSessions); `own` (hapticctl's own session) is marked.
 std::string sessions_view(const std::vector<haptic::SessionSummary>& sessions, std::uint64_t own);
