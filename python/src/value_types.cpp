@@ -425,6 +425,38 @@ void bind_reports(py::module_& m) {
       .readonly("round_trip_p99_us", &ClientStats::round_trip_p99_us, "µs")
       .readonly("round_trip_p999_us", &ClientStats::round_trip_p999_us, "µs")
       .finish();
+  StructBinder<CouplingStats> coupling(
+      m, "CouplingStats",
+      "One coupling across a federation's network: its passivity layer's books at this site, "
+      "cumulative since it began (docs/federation.md).");
+  py::enum_<CouplingStats::Kind>(coupling.cls(), "Kind")
+      .value("TOOL", CouplingStats::Kind::kTool, "this site's tool at `port` and a remote tool")
+      .value("MASS", CouplingStats::Kind::kMass, "this site's copy of `mass` and another site's");
+  coupling.readonly("kind", &CouplingStats::kind, "CouplingStats.Kind")
+      .readonly("port", &CouplingStats::port, "TOOL: this site's device port")
+      .readonly("remote", &CouplingStats::remote, "TOOL: the remote tool's key; MASS: the other site's")
+      .readonly("mass", &CouplingStats::mass, "MASS: the mass's key")
+      .readonly("injected_j", &CouplingStats::injected_j, "J, put in by this site's user (or copy)")
+      .readonly("given_j", &CouplingStats::given_j, "J, given to this site's user (or copy)")
+      .readonly("sent_j", &CouplingStats::sent_j, "J, sent to the other site")
+      .readonly("received_j", &CouplingStats::received_j, "J, received from it")
+      .readonly("reservoir_j", &CouplingStats::reservoir_j,
+                "J, held here now: injected − given + received − sent")
+      .finish();
+  StructBinder<FederationStats>(m, "FederationStats",
+                                "What crossed between the sites of a federation (Stats.federation).")
+      .readonly("samples_published", &FederationStats::samples_published,
+                "tool and mass-copy samples this site published")
+      .readonly("samples_failed", &FederationStats::samples_failed, "publications DDS refused")
+      .readonly("items_published", &FederationStats::items_published,
+                "versions of this site's across_sites items sent")
+      .readonly("items_applied", &FederationStats::items_applied,
+                "other sites' item versions applied here")
+      .readonly("items_refused", &FederationStats::items_refused, "refused by this site's checks")
+      .readonly("wrenches_accepted", &FederationStats::wrenches_accepted, "ROS 2 wrenches taken in")
+      .readonly("wrenches_refused", &FederationStats::wrenches_refused, "refused (frame, NaN)")
+      .readonly("couplings", &FederationStats::couplings, "list of CouplingStats")
+      .finish();
   StructBinder<Stats>(m, "Stats", "The server's counters (GetStats).")
       .readonly("ticks", &Stats::ticks, "")
       .readonly("achieved_rate_hz", &Stats::achieved_rate_hz, "Hz")
@@ -461,6 +493,8 @@ void bind_reports(py::module_& m) {
                 "closed at max_connections for a host holding fewer")
       .readonly("tls_handshakes_failed", &Stats::tls_handshakes_failed, "")
       .readonly("clients", &Stats::clients, "list of ClientStats, in session id order")
+      .readonly("federation", &Stats::federation,
+                "FederationStats; None for a server without a federation section")
       .finish();
   StructBinder<SessionSummary>(m, "SessionSummary", "One open session, as an admin sees it.")
       .readonly("session_id", &SessionSummary::session_id, "")

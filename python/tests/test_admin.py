@@ -1,6 +1,8 @@
 """Statistics, recordings and tokens through the Python SDK."""
 
 import json
+import os
+import time
 
 import pytest
 
@@ -19,10 +21,72 @@ def test_stats_count_this_session_and_its_stream(client):
     assert stats.ticks >= 100 and stats.objects == 1 and stats.sessions == 1
     assert [c.client_name for c in stats.clients] == ["pytest"]
     assert stats.clients[0].decimation == 1
+    assert stats.federation is None  # no federation section
     assert client.receive_counters().rejected == 0
     del wall  # a handle no one holds removes its object
     client.step(100)
     assert client.stats().objects == 0
+
+
+def federation_section(site, domain_offset):
+    """A federation section on loopback DDS, in a domain of this test run's own (from its pid)."""
+    return {"site": site, "domain_id": 100 + (os.getpid() + domain_offset) % 120,
+            "peers": ["127.0.0.1"]}
+
+
+def test_a_site_alone_has_federation_stats_and_no_coupling():
+    server = ServerProcess(lockstep_config(federation=federation_section("py-alone", 7)))
+    try:
+        with hapticd.Client(server.config()) as client:
+            client.step(10)
+            federation = client.stats().federation
+            assert isinstance(federation, hapticd.FederationStats)
+            assert federation.couplings == []
+            assert federation.items_refused == 0 and federation.wrenches_refused == 0
+            assert federation.samples_failed == 0
+    finally:
+        assert server.stop() == 0
+
+
+def test_two_sites_see_their_tools_coupling_and_its_books_balance():
+    """Two real-time sites on loopback DDS, A's hand pushing its tool into B's: A holds B's tool
+    as a coupling of its port 0, its user put energy into it, and its layer holds what its books
+    say (injected − given + received − sent, to 1 mJ: the figures are read a tick apart)."""
+    def site(name, x):
+        return ServerProcess(json.dumps({
+            "udp_address": "127.0.0.1", "status_period_s": 0, "real_time": {"use_fifo": False},
+            "simulated_point_mass": {"initial_position": {"x": x}},
+            "federation": federation_section(name, 37)}))
+
+    a = site("py-a", -0.02)
+    try:
+        b = site("py-b", 0.02)
+        try:
+            with hapticd.Client(a.config()) as client:
+                hand = hapticd.OperatorInput.follow_line((-0.02, 0, 0), (0.03, 0, 0), 1.0,
+                                                         hapticd.OperatorInput.Grip.CUSTOM)
+                hand.stiffness = 200.0
+                hand.damping = 2.0
+                client.set_operator(hand)
+                give_up = time.monotonic() + 10.0
+                couplings = []
+                while time.monotonic() < give_up:
+                    couplings = client.stats().federation.couplings
+                    if couplings and couplings[0].injected_j > 0.0:
+                        break
+                    time.sleep(0.05)  # polling the server's figures, not waiting for them
+            assert len(couplings) == 1, "A never heard B's tool"
+            coupling = couplings[0]
+            assert coupling.kind == hapticd.CouplingStats.Kind.TOOL
+            assert coupling.port == 0 and coupling.remote != 0 and coupling.mass == 0
+            assert coupling.injected_j > 0.0, "A's hand put nothing into the coupling"
+            assert coupling.reservoir_j == pytest.approx(
+                coupling.injected_j - coupling.given_j + coupling.received_j - coupling.sent_j,
+                abs=1e-3)
+        finally:
+            assert b.stop() == 0
+    finally:
+        assert a.stop() == 0
 
 
 def test_a_recording_counts_the_samples_it_wrote(tmp_path):

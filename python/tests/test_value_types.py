@@ -72,6 +72,18 @@ def test_operator_inputs_and_enums_read_as_in_cpp():
     np.testing.assert_array_equal(pose.orientation, [0, 1, 0, 0])  # (w, x, y, z)
 
 
+def test_federation_stats_are_read_only_results_with_cpp_s_defaults():
+    coupling = hapticd.CouplingStats()
+    assert coupling.kind == hapticd.CouplingStats.Kind.TOOL
+    assert (coupling.port, coupling.remote, coupling.mass) == (0, 0, 0)
+    assert coupling.injected_j == coupling.reservoir_j == 0.0
+    assert hapticd.CouplingStats.Kind.MASS.name == "MASS"
+    assert hapticd.FederationStats().couplings == []
+    assert "reservoir_j" in hapticd.CouplingStats._fields
+    with pytest.raises(AttributeError):
+        coupling.reservoir_j = 1.0  # the server's figures, not the caller's
+
+
 def test_orientation_specs_take_quaternions_and_laws_and_go_into_scenes():
     spring = hapticd.OrientationSpringSpec(target=(0.5, 0.5, -0.5, 0.5), stiffness=0.8,
                                            damping=0.02, max_torque=0.3,
