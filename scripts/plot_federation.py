@@ -17,7 +17,6 @@ of exactly 0 (the no-network reference itself) is drawn at the bottom edge.
 
 Runs with /usr/bin/python3 and Debian's python3-matplotlib (Agg backend); nothing else.
 """
-import csv
 import math
 import os
 import sys
@@ -26,6 +25,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+from plot_common import InputError, flag, number, read_table  # noqa: E402
 
 # The same data draws the same bytes (no dates, fixed SVG ids): regenerated charts diff cleanly.
 plt.rcParams["svg.hashsalt"] = "hapticd"
@@ -49,43 +50,6 @@ LOSS_STYLES = ["-", "--", ":", "-."]
 LOSS_MARKERS = ["o", "s", "^", "D"]
 BAND_SHARE = 0.10  # the unstable band's share of each axis' height
 ZERO_SHIFT = 1.25  # an error of 0 is drawn this factor above the bottom edge (log axis)
-
-
-class InputError(Exception):
-    """A missing file, a missing column or a value that is not what it should be."""
-
-
-def read_table(path, columns):
-    """Rows of a CSV file as (line number, dict), after checking that every column is present."""
-    if not os.path.isfile(path):
-        raise InputError(f"{path}: file not found")
-    with open(path, newline="") as f:
-        reader = csv.DictReader(f)
-        if reader.fieldnames is None:
-            raise InputError(f"{path}: empty file (expected a header with {', '.join(columns)})")
-        missing = [c for c in columns if c not in reader.fieldnames]
-        if missing:
-            raise InputError(f"{path}: missing column(s) {', '.join(missing)} "
-                             f"(header: {', '.join(reader.fieldnames)})")
-        return [(i + 2, row) for i, row in enumerate(reader)]
-
-
-def number(path, line, row, column):
-    """A float from a cell ("inf", "nan" and "-inf" included), or InputError naming the cell."""
-    text = (row.get(column) or "").strip()
-    try:
-        return float(text)
-    except ValueError:
-        raise InputError(f"{path}:{line}: column {column}: not a number: {text!r}") from None
-
-
-def flag(path, line, row, column):
-    text = (row.get(column) or "").strip().lower()
-    if text in ("1", "true"):
-        return True
-    if text in ("0", "false"):
-        return False
-    raise InputError(f"{path}:{line}: column {column}: expected 1 or 0, got {text!r}")
 
 
 def load(directory):

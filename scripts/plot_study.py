@@ -19,7 +19,6 @@ reference is not exact, a dashed line marks how far the reference itself has con
 
 Runs with /usr/bin/python3 and Debian's python3-matplotlib (Agg backend); nothing else.
 """
-import csv
 import textwrap
 import math
 import os
@@ -29,6 +28,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+from plot_common import InputError, flag, number, read_table  # noqa: E402
 
 # The same data draws the same bytes (no dates, fixed SVG ids): regenerated charts diff cleanly.
 plt.rcParams["svg.hashsalt"] = "hapticd"
@@ -55,43 +56,6 @@ SCHEME_COLOURS = {
 SPARE_COLOURS = ["#937860", "#da8bc3", "#8c8c8c", "#ccb974", "#64b5cd", "#2ca02c", "#17becf"]
 LINE_STYLES = ["-", "--", ":", "-."]
 MARKERS = ["o", "s", "^", "D", "v", "P", "X"]
-
-
-class InputError(Exception):
-    """A missing file, a missing column or a value that is not what it should be."""
-
-
-def read_table(path, columns):
-    """Rows of a CSV file as (line number, dict), after checking that every column is present."""
-    if not os.path.isfile(path):
-        raise InputError(f"{path}: file not found")
-    with open(path, newline="") as f:
-        reader = csv.DictReader(f)
-        if reader.fieldnames is None:
-            raise InputError(f"{path}: empty file (expected a header with {', '.join(columns)})")
-        missing = [c for c in columns if c not in reader.fieldnames]
-        if missing:
-            raise InputError(f"{path}: missing column(s) {', '.join(missing)} "
-                             f"(header: {', '.join(reader.fieldnames)})")
-        return [(i + 2, row) for i, row in enumerate(reader)]
-
-
-def number(path, line, row, column):
-    """A float from a cell ("inf", "nan" and "-inf" included), or InputError naming the cell."""
-    text = (row.get(column) or "").strip()
-    try:
-        return float(text)
-    except ValueError:
-        raise InputError(f"{path}:{line}: column {column}: not a number: {text!r}") from None
-
-
-def flag(path, line, row, column):
-    text = (row.get(column) or "").strip().lower()
-    if text in ("1", "true"):
-        return True
-    if text in ("0", "false"):
-        return False
-    raise InputError(f"{path}:{line}: column {column}: expected 1 or 0, got {text!r}")
 
 
 def load(directory):
