@@ -17,6 +17,7 @@
 # Exit 77 (ctest: skipped) where it cannot run: not root, no ip, no network namespaces. Everything
 # it makes is removed on exit. Traffic stays inside these namespaces.
 set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/../support/netns_bridge.sh"
 
 skip() { echo "federation_latency: skipped: $*"; exit 77; }
 [ $# -ge 1 ] || { echo "usage: $0 BENCH_BINARY [--seconds S] [--rounds R] [--sites \"2 8\"] [--transports \"udp dds\"] [--fifo PRIORITY]" >&2; exit 2; }
@@ -38,8 +39,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 
-[ "$(id -u)" -eq 0 ] || skip "needs root (network namespaces)"
-command -v ip >/dev/null || skip "needs ip (iproute2)"
+netns_bridge_check
 if [ ${#fifo[@]} -gt 0 ]; then
   chrt -f 1 true 2>/dev/null || skip "cannot run SCHED_FIFO (--fifo)"
   echo "federation_latency: every site's process SCHED_FIFO, priority ${fifo[2]}"
@@ -62,29 +62,15 @@ site_pids=()
 
 cleanup() {
   for pid in "${site_pids[@]}"; do kill "$pid" 2>/dev/null || true; done
-  for ns in "${namespaces[@]}" "$switch_ns"; do ip netns del "$ns" 2>/dev/null || true; done
+  netns_bridge_cleanup "${namespaces[@]}" "$switch_ns"
   rm -rf "$work"
 }
 trap cleanup EXIT
 
-ip netns add "$switch_ns" 2>/dev/null || skip "cannot make a network namespace"
-ip -n "$switch_ns" link add br0 type bridge 2>/dev/null || skip "cannot make a bridge"
-ip -n "$switch_ns" link set br0 up
-
-# attach NAMESPACE ADDRESS INDEX: a namespace with ADDRESS/24 on a veth to the bridge.
-attach() {
-  local ns="$1" address="$2" index="$3"
-  ip netns add "$ns"
-  ip link add "hfl$index-$tag" type veth peer name "hflb$index-$tag" || skip "cannot make a veth pair"
-  ip link set "hfl$index-$tag" netns "$ns"
-  ip link set "hflb$index-$tag" netns "$switch_ns"
-  ip -n "$switch_ns" link set "hflb$index-$tag" master br0
-  ip -n "$switch_ns" link set "hflb$index-$tag" up
-  ip -n "$ns" link set lo up
-  ip -n "$ns" addr add "$address/24" dev "hfl$index-$tag"
-  ip -n "$ns" link set "hfl$index-$tag" up
-}
-for ((i = 0; i < most; i++)); do attach "${namespaces[$i]}" "${addresses[$i]}" "$i"; done
+netns_bridge_make "$switch_ns"
+for ((i = 0; i < most; i++)); do
+  netns_bridge_attach "$switch_ns" "${namespaces[$i]}" "${addresses[$i]}" "hfl$i-$tag" "hflb$i-$tag"
+done
 
 # A configuration: every site's process in its namespace, measuring from one common start time
 # (CLOCK_MONOTONIC, shared by the namespaces) after time to start and, for DDS, to discover.

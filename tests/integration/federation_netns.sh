@@ -12,12 +12,12 @@
 # Exit 77 (ctest: skipped) where it cannot run: not root, no ip, no network namespaces. Everything
 # it makes is removed on exit. Traffic stays inside these namespaces.
 set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/../support/netns_bridge.sh"
 
 binary="$1"
 skip() { echo "federation_netns: skipped: $*"; exit 77; }
 
-[ "$(id -u)" -eq 0 ] || skip "needs root (network namespaces)"
-command -v ip >/dev/null || skip "needs ip (iproute2)"
+netns_bridge_check
 
 tag=$$
 switch_ns="hfed-br-$tag"
@@ -25,30 +25,12 @@ site_namespaces=("hfed-a-$tag" "hfed-b-$tag" "hfed-c-$tag")
 site_addresses=(10.82.0.1 10.82.0.2 10.82.0.3)
 workstation_ns="hfed-w-$tag"
 
-cleanup() {
-  for ns in "${site_namespaces[@]}" "$workstation_ns" "$switch_ns"; do
-    ip netns del "$ns" 2>/dev/null || true
-  done
-}
+cleanup() { netns_bridge_cleanup "${site_namespaces[@]}" "$workstation_ns" "$switch_ns"; }
 trap cleanup EXIT
 
-ip netns add "$switch_ns" 2>/dev/null || skip "cannot make a network namespace"
-ip -n "$switch_ns" link add br0 type bridge 2>/dev/null || skip "cannot make a bridge"
-ip -n "$switch_ns" link set br0 up
-
+netns_bridge_make "$switch_ns"
 # attach NAMESPACE ADDRESS INDEX: a namespace with ADDRESS/24 on a veth to the bridge.
-attach() {
-  local ns="$1" address="$2" index="$3"
-  ip netns add "$ns"
-  ip link add "hfd$index-$tag" type veth peer name "hfdb$index-$tag" || skip "cannot make a veth pair"
-  ip link set "hfd$index-$tag" netns "$ns"
-  ip link set "hfdb$index-$tag" netns "$switch_ns"
-  ip -n "$switch_ns" link set "hfdb$index-$tag" master br0
-  ip -n "$switch_ns" link set "hfdb$index-$tag" up
-  ip -n "$ns" link set lo up
-  ip -n "$ns" addr add "$address/24" dev "hfd$index-$tag"
-  ip -n "$ns" link set "hfd$index-$tag" up
-}
+attach() { netns_bridge_attach "$switch_ns" "$1" "$2" "hfd$3-$tag" "hfdb$3-$tag"; }
 
 for i in 0 1 2; do attach "${site_namespaces[$i]}" "${site_addresses[$i]}" "$i"; done
 attach "$workstation_ns" 10.82.0.8 8

@@ -11,12 +11,12 @@
 # Exit 77 (ctest: skipped) where it cannot run: not root, no ip, no network namespaces. Everything
 # it makes is removed on exit. Traffic stays inside these namespaces.
 set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/../support/netns_bridge.sh"
 
 binary="$1"
 skip() { echo "flood_netns: skipped: $*"; exit 77; }
 
-[ "$(id -u)" -eq 0 ] || skip "needs root (network namespaces)"
-command -v ip >/dev/null || skip "needs ip (iproute2)"
+netns_bridge_check
 
 tag=$$
 switch_ns="hflood-br-$tag"
@@ -25,30 +25,12 @@ workstation_ns="hflood-w-$tag"
 flood_namespaces=()
 for i in 1 2 3 4 5 6; do flood_namespaces+=("hflood-$i-$tag"); done
 
-cleanup() {
-  for ns in "$server_ns" "$workstation_ns" "${flood_namespaces[@]}" "$switch_ns"; do
-    ip netns del "$ns" 2>/dev/null || true
-  done
-}
+cleanup() { netns_bridge_cleanup "$server_ns" "$workstation_ns" "${flood_namespaces[@]}" "$switch_ns"; }
 trap cleanup EXIT
 
-ip netns add "$switch_ns" 2>/dev/null || skip "cannot make a network namespace"
-ip -n "$switch_ns" link add br0 type bridge
-ip -n "$switch_ns" link set br0 up
-
+netns_bridge_make "$switch_ns"
 # attach NAMESPACE ADDRESS INDEX: a namespace with ADDRESS/24 on a veth to the bridge.
-attach() {
-  local ns="$1" address="$2" index="$3"
-  ip netns add "$ns"
-  ip link add "hf$index-$tag" type veth peer name "hfb$index-$tag"
-  ip link set "hf$index-$tag" netns "$ns"
-  ip link set "hfb$index-$tag" netns "$switch_ns"
-  ip -n "$switch_ns" link set "hfb$index-$tag" master br0
-  ip -n "$switch_ns" link set "hfb$index-$tag" up
-  ip -n "$ns" link set lo up
-  ip -n "$ns" addr add "$address/24" dev "hf$index-$tag"
-  ip -n "$ns" link set "hf$index-$tag" up
-}
+attach() { netns_bridge_attach "$switch_ns" "$1" "$2" "hf$3-$tag" "hfb$3-$tag"; }
 
 attach "$server_ns" 10.79.0.1 0
 attach "$workstation_ns" 10.79.0.8 8
