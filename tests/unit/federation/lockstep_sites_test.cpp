@@ -15,18 +15,16 @@
 #include <vector>
 
 #include "federation/sample_relay.hpp"
-#include "runtime/cartesian_model.hpp"
-#include "runtime/remote_tools.hpp"
-#include "runtime/shared_masses.hpp"
-#include "runtime/simulated_point_mass_device.hpp"
-#include "runtime/tick_runner.hpp"
 #include "support/delay_line_network.hpp"
+#include "support/lockstep_site.hpp"
 
 namespace haptic::federation {
 namespace {
 
 using runtime::shared_mass_key;
 using runtime::site_key;
+using test::hand_towards;
+using test::Phase;
 
 constexpr double kPeriod = 1e-3;
 constexpr std::uint64_t kTicks = 60'000;
@@ -56,21 +54,7 @@ std::chrono::steady_clock::time_point clock_at(std::uint64_t tick) {
 
 /// The shared sphere as site `site` (0: the one that made it, item 1) compiles it.
 std::unique_ptr<const engine::CompiledScene> scene_at(int site) {
-  engine::ObjectSpec sphere;
-  sphere.shape = engine::SphereSpec{kSphereRadius};
-  sphere.stiffness = 500.0;
-  sphere.object_mass = 0.5;
-  sphere.object_damping = 1.0;
-  sphere.across_sites = true;
-  if (site != 0) {
-    sphere.origin_site = site_key(site_name(0));
-    sphere.origin_id = 1;
-  }
-  engine::SceneDescription description;
-  engine::ItemMeta meta;
-  meta.id = site == 0 ? 1 : 40 + static_cast<std::uint64_t>(site);  // its id here
-  description.objects.push_back(engine::ObjectEntry{meta, sphere});
-  return std::make_unique<const engine::CompiledScene>(engine::compile_scene(description, 50, 1, kPeriod));
+  return test::shared_sphere_at(site, site_name(0), kSphereRadius, kPeriod);
 }
 
 /// Where each site's hand takes its tool (each move a line over 1.5 s). Until 20 s the tools push
@@ -79,10 +63,6 @@ std::unique_ptr<const engine::CompiledScene> scene_at(int site) {
 /// push it from −x, from +x (2 mm above its centre) and from −y (2 mm below), at heights that keep
 /// the tools more than an avatar apart there, and at 45 s they let go. So while a tool is away from
 /// the mass the force it is given is the avatars' alone (checked below).
-struct Phase {
-  double at_s;
-  engine::Vec3 target;
-};
 std::vector<std::vector<Phase>> scripts() {
   return {{{0, {-0.03, 0.06, 0}},
            {1, {0.01, 0.06, 0}},
@@ -107,41 +87,18 @@ std::vector<std::vector<Phase>> scripts() {
 }
 constexpr double kToolsPhaseEndS = 20.0;
 
-engine::HandInput hand_towards(const engine::Vec3& from, const engine::Vec3& to) {
-  engine::HandInput hand;
-  hand.mode = engine::HandInput::Mode::kFollowTarget;
-  hand.target = from;
-  hand.stiffness = 200.0;
-  hand.damping = 2.0;
-  hand.trajectory.shape = engine::TargetTrajectory::Shape::kLine;
-  hand.trajectory.end = to;
-  hand.trajectory.duration_s = 1.5;
-  return hand;
-}
-
 /// One site: its loop (as hapticd builds it for federation) and its relay on the network.
-struct Site {
+struct Site : test::LockstepSite {
   Site(int index, const engine::Vec3& start, test::DelayLineNetwork& network, double silence_s = 0.5)
-      : name(site_name(index)),
-        key(site_key(name)),
-        device(params(), engine::PointMassState{start, {}}, kMaxForce),
-        scenes(scene_at(index)),
-        stage(key, runtime::MassCouplingParams{}, kPeriod, &in, &out),
-        runner({runtime::TickPort{&device, &model, &samples, engine::force_limits_for(kMaxForce), std::nullopt,
-                                  &remote, &ledger, runtime::AvatarParams{kAvatarRadius, 1000.0, 0.0}}},
-               scenes, counters, runtime::TickConfig{kPeriod, {}, 50, {}, &stage}),
+      : LockstepSite(site_key(site_name(index)), start, scene_at(index),
+                     {.period_s = kPeriod,
+                      .max_force_N = kMaxForce,
+                      .remote_tools = true,
+                      .avatar_radius_m = kAvatarRadius,
+                      .shared_masses = true}),
+        name(site_name(index)),
         relay(options(name, silence_s), network.site(name), {RelayPort{&samples, 0, &remote, &ledger}},
-              RelayMasses{&out, &in}) {
-    device.set_hand(hand_towards(start, start));
-  }
-  static engine::PointMassParams params() {
-    engine::PointMassParams p;
-    p.mass = 0.05;
-    p.damping = 0.1;
-    p.workspace_min = {-1, -1, -1};
-    p.workspace_max = {1, 1, 1};
-    return p;
-  }
+              RelayMasses{&out, &in}) {}
   static RelayOptions options(const std::string& name, double silence_s) {
     RelayOptions o;
     o.site = name;
@@ -150,18 +107,6 @@ struct Site {
   }
 
   std::string name;
-  std::uint64_t key;
-  runtime::SimulatedPointMassDevice device;
-  runtime::CartesianModel model;
-  runtime::SceneExchange scenes;
-  runtime::SampleRing samples;
-  runtime::LoopCounters counters;
-  runtime::LatestValue<runtime::RemoteToolSet> remote;
-  runtime::CouplingLedger ledger;
-  runtime::LatestValue<runtime::RemoteMassTable> in;
-  runtime::LatestValue<runtime::LocalMassTable> out;
-  runtime::SharedMassStage stage;
-  runtime::TickRunner runner;
   SampleRelay relay;
 };
 

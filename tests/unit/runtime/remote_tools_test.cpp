@@ -12,11 +12,8 @@
 #include <random>
 #include <vector>
 
-#include "runtime/cartesian_model.hpp"
-#include "runtime/remote_tools.hpp"
-#include "runtime/simulated_point_mass_device.hpp"
-#include "runtime/tick_runner.hpp"
 #include "support/allocation_counter.hpp"
+#include "support/lockstep_site.hpp"
 
 namespace haptic::runtime {
 namespace {
@@ -24,42 +21,13 @@ namespace {
 constexpr double kPeriod = 1e-3;
 
 /// One site: its device held by a hand whose target moves from `start` to `end` over 1.5 s.
-struct Site {
-  Site(const engine::Vec3& start, const engine::Vec3& end, std::uint64_t key)
-      : device(params(), engine::PointMassState{start, {}}, 20.0),
-        scenes(std::make_unique<const engine::CompiledScene>(engine::compile_scene({}, 50, 1, kPeriod))),
-        runner({TickPort{&device, &model, &samples, engine::force_limits_for(20.0), std::nullopt, &remote, &ledger,
-                         AvatarParams{0.01, 1000.0, 0.0}}},
-               scenes, counters, TickConfig{kPeriod, {}, 50, {}}),
-        key(key) {
-    engine::HandInput hand;
-    hand.mode = engine::HandInput::Mode::kFollowTarget;
-    hand.target = start;
-    hand.stiffness = 200.0;
-    hand.damping = 2.0;
-    hand.trajectory.shape = engine::TargetTrajectory::Shape::kLine;
-    hand.trajectory.end = end;
-    hand.trajectory.duration_s = 1.5;
-    device.set_hand(hand);
+struct Site : test::LockstepSite {
+  Site(const engine::Vec3& start, const engine::Vec3& end, std::uint64_t site)
+      : LockstepSite(site, start,
+                     std::make_unique<const engine::CompiledScene>(engine::compile_scene({}, 50, 1, kPeriod)),
+                     {.period_s = kPeriod, .max_force_N = 20.0, .remote_tools = true, .avatar_radius_m = 0.01}) {
+    device.set_hand(test::hand_towards(start, end));
   }
-  static engine::PointMassParams params() {
-    engine::PointMassParams p;
-    p.mass = 0.05;
-    p.damping = 0.1;
-    p.workspace_min = {-1, -1, -1};
-    p.workspace_max = {1, 1, 1};
-    return p;
-  }
-
-  SimulatedPointMassDevice device;
-  CartesianModel model;
-  SceneExchange scenes;
-  SampleRing samples;
-  LoopCounters counters;
-  LatestValue<RemoteToolSet> remote;
-  CouplingLedger ledger;
-  TickRunner runner;
-  std::uint64_t key;
 };
 
 struct Message {

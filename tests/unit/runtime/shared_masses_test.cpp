@@ -13,11 +13,8 @@
 #include <random>
 #include <vector>
 
-#include "runtime/cartesian_model.hpp"
-#include "runtime/shared_masses.hpp"
-#include "runtime/simulated_point_mass_device.hpp"
-#include "runtime/tick_runner.hpp"
 #include "support/allocation_counter.hpp"
+#include "support/lockstep_site.hpp"
 
 namespace haptic::runtime {
 namespace {
@@ -26,78 +23,27 @@ constexpr double kPeriod = 1e-3;
 constexpr std::uint64_t kTicks = 60'000;
 constexpr double kMaxForce = 20.0;  // the devices' limit. N
 
+using test::hand_towards;
+using test::Phase;
+
 /// The shared sphere as site `site` (0: the one that made it, item 1) compiles it.
 std::unique_ptr<const engine::CompiledScene> scene_at(int site) {
-  engine::ObjectSpec sphere;
-  sphere.shape = engine::SphereSpec{0.02};
-  sphere.stiffness = 500.0;
-  sphere.object_mass = 0.5;
-  sphere.object_damping = 1.0;
-  sphere.across_sites = true;
-  if (site != 0) {
-    sphere.origin_site = site_key("site-0");
-    sphere.origin_id = 1;
-  }
-  engine::SceneDescription description;
-  engine::ItemMeta meta;
-  meta.id = site == 0 ? 1 : 40 + static_cast<std::uint64_t>(site);  // its id here
-  description.objects.push_back(engine::ObjectEntry{meta, sphere});
-  return std::make_unique<const engine::CompiledScene>(engine::compile_scene(description, 50, 1, kPeriod));
+  return test::shared_sphere_at(site, "site-0", 0.02, kPeriod);
 }
 
 /// Where each site's hand takes its tool, phase by phase (targets move over 1.5 s): push the
 /// mass, squeeze it, push it through, and let go from 40 s.
-struct Phase {
-  double at_s;
-  engine::Vec3 target;
-};
 std::vector<std::vector<Phase>> scripts() {
   return {{{0, {-0.05, 0, 0}}, {1, {-0.005, 0, 0}}, {25, {0.01, 0, 0}}, {40, {-0.05, 0, 0}}},
           {{0, {0.05, 0, 0}}, {12, {0.0, 0, 0}}, {40, {0.05, 0, 0}}},
           {{0, {0.01, -0.05, 0}}, {18, {0.01, -0.01, 0}}, {40, {0.01, -0.05, 0}}}};
 }
 
-engine::HandInput hand_towards(const engine::Vec3& from, const engine::Vec3& to) {
-  engine::HandInput hand;
-  hand.mode = engine::HandInput::Mode::kFollowTarget;
-  hand.target = from;
-  hand.stiffness = 200.0;
-  hand.damping = 2.0;
-  hand.trajectory.shape = engine::TargetTrajectory::Shape::kLine;
-  hand.trajectory.end = to;
-  hand.trajectory.duration_s = 1.5;
-  return hand;
-}
-
-struct Site {
+/// A site's loop with the mass stage (no remote tools).
+struct Site : test::LockstepSite {
   Site(int index, const engine::Vec3& start)
-      : key(site_key("site-" + std::to_string(index))),
-        device(params(), engine::PointMassState{start, {}}, kMaxForce),
-        scenes(scene_at(index)),
-        stage(key, MassCouplingParams{}, kPeriod, &in, &out),
-        runner({TickPort{&device, &model, &samples, engine::force_limits_for(kMaxForce)}}, scenes, counters,
-               TickConfig{kPeriod, {}, 50, {}, &stage}) {
-    device.set_hand(hand_towards(start, start));
-  }
-  static engine::PointMassParams params() {
-    engine::PointMassParams p;
-    p.mass = 0.05;
-    p.damping = 0.1;
-    p.workspace_min = {-1, -1, -1};
-    p.workspace_max = {1, 1, 1};
-    return p;
-  }
-
-  std::uint64_t key;
-  SimulatedPointMassDevice device;
-  CartesianModel model;
-  SceneExchange scenes;
-  SampleRing samples;
-  LoopCounters counters;
-  LatestValue<RemoteMassTable> in;
-  LatestValue<LocalMassTable> out;
-  SharedMassStage stage;
-  TickRunner runner;
+      : LockstepSite(site_key("site-" + std::to_string(index)), start, scene_at(index),
+                     {.period_s = kPeriod, .max_force_N = kMaxForce, .shared_masses = true}) {}
 };
 
 struct Message {
