@@ -6,15 +6,10 @@
 namespace haptic::federation {
 
 std::uint64_t remote_key(const std::string& site, std::uint32_t port) {
-  // FNV-1a over the site's name and the port: the same key at every site, 0 never.
-  std::uint64_t hash = 1469598103934665603ull;
-  const auto mix = [&](unsigned char byte) {
-    hash ^= byte;
-    hash *= 1099511628211ull;
-  };
-  for (const char c : site) mix(static_cast<unsigned char>(c));
-  mix(0);
-  for (int shift = 0; shift < 32; shift += 8) mix(static_cast<unsigned char>(port >> shift));
+  // FNV-1a over the site's name, a 0 byte and the port: the same key at every site, 0 never.
+  const char tail[5] = {0, static_cast<char>(port), static_cast<char>(port >> 8), static_cast<char>(port >> 16),
+                        static_cast<char>(port >> 24)};
+  const std::uint64_t hash = runtime::fnv1a(std::string_view(tail, sizeof tail), runtime::fnv1a(site));
   return hash == 0 ? 1 : hash;
 }
 

@@ -4,12 +4,16 @@
 
 namespace haptic::runtime {
 
-std::uint64_t site_key(std::string_view site) {
-  std::uint64_t hash = 14695981039346656037ull;  // FNV-1a, 64 bit
-  for (const char c : site) {
+std::uint64_t fnv1a(std::string_view bytes, std::uint64_t hash) {
+  for (const char c : bytes) {
     hash ^= static_cast<unsigned char>(c);
     hash *= 1099511628211ull;
   }
+  return hash;
+}
+
+std::uint64_t site_key(std::string_view site) {
+  const std::uint64_t hash = fnv1a(site);
   return hash != 0 ? hash : 1;
 }
 

@@ -21,6 +21,10 @@ namespace haptic::runtime {
 /// Most masses shared across sites one scene couples (a mailbox is copied every tick).
 inline constexpr std::size_t kMaxSharedMasses = 4;
 
+/// FNV-1a (64 bit) over `bytes`, continuing from `hash` (the offset basis to start).
+inline constexpr std::uint64_t kFnvOffsetBasis = 14695981039346656037ull;
+std::uint64_t fnv1a(std::string_view bytes, std::uint64_t hash = kFnvOffsetBasis);
+
 /// A site's key: FNV-1a of its name, never 0 (the same at every site).
 std::uint64_t site_key(std::string_view site);
 /// A shared mass's key at every site: its origin site's key and its id there. Never 0.

@@ -40,6 +40,15 @@ engine::Vec3 from_passive_source(engine::NetworkPassivity& layer, const engine::
   return layer.apply(F, v, p, std::numeric_limits<double>::infinity()).F_T_W;
 }
 
+/// A network passivity layer at a device port: its damper capped at what stops the device's mass
+/// (or, for a torque, its inertia) within one period T; the default cap where that is unknown (0).
+engine::NetworkPassivityParams port_layer(double mass, double T) {
+  engine::NetworkPassivityParams params;
+  params.period = T;
+  if (mass > 0.0) params.max_damping = mass / T;
+  return params;
+}
+
 }  // namespace
 
 TickRunner::TickRunner(Device& device, DeviceModel& model, SceneExchange& scenes,
@@ -69,12 +78,7 @@ void TickRunner::make_ports(const std::vector<TickPort>& ports) {
     out.robot = port.robot;
     out.robot_params = port.robot_params;
     if (port.robot) {
-      engine::NetworkPassivityParams params;
-      params.period = config_.period_s;
-      // The device port's cap, as for the avatars: the damper that stops the tool's mass in one period.
-      const double mass = description.apparent_mass;
-      params.max_damping = mass > 0.0 ? mass / config_.period_s : params.max_damping;
-      out.robot_layer.emplace(params);
+      out.robot_layer.emplace(port_layer(description.apparent_mass, config_.period_s));
       // What is in the mailbox already (before a lockstep reset) is not rendered again: stale
       // until a new wrench comes.
       out.robot_sequence = port.robot->load().sequence;
@@ -85,10 +89,7 @@ void TickRunner::make_ports(const std::vector<TickPort>& ports) {
       out.torque_guard.emplace(engine::force_limits_for(description.max_torque));
       // The robot's torque on the handle, where the device takes torques and knows its inertia.
       if (port.robot && description.apparent_inertia > 0.0) {
-        engine::NetworkPassivityParams params;
-        params.period = config_.period_s;
-        params.max_damping = description.apparent_inertia / config_.period_s;  // N·m·s/rad
-        out.robot_torque_layer.emplace(params);
+        out.robot_torque_layer.emplace(port_layer(description.apparent_inertia, config_.period_s));
       }
     }
   }
@@ -248,16 +249,12 @@ engine::Vec3 TickRunner::avatar_force(Port& port, const ToolReading& reading) {
       port.coupling_keys[slot] = tool.key;
       port.couplings[slot].reset();
       if (tool.key != 0) {
-        engine::NetworkPassivityParams params;
-        params.period = config_.period_s;
-        // The device port's cap: the damper that stops the tool's mass in one period.
-        const double mass = port.device.description().apparent_mass;
-        params.max_damping = mass > 0.0 ? mass / config_.period_s : params.max_damping;
-        port.couplings[slot].emplace(params);
+        port.couplings[slot].emplace(port_layer(port.device.description().apparent_mass, config_.period_s));
       }
     }
     if (!port.couplings[slot]) {
-      if (port.ledger) port.ledger->record(slot, CouplingBooks{});
+      // No coupling in the slot: its books are cleared once, not written every tick.
+      if (port.ledger && port.ledger->key(slot) != 0) port.ledger->record(slot, CouplingBooks{});
       continue;
     }
     double gain = 1.0;
