@@ -1,16 +1,23 @@
 // The C API (haptic/haptic_c.h) over haptic::Client: every entry point catches every exception
-// and reports it as a code and message, so nothing unwinds into C.
+// and reports it as a code and message, so nothing unwinds into C. Each spec kind has one pair of
+// conversions (CSpec ↔ the C++ spec) that init, add, update, scenes and read-back share.
 
 #include "haptic/haptic_c.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <exception>
 #include <new>
 #include <optional>
 #include <string>
+#include <type_traits>
+#include <utility>
+#include <variant>
+#include <vector>
 
 #include "haptic/haptic.hpp"
+#include "haptic/motion.hpp"
 
 struct haptic_client {
   haptic::Client client;
@@ -20,7 +27,25 @@ struct haptic_object {
   haptic::ObjectHandle handle;
 };
 
+struct haptic_field {
+  haptic::FieldHandle handle;
+};
+
+struct haptic_applied_scene {
+  std::vector<std::optional<haptic::ObjectHandle>> objects;
+  std::vector<std::optional<haptic::FieldHandle>> fields;
+  std::vector<haptic::StabilityReport> stability;
+};
+
+struct haptic_registered_scene {
+  haptic::RegisteredScene scene;
+};
+
 namespace {
+
+using haptic::InvalidArgumentError;
+
+// ---- errors ----
 
 void set_error(haptic_error* err, int code, const char* message) {
   if (err == nullptr) return;
@@ -65,20 +90,588 @@ int guarded(haptic_error* err, Body&& body) noexcept {
   }
 }
 
-int invalid(haptic_error* err, const char* message) {
-  set_error(err, HAPTIC_ERROR_INVALID_ARGUMENT, message);
-  return HAPTIC_ERROR_INVALID_ARGUMENT;
+/// Throws InvalidArgumentError "<call>: <field>: is NULL" when `pointer` is.
+void require(const void* pointer, const char* call, const char* field) {
+  if (pointer == nullptr) throw InvalidArgumentError(std::string(call) + ": " + field + ": is NULL");
 }
 
-const haptic::ClientConfig& defaults() {
-  static const haptic::ClientConfig config;
-  return config;
+/// A caller's struct that starts with a size: NULL or smaller than version 1's is refused.
+template <typename CStruct>
+const CStruct& sized(const void* pointer, const char* call, const char* field) {
+  require(pointer, call, field);
+  std::uint32_t size = 0;
+  std::memcpy(&size, pointer, sizeof(size));
+  if (size < sizeof(CStruct)) {
+    throw InvalidArgumentError(std::string(call) + ": " + field + ": size " + std::to_string(size) +
+                               " is smaller than version 1's " + std::to_string(sizeof(CStruct)));
+  }
+  return *static_cast<const CStruct*>(pointer);
 }
+template <typename CStruct>
+CStruct& sized_out(void* pointer, const char* call, const char* field) {
+  return const_cast<CStruct&>(sized<CStruct>(pointer, call, field));
+}
+
+/// A problem with one field of a C struct, found while converting it; the call that read the
+/// struct turns it into InvalidArgumentError "<call>: <struct>.<field>: <problem>".
+struct FieldProblem {
+  std::string field;
+  std::string problem;
+};
+
+template <typename Convert>
+auto converting(const char* call, const char* name, Convert&& convert) {
+  try {
+    return convert();
+  } catch (const FieldProblem& p) {
+    throw InvalidArgumentError(std::string(call) + ": " + name + "." + p.field + ": " + p.problem);
+  }
+}
+
+/// A C enum's value as the C++ enum; out of range is a FieldProblem.
+template <typename Enum>
+Enum enum_from(std::int32_t value, std::int32_t last, const char* field) {
+  if (value < 0 || value > last) {
+    throw FieldProblem{field, std::to_string(value) + " is not one of 0.." + std::to_string(last)};
+  }
+  return static_cast<Enum>(value);
+}
+
+void copy_text(char* out, std::size_t capacity, const std::string& text) {
+  const std::size_t n = std::min(capacity - 1, text.size());
+  std::memcpy(out, text.data(), n);
+  out[n] = '\0';
+}
+
+std::int64_t steady_ns(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
+}
+
+// ---- value types ----
 
 haptic_vec3 to_c(const haptic::Vec3& v) { return {v.x, v.y, v.z}; }
-haptic::Vec3 from_c(const haptic_vec3& v) { return {v.x, v.y, v.z}; }
+haptic::Vec3 to_cpp(const haptic_vec3& v) { return {v.x, v.y, v.z}; }
+haptic_quaternion to_c(const haptic::Quaternion& q) { return {q.w, q.x, q.y, q.z}; }
+haptic::Quaternion to_cpp(const haptic_quaternion& q) { return {q.w, q.x, q.y, q.z}; }
+haptic_pose to_c(const haptic::Pose& p) { return {to_c(p.position), to_c(p.orientation)}; }
+haptic::Pose to_cpp(const haptic_pose& p) { return {to_cpp(p.position), to_cpp(p.orientation)}; }
+haptic_dynamics to_c(const haptic::Dynamics& d) { return {d.mass, d.damping}; }
+haptic::Dynamics to_cpp(const haptic_dynamics& d) { return {d.mass, d.damping}; }
+
+constexpr std::int32_t kLastLaw = static_cast<std::int32_t>(haptic::ImpedanceLaw::kTustin);
+
+haptic_impedance to_c(const haptic::Impedance& i) {
+  haptic_impedance c{};
+  c.stiffness = i.stiffness;
+  c.damping = i.damping;
+  c.static_friction = i.static_friction;
+  c.dynamic_friction = i.dynamic_friction;
+  c.mass = i.mass;
+  c.law = static_cast<std::int32_t>(i.law);
+  c.transparency_optimal_damping = i.transparency_optimal_damping;
+  c.virtual_coupling = i.virtual_coupling;
+  return c;
+}
+haptic::Impedance to_cpp(const haptic_impedance& c) {
+  haptic::Impedance i;
+  i.stiffness = c.stiffness;
+  i.damping = c.damping;
+  i.static_friction = c.static_friction;
+  i.dynamic_friction = c.dynamic_friction;
+  i.mass = c.mass;
+  i.law = enum_from<haptic::ImpedanceLaw>(c.law, kLastLaw, "impedance.law");
+  i.transparency_optimal_damping = c.transparency_optimal_damping != 0;
+  i.virtual_coupling = c.virtual_coupling != 0;
+  return i;
+}
+
+haptic_distance to_c(const haptic::Distance& d) {
+  haptic_distance c{};
+  c.kind = static_cast<std::int32_t>(d.kind);
+  c.origin = to_c(d.origin);
+  c.axis = to_c(d.axis);
+  c.radius = d.radius;
+  return c;
+}
+haptic::Distance to_cpp(const haptic_distance& c) {
+  haptic::Distance d;
+  d.kind = enum_from<haptic::Distance::Kind>(c.kind, HAPTIC_DISTANCE_SPHERE, "distance.kind");
+  d.origin = to_cpp(c.origin);
+  d.axis = to_cpp(c.axis);
+  d.radius = c.radius;
+  return d;
+}
+
+// ---- specs: one to_c / to_cpp pair per kind, and its traits ----
+
+haptic_wall_spec to_c(const haptic::WallSpec& s) {
+  haptic_wall_spec c{};
+  c.size = sizeof(c);
+  c.point = to_c(s.point);
+  c.normal = to_c(s.normal);
+  c.impedance = to_c(s.impedance);
+  c.shared = s.shared;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::WallSpec to_cpp(const haptic_wall_spec& c) {
+  haptic::WallSpec s;
+  s.point = to_cpp(c.point);
+  s.normal = to_cpp(c.normal);
+  s.impedance = to_cpp(c.impedance);
+  s.shared = c.shared != 0;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_sphere_spec to_c(const haptic::SphereSpec& s) {
+  haptic_sphere_spec c{};
+  c.size = sizeof(c);
+  c.center = to_c(s.center);
+  c.radius = s.radius;
+  c.impedance = to_c(s.impedance);
+  c.dynamics = to_c(s.dynamics);
+  c.shared = s.shared;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::SphereSpec to_cpp(const haptic_sphere_spec& c) {
+  haptic::SphereSpec s;
+  s.center = to_cpp(c.center);
+  s.radius = c.radius;
+  s.impedance = to_cpp(c.impedance);
+  s.dynamics = to_cpp(c.dynamics);
+  s.shared = c.shared != 0;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_box_spec to_c(const haptic::BoxSpec& s) {
+  haptic_box_spec c{};
+  c.size = sizeof(c);
+  c.pose = to_c(s.pose);
+  c.half_extents = to_c(s.half_extents);
+  c.impedance = to_c(s.impedance);
+  c.dynamics = to_c(s.dynamics);
+  c.shared = s.shared;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::BoxSpec to_cpp(const haptic_box_spec& c) {
+  haptic::BoxSpec s;
+  s.pose = to_cpp(c.pose);
+  s.half_extents = to_cpp(c.half_extents);
+  s.impedance = to_cpp(c.impedance);
+  s.dynamics = to_cpp(c.dynamics);
+  s.shared = c.shared != 0;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_capsule_spec to_c(const haptic::CapsuleSpec& s) {
+  haptic_capsule_spec c{};
+  c.size = sizeof(c);
+  c.pose = to_c(s.pose);
+  c.radius = s.radius;
+  c.half_length = s.half_length;
+  c.impedance = to_c(s.impedance);
+  c.dynamics = to_c(s.dynamics);
+  c.shared = s.shared;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::CapsuleSpec to_cpp(const haptic_capsule_spec& c) {
+  haptic::CapsuleSpec s;
+  s.pose = to_cpp(c.pose);
+  s.radius = c.radius;
+  s.half_length = c.half_length;
+  s.impedance = to_cpp(c.impedance);
+  s.dynamics = to_cpp(c.dynamics);
+  s.shared = c.shared != 0;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_tangent_plane_spec to_c(const haptic::TangentPlaneSpec& s) {
+  haptic_tangent_plane_spec c{};
+  c.size = sizeof(c);
+  c.pose = to_c(s.pose);
+  c.normal = to_c(s.normal);
+  c.reference = to_c(s.reference);
+  c.tangential_stiffness = s.tangential_stiffness;
+  c.tangential_damping = s.tangential_damping;
+  c.impedance = to_c(s.impedance);
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::TangentPlaneSpec to_cpp(const haptic_tangent_plane_spec& c) {
+  haptic::TangentPlaneSpec s;
+  s.pose = to_cpp(c.pose);
+  s.normal = to_cpp(c.normal);
+  s.reference = to_cpp(c.reference);
+  s.tangential_stiffness = c.tangential_stiffness;
+  s.tangential_damping = c.tangential_damping;
+  s.impedance = to_cpp(c.impedance);
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+// A mesh's arrays: the C struct points into the C++ spec's vectors (which must outlive it).
+haptic_mesh_spec to_c(const haptic::MeshSpec& s) {
+  static_assert(sizeof(haptic_vec3) == sizeof(haptic::Vec3) &&
+                std::is_standard_layout_v<haptic::Vec3>);
+  haptic_mesh_spec c{};
+  c.size = sizeof(c);
+  c.pose = to_c(s.pose);
+  c.vertices = s.vertices.empty() ? nullptr : reinterpret_cast<const haptic_vec3*>(s.vertices.data());
+  c.vertex_count = static_cast<std::uint32_t>(s.vertices.size());
+  c.indices = s.indices.empty() ? nullptr : s.indices.data();
+  c.index_count = static_cast<std::uint32_t>(s.indices.size());
+  c.impedance = to_c(s.impedance);
+  c.shared = s.shared;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::MeshSpec to_cpp(const haptic_mesh_spec& c) {
+  haptic::MeshSpec s;
+  s.pose = to_cpp(c.pose);
+  if (c.vertex_count > 0 && c.vertices == nullptr) throw FieldProblem{"vertices", "is NULL with vertex_count > 0"};
+  if (c.index_count > 0 && c.indices == nullptr) throw FieldProblem{"indices", "is NULL with index_count > 0"};
+  s.vertices.reserve(c.vertex_count);
+  for (std::uint32_t i = 0; i < c.vertex_count; ++i) s.vertices.push_back(to_cpp(c.vertices[i]));
+  if (c.index_count > 0) s.indices.assign(c.indices, c.indices + c.index_count);
+  s.impedance = to_cpp(c.impedance);
+  s.shared = c.shared != 0;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_spring_field_spec to_c(const haptic::SpringFieldSpec& s) {
+  haptic_spring_field_spec c{};
+  c.size = sizeof(c);
+  c.anchor = to_c(s.anchor);
+  c.stiffness = s.stiffness;
+  c.damping = s.damping;
+  c.max_force = s.max_force;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::SpringFieldSpec to_cpp(const haptic_spring_field_spec& c) {
+  haptic::SpringFieldSpec s;
+  s.anchor = to_cpp(c.anchor);
+  s.stiffness = c.stiffness;
+  s.damping = c.damping;
+  s.max_force = c.max_force;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_distance_spring_spec to_c(const haptic::DistanceSpringSpec& s) {
+  haptic_distance_spring_spec c{};
+  c.size = sizeof(c);
+  c.anchor = to_c(s.anchor);
+  c.stiffness = s.stiffness;
+  c.damping = s.damping;
+  c.max_force = s.max_force;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::DistanceSpringSpec to_cpp(const haptic_distance_spring_spec& c) {
+  haptic::DistanceSpringSpec s;
+  s.anchor = to_cpp(c.anchor);
+  s.stiffness = c.stiffness;
+  s.damping = c.damping;
+  s.max_force = c.max_force;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_potential_field_spec to_c(const haptic::PotentialFieldSpec& s) {
+  haptic_potential_field_spec c{};
+  c.size = sizeof(c);
+  c.distance = to_c(s.distance);
+  c.kind = static_cast<std::int32_t>(s.kind);
+  c.order = s.order;
+  c.gain = s.gain;
+  c.offset = s.offset;
+  c.influence_distance = s.influence_distance;
+  c.min_distance = s.min_distance;
+  c.central_differences = s.central_differences;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::PotentialFieldSpec to_cpp(const haptic_potential_field_spec& c) {
+  haptic::PotentialFieldSpec s;
+  s.distance = to_cpp(c.distance);
+  s.kind = enum_from<haptic::PotentialFieldSpec::Kind>(c.kind, HAPTIC_POTENTIAL_KHATIB, "potential.kind");
+  s.order = c.order;
+  s.gain = c.gain;
+  s.offset = c.offset;
+  s.influence_distance = c.influence_distance;
+  s.min_distance = c.min_distance;
+  s.central_differences = c.central_differences != 0;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_linear_field_spec to_c(const haptic::LinearFieldSpec& s) {
+  haptic_linear_field_spec c{};
+  c.size = sizeof(c);
+  c.origin = to_c(s.origin);
+  c.force = to_c(s.force);
+  for (int row = 0; row < 3; ++row) c.jacobian[row] = to_c(s.jacobian[row]);
+  c.radius = s.radius;
+  c.fade_width = s.fade_width;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::LinearFieldSpec to_cpp(const haptic_linear_field_spec& c) {
+  haptic::LinearFieldSpec s;
+  s.origin = to_cpp(c.origin);
+  s.force = to_cpp(c.force);
+  for (int row = 0; row < 3; ++row) s.jacobian[row] = to_cpp(c.jacobian[row]);
+  s.radius = c.radius;
+  s.fade_width = c.fade_width;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_viscous_field_spec to_c(const haptic::ViscousFieldSpec& s) {
+  haptic_viscous_field_spec c{};
+  c.size = sizeof(c);
+  c.damping = s.damping;
+  c.center = to_c(s.center);
+  c.radius = s.radius;
+  c.fade_width = s.fade_width;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::ViscousFieldSpec to_cpp(const haptic_viscous_field_spec& c) {
+  haptic::ViscousFieldSpec s;
+  s.damping = c.damping;
+  s.center = to_cpp(c.center);
+  s.radius = c.radius;
+  s.fade_width = c.fade_width;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_detent_field_spec to_c(const haptic::DetentFieldSpec& s) {
+  haptic_detent_field_spec c{};
+  c.size = sizeof(c);
+  c.distance = to_c(s.distance);
+  c.depth = s.depth;
+  c.radius = s.radius;
+  c.rim_height = s.rim_height;
+  c.rim_width = s.rim_width;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::DetentFieldSpec to_cpp(const haptic_detent_field_spec& c) {
+  haptic::DetentFieldSpec s;
+  s.distance = to_cpp(c.distance);
+  s.depth = c.depth;
+  s.radius = c.radius;
+  s.rim_height = c.rim_height;
+  s.rim_width = c.rim_width;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_orientation_spring_spec to_c(const haptic::OrientationSpringSpec& s) {
+  haptic_orientation_spring_spec c{};
+  c.size = sizeof(c);
+  c.target = to_c(s.target);
+  c.stiffness = s.stiffness;
+  c.damping = s.damping;
+  c.max_torque = s.max_torque;
+  c.law = static_cast<std::int32_t>(s.law);
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::OrientationSpringSpec to_cpp(const haptic_orientation_spring_spec& c) {
+  haptic::OrientationSpringSpec s;
+  s.target = to_cpp(c.target);
+  s.stiffness = c.stiffness;
+  s.damping = c.damping;
+  s.max_torque = c.max_torque;
+  s.law = enum_from<haptic::ImpedanceLaw>(c.law, kLastLaw, "orientation_spring.law");
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+haptic_orientation_detent_spec to_c(const haptic::OrientationDetentSpec& s) {
+  haptic_orientation_detent_spec c{};
+  c.size = sizeof(c);
+  c.target = to_c(s.target);
+  c.depth = s.depth;
+  c.radius = s.radius;
+  c.rim_height = s.rim_height;
+  c.rim_width = s.rim_width;
+  c.damping = s.damping;
+  c.across_sites = s.across_sites;
+  return c;
+}
+haptic::OrientationDetentSpec to_cpp(const haptic_orientation_detent_spec& c) {
+  haptic::OrientationDetentSpec s;
+  s.target = to_cpp(c.target);
+  s.depth = c.depth;
+  s.radius = c.radius;
+  s.rim_height = c.rim_height;
+  s.rim_width = c.rim_width;
+  s.damping = c.damping;
+  s.across_sites = c.across_sites != 0;
+  return s;
+}
+
+/// Each C spec's kind, the C++ spec it converts to, and the name the server's messages give it.
+template <typename CSpec> struct SpecTraits;
+#define HAPTIC_C_SPEC(CSPEC, CPP, KIND, NAME)      \
+  template <> struct SpecTraits<CSPEC> {           \
+    using Cpp = haptic::CPP;                       \
+    static constexpr std::int32_t kind = KIND;     \
+    static constexpr const char* name = NAME;      \
+  };
+HAPTIC_C_SPEC(haptic_wall_spec, WallSpec, HAPTIC_KIND_WALL, "object.wall")
+HAPTIC_C_SPEC(haptic_sphere_spec, SphereSpec, HAPTIC_KIND_SPHERE, "object.sphere")
+HAPTIC_C_SPEC(haptic_box_spec, BoxSpec, HAPTIC_KIND_BOX, "object.box")
+HAPTIC_C_SPEC(haptic_capsule_spec, CapsuleSpec, HAPTIC_KIND_CAPSULE, "object.capsule")
+HAPTIC_C_SPEC(haptic_tangent_plane_spec, TangentPlaneSpec, HAPTIC_KIND_TANGENT_PLANE, "object.tangent_plane")
+HAPTIC_C_SPEC(haptic_mesh_spec, MeshSpec, HAPTIC_KIND_MESH, "object.mesh")
+HAPTIC_C_SPEC(haptic_spring_field_spec, SpringFieldSpec, HAPTIC_KIND_SPRING_FIELD, "field.spring")
+HAPTIC_C_SPEC(haptic_distance_spring_spec, DistanceSpringSpec, HAPTIC_KIND_DISTANCE_SPRING, "field.distance_spring")
+HAPTIC_C_SPEC(haptic_potential_field_spec, PotentialFieldSpec, HAPTIC_KIND_POTENTIAL_FIELD, "field.potential")
+HAPTIC_C_SPEC(haptic_linear_field_spec, LinearFieldSpec, HAPTIC_KIND_LINEAR_FIELD, "field.linear")
+HAPTIC_C_SPEC(haptic_viscous_field_spec, ViscousFieldSpec, HAPTIC_KIND_VISCOUS_FIELD, "field.viscous")
+HAPTIC_C_SPEC(haptic_detent_field_spec, DetentFieldSpec, HAPTIC_KIND_DETENT_FIELD, "field.detent")
+HAPTIC_C_SPEC(haptic_orientation_spring_spec, OrientationSpringSpec, HAPTIC_KIND_ORIENTATION_SPRING, "field.orientation_spring")
+HAPTIC_C_SPEC(haptic_orientation_detent_spec, OrientationDetentSpec, HAPTIC_KIND_ORIENTATION_DETENT, "field.orientation_detent")
+#undef HAPTIC_C_SPEC
+
+template <typename CSpec>
+void init_spec(CSpec* spec) {
+  if (spec != nullptr) *spec = to_c(typename SpecTraits<CSpec>::Cpp{});
+}
+
+template <typename CSpec>
+typename SpecTraits<CSpec>::Cpp read_spec(const void* spec, const char* call) {
+  const CSpec& c = sized<CSpec>(spec, call, SpecTraits<CSpec>::name);
+  return converting(call, SpecTraits<CSpec>::name, [&] { return to_cpp(c); });
+}
+
+template <typename CSpec>
+int add_object(haptic_client* client, const CSpec* spec, haptic_object** out, haptic_error* err) {
+  return guarded(err, [&] {
+    require(out, "CreateObject", "out");
+    *out = nullptr;
+    require(client, "CreateObject", "client");
+    const auto cpp = read_spec<CSpec>(spec, "CreateObject");
+    haptic::ObjectHandle handle;
+    if constexpr (std::is_same_v<CSpec, haptic_wall_spec>) handle = client->client.add_wall(cpp);
+    else if constexpr (std::is_same_v<CSpec, haptic_sphere_spec>) handle = client->client.add_sphere(cpp);
+    else if constexpr (std::is_same_v<CSpec, haptic_box_spec>) handle = client->client.add_box(cpp);
+    else if constexpr (std::is_same_v<CSpec, haptic_capsule_spec>) handle = client->client.add_capsule(cpp);
+    else if constexpr (std::is_same_v<CSpec, haptic_tangent_plane_spec>) handle = client->client.add_tangent_plane(cpp);
+    else handle = client->client.add_mesh(cpp);
+    *out = new haptic_object{std::move(handle)};
+    return HAPTIC_OK;
+  });
+}
+
+template <typename CSpec>
+int add_field(haptic_client* client, const CSpec* spec, haptic_field** out, haptic_error* err) {
+  return guarded(err, [&] {
+    require(out, "CreateField", "out");
+    *out = nullptr;
+    require(client, "CreateField", "client");
+    const auto cpp = read_spec<CSpec>(spec, "CreateField");
+    haptic::FieldHandle handle;
+    if constexpr (std::is_same_v<CSpec, haptic_spring_field_spec>) handle = client->client.add_spring_field(cpp);
+    else handle = client->client.add_field(cpp);
+    *out = new haptic_field{std::move(handle)};
+    return HAPTIC_OK;
+  });
+}
+
+template <typename Handle, typename CSpec>
+int update_item(Handle* item, const CSpec* spec, const char* call, haptic_error* err) {
+  return guarded(err, [&] {
+    require(item, call, "handle");
+    item->handle.update(read_spec<CSpec>(spec, call));
+    return HAPTIC_OK;
+  });
+}
+
+/// A scene item's spec, as the C++ scene's object or field variant.
+void add_scene_item(const haptic_scene_item& item, haptic::SceneSpec& scene, const char* call) {
+  const void* spec = item.spec;
+  switch (item.kind) {
+    case HAPTIC_KIND_WALL: scene.objects.emplace_back(read_spec<haptic_wall_spec>(spec, call)); return;
+    case HAPTIC_KIND_SPHERE: scene.objects.emplace_back(read_spec<haptic_sphere_spec>(spec, call)); return;
+    case HAPTIC_KIND_BOX: scene.objects.emplace_back(read_spec<haptic_box_spec>(spec, call)); return;
+    case HAPTIC_KIND_CAPSULE: scene.objects.emplace_back(read_spec<haptic_capsule_spec>(spec, call)); return;
+    case HAPTIC_KIND_TANGENT_PLANE: scene.objects.emplace_back(read_spec<haptic_tangent_plane_spec>(spec, call)); return;
+    case HAPTIC_KIND_MESH: scene.objects.emplace_back(read_spec<haptic_mesh_spec>(spec, call)); return;
+    case HAPTIC_KIND_SPRING_FIELD: scene.fields.emplace_back(read_spec<haptic_spring_field_spec>(spec, call)); return;
+    case HAPTIC_KIND_DISTANCE_SPRING: scene.fields.emplace_back(read_spec<haptic_distance_spring_spec>(spec, call)); return;
+    case HAPTIC_KIND_POTENTIAL_FIELD: scene.fields.emplace_back(read_spec<haptic_potential_field_spec>(spec, call)); return;
+    case HAPTIC_KIND_LINEAR_FIELD: scene.fields.emplace_back(read_spec<haptic_linear_field_spec>(spec, call)); return;
+    case HAPTIC_KIND_VISCOUS_FIELD: scene.fields.emplace_back(read_spec<haptic_viscous_field_spec>(spec, call)); return;
+    case HAPTIC_KIND_DETENT_FIELD: scene.fields.emplace_back(read_spec<haptic_detent_field_spec>(spec, call)); return;
+    case HAPTIC_KIND_ORIENTATION_SPRING: scene.fields.emplace_back(read_spec<haptic_orientation_spring_spec>(spec, call)); return;
+    case HAPTIC_KIND_ORIENTATION_DETENT: scene.fields.emplace_back(read_spec<haptic_orientation_detent_spec>(spec, call)); return;
+    default:
+      throw InvalidArgumentError(std::string(call) + ": kind: " + std::to_string(item.kind) +
+                                 " is not a haptic_kind");
+  }
+}
+
+haptic::SceneSpec scene_of(const haptic_scene_item* items, std::uint32_t count, const char* call) {
+  if (count > 0) require(items, call, "items");
+  haptic::SceneSpec scene;
+  for (std::uint32_t i = 0; i < count; ++i) add_scene_item(items[i], scene, call);
+  return scene;
+}
+
+/// The kind of a read-back object or field: the index of its C++ variant alternative.
+template <typename Variant>
+std::int32_t kind_of(const Variant& v) {
+  return std::visit([](const auto& spec) {
+    using Cpp = std::decay_t<decltype(spec)>;
+    if constexpr (std::is_same_v<Cpp, haptic::WallSpec>) return std::int32_t{HAPTIC_KIND_WALL};
+    else if constexpr (std::is_same_v<Cpp, haptic::SphereSpec>) return std::int32_t{HAPTIC_KIND_SPHERE};
+    else if constexpr (std::is_same_v<Cpp, haptic::BoxSpec>) return std::int32_t{HAPTIC_KIND_BOX};
+    else if constexpr (std::is_same_v<Cpp, haptic::CapsuleSpec>) return std::int32_t{HAPTIC_KIND_CAPSULE};
+    else if constexpr (std::is_same_v<Cpp, haptic::TangentPlaneSpec>) return std::int32_t{HAPTIC_KIND_TANGENT_PLANE};
+    else if constexpr (std::is_same_v<Cpp, haptic::MeshSpec>) return std::int32_t{HAPTIC_KIND_MESH};
+    else if constexpr (std::is_same_v<Cpp, haptic::SpringFieldSpec>) return std::int32_t{HAPTIC_KIND_SPRING_FIELD};
+    else if constexpr (std::is_same_v<Cpp, haptic::DistanceSpringSpec>) return std::int32_t{HAPTIC_KIND_DISTANCE_SPRING};
+    else if constexpr (std::is_same_v<Cpp, haptic::PotentialFieldSpec>) return std::int32_t{HAPTIC_KIND_POTENTIAL_FIELD};
+    else if constexpr (std::is_same_v<Cpp, haptic::LinearFieldSpec>) return std::int32_t{HAPTIC_KIND_LINEAR_FIELD};
+    else if constexpr (std::is_same_v<Cpp, haptic::ViscousFieldSpec>) return std::int32_t{HAPTIC_KIND_VISCOUS_FIELD};
+    else if constexpr (std::is_same_v<Cpp, haptic::DetentFieldSpec>) return std::int32_t{HAPTIC_KIND_DETENT_FIELD};
+    else if constexpr (std::is_same_v<Cpp, haptic::OrientationSpringSpec>) return std::int32_t{HAPTIC_KIND_ORIENTATION_SPRING};
+    else return std::int32_t{HAPTIC_KIND_ORIENTATION_DETENT};
+  }, v);
+}
+
+/// Copies a read-back spec into the caller's struct of its kind (size checked).
+template <typename Variant>
+void copy_spec(const Variant& v, void* out, const char* call) {
+  std::visit([&](const auto& spec) {
+    using Cpp = std::decay_t<decltype(spec)>;
+    using CSpec = decltype(to_c(spec));
+    static_assert(std::is_same_v<typename SpecTraits<CSpec>::Cpp, Cpp>);
+    sized_out<CSpec>(out, call, SpecTraits<CSpec>::name) = to_c(spec);
+  }, v);
+}
+
+// ---- state, stability, events ----
 
 void copy_state(const haptic::State& s, haptic_state* out) {
+  const std::uint32_t size = out->size;
+  *out = haptic_state{};
+  out->size = size;
   out->tick = s.tick;
   out->sequence = s.sequence;
   out->server_time = s.server_time;
@@ -89,6 +682,128 @@ void copy_state(const haptic::State& s, haptic_state* out) {
   out->contact_count = s.contact_count;
   out->flags = s.flags;
   out->buttons = s.buttons;
+  out->has_orientation = s.orientation.has_value();
+  out->orientation = to_c(s.orientation.value_or(haptic::Quaternion{}));
+  out->torque = to_c(s.torque.value_or(haptic::Vec3{}));
+  out->received_at_ns = steady_ns(s.received_at);
+  out->arrived_at_ns = s.arrived_at ? steady_ns(*s.arrived_at) : 0;
+  out->age_ns = s.age.count();
+}
+
+haptic::State state_of(const haptic_state& c) {
+  haptic::State s;
+  s.tick = c.tick;
+  s.server_time = c.server_time;
+  s.position = to_cpp(c.position);
+  s.velocity = to_cpp(c.velocity);
+  return s;
+}
+
+void copy_report(const haptic::StabilityReport& r, haptic_stability_report& out) {
+  const std::uint32_t size = out.size;
+  out = haptic_stability_report{};
+  out.size = size;
+  out.available = 1;
+  out.colgate_min_damping = r.colgate_min_damping;
+  out.device_mass = r.device_mass;
+  out.device_damping = r.device_damping;
+  out.max_stable_stiffness = r.max_stable_stiffness;
+  out.max_pole_magnitude = r.max_pole_magnitude;
+  out.chosen_damping = r.chosen_damping;
+  out.chosen_stiffness = r.chosen_stiffness;
+  out.passive = r.passive;
+  out.device_known = r.device_known;
+  out.stable = r.stable;
+  out.robustly_stable = r.robustly_stable;
+  copy_text(out.warning, sizeof(out.warning), r.warning);
+}
+
+void copy_recording(const haptic::RecordingStatus& r, haptic_recording_status* out) {
+  if (out == nullptr) return;
+  haptic_recording_status& c = sized_out<haptic_recording_status>(out, "Recording", "status");
+  const std::uint32_t size = c.size;
+  c = haptic_recording_status{};
+  c.size = size;
+  copy_text(c.path, sizeof(c.path), r.path);
+  c.start_tick = r.start_tick;
+  c.samples = r.samples;
+  c.samples_missed = r.samples_missed;
+  c.changes = r.changes;
+  c.records_not_written = r.records_not_written;
+  copy_text(c.write_error, sizeof(c.write_error), r.write_error);
+}
+
+/// Copies up to `capacity` of `items` (each by `convert`) and sets *count to how many there are.
+template <typename C, typename Cpp, typename Convert>
+void copy_list(const std::vector<Cpp>& items, C* out, std::uint32_t capacity, std::uint32_t* count,
+               const char* call, Convert convert) {
+  require(count, call, "count");
+  if (capacity > 0) require(out, call, "out");
+  *count = static_cast<std::uint32_t>(items.size());
+  const std::size_t n = std::min<std::size_t>(capacity, items.size());
+  for (std::size_t i = 0; i < n; ++i) out[i] = convert(items[i]);
+}
+
+static_assert(static_cast<int>(haptic::Event::Kind::kReset) == HAPTIC_EVENT_RESET);
+static_assert(static_cast<int>(haptic::ConnectionChange::State::kEnded) == HAPTIC_CONNECTION_ENDED);
+static_assert(static_cast<int>(haptic::Role::kAdmin) == HAPTIC_ROLE_ADMIN);
+static_assert(static_cast<int>(haptic::ImpedanceLaw::kTustin) == HAPTIC_LAW_TUSTIN);
+static_assert(static_cast<int>(haptic::Distance::Kind::kSphere) == HAPTIC_DISTANCE_SPHERE);
+static_assert(static_cast<int>(haptic::OperatorInput::Profile::Shape::kRecorded) == HAPTIC_PROFILE_RECORDED);
+
+haptic::OperatorInput operator_of(const haptic_operator_input& c) {
+  using Input = haptic::OperatorInput;
+  Input in;
+  in.mode = enum_from<Input::Mode>(c.mode, HAPTIC_OPERATOR_PUSH, "mode");
+  in.target = to_cpp(c.target);
+  in.stiffness = c.stiffness;
+  in.damping = c.damping;
+  in.mass = c.mass;
+  in.grip = enum_from<Input::Grip>(c.grip, HAPTIC_GRIP_TIGHT, "grip");
+  in.path.shape = enum_from<Input::Path::Shape>(c.path_shape, HAPTIC_PATH_SINE, "path_shape");
+  in.path.end = to_cpp(c.path_end);
+  in.path.duration_s = c.path_duration_s;
+  in.path.amplitude = to_cpp(c.path_amplitude);
+  in.path.frequency_hz = c.path_frequency_hz;
+  in.force = to_cpp(c.force);
+  in.profile.shape = enum_from<Input::Profile::Shape>(c.profile_shape, HAPTIC_PROFILE_RECORDED,
+                                                      "profile_shape");
+  in.profile.start_s = c.profile_start_s;
+  in.profile.rise_s = c.profile_rise_s;
+  in.profile.frequency_hz = c.profile_frequency_hz;
+  in.profile.offset = to_cpp(c.profile_offset);
+  if (c.profile_sample_count > 0 && c.profile_samples == nullptr) {
+    throw FieldProblem{"profile_samples", "is NULL with profile_sample_count > 0"};
+  }
+  for (std::uint32_t i = 0; i < c.profile_sample_count; ++i) {
+    in.profile.samples.push_back(to_cpp(c.profile_samples[i]));
+  }
+  in.profile.sample_period_s = c.profile_sample_period_s;
+  in.profile.repeat = c.profile_repeat != 0;
+  return in;
+}
+
+const haptic::ClientConfig& defaults() {
+  static const haptic::ClientConfig config;
+  return config;
+}
+
+std::string text_or_empty(const char* text) { return text != nullptr ? text : ""; }
+
+haptic_applied_scene* applied_of(haptic::AppliedScene&& applied,
+                                 const std::vector<haptic::StabilityReport>& stability) {
+  auto* out = new haptic_applied_scene;
+  for (auto& o : applied.objects) out->objects.emplace_back(std::move(o));
+  for (auto& f : applied.fields) out->fields.emplace_back(std::move(f));
+  out->stability = stability;
+  return out;
+}
+template <typename List>
+void check_index(const List& list, std::uint32_t index, const char* call) {
+  if (index >= list.size()) {
+    throw InvalidArgumentError(std::string(call) + ": index: " + std::to_string(index) +
+                               " is past the scene's " + std::to_string(list.size()));
+  }
 }
 
 }  // namespace
@@ -97,6 +812,8 @@ extern "C" {
 
 uint32_t haptic_c_version(void) { return HAPTIC_C_VERSION; }
 
+// ---- client ----
+
 void haptic_client_config_init(haptic_client_config* config) {
   if (config == nullptr) return;
   const haptic::ClientConfig& d = defaults();
@@ -104,51 +821,124 @@ void haptic_client_config_init(haptic_client_config* config) {
   config->size = sizeof(haptic_client_config);
   config->server_address = d.server_address.c_str();
   config->client_name = d.client_name.c_str();
-  config->token = d.token.c_str();
+  config->token = "";
+  config->tls_ca_file = "";
+  config->tls_cert_file = "";
+  config->tls_key_file = "";
+  config->tls_server_name = "";
+  config->udp_address = "";
   config->rpc_timeout_ms = static_cast<uint32_t>(d.rpc_timeout.count());
   config->heartbeat_period_ms = static_cast<uint32_t>(d.heartbeat_period.count());
   config->state_decimation = d.state_decimation;
   config->device_index = d.device_index;
-  config->reconnect = d.reconnect ? 1 : 0;
+  config->reconnect = d.reconnect;
+  config->allow_plaintext_token = d.allow_plaintext_token;
+  config->reconnect_backoff_min_ms = static_cast<uint32_t>(d.reconnect_backoff_min.count());
+  config->reconnect_backoff_max_ms = static_cast<uint32_t>(d.reconnect_backoff_max.count());
 }
 
 int haptic_client_open(const haptic_client_config* config, haptic_client** out, haptic_error* err) {
-  if (out == nullptr) return invalid(err, "haptic_client_open: out: is NULL");
-  *out = nullptr;
-  if (config == nullptr) return invalid(err, "ClientConfig: config: is NULL");
-  if (config->size < sizeof(haptic_client_config)) {
-    return invalid(err, "ClientConfig: size: smaller than version 1's haptic_client_config");
-  }
   return guarded(err, [&] {
-    haptic::ClientConfig c;
-    if (config->server_address != nullptr) c.server_address = config->server_address;
-    if (config->client_name != nullptr) c.client_name = config->client_name;
-    if (config->token != nullptr) c.token = config->token;
-    c.rpc_timeout = std::chrono::milliseconds(config->rpc_timeout_ms);
-    c.heartbeat_period = std::chrono::milliseconds(config->heartbeat_period_ms);
-    c.state_decimation = config->state_decimation;
-    c.device_index = config->device_index;
-    c.reconnect = config->reconnect != 0;
-    *out = new haptic_client{haptic::Client(std::move(c))};
+    require(out, "ClientConfig", "out");
+    *out = nullptr;
+    const auto& c = sized<haptic_client_config>(config, "ClientConfig", "config");
+    haptic::ClientConfig cpp;
+    if (c.server_address != nullptr) cpp.server_address = c.server_address;
+    if (c.client_name != nullptr) cpp.client_name = c.client_name;
+    cpp.token = text_or_empty(c.token);
+    if (!text_or_empty(c.tls_ca_file).empty()) {
+      cpp.tls = haptic::TlsOptions{c.tls_ca_file, text_or_empty(c.tls_cert_file),
+                                   text_or_empty(c.tls_key_file), text_or_empty(c.tls_server_name)};
+    } else if (!text_or_empty(c.tls_cert_file).empty() || !text_or_empty(c.tls_key_file).empty()) {
+      throw InvalidArgumentError("ClientConfig: tls_ca_file: needed with tls_cert_file and tls_key_file");
+    }
+    cpp.udp_address = text_or_empty(c.udp_address);
+    cpp.rpc_timeout = std::chrono::milliseconds(c.rpc_timeout_ms);
+    cpp.heartbeat_period = std::chrono::milliseconds(c.heartbeat_period_ms);
+    cpp.state_decimation = c.state_decimation;
+    cpp.device_index = c.device_index;
+    cpp.reconnect = c.reconnect != 0;
+    cpp.allow_plaintext_token = c.allow_plaintext_token != 0;
+    cpp.reconnect_backoff_min = std::chrono::milliseconds(c.reconnect_backoff_min_ms);
+    cpp.reconnect_backoff_max = std::chrono::milliseconds(c.reconnect_backoff_max_ms);
+    *out = new haptic_client{haptic::Client(std::move(cpp))};
     return HAPTIC_OK;
   });
 }
 
-void haptic_client_close(haptic_client* client) {
-  // The Client's destructor swallows its own errors; this catch keeps a surprise out of C.
+int haptic_client_close(haptic_client* client, haptic_error* err) {
+  if (client == nullptr) return guarded(err, [] { return HAPTIC_OK; });
+  const int status = guarded(err, [&] {
+    client->client.close();
+    return HAPTIC_OK;
+  });
+  // From inside a callback close() refuses (it would wait for its own thread): the client stays.
+  if (status == HAPTIC_ERROR_FAILED_PRECONDITION) return status;
   try {
-    delete client;
+    delete client;  // the destructor swallows its own errors; this catch keeps a surprise out of C
   } catch (...) {
+  }
+  return status;
+}
+
+int haptic_client_device_info(const haptic_client* client, haptic_device_info* out, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "device_info", "client");
+    auto& c = sized_out<haptic_device_info>(out, "device_info", "out");
+    const haptic::DeviceInfo& d = client->client.device_info();
+    const std::uint32_t size = c.size;
+    c = haptic_device_info{};
+    c.size = size;
+    copy_text(c.name, sizeof(c.name), d.name);
+    copy_text(c.model, sizeof(c.model), d.model);
+    const haptic::DeviceCapabilities& k = d.capabilities;
+    const auto bit = [](bool has, unsigned flag) { return has ? static_cast<std::uint32_t>(flag) : 0u; };
+    c.capabilities = bit(k.gravity, HAPTIC_CAPABILITY_GRAVITY) | bit(k.brakes, HAPTIC_CAPABILITY_BRAKES) |
+                     bit(k.flexible_modes, HAPTIC_CAPABILITY_FLEXIBLE_MODES) |
+                     bit(k.friction, HAPTIC_CAPABILITY_FRICTION) |
+                     bit(k.force_sensor, HAPTIC_CAPABILITY_FORCE_SENSOR) |
+                     bit(k.quantized_position, HAPTIC_CAPABILITY_QUANTIZED_POSITION) |
+                     bit(k.state_estimator, HAPTIC_CAPABILITY_STATE_ESTIMATOR) |
+                     bit(k.disturbance_observer, HAPTIC_CAPABILITY_DISTURBANCE_OBSERVER) |
+                     bit(k.orientation, HAPTIC_CAPABILITY_ORIENTATION) |
+                     bit(k.torque, HAPTIC_CAPABILITY_TORQUE);
+    c.dof = d.dof;
+    c.workspace_min = to_c(d.workspace_min);
+    c.workspace_max = to_c(d.workspace_max);
+    c.max_force = d.max_force;
+    c.loop_rate_hz = d.loop_rate_hz;
+    c.max_torque = d.max_torque;
+    c.simulated = d.simulated;
+    c.buttons = d.buttons;
+    return HAPTIC_OK;
+  });
+}
+
+uint64_t haptic_client_session_id(const haptic_client* client) {
+  if (client == nullptr) return 0;
+  try {
+    return client->client.session_id();
+  } catch (...) {
+    return 0;
   }
 }
 
+int64_t haptic_client_lease_timeout_ms(const haptic_client* client) {
+  if (client == nullptr) return 0;
+  try {
+    return client->client.lease_timeout().count();
+  } catch (...) {
+    return 0;
+  }
+}
+
+// ---- state ----
+
 int haptic_client_poll_state(haptic_client* client, haptic_state* out, uint32_t timeout_ms,
                              haptic_error* err) {
-  if (client == nullptr) return invalid(err, "poll_state: client: is NULL");
-  if (out == nullptr || out->size < sizeof(haptic_state)) {
-    return invalid(err, "poll_state: state: NULL or size smaller than version 1's haptic_state");
-  }
   return guarded(err, [&] {
+    require(client, "poll_state", "client");
+    sized<haptic_state>(out, "poll_state", "state");
     haptic::State s;
     if (!client->client.poll_state(s, std::chrono::milliseconds(timeout_ms))) return HAPTIC_TIMEOUT;
     copy_state(s, out);
@@ -158,11 +948,9 @@ int haptic_client_poll_state(haptic_client* client, haptic_state* out, uint32_t 
 
 int haptic_client_wait_for_tick(haptic_client* client, uint64_t tick, haptic_state* out,
                                 uint32_t timeout_ms, haptic_error* err) {
-  if (client == nullptr) return invalid(err, "wait_for_tick: client: is NULL");
-  if (out == nullptr || out->size < sizeof(haptic_state)) {
-    return invalid(err, "wait_for_tick: state: NULL or size smaller than version 1's haptic_state");
-  }
   return guarded(err, [&] {
+    require(client, "wait_for_tick", "client");
+    sized<haptic_state>(out, "wait_for_tick", "state");
     haptic::State s;
     if (!client->client.wait_for_tick(tick, s, std::chrono::milliseconds(timeout_ms))) {
       return HAPTIC_TIMEOUT;
@@ -172,71 +960,671 @@ int haptic_client_wait_for_tick(haptic_client* client, uint64_t tick, haptic_sta
   });
 }
 
-int haptic_client_step(haptic_client* client, uint32_t ticks, uint64_t* last_tick, haptic_error* err) {
-  if (client == nullptr) return invalid(err, "Step: client: is NULL");
+int haptic_client_subscribe(haptic_client* client, uint32_t decimation, haptic_error* err) {
   return guarded(err, [&] {
+    require(client, "Subscribe", "client");
+    client->client.subscribe(decimation);
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_on_state(haptic_client* client, haptic_state_callback callback, void* user_data,
+                           haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "on_state", "client");
+    if (callback == nullptr) {
+      client->client.on_state({});
+      return HAPTIC_OK;
+    }
+    client->client.on_state([callback, user_data](const haptic::State& s) {
+      haptic_state c{};
+      c.size = sizeof(c);
+      copy_state(s, &c);
+      callback(&c, user_data);
+    });
+    return HAPTIC_OK;
+  });
+}
+
+int64_t haptic_steady_clock_ns(void) { return steady_ns(std::chrono::steady_clock::now()); }
+
+int32_t haptic_client_server_time_at(const haptic_client* client, int64_t local_ns, double* out) {
+  if (client == nullptr || out == nullptr) return 0;
+  try {
+    const auto local = std::chrono::steady_clock::time_point(std::chrono::nanoseconds(local_ns));
+    const std::optional<double> t = client->client.server_time_at(local);
+    if (!t) return 0;
+    *out = *t;
+    return 1;
+  } catch (...) {
+    return 0;
+  }
+}
+
+int32_t haptic_client_clock_offset_ns(const haptic_client* client, int64_t* out) {
+  if (client == nullptr || out == nullptr) return 0;
+  try {
+    const auto offset = client->client.clock_offset();
+    if (!offset) return 0;
+    *out = offset->count();
+    return 1;
+  } catch (...) {
+    return 0;
+  }
+}
+
+int32_t haptic_client_clock_drift(const haptic_client* client, double* out) {
+  if (client == nullptr || out == nullptr) return 0;
+  try {
+    const auto drift = client->client.clock_drift();
+    if (!drift) return 0;
+    *out = *drift;
+    return 1;
+  } catch (...) {
+    return 0;
+  }
+}
+
+haptic_vec3 haptic_interpolate_position(const haptic_state* a, const haptic_state* b, double t) {
+  if (a == nullptr || b == nullptr) return {0.0, 0.0, 0.0};
+  return to_c(haptic::interpolate_position(state_of(*a), state_of(*b), t));
+}
+
+haptic_vec3 haptic_predict_position(const haptic_state* previous, const haptic_state* latest,
+                                    double t) {
+  if (previous == nullptr || latest == nullptr) return {0.0, 0.0, 0.0};
+  return to_c(haptic::predict_position(state_of(*previous), state_of(*latest), t));
+}
+
+int haptic_client_receive_counters(const haptic_client* client, haptic_receive_counters* out,
+                                   haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "receive_counters", "client");
+    auto& c = sized_out<haptic_receive_counters>(out, "receive_counters", "out");
+    const haptic::ReceiveCounters r = client->client.receive_counters();
+    const std::uint32_t size = c.size;
+    c = haptic_receive_counters{size,       r.accepted, r.rejected,  r.skipped,   r.challenges_answered,
+                                r.callback_skipped, r.lost, r.reordered, r.duplicates, r.reconnects};
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_set_heartbeats_enabled(haptic_client* client, int32_t enabled, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "set_heartbeats_enabled", "client");
+    client->client.set_heartbeats_enabled(enabled != 0);
+    return HAPTIC_OK;
+  });
+}
+
+// ---- specs ----
+
+void haptic_wall_spec_init(haptic_wall_spec* spec) { init_spec(spec); }
+void haptic_sphere_spec_init(haptic_sphere_spec* spec) { init_spec(spec); }
+void haptic_box_spec_init(haptic_box_spec* spec) { init_spec(spec); }
+void haptic_capsule_spec_init(haptic_capsule_spec* spec) { init_spec(spec); }
+void haptic_tangent_plane_spec_init(haptic_tangent_plane_spec* spec) { init_spec(spec); }
+void haptic_mesh_spec_init(haptic_mesh_spec* spec) { init_spec(spec); }
+void haptic_spring_field_spec_init(haptic_spring_field_spec* spec) { init_spec(spec); }
+void haptic_distance_spring_spec_init(haptic_distance_spring_spec* spec) { init_spec(spec); }
+void haptic_potential_field_spec_init(haptic_potential_field_spec* spec) { init_spec(spec); }
+void haptic_linear_field_spec_init(haptic_linear_field_spec* spec) { init_spec(spec); }
+void haptic_viscous_field_spec_init(haptic_viscous_field_spec* spec) { init_spec(spec); }
+void haptic_detent_field_spec_init(haptic_detent_field_spec* spec) { init_spec(spec); }
+void haptic_orientation_spring_spec_init(haptic_orientation_spring_spec* spec) { init_spec(spec); }
+void haptic_orientation_detent_spec_init(haptic_orientation_detent_spec* spec) { init_spec(spec); }
+
+#define HAPTIC_C_ADD_OBJECT(NAME, CSPEC)                                                        \
+  int haptic_client_add_##NAME(haptic_client* client, const CSPEC* spec, haptic_object** out,  \
+                               haptic_error* err) {                                            \
+    return add_object(client, spec, out, err);                                                 \
+  }                                                                                            \
+  int haptic_object_update_##NAME(haptic_object* object, const CSPEC* spec, haptic_error* err) { \
+    return update_item(object, spec, "UpdateObject", err);                                     \
+  }
+HAPTIC_C_ADD_OBJECT(wall, haptic_wall_spec)
+HAPTIC_C_ADD_OBJECT(sphere, haptic_sphere_spec)
+HAPTIC_C_ADD_OBJECT(box, haptic_box_spec)
+HAPTIC_C_ADD_OBJECT(capsule, haptic_capsule_spec)
+HAPTIC_C_ADD_OBJECT(tangent_plane, haptic_tangent_plane_spec)
+HAPTIC_C_ADD_OBJECT(mesh, haptic_mesh_spec)
+#undef HAPTIC_C_ADD_OBJECT
+
+#define HAPTIC_C_ADD_FIELD(NAME, CSPEC)                                                         \
+  int haptic_client_add_##NAME(haptic_client* client, const CSPEC* spec, haptic_field** out,   \
+                               haptic_error* err) {                                            \
+    return add_field(client, spec, out, err);                                                  \
+  }                                                                                            \
+  int haptic_field_update_##NAME(haptic_field* field, const CSPEC* spec, haptic_error* err) {  \
+    return update_item(field, spec, "UpdateField", err);                                       \
+  }
+HAPTIC_C_ADD_FIELD(spring_field, haptic_spring_field_spec)
+HAPTIC_C_ADD_FIELD(distance_spring, haptic_distance_spring_spec)
+HAPTIC_C_ADD_FIELD(potential_field, haptic_potential_field_spec)
+HAPTIC_C_ADD_FIELD(linear_field, haptic_linear_field_spec)
+HAPTIC_C_ADD_FIELD(viscous_field, haptic_viscous_field_spec)
+HAPTIC_C_ADD_FIELD(detent_field, haptic_detent_field_spec)
+HAPTIC_C_ADD_FIELD(orientation_spring, haptic_orientation_spring_spec)
+HAPTIC_C_ADD_FIELD(orientation_detent, haptic_orientation_detent_spec)
+#undef HAPTIC_C_ADD_FIELD
+
+uint64_t haptic_object_id(const haptic_object* object) {
+  return object != nullptr ? object->handle.id() : 0;
+}
+uint64_t haptic_field_id(const haptic_field* field) { return field != nullptr ? field->handle.id() : 0; }
+
+int haptic_object_remove(haptic_object* object, haptic_error* err) {
+  const int status = guarded(err, [&] {
+    if (object != nullptr) object->handle.remove();
+    return HAPTIC_OK;
+  });
+  delete object;  // the handle owns nothing any more, or its destructor swallows the error
+  return status;
+}
+
+int haptic_field_remove(haptic_field* field, haptic_error* err) {
+  const int status = guarded(err, [&] {
+    if (field != nullptr) field->handle.remove();
+    return HAPTIC_OK;
+  });
+  delete field;
+  return status;
+}
+
+uint64_t haptic_object_release(haptic_object* object) {
+  if (object == nullptr) return 0;
+  const std::uint64_t id = object->handle.release();
+  delete object;
+  return id;
+}
+
+uint64_t haptic_field_release(haptic_field* field) {
+  if (field == nullptr) return 0;
+  const std::uint64_t id = field->handle.release();
+  delete field;
+  return id;
+}
+
+int haptic_object_stability(const haptic_object* object, haptic_stability_report* out,
+                            haptic_error* err) {
+  return guarded(err, [&] {
+    require(object, "stability", "object");
+    copy_report(object->handle.stability(), sized_out<haptic_stability_report>(out, "stability", "out"));
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_field_stability(const haptic_field* field, haptic_stability_report* out,
+                           haptic_error* err) {
+  return guarded(err, [&] {
+    require(field, "stability", "field");
+    auto& c = sized_out<haptic_stability_report>(out, "stability", "out");
+    if (field->handle.stability()) {
+      copy_report(*field->handle.stability(), c);
+    } else {
+      const std::uint32_t size = c.size;
+      c = haptic_stability_report{};
+      c.size = size;
+    }
+    return HAPTIC_OK;
+  });
+}
+
+// ---- scenes ----
+
+int haptic_client_apply_scene(haptic_client* client, const haptic_scene_item* items, uint32_t count,
+                              haptic_applied_scene** out, haptic_error* err) {
+  return guarded(err, [&] {
+    require(out, "ApplyScene", "out");
+    *out = nullptr;
+    require(client, "ApplyScene", "client");
+    haptic::AppliedScene applied = client->client.apply_scene(scene_of(items, count, "ApplyScene"));
+    *out = applied_of(std::move(applied), client->client.last_scene_stability());
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_apply_scene_file(haptic_client* client, const char* path,
+                                   haptic_applied_scene** out, haptic_error* err) {
+  return guarded(err, [&] {
+    require(out, "apply_scene_file", "out");
+    *out = nullptr;
+    require(client, "apply_scene_file", "client");
+    require(path, "apply_scene_file", "path");
+    haptic::AppliedScene applied = client->client.apply_scene_file(path);
+    *out = applied_of(std::move(applied), client->client.last_scene_stability());
+    return HAPTIC_OK;
+  });
+}
+
+void haptic_applied_scene_counts(const haptic_applied_scene* scene, uint32_t* objects,
+                                 uint32_t* fields) {
+  if (objects != nullptr) *objects = scene ? static_cast<uint32_t>(scene->objects.size()) : 0;
+  if (fields != nullptr) *fields = scene ? static_cast<uint32_t>(scene->fields.size()) : 0;
+}
+
+haptic_object* haptic_applied_scene_take_object(haptic_applied_scene* scene, uint32_t index) {
+  if (scene == nullptr || index >= scene->objects.size() || !scene->objects[index]) return nullptr;
+  try {
+    auto* object = new haptic_object{std::move(*scene->objects[index])};
+    scene->objects[index].reset();
+    return object;
+  } catch (...) {
+    return nullptr;
+  }
+}
+
+haptic_field* haptic_applied_scene_take_field(haptic_applied_scene* scene, uint32_t index) {
+  if (scene == nullptr || index >= scene->fields.size() || !scene->fields[index]) return nullptr;
+  try {
+    auto* field = new haptic_field{std::move(*scene->fields[index])};
+    scene->fields[index].reset();
+    return field;
+  } catch (...) {
+    return nullptr;
+  }
+}
+
+int haptic_applied_scene_stability(const haptic_applied_scene* scene, uint32_t index,
+                                   haptic_stability_report* out, haptic_error* err) {
+  return guarded(err, [&] {
+    require(scene, "last_scene_stability", "scene");
+    if (index >= scene->stability.size()) {
+      throw InvalidArgumentError("last_scene_stability: index: " + std::to_string(index) +
+                                 " is past the scene's " + std::to_string(scene->stability.size()) +
+                                 " objects");
+    }
+    copy_report(scene->stability[index],
+                sized_out<haptic_stability_report>(out, "last_scene_stability", "out"));
+    return HAPTIC_OK;
+  });
+}
+
+void haptic_applied_scene_free(haptic_applied_scene* scene) {
+  if (scene == nullptr) return;
+  // Handles not taken let go of their items rather than removing them (haptic_c.h).
+  for (auto& o : scene->objects) {
+    if (o) o->release();
+  }
+  for (auto& f : scene->fields) {
+    if (f) f->release();
+  }
+  delete scene;
+}
+
+int haptic_scene_json(const haptic_scene_item* items, uint32_t count, char* buffer, size_t capacity,
+                      size_t* length, haptic_error* err) {
+  return guarded(err, [&] {
+    require(length, "scene_json", "length");
+    if (capacity > 0) require(buffer, "scene_json", "buffer");
+    const std::string json = haptic::scene_json(scene_of(items, count, "scene_json"));
+    *length = json.size();
+    if (capacity > 0) copy_text(buffer, capacity, json);
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_scene(haptic_client* client, int32_t all_sessions, haptic_registered_scene** out,
+                        haptic_error* err) {
+  return guarded(err, [&] {
+    require(out, "GetScene", "out");
+    *out = nullptr;
+    require(client, "GetScene", "client");
+    *out = new haptic_registered_scene{client->client.scene(all_sessions != 0)};
+    return HAPTIC_OK;
+  });
+}
+
+void haptic_registered_scene_counts(const haptic_registered_scene* scene, uint32_t* objects,
+                                    uint32_t* fields) {
+  if (objects != nullptr) *objects = scene ? static_cast<uint32_t>(scene->scene.scene.objects.size()) : 0;
+  if (fields != nullptr) *fields = scene ? static_cast<uint32_t>(scene->scene.scene.fields.size()) : 0;
+}
+
+int haptic_registered_scene_object(const haptic_registered_scene* scene, uint32_t index,
+                                   haptic_scene_entry* out, haptic_error* err) {
+  return guarded(err, [&] {
+    require(scene, "scene.objects", "scene");
+    check_index(scene->scene.scene.objects, index, "scene.objects");
+    auto& c = sized_out<haptic_scene_entry>(out, "scene.objects", "out");
+    c.kind = kind_of(scene->scene.scene.objects[index]);
+    c.id = scene->scene.object_ids[index];
+    c.session_id = scene->scene.object_sessions[index];
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_registered_scene_field(const haptic_registered_scene* scene, uint32_t index,
+                                  haptic_scene_entry* out, haptic_error* err) {
+  return guarded(err, [&] {
+    require(scene, "scene.fields", "scene");
+    check_index(scene->scene.scene.fields, index, "scene.fields");
+    auto& c = sized_out<haptic_scene_entry>(out, "scene.fields", "out");
+    c.kind = kind_of(scene->scene.scene.fields[index]);
+    c.id = scene->scene.field_ids[index];
+    c.session_id = scene->scene.field_sessions[index];
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_registered_scene_object_spec(const haptic_registered_scene* scene, uint32_t index,
+                                        void* spec, haptic_error* err) {
+  return guarded(err, [&] {
+    require(scene, "scene.objects", "scene");
+    check_index(scene->scene.scene.objects, index, "scene.objects");
+    copy_spec(scene->scene.scene.objects[index], spec, "scene.objects");
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_registered_scene_field_spec(const haptic_registered_scene* scene, uint32_t index,
+                                       void* spec, haptic_error* err) {
+  return guarded(err, [&] {
+    require(scene, "scene.fields", "scene");
+    check_index(scene->scene.scene.fields, index, "scene.fields");
+    copy_spec(scene->scene.scene.fields[index], spec, "scene.fields");
+    return HAPTIC_OK;
+  });
+}
+
+void haptic_registered_scene_free(haptic_registered_scene* scene) { delete scene; }
+
+int haptic_client_scene_energy(haptic_client* client, haptic_item_energy* out, uint32_t capacity,
+                               uint32_t* count, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "GetSceneEnergy", "client");
+    copy_list(client->client.scene_energy(), out, capacity, count, "GetSceneEnergy",
+              [](const haptic::ItemEnergy& e) {
+                return haptic_item_energy{e.id, e.session_id, e.is_object, e.given_to_device,
+                                          e.absorbed_from_device};
+              });
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_object_states(haptic_client* client, haptic_object_state* out, uint32_t capacity,
+                                uint32_t* count, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "GetObjectStates", "client");
+    copy_list(client->client.object_states(), out, capacity, count, "GetObjectStates",
+              [](const haptic::ObjectState& s) {
+                return haptic_object_state{s.id, to_c(s.position), to_c(s.velocity)};
+              });
+    return HAPTIC_OK;
+  });
+}
+
+// ---- operator, lockstep ----
+
+void haptic_operator_input_init(haptic_operator_input* input) {
+  if (input == nullptr) return;
+  const haptic::OperatorInput d;
+  *input = haptic_operator_input{};
+  input->size = sizeof(*input);
+  input->mode = static_cast<int32_t>(d.mode);
+  input->target = to_c(d.target);
+  input->stiffness = d.stiffness;
+  input->damping = d.damping;
+  input->mass = d.mass;
+  input->grip = static_cast<int32_t>(d.grip);
+  input->path_shape = static_cast<int32_t>(d.path.shape);
+  input->path_end = to_c(d.path.end);
+  input->path_duration_s = d.path.duration_s;
+  input->path_amplitude = to_c(d.path.amplitude);
+  input->path_frequency_hz = d.path.frequency_hz;
+  input->force = to_c(d.force);
+  input->profile_shape = static_cast<int32_t>(d.profile.shape);
+  input->profile_repeat = d.profile.repeat;
+  input->profile_start_s = d.profile.start_s;
+  input->profile_rise_s = d.profile.rise_s;
+  input->profile_frequency_hz = d.profile.frequency_hz;
+  input->profile_offset = to_c(d.profile.offset);
+  input->profile_sample_period_s = d.profile.sample_period_s;
+}
+
+int haptic_client_set_operator(haptic_client* client, const haptic_operator_input* input,
+                               haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "SetOperator", "client");
+    const auto& c = sized<haptic_operator_input>(input, "SetOperator", "input");
+    client->client.set_operator(converting("SetOperator", "input", [&] { return operator_of(c); }));
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_set_operator_push(haptic_client* client, haptic_vec3 force, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "SetOperator", "client");
+    client->client.set_operator(haptic::OperatorInput::push(to_cpp(force)));
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_set_operator_follow(haptic_client* client, haptic_vec3 target, double stiffness,
+                                      double damping, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "SetOperator", "client");
+    client->client.set_operator(haptic::OperatorInput::follow(to_cpp(target), stiffness, damping));
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_step(haptic_client* client, uint32_t ticks, uint64_t* last_tick, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "Step", "client");
     const std::uint64_t last = client->client.step(ticks);
     if (last_tick != nullptr) *last_tick = last;
     return HAPTIC_OK;
   });
 }
 
-void haptic_wall_spec_init(haptic_wall_spec* spec) {
-  if (spec == nullptr) return;
-  const haptic::WallSpec d;
-  *spec = haptic_wall_spec{};
-  spec->size = sizeof(haptic_wall_spec);
-  spec->point = to_c(d.point);
-  spec->normal = to_c(d.normal);
-  spec->stiffness = d.impedance.stiffness;
-  spec->damping = d.impedance.damping;
-  spec->static_friction = d.impedance.static_friction;
-  spec->dynamic_friction = d.impedance.dynamic_friction;
-  spec->shared = d.shared ? 1 : 0;
+int haptic_client_reset(haptic_client* client, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "Reset", "client");
+    client->client.reset();
+    return HAPTIC_OK;
+  });
 }
 
-int haptic_client_add_wall(haptic_client* client, const haptic_wall_spec* spec, haptic_object** out,
+// ---- events, connection ----
+
+int haptic_client_on_event(haptic_client* client, haptic_event_callback callback, void* user_data,
                            haptic_error* err) {
-  if (out == nullptr) return invalid(err, "CreateObject: out: is NULL");
-  *out = nullptr;
-  if (client == nullptr) return invalid(err, "CreateObject: client: is NULL");
-  if (spec == nullptr || spec->size < sizeof(haptic_wall_spec)) {
-    return invalid(err, "CreateObject: object.wall: NULL or size smaller than version 1's haptic_wall_spec");
-  }
   return guarded(err, [&] {
-    haptic::WallSpec w;
-    w.point = from_c(spec->point);
-    w.normal = from_c(spec->normal);
-    w.impedance.stiffness = spec->stiffness;
-    w.impedance.damping = spec->damping;
-    w.impedance.static_friction = spec->static_friction;
-    w.impedance.dynamic_friction = spec->dynamic_friction;
-    w.shared = spec->shared != 0;
-    *out = new haptic_object{client->client.add_wall(w)};
+    require(client, "WatchEvents", "client");
+    if (callback == nullptr) {
+      client->client.on_event({});
+      return HAPTIC_OK;
+    }
+    client->client.on_event([callback, user_data](const haptic::Event& e) {
+      haptic_event c{};
+      c.size = sizeof(c);
+      c.kind = static_cast<int32_t>(e.kind);
+      c.session_id = e.session_id;
+      c.item_id = e.item_id;
+      c.server_time = e.server_time;
+      c.message = e.message.c_str();
+      callback(&c, user_data);
+    });
     return HAPTIC_OK;
   });
 }
 
-int haptic_object_remove(haptic_object* object, haptic_error* err) {
-  if (object == nullptr) {
-    set_error(err, HAPTIC_OK, "");
-    return HAPTIC_OK;
-  }
-  const int status = guarded(err, [&] {
-    object->handle.remove();
+int haptic_client_on_connection(haptic_client* client, haptic_connection_callback callback,
+                                void* user_data, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "on_connection", "client");
+    if (callback == nullptr) {
+      client->client.on_connection({});
+      return HAPTIC_OK;
+    }
+    client->client.on_connection([callback, user_data](const haptic::ConnectionChange& change) {
+      haptic_connection_change c{};
+      c.size = sizeof(c);
+      c.state = static_cast<int32_t>(change.state);
+      c.session_id = change.session_id;
+      c.new_session = change.new_session;
+      c.items_not_restored = change.items_not_restored;
+      c.outage_ms = change.outage.count();
+      c.reason = change.reason.c_str();
+      callback(&c, user_data);
+    });
     return HAPTIC_OK;
   });
+}
+
+int32_t haptic_client_connection_state(const haptic_client* client) {
+  if (client == nullptr) return HAPTIC_CONNECTION_ENDED;
   try {
-    delete object;
+    return static_cast<int32_t>(client->client.connection_state());
   } catch (...) {
+    return HAPTIC_CONNECTION_ENDED;
   }
-  return status;
 }
 
-int haptic_client_set_operator_push(haptic_client* client, haptic_vec3 force, haptic_error* err) {
-  if (client == nullptr) return invalid(err, "SetOperator: client: is NULL");
+// ---- administration ----
+
+int haptic_client_sessions(haptic_client* client, haptic_session_summary* out, uint32_t capacity,
+                           uint32_t* count, haptic_error* err) {
   return guarded(err, [&] {
-    client->client.set_operator(haptic::OperatorInput::push(from_c(force)));
+    require(client, "ListSessions", "client");
+    copy_list(client->client.sessions(), out, capacity, count, "ListSessions",
+              [](const haptic::SessionSummary& s) {
+                haptic_session_summary c{};
+                c.session_id = s.session_id;
+                copy_text(c.client_name, sizeof(c.client_name), s.client_name);
+                copy_text(c.peer, sizeof(c.peer), s.peer);
+                copy_text(c.token_name, sizeof(c.token_name), s.token_name);
+                c.device_index = s.device_index;
+                c.role = static_cast<int32_t>(s.role);
+                c.opened_time = s.opened_time;
+                return c;
+              });
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_kick_session(haptic_client* client, uint64_t session_id, const char* reason,
+                               haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "KickSession", "client");
+    client->client.kick_session(session_id, text_or_empty(reason));
+    return HAPTIC_OK;
+  });
+}
+
+void haptic_session_id_text(uint64_t session_id, char out[17]) {
+  if (out == nullptr) return;
+  try {
+    copy_text(out, 17, haptic::session_id_text(session_id));
+  } catch (...) {
+    out[0] = '\0';
+  }
+}
+
+int haptic_client_stats(haptic_client* client, haptic_stats* out, haptic_stream_stats* clients,
+                        uint32_t clients_capacity, haptic_coupling_stats* couplings,
+                        uint32_t couplings_capacity, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "GetStats", "client");
+    auto& c = sized_out<haptic_stats>(out, "GetStats", "out");
+    if (clients_capacity > 0) require(clients, "GetStats", "clients");
+    if (couplings_capacity > 0) require(couplings, "GetStats", "couplings");
+    const haptic::Stats s = client->client.stats();
+    const std::uint32_t size = c.size;
+    c = haptic_stats{};
+    c.size = size;
+    c.sessions = s.sessions;
+    c.ticks = s.ticks;
+    c.achieved_rate_hz = s.achieved_rate_hz;
+    c.lateness_p50_us = s.lateness_p50_us;
+    c.lateness_p99_us = s.lateness_p99_us;
+    c.lateness_p999_us = s.lateness_p999_us;
+    c.lateness_max_us = s.lateness_max_us;
+    c.lateness_samples = s.lateness_samples;
+    c.window_s = s.window_s;
+    c.overruns = s.overruns;
+    c.objects = s.objects;
+    c.fields = s.fields;
+    c.datagrams_sent = s.datagrams_sent;
+    c.datagrams_received = s.datagrams_received;
+    c.datagrams_dropped = s.datagrams_dropped;
+    c.force_faults = s.force_faults;
+    c.force_saturations = s.force_saturations;
+    c.passivity_active_ticks = s.passivity_active_ticks;
+    c.leases_expired = s.leases_expired;
+    c.device_faults = s.device_faults;
+    c.send_delay_p50_us = s.send_delay_p50_us;
+    c.send_delay_p99_us = s.send_delay_p99_us;
+    c.send_delay_p999_us = s.send_delay_p999_us;
+    c.heartbeats_rate_limited = s.heartbeats_rate_limited;
+    c.datagrams_foreign_source = s.datagrams_foreign_source;
+    c.path_challenges_sent = s.path_challenges_sent;
+    c.samples_skipped = s.samples_skipped;
+    c.connections_refused = s.connections_refused;
+    c.connections_timed_out = s.connections_timed_out;
+    c.connections_evicted = s.connections_evicted;
+    c.tls_handshakes_failed = s.tls_handshakes_failed;
+    c.connections_open = s.connections_open;
+    c.client_count = static_cast<uint32_t>(s.clients.size());
+    for (std::size_t i = 0; i < std::min<std::size_t>(clients_capacity, s.clients.size()); ++i) {
+      const haptic::ClientStats& k = s.clients[i];
+      haptic_stream_stats& o = clients[i];
+      o = haptic_stream_stats{};
+      o.session_id = k.session_id;
+      copy_text(o.client_name, sizeof(o.client_name), k.client_name);
+      copy_text(o.peer, sizeof(o.peer), k.peer);
+      o.device_index = k.device_index;
+      o.decimation = k.decimation;
+      o.datagrams_sent = k.datagrams_sent;
+      o.heartbeats = k.heartbeats;
+      o.states_received = k.states_received;
+      o.states_lost = k.states_lost;
+      o.last_heartbeat_age_s = k.last_heartbeat_age_s;
+      o.round_trip_samples = k.round_trip_samples;
+      o.round_trip_p50_us = k.round_trip_p50_us;
+      o.round_trip_p99_us = k.round_trip_p99_us;
+      o.round_trip_p999_us = k.round_trip_p999_us;
+    }
+    if (s.federation) {
+      const haptic::FederationStats& f = *s.federation;
+      c.has_federation = 1;
+      c.coupling_count = static_cast<uint32_t>(f.couplings.size());
+      c.federation_samples_published = f.samples_published;
+      c.federation_samples_failed = f.samples_failed;
+      c.federation_items_published = f.items_published;
+      c.federation_items_applied = f.items_applied;
+      c.federation_items_refused = f.items_refused;
+      c.federation_wrenches_accepted = f.wrenches_accepted;
+      c.federation_wrenches_refused = f.wrenches_refused;
+      for (std::size_t i = 0; i < std::min<std::size_t>(couplings_capacity, f.couplings.size()); ++i) {
+        const haptic::CouplingStats& k = f.couplings[i];
+        couplings[i] = haptic_coupling_stats{static_cast<int32_t>(k.kind), k.port, k.remote, k.mass,
+                                             k.injected_j, k.given_j, k.sent_j, k.received_j,
+                                             k.reservoir_j};
+      }
+    }
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_start_recording(haptic_client* client, const char* name,
+                                  haptic_recording_status* out, haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "StartRecording", "client");
+    require(name, "StartRecording", "name");
+    if (out != nullptr) sized<haptic_recording_status>(out, "StartRecording", "out");
+    copy_recording(client->client.start_recording(name), out);
+    return HAPTIC_OK;
+  });
+}
+
+int haptic_client_stop_recording(haptic_client* client, haptic_recording_status* out,
+                                 haptic_error* err) {
+  return guarded(err, [&] {
+    require(client, "StopRecording", "client");
+    if (out != nullptr) sized<haptic_recording_status>(out, "StopRecording", "out");
+    copy_recording(client->client.stop_recording(), out);
     return HAPTIC_OK;
   });
 }

@@ -95,5 +95,34 @@ TEST(TouchWall, ItsOptionsAreRefusedWithStatusTwoNamingWhatWasWrong) {
   EXPECT_NE(in_clear.output.find("TlsOptions"), std::string::npos) << in_clear.output;
 }
 
+// The C program over the C API (examples/c/touch_wall.c) prints exactly what the C++ one prints,
+// each against a fresh lockstep server: the simulated hand pressing, and the device's own hand
+// watched; and it refuses the same bad options the same way.
+TEST(TouchWall, TheCProgramPrintsExactlyWhatTheCppOnePrints) {
+  for (const std::vector<std::string>& options :
+       {std::vector<std::string>{"--lockstep"}, std::vector<std::string>{"--lockstep", "--hand", "--seconds", "1"}}) {
+    ServerProcess for_cpp(lockstep_config());
+    std::vector<std::string> args = {for_cpp.address()};
+    args.insert(args.end(), options.begin(), options.end());
+    const Outcome cpp = touch_wall(args);
+    ASSERT_EQ(cpp.exit_code, 0) << cpp.output;
+    ASSERT_GT(rows_of(cpp.output).size(), 400u) << cpp.output;
+
+    ServerProcess for_c(lockstep_config());
+    args[0] = for_c.address();
+    const Outcome c = run_program(TOUCH_WALL_C_BINARY, args);
+    ASSERT_EQ(c.exit_code, 0) << c.output;
+    EXPECT_EQ(c.output, cpp.output);
+  }
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--cert", "client.pem"}, std::vector<std::string>{"--tls"},
+        std::vector<std::string>{"--seconds", "forever"}, std::vector<std::string>{"0.0.0.0:1", "--token", kToken}}) {
+    const Outcome cpp = touch_wall(bad);
+    const Outcome c = run_program(TOUCH_WALL_C_BINARY, bad);
+    EXPECT_EQ(c.exit_code, cpp.exit_code) << c.output;
+    EXPECT_EQ(c.output, cpp.output);
+  }
+}
+
 }  // namespace
 }  // namespace haptic::test
