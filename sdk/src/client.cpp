@@ -434,6 +434,36 @@ void Client::on_connection(std::function<void(const ConnectionChange&)> callback
 
 ConnectionChange::State Client::connection_state() const { return require(core_, "connection_state").connection_state(); }
 
+const ClientConfig& Client::config() const { return require(core_, "config").config(); }
+
+ObserverHandle Client::observe(std::shared_ptr<ReceiveObserver> observer, ObserveOptions options) {
+  if (!observer) throw InvalidArgumentError("observe: observer: empty");
+  detail::ClientCore& core = require(core_, "observe");
+  const std::uint64_t id = core.observe(std::move(observer), options.events);
+  return ObserverHandle(core_, id);
+}
+
+ObserverHandle::ObserverHandle(ObserverHandle&& other) noexcept
+    : core_(std::move(other.core_)), id_(std::exchange(other.id_, 0)) {}
+
+ObserverHandle& ObserverHandle::operator=(ObserverHandle&& other) noexcept {
+  if (this != &other) {
+    detach();
+    core_ = std::move(other.core_);
+    id_ = std::exchange(other.id_, 0);
+  }
+  return *this;
+}
+
+ObserverHandle::~ObserverHandle() { detach(); }
+
+void ObserverHandle::detach() noexcept {
+  if (id_ == 0) return;
+  if (auto core = core_.lock()) core->unobserve(id_);
+  id_ = 0;
+  core_.reset();
+}
+
 ReceiveCounters Client::receive_counters() const { return require(core_, "receive_counters").counters(); }
 
 void Client::close() {

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -199,6 +200,7 @@ ClientCore::ClientCore(ClientConfig config) : config_(std::move(config)) {
 ClientCore::~ClientCore() {
   stop_supervisor();
   stop_events();
+  end_observer_watches();
   try {
     close_session();
   } catch (...) {
@@ -223,20 +225,27 @@ void ClientCore::watch_events(std::function<void(const v1::Event&)> callback) {
     events_callback_ = callback;  // resumed after a reconnection
   }
   if (!callback) return;
-  auto context = std::make_unique<grpc::ClientContext>();
-  authenticate(*context);
+  Watch watch = open_watch(std::move(callback));
+  {
+    std::lock_guard lock(events_mutex_);
+    events_context_ = std::move(watch.context);
+  }
+  events_thread_ = std::move(watch.thread);
+}
+
+ClientCore::Watch ClientCore::open_watch(std::function<void(const v1::Event&)> callback) {
+  Watch watch;
+  watch.context = std::make_unique<grpc::ClientContext>();
+  authenticate(*watch.context);
   v1::WatchEventsRequest request;
   request.set_session_id(session_id_);
   // Opened here, so that a refusal the server gives at once (no session, too many streams)
   // reaches the caller as an error rather than a silent end.
-  std::unique_ptr<grpc::ClientReader<v1::Event>> reader = stub()->WatchEvents(context.get(), request);
+  std::unique_ptr<grpc::ClientReader<v1::Event>> reader =
+      stub()->WatchEvents(watch.context.get(), request);
   v1::Event first;
   if (!reader->Read(&first)) throw_status(reader->Finish(), "WatchEvents");
-  {
-    std::lock_guard lock(events_mutex_);
-    events_context_ = std::move(context);
-  }
-  events_thread_ = std::thread(
+  watch.thread = std::thread(
       [reader = std::move(reader), first = std::move(first), callback = std::move(callback)]() mutable {
         v1::Event event = std::move(first);
         do {
@@ -244,6 +253,60 @@ void ClientCore::watch_events(std::function<void(const v1::Event&)> callback) {
         } while (reader->Read(&event));
         reader->Finish();  // cancelled, or the session ended: the stream is over either way
       });
+  return watch;
+}
+
+void ClientCore::end_watch(Watch& watch) {
+  if (watch.context) watch.context->TryCancel();
+  if (watch.thread.joinable()) watch.thread.join();
+  watch.context.reset();
+}
+
+std::uint64_t ClientCore::observe(std::shared_ptr<ReceiveObserver> observer, bool events) {
+  Observer entry{observer, events, {}};
+  if (events) {
+    entry.watch = open_watch([observer](const v1::Event& event) { observer->on_event(from_proto(event)); });
+  }
+  std::uint64_t id = 0;
+  {
+    std::lock_guard lock(observers_mutex_);
+    id = next_observer_id_++;
+    observers_.emplace(id, std::move(entry));
+  }
+  udp_->add_tap(id, std::move(observer));
+  return id;
+}
+
+void ClientCore::unobserve(std::uint64_t id) noexcept {
+  if (udp_) udp_->remove_tap(id);
+  std::optional<Observer> removed;
+  {
+    std::lock_guard lock(observers_mutex_);  // waits out a connection change being told
+    const auto found = observers_.find(id);
+    if (found == observers_.end()) return;
+    removed = std::move(found->second);
+    observers_.erase(found);
+  }
+  end_watch(removed->watch);
+}
+
+void ClientCore::resume_observer_watches() {
+  std::lock_guard lock(observers_mutex_);
+  for (auto& [id, entry] : observers_) {
+    if (!entry.events) continue;
+    end_watch(entry.watch);
+    try {
+      entry.watch = open_watch(
+          [observer = entry.observer](const v1::Event& event) { observer->on_event(from_proto(event)); });
+    } catch (const Error&) {
+      // As the application's own stream: off until the observer is attached again.
+    }
+  }
+}
+
+void ClientCore::end_observer_watches() {
+  std::lock_guard lock(observers_mutex_);
+  for (auto& [id, entry] : observers_) end_watch(entry.watch);
 }
 
 void ClientCore::subscribe(std::uint32_t decimation) {
@@ -461,8 +524,12 @@ void ClientCore::on_connection(std::function<void(const ConnectionChange&)> call
 
 void ClientCore::announce(ConnectionChange change) {
   connection_state_ = change.state;
-  std::lock_guard lock(connection_mutex_);
-  if (connection_callback_) connection_callback_(change);
+  {
+    std::lock_guard lock(connection_mutex_);
+    if (connection_callback_) connection_callback_(change);
+  }
+  std::lock_guard lock(observers_mutex_);
+  for (const auto& [id, entry] : observers_) entry.observer->on_connection(change);
 }
 
 void ClientCore::stop_supervisor() {
@@ -623,6 +690,7 @@ void ClientCore::reopen() {
     } catch (const Error&) {
     }
   }
+  resume_observer_watches();
 }
 
 }  // namespace haptic::detail

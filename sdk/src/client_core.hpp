@@ -79,6 +79,13 @@ class ClientCore {
   /// reconnection.
   void watch_events(std::function<void(const v1::Event&)> callback);
 
+  /// Attaches an observer (Client::observe): every accepted State from the UDP link, its own
+  /// event stream if `events` (opened first; throws the refusal), every connection change.
+  /// Returns its id for unobserve.
+  std::uint64_t observe(std::shared_ptr<ReceiveObserver> observer, bool events);
+  /// Detaches it, waiting out a call in progress; unknown ids are ignored.
+  void unobserve(std::uint64_t id) noexcept;
+
   /// Called on the supervisor's thread with each change of the connection.
   void on_connection(std::function<void(const ConnectionChange&)> callback);
   ConnectionChange::State connection_state() const { return connection_state_.load(); }
@@ -164,6 +171,31 @@ class ClientCore {
   std::function<void(const v1::Event&)> events_callback_;  // guarded by events_mutex_
   std::thread events_thread_;
   void stop_events();
+  // A WatchEvents stream: its context (cancelled to end it) and the thread that reads it.
+  struct Watch {
+    std::unique_ptr<grpc::ClientContext> context;
+    std::thread thread;
+  };
+  /// Opens a stream for this session and runs `callback` on its own thread with each event,
+  /// WATCH_STARTED first; throws the server's refusal (read before this returns).
+  Watch open_watch(std::function<void(const v1::Event&)> callback);
+  /// Cancels the stream and joins its thread.
+  static void end_watch(Watch& watch);
+
+  // Observers (Client::observe), by id. observers_mutex_ is held while one is called with a
+  // connection change and while an event stream of theirs is reopened; never by the receive path
+  // (the UdpLink keeps its own list of sample taps).
+  struct Observer {
+    std::shared_ptr<ReceiveObserver> observer;
+    bool events = false;
+    Watch watch;
+  };
+  std::mutex observers_mutex_;
+  std::map<std::uint64_t, Observer> observers_;  // guarded by observers_mutex_
+  std::uint64_t next_observer_id_ = 1;           // guarded by observers_mutex_
+  /// Reopens the observers' event streams in a new session (reopen).
+  void resume_observer_watches();
+  void end_observer_watches();
 
   std::mutex connection_mutex_;
   std::function<void(const ConnectionChange&)> connection_callback_;  // guarded by connection_mutex_

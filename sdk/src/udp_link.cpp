@@ -380,6 +380,7 @@ void UdpLink::take(std::span<const std::uint8_t> datagram,
   // How much longer than the quickest recent sample this one took: time spent queued anywhere.
   state.age = std::chrono::nanoseconds(clock_.add(header.time_ns, steady_ns(batch.received_at)));
   if (!newest || state.tick >= newest->tick) newest = state;
+  for (const auto& tap : taps_) tap.second->on_sample(state);
 }
 
 void UdpLink::forget_ticks_locked() {
@@ -439,6 +440,23 @@ std::optional<std::chrono::steady_clock::time_point> UdpLink::last_heard() const
 void UdpLink::count_lost(std::uint64_t samples) {
   std::lock_guard lock(mutex_);
   counters_.lost += samples;
+}
+
+void UdpLink::add_tap(std::uint64_t id, std::shared_ptr<ReceiveObserver> tap) {
+  std::lock_guard lock(mutex_);
+  taps_.emplace_back(id, std::move(tap));
+}
+
+void UdpLink::remove_tap(std::uint64_t id) {
+  std::shared_ptr<ReceiveObserver> removed;  // released outside the lock
+  std::lock_guard lock(mutex_);
+  for (auto it = taps_.begin(); it != taps_.end(); ++it) {
+    if (it->first == id) {
+      removed = std::move(it->second);
+      taps_.erase(it);
+      break;
+    }
+  }
 }
 
 void UdpLink::on_state(std::function<void(const State&)> callback) {

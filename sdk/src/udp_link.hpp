@@ -21,8 +21,11 @@
 #include <span>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "clock_sync.hpp"
+#include "haptic/client.hpp"
 #include "haptic/types.hpp"
 #include "haptic/wire/datagram.hpp"
 
@@ -68,6 +71,11 @@ class UdpLink {
   std::optional<double> clock_drift() const;
   std::optional<double> server_time_at(std::chrono::steady_clock::time_point local) const;
   ReceiveCounters counters() const;
+  /// Calls `tap` with every State accepted from now on (on the receive thread, or the thread of a
+  /// restart_ticks or rebind that reads the socket; one at a time) until remove_tap(id), which
+  /// waits out a call in progress.
+  void add_tap(std::uint64_t id, std::shared_ptr<ReceiveObserver> tap);
+  void remove_tap(std::uint64_t id);
   /// Whether the calling thread is the one that runs the on_state callback (the receive thread).
   bool on_callback_thread() const { return std::this_thread::get_id() == receiver_.get_id(); }
 
@@ -152,6 +160,9 @@ class UdpLink {
   ClockSync clock_;                    // guarded by mutex_
   std::optional<std::chrono::steady_clock::time_point> last_heard_;  // guarded by mutex_
   ReceiveCounters counters_;           // guarded by mutex_
+  // Observers of every accepted State (ClientCore::observe), called in take() under mutex_: a
+  // removal then never races a call. Rarely changed; a vector to walk without allocating.
+  std::vector<std::pair<std::uint64_t, std::shared_ptr<ReceiveObserver>>> taps_;  // guarded by mutex_
   // The heartbeat's report (guarded by mutex_): counters_ as the current session started, and the
   // newest State's server stamp with its arrival (the round-trip echo).
   std::uint64_t session_accepted_base_ = 0;

@@ -212,6 +212,52 @@ struct SceneHandles {
   std::vector<FieldHandle> springs;
 };
 
+/// Sees what a Client receives, beside its callbacks (which stay the application's): every
+/// accepted State, the server's events and the connection's changes. For tools that sit beside an
+/// application, such as haptic::Recorder (haptic/recorder.hpp); attach with Client::observe.
+class ReceiveObserver {
+ public:
+  virtual ~ReceiveObserver() = default;
+  /// On the receive thread, for every State datagram accepted (ReceiveCounters::accepted), in the
+  /// order read, not only the newest that on_state is handed; not for the sample a Step reply
+  /// carries. Holds the receive path up while it runs, and poll_state and wait_for_tick with it:
+  /// copy and return.
+  virtual void on_sample(const State& state) noexcept = 0;
+  /// On a thread of the SDK's, with each server event of this observer's own WatchEvents stream
+  /// (ObserveOptions::events), starting with kWatchStarted.
+  virtual void on_event(const Event& event) noexcept { (void)event; }
+  /// On the SDK's supervisor thread, with each change Client::on_connection would be given.
+  virtual void on_connection(const ConnectionChange& change) noexcept { (void)change; }
+};
+
+struct ObserveOptions {
+  /// Open a WatchEvents stream of the observer's own (the server counts it among its streams):
+  /// the Client's on_event callback stays the application's.
+  bool events = false;
+};
+
+/// An attached ReceiveObserver (Client::observe): move-only; detach() or destruction stops the
+/// calls, waiting for one in progress. Harmless if it outlives its Client.
+class ObserverHandle {
+ public:
+  ObserverHandle() = default;
+  ObserverHandle(ObserverHandle&& other) noexcept;
+  ObserverHandle& operator=(ObserverHandle&& other) noexcept;
+  ObserverHandle(const ObserverHandle&) = delete;
+  ObserverHandle& operator=(const ObserverHandle&) = delete;
+  ~ObserverHandle();
+  /// After it returns the observer is called no more. Not from inside the observer's calls.
+  void detach() noexcept;
+  bool attached() const noexcept { return id_ != 0; }
+
+ private:
+  friend class Client;
+  ObserverHandle(std::weak_ptr<detail::ClientCore> core, std::uint64_t id)
+      : core_(std::move(core)), id_(id) {}
+  std::weak_ptr<detail::ClientCore> core_;
+  std::uint64_t id_ = 0;
+};
+
 /// One session with a hapticd server. Methods may be called from any thread, except that moving,
 /// close() and destruction must not race other calls on the same Client.
 class Client {
@@ -288,6 +334,8 @@ class Client {
   /// Changes the state-stream decimation (every n-th tick; 0 stops it).
   void subscribe(std::uint32_t decimation);
 
+  /// The configuration it was made with.
+  const ClientConfig& config() const;
   /// The device, as reported when the session opened.
   const DeviceInfo& device_info() const;
   /// The server's counters (GetStats). With tokens on the server: an ADMIN token only.
@@ -355,6 +403,11 @@ class Client {
   /// the client does not reconnect while they are off).
   void set_heartbeats_enabled(bool enabled);
   ReceiveCounters receive_counters() const;
+
+  /// Attaches `observer` (see ReceiveObserver) until the handle detaches it; the Client keeps it
+  /// alive meanwhile. With options.events its own event stream opens first: the server's refusal
+  /// is thrown (ResourceExhaustedError past its stream limits) and nothing is attached.
+  ObserverHandle observe(std::shared_ptr<ReceiveObserver> observer, ObserveOptions options = {});
 
   /// Closes the session now; throws haptic::Error if the server refuses. After kEnded (the server
   /// ended the session) there is nothing to close, and it only stops the client. Not from inside this
