@@ -12,6 +12,7 @@
 
 #include "integration/run_program.hpp"
 #include "integration/server_process.hpp"
+#include "integration/touch_wall_output.hpp"
 
 namespace haptic::test {
 namespace {
@@ -112,7 +113,7 @@ TEST(TouchWall, TheCProgramPrintsExactlyWhatTheCppOnePrints) {
     args[0] = for_c.address();
     const Outcome c = run_program(TOUCH_WALL_C_BINARY, args);
     ASSERT_EQ(c.exit_code, 0) << c.output;
-    EXPECT_EQ(c.output, cpp.output);
+    EXPECT_EQ(without_datagram_count(c.output), without_datagram_count(cpp.output));
   }
   for (const std::vector<std::string>& bad :
        {std::vector<std::string>{"--cert", "client.pem"}, std::vector<std::string>{"--tls"},

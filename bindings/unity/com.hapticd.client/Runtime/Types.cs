@@ -1,0 +1,525 @@
+// Value types of the hapticd C# binding: the C API's structs (haptic/haptic_c.h, version 1) laid
+// out field for field, so that they cross P/Invoke as they are. SI units; positions, velocities
+// and forces in the device's world frame W (docs/architecture.md).
+using System;
+using System.Runtime.InteropServices;
+
+namespace Hapticd
+{
+    [StructLayout(LayoutKind.Sequential)]
+    public struct Vec3
+    {
+        public double X, Y, Z;
+        public Vec3(double x, double y, double z) { X = x; Y = y; Z = z; }
+        public override string ToString() { return string.Format("({0}, {1}, {2})", X, Y, Z); }
+    }
+
+    /// <summary>Unit quaternion (w, x, y, z).</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct Quaternion
+    {
+        public double W, X, Y, Z;
+        public Quaternion(double w, double x, double y, double z) { W = w; X = x; Y = y; Z = z; }
+        public static Quaternion Identity { get { return new Quaternion(1, 0, 0, 0); } }
+    }
+
+    /// <summary>Where an object is: its origin (m) and orientation in W.</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct Pose
+    {
+        public Vec3 Position;
+        public Quaternion Orientation;
+        public Pose(Vec3 position, Quaternion orientation) { Position = position; Orientation = orientation; }
+        public static Pose At(Vec3 position) { return new Pose(position, Quaternion.Identity); }
+    }
+
+    /// <summary>How penetration becomes force along a surface's normal (docs/scene.md).</summary>
+    public enum ImpedanceLaw : int { Velocity = 0, BackwardDifference = 1, ExactZoh = 2, Tustin = 3 }
+
+    /// <summary>A virtual spring-damper with optional Coulomb friction.</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct Impedance
+    {
+        public double Stiffness;       // N/m, finite, >= 0
+        public double Damping;         // N·s/m, finite, >= 0
+        public double StaticFriction;
+        public double DynamicFriction;
+        public double Mass;            // kg, of the discrete laws
+        public ImpedanceLaw Law;
+        [MarshalAs(UnmanagedType.Bool)] public bool TransparencyOptimalDamping;
+        [MarshalAs(UnmanagedType.Bool)] public bool VirtualCoupling;
+        public Impedance(double stiffness, double damping) : this() { Stiffness = stiffness; Damping = damping; }
+    }
+
+    /// <summary>Mass > 0 makes an object a body the tool can push (000 eq. 7.1).</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct Dynamics
+    {
+        public double Mass;     // kg; 0: fixed
+        public double Damping;  // N·s/m
+        public Dynamics(double mass, double damping) { Mass = mass; Damping = damping; }
+    }
+
+    public enum DistanceKind : int { Point = 0, Line = 1, Plane = 2, Sphere = 3 }
+
+    /// <summary>The distance function the fields are built on.</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct Distance
+    {
+        public DistanceKind Kind;
+        public Vec3 Origin;   // m
+        public Vec3 Axis;     // Line: direction; Plane: normal
+        public double Radius; // Sphere, m
+    }
+
+    // ---- object specs: each has Default (the C++ SDK's defaults, from the library) ----
+
+    /// <summary>A plane the tool stays above: through Point, outward Normal.</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct WallSpec
+    {
+        internal uint size;
+        public Vec3 Point;
+        public Vec3 Normal;
+        public Impedance Impedance;
+        [MarshalAs(UnmanagedType.Bool)] public bool Shared;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static WallSpec Default { get { var s = new WallSpec(); Native.haptic_wall_spec_init(ref s); return s; } }
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct SphereSpec
+    {
+        internal uint size;
+        public Vec3 Center;
+        public double Radius;
+        public Impedance Impedance;
+        public Dynamics Dynamics;
+        [MarshalAs(UnmanagedType.Bool)] public bool Shared;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static SphereSpec Default { get { var s = new SphereSpec(); Native.haptic_sphere_spec_init(ref s); return s; } }
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct BoxSpec
+    {
+        internal uint size;
+        public Pose Pose;
+        public Vec3 HalfExtents;
+        public Impedance Impedance;
+        public Dynamics Dynamics;
+        [MarshalAs(UnmanagedType.Bool)] public bool Shared;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static BoxSpec Default { get { var s = new BoxSpec(); Native.haptic_box_spec_init(ref s); return s; } }
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct CapsuleSpec
+    {
+        internal uint size;
+        public Pose Pose;
+        public double Radius;
+        public double HalfLength;
+        public Impedance Impedance;
+        public Dynamics Dynamics;
+        [MarshalAs(UnmanagedType.Bool)] public bool Shared;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static CapsuleSpec Default { get { var s = new CapsuleSpec(); Native.haptic_capsule_spec_init(ref s); return s; } }
+    }
+
+    /// <summary>Russo's tangent-plane local model.</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct TangentPlaneSpec
+    {
+        internal uint size;
+        public Pose Pose;
+        public Vec3 Normal;
+        public Vec3 Reference;
+        public double TangentialStiffness;
+        public double TangentialDamping;
+        public Impedance Impedance;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static TangentPlaneSpec Default { get { var s = new TangentPlaneSpec(); Native.haptic_tangent_plane_spec_init(ref s); return s; } }
+    }
+
+    /// <summary>A triangle mesh in its pose's frame: three indices per triangle.</summary>
+    public sealed class MeshSpec
+    {
+        public Pose Pose = Pose.At(new Vec3());
+        public Vec3[] Vertices = new Vec3[0];
+        public uint[] Indices = new uint[0];
+        public Impedance Impedance;
+        public bool Shared;
+        public bool AcrossSites;
+    }
+
+    // ---- field specs ----
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct SpringFieldSpec
+    {
+        internal uint size;
+        public Vec3 Anchor;
+        public double Stiffness;
+        public double Damping;
+        public double MaxForce;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static SpringFieldSpec Default { get { var s = new SpringFieldSpec(); Native.haptic_spring_field_spec_init(ref s); return s; } }
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct DistanceSpringSpec
+    {
+        internal uint size;
+        public Distance Anchor;
+        public double Stiffness;
+        public double Damping;
+        public double MaxForce;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static DistanceSpringSpec Default { get { var s = new DistanceSpringSpec(); Native.haptic_distance_spring_spec_init(ref s); return s; } }
+    }
+
+    public enum PotentialKind : int { Polynomial = 0, Khatib = 1 }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct PotentialFieldSpec
+    {
+        internal uint size;
+        public Distance Distance;
+        public PotentialKind Kind;
+        public uint Order;
+        public double Gain;
+        public double Offset;
+        public double InfluenceDistance;
+        public double MinDistance;
+        [MarshalAs(UnmanagedType.Bool)] public bool CentralDifferences;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static PotentialFieldSpec Default { get { var s = new PotentialFieldSpec(); Native.haptic_potential_field_spec_init(ref s); return s; } }
+    }
+
+    /// <summary>F = F0 + K (p − origin) inside Radius; K's rows are JacobianRow0..2 (N/m).</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct LinearFieldSpec
+    {
+        internal uint size;
+        public Vec3 Origin;
+        public Vec3 Force;
+        public Vec3 JacobianRow0;
+        public Vec3 JacobianRow1;
+        public Vec3 JacobianRow2;
+        public double Radius;
+        public double FadeWidth;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static LinearFieldSpec Default { get { var s = new LinearFieldSpec(); Native.haptic_linear_field_spec_init(ref s); return s; } }
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct ViscousFieldSpec
+    {
+        internal uint size;
+        public double Damping;
+        public Vec3 Center;
+        public double Radius;
+        public double FadeWidth;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static ViscousFieldSpec Default { get { var s = new ViscousFieldSpec(); Native.haptic_viscous_field_spec_init(ref s); return s; } }
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct DetentFieldSpec
+    {
+        internal uint size;
+        public Distance Distance;
+        public double Depth;
+        public double Radius;
+        public double RimHeight;
+        public double RimWidth;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static DetentFieldSpec Default { get { var s = new DetentFieldSpec(); Native.haptic_detent_field_spec_init(ref s); return s; } }
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct OrientationSpringSpec
+    {
+        internal uint size;
+        public Quaternion Target;
+        public double Stiffness;
+        public double Damping;
+        public double MaxTorque;
+        public ImpedanceLaw Law;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static OrientationSpringSpec Default { get { var s = new OrientationSpringSpec(); Native.haptic_orientation_spring_spec_init(ref s); return s; } }
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct OrientationDetentSpec
+    {
+        internal uint size;
+        public Quaternion Target;
+        public double Depth;
+        public double Radius;
+        public double RimHeight;
+        public double RimWidth;
+        public double Damping;
+        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
+        public static OrientationDetentSpec Default { get { var s = new OrientationDetentSpec(); Native.haptic_orientation_detent_spec_init(ref s); return s; } }
+    }
+
+    // ---- state and reports ----
+
+    [Flags]
+    public enum StateFlags : uint { None = 0, ForceSaturated = 1, ForceFault = 2, RampingOut = 4, DeviceFault = 8 }
+
+    /// <summary>A sample of the tool. Local times are steady-clock nanoseconds (Client.SteadyClockNs).</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct State
+    {
+        internal uint size;
+        public ulong Tick;
+        public ulong Sequence;         // 0 from a Step reply
+        public double ServerTime;      // s
+        public Vec3 Position;          // p_WT, m
+        public Vec3 Velocity;          // v_WT, m/s
+        public Vec3 Force;             // F_T_W commanded, N
+        public Vec3 Proxy;             // contact point, m
+        public uint ContactCount;
+        public StateFlags Flags;
+        public uint Buttons;           // bit i: button i
+        internal int hasOrientation;
+        public Quaternion Orientation; // R_WT when HasOrientation
+        public Vec3 Torque;            // tau_T_W commanded, N·m
+        public long ReceivedAtNs;
+        public long ArrivedAtNs;       // the kernel's receive stamp; 0: none
+        public long AgeNs;
+        public bool HasOrientation { get { return hasOrientation != 0; } }
+    }
+
+    [Flags]
+    public enum Capabilities : uint
+    {
+        None = 0, Gravity = 1 << 0, Brakes = 1 << 1, FlexibleModes = 1 << 2, Friction = 1 << 3,
+        ForceSensor = 1 << 4, QuantizedPosition = 1 << 5, StateEstimator = 1 << 6,
+        DisturbanceObserver = 1 << 7, Orientation = 1 << 8, Torque = 1 << 9
+    }
+
+    /// <summary>The device, as reported when the session opened.</summary>
+    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
+    public struct DeviceInfo
+    {
+        internal uint size;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 128)] public string Name;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 64)] public string Model;
+        public Capabilities Capabilities;
+        public uint Dof;
+        public Vec3 WorkspaceMin;
+        public Vec3 WorkspaceMax;
+        public double MaxForce;
+        public double LoopRateHz;
+        public double MaxTorque;
+        [MarshalAs(UnmanagedType.Bool)] public bool Simulated;
+        public uint Buttons;
+    }
+
+    /// <summary>The server's stability report for an impedance (docs/scene.md).</summary>
+    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
+    public struct StabilityReport
+    {
+        internal uint size;
+        [MarshalAs(UnmanagedType.Bool)] public bool Available;
+        public double ColgateMinDamping;
+        public double DeviceMass;
+        public double DeviceDamping;
+        public double MaxStableStiffness;
+        public double MaxPoleMagnitude;
+        public double ChosenDamping;
+        public double ChosenStiffness;
+        [MarshalAs(UnmanagedType.Bool)] public bool Passive;
+        [MarshalAs(UnmanagedType.Bool)] public bool DeviceKnown;
+        [MarshalAs(UnmanagedType.Bool)] public bool Stable;
+        [MarshalAs(UnmanagedType.Bool)] public bool RobustlyStable;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 256)] public string Warning;
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct ReceiveCounters
+    {
+        internal uint size;
+        public ulong Accepted, Rejected, Skipped, ChallengesAnswered, CallbackSkipped, Lost, Reordered,
+            Duplicates, Reconnects;
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct ItemEnergy
+    {
+        public ulong Id;
+        public ulong SessionId;
+        [MarshalAs(UnmanagedType.Bool)] public bool IsObject;
+        public double GivenToDevice;       // J
+        public double AbsorbedFromDevice;  // J
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct ObjectState
+    {
+        public ulong Id;
+        public Vec3 Position;
+        public Vec3 Velocity;
+    }
+
+    public enum Role : int { None = 0, Observer = 1, Controller = 2, Admin = 3 }
+
+    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
+    public struct SessionSummary
+    {
+        public ulong SessionId;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 72)] public string ClientName;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 72)] public string Peer;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 72)] public string TokenName;
+        public uint DeviceIndex;
+        public Role Role;
+        public double OpenedTime;
+    }
+
+    /// <summary>One client's state stream in Stats.</summary>
+    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
+    public struct StreamStats
+    {
+        public ulong SessionId;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 72)] public string ClientName;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 72)] public string Peer;
+        public uint DeviceIndex;
+        public uint Decimation;
+        public ulong DatagramsSent, Heartbeats, StatesReceived, StatesLost;
+        public double LastHeartbeatAgeS;
+        public uint RoundTripSamples;
+        public double RoundTripP50Us, RoundTripP99Us, RoundTripP999Us;
+    }
+
+    /// <summary>One coupling of a federation (docs/federation.md). Unit: J.</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct CouplingStats
+    {
+        public int Kind;  // 0: tool, 1: shared mass
+        public uint Port;
+        public ulong Remote, Mass;
+        public double InjectedJ, GivenJ, SentJ, ReceivedJ, ReservoirJ;
+    }
+
+    /// <summary>The server's counters (GetStats), as haptic_stats lays them out.</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct StatsCounters
+    {
+        internal uint size;
+        public uint Sessions;
+        public ulong Ticks;
+        public double AchievedRateHz, LatenessP50Us, LatenessP99Us, LatenessP999Us, LatenessMaxUs;
+        public ulong LatenessSamples;
+        public double WindowS;
+        public ulong Overruns;
+        public uint Objects, Fields;
+        public ulong DatagramsSent, DatagramsReceived, DatagramsDropped, ForceFaults, ForceSaturations,
+            PassivityActiveTicks, LeasesExpired, DeviceFaults;
+        public double SendDelayP50Us, SendDelayP99Us, SendDelayP999Us;
+        public ulong HeartbeatsRateLimited, DatagramsForeignSource, PathChallengesSent, SamplesSkipped,
+            ConnectionsRefused, ConnectionsTimedOut, ConnectionsEvicted, TlsHandshakesFailed;
+        public uint ConnectionsOpen;
+        public uint ClientCount;
+        [MarshalAs(UnmanagedType.Bool)] public bool HasFederation;
+        public uint CouplingCount;
+        public ulong FederationSamplesPublished, FederationSamplesFailed, FederationItemsPublished,
+            FederationItemsApplied, FederationItemsRefused, FederationWrenchesAccepted,
+            FederationWrenchesRefused;
+    }
+
+    public sealed class Stats
+    {
+        public StatsCounters Counters;
+        public StreamStats[] Clients = new StreamStats[0];
+        public CouplingStats[] Couplings = new CouplingStats[0];
+    }
+
+    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
+    public struct RecordingStatus
+    {
+        internal uint size;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 512)] public string Path;
+        public ulong StartTick, Samples, SamplesMissed, Changes, RecordsNotWritten;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 256)] public string WriteError;
+    }
+
+    public enum EventKind : int
+    {
+        Unknown = 0, SessionOpened = 1, SessionClosed = 2, LeaseExpired = 3, SceneChanged = 4,
+        ForceFault = 5, WatchStarted = 6, DeviceFault = 7, Reset = 8
+    }
+
+    /// <summary>Something that happened on the server.</summary>
+    public sealed class Event
+    {
+        public EventKind Kind;
+        public ulong SessionId;
+        public ulong ItemId;
+        public double ServerTime;
+        public string Message = "";
+    }
+
+    public enum ConnectionState : int { Connected = 0, Lost = 1, Resumed = 2, Ended = 3 }
+
+    public sealed class ConnectionChange
+    {
+        public ConnectionState State;
+        public ulong SessionId;
+        public bool NewSession;
+        public uint ItemsNotRestored;
+        public long OutageMs;
+        public string Reason = "";
+    }
+
+    public enum OperatorMode : int { Release = 0, Follow = 1, Push = 2 }
+    public enum Grip : int { Custom = 0, Loose = 1, Tight = 2 }
+    public enum PathShape : int { Fixed = 0, Line = 1, Sine = 2 }
+    public enum ProfileShape : int { Constant = 0, Step = 1, Ramp = 2, Sine = 3, Recorded = 4 }
+
+    /// <summary>What the server's simulated hand does (haptic::OperatorInput).</summary>
+    public sealed class OperatorInput
+    {
+        public OperatorMode Mode;
+        public Vec3 Target;
+        public double Stiffness, Damping, Mass;
+        public Grip Grip;
+        public PathShape PathShape;
+        public Vec3 PathEnd;
+        public double PathDurationS;
+        public Vec3 PathAmplitude;
+        public double PathFrequencyHz;
+        public Vec3 Force;
+        public ProfileShape ProfileShape;
+        public bool ProfileRepeat;
+        public double ProfileStartS, ProfileRiseS, ProfileFrequencyHz;
+        public Vec3 ProfileOffset;
+        public Vec3[] ProfileSamples = new Vec3[0];
+        public double ProfileSamplePeriodS;
+
+        public static OperatorInput Release() { return new OperatorInput(); }
+        public static OperatorInput Push(Vec3 force) { return new OperatorInput { Mode = OperatorMode.Push, Force = force }; }
+        public static OperatorInput Follow(Vec3 target, double stiffness, double damping)
+        {
+            return new OperatorInput { Mode = OperatorMode.Follow, Target = target, Stiffness = stiffness, Damping = damping };
+        }
+    }
+
+    /// <summary>The SDK's error kinds (haptic_status).</summary>
+    public enum ErrorCode : int
+    {
+        Ok = 0, Connection = 1, InvalidArgument = 2, NotFound = 3, PermissionDenied = 4,
+        ResourceExhausted = 5, FailedPrecondition = 6, VersionMismatch = 7, Internal = 8,
+        Unauthenticated = 9
+    }
+
+    /// <summary>A refused or failed call: the code and the SDK's "call: field: problem" message.</summary>
+    public class HapticException : Exception
+    {
+        public ErrorCode Code { get; private set; }
+        public HapticException(ErrorCode code, string message) : base(message) { Code = code; }
+    }
+}

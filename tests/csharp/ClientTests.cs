@@ -1,0 +1,339 @@
+// The C# binding against a real lockstep hapticd (its address is the first argument; the gtest in
+// tests/integration/csharp_test.cpp starts the server and runs this under Mono): the acceptance
+// the Python SDK has — every object kind registered and read back, a wall holding a push,
+// refusals naming the field, callbacks on another thread with no delegate collected under them —
+// and the structs laid out as the C library lays them out.
+using System;
+using System.Collections.Generic;
+using System.Runtime.InteropServices;
+using System.Threading;
+using Hapticd;
+
+static class ClientTests
+{
+    static int failures;
+    static string currentTest = "";
+
+    static void Check(bool condition, string what)
+    {
+        if (condition) return;
+        failures++;
+        Console.Error.WriteLine("FAIL " + currentTest + ": " + what);
+    }
+
+    static void Near(double actual, double expected, double tolerance, string what)
+    {
+        Check(Math.Abs(actual - expected) <= tolerance, what + ": " + actual + " is not within " + tolerance + " of " + expected);
+    }
+
+    static HapticException Throws(Action action, string what)
+    {
+        try { action(); }
+        catch (HapticException e) { return e; }
+        Check(false, what + ": no HapticException");
+        return new HapticException(ErrorCode.Ok, "");
+    }
+
+    static Impedance Stiff { get { return new Impedance(1000.0, 1.0); } }
+
+    static List<object> EveryObjectKind()
+    {
+        var pose = Pose.At(new Vec3(0.3, 0.3, 0.3));
+        var wall = WallSpec.Default; wall.Point = new Vec3(0, 0, -0.05); wall.Impedance = Stiff;
+        var sphere = SphereSpec.Default; sphere.Center = new Vec3(0.2, 0, 0); sphere.Radius = 0.01; sphere.Impedance = Stiff;
+        var box = BoxSpec.Default; box.Pose = pose; box.HalfExtents = new Vec3(0.01, 0.02, 0.03); box.Impedance = Stiff;
+        var capsule = CapsuleSpec.Default; capsule.Pose = pose; capsule.Radius = 0.01; capsule.HalfLength = 0.02; capsule.Impedance = Stiff;
+        var plane = TangentPlaneSpec.Default; plane.Pose = pose; plane.Normal = new Vec3(0, 1, 0); plane.TangentialStiffness = 50.0; plane.Impedance = Stiff;
+        var mesh = new MeshSpec
+        {
+            Pose = pose,
+            Vertices = new[] { new Vec3(0, 0, 0), new Vec3(0.05, 0, 0), new Vec3(0, 0.05, 0), new Vec3(0, 0, 0.05) },
+            Indices = new uint[] { 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3 },
+            Impedance = Stiff,
+        };
+        return new List<object> { wall, sphere, box, capsule, plane, mesh };
+    }
+
+    static List<object> EveryFieldKind()
+    {
+        var spring = SpringFieldSpec.Default; spring.Anchor = new Vec3(0, 0, 0.02); spring.Stiffness = 20.0; spring.MaxForce = 2.0;
+        var line = DistanceSpringSpec.Default; line.Anchor.Kind = DistanceKind.Line; line.Anchor.Axis = new Vec3(1, 0, 0); line.Stiffness = 10.0;
+        var potential = PotentialFieldSpec.Default; potential.Distance.Origin = new Vec3(0.5, 0, 0); potential.Gain = 10.0; potential.Offset = 0.01;
+        var linear = LinearFieldSpec.Default; linear.Origin = new Vec3(0.5, 0.5, 0); linear.Force = new Vec3(0, 0, 0.1); linear.Radius = 0.01; linear.FadeWidth = 0.005;
+        var viscous = ViscousFieldSpec.Default; viscous.Damping = 0.5; viscous.Center = new Vec3(0.5, 0.5, 0.5); viscous.Radius = 0.01; viscous.FadeWidth = 0.005;
+        var detent = DetentFieldSpec.Default; detent.Distance.Origin = new Vec3(-0.5, 0, 0); detent.Depth = 0.01; detent.Radius = 0.01; detent.RimHeight = 0.001; detent.RimWidth = 0.005;
+        var turn = OrientationSpringSpec.Default; turn.Target = new Quaternion(0.5, 0.5, -0.5, 0.5); turn.Stiffness = 0.5; turn.Damping = 0.01; turn.MaxTorque = 0.1; turn.Law = ImpedanceLaw.BackwardDifference;
+        var click = OrientationDetentSpec.Default; click.Target = new Quaternion(0, 0, 0, 1); click.Depth = 0.01; click.Radius = 0.2; click.RimHeight = 0.002; click.RimWidth = 0.1; click.Damping = 0.001;
+        return new List<object> { spring, line, potential, linear, viscous, detent, turn, click };
+    }
+
+    static object AddAny(Client client, object spec)
+    {
+        if (spec is WallSpec) return client.AddWall((WallSpec)spec);
+        if (spec is SphereSpec) return client.AddSphere((SphereSpec)spec);
+        if (spec is BoxSpec) return client.AddBox((BoxSpec)spec);
+        if (spec is CapsuleSpec) return client.AddCapsule((CapsuleSpec)spec);
+        if (spec is TangentPlaneSpec) return client.AddTangentPlane((TangentPlaneSpec)spec);
+        if (spec is MeshSpec) return client.AddMesh((MeshSpec)spec);
+        if (spec is SpringFieldSpec) return client.AddField((SpringFieldSpec)spec);
+        if (spec is DistanceSpringSpec) return client.AddField((DistanceSpringSpec)spec);
+        if (spec is PotentialFieldSpec) return client.AddField((PotentialFieldSpec)spec);
+        if (spec is LinearFieldSpec) return client.AddField((LinearFieldSpec)spec);
+        if (spec is ViscousFieldSpec) return client.AddField((ViscousFieldSpec)spec);
+        if (spec is DetentFieldSpec) return client.AddField((DetentFieldSpec)spec);
+        if (spec is OrientationSpringSpec) return client.AddField((OrientationSpringSpec)spec);
+        return client.AddField((OrientationDetentSpec)spec);
+    }
+
+    static string Json(object spec) { return Client.SceneJson(new List<object> { spec }); }
+
+    static State StepAndGet(Client client, uint ticks)
+    {
+        ulong tick = client.Step(ticks);
+        State state;
+        Check(client.WaitForTick(tick, out state, 5000) && state.Tick == tick, "wait_for_tick after step");
+        return state;
+    }
+
+    // Each C struct's size as the library's init sets it equals the binding's marshalled size.
+    static void TheStructsAreLaidOutAsTheLibraryLaysThemOut()
+    {
+        currentTest = "layout";
+        Check(WallSpec.Default.size == Marshal.SizeOf(typeof(WallSpec)), "WallSpec " + WallSpec.Default.size + " vs " + Marshal.SizeOf(typeof(WallSpec)));
+        Check(SphereSpec.Default.size == Marshal.SizeOf(typeof(SphereSpec)), "SphereSpec");
+        Check(BoxSpec.Default.size == Marshal.SizeOf(typeof(BoxSpec)), "BoxSpec");
+        Check(CapsuleSpec.Default.size == Marshal.SizeOf(typeof(CapsuleSpec)), "CapsuleSpec");
+        Check(TangentPlaneSpec.Default.size == Marshal.SizeOf(typeof(TangentPlaneSpec)), "TangentPlaneSpec");
+        var mesh = new NativeMeshSpec();
+        Native.haptic_mesh_spec_init(ref mesh);
+        Check(mesh.size == Marshal.SizeOf(typeof(NativeMeshSpec)), "MeshSpec " + mesh.size + " vs " + Marshal.SizeOf(typeof(NativeMeshSpec)));
+        Check(SpringFieldSpec.Default.size == Marshal.SizeOf(typeof(SpringFieldSpec)), "SpringFieldSpec");
+        Check(DistanceSpringSpec.Default.size == Marshal.SizeOf(typeof(DistanceSpringSpec)), "DistanceSpringSpec");
+        Check(PotentialFieldSpec.Default.size == Marshal.SizeOf(typeof(PotentialFieldSpec)), "PotentialFieldSpec");
+        Check(LinearFieldSpec.Default.size == Marshal.SizeOf(typeof(LinearFieldSpec)), "LinearFieldSpec");
+        Check(ViscousFieldSpec.Default.size == Marshal.SizeOf(typeof(ViscousFieldSpec)), "ViscousFieldSpec");
+        Check(DetentFieldSpec.Default.size == Marshal.SizeOf(typeof(DetentFieldSpec)), "DetentFieldSpec");
+        Check(OrientationSpringSpec.Default.size == Marshal.SizeOf(typeof(OrientationSpringSpec)), "OrientationSpringSpec");
+        Check(OrientationDetentSpec.Default.size == Marshal.SizeOf(typeof(OrientationDetentSpec)), "OrientationDetentSpec");
+        // Defaults come from the library: the C++ SDK's.
+        Check(WallSpec.Default.Normal.Z == 1.0 && BoxSpec.Default.Pose.Orientation.W == 1.0, "defaults");
+        Check(PotentialFieldSpec.Default.Order == 2, "potential order default");
+        var config = new ClientConfig();
+        Check(config.ServerAddress == "127.0.0.1:50051" && config.Reconnect && config.StateDecimation == 1, "config defaults");
+    }
+
+    static void AWallHoldsAPush(Client client)
+    {
+        currentTest = "wall";
+        client.SetOperator(OperatorInput.Push(new Vec3(0, 0, -5.0)));
+        var spec = WallSpec.Default;
+        spec.Impedance = Stiff;
+        using (var wall = client.AddWall(spec))
+        {
+            Check(wall.Owned && wall.Id > 0, "owned with an id");
+            Check(wall.Stability.DeviceKnown && wall.Stability.Available, "stability report");
+            var state = StepAndGet(client, 3000);
+            // At rest the wall balances the push: 5 mm deep, 5 N up.
+            Check(state.ContactCount == 1, "in contact");
+            Near(state.Position.Z, -0.005, 1e-6, "depth");
+            Near(state.Force.Z, 5.0, 1e-3, "force");
+        }
+        var after = StepAndGet(client, 100);
+        Check(after.Force.Z == 0.0 && after.ContactCount == 0, "removed by Dispose: force ramped out");
+        client.SetOperator(OperatorInput.Release());
+    }
+
+    static void EveryKindRegistersReadsBackAndUpdates(Client client)
+    {
+        currentTest = "every kind";
+        var objectSpecs = EveryObjectKind();
+        var fieldSpecs = EveryFieldKind();
+        var objects = new List<ObjectHandle>();
+        var fields = new List<FieldHandle>();
+        foreach (var spec in objectSpecs) objects.Add((ObjectHandle)AddAny(client, spec));
+        foreach (var spec in fieldSpecs) fields.Add((FieldHandle)AddAny(client, spec));
+        var scene = client.Scene();
+        Check(scene.Objects.Count == 6 && scene.Fields.Count == 8, "counts");
+        for (int i = 0; i < scene.Objects.Count && i < 6; ++i)
+        {
+            Check(scene.ObjectIds[i] == objects[i].Id, "object id " + i);
+            Check(scene.Objects[i].GetType() == objectSpecs[i].GetType(), "object kind " + i);
+            Check(Json(scene.Objects[i]) == Json(objectSpecs[i]), "object " + i + " as given: " + Json(scene.Objects[i]));
+            Check(scene.ObjectSessions[i] == client.SessionId, "object session " + i);
+        }
+        for (int i = 0; i < scene.Fields.Count && i < 8; ++i)
+        {
+            Check(scene.FieldIds[i] == fields[i].Id, "field id " + i);
+            Check(scene.Fields[i].GetType() == fieldSpecs[i].GetType(), "field kind " + i);
+            Check(Json(scene.Fields[i]) == Json(fieldSpecs[i]), "field " + i + " as given: " + Json(scene.Fields[i]));
+        }
+        var mesh = scene.Objects.Count > 5 ? scene.Objects[5] as MeshSpec : null;
+        Check(mesh != null && mesh.Vertices.Length == 4 && mesh.Indices.Length == 12 && mesh.Vertices[1].X == 0.05, "mesh read back");
+        Check(fields[6].Stability.Available && !fields[0].Stability.Available, "an orientation spring's report alone");
+
+        var sphere = (SphereSpec)objectSpecs[1];
+        sphere.Radius = 0.03;
+        objects[1].Update(sphere);
+        var viscous = (ViscousFieldSpec)fieldSpecs[4];
+        viscous.Damping = 1.5;
+        fields[4].Update(viscous);
+        var turn = OrientationSpringSpec.Default;
+        turn.Stiffness = 0.2;
+        fields[7].Update(turn);  // a detent becomes a spring
+        scene = client.Scene();
+        Check(((SphereSpec)scene.Objects[1]).Radius == 0.03, "sphere updated");
+        Check(((ViscousFieldSpec)scene.Fields[4]).Damping == 1.5, "viscous updated");
+        Check(scene.Fields[7] is OrientationSpringSpec && Json(scene.Fields[7]) == Json(turn), "detent became a spring");
+        foreach (var o in objects) o.Remove();
+        foreach (var f in fields) f.Dispose();
+        scene = client.Scene();
+        Check(scene.Objects.Count == 0 && scene.Fields.Count == 0, "all removed");
+    }
+
+    static void RefusalsNameTheFieldAndChangeNothing(Client client)
+    {
+        currentTest = "refusals";
+        var spec = SphereSpec.Default;
+        spec.Center = new Vec3(0, 0, 0.1);
+        spec.Radius = 0.01;
+        spec.Impedance = Stiff;
+        using (var sphere = client.AddSphere(spec))
+        {
+            var bad = spec;
+            bad.Radius = -1.0;
+            var e = Throws(() => sphere.Update(bad), "negative radius");
+            Check(e.Code == ErrorCode.InvalidArgument, "code " + e.Code);
+            Check(e.Message.Contains("object.sphere.radius"), "message names the field: " + e.Message);
+            Check(((SphereSpec)client.Scene().Objects[0]).Radius == 0.01, "the sphere is as it was");
+
+            var nanWall = WallSpec.Default;
+            nanWall.Normal = new Vec3(0, 0, double.NaN);
+            e = Throws(() => client.AddWall(nanWall), "NaN normal");
+            Check(e.Message.StartsWith("CreateObject: object.half_space.normal"), "NaN normal named: " + e.Message);
+            var lawWall = WallSpec.Default;
+            lawWall.Impedance.Law = (ImpedanceLaw)9;
+            e = Throws(() => client.AddWall(lawWall), "law out of range");
+            Check(e.Message == "CreateObject: object.wall.impedance.law: 9 is not one of 0..3", e.Message);
+            // A scene with one bad item is refused whole, naming it; the scene before stays.
+            var items = new List<object> { WallSpec.Default, bad };
+            e = Throws(() => client.ApplyScene(items), "bad scene");
+            Check(e.Message.Contains("scene.objects[1]"), "scene item named: " + e.Message);
+            e = Throws(() => client.ApplyScene(new List<object> { "a wall" }), "not a spec");
+            Check(e.Message == "ApplyScene: items[0]: String is not an object or field spec", e.Message);
+            Check(client.Scene().Objects.Count == 1, "the scene before stays");
+        }
+        var unreachable = new ClientConfig { ServerAddress = "127.0.0.1:1", RpcTimeoutMs = 200, Reconnect = false };
+        var refused = Throws(() => new Client(unreachable), "unreachable server");
+        Check(refused.Code == ErrorCode.Connection, "connection error: " + refused.Code);
+    }
+
+    static void AScenesAppliesWholeAndReadsBack(Client client)
+    {
+        currentTest = "scene";
+        var items = new List<object>();
+        items.AddRange(EveryObjectKind());
+        items.AddRange(EveryFieldKind());
+        var applied = client.ApplyScene(items);
+        Check(applied.Objects.Count == 6 && applied.Fields.Count == 8 && applied.Stability.Count == 6, "handles");
+        var scene = client.Scene();
+        for (int i = 0; i < 6; ++i) Check(scene.ObjectIds[i] == applied.Objects[i].Id && Json(scene.Objects[i]) == Json(items[i]), "scene object " + i);
+        for (int i = 0; i < 8; ++i) Check(scene.FieldIds[i] == applied.Fields[i].Id && Json(scene.Fields[i]) == Json(items[6 + i]), "scene field " + i);
+        client.ApplyScene(new List<object>());
+        Check(client.Scene().Objects.Count == 0, "an empty scene clears it");
+        foreach (var o in applied.Objects) o.Dispose();  // stale: nothing to remove
+        foreach (var f in applied.Fields) f.Dispose();
+    }
+
+    static void CallbacksArriveOnAnotherThreadAndSurviveCollections(Client client)
+    {
+        currentTest = "callbacks";
+        int caller = Thread.CurrentThread.ManagedThreadId;
+        int states = 0, onCaller = 0;
+        ulong lastTick = 0;
+        var kinds = new List<EventKind>();
+        var gate = new object();
+        client.OnState(s =>
+        {
+            lock (gate)
+            {
+                states++;
+                if (Thread.CurrentThread.ManagedThreadId == caller) onCaller++;
+                lastTick = s.Tick;
+            }
+        });
+        client.OnEvent(e => { lock (gate) kinds.Add(e.Kind); });
+        // Collections while the SDK holds the callbacks: the delegates it calls must stay alive.
+        ulong tick = 0;
+        for (int round = 0; round < 20; ++round)
+        {
+            GC.Collect();
+            GC.WaitForPendingFinalizers();
+            tick = client.Step(50);
+        }
+        var spec = WallSpec.Default;
+        spec.Point = new Vec3(0, 0, -0.5);
+        using (client.AddWall(spec)) { }
+        for (int i = 0; i < 300; ++i)
+        {
+            lock (gate) { if (lastTick >= tick && kinds.Contains(EventKind.SceneChanged)) break; }
+            State s;
+            client.PollState(out s, 10);
+        }
+        client.OnState(null);
+        client.OnEvent(null);
+        int seen;
+        lock (gate)
+        {
+            seen = states;
+            Check(states > 0 && onCaller == 0, "states " + states + ", on the caller's thread " + onCaller);
+            Check(kinds.Contains(EventKind.WatchStarted) && kinds.Contains(EventKind.SceneChanged), "events: " + string.Join(",", kinds));
+        }
+        client.Step(50);
+        Thread.Sleep(50);
+        lock (gate) Check(states == seen, "no calls after OnState(null)");
+        // A callback that throws is caught and counted; the stream carries on.
+        client.OnState(s => { throw new InvalidOperationException("thrown on purpose"); });
+        client.Step(20);
+        for (int i = 0; i < 100 && client.CallbackExceptions == 0; ++i) Thread.Sleep(10);
+        client.OnState(null);
+        Check(client.CallbackExceptions > 0, "exceptions counted");
+    }
+
+    static void TheRestOfTheSession(Client client)
+    {
+        currentTest = "session";
+        var info = client.DeviceInfo;
+        Check(info.Simulated && info.LoopRateHz > 0 && info.Model == "point_mass" && info.Dof == 3, "device " + info.Model);
+        Check(client.SessionId > 0 && client.LeaseTimeoutMs > 0 && client.ConnectionState == ConnectionState.Connected, "session");
+        var stats = client.Stats();
+        Check(stats.Counters.Ticks > 0 && stats.Clients.Length == 1 && stats.Clients[0].ClientName == "csharp-test", "stats");
+        var sessions = client.Sessions();
+        Check(sessions.Length == 1 && sessions[0].SessionId == client.SessionId, "sessions");
+        Check(client.ReceiveCounters.Accepted > 0, "counters");
+        Check(client.ServerTimeNow().HasValue, "server time");
+        var e = Throws(() => client.StartRecording("x.rec"), "no recording_dir");
+        Check(e.Code == ErrorCode.FailedPrecondition, "recording refused: " + e.Code);
+        // Motion on a path of constant acceleration is exact.
+        var a = new State { ServerTime = 1.0, Velocity = new Vec3(0.1, 0, 0) };
+        var b = new State { ServerTime = 1.001, Position = new Vec3(0.1 * 0.001 + 0.001 * 0.001, 0, 0), Velocity = new Vec3(0.1 + 0.002, 0, 0) };
+        Near(Motion.Predict(a, b, 1.002).X, 0.1 * 0.002 + 0.002 * 0.002, 1e-12, "predict");
+        Near(Motion.Interpolate(a, b, 1.0005).X, 0.1 * 0.0005 + 0.0005 * 0.0005, 1e-12, "interpolate");
+    }
+
+    static int Main(string[] args)
+    {
+        if (args.Length < 1) { Console.Error.WriteLine("usage: ClientTests.exe host:port"); return 2; }
+        TheStructsAreLaidOutAsTheLibraryLaysThemOut();
+        using (var client = new Client(new ClientConfig { ServerAddress = args[0], ClientName = "csharp-test", HeartbeatPeriodMs = 20 }))
+        {
+            AWallHoldsAPush(client);
+            EveryKindRegistersReadsBackAndUpdates(client);
+            RefusalsNameTheFieldAndChangeNothing(client);
+            AScenesAppliesWholeAndReadsBack(client);
+            CallbacksArriveOnAnotherThreadAndSurviveCollections(client);
+            TheRestOfTheSession(client);
+        }
+        Console.WriteLine(failures == 0 ? "all C# checks passed" : failures + " C# checks failed");
+        return failures == 0 ? 0 : 1;
+    }
+}

@@ -1,0 +1,58 @@
+// The C# binding under Mono (Debian's mono-runtime, the runtime Unity's scripting grew from)
+// against a real lockstep hapticd: the binding's own checks, and touch_wall in C# printing exactly
+// what the C++ one prints, each against a fresh server.
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "integration/run_program.hpp"
+#include "integration/server_process.hpp"
+#include "integration/touch_wall_output.hpp"
+
+namespace haptic::test {
+namespace {
+
+Outcome mono(const std::string& program, const std::vector<std::string>& args) {
+  std::vector<std::string> words = {"--debug", program};
+  words.insert(words.end(), args.begin(), args.end());
+  return run_program(MONO_BINARY, words);
+}
+
+TEST(CSharp, TheBindingRegistersEveryKindHoldsAPushRefusesNamingTheFieldAndCallsBackOnItsThreads) {
+  ServerProcess server(lockstep_config());
+  const Outcome outcome = mono(CSHARP_TESTS, {server.address()});
+  EXPECT_EQ(outcome.exit_code, 0) << outcome.output;
+  EXPECT_NE(outcome.output.find("all C# checks passed"), std::string::npos) << outcome.output;
+}
+
+TEST(CSharp, TouchWallPrintsExactlyWhatTheCppOnePrints) {
+  for (const std::vector<std::string>& options :
+       {std::vector<std::string>{"--lockstep"}, std::vector<std::string>{"--lockstep", "--hand", "--seconds", "1"}}) {
+    ServerProcess for_cpp(lockstep_config());
+    std::vector<std::string> args = {for_cpp.address()};
+    args.insert(args.end(), options.begin(), options.end());
+    const Outcome cpp = run_program(TOUCH_WALL_BINARY, args);
+    ASSERT_EQ(cpp.exit_code, 0) << cpp.output;
+    ASSERT_GT(cpp.output.size(), 1000u) << cpp.output;
+
+    ServerProcess for_cs(lockstep_config());
+    args[0] = for_cs.address();
+    const Outcome cs = mono(CSHARP_TOUCH_WALL, args);
+    ASSERT_EQ(cs.exit_code, 0) << cs.output;
+    EXPECT_EQ(without_datagram_count(cs.output), without_datagram_count(cpp.output));
+  }
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--cert", "client.pem"}, std::vector<std::string>{"--tls"},
+        std::vector<std::string>{"--seconds", "forever"},
+        std::vector<std::string>{"0.0.0.0:1", "--token", "lab-controller-token-0123456789"}}) {
+    const Outcome cpp = run_program(TOUCH_WALL_BINARY, bad);
+    const Outcome cs = mono(CSHARP_TOUCH_WALL, bad);
+    EXPECT_EQ(cs.exit_code, cpp.exit_code) << cs.output;
+    EXPECT_EQ(cs.output, cpp.output);
+  }
+}
+
+}  // namespace
+}  // namespace haptic::test
