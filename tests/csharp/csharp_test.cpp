@@ -1,6 +1,7 @@
 // The C# binding under Mono (Debian's mono-runtime, the runtime Unity's scripting grew from)
-// against a real lockstep hapticd: the binding's own checks, and touch_wall in C# printing exactly
-// what the C++ one prints, each against a fresh server.
+// against a real lockstep hapticd: the binding's own checks, the Unity package's component (with a
+// stand-in for UnityEngine), and touch_wall in C# printing exactly what the C++ one prints, each
+// against a fresh server.
 
 #include <gtest/gtest.h>
 
@@ -25,6 +26,13 @@ TEST(CSharp, TheBindingRegistersEveryKindHoldsAPushRefusesNamingTheFieldAndCalls
   const Outcome outcome = mono(CSHARP_TESTS, {server.address()});
   EXPECT_EQ(outcome.exit_code, 0) << outcome.output;
   EXPECT_NE(outcome.output.find("all C# checks passed"), std::string::npos) << outcome.output;
+}
+
+TEST(CSharp, TheUnityComponentMovesItsTransformWithTheTool) {
+  ServerProcess server(lockstep_config());
+  const Outcome outcome = mono(UNITY_COMPONENT_TEST, {server.address()});
+  EXPECT_EQ(outcome.exit_code, 0) << outcome.output;
+  EXPECT_NE(outcome.output.find("the Unity component's checks passed"), std::string::npos) << outcome.output;
 }
 
 TEST(CSharp, TouchWallPrintsExactlyWhatTheCppOnePrints) {
