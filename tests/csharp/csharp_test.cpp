@@ -18,7 +18,13 @@ namespace {
 Outcome mono(const std::string& program, const std::vector<std::string>& args) {
   std::vector<std::string> words = {"--debug", program};
   words.insert(words.end(), args.begin(), args.end());
+#ifdef MONO_PRELOAD
+  // A sanitizer build: the instrumented libhaptic_c needs their runtime loaded first.
+  words.insert(words.begin(), {MONO_PRELOAD, "ASAN_OPTIONS=detect_leaks=0:halt_on_error=1", MONO_BINARY});
+  return run_program("/usr/bin/env", words);
+#else
   return run_program(MONO_BINARY, words);
+#endif
 }
 
 TEST(CSharp, TheBindingRegistersEveryKindHoldsAPushRefusesNamingTheFieldAndCallsBackOnItsThreads) {
