@@ -147,380 +147,273 @@ std::int64_t steady_ns(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
 }
 
-// ---- value types ----
+// ---- value types and specs: each struct's fields listed once, walked in either direction ----
 
 haptic_vec3 to_c(const haptic::Vec3& v) { return {v.x, v.y, v.z}; }
 haptic::Vec3 to_cpp(const haptic_vec3& v) { return {v.x, v.y, v.z}; }
 haptic_quaternion to_c(const haptic::Quaternion& q) { return {q.w, q.x, q.y, q.z}; }
 haptic::Quaternion to_cpp(const haptic_quaternion& q) { return {q.w, q.x, q.y, q.z}; }
-haptic_pose to_c(const haptic::Pose& p) { return {to_c(p.position), to_c(p.orientation)}; }
-haptic::Pose to_cpp(const haptic_pose& p) { return {to_cpp(p.position), to_cpp(p.orientation)}; }
-haptic_dynamics to_c(const haptic::Dynamics& d) { return {d.mass, d.damping}; }
-haptic::Dynamics to_cpp(const haptic_dynamics& d) { return {d.mass, d.damping}; }
 
-constexpr std::int32_t kLastLaw = static_cast<std::int32_t>(haptic::ImpedanceLaw::kTustin);
+/// The last value of each C++ enum a C struct carries as an int32_t (values 0..last).
+template <typename Enum> constexpr std::int32_t kLastValue = 0;
+template <> constexpr std::int32_t kLastValue<haptic::ImpedanceLaw> = HAPTIC_LAW_TUSTIN;
+template <> constexpr std::int32_t kLastValue<haptic::Distance::Kind> = HAPTIC_DISTANCE_SPHERE;
+template <> constexpr std::int32_t kLastValue<haptic::PotentialFieldSpec::Kind> = HAPTIC_POTENTIAL_KHATIB;
 
-haptic_impedance to_c(const haptic::Impedance& i) {
-  haptic_impedance c{};
-  c.stiffness = i.stiffness;
-  c.damping = i.damping;
-  c.static_friction = i.static_friction;
-  c.dynamic_friction = i.dynamic_friction;
-  c.mass = i.mass;
-  c.law = static_cast<std::int32_t>(i.law);
-  c.transparency_optimal_damping = i.transparency_optimal_damping;
-  c.virtual_coupling = i.virtual_coupling;
+// each_field(c, cpp, visit): calls visit(c.field, cpp.field, "name") for every field of a C struct
+// and its C++ twin, in the header's order. One list per struct serves both directions (ToCpp,
+// ToC below) and names the field in a refusal.
+template <typename V> void each_field(haptic_pose& c, haptic::Pose& s, V&& v) {
+  v(c.position, s.position, "position");
+  v(c.orientation, s.orientation, "orientation");
+}
+template <typename V> void each_field(haptic_dynamics& c, haptic::Dynamics& s, V&& v) {
+  v(c.mass, s.mass, "mass");
+  v(c.damping, s.damping, "damping");
+}
+template <typename V> void each_field(haptic_impedance& c, haptic::Impedance& s, V&& v) {
+  v(c.stiffness, s.stiffness, "stiffness");
+  v(c.damping, s.damping, "damping");
+  v(c.static_friction, s.static_friction, "static_friction");
+  v(c.dynamic_friction, s.dynamic_friction, "dynamic_friction");
+  v(c.mass, s.mass, "mass");
+  v(c.law, s.law, "law");
+  v(c.transparency_optimal_damping, s.transparency_optimal_damping, "transparency_optimal_damping");
+  v(c.virtual_coupling, s.virtual_coupling, "virtual_coupling");
+}
+template <typename V> void each_field(haptic_distance& c, haptic::Distance& s, V&& v) {
+  v(c.kind, s.kind, "kind");
+  v(c.origin, s.origin, "origin");
+  v(c.axis, s.axis, "axis");
+  v(c.radius, s.radius, "radius");
+}
+template <typename V> void each_field(haptic_wall_spec& c, haptic::WallSpec& s, V&& v) {
+  v(c.point, s.point, "point");
+  v(c.normal, s.normal, "normal");
+  v(c.impedance, s.impedance, "impedance");
+  v(c.shared, s.shared, "shared");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_sphere_spec& c, haptic::SphereSpec& s, V&& v) {
+  v(c.center, s.center, "center");
+  v(c.radius, s.radius, "radius");
+  v(c.impedance, s.impedance, "impedance");
+  v(c.dynamics, s.dynamics, "dynamics");
+  v(c.shared, s.shared, "shared");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_box_spec& c, haptic::BoxSpec& s, V&& v) {
+  v(c.pose, s.pose, "pose");
+  v(c.half_extents, s.half_extents, "half_extents");
+  v(c.impedance, s.impedance, "impedance");
+  v(c.dynamics, s.dynamics, "dynamics");
+  v(c.shared, s.shared, "shared");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_capsule_spec& c, haptic::CapsuleSpec& s, V&& v) {
+  v(c.pose, s.pose, "pose");
+  v(c.radius, s.radius, "radius");
+  v(c.half_length, s.half_length, "half_length");
+  v(c.impedance, s.impedance, "impedance");
+  v(c.dynamics, s.dynamics, "dynamics");
+  v(c.shared, s.shared, "shared");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_tangent_plane_spec& c, haptic::TangentPlaneSpec& s, V&& v) {
+  v(c.pose, s.pose, "pose");
+  v(c.normal, s.normal, "normal");
+  v(c.reference, s.reference, "reference");
+  v(c.tangential_stiffness, s.tangential_stiffness, "tangential_stiffness");
+  v(c.tangential_damping, s.tangential_damping, "tangential_damping");
+  v(c.impedance, s.impedance, "impedance");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+/// A mesh's fields but its arrays (to_c and to_cpp below carry those).
+template <typename V> void each_field(haptic_mesh_spec& c, haptic::MeshSpec& s, V&& v) {
+  v(c.pose, s.pose, "pose");
+  v(c.impedance, s.impedance, "impedance");
+  v(c.shared, s.shared, "shared");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_spring_field_spec& c, haptic::SpringFieldSpec& s, V&& v) {
+  v(c.anchor, s.anchor, "anchor");
+  v(c.stiffness, s.stiffness, "stiffness");
+  v(c.damping, s.damping, "damping");
+  v(c.max_force, s.max_force, "max_force");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_distance_spring_spec& c, haptic::DistanceSpringSpec& s, V&& v) {
+  v(c.anchor, s.anchor, "anchor");
+  v(c.stiffness, s.stiffness, "stiffness");
+  v(c.damping, s.damping, "damping");
+  v(c.max_force, s.max_force, "max_force");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_potential_field_spec& c, haptic::PotentialFieldSpec& s, V&& v) {
+  v(c.distance, s.distance, "distance");
+  v(c.kind, s.kind, "kind");
+  v(c.order, s.order, "order");
+  v(c.gain, s.gain, "gain");
+  v(c.offset, s.offset, "offset");
+  v(c.influence_distance, s.influence_distance, "influence_distance");
+  v(c.min_distance, s.min_distance, "min_distance");
+  v(c.central_differences, s.central_differences, "central_differences");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_linear_field_spec& c, haptic::LinearFieldSpec& s, V&& v) {
+  v(c.origin, s.origin, "origin");
+  v(c.force, s.force, "force");
+  v(c.jacobian, s.jacobian, "jacobian");
+  v(c.radius, s.radius, "radius");
+  v(c.fade_width, s.fade_width, "fade_width");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_viscous_field_spec& c, haptic::ViscousFieldSpec& s, V&& v) {
+  v(c.damping, s.damping, "damping");
+  v(c.center, s.center, "center");
+  v(c.radius, s.radius, "radius");
+  v(c.fade_width, s.fade_width, "fade_width");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_detent_field_spec& c, haptic::DetentFieldSpec& s, V&& v) {
+  v(c.distance, s.distance, "distance");
+  v(c.depth, s.depth, "depth");
+  v(c.radius, s.radius, "radius");
+  v(c.rim_height, s.rim_height, "rim_height");
+  v(c.rim_width, s.rim_width, "rim_width");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_orientation_spring_spec& c, haptic::OrientationSpringSpec& s, V&& v) {
+  v(c.target, s.target, "target");
+  v(c.stiffness, s.stiffness, "stiffness");
+  v(c.damping, s.damping, "damping");
+  v(c.max_torque, s.max_torque, "max_torque");
+  v(c.law, s.law, "law");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+template <typename V> void each_field(haptic_orientation_detent_spec& c, haptic::OrientationDetentSpec& s, V&& v) {
+  v(c.target, s.target, "target");
+  v(c.depth, s.depth, "depth");
+  v(c.radius, s.radius, "radius");
+  v(c.rim_height, s.rim_height, "rim_height");
+  v(c.rim_width, s.rim_width, "rim_width");
+  v(c.damping, s.damping, "damping");
+  v(c.across_sites, s.across_sites, "across_sites");
+}
+
+template <typename C, typename Cpp>
+concept HasFields = requires(C& c, Cpp& s) { each_field(c, s, [](auto&, auto&, const char*) {}); };
+
+/// Copies a C struct's fields into the C++ one; a nested struct's problem is named by its path.
+struct ToCpp {
+  void operator()(const double& c, double& s, const char*) const { s = c; }
+  void operator()(const std::uint32_t& c, std::uint32_t& s, const char*) const { s = c; }
+  void operator()(const std::int32_t& c, bool& s, const char*) const { s = c != 0; }
+  template <typename Enum>
+    requires std::is_enum_v<Enum>
+  void operator()(const std::int32_t& c, Enum& s, const char* name) const {
+    s = enum_from<Enum>(c, kLastValue<Enum>, name);
+  }
+  void operator()(const haptic_vec3& c, haptic::Vec3& s, const char*) const { s = to_cpp(c); }
+  void operator()(const haptic_quaternion& c, haptic::Quaternion& s, const char*) const { s = to_cpp(c); }
+  void operator()(const haptic_vec3 (&c)[3], haptic::Vec3 (&s)[3], const char*) const {
+    for (int i = 0; i < 3; ++i) s[i] = to_cpp(c[i]);
+  }
+  template <typename C, typename Cpp>
+    requires HasFields<C, Cpp>
+  void operator()(const C& c, Cpp& s, const char* name) const {
+    C copy = c;
+    try {
+      each_field(copy, s, *this);
+    } catch (FieldProblem& problem) {
+      problem.field = std::string(name) + "." + problem.field;
+      throw;
+    }
+  }
+};
+
+/// Copies a C++ struct's fields into the C one.
+struct ToC {
+  void operator()(double& c, const double& s, const char*) const { c = s; }
+  void operator()(std::uint32_t& c, const std::uint32_t& s, const char*) const { c = s; }
+  void operator()(std::int32_t& c, const bool& s, const char*) const { c = s ? 1 : 0; }
+  template <typename Enum>
+    requires std::is_enum_v<Enum>
+  void operator()(std::int32_t& c, const Enum& s, const char*) const { c = static_cast<std::int32_t>(s); }
+  void operator()(haptic_vec3& c, const haptic::Vec3& s, const char*) const { c = to_c(s); }
+  void operator()(haptic_quaternion& c, const haptic::Quaternion& s, const char*) const { c = to_c(s); }
+  void operator()(haptic_vec3 (&c)[3], const haptic::Vec3 (&s)[3], const char*) const {
+    for (int i = 0; i < 3; ++i) c[i] = to_c(s[i]);
+  }
+  template <typename C, typename Cpp>
+    requires HasFields<C, Cpp>
+  void operator()(C& c, const Cpp& s, const char*) const {
+    Cpp copy = s;
+    each_field(c, copy, *this);
+  }
+};
+
+/// The C twin of each C++ spec (and nested struct), by type.
+template <typename Cpp> struct CTwin;
+#define HAPTIC_C_TWIN(C, CPP) \
+  template <> struct CTwin<haptic::CPP> { using type = C; };
+HAPTIC_C_TWIN(haptic_pose, Pose)
+HAPTIC_C_TWIN(haptic_dynamics, Dynamics)
+HAPTIC_C_TWIN(haptic_impedance, Impedance)
+HAPTIC_C_TWIN(haptic_distance, Distance)
+HAPTIC_C_TWIN(haptic_wall_spec, WallSpec)
+HAPTIC_C_TWIN(haptic_sphere_spec, SphereSpec)
+HAPTIC_C_TWIN(haptic_box_spec, BoxSpec)
+HAPTIC_C_TWIN(haptic_capsule_spec, CapsuleSpec)
+HAPTIC_C_TWIN(haptic_tangent_plane_spec, TangentPlaneSpec)
+HAPTIC_C_TWIN(haptic_mesh_spec, MeshSpec)
+HAPTIC_C_TWIN(haptic_spring_field_spec, SpringFieldSpec)
+HAPTIC_C_TWIN(haptic_distance_spring_spec, DistanceSpringSpec)
+HAPTIC_C_TWIN(haptic_potential_field_spec, PotentialFieldSpec)
+HAPTIC_C_TWIN(haptic_linear_field_spec, LinearFieldSpec)
+HAPTIC_C_TWIN(haptic_viscous_field_spec, ViscousFieldSpec)
+HAPTIC_C_TWIN(haptic_detent_field_spec, DetentFieldSpec)
+HAPTIC_C_TWIN(haptic_orientation_spring_spec, OrientationSpringSpec)
+HAPTIC_C_TWIN(haptic_orientation_detent_spec, OrientationDetentSpec)
+#undef HAPTIC_C_TWIN
+
+/// A C++ struct as its C twin; a spec's size is set to its sizeof.
+template <typename Cpp>
+typename CTwin<Cpp>::type to_c(const Cpp& s) {
+  using C = typename CTwin<Cpp>::type;
+  C c{};
+  if constexpr (requires { c.size; }) c.size = sizeof(C);
+  Cpp copy = s;
+  each_field(c, copy, ToC{});
   return c;
 }
-haptic::Impedance to_cpp(const haptic_impedance& c) {
-  haptic::Impedance i;
-  i.stiffness = c.stiffness;
-  i.damping = c.damping;
-  i.static_friction = c.static_friction;
-  i.dynamic_friction = c.dynamic_friction;
-  i.mass = c.mass;
-  i.law = enum_from<haptic::ImpedanceLaw>(c.law, kLastLaw, "impedance.law");
-  i.transparency_optimal_damping = c.transparency_optimal_damping != 0;
-  i.virtual_coupling = c.virtual_coupling != 0;
-  return i;
-}
 
-haptic_distance to_c(const haptic::Distance& d) {
-  haptic_distance c{};
-  c.kind = static_cast<std::int32_t>(d.kind);
-  c.origin = to_c(d.origin);
-  c.axis = to_c(d.axis);
-  c.radius = d.radius;
-  return c;
-}
-haptic::Distance to_cpp(const haptic_distance& c) {
-  haptic::Distance d;
-  d.kind = enum_from<haptic::Distance::Kind>(c.kind, HAPTIC_DISTANCE_SPHERE, "distance.kind");
-  d.origin = to_cpp(c.origin);
-  d.axis = to_cpp(c.axis);
-  d.radius = c.radius;
-  return d;
-}
-
-// ---- specs: one to_c / to_cpp pair per kind, and its traits ----
-
-haptic_wall_spec to_c(const haptic::WallSpec& s) {
-  haptic_wall_spec c{};
-  c.size = sizeof(c);
-  c.point = to_c(s.point);
-  c.normal = to_c(s.normal);
-  c.impedance = to_c(s.impedance);
-  c.shared = s.shared;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::WallSpec to_cpp(const haptic_wall_spec& c) {
-  haptic::WallSpec s;
-  s.point = to_cpp(c.point);
-  s.normal = to_cpp(c.normal);
-  s.impedance = to_cpp(c.impedance);
-  s.shared = c.shared != 0;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_sphere_spec to_c(const haptic::SphereSpec& s) {
-  haptic_sphere_spec c{};
-  c.size = sizeof(c);
-  c.center = to_c(s.center);
-  c.radius = s.radius;
-  c.impedance = to_c(s.impedance);
-  c.dynamics = to_c(s.dynamics);
-  c.shared = s.shared;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::SphereSpec to_cpp(const haptic_sphere_spec& c) {
-  haptic::SphereSpec s;
-  s.center = to_cpp(c.center);
-  s.radius = c.radius;
-  s.impedance = to_cpp(c.impedance);
-  s.dynamics = to_cpp(c.dynamics);
-  s.shared = c.shared != 0;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_box_spec to_c(const haptic::BoxSpec& s) {
-  haptic_box_spec c{};
-  c.size = sizeof(c);
-  c.pose = to_c(s.pose);
-  c.half_extents = to_c(s.half_extents);
-  c.impedance = to_c(s.impedance);
-  c.dynamics = to_c(s.dynamics);
-  c.shared = s.shared;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::BoxSpec to_cpp(const haptic_box_spec& c) {
-  haptic::BoxSpec s;
-  s.pose = to_cpp(c.pose);
-  s.half_extents = to_cpp(c.half_extents);
-  s.impedance = to_cpp(c.impedance);
-  s.dynamics = to_cpp(c.dynamics);
-  s.shared = c.shared != 0;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_capsule_spec to_c(const haptic::CapsuleSpec& s) {
-  haptic_capsule_spec c{};
-  c.size = sizeof(c);
-  c.pose = to_c(s.pose);
-  c.radius = s.radius;
-  c.half_length = s.half_length;
-  c.impedance = to_c(s.impedance);
-  c.dynamics = to_c(s.dynamics);
-  c.shared = s.shared;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::CapsuleSpec to_cpp(const haptic_capsule_spec& c) {
-  haptic::CapsuleSpec s;
-  s.pose = to_cpp(c.pose);
-  s.radius = c.radius;
-  s.half_length = c.half_length;
-  s.impedance = to_cpp(c.impedance);
-  s.dynamics = to_cpp(c.dynamics);
-  s.shared = c.shared != 0;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_tangent_plane_spec to_c(const haptic::TangentPlaneSpec& s) {
-  haptic_tangent_plane_spec c{};
-  c.size = sizeof(c);
-  c.pose = to_c(s.pose);
-  c.normal = to_c(s.normal);
-  c.reference = to_c(s.reference);
-  c.tangential_stiffness = s.tangential_stiffness;
-  c.tangential_damping = s.tangential_damping;
-  c.impedance = to_c(s.impedance);
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::TangentPlaneSpec to_cpp(const haptic_tangent_plane_spec& c) {
-  haptic::TangentPlaneSpec s;
-  s.pose = to_cpp(c.pose);
-  s.normal = to_cpp(c.normal);
-  s.reference = to_cpp(c.reference);
-  s.tangential_stiffness = c.tangential_stiffness;
-  s.tangential_damping = c.tangential_damping;
-  s.impedance = to_cpp(c.impedance);
-  s.across_sites = c.across_sites != 0;
+/// A C struct as its C++ twin; a field out of range is a FieldProblem naming it.
+template <typename C, typename Cpp>
+Cpp to_cpp_as(const C& c) {
+  Cpp s{};
+  C copy = c;
+  each_field(copy, s, ToCpp{});
   return s;
 }
 
 // A mesh's arrays: the C struct points into the C++ spec's vectors (which must outlive it).
-haptic_mesh_spec to_c(const haptic::MeshSpec& s) {
-  static_assert(sizeof(haptic_vec3) == sizeof(haptic::Vec3) &&
-                std::is_standard_layout_v<haptic::Vec3>);
-  haptic_mesh_spec c{};
-  c.size = sizeof(c);
-  c.pose = to_c(s.pose);
+haptic_mesh_spec mesh_to_c(const haptic::MeshSpec& s) {
+  static_assert(sizeof(haptic_vec3) == sizeof(haptic::Vec3) && std::is_standard_layout_v<haptic::Vec3>);
+  haptic_mesh_spec c = to_c(s);
   c.vertices = s.vertices.empty() ? nullptr : reinterpret_cast<const haptic_vec3*>(s.vertices.data());
   c.vertex_count = static_cast<std::uint32_t>(s.vertices.size());
   c.indices = s.indices.empty() ? nullptr : s.indices.data();
   c.index_count = static_cast<std::uint32_t>(s.indices.size());
-  c.impedance = to_c(s.impedance);
-  c.shared = s.shared;
-  c.across_sites = s.across_sites;
   return c;
 }
-haptic::MeshSpec to_cpp(const haptic_mesh_spec& c) {
-  haptic::MeshSpec s;
-  s.pose = to_cpp(c.pose);
+haptic::MeshSpec mesh_to_cpp(const haptic_mesh_spec& c) {
+  haptic::MeshSpec s = to_cpp_as<haptic_mesh_spec, haptic::MeshSpec>(c);
   if (c.vertex_count > 0 && c.vertices == nullptr) throw FieldProblem{"vertices", "is NULL with vertex_count > 0"};
   if (c.index_count > 0 && c.indices == nullptr) throw FieldProblem{"indices", "is NULL with index_count > 0"};
   s.vertices.reserve(c.vertex_count);
   for (std::uint32_t i = 0; i < c.vertex_count; ++i) s.vertices.push_back(to_cpp(c.vertices[i]));
   if (c.index_count > 0) s.indices.assign(c.indices, c.indices + c.index_count);
-  s.impedance = to_cpp(c.impedance);
-  s.shared = c.shared != 0;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_spring_field_spec to_c(const haptic::SpringFieldSpec& s) {
-  haptic_spring_field_spec c{};
-  c.size = sizeof(c);
-  c.anchor = to_c(s.anchor);
-  c.stiffness = s.stiffness;
-  c.damping = s.damping;
-  c.max_force = s.max_force;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::SpringFieldSpec to_cpp(const haptic_spring_field_spec& c) {
-  haptic::SpringFieldSpec s;
-  s.anchor = to_cpp(c.anchor);
-  s.stiffness = c.stiffness;
-  s.damping = c.damping;
-  s.max_force = c.max_force;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_distance_spring_spec to_c(const haptic::DistanceSpringSpec& s) {
-  haptic_distance_spring_spec c{};
-  c.size = sizeof(c);
-  c.anchor = to_c(s.anchor);
-  c.stiffness = s.stiffness;
-  c.damping = s.damping;
-  c.max_force = s.max_force;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::DistanceSpringSpec to_cpp(const haptic_distance_spring_spec& c) {
-  haptic::DistanceSpringSpec s;
-  s.anchor = to_cpp(c.anchor);
-  s.stiffness = c.stiffness;
-  s.damping = c.damping;
-  s.max_force = c.max_force;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_potential_field_spec to_c(const haptic::PotentialFieldSpec& s) {
-  haptic_potential_field_spec c{};
-  c.size = sizeof(c);
-  c.distance = to_c(s.distance);
-  c.kind = static_cast<std::int32_t>(s.kind);
-  c.order = s.order;
-  c.gain = s.gain;
-  c.offset = s.offset;
-  c.influence_distance = s.influence_distance;
-  c.min_distance = s.min_distance;
-  c.central_differences = s.central_differences;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::PotentialFieldSpec to_cpp(const haptic_potential_field_spec& c) {
-  haptic::PotentialFieldSpec s;
-  s.distance = to_cpp(c.distance);
-  s.kind = enum_from<haptic::PotentialFieldSpec::Kind>(c.kind, HAPTIC_POTENTIAL_KHATIB, "potential.kind");
-  s.order = c.order;
-  s.gain = c.gain;
-  s.offset = c.offset;
-  s.influence_distance = c.influence_distance;
-  s.min_distance = c.min_distance;
-  s.central_differences = c.central_differences != 0;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_linear_field_spec to_c(const haptic::LinearFieldSpec& s) {
-  haptic_linear_field_spec c{};
-  c.size = sizeof(c);
-  c.origin = to_c(s.origin);
-  c.force = to_c(s.force);
-  for (int row = 0; row < 3; ++row) c.jacobian[row] = to_c(s.jacobian[row]);
-  c.radius = s.radius;
-  c.fade_width = s.fade_width;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::LinearFieldSpec to_cpp(const haptic_linear_field_spec& c) {
-  haptic::LinearFieldSpec s;
-  s.origin = to_cpp(c.origin);
-  s.force = to_cpp(c.force);
-  for (int row = 0; row < 3; ++row) s.jacobian[row] = to_cpp(c.jacobian[row]);
-  s.radius = c.radius;
-  s.fade_width = c.fade_width;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_viscous_field_spec to_c(const haptic::ViscousFieldSpec& s) {
-  haptic_viscous_field_spec c{};
-  c.size = sizeof(c);
-  c.damping = s.damping;
-  c.center = to_c(s.center);
-  c.radius = s.radius;
-  c.fade_width = s.fade_width;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::ViscousFieldSpec to_cpp(const haptic_viscous_field_spec& c) {
-  haptic::ViscousFieldSpec s;
-  s.damping = c.damping;
-  s.center = to_cpp(c.center);
-  s.radius = c.radius;
-  s.fade_width = c.fade_width;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_detent_field_spec to_c(const haptic::DetentFieldSpec& s) {
-  haptic_detent_field_spec c{};
-  c.size = sizeof(c);
-  c.distance = to_c(s.distance);
-  c.depth = s.depth;
-  c.radius = s.radius;
-  c.rim_height = s.rim_height;
-  c.rim_width = s.rim_width;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::DetentFieldSpec to_cpp(const haptic_detent_field_spec& c) {
-  haptic::DetentFieldSpec s;
-  s.distance = to_cpp(c.distance);
-  s.depth = c.depth;
-  s.radius = c.radius;
-  s.rim_height = c.rim_height;
-  s.rim_width = c.rim_width;
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_orientation_spring_spec to_c(const haptic::OrientationSpringSpec& s) {
-  haptic_orientation_spring_spec c{};
-  c.size = sizeof(c);
-  c.target = to_c(s.target);
-  c.stiffness = s.stiffness;
-  c.damping = s.damping;
-  c.max_torque = s.max_torque;
-  c.law = static_cast<std::int32_t>(s.law);
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::OrientationSpringSpec to_cpp(const haptic_orientation_spring_spec& c) {
-  haptic::OrientationSpringSpec s;
-  s.target = to_cpp(c.target);
-  s.stiffness = c.stiffness;
-  s.damping = c.damping;
-  s.max_torque = c.max_torque;
-  s.law = enum_from<haptic::ImpedanceLaw>(c.law, kLastLaw, "orientation_spring.law");
-  s.across_sites = c.across_sites != 0;
-  return s;
-}
-
-haptic_orientation_detent_spec to_c(const haptic::OrientationDetentSpec& s) {
-  haptic_orientation_detent_spec c{};
-  c.size = sizeof(c);
-  c.target = to_c(s.target);
-  c.depth = s.depth;
-  c.radius = s.radius;
-  c.rim_height = s.rim_height;
-  c.rim_width = s.rim_width;
-  c.damping = s.damping;
-  c.across_sites = s.across_sites;
-  return c;
-}
-haptic::OrientationDetentSpec to_cpp(const haptic_orientation_detent_spec& c) {
-  haptic::OrientationDetentSpec s;
-  s.target = to_cpp(c.target);
-  s.depth = c.depth;
-  s.radius = c.radius;
-  s.rim_height = c.rim_height;
-  s.rim_width = c.rim_width;
-  s.damping = c.damping;
-  s.across_sites = c.across_sites != 0;
   return s;
 }
 
@@ -548,15 +441,26 @@ HAPTIC_C_SPEC(haptic_orientation_spring_spec, OrientationSpringSpec, HAPTIC_KIND
 HAPTIC_C_SPEC(haptic_orientation_detent_spec, OrientationDetentSpec, HAPTIC_KIND_ORIENTATION_DETENT, "field.orientation_detent")
 #undef HAPTIC_C_SPEC
 
+/// A C spec from the C++ one (a mesh's arrays pointing into it).
+template <typename Cpp>
+typename CTwin<Cpp>::type spec_to_c(const Cpp& s) {
+  if constexpr (std::is_same_v<Cpp, haptic::MeshSpec>) return mesh_to_c(s);
+  else return to_c(s);
+}
+
 template <typename CSpec>
 void init_spec(CSpec* spec) {
-  if (spec != nullptr) *spec = to_c(typename SpecTraits<CSpec>::Cpp{});
+  if (spec != nullptr) *spec = spec_to_c(typename SpecTraits<CSpec>::Cpp{});
 }
 
 template <typename CSpec>
 typename SpecTraits<CSpec>::Cpp read_spec(const void* spec, const char* call) {
+  using Cpp = typename SpecTraits<CSpec>::Cpp;
   const CSpec& c = sized<CSpec>(spec, call, SpecTraits<CSpec>::name);
-  return converting(call, SpecTraits<CSpec>::name, [&] { return to_cpp(c); });
+  return converting(call, SpecTraits<CSpec>::name, [&] {
+    if constexpr (std::is_same_v<CSpec, haptic_mesh_spec>) return mesh_to_cpp(c);
+    else return to_cpp_as<CSpec, Cpp>(c);
+  });
 }
 
 template <typename CSpec>
@@ -660,9 +564,9 @@ template <typename Variant>
 void copy_spec(const Variant& v, void* out, const char* call) {
   std::visit([&](const auto& spec) {
     using Cpp = std::decay_t<decltype(spec)>;
-    using CSpec = decltype(to_c(spec));
+    using CSpec = typename CTwin<Cpp>::type;
     static_assert(std::is_same_v<typename SpecTraits<CSpec>::Cpp, Cpp>);
-    sized_out<CSpec>(out, call, SpecTraits<CSpec>::name) = to_c(spec);
+    sized_out<CSpec>(out, call, SpecTraits<CSpec>::name) = spec_to_c(spec);
   }, v);
 }
 
