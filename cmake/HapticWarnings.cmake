@@ -15,3 +15,15 @@ endif()
 function(haptic_apply_options target)
   target_link_libraries(${target} PRIVATE $<BUILD_INTERFACE:haptic::compile_options>)
 endfunction()
+
+# haptic_apply_c_options(<target>): the same for a C program of ours (the C API's example, test
+# and benchmark): C99 without extensions, warnings as errors, and the sanitizers with the rest
+# (a C program loading the instrumented libhaptic_c must bring their runtime first).
+function(haptic_apply_c_options target)
+  set_target_properties(${target} PROPERTIES C_STANDARD 99 C_STANDARD_REQUIRED ON C_EXTENSIONS OFF)
+  target_compile_options(${target} PRIVATE $<$<C_COMPILER_ID:GNU,Clang>:-Wall -Wextra -Wpedantic -Werror>)
+  if(HAPTIC_ENABLE_ASAN)
+    target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+  endif()
+endfunction()
