@@ -4,41 +4,16 @@
 # runs it in lockstep, checks its user, that it holds hapticd alone and that the runtime's health
 # status (the image's HEALTHCHECK) turns healthy, and drives it with the host's touch_wall in
 # lockstep.
-# scripts/setup installs podman, runc and debootstrap, so a missing one is a failure here, not a
-# skip; exit 77 (skipped) only when HAPTIC_SKIP_CONTAINER=1 says this machine cannot run
-# containers at all.
+# podman, runc and debootstrap missing fail it; HAPTIC_SKIP_CONTAINER=1 skips it (exit 77):
+# base_image.sh.
 # Usage: container_test.sh <source-dir> <hapticd binary> <touch_wall binary>
 set -euo pipefail
 source_dir="$1"
 hapticd="$2"
 touch_wall="$3"
 
-if [ "${HAPTIC_SKIP_CONTAINER:-0}" = 1 ]; then
-  echo "SKIP: HAPTIC_SKIP_CONTAINER=1"
-  exit 77
-fi
-for tool in podman runc debootstrap; do
-  if ! command -v "$tool" >/dev/null 2>&1; then
-    echo "FAIL: $tool is not installed (scripts/setup installs it: podman runc debootstrap)"
-    exit 1
-  fi
-done
-podman_opts=(--runtime runc)
-run_opts=(--ulimit nofile=1024:1024 --ulimit nproc=1024:1024)
-
-# No registry is reachable here: make the Debian 12 base image locally once, with debootstrap.
-base=localhost/hapticd-base:bookworm
-if ! podman "${podman_opts[@]}" image exists "$base"; then
-  if [ "$(id -u)" -ne 0 ]; then
-    echo "FAIL: no base image $base, and making one with debootstrap needs root"
-    exit 1
-  fi
-  rootfs=$(mktemp -d)
-  echo "making base image $base with debootstrap (about a minute)"
-  debootstrap --variant=minbase bookworm "$rootfs" >/dev/null
-  tar -C "$rootfs" -c . | podman "${podman_opts[@]}" import - "$base" >/dev/null
-  rm -rf "$rootfs"
-fi
+# podman_opts, run_opts and the Debian 12 base image $base (made once with debootstrap).
+source "$source_dir/tests/container/base_image.sh"
 
 work=$(mktemp -d)
 chmod 777 "$work"
