@@ -1,0 +1,110 @@
+// What the session recorder costs the SDK's receive thread per sample: the taps' loop UdpLink::take
+// runs for each accepted State, with no recorder attached (off) and with one (on: a copy into the
+// recorder's ring while its writer thread drains it into an HDF5 or CSV file). Each iteration
+// offers one recvmmsg batch (32 States) and is timed alone; between iterations the writer empties
+// the ring, as it does between a 1 kHz stream's wake-ups, so nothing is dropped. One State copy is
+// timed too, for scale (take() already makes several). Prints figures only; docs/recorder.md
+// quotes one run.
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include <unistd.h>
+
+#include "haptic/recorder.hpp"
+#include "recorder_test_access.hpp"
+
+namespace {
+
+using haptic::ReceiveObserver;
+using haptic::State;
+
+constexpr int kBatch = 32;  // UdpLink's recvmmsg batch
+
+State sample(std::uint64_t tick) {
+  State state;
+  state.tick = tick;
+  state.sequence = tick;
+  state.server_time = static_cast<double>(tick) * 1e-3;
+  state.position = {1e-3, 2e-3, 3e-3};
+  state.force = {0.1, 0.2, 0.3};
+  state.received_at = std::chrono::steady_clock::now();
+  return state;
+}
+
+// What UdpLink keeps: (id, observer) pairs walked for each State.
+using Taps = std::vector<std::pair<std::uint64_t, std::shared_ptr<ReceiveObserver>>>;
+
+void offer_batches(benchmark::State& bench, const Taps& taps) {
+  std::vector<State> batch;
+  for (int i = 0; i < kBatch; ++i) batch.push_back(sample(static_cast<std::uint64_t>(i + 1)));
+  std::uint64_t tick = 0;
+  for (auto _ : bench) {
+    const auto begin = std::chrono::steady_clock::now();
+    for (State& state : batch) {
+      state.tick = ++tick;
+      for (const auto& tap : taps) tap.second->on_sample(state);
+    }
+    const auto end = std::chrono::steady_clock::now();
+    bench.SetIterationTime(std::chrono::duration<double>(end - begin).count());
+    benchmark::DoNotOptimize(batch.data());
+    // The writer's turn (untimed): at 1 kHz it has a millisecond per sample.
+    if (!taps.empty()) std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  bench.SetItemsProcessed(bench.iterations() * kBatch);
+  bench.counters["ns_per_sample"] = benchmark::Counter(
+      static_cast<double>(bench.iterations() * kBatch),
+      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void BM_TapsOff(benchmark::State& bench) { offer_batches(bench, {}); }
+
+void tap_on(benchmark::State& bench, const char* extension) {
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("recorder_bench-" + std::to_string(::getpid()) + extension))
+                               .string();
+  std::shared_ptr<ReceiveObserver> sink =
+      haptic::detail::RecorderTestAccess::make_sink({.path = path, .events = false, .overwrite = true});
+  offer_batches(bench, {{1, sink}});
+  const haptic::RecorderStats stats = haptic::detail::RecorderTestAccess::finish(*sink);
+  bench.counters["dropped"] = static_cast<double>(stats.dropped);
+  bench.counters["written"] = static_cast<double>(stats.samples_written);
+  std::filesystem::remove(path);
+}
+
+void BM_TapOnHdf5(benchmark::State& bench) { tap_on(bench, ".h5"); }
+void BM_TapOnCsv(benchmark::State& bench) { tap_on(bench, ".csv"); }
+
+void BM_StateCopy(benchmark::State& bench) {
+  State from = sample(1);
+  std::vector<State> to(kBatch);
+  for (auto _ : bench) {
+    const auto begin = std::chrono::steady_clock::now();
+    for (State& slot : to) {
+      ++from.tick;
+      slot = from;
+      benchmark::DoNotOptimize(slot);
+    }
+    const auto end = std::chrono::steady_clock::now();
+    bench.SetIterationTime(std::chrono::duration<double>(end - begin).count());
+  }
+  bench.counters["ns_per_sample"] = benchmark::Counter(
+      static_cast<double>(bench.iterations() * kBatch),
+      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+BENCHMARK(BM_TapsOff)->UseManualTime()->Iterations(20000);
+BENCHMARK(BM_StateCopy)->UseManualTime()->Iterations(20000);
+BENCHMARK(BM_TapOnHdf5)->UseManualTime()->Iterations(20000);
+BENCHMARK(BM_TapOnCsv)->UseManualTime()->Iterations(20000);
+
+}  // namespace
+
+BENCHMARK_MAIN();
