@@ -52,6 +52,7 @@ TYPE_OVERRIDES = {
     "Client.on_event.callback": "Optional[Callable[[Event], object]]",
     "Client.on_connection.callback": "Optional[Callable[[ConnectionChange], object]]",
     "OperatorInput.push_recorded.samples": "ArrayLike",
+    "Client.record.path": "Union[str, PathLike[str]]",
 }
 
 # Attributes set on instances at run time (module.cpp, raise()).
@@ -304,6 +305,8 @@ def imports_for(body):
                                       "Tuple", "Union", "overload")
                     if re.search(rf"\b{name}\b", body)]
     lines = []
+    if re.search(r"\bPathLike\b", body):
+        lines.append("from os import PathLike")
     if typing_names:
         lines.append(f"from typing import {', '.join(typing_names)}")
         lines.append("")

@@ -11,5 +11,7 @@ void bind_value_types(pybind11::module_& m);
 void bind_errors(pybind11::module_& m);
 /// Client, its handles and the scene's free functions (haptic/client.hpp, haptic/motion.hpp).
 void bind_client(pybind11::module_& m);
+/// Recorder and Client.record (haptic/recorder.hpp); after bind_client.
+void bind_recorder(pybind11::module_& m);
 
 }  // namespace haptic::python

@@ -99,4 +99,5 @@ PYBIND11_MODULE(_native, m) {
   haptic::python::bind_errors(m);
   haptic::python::bind_value_types(m);
   haptic::python::bind_client(m);
+  haptic::python::bind_recorder(m);
 }
