@@ -3,11 +3,13 @@
 // recorder's ring while its writer thread drains it into an HDF5 or CSV file). Each iteration
 // offers one recvmmsg batch (32 States) and is timed alone; between iterations the writer empties
 // the ring, as it does between a 1 kHz stream's wake-ups, so nothing is dropped. One State copy is
-// timed too, for scale (take() already makes several). Prints figures only; docs/recorder.md
-// quotes one run.
+// timed too, for scale (take() already makes several), and the same ring behind a mutex, the
+// design not taken. Prints figures only; docs/recorder.md quotes one run.
 #include <benchmark/benchmark.h>
 
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -82,6 +84,58 @@ void tap_on(benchmark::State& bench, const char* extension) {
 void BM_TapOnHdf5(benchmark::State& bench) { tap_on(bench, ".h5"); }
 void BM_TapOnCsv(benchmark::State& bench) { tap_on(bench, ".csv"); }
 
+// The alternative the recorder does not use, for comparison: the same ring behind a mutex, drained
+// by a thread that takes what is queued under the lock every 5 ms (as the writer does) and drops it.
+class MutexRing final : public ReceiveObserver {
+ public:
+  explicit MutexRing(std::size_t capacity) : slots_(capacity) {
+    drainer_ = std::thread([this] {
+      std::vector<State> taken;
+      taken.reserve(slots_.size());
+      std::unique_lock lock(mutex_);
+      while (!stop_) {
+        wake_.wait_for(lock, std::chrono::milliseconds(5), [this] { return stop_; });
+        taken.clear();
+        for (; head_ != tail_; ++head_) taken.push_back(slots_[head_ % slots_.size()]);
+      }
+    });
+  }
+  ~MutexRing() override {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    drainer_.join();
+  }
+  void on_sample(const State& state) noexcept override {
+    std::lock_guard lock(mutex_);
+    if (tail_ - head_ == slots_.size()) {
+      ++dropped_;
+      return;
+    }
+    slots_[tail_++ % slots_.size()] = state;
+  }
+  std::uint64_t dropped() {
+    std::lock_guard lock(mutex_);
+    return dropped_;
+  }
+
+ private:
+  std::vector<State> slots_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::uint64_t head_ = 0, tail_ = 0, dropped_ = 0;
+  bool stop_ = false;
+  std::thread drainer_;
+};
+
+void BM_TapOnMutexRing(benchmark::State& bench) {
+  auto ring = std::make_shared<MutexRing>(65536);
+  offer_batches(bench, {{1, ring}});
+  bench.counters["dropped"] = static_cast<double>(ring->dropped());
+}
+
 void BM_StateCopy(benchmark::State& bench) {
   State from = sample(1);
   std::vector<State> to(kBatch);
@@ -104,6 +158,7 @@ BENCHMARK(BM_TapsOff)->UseManualTime()->Iterations(20000);
 BENCHMARK(BM_StateCopy)->UseManualTime()->Iterations(20000);
 BENCHMARK(BM_TapOnHdf5)->UseManualTime()->Iterations(20000);
 BENCHMARK(BM_TapOnCsv)->UseManualTime()->Iterations(20000);
+BENCHMARK(BM_TapOnMutexRing)->UseManualTime()->Iterations(20000);
 
 }  // namespace
 
