@@ -560,5 +560,47 @@ TEST(Recorder, ARecorderThatOutlivesItsClientClosesWhatItHas) {
   H5Fclose(file);
 }
 
+TEST(Recorder, AServerRestartIsRecordedAndTheEventsResumeInTheNewSession) {
+  auto first = std::make_unique<test::ServerProcess>(test::lockstep_config());
+  const std::uint16_t grpc_port = first->grpc_port();
+  const std::uint16_t udp_port = first->udp_port();
+  TempDir dir;
+  test::ConnectionLog log;
+  Client client(config_for(*first, "recorder"));
+  log.attach(client);  // the application's own callback stays its own
+  Recorder recorder(client, {.path = dir.file("restart.csv")});
+  const auto kind_count = [&](int kind) {
+    const Csv events = read_csv(dir.file("restart.events.csv"));
+    int n = 0;
+    for (const auto& row : events.rows) n += std::stoi(row[events.column("kind")]) == kind ? 1 : 0;
+    return n;
+  };
+  ASSERT_TRUE(eventually([&] { return recorder.stats().events_written >= 1; }));
+
+  first.reset();  // the server exits, and the session with it
+  ASSERT_TRUE(log.wait(1, std::chrono::seconds(5)));
+  test::ServerProcess second(test::lockstep_config(), {}, 0, grpc_port, udp_port);
+  const auto resumed = log.wait(2, std::chrono::seconds(10));
+  ASSERT_TRUE(resumed);
+  ASSERT_EQ(resumed->first.state, ConnectionChange::State::kResumed);
+  // The recorder's stream was opened again in the new session: it sees this session's wall.
+  ObjectHandle wall = client.add_wall({.normal = {0, 0, 1}, .impedance = {500, 1}});
+  // watch started, lost, resumed, watch started again, the wall made.
+  ASSERT_TRUE(eventually([&] { return recorder.stats().events_written >= 5; }));
+  const RecorderStats stats = recorder.close();
+  EXPECT_GE(kind_count(static_cast<int>(Event::Kind::kSceneChanged)), 1);
+  EXPECT_EQ(stats.write_errors, 0u);
+  EXPECT_EQ(kind_count(101), 1);  // connection_lost
+  EXPECT_EQ(kind_count(102), 1);  // connection_resumed
+  EXPECT_EQ(kind_count(static_cast<int>(Event::Kind::kWatchStarted)), 2);  // each session's stream
+  const Csv events = read_csv(dir.file("restart.events.csv"));
+  for (const auto& row : events.rows) {
+    if (row[events.column("kind_name")] == "connection_resumed") {
+      EXPECT_EQ(row[events.column("session_id")], std::to_string(client.session_id()));
+      EXPECT_EQ(row[events.column("server_time_s")], "NaN");
+    }
+  }
+}
+
 }  // namespace
 }  // namespace haptic
