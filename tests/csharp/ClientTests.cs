@@ -320,9 +320,75 @@ static class ClientTests
         Near(Motion.Interpolate(a, b, 1.0005).X, 0.1 * 0.0005 + 0.0005 * 0.0005, 1e-12, "interpolate");
     }
 
+    static string R(double v) { return double.IsNaN(v) ? "NaN" : v.ToString("R", System.Globalization.CultureInfo.InvariantCulture); }
+
+    // Records a session to dir/session.csv and dir/session.h5 while the state callback keeps what
+    // it saw, written to dir/seen.csv in the recorder's columns for the test to compare.
+    static void TheRecorderWritesWhatTheClientReceived(Client client, string dir)
+    {
+        currentTest = "recorder";
+        var before = client.ReceiveCounters.Accepted;
+        var csv = client.Record(new RecorderOptions { Path = dir + "/session.csv" });
+        var hdf5 = client.Record(new RecorderOptions { Path = dir + "/session.h5" });
+        Check(csv.Path == dir + "/session.csv" && csv.EventsPath == dir + "/session.events.csv", "paths " + csv.EventsPath);
+        var e = Throws(() => client.Record(new RecorderOptions { Path = dir + "/session.txt" }), "unknown extension");
+        Check(e.Code == ErrorCode.InvalidArgument && e.Message.StartsWith("record: path: "), e.Message);
+        e = Throws(() => client.Record(new RecorderOptions { Path = dir + "/session.h5" }), "existing file");
+        Check(e.Message.Contains("exists"), e.Message);
+
+        var seen = new List<State>();
+        var gate = new object();
+        client.OnState(s => { lock (gate) seen.Add(s); });
+        var spec = WallSpec.Default;
+        spec.Impedance = Stiff;
+        var wall = client.AddWall(spec);
+        client.SetOperator(OperatorInput.Push(new Vec3(0, 0, -2.0)));
+        for (int chunk = 0; chunk < 20; ++chunk)
+        {
+            if (chunk == 15) wall.Remove();
+            ulong last = client.Step(50);
+            for (int i = 0; i < 1000; ++i)
+            {
+                lock (gate) { if (seen.Count > 0 && seen[seen.Count - 1].Tick >= last) break; }
+                State ignored;
+                client.PollState(out ignored, 5);
+            }
+        }
+        client.OnState(null);
+        client.SetOperator(OperatorInput.Release());
+        var accepted = client.ReceiveCounters.Accepted - before;
+        var csvTotals = csv.Close();
+        hdf5.Dispose();
+        var hdf5Totals = hdf5.Stats;  // Dispose closed it: the final totals
+        Check(csvTotals.SamplesReceived == accepted && csvTotals.SamplesWritten == accepted && csvTotals.Dropped == 0 &&
+              csvTotals.WriteErrors == 0 && csvTotals.EventsWritten >= 1, "CSV totals " + csvTotals.SamplesWritten + " of " + accepted);
+        Check(hdf5Totals.SamplesWritten == accepted && hdf5Totals.Dropped == 0, "HDF5 totals");
+        Check(!csv.Recording && csv.Close().SamplesWritten == csvTotals.SamplesWritten, "closing again gives the totals again");
+        using (var file = new System.IO.StreamWriter(dir + "/seen.csv"))
+        {
+            file.Write("received_ns,arrived_ns,tick,sequence,server_time_s,position_x_m,position_y_m,position_z_m," +
+                       "velocity_x_m_s,velocity_y_m_s,velocity_z_m_s,force_x_N,force_y_N,force_z_N,proxy_x_m,proxy_y_m," +
+                       "proxy_z_m,contact_count,flags,buttons,age_ns,orientation_w,orientation_x,orientation_y,orientation_z," +
+                       "torque_x_Nm,torque_y_Nm,torque_z_Nm\n");
+            foreach (var s in seen)
+            {
+                file.Write(string.Join(",", new[] {
+                    s.ReceivedAtNs.ToString(), (s.ArrivedAtNs != 0 ? s.ArrivedAtNs : -1).ToString(), s.Tick.ToString(), s.Sequence.ToString(),
+                    R(s.ServerTime), R(s.Position.X), R(s.Position.Y), R(s.Position.Z), R(s.Velocity.X), R(s.Velocity.Y), R(s.Velocity.Z),
+                    R(s.Force.X), R(s.Force.Y), R(s.Force.Z), R(s.Proxy.X), R(s.Proxy.Y), R(s.Proxy.Z),
+                    s.ContactCount.ToString(), ((uint)s.Flags).ToString(), s.Buttons.ToString(), s.AgeNs.ToString(),
+                    R(s.HasOrientation ? s.Orientation.W : double.NaN), R(s.HasOrientation ? s.Orientation.X : double.NaN),
+                    R(s.HasOrientation ? s.Orientation.Y : double.NaN), R(s.HasOrientation ? s.Orientation.Z : double.NaN),
+                    R(s.HasOrientation ? s.Torque.X : double.NaN), R(s.HasOrientation ? s.Torque.Y : double.NaN),
+                    R(s.HasOrientation ? s.Torque.Z : double.NaN) }) + "\n");
+            }
+        }
+        Check(seen.Count > 0, "the callback saw samples");
+    }
+
     static int Main(string[] args)
     {
-        if (args.Length < 1) { Console.Error.WriteLine("usage: ClientTests.exe host:port"); return 2; }
+        if (args.Length < 1) { Console.Error.WriteLine("usage: ClientTests.exe host:port [recording-dir]"); return 2; }
         TheStructsAreLaidOutAsTheLibraryLaysThemOut();
         using (var client = new Client(new ClientConfig { ServerAddress = args[0], ClientName = "csharp-test", HeartbeatPeriodMs = 20 }))
         {
@@ -332,6 +398,7 @@ static class ClientTests
             AScenesAppliesWholeAndReadsBack(client);
             CallbacksArriveOnAnotherThreadAndSurviveCollections(client);
             TheRestOfTheSession(client);
+            if (args.Length > 1) TheRecorderWritesWhatTheClientReceived(client, args[1]);
         }
         Console.WriteLine(failures == 0 ? "all C# checks passed" : failures + " C# checks failed");
         return failures == 0 ? 0 : 1;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "integration/recording_files.hpp"
 #include "integration/run_program.hpp"
 #include "integration/server_process.hpp"
 #include "integration/touch_wall_output.hpp"
@@ -29,9 +30,17 @@ Outcome mono(const std::string& program, const std::vector<std::string>& args) {
 
 TEST(CSharp, TheBindingRegistersEveryKindHoldsAPushRefusesNamingTheFieldAndCallsBackOnItsThreads) {
   ServerProcess server(lockstep_config());
-  const Outcome outcome = mono(CSHARP_TESTS, {server.address()});
+  const TempDir dir;
+  const Outcome outcome = mono(CSHARP_TESTS, {server.address(), dir.path()});
   EXPECT_EQ(outcome.exit_code, 0) << outcome.output;
   EXPECT_NE(outcome.output.find("all C# checks passed"), std::string::npos) << outcome.output;
+  // Its recorders' files hold every sample its callback saw (written to seen.csv), every field the same.
+  const auto seen = csv_rows(read_csv(dir.file("seen.csv")));
+  const auto csv = csv_rows(read_csv(dir.file("session.csv")));
+  const auto hdf5 = h5_file_rows(dir.file("session.h5"));
+  EXPECT_EQ(csv.size(), hdf5.size());
+  expect_rows_match(csv, seen, "CSV from C#");
+  expect_rows_match(hdf5, seen, "HDF5 from C#");
 }
 
 TEST(CSharp, TheUnityComponentMovesItsTransformWithTheTool) {

@@ -9,6 +9,10 @@ extern "C" {
 /** Returns the number of failed checks (0: passed); they are printed on stderr. */
 int c_api_test_run(const char* address);
 
+/** Records a session to `dir`/session.csv and `dir`/session.h5 from C while the state callback
+ * writes what it saw to `dir`/seen.csv (the recorder's column names); returns the failed checks. */
+int c_api_record_run(const char* address, const char* dir);
+
 #ifdef __cplusplus
 }
 #endif

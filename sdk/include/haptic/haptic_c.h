@@ -935,6 +935,60 @@ int haptic_client_start_recording(haptic_client* client, const char* name,
 int haptic_client_stop_recording(haptic_client* client, haptic_recording_status* out,
                                  haptic_error* err);
 
+/* ---------------------------------------------------------------------------------------------
+ * The session's samples in a file (haptic::Recorder; docs/recorder.md) */
+
+/** Records what a client receives: every State it accepts, and the server's events and the
+ * connection's changes, into CSV or HDF5, from a bounded queue a thread of its own drains. */
+typedef struct haptic_recorder haptic_recorder;
+
+typedef enum haptic_recorder_format {
+  HAPTIC_RECORDER_AUTO = 0, /* by the path's extension: .csv, .h5 or .hdf5 */
+  HAPTIC_RECORDER_CSV = 1,  /* samples in `path`, events in <stem>.events.csv */
+  HAPTIC_RECORDER_HDF5 = 2  /* one file: /samples and /events, a dataset per column */
+} haptic_recorder_format;
+
+/** haptic::RecorderOptions. */
+typedef struct haptic_recorder_options {
+  uint32_t size;
+  const char* path;         /* the file; copied */
+  int32_t format;           /* haptic_recorder_format */
+  int32_t events;           /* record the server's events and the connection's changes */
+  int32_t overwrite;        /* replace an existing file instead of refusing it */
+  uint64_t queue_capacity;  /* samples between the receive thread and the writer, >= 1 */
+} haptic_recorder_options;
+
+/** haptic::RecorderStats. */
+typedef struct haptic_recorder_stats {
+  uint32_t size;
+  uint64_t samples_received;  /* States the client accepted while recording */
+  uint64_t samples_written;   /* of those, the ones in the file */
+  uint64_t dropped;           /* the ones that found the queue full */
+  uint64_t events_written;
+  uint64_t events_dropped;
+  uint64_t write_errors;      /* samples and events a failed write kept from the file */
+  char first_error[256];      /* the first failure's reason; empty if none */
+} haptic_recorder_stats;
+
+/** Fills `options` with RecorderOptions' defaults (no path) and sets its size. */
+void haptic_recorder_options_init(haptic_recorder_options* options);
+/** Creates the file(s) and starts recording `client` (haptic::Recorder's constructor): on
+ * success *out is the recorder; refused (a bad path, an existing file, capacity 0), *out is NULL,
+ * the message names the field ("record: path: …") and no file is left behind. Several recorders
+ * may record one client; none takes its callbacks. */
+int haptic_client_record(haptic_client* client, const haptic_recorder_options* options,
+                         haptic_recorder** out, haptic_error* err);
+/** The totals so far (any thread). */
+int haptic_recorder_get_stats(const haptic_recorder* recorder, haptic_recorder_stats* out,
+                              haptic_error* err);
+/** The samples' file and the events' file (empty without events); valid while the recorder is. */
+const char* haptic_recorder_path(const haptic_recorder* recorder);
+const char* haptic_recorder_events_path(const haptic_recorder* recorder);
+/** Stops recording, writes what is queued, flushes and closes the file(s), frees the recorder and
+ * puts the totals in `totals` (may be NULL). NULL is ignored. A failed write is in the totals, not
+ * the return value. Close a recorder before its client to keep all it received. */
+int haptic_recorder_close(haptic_recorder* recorder, haptic_recorder_stats* totals, haptic_error* err);
+
 #ifdef __cplusplus
 }
 #endif

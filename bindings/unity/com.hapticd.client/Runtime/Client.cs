@@ -851,6 +851,23 @@ namespace Hapticd
             return status;
         }
 
+        /// <summary>Starts recording what this client receives into a file (docs/recorder.md).
+        /// Refused (HapticException, InvalidArgument naming the field) for a bad path or an
+        /// existing file; nothing is left behind then.</summary>
+        public Recorder Record(RecorderOptions options)
+        {
+            if (options == null) throw new HapticException(ErrorCode.InvalidArgument, "record: options: is null");
+            var n = new NativeRecorderOptions
+            {
+                size = Check.SizeOf<NativeRecorderOptions>(), Path = options.Path ?? "", Format = (int)options.Format,
+                Events = options.Events ? 1 : 0, Overwrite = options.Overwrite ? 1 : 0, QueueCapacity = options.QueueCapacity,
+            };
+            NativeError err;
+            IntPtr recorder;
+            Check.Status(Native.haptic_client_record(Live, ref n, out recorder, out err), err);
+            return new Recorder(recorder);
+        }
+
         public RecordingStatus StopRecording()
         {
             var status = new RecordingStatus { size = Check.SizeOf<RecordingStatus>() };
@@ -858,6 +875,56 @@ namespace Hapticd
             Check.Status(Native.haptic_client_stop_recording(Live, ref status, out err), err);
             return status;
         }
+    }
+
+    /// <summary>Records what a client receives into CSV or HDF5 (docs/recorder.md): every State it
+    /// accepts, and the server's events. Dispose (or Close) drains, flushes and closes the file.</summary>
+    public sealed class Recorder : IDisposable
+    {
+        private IntPtr recorder_;
+        private RecorderStats totals_;
+        public string Path { get; private set; }
+        public string EventsPath { get; private set; }
+
+        internal Recorder(IntPtr recorder)
+        {
+            recorder_ = recorder;
+            Path = Marshal.PtrToStringAnsi(Native.haptic_recorder_path(recorder)) ?? "";
+            EventsPath = Marshal.PtrToStringAnsi(Native.haptic_recorder_events_path(recorder)) ?? "";
+        }
+        ~Recorder() { Close(); }
+
+        public bool Recording { get { return recorder_ != IntPtr.Zero; } }
+
+        /// <summary>The totals so far; after Close, the final ones.</summary>
+        public RecorderStats Stats
+        {
+            get
+            {
+                if (recorder_ == IntPtr.Zero) return totals_;
+                var stats = new RecorderStats { size = Check.SizeOf<RecorderStats>() };
+                NativeError err;
+                Check.Status(Native.haptic_recorder_get_stats(recorder_, ref stats, out err), err);
+                return stats;
+            }
+        }
+
+        /// <summary>Stops recording, writes what is queued, flushes and closes the file(s); the
+        /// totals (again on later calls). A failed write is in the totals.</summary>
+        public RecorderStats Close()
+        {
+            if (recorder_ == IntPtr.Zero) return totals_;
+            var totals = new RecorderStats { size = Check.SizeOf<RecorderStats>() };
+            NativeError err;
+            var status = Native.haptic_recorder_close(recorder_, ref totals, out err);
+            recorder_ = IntPtr.Zero;
+            totals_ = totals;
+            GC.SuppressFinalize(this);
+            Check.Status(status, err);
+            return totals_;
+        }
+
+        public void Dispose() { Close(); }
     }
 
     /// <summary>Between and beyond the samples: the tool's position at a server time a frame needs.</summary>

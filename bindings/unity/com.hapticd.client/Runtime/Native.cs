@@ -120,6 +120,17 @@ namespace Hapticd
         public double ProfileSamplePeriodS;
     }
 
+    [StructLayout(LayoutKind.Sequential)]
+    internal struct NativeRecorderOptions
+    {
+        public uint size;
+        [MarshalAs(UnmanagedType.LPStr)] public string Path;
+        public int Format;
+        public int Events;
+        public int Overwrite;
+        public ulong QueueCapacity;
+    }
+
     internal enum Kind : int
     {
         Wall = 1, Sphere = 2, Box = 3, Capsule = 4, TangentPlane = 5, Mesh = 6,
@@ -250,5 +261,11 @@ namespace Hapticd
         [DllImport(Library)] internal static extern int haptic_client_stats(IntPtr client, ref StatsCounters stats, [Out] StreamStats[] clients, uint clientsCapacity, [Out] CouplingStats[] couplings, uint couplingsCapacity, out NativeError err);
         [DllImport(Library)] internal static extern int haptic_client_start_recording(IntPtr client, [MarshalAs(UnmanagedType.LPStr)] string name, ref RecordingStatus status, out NativeError err);
         [DllImport(Library)] internal static extern int haptic_client_stop_recording(IntPtr client, ref RecordingStatus status, out NativeError err);
+
+        [DllImport(Library)] internal static extern int haptic_client_record(IntPtr client, ref NativeRecorderOptions options, out IntPtr recorder, out NativeError err);
+        [DllImport(Library)] internal static extern int haptic_recorder_get_stats(IntPtr recorder, ref RecorderStats stats, out NativeError err);
+        [DllImport(Library)] internal static extern IntPtr haptic_recorder_path(IntPtr recorder);
+        [DllImport(Library)] internal static extern IntPtr haptic_recorder_events_path(IntPtr recorder);
+        [DllImport(Library)] internal static extern int haptic_recorder_close(IntPtr recorder, ref RecorderStats totals, out NativeError err);
     }
 }

@@ -508,6 +508,27 @@ namespace Hapticd
         }
     }
 
+    public enum RecorderFormat : int { Auto = 0, Csv = 1, Hdf5 = 2 }
+
+    /// <summary>What Client.Record writes and where (haptic::RecorderOptions; docs/recorder.md).</summary>
+    public sealed class RecorderOptions
+    {
+        public string Path = "";          // .csv, or .h5 / .hdf5 with Auto
+        public RecorderFormat Format = RecorderFormat.Auto;
+        public ulong QueueCapacity = 65536;  // samples between the receive thread and the writer
+        public bool Events = true;        // the server's events and the connection's changes
+        public bool Overwrite = false;    // an existing file is refused unless set
+    }
+
+    /// <summary>A recorder's totals (haptic::RecorderStats).</summary>
+    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
+    public struct RecorderStats
+    {
+        internal uint size;
+        public ulong SamplesReceived, SamplesWritten, Dropped, EventsWritten, EventsDropped, WriteErrors;
+        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 256)] public string FirstError;
+    }
+
     /// <summary>The SDK's error kinds (haptic_status).</summary>
     public enum ErrorCode : int
     {
