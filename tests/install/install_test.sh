@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the build tree into a temporary prefix, then configures, builds and runs an outside
-# project (tests/install/consumer) that uses find_package(hapticd) and links haptic::sdk. (The
+# project (tests/install/consumer) that uses find_package(hapticd) and links haptic::sdk, and
+# haptic::recorder in a second program. (The
 # Python package's install: python_install_test.sh.)
 # Usage: install_test.sh <build-dir> <source-dir> [compiler and linker flags the SDK was built with,
 #        e.g. -fsanitize=address,undefined: a consumer must link what they need]
@@ -22,3 +23,4 @@ cmake -S "$source_dir/tests/install/consumer" -B "$work/consumer" -G Ninja \
   "${launcher[@]}" >/dev/null
 cmake --build "$work/consumer" -j2 >/dev/null
 "$work/consumer/consumer"
+"$work/consumer/recorder_consumer"
