@@ -49,9 +49,13 @@ grep -qx 'ExecStart=/usr/bin/hapticd --config /etc/hapticd/config.json' /usr/lib
 hapticd --config /etc/hapticd/config.json --print-config >/dev/null ||
   fail "hapticd refuses the configuration the package installs"
 [ -f /usr/share/hapticd/web/index.html ] || fail "no viewer page in /usr/share/hapticd/web"
-ls /usr/lib/hapticd/point_mass_driver.so >/dev/null || fail "no drivers in /usr/lib/hapticd"
+# hapticd finds the packaged drivers where it was built to look (<libdir>/hapticd under /usr).
+hapticd --list-devices >"$test_dir/devices.txt" 2>&1 || { cat "$test_dir/devices.txt"; fail "hapticd --list-devices failed"; }
+grep -Eq '^/usr/lib/([a-z0-9_-]+/)?hapticd/point_mass_driver\.so \(driver ABI [0-9]+\): 1 device' "$test_dir/devices.txt" ||
+  { cat "$test_dir/devices.txt"; fail "hapticd does not find the packaged example driver"; }
 echo "account: $(getent passwd hapticd)"
 echo "conffile /etc/hapticd/config.json; unit /usr/lib/systemd/system/hapticd.service (not enabled)"
+grep point_mass "$test_dir/devices.txt"
 
 # A lockstep hapticd as the hapticd account, on ephemeral loopback ports, found through its ready
 # file; each example gets a fresh one (lockstep is exact from a fresh start).
