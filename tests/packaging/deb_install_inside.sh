@@ -4,7 +4,8 @@
 # mirror), checks what the hapticd package set up, runs a lockstep hapticd as the hapticd account
 # and touch_wall, hapticctl, the Python example and the C example (compiled against the installed
 # header and library) against it, builds tests/install/consumer with find_package(hapticd), then
-# purges the packages and checks that nothing of theirs is left.
+# purges the packages and checks that nothing of theirs is left; then installs hapticd again where
+# systemd is installed (not running), enables its unit and purges it.
 # Usage: deb_install_inside.sh [--python]
 set -euo pipefail
 test_dir=/tmp/hapticd-test
@@ -162,4 +163,27 @@ hash -r  # bash remembers where it found the programs it ran
 # The account stays, as Debian's packages leave system accounts (docs/packaging.md, Removing).
 getent passwd hapticd >/dev/null || fail "the hapticd account went with the package"
 echo "purged: no file, folder or configuration of the packages is left; the hapticd account stays"
+
+# Where systemd is installed (as on a server; here not running, as in a chroot): the account and
+# /run/hapticd come from the package's sysusers.d and tmpfiles.d files, and a unit the
+# administrator enabled is disabled on removal, leaving no link behind.
+step "hapticd where systemd is installed: systemd-sysusers, systemd-tmpfiles, enable, purge"
+userdel hapticd
+systemd_started=$(date +%s)
+apt-get install -y -qq --no-install-recommends systemd >"$test_dir/systemd.log" 2>&1 ||
+  { cat "$test_dir/systemd.log"; fail "could not install systemd"; }
+apt-get install -y -qq --no-install-recommends "$test_dir"/debs/hapticd_*.deb >"$test_dir/install2.log" 2>&1 ||
+  { cat "$test_dir/install2.log"; fail "hapticd does not install where systemd is"; }
+echo "systemd and hapticd installed in $(( $(date +%s) - systemd_started )) s"
+grep -q '^hapticd:x:[0-9]*:[0-9]*:hapticd networked haptic server:/:/usr/sbin/nologin$' <<<"$(getent passwd hapticd)" ||
+  fail "systemd-sysusers made no hapticd account: '$(getent passwd hapticd || true)'"
+[ "$(stat -c %a /run/hapticd)" = 1777 ] || fail "systemd-tmpfiles did not make /run/hapticd 1777"
+wants=/etc/systemd/system/multi-user.target.wants/hapticd.service
+systemctl enable hapticd.service >/dev/null 2>&1 || fail "systemctl enable hapticd.service failed"
+[ -L "$wants" ] || fail "systemctl enable made no $wants"
+apt-get purge -y hapticd >"$test_dir/purge2.log" 2>&1 || { cat "$test_dir/purge2.log"; fail "apt-get purge hapticd failed"; }
+[ ! -e "$wants" ] && [ ! -L "$wants" ] || fail "the enabled unit's link $wants is left after purge"
+[ ! -e /usr/lib/systemd/system/hapticd.service ] || fail "the unit is left after purge"
+[ ! -e /etc/hapticd ] || fail "/etc/hapticd is left after purge"
+echo "account by systemd-sysusers, /run/hapticd by systemd-tmpfiles; enabled, then purged with no link left"
 echo "inside the container: $(( $(date +%s) - started )) s"
