@@ -9,8 +9,14 @@
 #   --python: the build has the Python module, so python3-hapticd is made and tested too (an
 #   empty third argument: it has not).
 set -euo pipefail
-if [ $# -lt 2 ] || [ $# -gt 3 ] || { [ $# -eq 3 ] && [ -n "$3" ] && [ "$3" != --python ]; }; then
+if [ $# -lt 2 ] || [ $# -gt 3 ]; then
   echo "usage: deb_install_test.sh SOURCE_DIR BUILD_DIR [--python]"; exit 2
+fi
+if [ $# -eq 3 ] && [ -n "$3" ] && [ "$3" != --python ]; then
+  echo "deb_install_test.sh: unknown argument '$3' (expected --python or nothing)"; exit 2
+fi
+if [ ! -f "$2/CPackConfig.cmake" ]; then
+  echo "deb_install_test.sh: '$2' is not a configured build of hapticd (no CPackConfig.cmake)"; exit 2
 fi
 source_dir="$1"
 build_dir="$2"
