@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the build tree into a temporary prefix, then configures, builds and runs an outside
 # project (tests/install/consumer) that uses find_package(hapticd) and links haptic::sdk, and
-# haptic::recorder in a second program. (The
+# haptic::recorder in a second program, and a C project (tests/install/c_consumer) that links the C
+# API, haptic::c. (The
 # Python package's install: python_install_test.sh.)
 # Usage: install_test.sh <build-dir> <source-dir> [compiler and linker flags the SDK was built with,
 #        e.g. -fsanitize=address,undefined: a consumer must link what they need]
@@ -24,3 +25,10 @@ cmake -S "$source_dir/tests/install/consumer" -B "$work/consumer" -G Ninja \
 cmake --build "$work/consumer" -j2 >/dev/null
 "$work/consumer/consumer"
 "$work/consumer/recorder_consumer"
+c_launcher=()
+command -v ccache >/dev/null && c_launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache)
+cmake -S "$source_dir/tests/install/c_consumer" -B "$work/c_consumer" -G Ninja \
+  -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_C_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="$flags" \
+  "${c_launcher[@]}" >/dev/null
+cmake --build "$work/c_consumer" >/dev/null
+"$work/c_consumer/c_consumer"
