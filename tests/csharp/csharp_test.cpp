@@ -51,30 +51,9 @@ TEST(CSharp, TheUnityComponentMovesItsTransformWithTheTool) {
 }
 
 TEST(CSharp, TouchWallPrintsExactlyWhatTheCppOnePrints) {
-  for (const std::vector<std::string>& options :
-       {std::vector<std::string>{"--lockstep"}, std::vector<std::string>{"--lockstep", "--hand", "--seconds", "1"}}) {
-    ServerProcess for_cpp(lockstep_config());
-    std::vector<std::string> args = {for_cpp.address()};
-    args.insert(args.end(), options.begin(), options.end());
-    const Outcome cpp = run_program(TOUCH_WALL_BINARY, args);
-    ASSERT_EQ(cpp.exit_code, 0) << cpp.output;
-    ASSERT_GT(cpp.output.size(), 1000u) << cpp.output;
-
-    ServerProcess for_cs(lockstep_config());
-    args[0] = for_cs.address();
-    const Outcome cs = mono(CSHARP_TOUCH_WALL, args);
-    ASSERT_EQ(cs.exit_code, 0) << cs.output;
-    EXPECT_EQ(without_datagram_count(cs.output), without_datagram_count(cpp.output));
-  }
-  for (const std::vector<std::string>& bad :
-       {std::vector<std::string>{"--cert", "client.pem"}, std::vector<std::string>{"--tls"},
-        std::vector<std::string>{"--seconds", "forever"},
-        std::vector<std::string>{"0.0.0.0:1", "--token", "lab-controller-token-0123456789"}}) {
-    const Outcome cpp = run_program(TOUCH_WALL_BINARY, bad);
-    const Outcome cs = mono(CSHARP_TOUCH_WALL, bad);
-    EXPECT_EQ(cs.exit_code, cpp.exit_code) << cs.output;
-    EXPECT_EQ(cs.output, cpp.output);
-  }
+  expect_prints_what_cpp_prints(
+      [](const std::vector<std::string>& args) { return run_program(TOUCH_WALL_BINARY, args); },
+      [](const std::vector<std::string>& args) { return mono(CSHARP_TOUCH_WALL, args); });
 }
 
 }  // namespace

@@ -100,29 +100,9 @@ TEST(TouchWall, ItsOptionsAreRefusedWithStatusTwoNamingWhatWasWrong) {
 // each against a fresh lockstep server: the simulated hand pressing, and the device's own hand
 // watched; and it refuses the same bad options the same way.
 TEST(TouchWall, TheCProgramPrintsExactlyWhatTheCppOnePrints) {
-  for (const std::vector<std::string>& options :
-       {std::vector<std::string>{"--lockstep"}, std::vector<std::string>{"--lockstep", "--hand", "--seconds", "1"}}) {
-    ServerProcess for_cpp(lockstep_config());
-    std::vector<std::string> args = {for_cpp.address()};
-    args.insert(args.end(), options.begin(), options.end());
-    const Outcome cpp = touch_wall(args);
-    ASSERT_EQ(cpp.exit_code, 0) << cpp.output;
-    ASSERT_GT(rows_of(cpp.output).size(), 400u) << cpp.output;
-
-    ServerProcess for_c(lockstep_config());
-    args[0] = for_c.address();
-    const Outcome c = run_program(TOUCH_WALL_C_BINARY, args);
-    ASSERT_EQ(c.exit_code, 0) << c.output;
-    EXPECT_EQ(without_datagram_count(c.output), without_datagram_count(cpp.output));
-  }
-  for (const std::vector<std::string>& bad :
-       {std::vector<std::string>{"--cert", "client.pem"}, std::vector<std::string>{"--tls"},
-        std::vector<std::string>{"--seconds", "forever"}, std::vector<std::string>{"0.0.0.0:1", "--token", kToken}}) {
-    const Outcome cpp = touch_wall(bad);
-    const Outcome c = run_program(TOUCH_WALL_C_BINARY, bad);
-    EXPECT_EQ(c.exit_code, cpp.exit_code) << c.output;
-    EXPECT_EQ(c.output, cpp.output);
-  }
+  expect_prints_what_cpp_prints(touch_wall, [](const std::vector<std::string>& args) {
+    return run_program(TOUCH_WALL_C_BINARY, args);
+  });
 }
 
 }  // namespace

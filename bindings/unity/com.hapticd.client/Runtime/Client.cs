@@ -68,23 +68,60 @@ namespace Hapticd
         internal static uint SizeOf<T>() { return (uint)Marshal.SizeOf(typeof(T)); }
     }
 
-    /// <summary>A registered object of any kind. Dispose (or Remove) removes it from the server; a
-    /// handle that is only collected lets go of it (it stays until the session ends).</summary>
-    public sealed class ObjectHandle : IDisposable
+    /// <summary>What ObjectHandle and FieldHandle share: the library's handle of one item. Dispose
+    /// (or Remove) removes the item from the server; a handle that is only collected lets go of it
+    /// (it stays until the session ends).</summary>
+    public abstract class ItemHandle : IDisposable
     {
         private IntPtr handle_;
-        internal ObjectHandle(IntPtr handle) { handle_ = handle; }
-        ~ObjectHandle() { if (handle_ != IntPtr.Zero) Native.haptic_object_release(handle_); }
+        internal ItemHandle(IntPtr handle) { handle_ = handle; }
+        ~ItemHandle() { if (handle_ != IntPtr.Zero) NativeRelease(handle_); }
 
-        private IntPtr Live(string call)
+        internal abstract ulong NativeId(IntPtr handle);
+        internal abstract int NativeRemove(IntPtr handle, out NativeError err);
+        internal abstract ulong NativeRelease(IntPtr handle);
+
+        internal IntPtr Live(string call)
         {
             if (handle_ == IntPtr.Zero) throw new HapticException(ErrorCode.FailedPrecondition, call + ": handle: removed or released already");
             return handle_;
         }
 
         /// <summary>The item's id on the server now; 0 once removed or released.</summary>
-        public ulong Id { get { return handle_ == IntPtr.Zero ? 0 : Native.haptic_object_id(handle_); } }
+        public ulong Id { get { return handle_ == IntPtr.Zero ? 0 : NativeId(handle_); } }
         public bool Owned { get { return handle_ != IntPtr.Zero; } }
+
+        /// <summary>Removes the item now; its force ramps out on the server.</summary>
+        public void Remove()
+        {
+            if (handle_ == IntPtr.Zero) return;
+            NativeError err;
+            var status = NativeRemove(handle_, out err);  // frees the handle, whatever the result
+            handle_ = IntPtr.Zero;
+            GC.SuppressFinalize(this);
+            Check.Status(status, err);
+        }
+
+        /// <summary>Stops owning the item (it stays until the session ends); returns its id.</summary>
+        public ulong Release()
+        {
+            if (handle_ == IntPtr.Zero) return 0;
+            var id = NativeRelease(handle_);
+            handle_ = IntPtr.Zero;
+            GC.SuppressFinalize(this);
+            return id;
+        }
+
+        public void Dispose() { Remove(); }
+    }
+
+    /// <summary>A registered object of any kind.</summary>
+    public sealed class ObjectHandle : ItemHandle
+    {
+        internal ObjectHandle(IntPtr handle) : base(handle) { }
+        internal override ulong NativeId(IntPtr h) { return Native.haptic_object_id(h); }
+        internal override int NativeRemove(IntPtr h, out NativeError err) { return Native.haptic_object_remove(h, out err); }
+        internal override ulong NativeRelease(IntPtr h) { return Native.haptic_object_release(h); }
 
         /// <summary>The server's stability report for the impedance as registered or last updated.</summary>
         public StabilityReport Stability
@@ -113,46 +150,15 @@ namespace Hapticd
                 Check.Status(Native.haptic_object_update_mesh(target, ref s, out e), e);
             }
         }
-
-        /// <summary>Removes the object now; its force ramps out on the server.</summary>
-        public void Remove()
-        {
-            if (handle_ == IntPtr.Zero) return;
-            NativeError err;
-            var status = Native.haptic_object_remove(handle_, out err);  // frees the handle, whatever the result
-            handle_ = IntPtr.Zero;
-            GC.SuppressFinalize(this);
-            Check.Status(status, err);
-        }
-
-        /// <summary>Stops owning the object (it stays until the session ends); returns its id.</summary>
-        public ulong Release()
-        {
-            if (handle_ == IntPtr.Zero) return 0;
-            var id = Native.haptic_object_release(handle_);
-            handle_ = IntPtr.Zero;
-            GC.SuppressFinalize(this);
-            return id;
-        }
-
-        public void Dispose() { Remove(); }
     }
 
-    /// <summary>A registered energy field; as ObjectHandle.</summary>
-    public sealed class FieldHandle : IDisposable
+    /// <summary>A registered energy field of any kind.</summary>
+    public sealed class FieldHandle : ItemHandle
     {
-        private IntPtr handle_;
-        internal FieldHandle(IntPtr handle) { handle_ = handle; }
-        ~FieldHandle() { if (handle_ != IntPtr.Zero) Native.haptic_field_release(handle_); }
-
-        private IntPtr Live(string call)
-        {
-            if (handle_ == IntPtr.Zero) throw new HapticException(ErrorCode.FailedPrecondition, call + ": handle: removed or released already");
-            return handle_;
-        }
-
-        public ulong Id { get { return handle_ == IntPtr.Zero ? 0 : Native.haptic_field_id(handle_); } }
-        public bool Owned { get { return handle_ != IntPtr.Zero; } }
+        internal FieldHandle(IntPtr handle) : base(handle) { }
+        internal override ulong NativeId(IntPtr h) { return Native.haptic_field_id(h); }
+        internal override int NativeRemove(IntPtr h, out NativeError err) { return Native.haptic_field_remove(h, out err); }
+        internal override ulong NativeRelease(IntPtr h) { return Native.haptic_field_release(h); }
 
         /// <summary>An orientation spring's stability report (Available false for other fields).</summary>
         public StabilityReport Stability
@@ -174,27 +180,6 @@ namespace Hapticd
         public void Update(DetentFieldSpec s) { NativeError e; s.size = Check.SizeOf<DetentFieldSpec>(); Check.Status(Native.haptic_field_update_detent_field(Live("UpdateField"), ref s, out e), e); }
         public void Update(OrientationSpringSpec s) { NativeError e; s.size = Check.SizeOf<OrientationSpringSpec>(); Check.Status(Native.haptic_field_update_orientation_spring(Live("UpdateField"), ref s, out e), e); }
         public void Update(OrientationDetentSpec s) { NativeError e; s.size = Check.SizeOf<OrientationDetentSpec>(); Check.Status(Native.haptic_field_update_orientation_detent(Live("UpdateField"), ref s, out e), e); }
-
-        public void Remove()
-        {
-            if (handle_ == IntPtr.Zero) return;
-            NativeError err;
-            var status = Native.haptic_field_remove(handle_, out err);
-            handle_ = IntPtr.Zero;
-            GC.SuppressFinalize(this);
-            Check.Status(status, err);
-        }
-
-        public ulong Release()
-        {
-            if (handle_ == IntPtr.Zero) return 0;
-            var id = Native.haptic_field_release(handle_);
-            handle_ = IntPtr.Zero;
-            GC.SuppressFinalize(this);
-            return id;
-        }
-
-        public void Dispose() { Remove(); }
     }
 
     /// <summary>A mesh's arrays pinned for the length of one call.</summary>
