@@ -320,7 +320,20 @@ static class ClientTests
         Near(Motion.Interpolate(a, b, 1.0005).X, 0.1 * 0.0005 + 0.0005 * 0.0005, 1e-12, "interpolate");
     }
 
-    static string R(double v) { return double.IsNaN(v) ? "NaN" : v.ToString("R", System.Globalization.CultureInfo.InvariantCulture); }
+    // A double exactly, as a C hex float (strtod reads it back bit for bit): Mono's "R" and "G17"
+    // do not always round-trip (-7.1266979490496405e-308 came out as ...395e-308), and the test
+    // compares the doubles exactly.
+    static string R(double v)
+    {
+        if (double.IsNaN(v)) return "NaN";
+        long bits = BitConverter.DoubleToInt64Bits(v);
+        string sign = bits < 0 ? "-" : "";
+        int exponent = (int)((bits >> 52) & 0x7FF);
+        long fraction = bits & 0xFFFFFFFFFFFFFL;
+        if (exponent == 0x7FF) return sign + "inf";
+        if (exponent == 0) return sign + "0x0." + fraction.ToString("x13") + "p-1022";  // zero and subnormals
+        return sign + "0x1." + fraction.ToString("x13") + "p" + (exponent - 1023);
+    }
 
     // Records a session to dir/session.csv and dir/session.h5 while the state callback keeps what
     // it saw, written to dir/seen.csv in the recorder's columns for the test to compare.
