@@ -475,13 +475,22 @@ void UdpLink::offer(const State& state) {
   arrived_.notify_all();
 }
 
+namespace {
+/// Waits on `arrived` for `ready` up to `timeout`; a timeout of zero only looks (a condition
+/// variable's wait with a deadline already past still costs a futex call: about 80 µs here).
+template <typename Ready>
+bool wait_ready(std::condition_variable& arrived, std::unique_lock<std::mutex>& lock,
+                std::chrono::milliseconds timeout, Ready ready) {
+  if (timeout <= std::chrono::milliseconds::zero()) return ready();
+  return arrived.wait_for(lock, timeout, ready);
+}
+}  // namespace
+
 bool UdpLink::poll(State& out, std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
-  if (!arrived_.wait_for(lock, timeout,
-                         [this] {
-                           return have_latest_ &&
-                                  (!last_polled_tick_ || latest_.tick > *last_polled_tick_);
-                         })) {
+  if (!wait_ready(arrived_, lock, timeout, [this] {
+        return have_latest_ && (!last_polled_tick_ || latest_.tick > *last_polled_tick_);
+      })) {
     return false;
   }
   out = latest_;
@@ -491,7 +500,7 @@ bool UdpLink::poll(State& out, std::chrono::milliseconds timeout) {
 
 bool UdpLink::wait_for_tick(std::uint64_t tick, State& out, std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
-  if (!arrived_.wait_for(lock, timeout, [&] { return have_latest_ && latest_.tick >= tick; })) {
+  if (!wait_ready(arrived_, lock, timeout, [&] { return have_latest_ && latest_.tick >= tick; })) {
     return false;
   }
   out = latest_;

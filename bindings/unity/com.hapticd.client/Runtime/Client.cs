@@ -59,10 +59,33 @@ namespace Hapticd
     internal static class Check
     {
         /// <summary>Throws the call's error unless it returned HAPTIC_OK (or, allowed, the timeout).</summary>
-        internal static int Status(int status, NativeError err, bool timeoutAllowed = false)
+        // The calling thread's haptic_error (int32 code, 512-byte message), made once per thread and
+        // kept for its life: reading it only when a call fails spares every call a string (a poll at
+        // frame rate allocates nothing).
+        [ThreadStatic] private static IntPtr error_;
+        private const int ErrorSize = 4 + 512;
+
+        internal static IntPtr Err
+        {
+            get
+            {
+                if (error_ == IntPtr.Zero)
+                {
+                    error_ = Marshal.AllocHGlobal(ErrorSize);
+                    Marshal.WriteInt32(error_, 0);
+                    Marshal.WriteByte(error_, 4, 0);
+                }
+                return error_;
+            }
+        }
+
+        /// <summary>Throws the call's error (read from this thread's Err) unless it returned
+        /// HAPTIC_OK or, when allowed, the timeout.</summary>
+        internal static int Status(int status, bool timeoutAllowed = false)
         {
             if (status == 0 || (timeoutAllowed && status == Native.Timeout)) return status;
-            throw new HapticException((ErrorCode)status, err.Message ?? ("error " + status));
+            string message = Marshal.PtrToStringAnsi(new IntPtr(Err.ToInt64() + 4));
+            throw new HapticException((ErrorCode)status, string.IsNullOrEmpty(message) ? "error " + status : message);
         }
 
         internal static uint SizeOf<T>() { return (uint)Marshal.SizeOf(typeof(T)); }
@@ -78,7 +101,7 @@ namespace Hapticd
         ~ItemHandle() { if (handle_ != IntPtr.Zero) NativeRelease(handle_); }
 
         internal abstract ulong NativeId(IntPtr handle);
-        internal abstract int NativeRemove(IntPtr handle, out NativeError err);
+        internal abstract int NativeRemove(IntPtr handle);
         internal abstract ulong NativeRelease(IntPtr handle);
 
         internal IntPtr Live(string call)
@@ -95,11 +118,10 @@ namespace Hapticd
         public void Remove()
         {
             if (handle_ == IntPtr.Zero) return;
-            NativeError err;
-            var status = NativeRemove(handle_, out err);  // frees the handle, whatever the result
+            var status = NativeRemove(handle_);  // frees the handle, whatever the result
             handle_ = IntPtr.Zero;
             GC.SuppressFinalize(this);
-            Check.Status(status, err);
+            Check.Status(status);
         }
 
         /// <summary>Stops owning the item (it stays until the session ends); returns its id.</summary>
@@ -120,7 +142,7 @@ namespace Hapticd
     {
         internal ObjectHandle(IntPtr handle) : base(handle) { }
         internal override ulong NativeId(IntPtr h) { return Native.haptic_object_id(h); }
-        internal override int NativeRemove(IntPtr h, out NativeError err) { return Native.haptic_object_remove(h, out err); }
+        internal override int NativeRemove(IntPtr h) { return Native.haptic_object_remove(h, Check.Err); }
         internal override ulong NativeRelease(IntPtr h) { return Native.haptic_object_release(h); }
 
         /// <summary>The server's stability report for the impedance as registered or last updated.</summary>
@@ -129,25 +151,23 @@ namespace Hapticd
             get
             {
                 var r = new StabilityReport { size = Check.SizeOf<StabilityReport>() };
-                NativeError err;
-                Check.Status(Native.haptic_object_stability(Live("stability"), ref r, out err), err);
+                Check.Status(Native.haptic_object_stability(Live("stability"), ref r, Check.Err));
                 return r;
             }
         }
 
-        public void Update(WallSpec s) { NativeError e; s.size = Check.SizeOf<WallSpec>(); Check.Status(Native.haptic_object_update_wall(Live("UpdateObject"), ref s, out e), e); }
-        public void Update(SphereSpec s) { NativeError e; s.size = Check.SizeOf<SphereSpec>(); Check.Status(Native.haptic_object_update_sphere(Live("UpdateObject"), ref s, out e), e); }
-        public void Update(BoxSpec s) { NativeError e; s.size = Check.SizeOf<BoxSpec>(); Check.Status(Native.haptic_object_update_box(Live("UpdateObject"), ref s, out e), e); }
-        public void Update(CapsuleSpec s) { NativeError e; s.size = Check.SizeOf<CapsuleSpec>(); Check.Status(Native.haptic_object_update_capsule(Live("UpdateObject"), ref s, out e), e); }
-        public void Update(TangentPlaneSpec s) { NativeError e; s.size = Check.SizeOf<TangentPlaneSpec>(); Check.Status(Native.haptic_object_update_tangent_plane(Live("UpdateObject"), ref s, out e), e); }
+        public void Update(WallSpec s) { s.size = Check.SizeOf<WallSpec>(); Check.Status(Native.haptic_object_update_wall(Live("UpdateObject"), ref s, Check.Err)); }
+        public void Update(SphereSpec s) { s.size = Check.SizeOf<SphereSpec>(); Check.Status(Native.haptic_object_update_sphere(Live("UpdateObject"), ref s, Check.Err)); }
+        public void Update(BoxSpec s) { s.size = Check.SizeOf<BoxSpec>(); Check.Status(Native.haptic_object_update_box(Live("UpdateObject"), ref s, Check.Err)); }
+        public void Update(CapsuleSpec s) { s.size = Check.SizeOf<CapsuleSpec>(); Check.Status(Native.haptic_object_update_capsule(Live("UpdateObject"), ref s, Check.Err)); }
+        public void Update(TangentPlaneSpec s) { s.size = Check.SizeOf<TangentPlaneSpec>(); Check.Status(Native.haptic_object_update_tangent_plane(Live("UpdateObject"), ref s, Check.Err)); }
         public void Update(MeshSpec mesh)
         {
             var target = Live("UpdateObject");
             using (var pinned = new PinnedMesh(mesh))
             {
-                NativeError e;
                 var s = pinned.Spec;
-                Check.Status(Native.haptic_object_update_mesh(target, ref s, out e), e);
+                Check.Status(Native.haptic_object_update_mesh(target, ref s, Check.Err));
             }
         }
     }
@@ -157,7 +177,7 @@ namespace Hapticd
     {
         internal FieldHandle(IntPtr handle) : base(handle) { }
         internal override ulong NativeId(IntPtr h) { return Native.haptic_field_id(h); }
-        internal override int NativeRemove(IntPtr h, out NativeError err) { return Native.haptic_field_remove(h, out err); }
+        internal override int NativeRemove(IntPtr h) { return Native.haptic_field_remove(h, Check.Err); }
         internal override ulong NativeRelease(IntPtr h) { return Native.haptic_field_release(h); }
 
         /// <summary>An orientation spring's stability report (Available false for other fields).</summary>
@@ -166,20 +186,19 @@ namespace Hapticd
             get
             {
                 var r = new StabilityReport { size = Check.SizeOf<StabilityReport>() };
-                NativeError err;
-                Check.Status(Native.haptic_field_stability(Live("stability"), ref r, out err), err);
+                Check.Status(Native.haptic_field_stability(Live("stability"), ref r, Check.Err));
                 return r;
             }
         }
 
-        public void Update(SpringFieldSpec s) { NativeError e; s.size = Check.SizeOf<SpringFieldSpec>(); Check.Status(Native.haptic_field_update_spring_field(Live("UpdateField"), ref s, out e), e); }
-        public void Update(DistanceSpringSpec s) { NativeError e; s.size = Check.SizeOf<DistanceSpringSpec>(); Check.Status(Native.haptic_field_update_distance_spring(Live("UpdateField"), ref s, out e), e); }
-        public void Update(PotentialFieldSpec s) { NativeError e; s.size = Check.SizeOf<PotentialFieldSpec>(); Check.Status(Native.haptic_field_update_potential_field(Live("UpdateField"), ref s, out e), e); }
-        public void Update(LinearFieldSpec s) { NativeError e; s.size = Check.SizeOf<LinearFieldSpec>(); Check.Status(Native.haptic_field_update_linear_field(Live("UpdateField"), ref s, out e), e); }
-        public void Update(ViscousFieldSpec s) { NativeError e; s.size = Check.SizeOf<ViscousFieldSpec>(); Check.Status(Native.haptic_field_update_viscous_field(Live("UpdateField"), ref s, out e), e); }
-        public void Update(DetentFieldSpec s) { NativeError e; s.size = Check.SizeOf<DetentFieldSpec>(); Check.Status(Native.haptic_field_update_detent_field(Live("UpdateField"), ref s, out e), e); }
-        public void Update(OrientationSpringSpec s) { NativeError e; s.size = Check.SizeOf<OrientationSpringSpec>(); Check.Status(Native.haptic_field_update_orientation_spring(Live("UpdateField"), ref s, out e), e); }
-        public void Update(OrientationDetentSpec s) { NativeError e; s.size = Check.SizeOf<OrientationDetentSpec>(); Check.Status(Native.haptic_field_update_orientation_detent(Live("UpdateField"), ref s, out e), e); }
+        public void Update(SpringFieldSpec s) { s.size = Check.SizeOf<SpringFieldSpec>(); Check.Status(Native.haptic_field_update_spring_field(Live("UpdateField"), ref s, Check.Err)); }
+        public void Update(DistanceSpringSpec s) { s.size = Check.SizeOf<DistanceSpringSpec>(); Check.Status(Native.haptic_field_update_distance_spring(Live("UpdateField"), ref s, Check.Err)); }
+        public void Update(PotentialFieldSpec s) { s.size = Check.SizeOf<PotentialFieldSpec>(); Check.Status(Native.haptic_field_update_potential_field(Live("UpdateField"), ref s, Check.Err)); }
+        public void Update(LinearFieldSpec s) { s.size = Check.SizeOf<LinearFieldSpec>(); Check.Status(Native.haptic_field_update_linear_field(Live("UpdateField"), ref s, Check.Err)); }
+        public void Update(ViscousFieldSpec s) { s.size = Check.SizeOf<ViscousFieldSpec>(); Check.Status(Native.haptic_field_update_viscous_field(Live("UpdateField"), ref s, Check.Err)); }
+        public void Update(DetentFieldSpec s) { s.size = Check.SizeOf<DetentFieldSpec>(); Check.Status(Native.haptic_field_update_detent_field(Live("UpdateField"), ref s, Check.Err)); }
+        public void Update(OrientationSpringSpec s) { s.size = Check.SizeOf<OrientationSpringSpec>(); Check.Status(Native.haptic_field_update_orientation_spring(Live("UpdateField"), ref s, Check.Err)); }
+        public void Update(OrientationDetentSpec s) { s.size = Check.SizeOf<OrientationDetentSpec>(); Check.Status(Native.haptic_field_update_orientation_detent(Live("UpdateField"), ref s, Check.Err)); }
     }
 
     /// <summary>A mesh's arrays pinned for the length of one call.</summary>
@@ -343,8 +362,7 @@ namespace Hapticd
                 ReconnectBackoffMinMs = config.ReconnectBackoffMinMs,
                 ReconnectBackoffMaxMs = config.ReconnectBackoffMaxMs,
             };
-            NativeError err;
-            Check.Status(Native.haptic_client_open(ref c, out client_, out err), err);
+            Check.Status(Native.haptic_client_open(ref c, out client_, Check.Err));
         }
 
         ~Client() { Close(false); }
@@ -364,12 +382,11 @@ namespace Hapticd
         private void Close(bool throwOnError)
         {
             if (client_ == IntPtr.Zero) return;
-            NativeError err;
-            var status = Native.haptic_client_close(client_, out err);
+            var status = Native.haptic_client_close(client_, Check.Err);
             if (status == (int)ErrorCode.FailedPrecondition)
             {
                 // Called from inside one of its own callbacks: the library leaves the client open.
-                if (throwOnError) Check.Status(status, err);
+                if (throwOnError) Check.Status(status);
                 return;
             }
             client_ = IntPtr.Zero;
@@ -385,8 +402,7 @@ namespace Hapticd
             get
             {
                 var info = new DeviceInfo { size = Check.SizeOf<DeviceInfo>() };
-                NativeError err;
-                Check.Status(Native.haptic_client_device_info(Live, ref info, out err), err);
+                Check.Status(Native.haptic_client_device_info(Live, ref info, Check.Err));
                 return info;
             }
         }
@@ -405,28 +421,25 @@ namespace Hapticd
         public bool PollState(out State state, uint timeoutMs)
         {
             state = new State { size = Check.SizeOf<State>() };
-            NativeError err;
-            return Check.Status(Native.haptic_client_poll_state(Live, ref state, timeoutMs, out err), err, true) == 0;
+            return Check.Status(Native.haptic_client_poll_state(Live, ref state, timeoutMs, Check.Err), true) == 0;
         }
 
         /// <summary>Waits up to timeoutMs until a sample of tick >= `tick` has arrived.</summary>
         public bool WaitForTick(ulong tick, out State state, uint timeoutMs)
         {
             state = new State { size = Check.SizeOf<State>() };
-            NativeError err;
-            return Check.Status(Native.haptic_client_wait_for_tick(Live, tick, ref state, timeoutMs, out err), err, true) == 0;
+            return Check.Status(Native.haptic_client_wait_for_tick(Live, tick, ref state, timeoutMs, Check.Err), true) == 0;
         }
 
-        public void Subscribe(uint decimation) { NativeError err; Check.Status(Native.haptic_client_subscribe(Live, decimation, out err), err); }
+        public void Subscribe(uint decimation) { Check.Status(Native.haptic_client_subscribe(Live, decimation, Check.Err)); }
 
         /// <summary>Calls `callback` on the SDK's receive thread with each newest State (null stops
         /// it, returning once a call in progress has). Keep it short; guard what it shares.</summary>
         public void OnState(Action<State> callback)
         {
-            NativeError err;
             if (callback == null)
             {
-                Check.Status(Native.haptic_client_on_state(Live, null, IntPtr.Zero, out err), err);
+                Check.Status(Native.haptic_client_on_state(Live, null, IntPtr.Zero, Check.Err));
                 stateCallback_ = null;
                 onState_ = null;
                 return;
@@ -437,7 +450,7 @@ namespace Hapticd
                 try { var cb = onState_; if (cb != null) cb(state); }
                 catch (Exception e) { CallbackFailed(e); }
             };
-            Check.Status(Native.haptic_client_on_state(Live, native, IntPtr.Zero, out err), err);
+            Check.Status(Native.haptic_client_on_state(Live, native, IntPtr.Zero, Check.Err));
             stateCallback_ = native;  // the library calls the new one from now on
         }
 
@@ -445,10 +458,9 @@ namespace Hapticd
         /// with WatchStarted (null stops it).</summary>
         public void OnEvent(Action<Event> callback)
         {
-            NativeError err;
             if (callback == null)
             {
-                Check.Status(Native.haptic_client_on_event(Live, null, IntPtr.Zero, out err), err);
+                Check.Status(Native.haptic_client_on_event(Live, null, IntPtr.Zero, Check.Err));
                 eventCallback_ = null;
                 onEvent_ = null;
                 return;
@@ -467,7 +479,7 @@ namespace Hapticd
                 }
                 catch (Exception x) { CallbackFailed(x); }
             };
-            Check.Status(Native.haptic_client_on_event(Live, native, IntPtr.Zero, out err), err);
+            Check.Status(Native.haptic_client_on_event(Live, native, IntPtr.Zero, Check.Err));
             eventCallback_ = native;
         }
 
@@ -475,10 +487,9 @@ namespace Hapticd
         /// when it resumes (null stops it).</summary>
         public void OnConnection(Action<ConnectionChange> callback)
         {
-            NativeError err;
             if (callback == null)
             {
-                Check.Status(Native.haptic_client_on_connection(Live, null, IntPtr.Zero, out err), err);
+                Check.Status(Native.haptic_client_on_connection(Live, null, IntPtr.Zero, Check.Err));
                 connectionCallback_ = null;
                 onConnection_ = null;
                 return;
@@ -498,7 +509,7 @@ namespace Hapticd
                 }
                 catch (Exception x) { CallbackFailed(x); }
             };
-            Check.Status(Native.haptic_client_on_connection(Live, native, IntPtr.Zero, out err), err);
+            Check.Status(Native.haptic_client_on_connection(Live, native, IntPtr.Zero, Check.Err));
             connectionCallback_ = native;
         }
 
@@ -515,16 +526,14 @@ namespace Hapticd
             get
             {
                 var c = new ReceiveCounters { size = Check.SizeOf<ReceiveCounters>() };
-                NativeError err;
-                Check.Status(Native.haptic_client_receive_counters(Live, ref c, out err), err);
+                Check.Status(Native.haptic_client_receive_counters(Live, ref c, Check.Err));
                 return c;
             }
         }
 
         public void SetHeartbeatsEnabled(bool enabled)
         {
-            NativeError err;
-            Check.Status(Native.haptic_client_set_heartbeats_enabled(Live, enabled ? 1 : 0, out err), err);
+            Check.Status(Native.haptic_client_set_heartbeats_enabled(Live, enabled ? 1 : 0, Check.Err));
         }
 
         /// <summary>The steady clock's now (ns), the clock of State's local times.</summary>
@@ -545,31 +554,30 @@ namespace Hapticd
 
         // ---- objects and fields ----
 
-        public ObjectHandle AddWall(WallSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<WallSpec>(); Check.Status(Native.haptic_client_add_wall(Live, ref s, out h, out e), e); return new ObjectHandle(h); }
-        public ObjectHandle AddSphere(SphereSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<SphereSpec>(); Check.Status(Native.haptic_client_add_sphere(Live, ref s, out h, out e), e); return new ObjectHandle(h); }
-        public ObjectHandle AddBox(BoxSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<BoxSpec>(); Check.Status(Native.haptic_client_add_box(Live, ref s, out h, out e), e); return new ObjectHandle(h); }
-        public ObjectHandle AddCapsule(CapsuleSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<CapsuleSpec>(); Check.Status(Native.haptic_client_add_capsule(Live, ref s, out h, out e), e); return new ObjectHandle(h); }
-        public ObjectHandle AddTangentPlane(TangentPlaneSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<TangentPlaneSpec>(); Check.Status(Native.haptic_client_add_tangent_plane(Live, ref s, out h, out e), e); return new ObjectHandle(h); }
+        public ObjectHandle AddWall(WallSpec s) { IntPtr h; s.size = Check.SizeOf<WallSpec>(); Check.Status(Native.haptic_client_add_wall(Live, ref s, out h, Check.Err)); return new ObjectHandle(h); }
+        public ObjectHandle AddSphere(SphereSpec s) { IntPtr h; s.size = Check.SizeOf<SphereSpec>(); Check.Status(Native.haptic_client_add_sphere(Live, ref s, out h, Check.Err)); return new ObjectHandle(h); }
+        public ObjectHandle AddBox(BoxSpec s) { IntPtr h; s.size = Check.SizeOf<BoxSpec>(); Check.Status(Native.haptic_client_add_box(Live, ref s, out h, Check.Err)); return new ObjectHandle(h); }
+        public ObjectHandle AddCapsule(CapsuleSpec s) { IntPtr h; s.size = Check.SizeOf<CapsuleSpec>(); Check.Status(Native.haptic_client_add_capsule(Live, ref s, out h, Check.Err)); return new ObjectHandle(h); }
+        public ObjectHandle AddTangentPlane(TangentPlaneSpec s) { IntPtr h; s.size = Check.SizeOf<TangentPlaneSpec>(); Check.Status(Native.haptic_client_add_tangent_plane(Live, ref s, out h, Check.Err)); return new ObjectHandle(h); }
         public ObjectHandle AddMesh(MeshSpec mesh)
         {
             var client = Live;
             using (var pinned = new PinnedMesh(mesh))
-            {
-                NativeError e; IntPtr h;
+            { IntPtr h;
                 var s = pinned.Spec;
-                Check.Status(Native.haptic_client_add_mesh(client, ref s, out h, out e), e);
+                Check.Status(Native.haptic_client_add_mesh(client, ref s, out h, Check.Err));
                 return new ObjectHandle(h);
             }
         }
 
-        public FieldHandle AddField(SpringFieldSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<SpringFieldSpec>(); Check.Status(Native.haptic_client_add_spring_field(Live, ref s, out h, out e), e); return new FieldHandle(h); }
-        public FieldHandle AddField(DistanceSpringSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<DistanceSpringSpec>(); Check.Status(Native.haptic_client_add_distance_spring(Live, ref s, out h, out e), e); return new FieldHandle(h); }
-        public FieldHandle AddField(PotentialFieldSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<PotentialFieldSpec>(); Check.Status(Native.haptic_client_add_potential_field(Live, ref s, out h, out e), e); return new FieldHandle(h); }
-        public FieldHandle AddField(LinearFieldSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<LinearFieldSpec>(); Check.Status(Native.haptic_client_add_linear_field(Live, ref s, out h, out e), e); return new FieldHandle(h); }
-        public FieldHandle AddField(ViscousFieldSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<ViscousFieldSpec>(); Check.Status(Native.haptic_client_add_viscous_field(Live, ref s, out h, out e), e); return new FieldHandle(h); }
-        public FieldHandle AddField(DetentFieldSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<DetentFieldSpec>(); Check.Status(Native.haptic_client_add_detent_field(Live, ref s, out h, out e), e); return new FieldHandle(h); }
-        public FieldHandle AddField(OrientationSpringSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<OrientationSpringSpec>(); Check.Status(Native.haptic_client_add_orientation_spring(Live, ref s, out h, out e), e); return new FieldHandle(h); }
-        public FieldHandle AddField(OrientationDetentSpec s) { NativeError e; IntPtr h; s.size = Check.SizeOf<OrientationDetentSpec>(); Check.Status(Native.haptic_client_add_orientation_detent(Live, ref s, out h, out e), e); return new FieldHandle(h); }
+        public FieldHandle AddField(SpringFieldSpec s) { IntPtr h; s.size = Check.SizeOf<SpringFieldSpec>(); Check.Status(Native.haptic_client_add_spring_field(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
+        public FieldHandle AddField(DistanceSpringSpec s) { IntPtr h; s.size = Check.SizeOf<DistanceSpringSpec>(); Check.Status(Native.haptic_client_add_distance_spring(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
+        public FieldHandle AddField(PotentialFieldSpec s) { IntPtr h; s.size = Check.SizeOf<PotentialFieldSpec>(); Check.Status(Native.haptic_client_add_potential_field(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
+        public FieldHandle AddField(LinearFieldSpec s) { IntPtr h; s.size = Check.SizeOf<LinearFieldSpec>(); Check.Status(Native.haptic_client_add_linear_field(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
+        public FieldHandle AddField(ViscousFieldSpec s) { IntPtr h; s.size = Check.SizeOf<ViscousFieldSpec>(); Check.Status(Native.haptic_client_add_viscous_field(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
+        public FieldHandle AddField(DetentFieldSpec s) { IntPtr h; s.size = Check.SizeOf<DetentFieldSpec>(); Check.Status(Native.haptic_client_add_detent_field(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
+        public FieldHandle AddField(OrientationSpringSpec s) { IntPtr h; s.size = Check.SizeOf<OrientationSpringSpec>(); Check.Status(Native.haptic_client_add_orientation_spring(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
+        public FieldHandle AddField(OrientationDetentSpec s) { IntPtr h; s.size = Check.SizeOf<OrientationDetentSpec>(); Check.Status(Native.haptic_client_add_orientation_detent(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
 
         // ---- scenes ----
 
@@ -580,9 +588,8 @@ namespace Hapticd
             var client = Live;
             using (var scene = new NativeScene(items))
             {
-                NativeError err;
                 IntPtr applied;
-                Check.Status(Native.haptic_client_apply_scene(client, scene.Items, (uint)scene.Items.Length, out applied, out err), err);
+                Check.Status(Native.haptic_client_apply_scene(client, scene.Items, (uint)scene.Items.Length, out applied, Check.Err));
                 return TakeAll(applied);
             }
         }
@@ -590,9 +597,8 @@ namespace Hapticd
         /// <summary>The same from a scene file (protobuf JSON, as hapticd --scene reads).</summary>
         public AppliedScene ApplySceneFile(string path)
         {
-            NativeError err;
             IntPtr applied;
-            Check.Status(Native.haptic_client_apply_scene_file(Live, path, out applied, out err), err);
+            Check.Status(Native.haptic_client_apply_scene_file(Live, path, out applied, Check.Err));
             return TakeAll(applied);
         }
 
@@ -607,8 +613,7 @@ namespace Hapticd
                 {
                     result.Objects.Add(new ObjectHandle(Native.haptic_applied_scene_take_object(applied, i)));
                     var r = new StabilityReport { size = Check.SizeOf<StabilityReport>() };
-                    NativeError err;
-                    Check.Status(Native.haptic_applied_scene_stability(applied, i, ref r, out err), err);
+                    Check.Status(Native.haptic_applied_scene_stability(applied, i, ref r, Check.Err));
                     result.Stability.Add(r);
                 }
                 for (uint i = 0; i < fields; ++i) result.Fields.Add(new FieldHandle(Native.haptic_applied_scene_take_field(applied, i)));
@@ -625,11 +630,10 @@ namespace Hapticd
         {
             using (var scene = new NativeScene(items))
             {
-                NativeError err;
                 UIntPtr length;
-                Check.Status(Native.haptic_scene_json(scene.Items, (uint)scene.Items.Length, null, UIntPtr.Zero, out length, out err), err);
+                Check.Status(Native.haptic_scene_json(scene.Items, (uint)scene.Items.Length, null, UIntPtr.Zero, out length, Check.Err));
                 var buffer = new byte[(int)length.ToUInt64() + 1];
-                Check.Status(Native.haptic_scene_json(scene.Items, (uint)scene.Items.Length, buffer, (UIntPtr)buffer.Length, out length, out err), err);
+                Check.Status(Native.haptic_scene_json(scene.Items, (uint)scene.Items.Length, buffer, (UIntPtr)buffer.Length, out length, Check.Err));
                 return Encoding.UTF8.GetString(buffer, 0, (int)length.ToUInt64());
             }
         }
@@ -637,9 +641,8 @@ namespace Hapticd
         /// <summary>This session's objects and fields as the server holds them; with allSessions, everyone's.</summary>
         public RegisteredScene Scene(bool allSessions = false)
         {
-            NativeError err;
             IntPtr scene;
-            Check.Status(Native.haptic_client_scene(Live, allSessions ? 1 : 0, out scene, out err), err);
+            Check.Status(Native.haptic_client_scene(Live, allSessions ? 1 : 0, out scene, Check.Err));
             var result = new RegisteredScene();
             try
             {
@@ -648,7 +651,7 @@ namespace Hapticd
                 for (uint i = 0; i < objects; ++i)
                 {
                     var entry = new NativeSceneEntry { size = Check.SizeOf<NativeSceneEntry>() };
-                    Check.Status(Native.haptic_registered_scene_object(scene, i, ref entry, out err), err);
+                    Check.Status(Native.haptic_registered_scene_object(scene, i, ref entry, Check.Err));
                     result.Objects.Add(ReadSpec(scene, i, (Kind)entry.Kind, true));
                     result.ObjectIds.Add(entry.Id);
                     result.ObjectSessions.Add(entry.SessionId);
@@ -656,7 +659,7 @@ namespace Hapticd
                 for (uint i = 0; i < fields; ++i)
                 {
                     var entry = new NativeSceneEntry { size = Check.SizeOf<NativeSceneEntry>() };
-                    Check.Status(Native.haptic_registered_scene_field(scene, i, ref entry, out err), err);
+                    Check.Status(Native.haptic_registered_scene_field(scene, i, ref entry, Check.Err));
                     result.Fields.Add(ReadSpec(scene, i, (Kind)entry.Kind, false));
                     result.FieldIds.Add(entry.Id);
                     result.FieldSessions.Add(entry.SessionId);
@@ -712,9 +715,8 @@ namespace Hapticd
             {
                 for (int i = 0; i < Marshal.SizeOf(typeof(T)); ++i) Marshal.WriteByte(block, i, 0);
                 Marshal.WriteInt32(block, (int)Check.SizeOf<T>());
-                NativeError err;
-                Check.Status(isObject ? Native.haptic_registered_scene_object_spec(scene, index, block, out err)
-                                      : Native.haptic_registered_scene_field_spec(scene, index, block, out err), err);
+                Check.Status(isObject ? Native.haptic_registered_scene_object_spec(scene, index, block, Check.Err)
+                                      : Native.haptic_registered_scene_field_spec(scene, index, block, Check.Err));
                 return (T)Marshal.PtrToStructure(block, typeof(T));
             }
             finally
@@ -725,21 +727,19 @@ namespace Hapticd
 
         public ItemEnergy[] SceneEnergy()
         {
-            NativeError err;
             uint count;
-            Check.Status(Native.haptic_client_scene_energy(Live, null, 0, out count, out err), err);
+            Check.Status(Native.haptic_client_scene_energy(Live, null, 0, out count, Check.Err));
             var items = new ItemEnergy[count];
-            Check.Status(Native.haptic_client_scene_energy(Live, items, count, out count, out err), err);
+            Check.Status(Native.haptic_client_scene_energy(Live, items, count, out count, Check.Err));
             return count < items.Length ? SubArray(items, count) : items;
         }
 
         public ObjectState[] ObjectStates()
         {
-            NativeError err;
             uint count;
-            Check.Status(Native.haptic_client_object_states(Live, null, 0, out count, out err), err);
+            Check.Status(Native.haptic_client_object_states(Live, null, 0, out count, Check.Err));
             var states = new ObjectState[count];
-            Check.Status(Native.haptic_client_object_states(Live, states, count, out count, out err), err);
+            Check.Status(Native.haptic_client_object_states(Live, states, count, out count, Check.Err));
             return count < states.Length ? SubArray(states, count) : states;
         }
 
@@ -771,8 +771,7 @@ namespace Hapticd
                     ProfileSamples = pinned.AddrOfPinnedObject(), ProfileSampleCount = (uint)samples.Length,
                     ProfileSamplePeriodS = input.ProfileSamplePeriodS,
                 };
-                NativeError err;
-                Check.Status(Native.haptic_client_set_operator(Live, ref n, out err), err);
+                Check.Status(Native.haptic_client_set_operator(Live, ref n, Check.Err));
             }
             finally
             {
@@ -783,29 +782,27 @@ namespace Hapticd
         /// <summary>Lockstep servers only: runs `ticks` ticks; returns the last one's index.</summary>
         public ulong Step(uint ticks)
         {
-            NativeError err;
             ulong last;
-            Check.Status(Native.haptic_client_step(Live, ticks, out last, out err), err);
+            Check.Status(Native.haptic_client_step(Live, ticks, out last, Check.Err));
             return last;
         }
 
         /// <summary>Lockstep servers with simulated devices only: puts the server back as it started.</summary>
-        public void Reset() { NativeError err; Check.Status(Native.haptic_client_reset(Live, out err), err); }
+        public void Reset() { Check.Status(Native.haptic_client_reset(Live, Check.Err)); }
 
         // ---- administration ----
 
         public Stats Stats()
         {
             var counters = new StatsCounters { size = Check.SizeOf<StatsCounters>() };
-            NativeError err;
-            Check.Status(Native.haptic_client_stats(Live, ref counters, null, 0, null, 0, out err), err);
+            Check.Status(Native.haptic_client_stats(Live, ref counters, null, 0, null, 0, Check.Err));
             var stats = new Stats
             {
                 Clients = new StreamStats[counters.ClientCount + 4],  // room for sessions opened meanwhile
                 Couplings = new CouplingStats[counters.CouplingCount + 4],
             };
             Check.Status(Native.haptic_client_stats(Live, ref counters, stats.Clients, (uint)stats.Clients.Length,
-                                                    stats.Couplings, (uint)stats.Couplings.Length, out err), err);
+                                                    stats.Couplings, (uint)stats.Couplings.Length, Check.Err));
             stats.Counters = counters;
             stats.Clients = SubArray(stats.Clients, Math.Min(counters.ClientCount, (uint)stats.Clients.Length));
             stats.Couplings = SubArray(stats.Couplings, Math.Min(counters.CouplingCount, (uint)stats.Couplings.Length));
@@ -814,25 +811,22 @@ namespace Hapticd
 
         public SessionSummary[] Sessions()
         {
-            NativeError err;
             uint count;
-            Check.Status(Native.haptic_client_sessions(Live, null, 0, out count, out err), err);
+            Check.Status(Native.haptic_client_sessions(Live, null, 0, out count, Check.Err));
             var sessions = new SessionSummary[count + 4];
-            Check.Status(Native.haptic_client_sessions(Live, sessions, (uint)sessions.Length, out count, out err), err);
+            Check.Status(Native.haptic_client_sessions(Live, sessions, (uint)sessions.Length, out count, Check.Err));
             return SubArray(sessions, Math.Min(count, (uint)sessions.Length));
         }
 
         public void KickSession(ulong sessionId, string reason = "")
         {
-            NativeError err;
-            Check.Status(Native.haptic_client_kick_session(Live, sessionId, reason ?? "", out err), err);
+            Check.Status(Native.haptic_client_kick_session(Live, sessionId, reason ?? "", Check.Err));
         }
 
         public RecordingStatus StartRecording(string name)
         {
             var status = new RecordingStatus { size = Check.SizeOf<RecordingStatus>() };
-            NativeError err;
-            Check.Status(Native.haptic_client_start_recording(Live, name, ref status, out err), err);
+            Check.Status(Native.haptic_client_start_recording(Live, name, ref status, Check.Err));
             return status;
         }
 
@@ -847,17 +841,15 @@ namespace Hapticd
                 size = Check.SizeOf<NativeRecorderOptions>(), Path = options.Path ?? "", Format = (int)options.Format,
                 Events = options.Events ? 1 : 0, Overwrite = options.Overwrite ? 1 : 0, QueueCapacity = options.QueueCapacity,
             };
-            NativeError err;
             IntPtr recorder;
-            Check.Status(Native.haptic_client_record(Live, ref n, out recorder, out err), err);
+            Check.Status(Native.haptic_client_record(Live, ref n, out recorder, Check.Err));
             return new Recorder(recorder);
         }
 
         public RecordingStatus StopRecording()
         {
             var status = new RecordingStatus { size = Check.SizeOf<RecordingStatus>() };
-            NativeError err;
-            Check.Status(Native.haptic_client_stop_recording(Live, ref status, out err), err);
+            Check.Status(Native.haptic_client_stop_recording(Live, ref status, Check.Err));
             return status;
         }
     }
@@ -888,8 +880,7 @@ namespace Hapticd
             {
                 if (recorder_ == IntPtr.Zero) return totals_;
                 var stats = new RecorderStats { size = Check.SizeOf<RecorderStats>() };
-                NativeError err;
-                Check.Status(Native.haptic_recorder_get_stats(recorder_, ref stats, out err), err);
+                Check.Status(Native.haptic_recorder_get_stats(recorder_, ref stats, Check.Err));
                 return stats;
             }
         }
@@ -900,12 +891,11 @@ namespace Hapticd
         {
             if (recorder_ == IntPtr.Zero) return totals_;
             var totals = new RecorderStats { size = Check.SizeOf<RecorderStats>() };
-            NativeError err;
-            var status = Native.haptic_recorder_close(recorder_, ref totals, out err);
+            var status = Native.haptic_recorder_close(recorder_, ref totals, Check.Err);
             recorder_ = IntPtr.Zero;
             totals_ = totals;
             GC.SuppressFinalize(this);
-            Check.Status(status, err);
+            Check.Status(status);
             return totals_;
         }
 
