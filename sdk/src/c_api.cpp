@@ -52,11 +52,18 @@ using haptic::InvalidArgumentError;
 
 // ---- errors ----
 
-void set_error(haptic_error* err, int code, const char* message) {
+/// Copies `text` into a fixed buffer, truncated to fit and NUL-terminated (only what it needs:
+/// a success's empty message writes one byte).
+void copy_text(char* out, std::size_t capacity, const std::string& text) {
+  const std::size_t n = std::min(capacity - 1, text.size());
+  std::memcpy(out, text.data(), n);
+  out[n] = '\0';
+}
+
+void set_error(haptic_error* err, int code, const std::string& message) {
   if (err == nullptr) return;
   err->code = code;
-  std::strncpy(err->message, message, HAPTIC_ERROR_MESSAGE_SIZE - 1);
-  err->message[HAPTIC_ERROR_MESSAGE_SIZE - 1] = '\0';
+  copy_text(err->message, sizeof(err->message), message);
 }
 
 int code_of(haptic::ErrorCode code) {
@@ -140,12 +147,6 @@ Enum enum_from(std::int32_t value, std::int32_t last, const char* field) {
     throw FieldProblem{field, std::to_string(value) + " is not one of 0.." + std::to_string(last)};
   }
   return static_cast<Enum>(value);
-}
-
-void copy_text(char* out, std::size_t capacity, const std::string& text) {
-  const std::size_t n = std::min(capacity - 1, text.size());
-  std::memcpy(out, text.data(), n);
-  out[n] = '\0';
 }
 
 std::int64_t steady_ns(std::chrono::steady_clock::time_point t) {
@@ -358,7 +359,7 @@ struct ToC {
   }
 };
 
-/// The C twin of each C++ spec (and nested struct), by type.
+/// The C twin of each C++ struct, by type: the nested ones here, the specs with their traits below.
 template <typename Cpp> struct CTwin;
 #define HAPTIC_C_TWIN(C, CPP) \
   template <> struct CTwin<haptic::CPP> { using type = C; };
@@ -366,20 +367,32 @@ HAPTIC_C_TWIN(haptic_pose, Pose)
 HAPTIC_C_TWIN(haptic_dynamics, Dynamics)
 HAPTIC_C_TWIN(haptic_impedance, Impedance)
 HAPTIC_C_TWIN(haptic_distance, Distance)
-HAPTIC_C_TWIN(haptic_wall_spec, WallSpec)
-HAPTIC_C_TWIN(haptic_sphere_spec, SphereSpec)
-HAPTIC_C_TWIN(haptic_box_spec, BoxSpec)
-HAPTIC_C_TWIN(haptic_capsule_spec, CapsuleSpec)
-HAPTIC_C_TWIN(haptic_tangent_plane_spec, TangentPlaneSpec)
-HAPTIC_C_TWIN(haptic_mesh_spec, MeshSpec)
-HAPTIC_C_TWIN(haptic_spring_field_spec, SpringFieldSpec)
-HAPTIC_C_TWIN(haptic_distance_spring_spec, DistanceSpringSpec)
-HAPTIC_C_TWIN(haptic_potential_field_spec, PotentialFieldSpec)
-HAPTIC_C_TWIN(haptic_linear_field_spec, LinearFieldSpec)
-HAPTIC_C_TWIN(haptic_viscous_field_spec, ViscousFieldSpec)
-HAPTIC_C_TWIN(haptic_detent_field_spec, DetentFieldSpec)
-HAPTIC_C_TWIN(haptic_orientation_spring_spec, OrientationSpringSpec)
-HAPTIC_C_TWIN(haptic_orientation_detent_spec, OrientationDetentSpec)
+
+/// Each C spec's kind, the C++ spec it converts to (and back: its CTwin), and the name the
+/// server's messages give it.
+template <typename CSpec> struct SpecTraits;
+#define HAPTIC_C_SPEC(CSPEC, CPP, KIND, NAME)      \
+  template <> struct SpecTraits<CSPEC> {           \
+    using Cpp = haptic::CPP;                       \
+    static constexpr std::int32_t kind = KIND;     \
+    static constexpr const char* name = NAME;      \
+  };                                               \
+  HAPTIC_C_TWIN(CSPEC, CPP)
+HAPTIC_C_SPEC(haptic_wall_spec, WallSpec, HAPTIC_KIND_WALL, "object.wall")
+HAPTIC_C_SPEC(haptic_sphere_spec, SphereSpec, HAPTIC_KIND_SPHERE, "object.sphere")
+HAPTIC_C_SPEC(haptic_box_spec, BoxSpec, HAPTIC_KIND_BOX, "object.box")
+HAPTIC_C_SPEC(haptic_capsule_spec, CapsuleSpec, HAPTIC_KIND_CAPSULE, "object.capsule")
+HAPTIC_C_SPEC(haptic_tangent_plane_spec, TangentPlaneSpec, HAPTIC_KIND_TANGENT_PLANE, "object.tangent_plane")
+HAPTIC_C_SPEC(haptic_mesh_spec, MeshSpec, HAPTIC_KIND_MESH, "object.mesh")
+HAPTIC_C_SPEC(haptic_spring_field_spec, SpringFieldSpec, HAPTIC_KIND_SPRING_FIELD, "field.spring")
+HAPTIC_C_SPEC(haptic_distance_spring_spec, DistanceSpringSpec, HAPTIC_KIND_DISTANCE_SPRING, "field.distance_spring")
+HAPTIC_C_SPEC(haptic_potential_field_spec, PotentialFieldSpec, HAPTIC_KIND_POTENTIAL_FIELD, "field.potential")
+HAPTIC_C_SPEC(haptic_linear_field_spec, LinearFieldSpec, HAPTIC_KIND_LINEAR_FIELD, "field.linear")
+HAPTIC_C_SPEC(haptic_viscous_field_spec, ViscousFieldSpec, HAPTIC_KIND_VISCOUS_FIELD, "field.viscous")
+HAPTIC_C_SPEC(haptic_detent_field_spec, DetentFieldSpec, HAPTIC_KIND_DETENT_FIELD, "field.detent")
+HAPTIC_C_SPEC(haptic_orientation_spring_spec, OrientationSpringSpec, HAPTIC_KIND_ORIENTATION_SPRING, "field.orientation_spring")
+HAPTIC_C_SPEC(haptic_orientation_detent_spec, OrientationDetentSpec, HAPTIC_KIND_ORIENTATION_DETENT, "field.orientation_detent")
+#undef HAPTIC_C_SPEC
 #undef HAPTIC_C_TWIN
 
 /// A C++ struct as its C twin; a spec's size is set to its sizeof.
@@ -422,29 +435,6 @@ haptic::MeshSpec mesh_to_cpp(const haptic_mesh_spec& c) {
   return s;
 }
 
-/// Each C spec's kind, the C++ spec it converts to, and the name the server's messages give it.
-template <typename CSpec> struct SpecTraits;
-#define HAPTIC_C_SPEC(CSPEC, CPP, KIND, NAME)      \
-  template <> struct SpecTraits<CSPEC> {           \
-    using Cpp = haptic::CPP;                       \
-    static constexpr std::int32_t kind = KIND;     \
-    static constexpr const char* name = NAME;      \
-  };
-HAPTIC_C_SPEC(haptic_wall_spec, WallSpec, HAPTIC_KIND_WALL, "object.wall")
-HAPTIC_C_SPEC(haptic_sphere_spec, SphereSpec, HAPTIC_KIND_SPHERE, "object.sphere")
-HAPTIC_C_SPEC(haptic_box_spec, BoxSpec, HAPTIC_KIND_BOX, "object.box")
-HAPTIC_C_SPEC(haptic_capsule_spec, CapsuleSpec, HAPTIC_KIND_CAPSULE, "object.capsule")
-HAPTIC_C_SPEC(haptic_tangent_plane_spec, TangentPlaneSpec, HAPTIC_KIND_TANGENT_PLANE, "object.tangent_plane")
-HAPTIC_C_SPEC(haptic_mesh_spec, MeshSpec, HAPTIC_KIND_MESH, "object.mesh")
-HAPTIC_C_SPEC(haptic_spring_field_spec, SpringFieldSpec, HAPTIC_KIND_SPRING_FIELD, "field.spring")
-HAPTIC_C_SPEC(haptic_distance_spring_spec, DistanceSpringSpec, HAPTIC_KIND_DISTANCE_SPRING, "field.distance_spring")
-HAPTIC_C_SPEC(haptic_potential_field_spec, PotentialFieldSpec, HAPTIC_KIND_POTENTIAL_FIELD, "field.potential")
-HAPTIC_C_SPEC(haptic_linear_field_spec, LinearFieldSpec, HAPTIC_KIND_LINEAR_FIELD, "field.linear")
-HAPTIC_C_SPEC(haptic_viscous_field_spec, ViscousFieldSpec, HAPTIC_KIND_VISCOUS_FIELD, "field.viscous")
-HAPTIC_C_SPEC(haptic_detent_field_spec, DetentFieldSpec, HAPTIC_KIND_DETENT_FIELD, "field.detent")
-HAPTIC_C_SPEC(haptic_orientation_spring_spec, OrientationSpringSpec, HAPTIC_KIND_ORIENTATION_SPRING, "field.orientation_spring")
-HAPTIC_C_SPEC(haptic_orientation_detent_spec, OrientationDetentSpec, HAPTIC_KIND_ORIENTATION_DETENT, "field.orientation_detent")
-#undef HAPTIC_C_SPEC
 
 /// A C spec from the C++ one (a mesh's arrays pointing into it).
 template <typename Cpp>
@@ -542,25 +532,11 @@ haptic::SceneSpec scene_of(const haptic_scene_item* items, std::uint32_t count, 
   return scene;
 }
 
-/// The kind of a read-back object or field: the index of its C++ variant alternative.
+/// The kind of a read-back object or field, from its C++ spec's C twin.
 template <typename Variant>
 std::int32_t kind_of(const Variant& v) {
   return std::visit([](const auto& spec) {
-    using Cpp = std::decay_t<decltype(spec)>;
-    if constexpr (std::is_same_v<Cpp, haptic::WallSpec>) return std::int32_t{HAPTIC_KIND_WALL};
-    else if constexpr (std::is_same_v<Cpp, haptic::SphereSpec>) return std::int32_t{HAPTIC_KIND_SPHERE};
-    else if constexpr (std::is_same_v<Cpp, haptic::BoxSpec>) return std::int32_t{HAPTIC_KIND_BOX};
-    else if constexpr (std::is_same_v<Cpp, haptic::CapsuleSpec>) return std::int32_t{HAPTIC_KIND_CAPSULE};
-    else if constexpr (std::is_same_v<Cpp, haptic::TangentPlaneSpec>) return std::int32_t{HAPTIC_KIND_TANGENT_PLANE};
-    else if constexpr (std::is_same_v<Cpp, haptic::MeshSpec>) return std::int32_t{HAPTIC_KIND_MESH};
-    else if constexpr (std::is_same_v<Cpp, haptic::SpringFieldSpec>) return std::int32_t{HAPTIC_KIND_SPRING_FIELD};
-    else if constexpr (std::is_same_v<Cpp, haptic::DistanceSpringSpec>) return std::int32_t{HAPTIC_KIND_DISTANCE_SPRING};
-    else if constexpr (std::is_same_v<Cpp, haptic::PotentialFieldSpec>) return std::int32_t{HAPTIC_KIND_POTENTIAL_FIELD};
-    else if constexpr (std::is_same_v<Cpp, haptic::LinearFieldSpec>) return std::int32_t{HAPTIC_KIND_LINEAR_FIELD};
-    else if constexpr (std::is_same_v<Cpp, haptic::ViscousFieldSpec>) return std::int32_t{HAPTIC_KIND_VISCOUS_FIELD};
-    else if constexpr (std::is_same_v<Cpp, haptic::DetentFieldSpec>) return std::int32_t{HAPTIC_KIND_DETENT_FIELD};
-    else if constexpr (std::is_same_v<Cpp, haptic::OrientationSpringSpec>) return std::int32_t{HAPTIC_KIND_ORIENTATION_SPRING};
-    else return std::int32_t{HAPTIC_KIND_ORIENTATION_DETENT};
+    return SpecTraits<typename CTwin<std::decay_t<decltype(spec)>>::type>::kind;
   }, v);
 }
 

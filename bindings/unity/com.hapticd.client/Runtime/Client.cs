@@ -869,7 +869,8 @@ namespace Hapticd
             Path = Marshal.PtrToStringAnsi(Native.haptic_recorder_path(recorder)) ?? "";
             EventsPath = Marshal.PtrToStringAnsi(Native.haptic_recorder_events_path(recorder)) ?? "";
         }
-        ~Recorder() { Close(); }
+        // A finalizer must not throw (it would end the process); Close only reports a bad size.
+        ~Recorder() { try { Close(); } catch (HapticException) { } }
 
         public bool Recording { get { return recorder_ != IntPtr.Zero; } }
 
