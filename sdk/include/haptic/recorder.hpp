@@ -56,7 +56,10 @@ struct RecorderStats {
 /// connection's changes. The receive thread only copies each sample into a bounded queue; a thread
 /// of the recorder's writes it. Move-only; the destructor does what close() does, errors swallowed.
 /// It does not take the Client's on_state, on_event or on_connection. Harmless if it outlives its
-/// Client (it records nothing more).
+/// Client (it records nothing more). The writer flushes at least every 50 ms: a process that dies
+/// while it records leaves files that open and hold every sample handed over up to 100 ms before
+/// (an HDF5 file is written in SWMR mode, and opened with SWMR read after such a death;
+/// docs/recorder.md, "What a crash leaves").
 class Recorder {
  public:
   /// Creates the file(s) and starts recording. Throws InvalidArgumentError naming the field

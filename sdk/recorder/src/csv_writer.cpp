@@ -1,6 +1,8 @@
 // CSV: one file of samples (a header row, one row per State), and one of events beside it. Doubles
 // as %.17g, so that each reads back to the same double; NaN as "NaN" (pandas, MATLAB and Python's
-// float() read it). Each batch is flushed, so a failed write is the batch's own.
+// float() read it). The header rows are flushed when the files are made, and each batch as soon as
+// it is written: a failed write is the batch's own, and a process that dies leaves every batch
+// written before (docs/recorder.md, "What a crash leaves").
 #include <cerrno>
 #include <cinttypes>
 #include <cmath>
@@ -75,6 +77,10 @@ class CsvWriter final : public RecordWriter {
     if (events_ != nullptr) {
       std::fputs("received_ns,kind,kind_name,session_id,server_time_s,item_id,message\n", events_);
     }
+    // A file with its header from the start, whenever the process dies. A failure here (a full
+    // disk) is left to the first batch's flush to report.
+    std::string ignored;
+    flush(ignored);
   }
 
   ~CsvWriter() override {

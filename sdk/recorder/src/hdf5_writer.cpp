@@ -3,6 +3,14 @@
 // each chunked and extendible, appended a batch at a time. Units in each dataset's "unit"
 // attribute; who and what was recorded in the root's attributes. HDF5's own error printing is
 // held off around every call (H5E_BEGIN_TRY): a failure comes back as the recorder's error.
+//
+// Written in SWMR mode (single writer, multiple readers; HDF5 1.10's file format): once the layout
+// is made, H5Fstart_swmr_write flushes it and from then on HDF5 writes in an order that keeps the
+// file whole for a reader at every moment — a chunk before the index that finds it, the index
+// before the length that counts it. So a process killed at any point leaves a file that opens
+// (with SWMR read; HDF5 marks it open for writing until H5Fclose) and holds what the last flush
+// made durable; the recorder flushes often (recorder.cpp, kFlushPeriod). docs/recorder.md, "What a
+// crash leaves".
 #include <hdf5.h>
 
 #include <cerrno>
@@ -57,13 +65,20 @@ class Hdf5Writer final : public RecordWriter {
       string_type_ = H5Tcopy(H5T_C_S1);
       H5Tset_size(string_type_, H5T_VARIABLE);
       H5Tset_cset(string_type_, H5T_CSET_UTF8);
-      file_ = H5Fcreate(path.c_str(), overwrite ? H5F_ACC_TRUNC : H5F_ACC_EXCL, H5P_DEFAULT, H5P_DEFAULT);
+      // SWMR needs 1.10's format; named rather than H5F_LIBVER_LATEST, so that a newer HDF5 writes
+      // files that 1.10 still reads.
+      const hid_t access = H5Pcreate(H5P_FILE_ACCESS);
+      H5Pset_libver_bounds(access, H5F_LIBVER_V110, H5F_LIBVER_V110);
+      file_ = H5Fcreate(path.c_str(), overwrite ? H5F_ACC_TRUNC : H5F_ACC_EXCL, H5P_DEFAULT, access);
+      H5Pclose(access);
       if (file_ < 0) {
         why = std::filesystem::exists(path) && !overwrite
                   ? "exists (RecorderOptions::overwrite replaces it)"
                   : hdf5_error();
       } else {
-        ok = make_layout(events, info);
+        // The layout made and flushed before the first sample: a file killed from here on opens,
+        // with every dataset.
+        ok = make_layout(events, info) && H5Fstart_swmr_write(file_) >= 0;
         if (!ok) why = hdf5_error();
       }
     }
@@ -144,7 +159,8 @@ class Hdf5Writer final : public RecordWriter {
   bool flush(std::string& error) override {
     herr_t status = 0;
     H5E_BEGIN_TRY {
-      status = H5Fflush(file_, H5F_SCOPE_GLOBAL);
+      // Every dataset's cached chunks, then the metadata that finds them, in SWMR's order.
+      status = H5Fflush(file_, H5F_SCOPE_LOCAL);
       if (status < 0) error = "flush: " + hdf5_error();
     }
     H5E_END_TRY;

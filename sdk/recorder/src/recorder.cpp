@@ -27,8 +27,12 @@ constexpr std::size_t kBatch = 4096;
 // The writer wakes this often to drain the queue: the receive thread never signals it (a futex
 // wake per sample would cost the receive path a system call).
 constexpr auto kWriterPeriod = std::chrono::milliseconds(5);
-// HDF5's metadata is flushed this often, so that a process that dies leaves a readable file.
-constexpr auto kFlushPeriod = std::chrono::seconds(1);
+// What the writer has written is flushed this often (HDF5: the chunks and the metadata that finds
+// them; CSV flushes each batch as well). With the writer's period this bounds what a process that
+// dies can lose to the samples of its last 100 ms while the writer keeps up (docs/recorder.md,
+// "What a crash leaves"): a sample waits up to kWriterPeriod to be written and kFlushPeriod more
+// to be flushed, leaving room for a late wake-up and the flush itself.
+constexpr auto kFlushPeriod = std::chrono::milliseconds(50);
 // At most this many samples queued (each a State, 240 bytes): 4 GB.
 constexpr std::size_t kMaxQueueCapacity = std::size_t{1} << 24;
 
@@ -44,12 +48,11 @@ std::string lower(std::string text) {
 /// that empties its queues into the file.
 class RecorderSink final : public ReceiveObserver {
  public:
-  RecorderSink(std::unique_ptr<RecordWriter> writer, std::size_t capacity, bool flush_periodically,
-               std::string path, std::string events_path)
+  RecorderSink(std::unique_ptr<RecordWriter> writer, std::size_t capacity, std::string path,
+               std::string events_path)
       : writer_(std::move(writer)),
         queue_(capacity),
         event_capacity_(capacity),
-        flush_periodically_(flush_periodically),
         path_(std::move(path)),
         events_path_(std::move(events_path)) {}
 
@@ -140,6 +143,7 @@ class RecorderSink final : public ReceiveObserver {
     batch.reserve(std::min(kBatch, queue_.capacity()));
     std::vector<EventRecord> events;
     auto flushed_at = std::chrono::steady_clock::now();
+    bool unflushed = false;  // written since flushed_at
     for (;;) {
       bool stopping = false;
       {
@@ -154,17 +158,21 @@ class RecorderSink final : public ReceiveObserver {
         const std::size_t written = writer_->write_samples(batch, error);
         samples_written_.fetch_add(written, std::memory_order_relaxed);
         if (written < batch.size()) note_error(error, batch.size() - written);
+        unflushed = true;
       }
       if (!events.empty()) {
         const std::size_t written = writer_->write_events(events, error);
         events_written_.fetch_add(written, std::memory_order_relaxed);
         if (written < events.size()) note_error(error, events.size() - written);
         events.clear();
+        unflushed = true;
       }
-      if (stopping) return;  // the observer was detached before: nothing more arrives
-      if (flush_periodically_ && std::chrono::steady_clock::now() - flushed_at >= kFlushPeriod) {
+      if (stopping) return;  // the observer was detached before: nothing more arrives; close flushes
+      const auto now = std::chrono::steady_clock::now();
+      if (unflushed && now - flushed_at >= kFlushPeriod) {
         if (!writer_->flush(error)) note_error(error, 0);
-        flushed_at = std::chrono::steady_clock::now();
+        flushed_at = now;
+        unflushed = false;
       }
     }
   }
@@ -172,7 +180,6 @@ class RecorderSink final : public ReceiveObserver {
   std::unique_ptr<RecordWriter> writer_;  // the writer thread's, until finish()
   SampleQueue queue_;
   const std::size_t event_capacity_;
-  const bool flush_periodically_;
   const std::string path_;
   const std::string events_path_;
 
@@ -249,8 +256,7 @@ std::shared_ptr<RecorderSink> make_recorder_sink(const RecorderOptions& options,
   std::unique_ptr<RecordWriter> writer =
       format == Format::kCsv ? make_csv_writer(path, events_path, options.overwrite)
                              : make_hdf5_writer(path, options.events, options.overwrite, info);
-  return std::make_shared<RecorderSink>(std::move(writer), options.queue_capacity,
-                                        format == Format::kHdf5, path, events_path);
+  return std::make_shared<RecorderSink>(std::move(writer), options.queue_capacity, path, events_path);
 }
 
 }  // namespace
