@@ -4,7 +4,10 @@
 // offers one recvmmsg batch (32 States) and is timed alone; between iterations the writer empties
 // the ring, as it does between a 1 kHz stream's wake-ups, so nothing is dropped. One State copy is
 // timed too, for scale (take() already makes several), and the same ring behind a mutex, the
-// design not taken. Prints figures only; docs/recorder.md quotes one run.
+// design not taken. And the writer thread's own share, per sample: the CSV and HDF5 writers fed a
+// 1 kHz stream's batches (5 samples, one wake-up's worth) and flushed every 10 batches (50 ms, the
+// recorder's policy) or every 200 (1 s, for comparison). Prints figures only; docs/recorder.md
+// quotes one run.
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -21,6 +24,7 @@
 #include <unistd.h>
 
 #include "haptic/recorder.hpp"
+#include "record_format.hpp"
 #include "recorder_test_access.hpp"
 
 namespace {
@@ -154,11 +158,42 @@ void BM_StateCopy(benchmark::State& bench) {
       benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
+// The writer thread's work per sample: a batch written (HDF5: appended to each column's cached
+// chunk; CSV: formatted and handed to the kernel), and every `batches per flush` batches a flush
+// (HDF5: every column's chunk and the metadata that finds it).
+void writer_cost(benchmark::State& bench, const char* extension) {
+  constexpr std::size_t kWakeUpBatch = 5;  // 1 kHz, a wake-up every 5 ms
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("recorder_bench-writer-" + std::to_string(::getpid()) + extension))
+                               .string();
+  std::unique_ptr<haptic::detail::RecordWriter> writer =
+      std::string(extension) == ".csv" ? haptic::detail::make_csv_writer(path, "", true)
+                                       : haptic::detail::make_hdf5_writer(path, false, true, {});
+  const auto batches_per_flush = static_cast<std::uint64_t>(bench.range(0));
+  std::vector<State> batch;
+  for (std::size_t i = 0; i < kWakeUpBatch; ++i) batch.push_back(sample(i + 1));
+  std::uint64_t tick = 0, batches = 0, failed = 0;
+  std::string error;
+  for (auto _ : bench) {
+    for (State& state : batch) state.tick = ++tick;
+    failed += batch.size() - writer->write_samples(batch, error);
+    if (++batches % batches_per_flush == 0 && !writer->flush(error)) ++failed;
+  }
+  if (!writer->close(error)) ++failed;
+  std::filesystem::remove(path);
+  bench.counters["failed"] = static_cast<double>(failed);
+  bench.counters["ns_per_sample"] = benchmark::Counter(
+      static_cast<double>(bench.iterations() * kWakeUpBatch),
+      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
 BENCHMARK(BM_TapsOff)->UseManualTime()->Iterations(20000);
 BENCHMARK(BM_StateCopy)->UseManualTime()->Iterations(20000);
 BENCHMARK(BM_TapOnHdf5)->UseManualTime()->Iterations(20000);
 BENCHMARK(BM_TapOnCsv)->UseManualTime()->Iterations(20000);
 BENCHMARK(BM_TapOnMutexRing)->UseManualTime()->Iterations(20000);
+BENCHMARK_CAPTURE(writer_cost, hdf5, ".h5")->ArgName("batches_per_flush")->Arg(10)->Arg(200)->Iterations(20000);
+BENCHMARK_CAPTURE(writer_cost, csv, ".csv")->ArgName("batches_per_flush")->Arg(10)->Arg(200)->Iterations(20000);
 
 }  // namespace
 
