@@ -84,6 +84,7 @@ class Client:
         rpc_timeout: float = ...,
         heartbeat_period: float = ...,
         state_decimation: int = ...,
+        lockstep_flow_control: bool = ...,
         udp_address: str = ...,
         device_index: int = ...,
         reconnect: bool = ...,
@@ -193,6 +194,7 @@ class ClientConfig:
     client_name: str
     device_index: int
     heartbeat_period: float
+    lockstep_flow_control: bool
     reconnect: bool
     reconnect_backoff_max: float
     reconnect_backoff_min: float
@@ -213,6 +215,7 @@ class ClientConfig:
         rpc_timeout: float = ...,
         heartbeat_period: float = ...,
         state_decimation: int = ...,
+        lockstep_flow_control: bool = ...,
         udp_address: str = ...,
         device_index: int = ...,
         reconnect: bool = ...,
@@ -227,6 +230,10 @@ class ClientStats:
     def __init__(self) -> None: ...
     def __copy__(self) -> ClientStats: ...
     def __deepcopy__(self, arg0: Dict[Any, Any]) -> ClientStats: ...
+    @property
+    def ack_window(self) -> int: ...
+    @property
+    def acknowledged_sequence(self) -> int: ...
     @property
     def client_name(self) -> str: ...
     @property
@@ -249,6 +256,8 @@ class ClientStats:
     def round_trip_p99_us(self) -> float: ...
     @property
     def round_trip_samples(self) -> int: ...
+    @property
+    def samples_unsent(self) -> int: ...
     @property
     def session_id(self) -> int: ...
     @property
@@ -1366,6 +1375,8 @@ class Stats:
     @property
     def achieved_rate_hz(self) -> float: ...
     @property
+    def ack_stalls(self) -> int: ...
+    @property
     def clients(self) -> List[ClientStats]: ...
     @property
     def connections_evicted(self) -> int: ...
@@ -1415,6 +1426,8 @@ class Stats:
     def passivity_active_ticks(self) -> int: ...
     @property
     def path_challenges_sent(self) -> int: ...
+    @property
+    def samples_missed(self) -> int: ...
     @property
     def samples_skipped(self) -> int: ...
     @property

@@ -197,6 +197,8 @@ void bind_config(py::module_& m) {
       .property("rpc_timeout", rpc_get, rpc_set, "deadline of every control-plane call, s")
       .property("heartbeat_period", beat_get, beat_set, "UDP heartbeat period, s")
       .field("state_decimation", &ClientConfig::state_decimation, "state every n-th tick; 0: none")
+      .field("lockstep_flow_control", &ClientConfig::lockstep_flow_control,
+             "acknowledge what was read, so a lockstep Step of any length arrives whole")
       .field("udp_address", &ClientConfig::udp_address, "host:port to send datagrams to instead")
       .field("device_index", &ClientConfig::device_index, "the server's device port to use")
       .field("reconnect", &ClientConfig::reconnect, "reconnect on its own after a loss")

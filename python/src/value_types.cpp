@@ -419,6 +419,9 @@ void bind_reports(py::module_& m) {
       .readonly("heartbeats", &ClientStats::heartbeats, "")
       .readonly("states_received", &ClientStats::states_received, "")
       .readonly("states_lost", &ClientStats::states_lost, "")
+      .readonly("ack_window", &ClientStats::ack_window, "lockstep flow control granted; 0: none")
+      .readonly("acknowledged_sequence", &ClientStats::acknowledged_sequence, "")
+      .readonly("samples_unsent", &ClientStats::samples_unsent, "numbered for it, never sent")
       .readonly("last_heartbeat_age_s", &ClientStats::last_heartbeat_age_s, "s; -1: none yet")
       .readonly("round_trip_samples", &ClientStats::round_trip_samples, "")
       .readonly("round_trip_p50_us", &ClientStats::round_trip_p50_us, "µs")
@@ -485,6 +488,8 @@ void bind_reports(py::module_& m) {
       .readonly("datagrams_foreign_source", &Stats::datagrams_foreign_source, "")
       .readonly("path_challenges_sent", &Stats::path_challenges_sent, "")
       .readonly("samples_skipped", &Stats::samples_skipped, "")
+      .readonly("samples_missed", &Stats::samples_missed, "")
+      .readonly("ack_stalls", &Stats::ack_stalls, "")
       .readonly("connections_open", &Stats::connections_open, "")
       .readonly("connections_refused", &Stats::connections_refused, "")
       .readonly("connections_timed_out", &Stats::connections_timed_out,

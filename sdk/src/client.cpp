@@ -321,8 +321,13 @@ std::uint64_t Client::step(std::uint32_t ticks) {
   v1::StepRequest request;
   request.set_session_id(core.session_id());
   request.set_ticks(ticks);
-  const auto reply =
-      core.call<v1::StepRequest, v1::StepResponse>("Step", &v1::Haptic::Stub::Step, request);
+  // A Step runs its ticks as fast as the loop and the stream's flow control allow (a slow reader
+  // slows it): it is given as long as the same ticks would take in real time, beyond rpc_timeout.
+  const double rate_hz = core.device_info().loop_rate_hz > 0.0 ? core.device_info().loop_rate_hz : 1000.0;
+  const auto real_time = std::chrono::milliseconds(
+      static_cast<std::int64_t>(std::ceil(static_cast<double>(ticks) * 1000.0 / rate_hz)));
+  const auto reply = core.call<v1::StepRequest, v1::StepResponse>(
+      "Step", &v1::Haptic::Stub::Step, request, core.config().rpc_timeout + real_time);
   core.note_run(reply.run());
   if (reply.has_state()) core.udp().offer(detail::from_proto(reply.state()));
   return reply.tick();

@@ -316,6 +316,7 @@ void ClientCore::subscribe(std::uint32_t decimation) {
   v1::SubscribeStateRequest request;
   request.set_session_id(session_id_);
   request.set_decimation(decimation);
+  if (config_.lockstep_flow_control) request.set_ack_window(udp_->ack_window_capacity());
   // The server sends state to where heartbeats come from. Until one has arrived it has no address,
   // so resend and ask again for up to rpc_timeout: a firewall or NAT that eats our UDP becomes a
   // clear error here instead of a silent stream.
@@ -323,6 +324,7 @@ void ClientCore::subscribe(std::uint32_t decimation) {
   for (;;) {
     const auto reply = call<v1::SubscribeStateRequest, v1::SubscribeStateResponse>(
         "SubscribeState", &v1::Haptic::Stub::SubscribeState, request);
+    udp_->set_ack_window(reply.ack_window());
     if (decimation == 0 || reply.udp_endpoint_known()) return;
     if (std::chrono::steady_clock::now() > give_up) {
       throw ConnectionError("SubscribeState: UDP heartbeats from this client do not reach the "

@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -30,11 +31,13 @@ class ClientCore {
   explicit ClientCore(ClientConfig config);
   ~ClientCore();
 
-  /// Runs one unary RPC with the configured deadline; throws the mapped haptic::Error.
+  /// Runs one unary RPC with the configured deadline (or `timeout`, when longer work is asked
+  /// for); throws the mapped haptic::Error.
   template <typename Request, typename Response, typename Method>
-  Response call(const char* name, Method method, Request request) {
+  Response call(const char* name, Method method, Request request,
+                std::optional<std::chrono::milliseconds> timeout = std::nullopt) {
     grpc::ClientContext context;
-    context.set_deadline(std::chrono::system_clock::now() + config_.rpc_timeout);
+    context.set_deadline(std::chrono::system_clock::now() + timeout.value_or(config_.rpc_timeout));
     authenticate(context);
     Response response;
     throw_status(((*stub()).*method)(&context, request, &response), name);

@@ -541,6 +541,8 @@ Stats from_proto(const v1::Stats& s) {
   out.datagrams_foreign_source = s.datagrams_foreign_source();
   out.path_challenges_sent = s.path_challenges_sent();
   out.samples_skipped = s.samples_skipped();
+  out.samples_missed = s.samples_missed();
+  out.ack_stalls = s.ack_stalls();
   out.connections_open = s.connections_open();
   out.connections_refused = s.connections_refused();
   out.connections_timed_out = s.connections_timed_out();
@@ -561,6 +563,9 @@ Stats from_proto(const v1::Stats& s) {
     client.heartbeats = c.heartbeats();
     client.states_received = c.states_received();
     client.states_lost = c.states_lost();
+    client.ack_window = c.ack_window();
+    client.acknowledged_sequence = c.acknowledged_sequence();
+    client.samples_unsent = c.samples_unsent();
     client.last_heartbeat_age_s = c.last_heartbeat_age_s();
     client.round_trip_samples = c.round_trip_samples();
     client.round_trip_p50_us = c.round_trip_p50_us();

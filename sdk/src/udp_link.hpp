@@ -58,6 +58,12 @@ class UdpLink {
   void restart_ticks();
   /// The client (re)subscribed: the server may number from 1 again.
   void new_subscription();
+  /// Lockstep flow control: how many State datagrams this link's socket can hold unread (its
+  /// receive buffer as the kernel granted it, at a generous 2 KiB each), to ask the server for.
+  std::uint32_t ack_window_capacity() const;
+  /// The window the server granted (0: none): from now on the receive thread acknowledges, with
+  /// a heartbeat, every quarter of it that it has read.
+  void set_ack_window(std::uint32_t window) { ack_window_.store(window, std::memory_order_relaxed); }
   /// When the last authenticated datagram arrived (a State or a path challenge); none before one.
   std::optional<std::chrono::steady_clock::time_point> last_heard() const;
   /// Adds `samples` to ReceiveCounters::lost (the samples an outage cost, estimated by its owner).
@@ -91,6 +97,9 @@ class UdpLink {
 
   void send_heartbeat();
   void schedule_heartbeat();
+  /// Flow control (a window granted): sends a heartbeat, which acknowledges the highest sequence
+  /// read, once a quarter window has been read since the last one. Receive thread.
+  void acknowledge_if_due();
   /// The receive thread: waits on the socket (and the wake-up descriptor, for stopping), reads
   /// under receive_mutex_, and calls the callback with the newest State outside any lock.
   void receive_loop();
@@ -123,6 +132,7 @@ class UdpLink {
   std::atomic<std::uint64_t> heartbeat_sequence_{0};
   std::atomic<bool> heartbeats_enabled_{true};
   std::atomic<bool> stopping_{false};
+  std::atomic<std::uint32_t> ack_window_{0};
 
   // Who this link speaks for, and where the server is: the receive thread and the heartbeat
   // thread both read them; rebind() changes them.
@@ -167,6 +177,7 @@ class UdpLink {
   // newest State's server stamp with its arrival (the round-trip echo).
   std::uint64_t session_accepted_base_ = 0;
   std::uint64_t session_lost_base_ = 0;
+  std::uint64_t accepted_at_acknowledgement_ = 0;  // counters_.accepted when last acknowledged
   std::int64_t echo_state_time_ns_ = 0;
   std::chrono::steady_clock::time_point echo_received_at_{};
 

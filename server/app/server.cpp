@@ -246,7 +246,10 @@ Server::Server(const v1::ServerConfig& config)
       [this] { return stats(); }, access,
       [this](std::uint64_t session_id) { return reset_lockstep(session_id); }, recorder_.get(),
       config.recording_dir(), [this](const std::string& path) { return start_recording(path); },
-      config.has_federation()});
+      config.has_federation(),
+      [this](std::uint64_t tick, std::chrono::milliseconds timeout) {
+        return udp_.wait_sent_through(tick, timeout);
+      }});
   const std::uint32_t fd_limit = raise_fd_limit();
   // A TLS connection takes three descriptors once served (the TCP socket and both ends of the
   // socket pair to gRPC), a plaintext one one.
@@ -617,6 +620,9 @@ v1::ClientStats to_proto(const net::ClientStatistics& client) {
   out.set_heartbeats(client.heartbeats);
   out.set_states_received(client.states_received);
   out.set_states_lost(client.states_lost);
+  out.set_ack_window(client.ack_window);
+  out.set_acknowledged_sequence(client.acknowledged_sequence);
+  out.set_samples_unsent(client.samples_unsent);
   out.set_last_heartbeat_age_s(
       client.since_heartbeat ? std::chrono::duration<double>(*client.since_heartbeat).count() : -1.0);
   std::vector<std::int64_t> round_trips = client.round_trips_ns;
@@ -663,6 +669,8 @@ v1::Stats Server::stats(runtime::LatenessHistogram::Counts* lateness_bins) const
   stats.set_datagrams_foreign_source(udp_.counters().foreign_source.load(std::memory_order_relaxed));
   stats.set_path_challenges_sent(udp_.counters().challenges_sent.load(std::memory_order_relaxed));
   stats.set_samples_skipped(udp_.counters().samples_skipped.load(std::memory_order_relaxed));
+  stats.set_samples_missed(udp_.counters().samples_missed.load(std::memory_order_relaxed));
+  stats.set_ack_stalls(udp_.counters().ack_stalls.load(std::memory_order_relaxed));
   if (listener_) {
     const net::ConnectionCounters& connections = listener_->counters();
     stats.set_connections_open(connections.open.load(std::memory_order_relaxed));

@@ -39,6 +39,10 @@ void log_if_unstable(const v1::StabilityReport& report, std::uint64_t session_id
 constexpr std::uint32_t kApiVersion = v1::API_VERSION_CURRENT;
 constexpr std::uint32_t kMaxDecimation = 1000;
 constexpr std::uint32_t kMaxStepTicks = 1'000'000;
+// SubscribeState's lockstep flow-control window, in datagrams: at least a few acknowledgements'
+// worth (the SDK acknowledges every quarter window), at most what a 64 MiB socket buffer holds.
+constexpr std::uint32_t kMinAckWindow = 16;
+constexpr std::uint32_t kMaxAckWindow = 65536;
 
 /// The host a call comes from. Connections hapticd accepted itself (net::ControlListener) show
 /// as "fd:N" in gRPC's peer string: their address is the socket's own.
@@ -598,11 +602,21 @@ grpc::Status HapticService::SubscribeState(grpc::ServerContext* context,
     return invalid("decimation: must be 0 (stop) to " + std::to_string(kMaxDecimation) + ", got " +
                    std::to_string(request->decimation()));
   }
+  if (const std::uint32_t window = request->ack_window();
+      window != 0 && (window < kMinAckWindow || window > kMaxAckWindow)) {
+    return invalid("ack_window: must be 0 (no flow control) or " + std::to_string(kMinAckWindow) +
+                   " to " + std::to_string(kMaxAckWindow) + ", got " + std::to_string(window));
+  }
+  // Flow control is lockstep's: in real time a stale sample is worse than a lost one, and
+  // nothing may wait on a client.
+  const std::uint32_t window =
+      deps_.loop.config().mode == runtime::TimeMode::kLockstep ? request->ack_window() : 0;
   // The stream starts with the next tick the loop runs: samples the sender has yet to catch up
   // with predate the subscription.
   const auto endpoint_known = deps_.sessions.subscribe(request->session_id(), request->decimation(),
-                                                       deps_.loop.completed_ticks() + 1);
+                                                       deps_.loop.completed_ticks() + 1, window);
   response->set_udp_endpoint_known(endpoint_known.value_or(false));
+  response->set_ack_window(request->decimation() > 0 ? window : 0);
   return grpc::Status::OK;
 }
 
@@ -648,14 +662,21 @@ grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepReq
                    std::to_string(request->ticks()));
   }
   runtime::LoopThread::Stepped stepped;
-  if (deps_.recorder != nullptr && deps_.recorder->active()) {
-    // The recorder reads every tick's sample from a ring of 1024: step in pieces it keeps up with.
+  // The run recorder and the state sender read every tick's sample from a ring of 1024: with
+  // either at work, step in pieces of half a ring and wait for them after each, so that no
+  // sample is overwritten before they have read it. The sender may itself be waiting on a
+  // flow-controlled client (at most kAckStallTimeout before it sends on without waiting); a wait
+  // that still runs out only lets the next piece go, and what the ring then loses is counted.
+  const bool recording = deps_.recorder != nullptr && deps_.recorder->active();
+  const bool streaming = deps_.wait_streamed_through && deps_.sessions.any_subscribed();
+  if (recording || streaming) {
     constexpr std::uint32_t kPiece = runtime::SampleRing::kCapacity / 2;
     for (std::uint32_t left = request->ticks(); left > 0;) {
       const std::uint32_t piece = std::min(left, kPiece);
       stepped = deps_.loop.step(piece);
       left -= piece;
-      deps_.recorder->wait_written_through(stepped.tick, std::chrono::seconds(5));
+      if (recording) deps_.recorder->wait_written_through(stepped.tick, std::chrono::seconds(5));
+      if (streaming) deps_.wait_streamed_through(stepped.tick, std::chrono::seconds(5));
     }
   } else {
     stepped = deps_.loop.step(request->ticks());

@@ -3,6 +3,7 @@
 // anything changes (INVALID_ARGUMENT names the field); another session's item is
 // PERMISSION_DENIED; limits are RESOURCE_EXHAUSTED. Any request renews its session's lease.
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -46,6 +47,10 @@ struct ServiceDependencies {
   std::function<std::string(const std::string& path)> start_recording;
   /// In a federation: items may be marked across_sites (else that is refused).
   bool federated = false;
+  /// The state sender: waits (up to the timeout) until it has sent what is due through a tick,
+  /// true when it has. A lockstep Step with subscribers runs in pieces the sender keeps up with,
+  /// so that the loop's ring of samples never laps it. Empty: Step does not wait for it.
+  std::function<bool(std::uint64_t tick, std::chrono::milliseconds timeout)> wait_streamed_through;
 };
 
 class HapticService final : public v1::Haptic::Service {

@@ -179,6 +179,12 @@ std::string prometheus_text(const v1::Stats& s) {
   e.single("hapticd_udp_samples_skipped_total", "counter",
            "State samples not sent because a newer one was ready for the same client.",
            static_cast<double>(s.samples_skipped()));
+  e.single("hapticd_udp_samples_missed_total", "counter",
+           "State samples due to a client that the loop's ring overwrote before the sender read them.",
+           static_cast<double>(s.samples_missed()));
+  e.single("hapticd_udp_ack_stalls_total", "counter",
+           "Lockstep flow-controlled streams sent on without waiting after 1 s with no acknowledgement.",
+           static_cast<double>(s.ack_stalls()));
   e.single("hapticd_grpc_connections_open", "gauge", "Control-plane connections open.",
            s.connections_open());
   e.single("hapticd_grpc_connections_refused_total", "counter",

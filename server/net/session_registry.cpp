@@ -129,6 +129,9 @@ std::vector<ClientStatistics> SessionRegistry::client_statistics(SteadyClock::ti
     client.heartbeats = session.heartbeats_accepted;
     client.states_received = session.report.states_received;
     client.states_lost = session.report.states_lost;
+    client.ack_window = session.ack_window;
+    client.acknowledged_sequence = session.acknowledged->load(std::memory_order_relaxed);
+    client.samples_unsent = session.unsent->load(std::memory_order_relaxed);
     if (session.last_heartbeat) client.since_heartbeat = now - *session.last_heartbeat;
     const std::size_t kept = std::min(session.round_trip_count, kRoundTripWindow);
     const std::size_t oldest = session.round_trip_count - kept;
@@ -236,7 +239,16 @@ HeartbeatOutcome SessionRegistry::on_heartbeat(std::uint64_t session_id, std::ui
   Session& session = it->second;
   if (!source_allowed(session, from)) return {Verdict::kForeignSource};
   if (sequence <= session.last_heartbeat_sequence) return {Verdict::kStale};
-  if (!session.heartbeats.take(kHeartbeatRateHz, kHeartbeatBurst, now)) return {Verdict::kRateLimited};
+  // An acknowledgement of States not acknowledged before: believed up to the last sequence the
+  // sender numbered, so a key holder cannot make more of them than datagrams were sent.
+  const std::uint64_t acknowledgeable =
+      std::min(report.last_state_sequence, session.sequenced->load(std::memory_order_acquire));
+  const bool acknowledges = session.ack_window > 0 && session.decimation > 0 &&
+                            acknowledgeable > session.acknowledged->load(std::memory_order_relaxed);
+  if (!acknowledges && !session.heartbeats.take(kHeartbeatRateHz, kHeartbeatBurst, now)) {
+    return {Verdict::kRateLimited};
+  }
+  if (acknowledges) session.acknowledged->store(acknowledgeable, std::memory_order_release);
   session.last_heartbeat_sequence = sequence;
   session.last_seen = now;
   ++session.heartbeats_accepted;
@@ -283,10 +295,17 @@ bool SessionRegistry::on_path_response(std::uint64_t session_id, std::uint64_t s
 }
 
 std::optional<bool> SessionRegistry::subscribe(std::uint64_t session_id, std::uint32_t decimation,
-                                               std::uint64_t first_tick) {
+                                               std::uint64_t first_tick, std::uint32_t ack_window) {
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(session_id);
   if (it == sessions_.end()) return std::nullopt;
+  if (it->second.decimation == 0 && decimation > 0) {
+    // A stream started afresh numbers from 1 (the sender holds no subscriber of this session
+    // while its decimation is 0, so nothing else writes these now).
+    it->second.sequenced->store(0, std::memory_order_release);
+    it->second.acknowledged->store(0, std::memory_order_release);
+  }
+  it->second.ack_window = decimation > 0 ? ack_window : 0;
   it->second.decimation = decimation;
   it->second.first_tick = first_tick;
   it->second.last_seen = SteadyClock::now();
@@ -326,9 +345,17 @@ std::vector<Subscriber> SessionRegistry::subscribers() const {
   for (const auto& [id, session] : sessions_) {
     if (session.decimation == 0 || !session.address) continue;
     out.push_back(Subscriber{id, session.info.key, *session.address, session.decimation,
-                             session.first_tick, session.info.device_index, session.sent});
+                             session.first_tick, session.info.device_index, session.sent,
+                             session.ack_window, session.sequenced, session.acknowledged,
+                             session.unsent});
   }
   return out;
+}
+
+bool SessionRegistry::any_subscribed() const {
+  std::lock_guard lock(mutex_);
+  return std::any_of(sessions_.begin(), sessions_.end(),
+                     [](const auto& entry) { return entry.second.decimation > 0; });
 }
 
 std::size_t SessionRegistry::size() const {

@@ -105,10 +105,22 @@ struct Subscriber {
   std::uint32_t device_index = 0;  // whose samples it is sent
   /// The session's count of State datagrams sent; the sender adds to it (relaxed), GetStats reads.
   std::shared_ptr<std::atomic<std::uint64_t>> sent;
+  /// Lockstep flow control: at most this many sequence numbers unacknowledged (0: none).
+  std::uint32_t ack_window = 0;
+  /// The last sequence number the sender gave a due sample of this subscription (sent or not);
+  /// the sender alone writes it. Acknowledgements above it are not believed.
+  std::shared_ptr<std::atomic<std::uint64_t>> sequenced;
+  /// The highest sequence the client has acknowledged (its heartbeats' last_state_sequence, at
+  /// most `sequenced`); the receiver writes it.
+  std::shared_ptr<std::atomic<std::uint64_t>> acknowledged;
+  /// Due samples numbered for it that never left (skipped, missed, refused by the kernel); the
+  /// sender adds to it, GetStats reads.
+  std::shared_ptr<std::atomic<std::uint64_t>> unsent;
 };
 
 /// What a heartbeat reports of the stream as the client receives it (wire::HeartbeatPayload).
 struct HeartbeatReport {
+  std::uint64_t last_state_sequence = 0;  // the highest State sequence it has received
   std::uint64_t states_received = 0;
   std::uint64_t states_lost = 0;
   /// Server time at receipt − the echoed State's stamp − the client's hold (ns); none in
@@ -124,6 +136,9 @@ struct ClientStatistics {
   std::uint64_t heartbeats = 0;        // heartbeats accepted
   std::uint64_t states_received = 0;   // as its last heartbeat reported
   std::uint64_t states_lost = 0;
+  std::uint32_t ack_window = 0;              // lockstep flow control granted; 0: none
+  std::uint64_t acknowledged_sequence = 0;   // the highest sequence it has acknowledged
+  std::uint64_t samples_unsent = 0;          // numbered for it, never sent
   /// How long ago its last heartbeat arrived; none yet.
   std::optional<SteadyClock::duration> since_heartbeat;
   /// Round trips of its last kRoundTripWindow heartbeats (ns), in arrival order.
@@ -164,7 +179,10 @@ class SessionRegistry {
   /// A heartbeat authenticated with the session's key, from `from`. Renews the lease unless it is
   /// refused (see HeartbeatOutcome). State only ever goes to an address that has answered a
   /// challenge: a heartbeat from any other asks for one to be sent there.
-  /// `report` is kept when the heartbeat is (not when refused).
+  /// `report` is kept when the heartbeat is (not when refused). A flow-controlled subscription's
+  /// heartbeat that acknowledges States not acknowledged before (report.last_state_sequence, up
+  /// to the last sequence numbered) is not charged to the heartbeat budget: the SDK sends one per
+  /// quarter window it reads, so acknowledgements come at most one per datagram sent.
   HeartbeatOutcome on_heartbeat(std::uint64_t session_id, std::uint64_t sequence,
                                 const UdpAddress& from, SteadyClock::time_point now = SteadyClock::now(),
                                 const HeartbeatReport& report = {});
@@ -174,10 +192,12 @@ class SessionRegistry {
                         const UdpAddress& from);
 
   /// Sets the state-stream decimation (0 stops it), streaming from tick `first_tick` on (the
-  /// sender may still be catching up with older ticks; those are not this subscription's);
-  /// nullopt if the session does not exist, else whether its UDP address is validated yet.
+  /// sender may still be catching up with older ticks; those are not this subscription's), with
+  /// lockstep flow control over `ack_window` sequence numbers (0: none); a stream started afresh
+  /// numbers from 1. nullopt if the session does not exist, else whether its UDP address is
+  /// validated yet.
   std::optional<bool> subscribe(std::uint64_t session_id, std::uint32_t decimation,
-                                std::uint64_t first_tick = 0);
+                                std::uint64_t first_tick = 0, std::uint32_t ack_window = 0);
 
   /// A lockstep reset: the ticks start again, so every subscription streams from the first.
   void restart_ticks();
@@ -188,6 +208,8 @@ class SessionRegistry {
   /// Changes whenever the subscriber list would change; lets the sender copy it only then.
   std::uint64_t subscribers_version() const;
   std::vector<Subscriber> subscribers() const;
+  /// Whether any session is subscribed to the state stream now.
+  bool any_subscribed() const;
 
   std::size_t size() const;
   /// Every open session (ListSessions), in id order.
@@ -209,6 +231,10 @@ class SessionRegistry {
     std::uint32_t decimation = 0;
     std::uint64_t first_tick = 0;
     std::shared_ptr<std::atomic<std::uint64_t>> sent = std::make_shared<std::atomic<std::uint64_t>>(0);
+    std::uint32_t ack_window = 0;
+    std::shared_ptr<std::atomic<std::uint64_t>> sequenced = std::make_shared<std::atomic<std::uint64_t>>(0);
+    std::shared_ptr<std::atomic<std::uint64_t>> acknowledged = std::make_shared<std::atomic<std::uint64_t>>(0);
+    std::shared_ptr<std::atomic<std::uint64_t>> unsent = std::make_shared<std::atomic<std::uint64_t>>(0);
     std::uint64_t heartbeats_accepted = 0;
     std::optional<SteadyClock::time_point> last_heartbeat;
     HeartbeatReport report;

@@ -14,7 +14,6 @@
 #include <cerrno>
 #include <cstring>
 #include <future>
-#include <map>
 #include <stdexcept>
 #include <vector>
 
@@ -76,12 +75,15 @@ SenderSetup UdpEndpoint::start(std::optional<std::int64_t> time_origin_ns,
   receiver_ = std::thread([this] { receive_loop(); });
   std::promise<SenderSetup> setup_promise;
   auto setup = setup_promise.get_future();
-  sender_ = std::thread([this, time_origin_ns, scheduling, &setup_promise] {
+  // The sender sends what is published after this call, however late its thread first runs.
+  const runtime::SampleRing& last_ring = *rings_.back();
+  const SendFrom from{last_ring.epoch(), last_ring.newest()};
+  sender_ = std::thread([this, time_origin_ns, scheduling, from, &setup_promise] {
     SenderSetup granted;
     if (scheduling.cpu >= 0) granted.cpu_error = runtime::pin_to_cpu(scheduling.cpu);
     if (scheduling.priority > 0) granted.priority_error = runtime::set_fifo_priority(scheduling.priority);
     setup_promise.set_value(granted);
-    send_loop(time_origin_ns);
+    send_loop(time_origin_ns, from);
   });
   return setup.get();
 }
@@ -133,7 +135,8 @@ bool UdpEndpoint::handle_heartbeat(std::span<const std::uint8_t> datagram,
     return false;
   }
   using Verdict = HeartbeatOutcome::Verdict;
-  HeartbeatReport report{heartbeat.states_received, heartbeat.states_lost, std::nullopt};
+  HeartbeatReport report{heartbeat.last_state_sequence, heartbeat.states_received,
+                         heartbeat.states_lost, std::nullopt};
   if (time_origin_ns_ && heartbeat.last_state_sequence > 0) {
     // Server time now, less the echoed tick stamp, less the time the client held it. A client can
     // only misreport its own figures; nonsense (negative, over a minute) is not kept.
@@ -151,6 +154,9 @@ bool UdpEndpoint::handle_heartbeat(std::span<const std::uint8_t> datagram,
   }
   const HeartbeatOutcome outcome =
       sessions_.on_heartbeat(peeked.session_id, header.sequence, from, SteadyClock::now(), report);
+  if (outcome.verdict == Verdict::kAccepted || outcome.verdict == Verdict::kChallenge) {
+    if (heartbeat.last_state_sequence > 0) acknowledgement_arrived();
+  }
   switch (outcome.verdict) {
     case Verdict::kAccepted:
       return true;
@@ -191,34 +197,76 @@ void plan_sends(std::span<const Subscriber> subscribers, std::uint64_t last_tick
                 std::uint64_t newest, bool conflate, std::vector<PlannedSend>& out,
                 std::uint64_t& skipped) {
   out.clear();
+  for (std::size_t i = 0; i < subscribers.size(); ++i) {
+    const Subscriber& subscriber = subscribers[i];
+    if (!conflate) continue;
+    // Conflating, a subscriber gets only its newest due tick; the due ones before it are skipped
+    // (counted here, and numbered with the one sent).
+    const std::uint64_t from = std::max(last_tick + 1, subscriber.first_tick);
+    if (newest < from) continue;
+    const std::uint64_t first_due = (from + subscriber.decimation - 1) / subscriber.decimation;
+    const std::uint64_t last_due = newest / subscriber.decimation;
+    if (last_due > first_due) skipped += last_due - first_due;
+  }
   for (std::uint64_t tick = last_tick + 1; tick <= newest; ++tick) {
     for (std::size_t i = 0; i < subscribers.size(); ++i) {
       const Subscriber& subscriber = subscribers[i];
       if (tick % subscriber.decimation != 0 || tick < subscriber.first_tick) continue;
-      if (conflate && tick + subscriber.decimation <= newest) {
-        ++skipped;  // a newer sample is already due to this subscriber
-        continue;
+      if (conflate && tick + subscriber.decimation <= newest) continue;  // a newer one is due
+      std::uint64_t skipped_before = 0;
+      if (conflate) {
+        const std::uint64_t from = std::max(last_tick + 1, subscriber.first_tick);
+        skipped_before = tick / subscriber.decimation - (from + subscriber.decimation - 1) / subscriber.decimation;
       }
-      out.push_back({i, tick});
+      out.push_back({i, tick, skipped_before});
     }
   }
 }
 
-void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns) {
+std::uint64_t flow_limit(const Subscriber& subscriber, std::uint64_t sequenced,
+                         std::uint64_t acknowledged, std::uint64_t last_tick) {
+  if (subscriber.ack_window == 0) return ~std::uint64_t{0};
+  const std::uint64_t outstanding = sequenced > acknowledged ? sequenced - acknowledged : 0;
+  const std::uint64_t credit = subscriber.ack_window > outstanding ? subscriber.ack_window - outstanding : 0;
+  // Its next due tick after last_tick; `credit` due ticks from there may go, and the ticks up to
+  // (not including) the one after them.
+  const std::uint64_t d = subscriber.decimation;
+  const std::uint64_t from = std::max(last_tick + 1, subscriber.first_tick);
+  const std::uint64_t next_due = (from + d - 1) / d * d;
+  return next_due + credit * d - 1;
+}
+
+void UdpEndpoint::acknowledgement_arrived() {
+  {
+    std::lock_guard lock(acknowledgement_mutex_);
+    ++acknowledgements_;
+  }
+  acknowledgement_cv_.notify_all();
+}
+
+void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, SendFrom from) {
   // Real time conflates: when this thread has fallen behind (the host was busy), each subscriber
   // gets only its newest due sample and the older ones are skipped and counted, never queued —
   // for haptics and graphics a stale sample is worse than a lost one. Lockstep sends every due
-  // tick (time there is the client's to step; nothing goes stale).
+  // tick (time there is the client's to step; nothing goes stale), and holds a flow-controlled
+  // subscriber's ticks back while its window of unacknowledged datagrams is full.
+  // Every due sample takes its subscriber's next sequence number, whether it is sent, skipped or
+  // missed: a client sees each one it did not get as a gap.
   const bool conflate = time_origin_ns.has_value();
   std::vector<Subscriber> subscribers;
   std::vector<PlannedSend> plan;
-  std::map<std::uint64_t, std::uint64_t> sequences;  // per session, last sequence sent
   std::uint64_t subscribers_version = ~0ull;
+  // Flow control: per subscriber (by index in `subscribers`), since when its full window has
+  // held the sender up, and whether it is being sent on without waiting (it stalled, and has not
+  // caught up since).
+  std::vector<std::optional<std::chrono::steady_clock::time_point>> waiting_since;
+  std::vector<bool> unpaced;
+  std::vector<std::uint64_t> acknowledged_at_stall;
   // The loop publishes the ports in order, the last port last: once its ring holds a tick, every
   // port's ring does.
   const runtime::SampleRing& last_ring = *rings_.back();
-  std::uint32_t epoch = last_ring.epoch();
-  std::uint64_t last_tick = last_ring.newest();
+  std::uint32_t epoch = from.epoch;
+  std::uint64_t last_tick = from.tick;
   std::vector<runtime::TickSample> samples(rings_.size());  // one tick's, per port
   std::vector<bool> present(rings_.size());
   // A wake-up's datagrams, encoded first and handed to the kernel together (sendmmsg): one
@@ -241,16 +289,59 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns) {
       sent_through_.store(0, std::memory_order_release);
       continue;
     }
-    const std::uint64_t newest = last_ring.newest();
+    const std::uint64_t published = last_ring.newest();
     if (const auto version = sessions_.subscribers_version(); version != subscribers_version) {
       subscribers = sessions_.subscribers();
       subscribers_version = version;
-      // Forget the sequence counters of sessions that are gone (a resubscribed session restarts
-      // at 1, which receivers accept: they order samples by tick).
-      std::erase_if(sequences, [&](const auto& entry) {
-        return std::none_of(subscribers.begin(), subscribers.end(),
-                            [&](const Subscriber& s) { return s.session_id == entry.first; });
-      });
+      waiting_since.assign(subscribers.size(), std::nullopt);
+      unpaced.assign(subscribers.size(), false);
+      acknowledged_at_stall.assign(subscribers.size(), 0);
+    }
+    // How far the flow-controlled subscribers' windows let this round go (lockstep only).
+    std::uint64_t acknowledgements_seen = 0;
+    {
+      std::lock_guard lock(acknowledgement_mutex_);
+      acknowledgements_seen = acknowledgements_;
+    }
+    std::uint64_t newest = published;
+    if (!conflate) {
+      const auto now = std::chrono::steady_clock::now();
+      for (std::size_t i = 0; i < subscribers.size(); ++i) {
+        const Subscriber& subscriber = subscribers[i];
+        if (subscriber.ack_window == 0) continue;
+        const std::uint64_t sequenced = subscriber.sequenced->load(std::memory_order_relaxed);
+        const std::uint64_t acknowledged = subscriber.acknowledged->load(std::memory_order_acquire);
+        const std::uint64_t limit = flow_limit(subscriber, sequenced, acknowledged, last_tick);
+        if (unpaced[i]) {
+          // Sent on without waiting since it stalled; paced again once it acknowledges again
+          // and has caught up to within its window.
+          if (acknowledged > acknowledged_at_stall[i] && sequenced <= acknowledged + subscriber.ack_window) {
+            unpaced[i] = false;
+          }
+          continue;
+        }
+        if (limit >= published) {
+          waiting_since[i].reset();
+          continue;
+        }
+        if (!waiting_since[i]) waiting_since[i] = now;
+        if (now - *waiting_since[i] >= kAckStallTimeout) {
+          unpaced[i] = true;
+          acknowledged_at_stall[i] = acknowledged;
+          waiting_since[i].reset();
+          counters_.ack_stalls.fetch_add(1, std::memory_order_relaxed);
+          continue;
+        }
+        newest = std::min(newest, limit);
+      }
+    }
+    if (newest <= last_tick) {
+      // Every window that matters is full: wait for an acknowledgement (or the stall deadline;
+      // a short bound, so a stop, a reset or a subscriber leaving is seen soon too).
+      std::unique_lock lock(acknowledgement_mutex_);
+      acknowledgement_cv_.wait_for(lock, std::chrono::milliseconds(10),
+                                   [&] { return acknowledgements_ != acknowledgements_seen; });
+      continue;
     }
     std::uint64_t skipped = 0;
     plan_sends(subscribers, last_tick, newest, conflate, plan, skipped);
@@ -264,15 +355,24 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns) {
       if (send.tick != read_tick) {  // each tick's samples read once, for whoever is sent them
         for (std::size_t port = 0; port < rings_.size(); ++port) {
           present[port] = rings_[port]->read(send.tick, samples[port]);
-          if (!present[port]) counters_.samples_missed.fetch_add(1, std::memory_order_relaxed);
         }
         read_tick = send.tick;
       }
-      if (!present[subscriber.device_index]) continue;
+      const std::uint64_t sequence =
+          subscriber.sequenced->load(std::memory_order_relaxed) + send.skipped_before + 1;
+      subscriber.sequenced->store(sequence, std::memory_order_release);
+      const bool missed = !present[subscriber.device_index];
+      if (const std::uint64_t unsent = send.skipped_before + (missed ? 1 : 0); unsent > 0 && subscriber.unsent) {
+        subscriber.unsent->fetch_add(unsent, std::memory_order_relaxed);
+      }
+      if (missed) {
+        counters_.samples_missed.fetch_add(1, std::memory_order_relaxed);
+        continue;
+      }
       const runtime::TickSample& sample = samples[subscriber.device_index];
       wire::Header header;
       header.session_id = subscriber.session_id;
-      header.sequence = ++sequences[subscriber.session_id];
+      header.sequence = sequence;
       header.time_ns = sample.time_ns;
       wire::StatePayload state;
       state.tick = sample.tick;
@@ -320,6 +420,9 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns) {
         counters_.send_errors.fetch_add(1, std::memory_order_relaxed);
         if (const auto& per_client = outgoing[first].subscriber->sent) {
           per_client->fetch_sub(1, std::memory_order_relaxed);
+        }
+        if (const auto& unsent = outgoing[first].subscriber->unsent) {
+          unsent->fetch_add(1, std::memory_order_relaxed);
         }
         ++first;
       }

@@ -11,7 +11,9 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
+#include <mutex>
 #include <optional>
 #include <span>
 #include <string>
@@ -32,7 +34,12 @@ struct UdpCounters {
   std::atomic<std::uint64_t> rate_limited{0};  // heartbeats over their session's budget
   std::atomic<std::uint64_t> foreign_source{0};  // from another host than the session's peer
   std::atomic<std::uint64_t> challenges_sent{0};  // PathChallenges to addresses not yet validated
-  std::atomic<std::uint64_t> samples_missed{0};  // samples overwritten before the sender read them
+  /// Due samples the ring had overwritten before the sender read them (it was held up for longer
+  /// than the ring lasts); each still takes its subscriber's sequence number.
+  std::atomic<std::uint64_t> samples_missed{0};
+  /// Flow-controlled subscribers the sender stopped waiting for: nothing acknowledged for
+  /// kAckStallTimeout while their window was full.
+  std::atomic<std::uint64_t> ack_stalls{0};
   /// Due samples not sent because a newer one was ready for the same subscriber (the sender had
   /// fallen behind): conflated, never queued.
   std::atomic<std::uint64_t> samples_skipped{0};
@@ -44,14 +51,31 @@ struct UdpCounters {
 struct PlannedSend {
   std::size_t subscriber = 0;
   std::uint64_t tick = 0;
+  /// This subscriber's due samples conflated away just before this one (real time): each takes a
+  /// sequence number, so the client sees the gap as samples lost.
+  std::uint64_t skipped_before = 0;
 };
 
 /// What the sender sends on a wake-up that finds ticks (last_tick, newest] published: each
 /// subscriber's due ticks (every decimation-th, from its first_tick), in tick order. Conflating,
-/// only each subscriber's newest due tick; the older due ones are added to `skipped`.
+/// only each subscriber's newest due tick; the older due ones are added to `skipped` (and to
+/// that send's skipped_before).
 void plan_sends(std::span<const Subscriber> subscribers, std::uint64_t last_tick,
                 std::uint64_t newest, bool conflate, std::vector<PlannedSend>& out,
                 std::uint64_t& skipped);
+
+/// Lockstep flow control: the last tick after `last_tick` that may be sent to `subscriber`
+/// without its unacknowledged sequence numbers passing its window, given the last sequence
+/// numbered (`sequenced`) and the highest acknowledged. Every due tick takes one number; ticks
+/// not due to it are free. Without a window, no limit.
+std::uint64_t flow_limit(const Subscriber& subscriber, std::uint64_t sequenced,
+                         std::uint64_t acknowledged, std::uint64_t last_tick);
+
+/// How long the sender waits for a flow-controlled subscriber's acknowledgement before sending on
+/// without it (counted, UdpCounters::ack_stalls) until it catches up: longer than the SDK's
+/// heartbeat period (100 ms), whose heartbeats acknowledge too, so only a client that has
+/// stopped reading meets it.
+inline constexpr std::chrono::milliseconds kAckStallTimeout{1000};
 
 /// How the State sender thread is scheduled.
 struct SenderScheduling {
@@ -101,7 +125,14 @@ class UdpEndpoint {
                         const wire::Key& key, const UdpAddress& from);
   bool handle_path_response(std::span<const std::uint8_t> datagram, const wire::Header& header,
                             const wire::Key& key, const UdpAddress& from);
-  void send_loop(std::optional<std::int64_t> time_origin_ns);
+  /// Where the sender starts: the last ring's epoch and newest tick when start() was called.
+  struct SendFrom {
+    std::uint32_t epoch = 0;
+    std::uint64_t tick = 0;
+  };
+  void send_loop(std::optional<std::int64_t> time_origin_ns, SendFrom from);
+  /// Wakes a sender waiting for an acknowledgement (the receiver, after one arrived).
+  void acknowledgement_arrived();
 
   SessionRegistry& sessions_;
   std::vector<runtime::SampleRing*> rings_;
@@ -109,6 +140,10 @@ class UdpEndpoint {
   std::uint16_t port_ = 0;
   std::atomic<bool> stopping_{false};
   std::atomic<std::uint64_t> sent_through_{0};  // the sender's last_tick, for wait_sent_through
+  // The sender waits here while a flow-controlled subscriber's window is full.
+  std::mutex acknowledgement_mutex_;
+  std::condition_variable acknowledgement_cv_;
+  std::uint64_t acknowledgements_ = 0;  // guarded by acknowledgement_mutex_
   std::optional<std::int64_t> time_origin_ns_;  // set by start() before the threads run
   std::thread receiver_;
   std::thread sender_;

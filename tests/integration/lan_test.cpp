@@ -426,7 +426,12 @@ TEST_P(LanProfile, TheClientAccountsForEveryStateAndTheForceNeverSteps) {
     // which: its lost count misses only drops after the last State to arrive.
     EXPECT_EQ(counters.accepted, network_counters->states_received - network_counters->states_dropped);
     EXPECT_EQ(counters.duplicates, network_counters->states_duplicated);
-    EXPECT_LE(counters.lost, network_counters->states_dropped);
+    // Besides the network's drops, the server numbers the samples its sender skipped when it had
+    // fallen behind (a busy host): the client counts those lost too. (Server-wide counts: an
+    // upper bound for this client's share.)
+    const Stats server_stats = observer.stats();
+    EXPECT_LE(counters.lost, network_counters->states_dropped + server_stats.samples_skipped +
+                                 server_stats.samples_missed);
     // Drops after the last State to arrive are never seen as gaps: ten in a row at 30 % loss
     // is a chance of 6e-6.
     EXPECT_GE(counters.lost + 10, network_counters->states_dropped);

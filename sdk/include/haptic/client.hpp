@@ -58,6 +58,13 @@ struct ClientConfig {
   std::chrono::milliseconds rpc_timeout{2000};     ///< Deadline of every control-plane call.
   std::chrono::milliseconds heartbeat_period{100}; ///< UDP heartbeat period; keep well under the lease.
   std::uint32_t state_decimation = 1;              ///< State every n-th tick; 0: no state stream.
+  /// Lockstep flow control: the client acknowledges what it has read (with heartbeats, one per
+  /// quarter of what its socket holds), and a lockstep server never has more unacknowledged than
+  /// that, so a Step of any length reaches it whole (the Step waits for slow readers; one that
+  /// reads nothing for a second is sent on without waiting, its losses counted). false: every due
+  /// State is sent at once, and what the socket cannot hold is lost and counted
+  /// (ReceiveCounters::lost). Real-time servers never wait on a client either way.
+  bool lockstep_flow_control = true;
   /// "host:port" to send datagrams to instead of server_address's host and the UDP port the
   /// server names: a port forward or a relay between client and server. Empty: the server's.
   /// (The server still answers the address the datagrams arrive from.)
@@ -323,7 +330,9 @@ class Client {
 
   /// Sets what the server's simulated operator does (FailedPreconditionError on real hardware).
   void set_operator(const OperatorInput& input);
-  /// Lockstep servers only: runs `ticks` ticks; returns the index of the last one.
+  /// Lockstep servers only: runs `ticks` ticks; returns the index of the last one. Every client
+  /// subscribed with lockstep_flow_control gets every due State of them (a slow reader slows the
+  /// Step). Its deadline is rpc_timeout plus the ticks' real-time duration (ticks ÷ loop rate).
   std::uint64_t step(std::uint32_t ticks);
   /// Lockstep servers with simulated devices only: puts the server back as it started (devices,
   /// simulated operators, ticks from 1, the server's own scene; this session's items go), so the

@@ -255,7 +255,9 @@ enum StateFlag : std::uint32_t {
 /// One tick's sample as the server streamed it.
 struct State {
   std::uint64_t tick = 0;        ///< Server loop tick.
-  std::uint64_t sequence = 0;    ///< Datagram sequence (gaps: loss or decimation); 0 from a Step reply.
+  /// The subscription's number for this due sample, from 1 (every due sample takes one): a gap
+  /// is a sample that never reached this client (ReceiveCounters::lost); 0 from a Step reply.
+  std::uint64_t sequence = 0;
   double server_time = 0.0;      ///< Server time of the tick. Unit: s.
   Vec3 position;                 ///< Tool position p_WT. Unit: m.
   Vec3 velocity;                 ///< Tool velocity v_WT. Unit: m/s.
@@ -438,6 +440,11 @@ struct ClientStats {
   std::uint64_t heartbeats = 0;       ///< heartbeats accepted from it
   std::uint64_t states_received = 0;  ///< as its last heartbeat reported
   std::uint64_t states_lost = 0;      ///< as its last heartbeat reported (sequence gaps)
+  std::uint32_t ack_window = 0;       ///< lockstep flow control granted (datagrams); 0: none
+  std::uint64_t acknowledged_sequence = 0;  ///< the highest sequence it has acknowledged
+  /// Samples due to it numbered but never sent (skipped, overwritten, refused by the kernel):
+  /// states_received + states_lost <= datagrams_sent + samples_unsent.
+  std::uint64_t samples_unsent = 0;
   double last_heartbeat_age_s = -1.0;  ///< how long ago its last heartbeat came; -1: none yet
   /// Round trip from a tick's stamp to the client and back (send delay + network both ways), over
   /// its last 256 heartbeats; real time only. Unit: µs.
@@ -506,6 +513,10 @@ struct Stats {
   std::uint64_t datagrams_foreign_source = 0;  ///< of datagrams_dropped: from another host
   std::uint64_t path_challenges_sent = 0;      ///< to UDP addresses not yet proven to receive
   std::uint64_t samples_skipped = 0;  ///< not sent: a newer one was ready (the sender fell behind)
+  /// Due samples the loop's ring had overwritten before the sender read them.
+  std::uint64_t samples_missed = 0;
+  /// Lockstep flow-controlled streams sent on without waiting: nothing acknowledged for 1 s.
+  std::uint64_t ack_stalls = 0;
   std::uint32_t connections_open = 0;     ///< control-plane connections held now
   std::uint64_t connections_refused = 0;  ///< over a connection cap, or no descriptor left
   /// Accepted, then closed: no TLS handshake or HTTP/2 preface within handshake_timeout_ms.
@@ -623,9 +634,12 @@ struct ReceiveCounters {
   /// States the on_state callback never saw because they arrived (by the kernel's receive stamp)
   /// while it was still busy with an older one; it is always handed the newest.
   std::uint64_t callback_skipped = 0;
-  /// States the server sent that never arrived: gaps in each session's sequence (net of late
-  /// arrivals), plus, for each outage the client reconnected after, the samples the stream
-  /// would have carried meanwhile (its length × loop rate ÷ decimation: an estimate).
+  /// States due to this client that never arrived: gaps in each session's sequence (net of late
+  /// arrivals), since the server numbers every due sample, whether the network lost it or the
+  /// server's sender skipped it (real time, fallen behind: Stats::samples_skipped) or found it
+  /// overwritten (Stats::samples_missed); plus, for each outage the client reconnected after,
+  /// the samples the stream would have carried meanwhile (its length × loop rate ÷ decimation:
+  /// an estimate).
   std::uint64_t lost = 0;
   /// States that arrived after a newer one (reordered on the way); not counted as lost.
   std::uint64_t reordered = 0;

@@ -147,6 +147,51 @@ TEST(SessionRegistry, HeartbeatsPastTheBudgetAreDroppedUnprocessed) {
             Verdict::kChallenge);
 }
 
+TEST(SessionRegistry, AcknowledgementsOfNewStatesPassTheHeartbeatBudgetAndNoMore) {
+  SessionRegistry registry(4, std::chrono::milliseconds(1000));
+  const auto session = registry.open("lockstep", 0, "127.0.0.1");
+  const auto t0 = SteadyClock::now();
+  std::uint64_t sequence = 0;
+  const HeartbeatOutcome first = registry.on_heartbeat(session->id, ++sequence, loopback(4000), t0);
+  ASSERT_EQ(first.verdict, Verdict::kChallenge);
+  ASSERT_TRUE(registry.on_path_response(session->id, ++sequence, first.nonce, loopback(4000)));
+  ASSERT_TRUE(registry.subscribe(session->id, 1, 1, 64).has_value());
+  const std::vector<Subscriber> subscribers = registry.subscribers();
+  ASSERT_EQ(subscribers.size(), 1u);
+  EXPECT_EQ(subscribers[0].ack_window, 64u);
+  subscribers[0].sequenced->store(1000);  // the sender has numbered 1000 States
+  // The budget spent on heartbeats that acknowledge nothing.
+  for (int i = 0; i < 100; ++i) registry.on_heartbeat(session->id, ++sequence, loopback(4000), t0);
+  EXPECT_EQ(registry.on_heartbeat(session->id, ++sequence, loopback(4000), t0).verdict, Verdict::kRateLimited);
+  const auto acknowledge = [&](std::uint64_t last_state_sequence) {
+    HeartbeatReport report;
+    report.last_state_sequence = last_state_sequence;
+    return registry.on_heartbeat(session->id, ++sequence, loopback(4000), t0, report).verdict;
+  };
+  // An acknowledgement of States not acknowledged before passes, and is kept.
+  EXPECT_EQ(acknowledge(256), Verdict::kAccepted);
+  EXPECT_EQ(subscribers[0].acknowledged->load(), 256u);
+  // The same again acknowledges nothing: charged, and so refused.
+  EXPECT_EQ(acknowledge(256), Verdict::kRateLimited);
+  // Beyond what was numbered, only what was numbered is believed...
+  EXPECT_EQ(acknowledge(5000), Verdict::kAccepted);
+  EXPECT_EQ(subscribers[0].acknowledged->load(), 1000u);
+  // ...so a key holder gets at most one uncharged heartbeat per State numbered.
+  EXPECT_EQ(acknowledge(5001), Verdict::kRateLimited);
+  const auto statistics = registry.client_statistics(t0);
+  ASSERT_EQ(statistics.size(), 1u);
+  EXPECT_EQ(statistics[0].ack_window, 64u);
+  EXPECT_EQ(statistics[0].acknowledged_sequence, 1000u);
+
+  // A stream started afresh numbers from 1 again; without a window nothing is exempt.
+  ASSERT_TRUE(registry.subscribe(session->id, 0).has_value());
+  ASSERT_TRUE(registry.subscribe(session->id, 1, 1, 0).has_value());
+  EXPECT_EQ(subscribers[0].sequenced->load(), 0u);
+  EXPECT_EQ(subscribers[0].acknowledged->load(), 0u);
+  subscribers[0].sequenced->store(10);
+  EXPECT_EQ(acknowledge(10), Verdict::kRateLimited);
+}
+
 TEST(SessionRegistry, OneHostCannotTakeEverySlot) {
   SessionRegistry registry(SessionLimits{4, 2, std::chrono::milliseconds(1000)});
   std::string refusal;

@@ -57,5 +57,33 @@ TEST(StateSender, BehindInRealTimeItSendsEachSubscribersNewestAndCountsTheRest) 
   EXPECT_EQ(skipped, 3u + 1u);  // 13-15 for the first, 14 for the second
 }
 
+TEST(StateSender, ConflatedSamplesAreNumberedWithTheOneSent) {
+  std::vector<PlannedSend> plan;
+  std::uint64_t skipped = 0;
+  plan_sends(kSubscribers, 0, 10, true, plan, skipped);
+  ASSERT_EQ(plan.size(), 3u);
+  EXPECT_EQ(plan[0].skipped_before, 9u);  // ticks 1-9: the sequence jumps by 10 to tick 10's
+  EXPECT_EQ(plan[1].skipped_before, 4u);  // 2, 4, 6, 8
+  EXPECT_EQ(plan[2].skipped_before, 0u);  // 10 is its first
+  plan_sends(kSubscribers, 0, 10, false, plan, skipped);
+  for (const PlannedSend& send : plan) EXPECT_EQ(send.skipped_before, 0u);
+}
+
+TEST(StateSender, AFlowControlledSubscribersTicksStopWhereItsWindowIsFull) {
+  Subscriber every = subscriber(1, 1);
+  every.ack_window = 16;
+  EXPECT_EQ(flow_limit(every, 0, 0, 0), 16u);    // a window's worth
+  EXPECT_EQ(flow_limit(every, 16, 0, 16), 16u);  // full: nothing more
+  EXPECT_EQ(flow_limit(every, 16, 4, 16), 20u);  // four acknowledged, four more
+  EXPECT_EQ(flow_limit(every, 16, 99, 16), 32u); // an acknowledgement past what was numbered counts as all
+  // Every 5th from tick 8: due ticks 10, 15, ... 85 are the window's 16; ticks up to 89 are free.
+  Subscriber fifth = subscriber(5, 8);
+  fifth.ack_window = 16;
+  EXPECT_EQ(flow_limit(fifth, 0, 0, 0), 89u);
+  EXPECT_EQ(flow_limit(fifth, 16, 0, 89), 89u);
+  Subscriber unpaced = subscriber(1, 1);
+  EXPECT_EQ(flow_limit(unpaced, 1'000'000, 0, 0), ~std::uint64_t{0});  // no window: no limit
+}
+
 }  // namespace
 }  // namespace haptic::net

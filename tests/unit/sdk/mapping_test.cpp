@@ -258,6 +258,8 @@ TEST(Conversions, ToolStateAndStatsComeBackWhole) {
       {"connections_timed_out", static_cast<double>(out.connections_timed_out)},
       {"connections_evicted", static_cast<double>(out.connections_evicted)},
       {"tls_handshakes_failed", static_cast<double>(out.tls_handshakes_failed)},
+      {"samples_missed", static_cast<double>(out.samples_missed)},
+      {"ack_stalls", static_cast<double>(out.ack_stalls)},
   };
   // Every field but the repeated `clients` and the `federation` part, checked below.
   EXPECT_EQ(seen.size() + 2, static_cast<std::size_t>(descriptor.field_count()));
@@ -285,6 +287,9 @@ TEST(Conversions, ToolStateAndStatsComeBackWhole) {
       {"round_trip_p50_us", c.round_trip_p50_us},
       {"round_trip_p99_us", c.round_trip_p99_us},
       {"round_trip_p999_us", c.round_trip_p999_us},
+      {"ack_window", static_cast<double>(c.ack_window)},
+      {"acknowledged_sequence", static_cast<double>(c.acknowledged_sequence)},
+      {"samples_unsent", static_cast<double>(c.samples_unsent)},
   };
   EXPECT_EQ(client_seen.size(), static_cast<std::size_t>(client_descriptor.field_count()));
   for (const auto& [name, value] : client_seen) {
