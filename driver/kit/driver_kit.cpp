@@ -30,6 +30,7 @@ runtime::DriverOptions driver_options(const KitOptions& options) {
   out.library = options.library;
   out.params_json = options.params_json;
   out.stale_after = kStaleAfterTicks;
+  out.call_timeout_s = options.call_timeout_s;
   return out;
 }
 

@@ -16,6 +16,9 @@ struct KitOptions {
   std::string library;             // the driver's shared library
   std::string params_json = "{}";  // what its create() gets
   bool cartesian = true;           // false: the Cartesian checks are skipped
+  /// Longest a read or write may take before it is a hang (DriverOptions::call_timeout_s);
+  /// hapticd's default. On a loaded host without real-time scheduling, raise it (docs/devices.md).
+  double call_timeout_s = 0.02;
 };
 
 struct CheckResult {

@@ -18,12 +18,19 @@ int main(int argc, char** argv) {
   cli.add_option("--params", options.params_json, "JSON its create() gets (driver.params)")->capture_default_str();
   cli.add_option("--model", model, "cartesian, or anything else to skip the Cartesian checks")
       ->capture_default_str();
+  std::uint32_t call_timeout_ms = 20;
+  cli.add_option("--call-timeout-ms", call_timeout_ms,
+                 "longest a read or write may take before it is a hang (hapticd's call_timeout_ms); "
+                 "raise it on a loaded host without real-time scheduling")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 10000u));
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     return cli.exit(error) == 0 ? 0 : 2;
   }
   options.cartesian = model == "cartesian";
+  options.call_timeout_s = call_timeout_ms * 1e-3;
   std::cout << "haptic-driver-kit: " << options.library << " with params " << options.params_json << "\n";
   const auto results = haptic::driver_kit::run_kit(options, std::cout);
   int passed = 0, failed = 0;

@@ -11,10 +11,17 @@
 
 namespace haptic::runtime::test {
 
+/// The driver-call deadline every test that does not test it runs with: what a call may take
+/// before it is a hang (a fault for good). A loaded machine may leave the driver thread
+/// unscheduled for longer than hapticd's 20 ms default; the behaviour these tests check does not
+/// depend on the call's speed, so they wait as long as it takes (a real hang is still one).
+inline constexpr double kTestCallTimeoutS = 5.0;
+
 inline DriverOptions driver_options(const std::string& library, const std::string& params_json) {
   DriverOptions options;
   options.library = library;
   options.params_json = params_json;
+  options.call_timeout_s = kTestCallTimeoutS;
   return options;
 }
 

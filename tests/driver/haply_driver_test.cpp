@@ -48,7 +48,6 @@ std::string params(const Service& service, const std::string& extra = {}) {
 DriverOptions haply(const Service& service, const std::string& extra = {}) {
   DriverOptions options = test::driver_options(
       HAPLY_DRIVER, params(service, std::string(R"("reply_timeout_ms": 2000)") + (extra.empty() ? "" : ", " + extra)));
-  options.call_timeout_s = 5.0;
   return options;
 }
 
@@ -93,7 +92,7 @@ TEST(Haply, AWallHoldsAHandWhereTheSpringSays) {
 TEST(Haply, PassesTheDriverKit) {
   Service service;
   std::ostringstream log;
-  for (const auto& result : driver_kit::run_kit({HAPLY_DRIVER, params(service), true}, log)) {
+  for (const auto& result : driver_kit::run_kit({HAPLY_DRIVER, params(service), true, test::kTestCallTimeoutS}, log)) {
     EXPECT_TRUE(result.passed) << result.name << ": " << result.detail << "\n" << log.str();
   }
 }

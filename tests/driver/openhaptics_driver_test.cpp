@@ -117,7 +117,7 @@ TEST(OpenHaptics, AWallHoldsAHandWhereTheSpringSaysWithTheAxesOfW) {
 TEST(OpenHaptics, PassesTheDriverKitOnAFreeRunningServoLoop) {
   Standin standin("rig=Touch", false);
   std::ostringstream log;
-  for (const auto& result : driver_kit::run_kit({OPENHAPTICS_DRIVER, params(R"("device": "rig")"), true}, log)) {
+  for (const auto& result : driver_kit::run_kit({OPENHAPTICS_DRIVER, params(R"("device": "rig")"), true, test::kTestCallTimeoutS}, log)) {
     EXPECT_TRUE(result.passed) << result.name << ": " << result.detail << "\n" << log.str();
   }
 }

@@ -60,7 +60,8 @@ TEST(TouchWall, OnADeviceWithoutASimulatedHandItRendersTheWallAndPrintsWhatTheTo
   // 1 mm in (1 N over touch_wall's 1000 N/m).
   ServerProcess server(R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
       "real_time": {"use_fifo": false},
-      "driver": {"library": ")" POINT_MASS_DRIVER R"(", "params": {"initial": [0, 0, 0.01],
+      "driver": {"library": ")" POINT_MASS_DRIVER R"(", "call_timeout_ms": 5000,
+                 "params": {"initial": [0, 0, 0.01],
                  "push": [0, 0, -1], "mass": 0.05, "damping": 0.5}}})");
   const Outcome outcome = touch_wall({server.address(), "--lockstep", "--seconds", "2"});
   ASSERT_EQ(outcome.exit_code, 0) << outcome.output;

@@ -488,7 +488,9 @@ int read_sensors(void* driver, haptic_driver_reading* reading) {
   if (device->failed.load(std::memory_order_acquire)) return HAPTIC_DRIVER_FAILED;
   // Before the servo loop's first tick there is no sample: wait for it (only at the start), rather
   // than report the device where it is not. 50 ms at most, not two periods: a loaded host may not
-  // run the runtime's new scheduler thread that soon (a CI run failed the kit at tick 0 so).
+  // run the runtime's new scheduler thread that soon (a CI run failed the kit at tick 0 so). The
+  // wait sleeps in steps of 0.2 ms rather than spinning: on a busy host a spinning reader takes
+  // the very CPU time the scheduler thread needs to make its first tick.
   if (device->sample_version.load(std::memory_order_acquire) == 0) {
     timespec start{};
     clock_gettime(CLOCK_MONOTONIC, &start);
@@ -500,6 +502,8 @@ int read_sensors(void* driver, haptic_driver_reading* reading) {
       if ((now.tv_sec - start.tv_sec) + 1e-9 * (now.tv_nsec - start.tv_nsec) > limit_s) {
         return HAPTIC_DRIVER_FAILED;
       }
+      timespec pause{0, 200'000};
+      nanosleep(&pause, nullptr);
     }
   }
   Sample copy;
