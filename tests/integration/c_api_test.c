@@ -353,6 +353,24 @@ static void test_wall_holds_a_push(haptic_client* client) {
   CHECK(strstr(err.message, "object.wall: size 16 is smaller than version 1's") != NULL);
   CHECK(haptic_client_add_wall(client, NULL, &refused, &err) == HAPTIC_ERROR_INVALID_ARGUMENT);
   CHECK(strcmp(err.message, "CreateObject: object.wall: is NULL") == 0);
+  /* A mesh whose arrays are NULL with counts above 0 is refused naming the array: never read. */
+  {
+    haptic_mesh_spec mesh;
+    haptic_mesh_spec_init(&mesh);
+    mesh.impedance.stiffness = 1000.0;
+    mesh.vertices = NULL;
+    mesh.vertex_count = 4;
+    mesh.indices = kTetrahedronIndices;
+    mesh.index_count = 12;
+    CHECK(haptic_client_add_mesh(client, &mesh, &refused, &err) == HAPTIC_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(err.message, "vertices: is NULL with vertex_count > 0") != NULL);
+    CHECK(refused == NULL);
+    mesh.vertices = kTetrahedron;
+    mesh.indices = NULL;
+    CHECK(haptic_client_add_mesh(client, &mesh, &refused, &err) == HAPTIC_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(err.message, "indices: is NULL with index_count > 0") != NULL);
+    CHECK(refused == NULL);
+  }
   /* Nothing was made: the tool falls freely under the push. */
   CHECK(step_and_get(client, 10, &s) == 0);
   CHECK(s.contact_count == 0u && s.force.z == 0.0);

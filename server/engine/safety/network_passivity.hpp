@@ -118,6 +118,7 @@ class NetworkPassivity {
 
   /// Changes the damper's cap (N·s/m, ≥ 0): several couplings on one body share its M/T.
   void set_max_damping(double max_damping) { params_.max_damping = max_damping; }
+  double max_damping() const { return params_.max_damping; }
 
   double sent() const { return sent_; }          // J sent to the other site, cumulative
   double received() const { return received_; } // J received from it, cumulative

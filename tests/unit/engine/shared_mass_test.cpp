@@ -202,6 +202,26 @@ TEST(SharedMass, ATouchPushesTheToolOutAndTheMassAway) {
   EXPECT_GT(mass.state().v_WM.x, 0.0);  // the reaction pushed it +x
 }
 
+TEST(SharedMass, TheCouplingsOfOneCopyShareItsDamperCap) {
+  // A held damper α on mass M is stable only for α T / M < 2: the couplings acting on one copy
+  // together get M/T between them, M/(2T) each with two copies coupled, M/T with one.
+  const SharedMassParams params;
+  const double M_over_T = params.mass / params.period;
+  CopyCouplings couplings;
+  const SharedMassState copy{{0, 0, 0}, {0.1, 0, 0}};
+  const RemoteMassCopy two[2] = {{7, {0.01, 0, 0}, {}, 0.0}, {8, {-0.01, 0, 0}, {}, 0.0}};
+  couplings.force(two, copy, params.mass, params);
+  ASSERT_NE(couplings.coupling(0), nullptr);
+  ASSERT_NE(couplings.coupling(1), nullptr);
+  EXPECT_DOUBLE_EQ(couplings.coupling(0)->max_damping(), M_over_T / 2.0);
+  EXPECT_DOUBLE_EQ(couplings.coupling(1)->max_damping(), M_over_T / 2.0);
+  // One of them gone: the other has the whole cap.
+  const RemoteMassCopy one[2] = {{7, {0.01, 0, 0}, {}, 0.0}, {}};
+  couplings.force(one, copy, params.mass, params);
+  EXPECT_EQ(couplings.coupling(1), nullptr);
+  EXPECT_DOUBLE_EQ(couplings.coupling(0)->max_damping(), M_over_T);
+}
+
 TEST(SharedMass, ANonFiniteRemoteCopyCouplesNothing) {
   SharedMass mass(SharedMassParams{}, SharedMassState{});
   const RemoteMassCopy bad[1] = {{7, {NAN, 0, 0}, {}, 0.0}};

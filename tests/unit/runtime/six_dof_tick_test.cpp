@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "engine/core/rotation.hpp"
+#include "haptic/wire/datagram.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/flush_denormals.hpp"
 #include "runtime/simulated_point_mass_device.hpp"
@@ -83,6 +84,46 @@ TEST(SixDofTick, TheSpringsTorqueIsInTheSampleAndTurnsTheHandleToItsTarget) {
   // Under-damped by the handle's own b (ζ = b / 2√(kI) ≈ 0.11): it rings down onto the target.
   for (int i = 0; i < 5000; ++i) rig.run_one();
   EXPECT_LT(std::abs(rig.angle_z()), 2e-4);
+}
+
+TEST(SixDofTick, AStiffSpringFarFromItsTargetIsHeldToTheDevicesMaxTorqueAndFlagged) {
+  // 10 N·m/rad at 0.5 rad asks for 5 N·m; the handle takes at most max_torque = 0.2 N·m. The
+  // torque guard is built from max_torque (not the 20 N max_force, which would let 5 N·m by).
+  const double k = 10.0;
+  Rig rig(spring_scene(k, 0.0, engine::ContactLaw::kVelocity), handle(0.5));
+  bool saturated = false;
+  double largest = 0.0;
+  for (int i = 0; i < 20; ++i) {
+    const TickSample sample = rig.run_one();
+    const double magnitude = std::sqrt(sample.tau_T_W.x * sample.tau_T_W.x +
+                                       sample.tau_T_W.y * sample.tau_T_W.y +
+                                       sample.tau_T_W.z * sample.tau_T_W.z);
+    largest = std::max(largest, magnitude);
+    EXPECT_LE(magnitude, 0.2 + 1e-12) << "tick " << i;
+    saturated = saturated || (sample.flags & wire::kFlagForceSaturated) != 0;
+  }
+  EXPECT_NEAR(largest, 0.2, 1e-12);  // it reaches the limit (past the guard's rate limit)
+  EXPECT_TRUE(saturated);
+}
+
+TEST(SixDofTick, TheDeviceRefusesANonFiniteTorqueAndItsOrientationStaysFinite) {
+  // The second layer behind the tick's torque guard: the simulated handle itself never takes a
+  // NaN torque (it turns the handle by none that tick and reports an error).
+  SimulatedPointMassDevice device(engine::PointMassParams{}, engine::PointMassState{{0.0, 0.0, 0.02}, {}},
+                                  20.0, handle(0.3));
+  DeviceReading reading;
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  DeviceCommand command;
+  command.tau_W = {std::nan(""), 0.0, 0.0};
+  EXPECT_EQ(device.write(command, kPeriod), DeviceStatus::kError);
+  const engine::Quat R = device.rotation()->state().R_WT;
+  EXPECT_TRUE(std::isfinite(R.w) && std::isfinite(R.x) && std::isfinite(R.y) && std::isfinite(R.z));
+  EXPECT_NEAR(engine::rotation_vector(R).z, 0.3, 1e-9);  // not turned by it
+  const engine::Vec3 w = device.rotation()->state().w_WT;
+  EXPECT_TRUE(std::isfinite(w.x) && std::isfinite(w.y) && std::isfinite(w.z));
+  // A finite torque afterwards is taken again.
+  command.tau_W = {0.0, 0.0, 0.01};
+  EXPECT_EQ(device.write(command, kPeriod), DeviceStatus::kOk);
 }
 
 TEST(SixDofTick, TheSpringsEnergyIsBookedAsTheWorkOfItsTorque) {
