@@ -49,6 +49,9 @@ constexpr double kGripperInertia = 1e-4;      // kg·m² (the angle's generalise
 constexpr double kGripperDamping = 1e-3;      // N·m·s/rad
 constexpr double kGripperOpen = 0.5;          // rad, start and upper limit; lower limit 0
 constexpr double kPi = 3.14159265358979323846;
+constexpr double kGravity = kStandardGravity;  // m/s², acting along -z of the device frame (§1.6)
+constexpr double kDefaultVelocityLimit = 2.0;  // m/s per axis: the velocity guard's threshold (§1.6
+                                               // "Safety"; no factory figure was found)
 
 // ---- The models FAKE_DHD_DEVICES may name ----
 struct Model {
@@ -56,12 +59,14 @@ struct Model {
   int type;             // dhdGetSystemType()
   bool wrist, active_wrist, gripper, active_gripper;
   int buttons;
+  bool left;            // dhdIsLeftHanded(): a left-handed model (type code *_LEFT, §1.5)
   double max_force;     // N (norm of the linear force)
   double max_torque;    // N·m (0: no actuated wrist)
   double max_gripper;   // N (0: no actuated gripper)
   double mass;          // kg (stand-in's choice)
   double half_box;      // m, workspace box ±half_box per axis
   bool needs_calibration;  // starts in RESET mode
+  bool drd_supported;      // drdIsSupported(): the DRD can regulate (and so auto-calibrate) it
 };
 
 // Type codes: §1.5 ([CHAI-DHD] dhdc.h 88-106). Max force, torque, gripper force and workspace
@@ -70,27 +75,38 @@ struct Model {
 // passive wrist; omega.7: + active gripper; sigma.7/lambda.7: active wrist + active gripper).
 // Buttons: the Falcon's four (§1.5, [FDC] constants.py 107-114), one on the others (the stand-in's
 // choice).
-// Fields: name, type, wrist, active wrist, gripper, active gripper, buttons, max force N, max
-// torque N·m, max gripper force N, mass kg, workspace half-box m, needs calibration.
+// The left-handed models (type codes *_LEFT, §1.5) are their right-handed twins mirrored; the
+// Falcon is not one the DRD supports (drdIsSupported false: its regulation gains are not built in,
+// [FDC] drd/__init__.py isSupported; the stand-in's choice for the Falcon, which DRD's CHAI3D
+// users calibrate by hand).
+// Fields: name, type, wrist, active wrist, gripper, active gripper, buttons, left-handed, max force
+// N, max torque N·m, max gripper force N, mass kg, workspace half-box m, needs calibration, DRD.
 constexpr Model kModels[] = {
     // §1.7, [CHAI-DELTA] lines 810-837
-    {"omega.3", DHD_DEVICE_OMEGA3, false, false, false, false, 1, 12.0, 0, 0, 0.2, 0.075, true},
+    {"omega.3", DHD_DEVICE_OMEGA3, false, false, false, false, 1, false, 12.0, 0, 0, 0.2, 0.075,
+     true, true},
     // §1.7, [CHAI-DELTA] lines 842-899
-    {"omega.6", DHD_DEVICE_OMEGA6_RIGHT, true, false, false, false, 1, 12.0, 0, 0, 0.2, 0.075,
-     true},
+    {"omega.6", DHD_DEVICE_OMEGA6_RIGHT, true, false, false, false, 1, false, 12.0, 0, 0, 0.2,
+     0.075, true, true},
     // §1.7, [CHAI-DELTA] lines 904-960 (gripper 8.0 N)
-    {"omega.7", DHD_DEVICE_OMEGA7_RIGHT, true, false, true, true, 1, 12.0, 0, 8.0, 0.2, 0.075,
-     true},
+    {"omega.7", DHD_DEVICE_OMEGA7_RIGHT, true, false, true, true, 1, false, 12.0, 0, 8.0, 0.2,
+     0.075, true, true},
+    {"omega.7-left", DHD_DEVICE_OMEGA7_LEFT, true, false, true, true, 1, true, 12.0, 0, 8.0, 0.2,
+     0.075, true, true},
     // §1.7, [CHAI-DELTA] lines 968-1037 (torque 0.2 N·m, gripper 8.0 N)
-    {"sigma.7", DHD_DEVICE_SIGMA7_RIGHT, true, true, true, true, 1, 12.0, 0.2, 8.0, 0.2, 0.075,
-     true},
+    {"sigma.7", DHD_DEVICE_SIGMA7_RIGHT, true, true, true, true, 1, false, 12.0, 0.2, 8.0, 0.2,
+     0.075, true, true},
+    {"sigma.7-left", DHD_DEVICE_SIGMA7_LEFT, true, true, true, true, 1, true, 12.0, 0.2, 8.0, 0.2,
+     0.075, true, true},
     // §1.7, [CHAI-DELTA] lines 778-805
-    {"delta.3", DHD_DEVICE_DELTA3, false, false, false, false, 1, 20.0, 0, 0, 0.2, 0.15, true},
+    {"delta.3", DHD_DEVICE_DELTA3, false, false, false, false, 1, false, 20.0, 0, 0, 0.2, 0.15,
+     true, true},
     // §1.7, [CHAI-DELTA] lines 1042-1126 (torque 0.2 N·m, gripper 8.0 N)
-    {"lambda.7", DHD_DEVICE_LAMBDA7_RIGHT, true, true, true, true, 1, 12.0, 0.2, 8.0, 0.2, 0.1125,
-     true},
+    {"lambda.7", DHD_DEVICE_LAMBDA7_RIGHT, true, true, true, true, 1, false, 12.0, 0.2, 8.0, 0.2,
+     0.1125, true, true},
     // §1.7, [CHAI-DELTA] lines 1132-1158; no calibration at open (the stand-in's choice)
-    {"falcon", DHD_DEVICE_FALCON, false, false, false, false, 4, 8.0, 0, 0, 0.1, 0.04, false},
+    {"falcon", DHD_DEVICE_FALCON, false, false, false, false, 4, false, 8.0, 0, 0, 0.1, 0.04,
+     false, false},
 };
 
 const Model* find_model(const std::string& name) {
@@ -148,7 +164,13 @@ struct Device {
   bool brake = false;         // BRAKE mode
   bool regulating = false;    // drdAutoInit's regulation holds the effector until drdStop
   bool gravity = true;        // gravity compensation on by default (§1.6, [FDC-DOCS] dhd-doc 260)
+  // A force command has been sent since forces were last enabled: gravity compensation is computed
+  // on the host and applied only with a force command (§1.6), so until then the arm falls.
+  bool commanded = false;
+  double velocity_limit = kDefaultVelocityLimit;  // m/s per axis, 0: off (`velocity ID LIMIT`)
   bool saturate = false;      // `saturate ID on`
+  std::string failing;        // `fail ID FUNCTION [CODE]`: that force setter fails with failing_code
+  int failing_code = DHD_ERROR_COM;
   int force_off_cause = DHD_FORCE_OFF_NONE;
   bool hang_pending = false;  // `hang ID`: the next position read blocks
   double hang_seconds = 0;    // 0: until `release`
@@ -386,12 +408,30 @@ void step(Device& d, double dt) {
     return;
   }
   const bool applied = forces_applied(d);
+  // Gravity pulls the effector down (-z, §1.6's frame) unless the SDK's compensation holds it:
+  // compensation on, forces applied, and a force command sent since they were enabled (the
+  // compensation is computed on the host and sent with each force command, §1.6).
+  const bool compensated = applied && d.gravity && d.commanded;
   const double b = kLinearDamping + (d.brake ? kBrakeDamping : 0.0);
   for (int i = 0; i < 3; ++i) {
-    const double F = (applied ? d.f_cmd[i] : 0.0) + d.hand[i];
+    const double weight = i == 2 && !compensated ? -m.mass * kGravity : 0.0;
+    const double F = (applied ? d.f_cmd[i] : 0.0) + d.hand[i] + weight;
     integrate(m.mass, b, F, dt, d.p[i], d.v[i]);
     if (d.p[i] > m.half_box) d.p[i] = m.half_box, d.v[i] = 0;
     if (d.p[i] < -m.half_box) d.p[i] = -m.half_box, d.v[i] = 0;
+  }
+  // The velocity guard (§1.6 "Safety"): an axis faster than the threshold while forces are on
+  // turns them off and engages the brakes, within the step that passes it; dhdGetStatus then says
+  // why (FORCE_OFF_CAUSE VELOCITY) until forces are enabled again.
+  if (applied && d.velocity_limit > 0) {
+    for (int i = 0; i < 3; ++i) {
+      if (std::fabs(d.v[i]) > d.velocity_limit) {
+        d.force = false;
+        d.brake = true;
+        d.force_off_cause = DHD_FORCE_OFF_VELOCITY;
+        break;
+      }
+    }
   }
   if (m.active_wrist) {
     const double c = kWristDamping + (d.brake ? kWristBrakeDamping : 0.0);
@@ -403,7 +443,9 @@ void step(Device& d, double dt) {
   }
   if (m.active_gripper) {
     const double c = kGripperDamping + (d.brake ? kWristBrakeDamping : 0.0);
-    integrate(kGripperInertia, c, applied ? d.fg_cmd : 0.0, dt, d.grip, d.grip_v);
+    // d.grip is the opening; on a left-handed model the SDK's angle and force are its negatives.
+    const double fg = m.left ? -d.fg_cmd : d.fg_cmd;
+    integrate(kGripperInertia, c, applied ? fg : 0.0, dt, d.grip, d.grip_v);
     if (d.grip > kGripperOpen) d.grip = kGripperOpen, d.grip_v = 0;
     if (d.grip < 0) d.grip = 0, d.grip_v = 0;
   }
@@ -531,6 +573,54 @@ int control_locked(State& s, const std::string& command) {
     d.regulating = false;
     return 0;
   }
+  if (verb == "forcebutton") {  // the device's force button: forces on -> off (BUTTON), off -> on
+    if (!at_end(in)) return -1;
+    if (forces_applied(d) || (d.force && d.initialized)) {
+      d.force = false;
+      d.brake = true;
+      d.force_off_cause = DHD_FORCE_OFF_BUTTON;  // §1.5 force-off causes
+    } else if (d.initialized && d.plugged) {
+      d.force = true;
+      d.brake = false;
+      d.force_off_cause = DHD_FORCE_OFF_NONE;
+      d.commanded = false;
+    }
+    return 0;
+  }
+  if (verb == "velocity") {  // the velocity guard's threshold, m/s per axis; 0 turns it off
+    double limit = 0;
+    if (!(in >> limit) || !at_end(in) || !std::isfinite(limit) || limit < 0) return -1;
+    d.velocity_limit = limit;
+    return 0;
+  }
+  if (verb == "elapse") {  // time passes without a force command: the plant steps under what it holds
+    double seconds = 0;
+    if (!(in >> seconds) || !at_end(in) || !std::isfinite(seconds) || seconds < 0 || seconds > 10)
+      return -1;
+    if (!d.plugged) return 0;
+    for (long n = std::lround(seconds / s.dt); n > 0; --n) step(d, s.dt);
+    return 0;
+  }
+  if (verb == "fail") {  // `fail ID FUNCTION [CODE]`: that force setter fails; `fail ID none`
+    std::string name;
+    int code = DHD_ERROR_COM;
+    if (!(in >> name)) return -1;
+    if (!(in >> code)) {
+      if (!in.eof()) return -1;
+    } else if (!at_end(in) || code <= DHD_NO_ERROR || code >= kErrorCount) {
+      return -1;
+    }
+    if (name == "none") {
+      d.failing.clear();
+      return 0;
+    }
+    if (name != "dhdSetForce" && name != "dhdSetForceAndTorque" && name != "dhdSetForceAndGripperForce" &&
+        name != "dhdSetForceAndTorqueAndGripperForce")
+      return -1;
+    d.failing = name;
+    d.failing_code = code;
+    return 0;
+  }
   if (verb == "saturate") {
     std::string on;
     if (!(in >> on) || !at_end(in) || (on != "on" && on != "off")) return -1;
@@ -595,11 +685,12 @@ bool clamp_norm(Vec3& v, double limit) {
   return true;
 }
 
-int set_forces(State& s, Vec3 f, Vec3 t, double fg, char ID) {
+int set_forces(State& s, const char* name, Vec3 f, Vec3 t, double fg, char ID) {
   run_script(s);
   ++s.ticks;
   Device* d = device_for(s, ID);
   if (!d) return -1;
+  if (d->failing == name) return fail(d->failing_code);  // `fail ID FUNCTION`: nothing sent
   for (double x : {f[0], f[1], f[2], t[0], t[1], t[2], fg})
     if (!std::isfinite(x)) return fail(DHD_ERROR_INVALID);
   const Model& m = *d->model;
@@ -620,6 +711,7 @@ int set_forces(State& s, Vec3 f, Vec3 t, double fg, char ID) {
   d->f_cmd = f;
   d->t_cmd = t;
   d->fg_cmd = fg;
+  d->commanded = true;  // the host's gravity compensation goes out with this command (§1.6)
   step(*d, s.dt);
   return (saturated || d->saturate) ? DHD_MOTOR_SATURATED : 0;
 }
@@ -814,8 +906,11 @@ FAKE_DHD_EXPORT int dhdEnableForce(uchar val, char ID) {
     d->force = true;
     d->brake = false;
     d->force_off_cause = DHD_FORCE_OFF_NONE;
+    d->commanded = false;  // no compensation until the next force command (§1.6)
   } else {
+    // Forces off: BRAKE mode, "entered when forces are disabled" ([FDC-DOCS] dhd-doc, Device Modes).
     d->force = false;
+    d->brake = true;
     d->force_off_cause = DHD_FORCE_OFF_SOFTWARE;
   }
   return 0;
@@ -880,6 +975,7 @@ FAKE_DHD_EXPORT int dhdGetButton(int index, char ID) {
   return (d->buttons >> index) & 1u;
 }
 
+#ifndef FAKE_DHD_NO_WRIST  // the equipment queries
 namespace {
 bool has(char ID, const char* name, bool Model::*field) {
   std::unique_lock<std::mutex> lock;
@@ -904,9 +1000,12 @@ FAKE_DHD_EXPORT bool dhdIsLeftHanded(char ID) {
   std::unique_lock<std::mutex> lock;
   State& s = loaded_state(lock);
   log_call(s, "dhdIsLeftHanded", {id_arg(ID)}, false);
-  device_for(s, ID);
-  return false;  // every simulated model is a right-handed one
+  Device* d = device_for(s, ID);
+  if (!d) return false;
+  return d->model->left;
 }
+
+#endif  // FAKE_DHD_NO_WRIST
 
 FAKE_DHD_EXPORT int dhdSetGravityCompensation(int val, char ID) {
   std::unique_lock<std::mutex> lock;
@@ -914,7 +1013,7 @@ FAKE_DHD_EXPORT int dhdSetGravityCompensation(int val, char ID) {
   log_call(s, "dhdSetGravityCompensation", {double(val), id_arg(ID)}, false);
   Device* d = device_for(s, ID);
   if (!d) return -1;
-  d->gravity = val != DHD_OFF;  // recorded only: gravity is not simulated
+  d->gravity = val != DHD_OFF;
   return 0;
 }
 
@@ -924,6 +1023,10 @@ FAKE_DHD_EXPORT int dhdSetBrakes(int val, char ID) {
   log_call(s, "dhdSetBrakes", {double(val), id_arg(ID)}, false);
   Device* d = device_for(s, ID);
   if (!d) return -1;
+  // BRAKE is the mode forces-off puts the device in ([FDC-DOCS] dhd-doc, Device Modes and
+  // Electromagnetic Brakes); nothing documents the brakes taking a device out of FORCE mode, so in
+  // FORCE mode this changes nothing (the stand-in's reading): dhdEnableForce(OFF) or dhdStop do.
+  if (d->initialized && d->force && !d->regulating) return 0;
   d->brake = val != DHD_OFF;
   return 0;
 }
@@ -952,6 +1055,7 @@ FAKE_DHD_EXPORT int dhdGetLinearVelocity(double* vx, double* vy, double* vz, cha
   return 0;
 }
 
+#ifndef FAKE_DHD_NO_WRIST  // the wrist and gripper getters
 FAKE_DHD_EXPORT int dhdGetOrientationFrame(double matrix[3][3], char ID) {
   std::unique_lock<std::mutex> lock;
   State& s = loaded_state(lock);
@@ -1001,7 +1105,7 @@ FAKE_DHD_EXPORT int dhdGetGripperAngleRad(double* a, char ID) {
   if (!d) return -1;
   if (!a) return fail(DHD_ERROR_NULL_ARGUMENT);
   if (!d->model->gripper) return fail(DHD_ERROR_NOT_AVAILABLE);
-  *a = d->grip;
+  *a = d->model->left ? -d->grip : d->grip;  // negative on a left-handed device (§1.6)
   return 0;
 }
 
@@ -1013,23 +1117,26 @@ FAKE_DHD_EXPORT int dhdGetGripperAngleDeg(double* a, char ID) {
   if (!d) return -1;
   if (!a) return fail(DHD_ERROR_NULL_ARGUMENT);
   if (!d->model->gripper) return fail(DHD_ERROR_NOT_AVAILABLE);
-  *a = d->grip * 180.0 / kPi;
+  *a = (d->model->left ? -d->grip : d->grip) * 180.0 / kPi;
   return 0;
 }
+
+#endif  // FAKE_DHD_NO_WRIST
 
 FAKE_DHD_EXPORT int dhdSetForce(double fx, double fy, double fz, char ID) {
   std::unique_lock<std::mutex> lock;
   State& s = loaded_state(lock);
   log_call(s, "dhdSetForce", {fx, fy, fz, id_arg(ID)}, true);
-  return set_forces(s, {fx, fy, fz}, {}, 0.0, ID);
+  return set_forces(s, "dhdSetForce", {fx, fy, fz}, {}, 0.0, ID);
 }
 
+#ifndef FAKE_DHD_NO_WRIST  // the wrist and gripper setters
 FAKE_DHD_EXPORT int dhdSetForceAndTorque(double fx, double fy, double fz, double tx, double ty,
                                          double tz, char ID) {
   std::unique_lock<std::mutex> lock;
   State& s = loaded_state(lock);
   log_call(s, "dhdSetForceAndTorque", {fx, fy, fz, tx, ty, tz, id_arg(ID)}, true);
-  return set_forces(s, {fx, fy, fz}, {tx, ty, tz}, 0.0, ID);
+  return set_forces(s, "dhdSetForceAndTorque", {fx, fy, fz}, {tx, ty, tz}, 0.0, ID);
 }
 
 FAKE_DHD_EXPORT int dhdSetForceAndGripperForce(double fx, double fy, double fz, double fg,
@@ -1037,7 +1144,7 @@ FAKE_DHD_EXPORT int dhdSetForceAndGripperForce(double fx, double fy, double fz, 
   std::unique_lock<std::mutex> lock;
   State& s = loaded_state(lock);
   log_call(s, "dhdSetForceAndGripperForce", {fx, fy, fz, fg, id_arg(ID)}, true);
-  return set_forces(s, {fx, fy, fz}, {}, fg, ID);
+  return set_forces(s, "dhdSetForceAndGripperForce", {fx, fy, fz}, {}, fg, ID);
 }
 
 FAKE_DHD_EXPORT int dhdSetForceAndTorqueAndGripperForce(double fx, double fy, double fz, double tx,
@@ -1046,7 +1153,7 @@ FAKE_DHD_EXPORT int dhdSetForceAndTorqueAndGripperForce(double fx, double fy, do
   State& s = loaded_state(lock);
   log_call(s, "dhdSetForceAndTorqueAndGripperForce", {fx, fy, fz, tx, ty, tz, fg, id_arg(ID)},
            true);
-  return set_forces(s, {fx, fy, fz}, {tx, ty, tz}, fg, ID);
+  return set_forces(s, "dhdSetForceAndTorqueAndGripperForce", {fx, fy, fz}, {tx, ty, tz}, fg, ID);
 }
 
 FAKE_DHD_EXPORT int dhdGetForceAndTorqueAndGripperForce(double* fx, double* fy, double* fz,
@@ -1063,6 +1170,8 @@ FAKE_DHD_EXPORT int dhdGetForceAndTorqueAndGripperForce(double* fx, double* fy, 
   *fg = d->fg_cmd;
   return 0;
 }
+
+#endif  // FAKE_DHD_NO_WRIST
 
 FAKE_DHD_EXPORT double dhdGetTime() {
   std::unique_lock<std::mutex> lock;
@@ -1114,12 +1223,24 @@ FAKE_DHD_EXPORT bool drdIsInitialized(char ID) {
   return d->initialized;  // the controller's RESET LED (§1.3 semantics)
 }
 
+FAKE_DHD_EXPORT bool drdIsSupported(char ID) {
+  std::unique_lock<std::mutex> lock;
+  State& s = loaded_state(lock);
+  log_call(s, "drdIsSupported", {id_arg(ID)}, false);
+  Device* d = device_for(s, ID);
+  if (!d) return false;
+  return d->model->drd_supported;
+}
+
 FAKE_DHD_EXPORT int drdAutoInit(char ID) {
   std::unique_lock<std::mutex> lock;
   State& s = loaded_state(lock);
   log_call(s, "drdAutoInit", {id_arg(ID)}, false);
   Device* d = device_for(s, ID);
   if (!d) return -1;
+  // A device the DRD does not support has no regulation to calibrate it with (the stand-in's
+  // choice of error).
+  if (!d->model->drd_supported) return fail(DHD_ERROR_NOT_AVAILABLE);
   // "moves to a known position and resets encoder counters" (§1.3): done at once, then the
   // regulation holds the effector at the origin, forces on, until drdStop.
   d->initialized = true;
@@ -1141,6 +1262,7 @@ FAKE_DHD_EXPORT int drdStop(bool frc, char ID) {
   Device* d = device_for(s, ID);
   if (!d) return -1;
   d->regulating = false;
+  d->commanded = false;  // the regulation's commands stop; the host has sent none
   if (!frc) {  // forces off unless the caller keeps them (CHAI3D: drdStop(true) then forces on)
     d->force = false;
     d->brake = true;
@@ -1199,23 +1321,51 @@ FAKE_DHD_CHECK(dhdSetBrakes);
 FAKE_DHD_CHECK(dhdStop);
 FAKE_DHD_CHECK(dhdGetPosition);
 FAKE_DHD_CHECK(dhdGetLinearVelocity);
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdGetOrientationFrame);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdGetPositionAndOrientationFrame);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdGetAngularVelocityRad);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdGetGripperAngleRad);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdGetGripperAngleDeg);
+#endif
 FAKE_DHD_CHECK(dhdGetButtonMask);
 FAKE_DHD_CHECK(dhdGetButton);
 FAKE_DHD_CHECK(dhdSetForce);
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdSetForceAndTorque);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdSetForceAndGripperForce);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdSetForceAndTorqueAndGripperForce);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdGetForceAndTorqueAndGripperForce);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdHasWrist);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdHasActiveWrist);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdHasGripper);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdHasActiveGripper);
+#endif
+#ifndef FAKE_DHD_NO_WRIST
 FAKE_DHD_CHECK(dhdIsLeftHanded);
+#endif
 FAKE_DHD_CHECK(dhdGetStatus);
 FAKE_DHD_CHECK(dhdErrorGetLast);
 FAKE_DHD_CHECK(dhdErrorGetLastStr);
@@ -1225,6 +1375,7 @@ FAKE_DHD_CHECK(dhdSleep);
 FAKE_DHD_CHECK(drdOpen);
 FAKE_DHD_CHECK(drdOpenID);
 FAKE_DHD_CHECK(drdClose);
+FAKE_DHD_CHECK(drdIsSupported);
 FAKE_DHD_CHECK(drdIsInitialized);
 FAKE_DHD_CHECK(drdAutoInit);
 FAKE_DHD_CHECK(drdStop);

@@ -42,7 +42,9 @@ inline constexpr int DHD_DEVICE_DELTA3 = 63;          // §1.5
 inline constexpr int DHD_DEVICE_OMEGA3 = 33;          // §1.5
 inline constexpr int DHD_DEVICE_OMEGA6_RIGHT = 34;    // §1.5
 inline constexpr int DHD_DEVICE_OMEGA7_RIGHT = 35;    // §1.5
+inline constexpr int DHD_DEVICE_OMEGA7_LEFT = 37;     // §1.5
 inline constexpr int DHD_DEVICE_SIGMA7_RIGHT = 104;   // §1.5
+inline constexpr int DHD_DEVICE_SIGMA7_LEFT = 105;    // §1.5
 inline constexpr int DHD_DEVICE_LAMBDA7_RIGHT = 108;  // §1.5
 inline constexpr int DHD_DEVICE_FALCON = 60;          // §1.5
 
@@ -80,6 +82,9 @@ inline constexpr int DHD_FORCE_OFF_USBDISCN = 5;  // §1.5
 inline constexpr int DHD_FORCE_OFF_DEADMAN = 6;   // §1.5
 
 inline constexpr int DHD_MAX_BUTTONS = 32;  // §1.5, dhdc.h 186 (16 in SDK 3.7.0)
+
+// §1.6, [FDC] dhd/__init__.py ~1307-1339: the SDK's standard gravity by default. Unit: m/s².
+inline constexpr double kStandardGravity = 9.81;
 
 // ---- The SDK version the stand-in reports (§1.3: "DHD - Haptic SDK ver 3.17.5", dhdc.h line 3;
 // the revision is not given anywhere, 0 is the stand-in's choice) ----
@@ -146,6 +151,7 @@ using dhdSleep_t = void (*)(double sec);
 using drdOpen_t = int (*)();
 using drdOpenID_t = int (*)(char ID);
 using drdClose_t = int (*)(char ID);
+using drdIsSupported_t = bool (*)(char ID);
 using drdIsInitialized_t = bool (*)(char ID);
 using drdAutoInit_t = int (*)(char ID);
 using drdStop_t = int (*)(bool frc, char ID);

@@ -50,11 +50,13 @@ struct Api {
   dhdHasActiveWrist_t dhdHasActiveWrist;
   dhdHasGripper_t dhdHasGripper;
   dhdHasActiveGripper_t dhdHasActiveGripper;
+  dhdIsLeftHanded_t dhdIsLeftHanded;
   dhdGetStatus_t dhdGetStatus;
   dhdErrorGetLast_t dhdErrorGetLast;
   dhdErrorGetLastStr_t dhdErrorGetLastStr;
   dhdErrorGetStr_t dhdErrorGetStr;
   dhdGetTime_t dhdGetTime;
+  drdIsSupported_t drdIsSupported;
   drdIsInitialized_t drdIsInitialized;
   drdAutoInit_t drdAutoInit;
   drdStop_t drdStop;
@@ -111,11 +113,13 @@ Api load() {
   RESOLVE(dhdHasActiveWrist);
   RESOLVE(dhdHasGripper);
   RESOLVE(dhdHasActiveGripper);
+  RESOLVE(dhdIsLeftHanded);
   RESOLVE(dhdGetStatus);
   RESOLVE(dhdErrorGetLast);
   RESOLVE(dhdErrorGetLastStr);
   RESOLVE(dhdErrorGetStr);
   RESOLVE(dhdGetTime);
+  RESOLVE(drdIsSupported);
   RESOLVE(drdIsInitialized);
   RESOLVE(drdAutoInit);
   RESOLVE(drdStop);
@@ -319,11 +323,168 @@ TEST_F(FakeForceDimension, DtIsChangeableAndTheHandForceActsWithForcesOff) {
   attach("falcon");
   ASSERT_EQ(api_->dhdOpenID(0), 0);
   ASSERT_EQ(control("dt 0.0005"), 0);
-  ASSERT_EQ(control("hand 0 0 0 -1"), 0);  // forces off: only the hand moves it
+  ASSERT_EQ(control("hand 0 0 -1 0"), 0);  // forces off: only the hand (and gravity) move it
   for (int i = 0; i < 200; ++i) ASSERT_EQ(api_->dhdSetForce(5, 0, 0, 0), 0);
   const Position p = position(0);
   EXPECT_EQ(p.x, 0.0);
-  EXPECT_NEAR(p.z, mass_damper_x(-1, 0.1, 2.0, 0.1), 1e-9);
+  EXPECT_NEAR(p.y, mass_damper_x(-1, 0.1, 2.0, 0.1), 1e-9);
+  EXPECT_NEAR(p.z, mass_damper_x(-0.1 * kStandardGravity, 0.1, 2.0, 0.1), 1e-9);  // its weight
+}
+
+// Gravity acts on the plant's z unless the SDK's compensation holds it, and that needs a force
+// command since forces were enabled (SOURCES.md §1.6: computed on the host, sent with each
+// command). `elapse` lets time pass without one, as between enabling forces and a first command.
+TEST_F(FakeForceDimension, GravityActsUntilAForceCommandCarriesTheCompensation) {
+  attach("omega.3");
+  const Api& a = *api_;
+  open_ready(0);  // forces on, no command yet
+  ASSERT_EQ(control("dt 0.0005"), 0);
+  ASSERT_EQ(control("elapse 0 0.0075"), 0);  // 15 steps
+  double vx, vy, vz;
+  ASSERT_EQ(a.dhdGetLinearVelocity(&vx, &vy, &vz, 0), 0);
+  const double m = 0.2, b = 2.0, W = m * kStandardGravity;
+  EXPECT_NEAR(vz, -mass_damper_v(W, m, b, 0.0075), 1e-9);  // free fall, through the damping
+  EXPECT_NEAR(vz, -0.0709, 1e-4);
+  EXPECT_NEAR(position(0).z, -mass_damper_x(W, m, b, 0.0075), 1e-12);
+
+  // A zero command carries the compensation: the arm stops falling (only the damping acts).
+  ASSERT_EQ(a.dhdSetForce(0, 0, 0, 0), 0);
+  ASSERT_EQ(a.dhdGetLinearVelocity(&vx, &vy, &vz, 0), 0);
+  const double v1 = vz;
+  ASSERT_EQ(control("elapse 0 0.01"), 0);
+  ASSERT_EQ(a.dhdGetLinearVelocity(&vx, &vy, &vz, 0), 0);
+  EXPECT_NEAR(vz, v1 * std::exp(-b / m * 0.01), 1e-12);
+
+  // Enabled again, no command yet: falling again. With the compensation off it falls under
+  // commands too.
+  ASSERT_EQ(a.dhdEnableForce(DHD_ON, 0), 0);
+  ASSERT_EQ(control("elapse 0 0.05"), 0);
+  ASSERT_EQ(a.dhdGetLinearVelocity(&vx, &vy, &vz, 0), 0);
+  EXPECT_LT(vz, -0.3);
+  attach("omega.3");
+  open_ready(0);
+  ASSERT_EQ(a.dhdSetGravityCompensation(DHD_OFF, 0), 0);
+  for (int i = 0; i < 10; ++i) ASSERT_EQ(a.dhdSetForce(0, 0, 0, 0), 0);
+  ASSERT_EQ(a.dhdGetLinearVelocity(&vx, &vy, &vz, 0), 0);
+  EXPECT_NEAR(vz, -mass_damper_v(W, m, b, 0.01), 1e-9);
+  EXPECT_EQ(control("elapse 0 -1"), -1);
+  EXPECT_EQ(control("elapse 0"), -1);
+}
+
+// The velocity guard (SOURCES.md §1.6, "Safety"): an axis past the threshold with forces on turns
+// them off and brakes, the setters still return 0 while nothing is applied, and dhdGetStatus says
+// why until dhdEnableForce turns them on again.
+TEST_F(FakeForceDimension, TheVelocityGuardTurnsForcesOffAndSaysWhy) {
+  attach("omega.3");
+  const Api& a = *api_;
+  open_ready(0);
+  ASSERT_EQ(control("velocity 0 0.5"), 0);
+  int status[DHD_MAX_STATUS] = {};
+  double vx = 0, vy, vz;
+  int ticks = 0;
+  while (vx <= 0.5 && ticks < 1000) {
+    ASSERT_EQ(a.dhdSetForce(12, 0, 0, 0), 0);
+    ASSERT_EQ(a.dhdGetLinearVelocity(&vx, &vy, &vz, 0), 0);
+    ++ticks;
+  }
+  // 12 N on 0.2 kg with 2 N·s/m: past 0.5 m/s in the 9th millisecond.
+  EXPECT_EQ(ticks, 9);
+  ASSERT_EQ(a.dhdGetStatus(status, 0), 0);
+  EXPECT_EQ(status[DHD_STATUS_FORCE], 0);
+  EXPECT_EQ(status[DHD_STATUS_BRAKE], 1);
+  EXPECT_EQ(status[DHD_STATUS_FORCE_OFF_CAUSE], DHD_FORCE_OFF_VELOCITY);
+  // The setter still succeeds; the force is not applied (the brake slows the effector).
+  for (int i = 0; i < 20; ++i) ASSERT_EQ(a.dhdSetForce(12, 0, 0, 0), 0);
+  const double v_braked = vx;
+  ASSERT_EQ(a.dhdGetLinearVelocity(&vx, &vy, &vz, 0), 0);
+  EXPECT_LT(vx, 0.5 * v_braked);
+  ASSERT_EQ(a.dhdGetStatus(status, 0), 0);
+  EXPECT_EQ(status[DHD_STATUS_FORCE_OFF_CAUSE], DHD_FORCE_OFF_VELOCITY);
+  // Enabled again: forces act, the cause is cleared.
+  ASSERT_EQ(a.dhdEnableForce(DHD_ON, 0), 0);
+  ASSERT_EQ(a.dhdGetStatus(status, 0), 0);
+  EXPECT_EQ(status[DHD_STATUS_FORCE], 1);
+  EXPECT_EQ(status[DHD_STATUS_FORCE_OFF_CAUSE], DHD_FORCE_OFF_NONE);
+  ASSERT_EQ(control("velocity 0 0"), 0);  // off: nothing trips it
+  for (int i = 0; i < 200; ++i) ASSERT_EQ(a.dhdSetForce(12, 0, 0, 0), 0);
+  ASSERT_EQ(a.dhdGetStatus(status, 0), 0);
+  EXPECT_EQ(status[DHD_STATUS_FORCE], 1);
+  EXPECT_EQ(control("velocity 0 -1"), -1);
+}
+
+// dhdSetBrakes does not take a device out of FORCE mode (BRAKE is the forces-off mode, SOURCES.md
+// §1.6); dhdEnableForce(OFF) does, into BRAKE.
+TEST_F(FakeForceDimension, BrakesDoNotStopForcesDisablingForcesBrakes) {
+  attach("omega.3");
+  const Api& a = *api_;
+  open_ready(0);
+  int status[DHD_MAX_STATUS] = {};
+  ASSERT_EQ(a.dhdSetBrakes(DHD_ON, 0), 0);
+  ASSERT_EQ(a.dhdGetStatus(status, 0), 0);
+  EXPECT_EQ(status[DHD_STATUS_FORCE], 1);
+  EXPECT_EQ(status[DHD_STATUS_BRAKE], 0);
+  ASSERT_EQ(a.dhdEnableForce(DHD_OFF, 0), 0);
+  ASSERT_EQ(a.dhdGetStatus(status, 0), 0);
+  EXPECT_EQ(status[DHD_STATUS_FORCE], 0);
+  EXPECT_EQ(status[DHD_STATUS_BRAKE], 1);
+  EXPECT_EQ(status[DHD_STATUS_FORCE_OFF_CAUSE], DHD_FORCE_OFF_SOFTWARE);
+  ASSERT_EQ(a.dhdSetBrakes(DHD_OFF, 0), 0);  // forces off, brakes off: IDLE
+  ASSERT_EQ(a.dhdGetStatus(status, 0), 0);
+  EXPECT_EQ(status[DHD_STATUS_IDLE], 1);
+}
+
+// `fail ID FUNCTION [CODE]` fails one force setter alone, sending nothing; the others still work.
+TEST_F(FakeForceDimension, FailMakesOneForceSetterFailAlone) {
+  attach("sigma.7");
+  const Api& a = *api_;
+  open_ready(0);
+  ASSERT_EQ(control("fail 0 dhdSetForce"), 0);
+  EXPECT_EQ(a.dhdSetForce(1, 0, 0, 0), -1);
+  EXPECT_EQ(a.dhdErrorGetLast(), DHD_ERROR_COM);
+  EXPECT_EQ(position(0).x, 0.0);  // nothing sent: the plant did not step
+  EXPECT_EQ(a.dhdSetForceAndTorqueAndGripperForce(1, 0, 0, 0, 0, 0, 0, 0), 0);
+  double x, y, z;
+  EXPECT_EQ(a.dhdGetPosition(&x, &y, &z, 0), 0);
+  ASSERT_EQ(control("fail 0 dhdSetForceAndTorqueAndGripperForce 21"), 0);  // DHD_ERROR_INVALID
+  EXPECT_EQ(a.dhdSetForceAndTorqueAndGripperForce(1, 0, 0, 0, 0, 0, 0, 0), -1);
+  EXPECT_EQ(a.dhdErrorGetLast(), DHD_ERROR_INVALID);
+  EXPECT_EQ(a.dhdSetForce(1, 0, 0, 0), 0);  // only the last named one fails
+  ASSERT_EQ(control("fail 0 none"), 0);
+  EXPECT_EQ(a.dhdSetForceAndTorqueAndGripperForce(1, 0, 0, 0, 0, 0, 0, 0), 0);
+  EXPECT_EQ(control("fail 0 dhdGetPosition"), -1);
+  EXPECT_EQ(control("fail 0 dhdSetForce 99"), -1);
+}
+
+// A left-handed model (SOURCES.md §1.5's *_LEFT codes) says so, and its gripper angle is negative
+// (§1.6: the lambda.7 manual; CHAI3D negates it), its force opening it when negative.
+TEST_F(FakeForceDimension, ALeftHandedDeviceSaysSoAndItsGripperAngleIsNegative) {
+  attach("omega.7-left,omega.7");
+  const Api& a = *api_;
+  open_ready(0);
+  open_ready(1);
+  EXPECT_EQ(a.dhdGetSystemType(0), DHD_DEVICE_OMEGA7_LEFT);
+  EXPECT_TRUE(a.dhdIsLeftHanded(0));
+  EXPECT_FALSE(a.dhdIsLeftHanded(1));
+  double angle = 0;
+  ASSERT_EQ(a.dhdGetGripperAngleRad(&angle, 0), 0);
+  EXPECT_EQ(angle, -0.5);
+  for (int i = 0; i < 10; ++i)
+    ASSERT_EQ(a.dhdSetForceAndTorqueAndGripperForce(0, 0, 0, 0, 0, 0, 0.001, 0), 0);
+  ASSERT_EQ(a.dhdGetGripperAngleRad(&angle, 0), 0);
+  EXPECT_NEAR(angle, -(0.5 + mass_damper_x(-0.001, 1e-4, 1e-3, 0.01)), 1e-9);  // closing
+}
+
+// drdIsSupported: the DRD regulates the omega.3, not the Falcon, whose drdAutoInit fails.
+TEST_F(FakeForceDimension, TheDrdSupportsTheOmegaNotTheFalcon) {
+  attach("omega.3,falcon");
+  const Api& a = *api_;
+  ASSERT_EQ(a.drdOpenID(0), 0);
+  ASSERT_EQ(a.drdOpenID(1), 1);
+  EXPECT_TRUE(a.drdIsSupported(0));
+  EXPECT_FALSE(a.drdIsSupported(1));
+  EXPECT_EQ(a.drdAutoInit(1), -1);
+  EXPECT_EQ(a.dhdErrorGetLast(), DHD_ERROR_NOT_AVAILABLE);
+  EXPECT_EQ(a.drdAutoInit(0), 0);
 }
 
 TEST_F(FakeForceDimension, NothingMovesBeforeForcesAreEnabled) {
