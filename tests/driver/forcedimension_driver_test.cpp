@@ -56,6 +56,30 @@ using test::refusal;
   return ::testing::AssertionFailure() << "'" << wanted[next] << "' missing (in this order) from:\n" << log;
 }
 
+/// The line of `log` right after the first line that starts with `line` ("" when none).
+std::string line_after(const std::string& log, const std::string& line) {
+  std::istringstream lines(log);
+  std::string at;
+  while (std::getline(lines, at)) {
+    if (at.rfind(line, 0) == 0) return std::getline(lines, at) ? at : std::string();
+  }
+  return {};
+}
+
+/// Device 0's force state as the stand-in holds it (its dhdGetStatus, SOURCES.md §1.5 indices).
+struct ForceState {
+  int force = -1, brake = -1, cause = -1;
+};
+ForceState force_state(const char* library = FAKE_FORCEDIMENSION_LIBRARY) {
+  void* handle = dlopen(library, RTLD_NOW | RTLD_LOCAL);
+  if (handle == nullptr) return {};
+  auto get_status = reinterpret_cast<int (*)(int*, char)>(dlsym(handle, "dhdGetStatus"));
+  int status[32] = {};
+  get_status(status, 0);
+  dlclose(handle);
+  return {status[5], status[6], status[14]};  // DHD_STATUS_FORCE, _BRAKE, _FORCEOFFCAUSE
+}
+
 TEST(ForceDimension, OpensCalibratesAndClosesInTheVendorsOrder) {
   Standin standin("omega.3");
   {
@@ -229,6 +253,260 @@ TEST(ForceDimension, WhatIsMissingOrWrongIsRefusedSayingWhatToDo) {
   DriverDevice device(fd(R"("calibrate": false)"));
   EXPECT_EQ(device.start(), DeviceStatus::kError);
   EXPECT_EQ(device.fault_reason(), "the device is not calibrated and params.calibrate is false");
+}
+
+// Issue 38: the device's velocity guard turns forces off while dhdSetForce goes on succeeding.
+// The driver sees it at the next read (dhdGetStatus), reports a device fault naming the cause in
+// the SDK's words, and once the hand is slow turns forces on again, commanding zero at once.
+TEST(ForceDimension, ForcesTheDeviceTurnsOffAreAFaultNamingTheCauseAndComeBackZeroFirst) {
+  Standin standin("omega.3");
+  DriverDevice device(fd());
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  ASSERT_EQ(standin.control("velocity 0 0.5"), 0);
+  DeviceReading reading;
+  DeviceCommand push;
+  push.tau[0] = 12.0;
+  int cut_at = -1, seen_at = -1;
+  for (int k = 0; k < 100; ++k) {
+    ASSERT_EQ(device.read(reading), DeviceStatus::kOk) << "tick " << k;
+    if (reading.safe_state) {
+      seen_at = k;
+      break;
+    }
+    ASSERT_EQ(device.write(push, kT), DeviceStatus::kOk) << "tick " << k;  // the setter succeeds
+    if (cut_at < 0 && force_state().force == 0) cut_at = k;
+  }
+  ASSERT_GE(cut_at, 0) << "the stand-in's guard never tripped";
+  EXPECT_EQ(force_state().cause, 2);  // DHD_FORCE_OFF_VELOCITY (SOURCES.md §1.5)
+  EXPECT_EQ(seen_at, cut_at + 1) << "the cut at tick " << cut_at << " was not seen at the next read";
+  EXPECT_NE(device.fault_reason().find("velocity guard"), std::string::npos) << device.fault_reason();
+  EXPECT_NE(device.fault_reason().find("DHD_FORCE_OFF_VELOCITY"), std::string::npos) << device.fault_reason();
+  // As the loop does on a faulted tick: the safe state, a zero command; until the hand is slow
+  // (the brake slows it) every reading says safe_state.
+  standin.clear();
+  int waited = 0;
+  for (;; ++waited) {
+    ASSERT_LT(waited, 200) << "forces never came back";
+    device.enter_safe_state();
+    ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+    ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+    if (!reading.safe_state) break;
+  }
+  EXPECT_GT(waited, 0);
+  EXPECT_LT(std::fabs(reading.q_dot[0]), 0.1);  // resume_speed's default
+  EXPECT_EQ(line_after(standin.calls(), "dhdEnableForce 1 0").rfind("dhdSetForce 0 0 0 0", 0), 0u)
+      << standin.calls();
+  EXPECT_EQ(force_state().force, 1);
+  push.tau[0] = 1.0;
+  const double x0 = reading.q[0];
+  for (int k = 0; k < 50; ++k) {
+    ASSERT_EQ(device.write(push, kT), DeviceStatus::kOk);
+    ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+    ASSERT_FALSE(reading.safe_state);
+  }
+  EXPECT_GT(reading.q[0], x0 + 1e-3);  // forces act again
+  device.stop();
+}
+
+// A person's force-off (the force button) is a fault too, and theirs to end: the driver does not
+// turn forces on itself, and goes on once the button turns them on, with a zero command first.
+TEST(ForceDimension, ForcesAPersonTurnsOffStayOffUntilTheyTurnThemOn) {
+  Standin standin("omega.3");
+  DriverDevice device(fd());
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+  ASSERT_EQ(standin.control("forcebutton 0"), 0);
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  EXPECT_TRUE(reading.safe_state);
+  EXPECT_NE(device.fault_reason().find("DHD_FORCE_OFF_BUTTON"), std::string::npos) << device.fault_reason();
+  standin.clear();
+  for (int k = 0; k < 20; ++k) {
+    device.enter_safe_state();
+    ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+    ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+    EXPECT_TRUE(reading.safe_state) << "tick " << k;
+  }
+  EXPECT_EQ(standin.calls().find("dhdEnableForce 1"), std::string::npos) << standin.calls();
+  ASSERT_EQ(standin.control("forcebutton 0"), 0);  // pressed again: forces on
+  standin.clear();
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  EXPECT_FALSE(reading.safe_state);
+  EXPECT_EQ(line_after(standin.calls(), "dhdGetStatus 0").rfind("dhdSetForce 0 0 0 0", 0), 0u) << standin.calls();
+  device.stop();
+}
+
+// Issue 38: gravity compensation goes out with force commands only (SOURCES.md §1.6), so forces
+// enabled with no command let the arm fall until the loop's first write. The driver commands zero
+// as soon as they are enabled: 7.5 ms later the arm has not moved.
+TEST(ForceDimension, ForcesAreCommandedZeroAsSoonAsTheyAreEnabled) {
+  for (const char* model : {"omega.3", "falcon"}) {
+    SCOPED_TRACE(model);
+    Standin standin(model);
+    DriverDevice device(fd());
+    ASSERT_EQ(device.start(), DeviceStatus::kOk);
+    EXPECT_EQ(line_after(standin.calls(), "dhdEnableForce 1 0").rfind("dhdSetForce 0 0 0 0", 0), 0u)
+        << standin.calls();
+    ASSERT_EQ(standin.control("dt 0.0005"), 0);
+    ASSERT_EQ(standin.control("elapse 0 0.0075"), 0);  // before the loop's first tick
+    DeviceReading reading;
+    ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+    EXPECT_EQ(reading.q_dot[2], 0.0) << "falling";
+    EXPECT_EQ(reading.q[2], 0.0);
+    device.stop();
+  }
+}
+
+// Issue 38: dhdSetBrakes does not take a device out of FORCE mode (SOURCES.md §1.6): the safe
+// state turns forces off. A write after it is taken but applies nothing; the next read with the
+// hand slow turns forces on again, zero first.
+TEST(ForceDimension, TheSafeStateTurnsForcesOffAndTheNextSlowReadTurnsThemOnZeroFirst) {
+  Standin standin("omega.3");
+  DriverDevice device(fd());
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+  device.enter_safe_state();
+  ForceState state = force_state();
+  EXPECT_EQ(state.force, 0);
+  EXPECT_EQ(state.brake, 1);
+  DeviceCommand push;
+  push.tau[0] = 5.0;
+  ASSERT_EQ(device.write(push, kT), DeviceStatus::kOk);
+  EXPECT_EQ(force_state().force, 0);
+  standin.clear();
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  EXPECT_FALSE(reading.safe_state);
+  EXPECT_EQ(reading.q[0], 0.0);  // the push after the safe state applied nothing
+  EXPECT_EQ(line_after(standin.calls(), "dhdEnableForce 1 0").rfind("dhdSetForce 0 0 0 0", 0), 0u)
+      << standin.calls();
+  EXPECT_EQ(force_state().force, 1);
+  device.stop();
+}
+
+// Issue 43: dhdSetForce's own failure (nothing else failing) is a write error naming the call and
+// the SDK's error; after the loop's safe state, forces come back at the next read, zero first.
+TEST(ForceDimension, AFailedSetForceIsAWriteErrorNamingItAndForcesComeBack) {
+  Standin standin("omega.3");
+  DriverDevice device(fd());
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  ASSERT_EQ(standin.control("fail 0 dhdSetForce"), 0);
+  DeviceCommand push;
+  push.tau[0] = 1.0;
+  EXPECT_EQ(device.write(push, kT), DeviceStatus::kError);
+  const std::string why = device.fault_reason();
+  EXPECT_EQ(why.rfind("dhdSetForce: ", 0), 0u) << why;
+  EXPECT_NE(why.find("(DHD error 2)"), std::string::npos) << why;
+  device.enter_safe_state();  // as the loop does after a failed write
+  EXPECT_EQ(force_state().force, 0);
+  ASSERT_EQ(standin.control("fail 0 none"), 0);
+  standin.clear();
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  EXPECT_FALSE(reading.safe_state);
+  EXPECT_EQ(line_after(standin.calls(), "dhdEnableForce 1 0").rfind("dhdSetForce 0 0 0 0", 0), 0u)
+      << standin.calls();
+  const double x0 = reading.q[0];
+  for (int k = 0; k < 50; ++k) {
+    ASSERT_EQ(device.write(push, kT), DeviceStatus::kOk);
+    ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  }
+  EXPECT_GT(reading.q[0], x0 + 1e-3);
+  device.stop();
+}
+
+// A left-handed device (dhdIsLeftHanded) reports its gripper angle negative (SOURCES.md §1.6): the
+// driver mirrors it, and the gripper force, so hapticd sees a right-handed gripper.
+TEST(ForceDimension, ALeftHandedGripperComesThroughAsARightHandedOne) {
+  Standin standin("omega.7-left");
+  void* library = dlopen(FORCEDIMENSION_DRIVER, RTLD_NOW | RTLD_LOCAL);
+  ASSERT_NE(library, nullptr) << dlerror();
+  const auto* api = reinterpret_cast<haptic_driver_entry_fn>(dlsym(library, HAPTIC_DRIVER_ENTRY_SYMBOL))();
+  char error[HAPTIC_DRIVER_ERROR_SIZE] = {};
+  void* driver = api->create(params().c_str(), error);
+  ASSERT_NE(driver, nullptr) << error;
+  ASSERT_EQ(api->start(driver), HAPTIC_DRIVER_OK);
+  haptic_driver_reading reading{};
+  ASSERT_EQ(api->read(driver, &reading), HAPTIC_DRIVER_OK);
+  EXPECT_EQ(reading.gripper, 0.5);  // open, as on a right-handed omega.7
+  haptic_driver_command command{};
+  command.gripper_force = 2.0;
+  standin.clear();
+  ASSERT_EQ(api->write(driver, &command, kT), HAPTIC_DRIVER_OK);
+  EXPECT_TRUE(in_order(standin.calls(), {"dhdSetForceAndTorqueAndGripperForce 0 0 0 0 0 0 -2 0"}));
+  api->stop(driver);
+  api->destroy(driver);
+  dlclose(library);
+}
+
+// The Falcon is not a device the DRD supports (drdIsSupported): it is never auto-initialized; one
+// in RESET mode is refused saying to calibrate it by hand.
+TEST(ForceDimension, AFalconIsNeverAutoInitialized) {
+  Standin standin("falcon");
+  {
+    DriverDevice device(fd());
+    ASSERT_EQ(device.start(), DeviceStatus::kOk);
+    device.stop();
+  }
+  EXPECT_TRUE(in_order(standin.calls(), {"drdIsSupported 0", "dhdEnableForce 1 0"}));
+  ASSERT_EQ(standin.control("uncalibrate 0"), 0);
+  standin.clear();
+  DriverDevice device(fd());
+  EXPECT_EQ(device.start(), DeviceStatus::kError);
+  EXPECT_NE(device.fault_reason().find("drdIsSupported: false"), std::string::npos) << device.fault_reason();
+  EXPECT_NE(device.fault_reason().find("calibrate it by hand"), std::string::npos) << device.fault_reason();
+  EXPECT_EQ(standin.calls().find("drdAutoInit"), std::string::npos) << standin.calls();
+}
+
+// A runtime without the wrist and gripper functions drives a wrist-less device (the kit passes);
+// a device with a wrist is refused there, naming what is missing.
+TEST(ForceDimension, WristFunctionsAreOptionalWhereTheDeviceHasNoWrist) {
+  setenv("FAKE_DHD_DEVICES", "omega.3", 1);
+  test::StandinLibrary standin(FAKE_FORCEDIMENSION_NOWRIST_LIBRARY, "fake_dhd");
+  const std::string nowrist = std::string(R"({"library": ")") + FAKE_FORCEDIMENSION_NOWRIST_LIBRARY + "\"}";
+  std::ostringstream log;
+  for (const auto& result : driver_kit::run_kit({FORCEDIMENSION_DRIVER, nowrist, true, test::kTestCallTimeoutS}, log)) {
+    EXPECT_TRUE(result.passed) << result.name << ": " << result.detail << "\n" << log.str();
+  }
+  setenv("FAKE_DHD_DEVICES", "omega.7", 1);
+  ASSERT_EQ(standin.control("reset"), 0);
+  const std::string why = refusal(test::driver_options(FORCEDIMENSION_DRIVER, nowrist));
+  EXPECT_NE(why.find("lacks dhdGetOrientationFrame"), std::string::npos) << why;
+}
+
+// DHD_MOTOR_SATURATED (SOURCES.md §1.4): the device scaled a command down. The ABI has no field
+// for it, so the driver counts such commands and says how many at stop.
+TEST(ForceDimension, SaturatedCommandsAreCountedAndLoggedAtStop) {
+  Standin standin("omega.3");
+  ASSERT_EQ(standin.control("saturate 0 on"), 0);
+  void* library = dlopen(FORCEDIMENSION_DRIVER, RTLD_NOW | RTLD_LOCAL);
+  ASSERT_NE(library, nullptr) << dlerror();
+  const auto* api = reinterpret_cast<haptic_driver_entry_fn>(dlsym(library, HAPTIC_DRIVER_ENTRY_SYMBOL))();
+  char error[HAPTIC_DRIVER_ERROR_SIZE] = {};
+  void* driver = api->create(params().c_str(), error);
+  ASSERT_NE(driver, nullptr) << error;
+  std::vector<std::string> warnings;
+  api->set_log(
+      driver,
+      [](void* context, int level, const char* message) {
+        if (level == HAPTIC_DRIVER_LOG_WARNING) static_cast<std::vector<std::string>*>(context)->push_back(message);
+      },
+      &warnings);
+  ASSERT_EQ(api->start(driver), HAPTIC_DRIVER_OK);
+  haptic_driver_command command{};
+  command.tau[0] = 1.0;
+  for (int k = 0; k < 10; ++k) ASSERT_EQ(api->write(driver, &command, kT), HAPTIC_DRIVER_OK);
+  api->stop(driver);
+  bool said = false;
+  for (const std::string& warning : warnings) {
+    said = said || warning.rfind("10 of 10 force commands came back DHD_MOTOR_SATURATED", 0) == 0;
+  }
+  EXPECT_TRUE(said) << (warnings.empty() ? std::string("no warning") : warnings.back());
+  api->destroy(driver);
+  dlclose(library);
 }
 
 }  // namespace

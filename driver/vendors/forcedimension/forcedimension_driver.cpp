@@ -25,6 +25,21 @@
 //   "apparent_mass", "apparent_damping": [x, y, z] (kg, N·s/m): the device at its tool as a
 //              mass-damper, from one's own identification; Force Dimension publishes none, so
 //              the default is unknown (0), and hapticd's stability report and passivity are off
+//   "status_period": reads between two looks at the device's force state (dhdGetStatus),
+//              default 1 (every read); a device that turns its forces off is seen within that many
+//   "resume_speed": m/s (default 0.1): forces the device or the safe state turned off are turned on
+//              again at the first read whose velocity is below this on every axis
+//
+// The force state. The device may turn its forces off itself (its velocity guard, its watchdog,
+// its force button, a dead-man switch: §1.6 "Safety", §1.5 force-off causes) while dhdSetForce
+// goes on succeeding. Each read looks at dhdGetStatus (every status_period reads); forces found
+// off are a device fault: the reading says safe_state, and last_error names the cause in the SDK's
+// words. Forces off for any cause but a person's (the force button, the dead-man switch) are
+// turned on again (dhdEnableForce, §1.3) at the first read with the hand slower than resume_speed,
+// and a zero force is commanded at once, so that the SDK's gravity compensation, which goes out
+// only with a force command (§1.6), holds the arm before the loop's first force; a person's are
+// waited for (the status shows forces on again). enter_safe_state turns forces off (BRAKE mode)
+// rather than only asking for the brakes, which the SDK's modes do not apply in FORCE mode.
 #include <haptic/driver.h>
 
 #include <dlfcn.h>
@@ -53,6 +68,44 @@ using uint = unsigned int;
 
 constexpr int kDhdOn = 1;   // DHD_ON  (§1.5)
 constexpr int kDhdOff = 0;  // DHD_OFF (§1.5)
+constexpr int kMotorSaturated = 2;  // DHD_MOTOR_SATURATED, a setter's success that scaled the command (§1.4)
+constexpr int kStatusSize = 32;     // DHD_MAX_STATUS is 17 (16 in 3.7.0): room for more (§1.5)
+constexpr int kStatusReset = 3;     // DHD_STATUS_RESET (§1.5)
+constexpr int kStatusForce = 5;     // DHD_STATUS_FORCE (§1.5)
+constexpr int kStatusForceOffCause = 14;  // DHD_STATUS_FORCEOFFCAUSE (§1.5)
+
+/// Why the device's forces are off, in the SDK's words: the force-off causes of §1.5 (values 0 to
+/// 6; DHD_FORCE_OFF_*, spelt DHD_FORCEOFF_* before 3.17) and what this driver does about each.
+const char* force_off_words(int cause) {
+  switch (cause) {
+    case 1:
+      return "dhdGetStatus: forces turned off at the device's force button (DHD_FORCE_OFF_BUTTON); "
+             "they resume when it is pressed again";
+    case 2:
+      return "dhdGetStatus: forces turned off by the device's velocity guard, the handle moved faster "
+             "than its threshold (DHD_FORCE_OFF_VELOCITY); on again once the hand is slow";
+    case 3:
+      return "dhdGetStatus: forces turned off by the device's watchdog, no command reached it in time "
+             "(DHD_FORCE_OFF_WATCHDOG); on again once the hand is slow";
+    case 4:
+      return "dhdGetStatus: forces turned off by software (DHD_FORCE_OFF_SOFTWARE); on again once the "
+             "hand is slow";
+    case 5:
+      return "dhdGetStatus: forces turned off, the USB connection was lost (DHD_FORCE_OFF_USBDISCN); on "
+             "again once the hand is slow";
+    case 6:
+      return "dhdGetStatus: forces turned off by the device's dead-man switch (DHD_FORCE_OFF_DEADMAN); "
+             "they resume when it is held again";
+    case 0:
+      return "dhdGetStatus: the device's forces are off with no cause given (DHD_FORCE_OFF_NONE); on "
+             "again once the hand is slow";
+    default:
+      return "dhdGetStatus: the device's forces are off for a cause this driver does not know; on again "
+             "once the hand is slow";
+  }
+}
+/// A person turned the forces off (the force button, the dead-man switch): theirs to turn on.
+bool by_person(int cause) { return cause == 1 || cause == 6; }
 
 struct DhdApi {
   int (*GetDeviceCount)() = nullptr;
@@ -64,24 +117,28 @@ struct DhdApi {
   int (*GetSerialNumber)(ushort* sn, char id) = nullptr;
   int (*EnableForce)(uchar val, char id) = nullptr;
   int (*SetGravityCompensation)(int val, char id) = nullptr;
-  int (*SetBrakes)(int val, char id) = nullptr;
   int (*Stop)(char id) = nullptr;
   int (*GetPosition)(double* px, double* py, double* pz, char id) = nullptr;
   int (*GetLinearVelocity)(double* vx, double* vy, double* vz, char id) = nullptr;
+  uint (*GetButtonMask)(char id) = nullptr;
+  int (*SetForce)(double fx, double fy, double fz, char id) = nullptr;
+  int (*GetStatus)(int status[kStatusSize], char id) = nullptr;
+  int (*ErrorGetLast)() = nullptr;
+  const char* (*ErrorGetStr)(int error) = nullptr;
+  // Optional: a device without a wrist or gripper needs none of these, and a runtime without them
+  // drives such devices (a device that has them is refused at create, naming what is missing).
   int (*GetOrientationFrame)(double matrix[3][3], char id) = nullptr;
   int (*GetAngularVelocityRad)(double* wx, double* wy, double* wz, char id) = nullptr;
   int (*GetGripperAngleRad)(double* a, char id) = nullptr;
-  uint (*GetButtonMask)(char id) = nullptr;
-  int (*SetForce)(double fx, double fy, double fz, char id) = nullptr;
   int (*SetForceAndTorqueAndGripperForce)(double fx, double fy, double fz, double tx, double ty,
                                           double tz, double fg, char id) = nullptr;
   bool (*HasWrist)(char id) = nullptr;
   bool (*HasActiveWrist)(char id) = nullptr;
   bool (*HasGripper)(char id) = nullptr;
   bool (*HasActiveGripper)(char id) = nullptr;
-  int (*ErrorGetLast)() = nullptr;
-  const char* (*ErrorGetStr)(int error) = nullptr;
+  bool (*IsLeftHanded)(char id) = nullptr;
   // DRD, in libdrd only (§1.1: libdrd holds every dhd function too); absent with a bare libdhd.
+  bool (*drdIsSupported)(char id) = nullptr;
   bool (*drdIsInitialized)(char id) = nullptr;
   int (*drdAutoInit)(char id) = nullptr;
   int (*drdStop)(bool frc, char id) = nullptr;
@@ -115,6 +172,15 @@ constexpr Model kModels[] = {
     {60, "Novint Falcon", 8.0, 0.04, 0.0, 0.0, 0.0, 4},
 };
 
+/// The models with a wrist (omega.6/.7, sigma.7, lambda.7, either hand; §1.5 type codes), for a
+/// runtime without dhdHasWrist.
+bool wrist_by_type(int type) {
+  for (int wristed : {34, 35, 36, 37, 104, 105, 108, 109}) {
+    if (type == wristed) return true;
+  }
+  return false;
+}
+
 const Model* model_of(int type) {
   for (const Model& model : kModels) {
     if (model.type == type) return &model;
@@ -145,23 +211,26 @@ std::string resolve(void* library, DhdApi& api) {
   need(api.GetSerialNumber, "dhdGetSerialNumber");
   need(api.EnableForce, "dhdEnableForce");
   need(api.SetGravityCompensation, "dhdSetGravityCompensation");
-  need(api.SetBrakes, "dhdSetBrakes");
   need(api.Stop, "dhdStop");
   need(api.GetPosition, "dhdGetPosition");
   need(api.GetLinearVelocity, "dhdGetLinearVelocity");
-  need(api.GetOrientationFrame, "dhdGetOrientationFrame");
-  need(api.GetAngularVelocityRad, "dhdGetAngularVelocityRad");
-  need(api.GetGripperAngleRad, "dhdGetGripperAngleRad");
   need(api.GetButtonMask, "dhdGetButtonMask");
   need(api.SetForce, "dhdSetForce");
-  need(api.SetForceAndTorqueAndGripperForce, "dhdSetForceAndTorqueAndGripperForce");
-  need(api.HasWrist, "dhdHasWrist");
-  need(api.HasActiveWrist, "dhdHasActiveWrist");
-  need(api.HasGripper, "dhdHasGripper");
-  need(api.HasActiveGripper, "dhdHasActiveGripper");
+  need(api.GetStatus, "dhdGetStatus");
   need(api.ErrorGetLast, "dhdErrorGetLast");
   need(api.ErrorGetStr, "dhdErrorGetStr");
+  // Optional: the wrist, gripper and handedness (absent: none of them).
+  symbols.may(api.GetOrientationFrame, "dhdGetOrientationFrame");
+  symbols.may(api.GetAngularVelocityRad, "dhdGetAngularVelocityRad");
+  symbols.may(api.GetGripperAngleRad, "dhdGetGripperAngleRad");
+  symbols.may(api.SetForceAndTorqueAndGripperForce, "dhdSetForceAndTorqueAndGripperForce");
+  symbols.may(api.HasWrist, "dhdHasWrist");
+  symbols.may(api.HasActiveWrist, "dhdHasActiveWrist");
+  symbols.may(api.HasGripper, "dhdHasGripper");
+  symbols.may(api.HasActiveGripper, "dhdHasActiveGripper");
+  symbols.may(api.IsLeftHanded, "dhdIsLeftHanded");
   // Optional: calibration needs libdrd.
+  symbols.may(api.drdIsSupported, "drdIsSupported");
   symbols.may(api.drdIsInitialized, "drdIsInitialized");
   symbols.may(api.drdAutoInit, "drdAutoInit");
   symbols.may(api.drdStop, "drdStop");
@@ -177,11 +246,21 @@ struct Device {
   ushort serial = 0;
   Model model{};
   bool wrist = false, active_wrist = false, gripper = false, active_gripper = false;
+  bool left_handed = false;  // dhdIsLeftHanded: the gripper's angle and force come mirrored (§1.6)
   bool calibrate = true, gravity_compensation = true;
   double apparent_mass[3] = {0, 0, 0}, apparent_damping[3] = {0, 0, 0};
+  unsigned status_period = 1;  // reads between looks at dhdGetStatus
+  unsigned reads_since_status = 0;
+  double resume_speed = 0.1;   // m/s
   std::uint64_t sequence = 0;
-  bool faulted = false;  // a call failed: forces are enabled again once the device answers
-  // The most recent failure, for last_error (read off the loop): the vendor's code and the call.
+  // Forces are off (the device turned them off, a call failed, or enter_safe_state did) and are to
+  // be turned on again; set from enter_safe_state's thread too.
+  std::atomic<bool> forces_off{false};
+  bool person_off = false;  // ... by a person (force button, dead-man switch): theirs to turn on
+  // Commands the runtime scaled down (DHD_MOTOR_SATURATED, §1.4): counted, logged at stop.
+  std::atomic<std::uint64_t> commands{0}, saturated{0};
+  // The most recent failure, for last_error (read off the loop): the vendor's code and the call
+  // (code 0: `failed_call` is the whole text, the driver's own words or a force-off cause).
   std::atomic<int> failed_code{0};
   std::atomic<const char*> failed_call{nullptr};
   haptic_driver_log_fn log = nullptr;
@@ -192,10 +271,25 @@ struct Device {
   }
   /// Records a failed call (a negative return, §1.4) for last_error; returns HAPTIC_DRIVER_FAILED.
   int failed(const char* call) {
-    faulted = true;
+    forces_off.store(true, std::memory_order_relaxed);  // the SDK may have dropped them (§1.5)
     failed_code.store(api.ErrorGetLast(), std::memory_order_relaxed);
     failed_call.store(call, std::memory_order_release);
     return HAPTIC_DRIVER_FAILED;
+  }
+  /// Records a fault in the driver's own words (a fixed string).
+  void says(const char* words) {
+    failed_code.store(0, std::memory_order_relaxed);
+    failed_call.store(words, std::memory_order_release);
+  }
+  /// Commands zero force (and torque, gripper force) at once: the SDK's gravity compensation goes
+  /// out with it (§1.6). Returns the setter's result (§1.4); `call` names the setter.
+  int command_zero(const char*& call) const {
+    if ((active_wrist || active_gripper) && api.SetForceAndTorqueAndGripperForce != nullptr) {
+      call = "dhdSetForceAndTorqueAndGripperForce";
+      return api.SetForceAndTorqueAndGripperForce(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, id);
+    }
+    call = "dhdSetForce";
+    return api.SetForce(0.0, 0.0, 0.0, id);
   }
 };
 
@@ -209,7 +303,8 @@ std::string vendor_error(const DhdApi& api) {
 haptic::vendor::DriverParams read_params(const char* params_json) {
   return haptic::vendor::DriverParams(params_json, {"library", "index", "serial", "calibrate",
                                                     "gravity_compensation", "max_force", "workspace_radius",
-                                                    "apparent_mass", "apparent_damping"});
+                                                    "apparent_mass", "apparent_damping", "status_period",
+                                                    "resume_speed"});
 }
 
 void* create(const char* params_json, char* error) {
@@ -269,14 +364,48 @@ void* create(const char* params_json, char* error) {
                     ") is not one this driver knows: give params.max_force (N) and "
                     "params.workspace_radius (m) from its manual");
     }
-    device->wrist = api.HasWrist(device->id);
-    device->active_wrist = api.HasActiveWrist(device->id);
-    device->gripper = api.HasGripper(device->id);
-    device->active_gripper = api.HasActiveGripper(device->id);
+    // A runtime without the equipment queries drives wrist-less devices only.
+    device->wrist = api.HasWrist != nullptr ? api.HasWrist(device->id) : wrist_by_type(device->type);
+    device->active_wrist = api.HasActiveWrist != nullptr && api.HasActiveWrist(device->id);
+    device->gripper = api.HasGripper != nullptr && api.HasGripper(device->id);
+    device->active_gripper = api.HasActiveGripper != nullptr && api.HasActiveGripper(device->id);
+    device->left_handed = api.IsLeftHanded != nullptr && api.IsLeftHanded(device->id);
+    const char* lacking = nullptr;  // the first function the device's wrist or gripper needs
+    if (device->wrist && api.GetOrientationFrame == nullptr) {
+      lacking = "dhdGetOrientationFrame";
+    } else if (device->wrist && api.GetAngularVelocityRad == nullptr) {
+      lacking = "dhdGetAngularVelocityRad";
+    } else if (device->gripper && api.GetGripperAngleRad == nullptr) {
+      lacking = "dhdGetGripperAngleRad";
+    } else if ((device->active_wrist || device->active_gripper) && api.SetForceAndTorqueAndGripperForce == nullptr) {
+      lacking = "dhdSetForceAndTorqueAndGripperForce";
+    }
+    if (lacking != nullptr) {
+      api.Close(device->id);
+      dlclose(device->library);
+      return refuse("the Force Dimension runtime lacks " + std::string(lacking) + ", which the " + device->name +
+                    "'s wrist or gripper needs (an SDK older than 3.17?)");
+    }
     device->calibrate = params.boolean("calibrate").value_or(true);
     device->gravity_compensation = params.boolean("gravity_compensation").value_or(true);
     if (auto m = params.triple("apparent_mass")) std::copy(m->begin(), m->end(), device->apparent_mass);
     if (auto b = params.triple("apparent_damping")) std::copy(b->begin(), b->end(), device->apparent_damping);
+    if (auto n = params.number("status_period")) {
+      if (!(*n >= 1.0 && *n <= 1000.0 && *n == std::floor(*n))) {
+        api.Close(device->id);
+        dlclose(device->library);
+        return refuse("params.status_period: a whole number of reads, 1 to 1000");
+      }
+      device->status_period = static_cast<unsigned>(*n);
+    }
+    if (auto v = params.number("resume_speed")) {
+      if (!(*v > 0.0 && std::isfinite(*v))) {
+        api.Close(device->id);
+        dlclose(device->library);
+        return refuse("params.resume_speed: a speed > 0 (m/s)");
+      }
+      device->resume_speed = *v;
+    }
     return device.release();
   } catch (const std::exception& failure) {
     return refuse(failure.what());
@@ -321,15 +450,33 @@ int start(void* driver) {
   DhdApi& api = device->api;
   // Calibration (§1.3, DRD): a device in RESET mode is not initialized; drdAutoInit moves it to a
   // known position and resets its encoders, then the robotic controller is stopped (as CHAI3D does).
-  if (api.drdIsInitialized != nullptr && !api.drdIsInitialized(device->id)) {
+  // Only a device the DRD supports (drdIsSupported: its regulation is built in) is calibrated so;
+  // for another (a Falcon) the status's RESET says whether it must be calibrated by hand.
+  const bool drd = api.drdIsInitialized != nullptr && api.drdAutoInit != nullptr &&
+                   (api.drdIsSupported == nullptr || api.drdIsSupported(device->id));
+  bool needs_calibration = false;
+  if (drd) {
+    needs_calibration = !api.drdIsInitialized(device->id);
+  } else {
+    int status[kStatusSize] = {};
+    if (api.GetStatus(status, device->id) < 0) return device->failed("dhdGetStatus");
+    needs_calibration = status[kStatusReset] != 0;
+  }
+  if (needs_calibration) {
     if (!device->calibrate) {
       device->say(HAPTIC_DRIVER_LOG_ERROR, "the device is not calibrated and params.calibrate is false");
-      device->failed_code.store(0);
-      device->failed_call.store("the device is not calibrated and params.calibrate is false");
+      device->says("the device is not calibrated and params.calibrate is false");
+      return HAPTIC_DRIVER_FAILED;
+    }
+    if (!drd) {
+      const char* why = "the device is not calibrated (RESET mode) and the DRD cannot calibrate it "
+                        "(drdIsSupported: false): calibrate it by hand as its manual says, then start again";
+      device->say(HAPTIC_DRIVER_LOG_ERROR, why);
+      device->says(why);
       return HAPTIC_DRIVER_FAILED;
     }
     device->say(HAPTIC_DRIVER_LOG_WARNING, "calibrating: the device moves to its reset position (keep clear)");
-    if (api.drdAutoInit == nullptr || api.drdAutoInit(device->id) < 0) return device->failed("drdAutoInit");
+    if (api.drdAutoInit(device->id) < 0) return device->failed("drdAutoInit");
     if (api.drdStop != nullptr) api.drdStop(true, device->id);
     device->say(HAPTIC_DRIVER_LOG_INFO, "calibrated");
   }
@@ -337,11 +484,23 @@ int start(void* driver) {
     return device->failed("dhdSetGravityCompensation");
   }
   if (api.EnableForce(kDhdOn, device->id) < 0) return device->failed("dhdEnableForce");
+  // Zero force at once: the gravity compensation goes out with a command only (§1.6), and until
+  // the loop's first write the arm would fall.
+  const char* zero_call = nullptr;
+  if (device->command_zero(zero_call) < 0) return device->failed(zero_call);
+  device->forces_off.store(false);
+  device->person_off = false;
+  device->reads_since_status = 0;
+  device->commands.store(0);
+  device->saturated.store(0);
   device->failed_code.store(0);
   device->failed_call.store(nullptr);
   device->say(HAPTIC_DRIVER_LOG_INFO, "forces enabled on " + device->name + (device->gravity_compensation
                                                                               ? ", the SDK's gravity compensation on"
                                                                               : ", gravity compensation off"));
+  if (device->left_handed && device->gripper) {
+    device->say(HAPTIC_DRIVER_LOG_INFO, "a left-handed device: its gripper's angle and force are mirrored");
+  }
   return HAPTIC_DRIVER_OK;
 }
 
@@ -349,6 +508,12 @@ void stop(void* driver) {
   auto* device = static_cast<Device*>(driver);
   device->api.SetForce(0.0, 0.0, 0.0, device->id);
   device->api.Stop(device->id);  // forces off, brakes on
+  if (const std::uint64_t saturated = device->saturated.load(); saturated > 0) {
+    device->say(HAPTIC_DRIVER_LOG_WARNING,
+                std::to_string(saturated) + " of " + std::to_string(device->commands.load()) +
+                    " force commands came back DHD_MOTOR_SATURATED: the device scaled them down (a motor "
+                    "could not deliver its share), so it applied less than hapticd reported");
+  }
 }
 
 // Each getter returns 0 or DHD_TIMEGUARD (1) on success, -1 on error (§1.4): success is >= 0.
@@ -356,6 +521,7 @@ int read_sensors(void* driver, haptic_driver_reading* reading) {
   auto* device = static_cast<Device*>(driver);
   const DhdApi& api = device->api;
   const char id = device->id;
+  reading->safe_state = 0;  // hapticd hands the same reading back each call
   if (api.GetPosition(&reading->q[0], &reading->q[1], &reading->q[2], id) < 0) {
     return device->failed("dhdGetPosition");
   }
@@ -371,16 +537,48 @@ int read_sensors(void* driver, haptic_driver_reading* reading) {
   } else {
     reading->orientation_W[0] = 1.0;
   }
-  if (device->gripper && api.GetGripperAngleRad(&reading->gripper, id) < 0) {
-    return device->failed("dhdGetGripperAngleRad");
+  if (device->gripper) {
+    if (api.GetGripperAngleRad(&reading->gripper, id) < 0) return device->failed("dhdGetGripperAngleRad");
+    if (device->left_handed) reading->gripper = -reading->gripper;  // negative on a left hand (§1.6)
   }
   reading->buttons = api.GetButtonMask(id);
-  // Back after a failure (a device plugged in again): the SDK leaves its forces off until asked.
-  if (device->faulted) {
-    if (api.EnableForce(kDhdOn, id) < 0) return device->failed("dhdEnableForce");
-    device->faulted = false;
-  }
   reading->sequence = ++device->sequence;  // each call reads the device afresh
+  // The force state, every status_period reads, and every read while forces are off.
+  const bool off = device->forces_off.load(std::memory_order_relaxed);
+  if (!off && ++device->reads_since_status < device->status_period) return HAPTIC_DRIVER_OK;
+  device->reads_since_status = 0;
+  int status[kStatusSize] = {};
+  if (api.GetStatus(status, id) < 0) return device->failed("dhdGetStatus");
+  const bool on = status[kStatusForce] != 0;
+  if (!off) {
+    if (on) return HAPTIC_DRIVER_OK;
+    // The device turned them off itself while its setters went on succeeding.
+    const int cause = status[kStatusForceOffCause];
+    device->person_off = by_person(cause);
+    device->forces_off.store(true, std::memory_order_relaxed);
+    device->says(force_off_words(cause));
+    reading->safe_state = 1;
+    return HAPTIC_DRIVER_OK;
+  }
+  // Forces are off: a person's are theirs to turn on; others are turned on once the hand is slow.
+  if (device->person_off) {
+    if (!on) {
+      reading->safe_state = 1;
+      return HAPTIC_DRIVER_OK;
+    }
+  } else {
+    for (int i = 0; i < 3; ++i) {
+      if (!(std::fabs(reading->q_dot[i]) < device->resume_speed)) {
+        reading->safe_state = 1;
+        return HAPTIC_DRIVER_OK;
+      }
+    }
+    if (api.EnableForce(kDhdOn, id) < 0) return device->failed("dhdEnableForce");
+  }
+  const char* zero_call = nullptr;
+  if (device->command_zero(zero_call) < 0) return device->failed(zero_call);  // zero first
+  device->person_off = false;
+  device->forces_off.store(false, std::memory_order_relaxed);
   return HAPTIC_DRIVER_OK;
 }
 
@@ -392,23 +590,29 @@ int write_command(void* driver, const haptic_driver_command* command, double /*d
   int result;
   if (device->active_wrist || device->active_gripper) {
     const double* t = command->torque_W;
+    // A left-handed device's gripper force is mirrored as its angle is (CHAI3D negates both, §1.6).
+    const double fg = device->active_gripper ? (device->left_handed ? -1.0 : 1.0) * command->gripper_force : 0.0;
     result = api.SetForceAndTorqueAndGripperForce(f[0], f[1], f[2], device->active_wrist ? t[0] : 0.0,
                                                   device->active_wrist ? t[1] : 0.0,
-                                                  device->active_wrist ? t[2] : 0.0,
-                                                  device->active_gripper ? command->gripper_force : 0.0,
-                                                  device->id);
+                                                  device->active_wrist ? t[2] : 0.0, fg, device->id);
     if (result < 0) return device->failed("dhdSetForceAndTorqueAndGripperForce");
   } else {
     result = api.SetForce(f[0], f[1], f[2], device->id);
     if (result < 0) return device->failed("dhdSetForce");
   }
+  device->commands.fetch_add(1, std::memory_order_relaxed);
+  if (result == kMotorSaturated) device->saturated.fetch_add(1, std::memory_order_relaxed);
   return HAPTIC_DRIVER_OK;
 }
 
+// Forces off, which puts the device in BRAKE mode ([FDC-DOCS] Device Modes); dhdSetBrakes alone
+// leaves a device in FORCE mode. The DHD API is thread-safe ([FDC-DOCS] Threading), so this may
+// run beside a hung read. The next read with the hand slow turns them on again, zero force first.
 void enter_safe_state(void* driver) {
   auto* device = static_cast<Device*>(driver);
+  device->forces_off.store(true, std::memory_order_relaxed);
   device->api.SetForce(0.0, 0.0, 0.0, device->id);
-  device->api.SetBrakes(kDhdOn, device->id);
+  device->api.EnableForce(kDhdOff, device->id);
 }
 
 void set_log(void* driver, haptic_driver_log_fn log, void* context) {
@@ -468,7 +672,7 @@ void last_error(void* driver, char* error) {
     return;
   }
   const int code = device->failed_code.load(std::memory_order_relaxed);
-  if (code == 0) {  // a refusal of this driver's own, not the runtime's
+  if (code == 0) {  // this driver's own words (a refusal, a force-off cause), not a runtime error
     std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", call);
     return;
   }
