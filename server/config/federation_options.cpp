@@ -27,6 +27,9 @@ federation::Ros2Options ros2_of(const v1::Ros2Config& ros2) {
   out.ros_namespace = ros2.ros_namespace();
   out.frame_id = ros2.frame_id();
   if (ros2.has_wrench_input()) out.wrench_topic = ros2.wrench_input().topic();
+  out.stamp_clock = ros2.stamp_clock() == v1::Ros2Config::SERVER_TIME
+                        ? federation::Ros2Options::StampClock::kServerTime
+                        : federation::Ros2Options::StampClock::kSystemTime;
   return out;
 }
 

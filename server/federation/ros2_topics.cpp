@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <ctime>
 #include <stdexcept>
 #include <vector>
 
@@ -25,11 +26,12 @@ const TopicKind kTopics[] = {{"/pose", &geometry_msgs_msg_dds__PoseStamped__desc
 
 bool name_char(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_'; }
 
-std_msgs_msg_dds__Header_ header(const ToolState& tool, const std::string& frame_id) {
+/// The header: stamped at `stamp_ns` (ns since the clock's epoch), in `frame_id`.
+std_msgs_msg_dds__Header_ header(std::int64_t stamp_ns, const std::string& frame_id) {
   std_msgs_msg_dds__Header_ out{};
   // builtin_interfaces/Time: seconds and nanoseconds in [0, 1e9), for negative times too.
-  std::int64_t sec = tool.time_ns / 1'000'000'000;
-  std::int64_t nanosec = tool.time_ns % 1'000'000'000;
+  std::int64_t sec = stamp_ns / 1'000'000'000;
+  std::int64_t nanosec = stamp_ns % 1'000'000'000;
   if (nanosec < 0) {
     nanosec += 1'000'000'000;
     --sec;
@@ -41,6 +43,24 @@ std_msgs_msg_dds__Header_ header(const ToolState& tool, const std::string& frame
 }
 
 geometry_msgs_msg_dds__Vector3_ vector(const engine::Vec3& v) { return {v.x, v.y, v.z}; }
+
+/// The publishers' QoS: reliable, so that a ROS 2 subscriber with the default profile (reliable,
+/// keep last 10) matches as well as one with the sensor-data profile (best effort); keep last 1,
+/// so that the writer never waits on a slow reader (history replaces what was not yet taken);
+/// volatile, as ROS 2's default.
+dds_qos_t* publisher_qos() {
+  dds_qos_t* qos = dds_create_qos();
+  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(1));
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+  return qos;
+}
+
+std::int64_t wall_clock_ns() {
+  timespec now{};
+  clock_gettime(CLOCK_REALTIME, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
 
 }  // namespace
 
@@ -81,7 +101,7 @@ std::string dds_topic_of(const std::string& ros_topic) { return "rt" + ros_topic
 Ros2ToolPublisher::Ros2ToolPublisher(const Participant& participant, const Ros2Options& options)
     : options_(options) {
   if (std::string error = validate(options); !error.empty()) throw std::runtime_error("ros2." + error);
-  dds_qos_t* qos = newest_only_qos();  // ROS 2's sensor-data profile
+  dds_qos_t* qos = publisher_qos();
   for (int i = 0; i < 4; ++i) {
     const std::string name = dds_topic_of(options.ros_namespace + kTopics[i].suffix);
     const dds_entity_t topic = dds_create_topic(participant.handle(), kTopics[i].type, name.c_str(), nullptr, nullptr);
@@ -102,7 +122,9 @@ Ros2ToolPublisher::~Ros2ToolPublisher() {
 }
 
 bool Ros2ToolPublisher::publish(const ToolState& tool) {
-  const std_msgs_msg_dds__Header_ stamp = header(tool, options_.frame_id);
+  const std_msgs_msg_dds__Header_ stamp =
+      header(options_.stamp_clock == Ros2Options::StampClock::kServerTime ? tool.time_ns : wall_clock_ns(),
+             options_.frame_id);
   geometry_msgs_msg_dds__PoseStamped_ pose{};
   pose.header = stamp;
   pose.pose.position = {tool.p_WT.x, tool.p_WT.y, tool.p_WT.z};

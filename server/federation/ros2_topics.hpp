@@ -41,6 +41,10 @@ struct Ros2Options {
   /// The topic a ROS 2 node sends the tool's force on, under ros_namespace ("wrench_command":
   /// <namespace>/wrench_command): a relative ROS name, not one of the four published. "": none.
   std::string wrench_topic;
+  /// What header.stamp counts: the host's wall clock at publication (what ROS tools compare), or
+  /// the tick's server time (reproducible in lockstep).
+  enum class StampClock { kSystemTime, kServerTime };
+  StampClock stamp_clock = StampClock::kSystemTime;
 };
 
 /// "" or one message naming the bad option.

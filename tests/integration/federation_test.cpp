@@ -33,7 +33,7 @@ TEST(Federation, ASitesToolIsOnRos2TopicsAsItsNewestTick) {
   test::ServerProcess server(R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
       "real_time": {"use_fifo": false},
       "federation": {"site": "bench-a", "domain_id": )" + std::to_string(domain) + R"(, "peers": ["127.0.0.1"],
-                     "ros2": {"rate_hz": 1000}}})");
+                     "ros2": {"rate_hz": 1000, "stamp_clock": "SERVER_TIME"}}})");
   federation::DomainOptions options;
   options.domain_id = domain;
   options.peers = {"127.0.0.1"};
@@ -73,6 +73,52 @@ TEST(Federation, ASitesToolIsOnRos2TopicsAsItsNewestTick) {
   }
   EXPECT_TRUE(matched) << "no pose of the stepped tick within 4 s";
   EXPECT_LT(last.position.z, 0.02);  // the hand pushed the tool down
+}
+
+// As a ROS 2 node with the default QoS profile (reliable, keep last 10) subscribes: it matches
+// hapticd's publishers, and header.stamp is this host's wall clock (the default stamp_clock), as
+// tf2, rviz and `ros2 topic delay` expect, not the seconds since the server started.
+TEST(Federation, ARos2NodeWithTheDefaultProfileGetsPosesStampedWithTheWallClock) {
+  const std::uint32_t domain = 100 + static_cast<std::uint32_t>((getpid() + 7) % 120);
+  test::ServerProcess server(R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
+      "real_time": {"use_fifo": false},
+      "federation": {"site": "bench-r", "domain_id": )" + std::to_string(domain) + R"(, "peers": ["127.0.0.1"],
+                     "ros2": {"rate_hz": 1000}}})");
+  federation::DomainOptions options;
+  options.domain_id = domain;
+  options.peers = {"127.0.0.1"};
+  federation::Participant node(options);
+  const dds_entity_t topic = dds_create_topic(node.handle(), &geometry_msgs_msg_dds__PoseStamped__desc,
+                                              "rt/hapticd/bench_r/port0/pose", nullptr, nullptr);
+  ASSERT_GT(topic, 0) << federation::dds_error(topic);
+  dds_qos_t* ros_default = dds_create_qos();  // rclcpp's default: reliable, keep last 10, volatile
+  dds_qset_reliability(ros_default, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(ros_default, DDS_HISTORY_KEEP_LAST, 10);
+  dds_qset_durability(ros_default, DDS_DURABILITY_VOLATILE);
+  const dds_entity_t reader = dds_create_reader(node.handle(), topic, ros_default, nullptr);
+  dds_delete_qos(ros_default);
+  ASSERT_GT(reader, 0) << federation::dds_error(reader);
+
+  Client client(config_for(server));
+  bool received = false;
+  for (int attempt = 0; attempt < 200 && !received; ++attempt) {
+    step_and_get(client, 1);  // a new tick for the relay to publish each try
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    void* samples[4] = {};
+    dds_sample_info_t infos[4];
+    const dds_return_t n = dds_take(reader, samples, infos, 4, 4);
+    for (dds_return_t i = 0; i < n; ++i) {
+      if (!infos[i].valid_data) continue;
+      const auto& pose = *static_cast<const geometry_msgs_msg_dds__PoseStamped_*>(samples[i]);
+      const double stamp = pose.header.stamp.sec + 1e-9 * pose.header.stamp.nanosec;
+      const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+      // The wall clock (not seconds since start): within a minute of now, however loaded the host.
+      EXPECT_NEAR(stamp, now, 60.0);
+      received = true;
+    }
+    if (n > 0) dds_return_loan(reader, samples, n);
+  }
+  EXPECT_TRUE(received) << "a reliable reader got no pose within 4 s: the writers do not match ROS 2's default profile";
 }
 
 // A ROS 2 node's wrench on the tool of a lockstep hapticd (federation.ros2.wrench_input): a writer

@@ -71,6 +71,7 @@ TEST(Ros2Topics, TheToolArrivesAsPoseTwistWrenchAndJoyUnderRos2sOwnNames) {
   Ros2Options options;
   options.ros_namespace = "/hapticd/bench/port0";
   options.buttons = 2;
+  options.stamp_clock = Ros2Options::StampClock::kServerTime;  // the tick's own stamp, exactly
   Ros2ToolPublisher publisher(hapticd, options);
   RosLikeReader pose(node, &geometry_msgs_msg_dds__PoseStamped__desc, "/hapticd/bench/port0/pose");
   RosLikeReader twist(node, &geometry_msgs_msg_dds__TwistStamped__desc, "/hapticd/bench/port0/twist");
