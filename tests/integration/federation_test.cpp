@@ -28,6 +28,20 @@ namespace {
 using test::config_for;
 using test::step_and_get;
 
+/// Takes the poses waiting at `reader` (up to 4), calling `see` with each and its stamp (s).
+template <typename See>
+void take_poses(dds_entity_t reader, See see) {
+  void* samples[4] = {};
+  dds_sample_info_t infos[4];
+  const dds_return_t n = dds_take(reader, samples, infos, 4, 4);
+  for (dds_return_t i = 0; i < n; ++i) {
+    if (!infos[i].valid_data) continue;
+    const auto& pose = *static_cast<const geometry_msgs_msg_dds__PoseStamped_*>(samples[i]);
+    see(pose, pose.header.stamp.sec + 1e-9 * pose.header.stamp.nanosec);
+  }
+  if (n > 0) dds_return_loan(reader, samples, n);
+}
+
 TEST(Federation, ASitesToolIsOnRos2TopicsAsItsNewestTick) {
   const std::uint32_t domain = 100 + static_cast<std::uint32_t>(getpid() % 120);
   test::ServerProcess server(R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
@@ -53,13 +67,7 @@ TEST(Federation, ASitesToolIsOnRos2TopicsAsItsNewestTick) {
   State last = stepped;
   for (int attempt = 0; attempt < 200 && !matched; ++attempt) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    void* samples[4] = {};
-    dds_sample_info_t infos[4];
-    const dds_return_t n = dds_take(reader, samples, infos, 4, 4);
-    for (dds_return_t i = 0; i < n; ++i) {
-      if (!infos[i].valid_data) continue;
-      const auto& pose = *static_cast<const geometry_msgs_msg_dds__PoseStamped_*>(samples[i]);
-      const double stamp = pose.header.stamp.sec + 1e-9 * pose.header.stamp.nanosec;
+    take_poses(reader, [&](const geometry_msgs_msg_dds__PoseStamped_& pose, double stamp) {
       if (std::abs(stamp - last.server_time) < 1e-9) {
         EXPECT_EQ(pose.pose.position.z, last.position.z);
         EXPECT_EQ(pose.pose.position.x, last.position.x);
@@ -67,8 +75,7 @@ TEST(Federation, ASitesToolIsOnRos2TopicsAsItsNewestTick) {
         EXPECT_STREQ(pose.header.frame_id, "hapticd_world");
         matched = true;
       }
-    }
-    if (n > 0) dds_return_loan(reader, samples, n);
+    });
     if (!matched && attempt % 10 == 9) last = step_and_get(client, 1);  // discovery may have been late
   }
   EXPECT_TRUE(matched) << "no pose of the stepped tick within 4 s";
@@ -104,19 +111,12 @@ TEST(Federation, ARos2NodeWithTheDefaultProfileGetsPosesStampedWithTheWallClock)
   for (int attempt = 0; attempt < 200 && !received; ++attempt) {
     step_and_get(client, 1);  // a new tick for the relay to publish each try
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    void* samples[4] = {};
-    dds_sample_info_t infos[4];
-    const dds_return_t n = dds_take(reader, samples, infos, 4, 4);
-    for (dds_return_t i = 0; i < n; ++i) {
-      if (!infos[i].valid_data) continue;
-      const auto& pose = *static_cast<const geometry_msgs_msg_dds__PoseStamped_*>(samples[i]);
-      const double stamp = pose.header.stamp.sec + 1e-9 * pose.header.stamp.nanosec;
+    take_poses(reader, [&](const geometry_msgs_msg_dds__PoseStamped_&, double stamp) {
       const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
       // The wall clock (not seconds since start): within a minute of now, however loaded the host.
       EXPECT_NEAR(stamp, now, 60.0);
       received = true;
-    }
-    if (n > 0) dds_return_loan(reader, samples, n);
+    });
   }
   EXPECT_TRUE(received) << "a reliable reader got no pose within 4 s: the writers do not match ROS 2's default profile";
 }
