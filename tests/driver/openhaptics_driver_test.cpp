@@ -18,6 +18,7 @@
 
 #include "driver_kit.hpp"
 #include "driver_test_support.hpp"
+#include "engine/core/rotation.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/device_port.hpp"
 #include "runtime/driver_device.hpp"
@@ -111,6 +112,32 @@ TEST(OpenHaptics, AWallHoldsAHandWhereTheSpringSaysWithTheAxesOfW) {
     ASSERT_EQ(port.read(tool), DeviceStatus::kOk) << "tick " << k;
   }
   EXPECT_NEAR(tool.p_WT.z - z0, -1.0 / 500.0, 5e-5);
+  device.stop();
+}
+
+// The gimbal turned about each of HD's axes reads as the same turn about the matching axis of W
+// (the one the position's axes map to: W x = HD z, W y = HD x, W z = HD y, SOURCES.md §2.5), on
+// the manual clock.
+TEST(OpenHaptics, TheGimbalsTurnAboutEachHdAxisIsATurnAboutTheMatchingAxisOfW) {
+  Standin standin("rig=Touch", true);
+  DriverDevice device(oh(R"("device": "rig")"));
+  ASSERT_TRUE(device.description().capabilities.orientation);
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  const struct {
+    const char* turn;  // a rotation vector in HD's frame, rad
+    engine::Vec3 in_w;
+  } cases[] = {{"0.3 0 0", {0, 0.3, 0}}, {"0 0.3 0", {0, 0, 0.3}}, {"0 0 0.3", {0.3, 0, 0}},
+               {"0.2 -0.1 0.25", {0.25, 0.2, -0.1}}};
+  for (const auto& c : cases) {
+    ASSERT_EQ(standin.control(std::string("turn rig ") + c.turn), 0) << c.turn;
+    ASSERT_EQ(standin.control("tick 1"), 0);
+    DeviceReading reading;
+    ASSERT_EQ(device.read(reading), DeviceStatus::kOk) << c.turn;
+    const engine::Vec3 turned = engine::rotation_vector(reading.R_WT);
+    EXPECT_NEAR(turned.x, c.in_w.x, 1e-9) << c.turn;
+    EXPECT_NEAR(turned.y, c.in_w.y, 1e-9) << c.turn;
+    EXPECT_NEAR(turned.z, c.in_w.z, 1e-9) << c.turn;
+  }
   device.stop();
 }
 
