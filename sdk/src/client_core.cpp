@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "haptic/io/loopback.hpp"
 #include "haptic/io/session_id.hpp"
 #include "conversions.hpp"
 #include "status_mapping.hpp"
@@ -48,11 +49,11 @@ std::uint16_t udp_port_of(const std::string& address) {
   return static_cast<std::uint16_t>(port);
 }
 
-/// A host no other machine can listen on: localhost, 127.0.0.0/8, ::1, or a Unix socket target.
+/// A host no other machine can listen on: localhost, a numeric address in 127.0.0.0/8, ::1 or
+/// ::ffff:127.0.0.0/104, or a Unix socket target. Another name is not, whatever it resolves to.
 bool is_loopback(const std::string& server_address) {
   if (server_address.rfind("unix:", 0) == 0) return true;
-  const std::string host = host_of(server_address);
-  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+  return io::is_loopback_literal(host_of(server_address));
 }
 
 void check_config(const ClientConfig& config) {

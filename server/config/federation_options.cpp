@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "haptic/io/loopback.hpp"
+
 namespace haptic::config {
 
 namespace {
@@ -33,10 +35,9 @@ federation::Ros2Options ros2_of(const v1::Ros2Config& ros2) {
   return out;
 }
 
-/// A loopback interface: the federation stays on this host.
-bool loopback(const std::string& interface) {
-  return interface == "lo" || interface == "::1" || interface.rfind("127.", 0) == 0;
-}
+/// A loopback interface (by name or by a numeric loopback address): the federation stays on this
+/// host.
+bool loopback(const std::string& interface) { return interface == "lo" || io::is_loopback_literal(interface); }
 
 }  // namespace
 

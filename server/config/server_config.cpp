@@ -17,24 +17,12 @@
 #include "config/federation_options.hpp"
 #include "config/security.hpp"
 #include "haptic/io/bounded_file.hpp"
+#include "haptic/io/loopback.hpp"
 #include "haptic/io/scene_file.hpp"
 #include "schema/scene_specs.hpp"
 
 namespace haptic::config {
 namespace {
-
-bool is_loopback_sockaddr(const sockaddr* address) {
-  if (address->sa_family == AF_INET) {
-    const auto* v4 = reinterpret_cast<const sockaddr_in*>(address);
-    return (ntohl(v4->sin_addr.s_addr) >> 24) == 127;
-  }
-  if (address->sa_family == AF_INET6) {
-    const in6_addr& v6 = reinterpret_cast<const sockaddr_in6*>(address)->sin6_addr;
-    if (IN6_IS_ADDR_LOOPBACK(&v6)) return true;
-    return IN6_IS_ADDR_V4MAPPED(&v6) && v6.s6_addr[12] == 127;
-  }
-  return false;
-}
 
 /// Refuses a non-loopback bind address unless the control plane has TLS and tokens, or remote
 /// access without them was accepted.
@@ -112,7 +100,7 @@ bool is_loopback_host(const std::string& host) {
   if (::getaddrinfo(host.c_str(), nullptr, &hints, &found) != 0 || found == nullptr) return false;
   bool all_loopback = true;
   for (const addrinfo* ai = found; ai != nullptr; ai = ai->ai_next) {
-    all_loopback = all_loopback && is_loopback_sockaddr(ai->ai_addr);
+    all_loopback = all_loopback && io::is_loopback_address(ai->ai_addr);
   }
   ::freeaddrinfo(found);
   return all_loopback;

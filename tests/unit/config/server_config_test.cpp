@@ -279,6 +279,18 @@ TEST(Config, TheFederationSectionTakesItsDefaultsAndNamesABadField) {
   EXPECT_EQ(parse_config(R"({"federation": {"site": "a", "interface": "eth0", "allow_insecure": true}})", "x")
                 .federation().interface(),
             "eth0");
+  // An address or name that only looks like loopback leaves this host too; loopback's own stay.
+  for (const char* away : {"10.0.127.1", "127.example.com", "0.0.0.0"}) {
+    EXPECT_NE(error_of(std::string(R"({"federation": {"site": "a", "interface": ")") + away + R"("}})")
+                  .find("leaves this host without DDS Security"),
+              std::string::npos)
+        << away;
+  }
+  for (const char* here : {"lo", "127.0.0.1", "::1", "::ffff:127.0.0.1"}) {
+    EXPECT_EQ(parse_config(std::string(R"({"federation": {"site": "a", "interface": ")") + here + R"("}})", "x")
+                  .federation().interface(),
+              here);
+  }
   EXPECT_NE(error_of(R"({"federation": {"site": "a", "ros2": {"rate_hz": 5000}}})")
                 .find("federation.ros2.rate_hz: must be 1 to 1000 and at most the loop rate"),
             std::string::npos);

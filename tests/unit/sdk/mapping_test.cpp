@@ -367,6 +367,16 @@ TEST(Client, ATokenIsNeverSentInClearToAnotherHostUnlessAllowed) {
         << message;
     EXPECT_NE(message.find("TlsOptions"), std::string::npos) << message;
   }
+  // A gRPC address list is loopback only if every member is: one that is not is refused (the
+  // check looked at the first member alone). Should it pass, nothing leaves this machine.
+  config.server_address = "ipv4:127.0.0.1:1,0.0.0.0:2";
+  try {
+    Client client(config);
+    ADD_FAILURE() << "a token in clear to a list with a non-loopback address was not refused";
+  } catch (const InvalidArgumentError& error) {
+    EXPECT_NE(std::string(error.what()).find("would be sent in clear"), std::string::npos) << error.what();
+  }
+  config.server_address = "0.0.0.0:1";
   // The explicit opt-out passes this check (and says so on stderr): here the next check, an
   // invalid rpc_timeout, stops the client before any connection.
   config.allow_plaintext_token = true;
