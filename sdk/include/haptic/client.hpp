@@ -47,9 +47,11 @@ struct ClientConfig {
   /// Present: TLS (needed when the server has security.tls). Absent: plaintext.
   std::optional<TlsOptions> tls;
   /// The bearer token the server gave this client (its security.tokens); sent with every call.
-  /// Empty: none (a server without tokens). Sent only over TLS or to a loopback address: with a
-  /// token, no `tls` and another host, the Client refuses to start (InvalidArgumentError naming
-  /// TlsOptions), since anyone on the network could read the token and act with its role.
+  /// Empty: none (a server without tokens). Sent only over TLS or to a loopback address
+  /// (localhost, a numeric 127.x.y.z, ::1 or ::ffff:127.x.y.z, a unix: target; any other name,
+  /// and a gRPC address list, count as another host): with a token, no `tls` and another host,
+  /// the Client refuses to start (InvalidArgumentError naming TlsOptions), since anyone on the
+  /// network could read the token and act with its role.
   std::string token;
   /// Sends `token` in clear to a non-loopback address all the same, for a lab that has chosen
   /// that on a network it trusts; said on stderr each time a Client starts so.
