@@ -17,6 +17,7 @@
 #include "config/federation_options.hpp"
 #include "config/security.hpp"
 #include "config/server_config.hpp"
+#include "federation/dds_log.hpp"
 #include "schema/scene_specs.hpp"
 #include "net/prometheus_text.hpp"
 #include "net/tls_server_context.hpp"
@@ -310,6 +311,18 @@ void Server::join_federation(const schema::SceneLimits& limits) {
     ports.push_back({samples_[port].get(), descriptions_[port].buttons, remote_tools_[port].get(), ledgers_[port].get(),
                      port < robot_wrenches_.size() ? robot_wrenches_[port].get() : nullptr});
   }
+  // Cyclone's own lines (a rogue host's failed DDS Security handshakes, twice a second) into this
+  // log, identical ones once per 10 s and counted; before the participant, whose domain takes the
+  // sink when it is made.
+  federation::route_dds_log([](federation::DdsLogLevel level, const std::string& line) {
+    if (level == federation::DdsLogLevel::kError) {
+      spdlog::error("{}", line);
+    } else if (level == federation::DdsLogLevel::kWarning) {
+      spdlog::warn("{}", line);
+    } else {
+      spdlog::info("{}", line);
+    }
+  });
   federation::RelayOptions relay = config::relay_options(config_.federation(), config_.loop_rate_hz());
   relay.log = [](const std::string& line) { spdlog::warn("{}", line); };
   federated_scene_ = std::make_unique<FederatedScene>(*scene_, limits);
@@ -767,6 +780,7 @@ void Server::housekeeping_loop() {
       service_->end_session(id, v1::Event::LEASE_EXPIRED);
     }
     if (++housekeeping_rounds % 100 == 0) service_->end_sessions_of_expired_tokens();  // each second
+    if (relay_ && housekeeping_rounds % 100 == 0) federation::flush_dds_log(steady_clock::now());  // counts said
     scene_->compact();
     if (const auto faults = counters_.force_faults.load(std::memory_order_relaxed);
         faults != faults_reported) {

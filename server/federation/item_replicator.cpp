@@ -5,12 +5,15 @@
 namespace haptic::federation {
 
 ItemReplicator::ItemReplicator(const ReplicatorOptions& options, ReplicatedScene& scene)
-    : options_(options), scene_(scene), participant_(std::make_unique<Participant>(options.domain)) {
+    : options_(options),
+      scene_(scene),
+      participant_(std::make_unique<Participant>(options.domain)),
+      limiter_(options.log_window) {
   open(*participant_);
 }
 
 ItemReplicator::ItemReplicator(const ReplicatorOptions& options, ReplicatedScene& scene, const Participant& participant)
-    : options_(options), scene_(scene) {
+    : options_(options), scene_(scene), limiter_(options.log_window) {
   open(participant);
 }
 
@@ -49,9 +52,21 @@ void ItemReplicator::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-void ItemReplicator::poll() {
+void ItemReplicator::poll() { poll(std::chrono::steady_clock::now()); }
+
+void ItemReplicator::poll(std::chrono::steady_clock::time_point now) {
   publish_changes();
-  apply_arrivals();
+  apply_arrivals(now);
+  limiter_.flush(now, log_lines_);
+  for (const std::string& line : log_lines_) log(line);
+  log_lines_.clear();
+}
+
+void ItemReplicator::log_limited(const std::string& key, const std::string& line,
+                                 std::chrono::steady_clock::time_point now) {
+  limiter_.admit(key, line, now, log_lines_);
+  for (const std::string& line_now : log_lines_) log(line_now);
+  log_lines_.clear();
 }
 
 void ItemReplicator::log(const std::string& line) const {
@@ -94,7 +109,7 @@ void ItemReplicator::publish_changes() {
   }
 }
 
-void ItemReplicator::apply_arrivals() {
+void ItemReplicator::apply_arrivals(std::chrono::steady_clock::time_point now) {
   events_.clear();
   reader_->take(events_, options_.site);
   for (const SharedItemEvent& event : events_) {
@@ -106,7 +121,9 @@ void ItemReplicator::apply_arrivals() {
           applied_.fetch_add(1, std::memory_order_relaxed);
         } else {
           refused_.fetch_add(1, std::memory_order_relaxed);
-          log("federation: " + which + " (version " + std::to_string(event.state.version) + ") refused: " + error);
+          log_limited(event.state.site + "\nrefused",
+                      "federation: " + which + " (version " + std::to_string(event.state.version) + ") refused: " + error,
+                      now);
         }
         break;
       }
@@ -114,7 +131,8 @@ void ItemReplicator::apply_arrivals() {
         scene_.remove_remote(event.state.site, event.state.item);
         break;
       case SharedItemEvent::What::kLost:
-        log("federation: " + which + " ramps out: its site is no longer heard");
+        log_limited(event.state.site + "\nlost", "federation: " + which + " ramps out: its site is no longer heard",
+                    now);
         scene_.remove_remote(event.state.site, event.state.item);
         break;
     }

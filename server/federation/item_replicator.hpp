@@ -22,6 +22,7 @@
 
 #include "federation/dds_participant.hpp"
 #include "federation/item_topic.hpp"
+#include "federation/log_limiter.hpp"
 
 namespace haptic::federation {
 
@@ -54,6 +55,9 @@ struct ReplicatorOptions {
   std::chrono::milliseconds period{10};  // how often the scene is compared and the topic taken
   /// Where refusals and sites' comings and goings are reported (one line each); may be empty.
   std::function<void(const std::string&)> log;
+  /// Another site's refused items, and its items ramping out, are logged once in this long per
+  /// site (the rest counted, then summarized: LogLimiter).
+  std::chrono::milliseconds log_window{10000};
 };
 
 class ItemReplicator {
@@ -72,8 +76,10 @@ class ItemReplicator {
   void start();
   void stop();
 
-  /// One round, for tests that step it: publish what changed here, apply what arrived.
+  /// One round, for tests that step it: publish what changed here, apply what arrived (at `now`,
+  /// for the log's rate limit).
   void poll();
+  void poll(std::chrono::steady_clock::time_point now);
 
   std::uint64_t published() const { return published_.load(std::memory_order_relaxed); }
   std::uint64_t applied() const { return applied_.load(std::memory_order_relaxed); }
@@ -82,8 +88,10 @@ class ItemReplicator {
  private:
   void open(const Participant& participant);
   void publish_changes();
-  void apply_arrivals();
+  void apply_arrivals(std::chrono::steady_clock::time_point now);
   void log(const std::string& line) const;
+  /// `line` under the rate limit of `key` (a site and what happened).
+  void log_limited(const std::string& key, const std::string& line, std::chrono::steady_clock::time_point now);
 
   struct Published {
     std::uint64_t version_key = 0;
@@ -99,6 +107,8 @@ class ItemReplicator {
   std::uint64_t seen_generation_ = ~std::uint64_t{0};
   std::map<std::uint64_t, Published> published_items_;  // by local id
   std::vector<SharedItemEvent> events_;                  // scratch
+  LogLimiter limiter_;
+  std::vector<std::string> log_lines_;                   // scratch
   std::thread thread_;
   std::atomic<bool> stopping_{false};
   std::atomic<std::uint64_t> published_{0};

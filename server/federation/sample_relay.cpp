@@ -2,8 +2,24 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 
 namespace haptic::federation {
+
+namespace {
+
+std::chrono::steady_clock::duration log_window(const RelayOptions& options) {
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options.log_window_s));
+}
+
+std::string seconds(std::chrono::steady_clock::duration d) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f", std::chrono::duration<double>(d).count());
+  return text;
+}
+
+}  // namespace
 
 std::uint64_t remote_key(const std::string& site, std::uint32_t port) {
   // FNV-1a over the site's name, a 0 byte and the port: the same key at every site, 0 never.
@@ -18,7 +34,8 @@ SampleRelay::SampleRelay(const RelayOptions& options, const std::vector<RelayPor
       ports_(ports),
       participant_(std::make_unique<Participant>(options.domain)),
       masses_(masses),
-      masses_on_(masses.local != nullptr && masses.remote != nullptr) {
+      masses_on_(masses.local != nullptr && masses.remote != nullptr),
+      peer_log_(log_window(options)) {
   dds_ = std::make_unique<DdsTransport>(*participant_, options_.tools, masses_on_);
   transport_ = dds_.get();
   // An observer's permissions refuse the mass topic's writer: this site's copies are not
@@ -47,7 +64,8 @@ SampleRelay::SampleRelay(const RelayOptions& options, Transport& transport, cons
       ports_(ports),
       transport_(&transport),
       masses_(masses),
-      masses_on_(masses.local != nullptr && masses.remote != nullptr) {
+      masses_on_(masses.local != nullptr && masses.remote != nullptr),
+      peer_log_(log_window(options)) {
   options_.ros2.reset();
   last_tick_.assign(ports_.size(), 0);
   slots_.resize(ports_.size());
@@ -87,12 +105,14 @@ void SampleRelay::step(std::chrono::steady_clock::time_point now) {
     publish_masses();
   }
   if (!wrenches_in_.empty()) receive_wrenches();
+  watch_sites(now);
   ++periods_;
 }
 
 void SampleRelay::receive(std::chrono::steady_clock::time_point now) {
   received_.clear();
   transport_->take_tools(received_, options_.site);
+  for (const ToolState& tool : received_) heard(tool.site, now);
   const auto silence = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
       std::chrono::duration<double>(options_.silence_s));
   for (std::size_t port = 0; port < ports_.size(); ++port) {
@@ -175,6 +195,7 @@ namespace haptic::federation {
 void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
   received_masses_.clear();
   transport_->take_masses(received_masses_, options_.site);
+  for (const MassState& mass : received_masses_) heard(mass.site, now);
   const auto silence = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
       std::chrono::duration<double>(options_.silence_s));
   const std::uint64_t own = runtime::site_key(options_.site);
@@ -279,6 +300,44 @@ void SampleRelay::receive_wrenches() {
     ports_[port].robot->store(wrench);
     wrenches_accepted_.fetch_add(1, std::memory_order_relaxed);
   }
+}
+
+}  // namespace haptic::federation
+
+namespace haptic::federation {
+
+void SampleRelay::heard(const std::string& site, std::chrono::steady_clock::time_point now) {
+  const auto [it, first] = peers_.try_emplace(site);
+  Peer& peer = it->second;
+  if (!peer.present) {
+    // Arrivals share a key, departures another: a site that comes and goes is logged once a
+    // window each way, its further comings and goings counted.
+    const std::string line = first ? "federation: site \"" + site + "\" heard for the first time"
+                                   : "federation: site \"" + site + "\" heard again after " +
+                                         seconds(now - peer.heard) + " s of silence";
+    peer_log_.admit(site + "\n+", line, now, log_lines_);
+    peer.present = true;
+  }
+  peer.heard = now;
+}
+
+void SampleRelay::watch_sites(std::chrono::steady_clock::time_point now) {
+  const auto silence = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options_.silence_s));
+  for (auto& [site, peer] : peers_) {
+    if (peer.present && now - peer.heard > silence) {
+      peer.present = false;
+      peer_log_.admit(site + "\n-",
+                      "federation: site \"" + site + "\" not heard for " + seconds(silence) +
+                          " s: its tools and mass copies are dropped",
+                      now, log_lines_);
+    }
+  }
+  peer_log_.flush(now, log_lines_);
+  for (const std::string& line : log_lines_) {
+    if (options_.log) options_.log(line);
+  }
+  log_lines_.clear();
 }
 
 }  // namespace haptic::federation

@@ -8,7 +8,9 @@
 //   - takes the other sites' copies of the shared masses into the loop's mailbox, and publishes
 //     this site's copies when the loop has moved them;
 //   - with ros2.wrench_topic, takes each port's ROS 2 wrench (a robot's) into its mailbox, refusing
-//     one in another frame or with a NaN or infinity (counted, and logged once per port and reason).
+//     one in another frame or with a NaN or infinity (counted, and logged once per port and reason);
+//   - logs each other site's arrival, its going quiet (nothing from it for silence_s) and its
+//     return, one line each, rate-limited per site (LogLimiter).
 // The loop never waits on it, and a sample nobody asked for is never converted.
 
 #include <array>
@@ -16,6 +18,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -23,6 +26,7 @@
 #include <vector>
 
 #include "federation/dds_participant.hpp"
+#include "federation/log_limiter.hpp"
 #include "federation/mass_topic.hpp"
 #include "federation/ros2_topics.hpp"
 #include "federation/tool_topic.hpp"
@@ -45,8 +49,12 @@ struct RelayOptions {
   /// A remote tool or mass copy not heard from for this long is dropped from the mailboxes (its
   /// site stopped or left the network): its avatar and its coupling go. Unit: s.
   double silence_s = 0.5;
-  /// Where the relay says what it refused (a ROS 2 wrench's frame, ...); unset: nowhere.
+  /// Where the relay says what it refused (a ROS 2 wrench's frame, ...) and which sites come and
+  /// go; unset: nowhere.
   std::function<void(const std::string&)> log;
+  /// A site's arrivals, and its departures, logged at most once in this long each (further ones
+  /// counted, then summarized). Unit: s.
+  double log_window_s = 10.0;
 };
 
 /// One port's ring, the buttons its device reports, and (with the tool topic) its mailbox of
@@ -113,6 +121,10 @@ class SampleRelay {
   void receive_masses(std::chrono::steady_clock::time_point now);
   void publish_masses();
   void receive_wrenches();
+  /// A sample from `site` arrived at `now`.
+  void heard(const std::string& site, std::chrono::steady_clock::time_point now);
+  /// Sites quiet since before now − silence_s are gone; what changed is logged.
+  void watch_sites(std::chrono::steady_clock::time_point now);
 
   /// Which remote tool each mailbox slot of a port holds.
   struct Slot {
@@ -144,6 +156,14 @@ class SampleRelay {
       mass_heard_{};
   std::uint64_t last_mass_tick_ = 0;
   std::uint64_t periods_ = 0;                             // run()'s periods so far
+  /// Each other site ever heard: when last, and whether it is heard now.
+  struct Peer {
+    std::chrono::steady_clock::time_point heard;
+    bool present = false;
+  };
+  std::map<std::string, Peer> peers_;
+  LogLimiter peer_log_;
+  std::vector<std::string> log_lines_;                     // scratch
   std::thread thread_;
   std::atomic<bool> stopping_{false};
   std::atomic<std::uint64_t> published_{0};

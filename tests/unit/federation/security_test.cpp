@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "federation/dds_log.hpp"
 #include "federation/dds_participant.hpp"
 #include "federation/item_replicator.hpp"
 #include "federation/item_topic.hpp"
@@ -187,6 +188,40 @@ TEST(FederationSecurity, ASiteWithACertificateFromAnotherCaReadsNothing) {
   // in the lab's CA is missing.
   Participant stranger(site_domain(3, certs.site("other", "bench-a")));
   exchange(a, b, &stranger, std::chrono::seconds(2));
+}
+
+// A rogue host (an identity from another CA) retries its handshake with each site about once a
+// second, and each site's Cyclone says so each time; routed to hapticd's log, each message is
+// written once and the rest counted when its window ends.
+TEST(FederationSecurity, ARogueHostsFailedHandshakesAreLoggedOnceThenCounted) {
+  REQUIRE_SECURITY();
+  const Certs& certs = Certs::get();
+  std::mutex mutex;
+  std::vector<std::string> lines;
+  route_dds_log([&](DdsLogLevel, const std::string& line) {
+    std::lock_guard lock(mutex);
+    lines.push_back(line);
+  });
+  {
+    Participant a(site_domain(1, certs.site("lab", "bench-a")));
+    Participant b(site_domain(2, certs.site("lab", "bench-c")));
+    Participant stranger(site_domain(3, certs.site("other", "bench-a")));
+    exchange(a, b, &stranger, std::chrono::seconds(3));
+  }
+  flush_dds_log(std::chrono::steady_clock::now() + std::chrono::seconds(11));
+  route_dds_log({});
+  std::lock_guard lock(mutex);
+  std::vector<std::string> refused;
+  std::vector<std::string> summaries;
+  for (const std::string& line : lines) {
+    if (line.find("handshake") == std::string::npos) continue;
+    (line.find(" more in 10 s)") == std::string::npos ? refused : summaries).push_back(line);
+  }
+  ASSERT_EQ(refused.size(), 1u) << "each failed handshake's message once, not " << refused.size() << " times";
+  EXPECT_EQ(refused[0].rfind("dds: ", 0), 0u) << refused[0];
+  EXPECT_NE(refused[0].find("subject: /O=hapticd/CN=bench-a"), std::string::npos) << refused[0];
+  ASSERT_EQ(summaries.size(), 1u) << "the retries counted in one line";
+  EXPECT_EQ(summaries[0].rfind(refused[0] + " (and ", 0), 0u) << summaries[0];
 }
 
 /// A ToolSample topic named `name` (access control looks at the name, not the type).
