@@ -298,8 +298,9 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, SendFrom
       acknowledged_at_stall.assign(subscribers.size(), 0);
     }
     // How far the flow-controlled subscribers' windows let this round go (lockstep only).
+    // (Lockstep only: the real-time sender takes no lock here.)
     std::uint64_t acknowledgements_seen = 0;
-    {
+    if (!conflate) {
       std::lock_guard lock(acknowledgement_mutex_);
       acknowledgements_seen = acknowledgements_;
     }
