@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,8 @@ struct MassState {
   /// (other site's key, cumulative energy its coupling with this copy sent it); at most
   /// kMaxMassCouplings.
   std::vector<std::pair<std::uint64_t, double>> sent;
+  /// As received: the site its writer speaks for (ToolState::writer_site).
+  std::optional<std::string> writer_site;
 };
 
 class MassPublisher {

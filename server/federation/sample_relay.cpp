@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 namespace haptic::federation {
@@ -112,6 +113,10 @@ void SampleRelay::step(std::chrono::steady_clock::time_point now) {
 void SampleRelay::receive(std::chrono::steady_clock::time_point now) {
   received_.clear();
   transport_->take_tools(received_, options_.site);
+  std::erase_if(received_, [&](const ToolState& tool) {
+    const bool finite = engine::is_finite(tool.p_WT) && engine::is_finite(tool.v_WT) && engine::is_finite(tool.F_T_W);
+    return !admit(tool.site, tool.writer_site, finite, "tool", now);
+  });
   for (const ToolState& tool : received_) heard(tool.site, now);
   const auto silence = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
       std::chrono::duration<double>(options_.silence_s));
@@ -121,7 +126,8 @@ void SampleRelay::receive(std::chrono::steady_clock::time_point now) {
     bool changed = !received_.empty();
     for (std::size_t i = 0; i < runtime::kMaxRemoteTools; ++i) {
       Slot& s = slots_[port][i];
-      if (s.used && now - s.heard > silence) {  // gone quiet: no ghost left in the scene
+      // Gone quiet, or cut off: no ghost left in the scene (the loop fades its avatar out).
+      if (s.used && (now - s.heard > silence || cut_off_.contains(s.site))) {
         s = Slot{};
         set.tools[i] = runtime::RemoteTool{};
         changed = true;
@@ -137,17 +143,26 @@ void SampleRelay::receive(std::chrono::steady_clock::time_point now) {
       }
       for (std::size_t i = 0; i < runtime::kMaxRemoteTools && slot == runtime::kMaxRemoteTools; ++i) {
         if (!slots_[port][i].used) {
-          slots_[port][i] = Slot{tool.site, tool.port, true, now};
+          slots_[port][i] = Slot{tool.site, tool.port, true, now, CreditAccount{}};
           slot = i;
         }
       }
       if (slot == runtime::kMaxRemoteTools) continue;
-      slots_[port][slot].heard = now;
-      double sent_to_us = 0.0;
+      Slot& s = slots_[port][slot];
+      s.heard = now;
+      const CouplingEnergy* to_us = nullptr;
       for (const CouplingEnergy& energy : tool.energy) {
-        if (energy.site == options_.site && energy.port == port) sent_to_us = energy.sent;
+        if (energy.site == options_.site && energy.port == port) to_us = &energy;
       }
-      set.tools[slot] = runtime::RemoteTool{remote_key(tool.site, tool.port), tool.p_WT, tool.v_WT, sent_to_us};
+      if (to_us != nullptr && !credit(s.credit, to_us->sent, tool.site,
+                                      "its tool " + std::to_string(tool.port) + " to this site's tool " +
+                                          std::to_string(port),
+                                      now)) {
+        s = Slot{};
+        set.tools[slot] = runtime::RemoteTool{};
+        continue;
+      }
+      set.tools[slot] = runtime::RemoteTool{remote_key(tool.site, tool.port), tool.p_WT, tool.v_WT, s.credit.credited()};
     }
     ports_[port].remote->store(set);
   }
@@ -195,6 +210,9 @@ namespace haptic::federation {
 void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
   received_masses_.clear();
   transport_->take_masses(received_masses_, options_.site);
+  std::erase_if(received_masses_, [&](const MassState& mass) {
+    return !admit(mass.site, mass.writer_site, engine::is_finite(mass.p_WM) && engine::is_finite(mass.v_WM), "mass copy", now);
+  });
   for (const MassState& mass : received_masses_) heard(mass.site, now);
   const auto silence = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
       std::chrono::duration<double>(options_.silence_s));
@@ -225,11 +243,17 @@ void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
       if (copies[i].key == 0) slot = i;
     }
     if (slot == engine::kMaxRemoteCopies) continue;
-    double sent_to_us = 0.0;
+    if (copies[slot].key != site) mass_credit_[entry][slot] = CreditAccount{};  // a new coupling
+    const double* to_us = nullptr;
     for (const auto& [to, sent] : mass.sent) {
-      if (to == own) sent_to_us = sent;
+      if (to == own) to_us = &sent;
     }
-    copies[slot] = engine::RemoteMassCopy{site, mass.p_WM, mass.v_WM, sent_to_us};
+    if (to_us != nullptr && !credit(mass_credit_[entry][slot], *to_us, mass.site, "its copy of a shared mass", now)) {
+      copies[slot] = engine::RemoteMassCopy{};
+      changed = true;
+      continue;
+    }
+    copies[slot] = engine::RemoteMassCopy{site, mass.p_WM, mass.v_WM, mass_credit_[entry][slot].credited()};
     mass_heard_[entry][slot] = now;
   }
   for (std::size_t i = 0; i < runtime::kMaxSharedMasses; ++i) {
@@ -237,7 +261,8 @@ void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
     bool any = false;
     for (std::size_t k = 0; k < engine::kMaxRemoteCopies; ++k) {
       engine::RemoteMassCopy& copy = table.masses[i].copies[k];
-      if (copy.key != 0 && now - mass_heard_[i][k] > silence) {  // its site went quiet: uncoupled
+      // Its site went quiet, or was cut off: uncoupled.
+      if (copy.key != 0 && (now - mass_heard_[i][k] > silence || cut_off_key(copy.key))) {
         copy = engine::RemoteMassCopy{};
         changed = true;
       }
@@ -338,6 +363,66 @@ void SampleRelay::watch_sites(std::chrono::steady_clock::time_point now) {
     if (options_.log) options_.log(line);
   }
   log_lines_.clear();
+}
+
+}  // namespace haptic::federation
+
+namespace haptic::federation {
+
+bool SampleRelay::cut_off_key(std::uint64_t site) const {
+  for (const std::string& name : cut_off_) {
+    if (runtime::site_key(name) == site) return true;
+  }
+  return false;
+}
+
+bool SampleRelay::admit(const std::string& site, const std::optional<std::string>& writer_site, bool finite,
+                        const char* what, std::chrono::steady_clock::time_point now) {
+  std::string refusal;
+  if (writer_site && *writer_site != site) {
+    refusal = std::string("federation: a ") + what + " sample naming site \"" + site + "\" refused: its writer speaks for " +
+              (writer_site->empty() ? std::string("no single site") : "site \"" + *writer_site + "\"") +
+              " (a site publishes only under its own name; under DDS Security its permissions allow no other)";
+  } else if (cut_off_.contains(site)) {
+    samples_refused_.fetch_add(1, std::memory_order_relaxed);  // logged when it was cut off
+    return false;
+  } else if (!finite) {
+    refusal = std::string("federation: a ") + what + " sample from site \"" + site +
+              "\" refused: it holds a NaN or an infinity";
+  } else {
+    return true;
+  }
+  samples_refused_.fetch_add(1, std::memory_order_relaxed);
+  // Per claimed site and reason: a forger that keeps at it gives one line a window.
+  peer_log_.admit(site + (writer_site && *writer_site != site ? "\nforged" : "\nnan"), refusal, now, log_lines_);
+  return false;
+}
+
+bool SampleRelay::credit(CreditAccount& account, double claimed, const std::string& site, const std::string& coupling,
+                         std::chrono::steady_clock::time_point now) {
+  const double refused_before = account.refused();
+  const CreditAccount::Verdict verdict = account.take(claimed, now, options_.credit);
+  energy_refused_.fetch_add(account.refused() - refused_before, std::memory_order_relaxed);
+  if (verdict == CreditAccount::Verdict::kCredited) return true;
+  if (cut_off_.insert(site).second) {
+    sites_cut_off_.fetch_add(1, std::memory_order_relaxed);
+    char cap[96];
+    std::snprintf(cap, sizeof cap, "%.3g W, %.3g J at once", options_.credit.max_power_W, options_.credit.burst_J);
+    std::string reason;
+    if (verdict == CreditAccount::Verdict::kNotFinite) {
+      char value[32];
+      std::snprintf(value, sizeof value, "%g", claimed);
+      reason = "the energy " + coupling + " says it sent is " + value;
+    } else {
+      char total[64];
+      std::snprintf(total, sizeof total, "%.3f J (%.3f J of it not credited)", claimed, account.refused());
+      reason = "the energy " + coupling + " says it sent, " + total + ", runs over the cap (" + cap + ") by more than a burst";
+    }
+    // Never rate-limited: a site is cut off once.
+    log_lines_.push_back("federation: site \"" + site + "\" cut off: its books do not add up: " + reason +
+                         "; nothing more is taken from it until this hapticd restarts");
+  }
+  return false;
 }
 
 }  // namespace haptic::federation

@@ -10,7 +10,13 @@
 //   - with ros2.wrench_topic, takes each port's ROS 2 wrench (a robot's) into its mailbox, refusing
 //     one in another frame or with a NaN or infinity (counted, and logged once per port and reason);
 //   - logs each other site's arrival, its going quiet (nothing from it for silence_s) and its
-//     return, one line each, rate-limited per site (LogLimiter).
+//     return, one line each, rate-limited per site (LogLimiter);
+//   - treats every other site as possibly wrong or hostile: a sample whose site is not the one its
+//     writer speaks for (the writer's partition, which DDS Security binds to the writer's
+//     identity), or with a NaN or an infinity, is refused, counted and logged; the energy another
+//     site says it sent is credited per coupling only up to the CreditCap, and a site whose books
+//     do not add up (CreditAccount) is cut off: nothing more is taken from it while this relay
+//     runs, and that is logged.
 // The loop never waits on it, and a sample nobody asked for is never converted.
 
 #include <array>
@@ -21,10 +27,12 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "federation/credit_account.hpp"
 #include "federation/dds_participant.hpp"
 #include "federation/log_limiter.hpp"
 #include "federation/mass_topic.hpp"
@@ -55,6 +63,8 @@ struct RelayOptions {
   /// A site's arrivals, and its departures, logged at most once in this long each (further ones
   /// counted, then summarized). Unit: s.
   double log_window_s = 10.0;
+  /// The most energy another site is credited per coupling (tools' and mass copies').
+  CreditCap credit;
 };
 
 /// One port's ring, the buttons its device reports, and (with the tool topic) its mailbox of
@@ -113,6 +123,13 @@ class SampleRelay {
   /// frame_id, a NaN or an infinity).
   std::uint64_t wrenches_accepted() const { return wrenches_accepted_.load(std::memory_order_relaxed); }
   std::uint64_t wrenches_refused() const { return wrenches_refused_.load(std::memory_order_relaxed); }
+  /// Other sites' tool and mass samples refused so far: naming a site their writer does not speak
+  /// for, holding a NaN or an infinity, or from a site cut off.
+  std::uint64_t samples_refused() const { return samples_refused_.load(std::memory_order_relaxed); }
+  /// Energy other sites claimed to have sent and were not credited (over the cap), cumulative. J.
+  double energy_refused() const { return energy_refused_.load(std::memory_order_relaxed); }
+  /// Sites cut off so far (their books did not add up).
+  std::uint64_t sites_cut_off() const { return sites_cut_off_.load(std::memory_order_relaxed); }
 
  private:
   void run();
@@ -125,6 +142,16 @@ class SampleRelay {
   void heard(const std::string& site, std::chrono::steady_clock::time_point now);
   /// Sites quiet since before now − silence_s are gone; what changed is logged.
   void watch_sites(std::chrono::steady_clock::time_point now);
+  /// Whether a sample naming `site`, from a writer speaking for `writer_site` (unset: the
+  /// transport cannot say), with finite values or not, is taken; what is not is counted and logged.
+  bool admit(const std::string& site, const std::optional<std::string>& writer_site, bool finite, const char* what,
+             std::chrono::steady_clock::time_point now);
+  /// Credits a claimed total on `account`; a claim that shows the site's books do not add up cuts
+  /// the site off (logged) and returns false.
+  /// Whether the site of this key (runtime::site_key) is cut off.
+  bool cut_off_key(std::uint64_t site) const;
+  bool credit(CreditAccount& account, double claimed, const std::string& site, const std::string& coupling,
+              std::chrono::steady_clock::time_point now);
 
   /// Which remote tool each mailbox slot of a port holds.
   struct Slot {
@@ -132,6 +159,7 @@ class SampleRelay {
     std::uint32_t port = 0;
     bool used = false;
     std::chrono::steady_clock::time_point heard;  // its newest sample's arrival
+    CreditAccount credit;                         // what its coupling with this port claims it sent
   };
 
   RelayOptions options_;
@@ -154,6 +182,8 @@ class SampleRelay {
   /// When each copy in the mailbox of remote masses was last heard ([mass][copy]).
   std::array<std::array<std::chrono::steady_clock::time_point, engine::kMaxRemoteCopies>, runtime::kMaxSharedMasses>
       mass_heard_{};
+  /// What each copy's coupling with this site's copy claims it sent ([mass][copy]).
+  std::array<std::array<CreditAccount, engine::kMaxRemoteCopies>, runtime::kMaxSharedMasses> mass_credit_{};
   std::uint64_t last_mass_tick_ = 0;
   std::uint64_t periods_ = 0;                             // run()'s periods so far
   /// Each other site ever heard: when last, and whether it is heard now.
@@ -162,6 +192,7 @@ class SampleRelay {
     bool present = false;
   };
   std::map<std::string, Peer> peers_;
+  std::set<std::string> cut_off_;                          // sites whose books did not add up
   LogLimiter peer_log_;
   std::vector<std::string> log_lines_;                     // scratch
   std::thread thread_;
@@ -170,6 +201,9 @@ class SampleRelay {
   std::atomic<std::uint64_t> failed_{0};
   std::atomic<std::uint64_t> wrenches_accepted_{0};
   std::atomic<std::uint64_t> wrenches_refused_{0};
+  std::atomic<std::uint64_t> samples_refused_{0};
+  std::atomic<double> energy_refused_{0.0};
+  std::atomic<std::uint64_t> sites_cut_off_{0};
 };
 
 }  // namespace haptic::federation

@@ -8,6 +8,7 @@
 // takes what arrived (Cyclone's write and take may allocate).
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,10 @@ struct ToolState {
   engine::Vec3 tau_T_W;
   std::uint32_t buttons = 0;
   std::vector<CouplingEnergy> energy;  // at most kMaxCouplings
+  /// As received: the site its writer speaks for (its partition: under DDS Security the writer's
+  /// permissions allow no other, so the identity vouches for it); "" where the writer is in no
+  /// single partition. Unset where the transport cannot say (a test's).
+  std::optional<std::string> writer_site;
 };
 
 /// Publishes this site's tools.

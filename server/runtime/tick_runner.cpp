@@ -45,6 +45,7 @@ engine::Vec3 from_passive_source(engine::NetworkPassivity& layer, const engine::
 engine::NetworkPassivityParams port_layer(double mass, double T) {
   engine::NetworkPassivityParams params;
   params.period = T;
+  params.max_deficit_J = engine::kCouplingMaxDeficitJ;
   if (mass > 0.0) params.max_damping = mass / T;
   return params;
 }

@@ -1,7 +1,9 @@
 #pragma once
 // Sites joined by a delay line with seeded loss, for lockstep tests of whole sites (loop and
 // relay): what a site publishes while the network is at tick k reaches every other site at tick
-// k + delay, unless the seeded draw loses it. The test advances the network once per tick.
+// k + delay, unless the seeded draw loses it. The test advances the network once per tick. Like
+// DDS with each site's writers in its own partition, every sample arrives with the name of the
+// site that published it (writer_site), whatever site it names.
 
 #include <cstdint>
 #include <deque>
@@ -40,11 +42,15 @@ class DelayLineNetwork {
    public:
     End(DelayLineNetwork& network, std::string name) : network_(network), name_(std::move(name)) {}
     bool publish_tool(const federation::ToolState& tool) override {
-      network_.send(name_, tool, &End::tools_);
+      federation::ToolState sent = tool;
+      sent.writer_site = name_;
+      network_.send(name_, sent, &End::tools_);
       return true;
     }
     bool publish_mass(const federation::MassState& mass) override {
-      network_.send(name_, mass, &End::masses_);
+      federation::MassState sent = mass;
+      sent.writer_site = name_;
+      network_.send(name_, sent, &End::masses_);
       return true;
     }
     void take_tools(std::vector<federation::ToolState>& out, const std::string&) override { deliver(tools_, out); }

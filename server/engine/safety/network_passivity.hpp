@@ -15,6 +15,15 @@
 //     (Hannaford and Ryu's passivity controller), capped at max_damping like theirs (or, for a
 //     simulated body, at cancelling the force's component along v where that is more); a
 //     reservoir in deficit (a period gave more than predicted) is paid back the same way;
+//   - the damper is capped, so against a hand holding still a push gives up to F²T²/2m a period
+//     that T F·v does not predict, and such periods add up (a tool moved at the other site without
+//     its user putting anything in, as a forging peer's does, took 13 mJ out of a held hand in
+//     10 s). So the force is then scaled (s in [0, 1]) to what R + max_deficit_J pays for over
+//     the coming period, its own push on the mass m = max_damping T included:
+//       s T F·v + s² T² |F|² / 2m ≤ R + max_deficit_J.
+//     An honest coupling stays far inside it (its deficits are a few mJ and the term µJ), and
+//     whatever the other end does, the coupling gives its user at most what the user put in, plus
+//     what was received, plus max_deficit_J;
 //   - what R holds beyond the energy stored in this site's own coupling spring (which its user may
 //     take back on release, so a contact does not feel plastic) is sent to the other site, as a
 //     cumulative total: a lost message is made good by the next, and nothing is counted twice.
@@ -31,10 +40,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "engine/core/vec3.hpp"
 
 namespace haptic::engine {
+
+/// The deficit hapticd allows its couplings across the network (tools' and shared masses'): above
+/// the −1.8 … −3.7 mJ its honest lockstep runs reach at worst across the channel (two light tools'
+/// held contact released at once, tests/unit/federation/lockstep_sites_test), far below what a
+/// forging peer took before the bound. Unit: J.
+inline constexpr double kCouplingMaxDeficitJ = 5e-3;
 
 struct NetworkPassivityParams {
   double period = 1e-3;              // T. Unit: s. > 0.
@@ -52,12 +68,16 @@ struct NetworkPassivityParams {
   /// For the copies of a shared mass (which keep nothing for their own springs: the pair's storage
   /// exists once). 0: at once (avatars). Unit: s. ≥ 0.
   double send_time_constant = 0.0;
+  /// The most the reservoir may be in deficit: the force is scaled to keep it there (see above).
+  /// Unit: J. ≥ 0; infinity: no bound.
+  double max_deficit_J = std::numeric_limits<double>::infinity();
 };
 
 /// One tick of the layer.
 struct NetworkPassivityStep {
   Vec3 F_T_W;          // the force to apply to the tool. Unit: N.
   double alpha = 0.0;  // the damping added along v this tick. Unit: N·s/m.
+  double scale = 1.0;   // what the deficit bound left of the force (s above), 1 when it did nothing
 };
 
 class NetworkPassivity {
@@ -93,6 +113,17 @@ class NetworkPassivity {
       const double cancel = params_.cancel_along_velocity ? std::max(dot(F_T_W, v_WT), 0.0) / v2 : 0.0;
       step.alpha = std::min(std::max(cancel, params_.max_damping), (predicted - budget) / (params_.period * v2));
       step.F_T_W -= step.alpha * v_WT;
+    }
+    if (std::isfinite(params_.max_deficit_J) && params_.max_damping > 0.0) {
+      const double mass = params_.max_damping * params_.period;  // what the damper's cap stops in T
+      const double limit = reservoir_ + params_.max_deficit_J;
+      const double a = params_.period * params_.period * dot(step.F_T_W, step.F_T_W) / (2.0 * mass);
+      const double b = params_.period * dot(step.F_T_W, v_WT);
+      if (a + b > limit) {
+        const double discriminant = b * b + 4.0 * a * limit;
+        step.scale = discriminant < 0.0 ? 0.0 : std::clamp((-b + std::sqrt(discriminant)) / (2.0 * a), 0.0, 1.0);
+        step.F_T_W = step.scale * step.F_T_W;
+      }
     }
     F_previous_ = step.F_T_W;
     p_previous_ = p_WT;

@@ -76,6 +76,9 @@ Vec3 CopyCouplings::force(std::span<const RemoteMassCopy> remotes, const SharedM
         // wait seconds for energy the other holds back). What a copy's layer holds flows out to the
         // other over 50 ms instead of at once, so it can use what it holds while it flows.
         layer.send_time_constant = 0.05;
+        // Another site's copy that moves without sending the energy (a forging peer) takes at most
+        // this much out of the copy here before the coupling's pull is withheld.
+        layer.max_deficit_J = kCouplingMaxDeficitJ;
         couplings_[slot].emplace(layer);
       }
     }

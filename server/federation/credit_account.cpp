@@ -1,0 +1,46 @@
+#include "federation/credit_account.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace haptic::federation {
+
+std::string validate(const CreditCap& cap) {
+  const auto check = [](const char* field, double value, double high) {
+    if (std::isfinite(value) && value > 0.0 && value <= high) return std::string();
+    std::ostringstream out;
+    out << field << ": must be > 0 and at most " << high << ", got " << value;
+    return out.str();
+  };
+  if (std::string e = check("max_power_W", cap.max_power_W, 1000.0); !e.empty()) return e;
+  return check("burst_J", cap.burst_J, 100.0);
+}
+
+CreditAccount::Verdict CreditAccount::take(double claimed, std::chrono::steady_clock::time_point now,
+                                           const CreditCap& cap) {
+  if (!std::isfinite(claimed) || claimed < 0.0) return Verdict::kNotFinite;
+  if (!started_) {
+    started_ = true;
+    bucket_ = cap.burst_J;
+  } else {
+    const double elapsed = std::max(0.0, std::chrono::duration<double>(now - last_).count());
+    bucket_ = std::min(cap.burst_J, bucket_ + cap.max_power_W * elapsed);
+    over_ = std::max(0.0, over_ - cap.max_power_W * elapsed);
+  }
+  last_ = now;
+  if (claimed < last_claimed_) {  // the peer's coupling began anew: its count restarts
+    last_claimed_ = claimed;
+    return Verdict::kCredited;
+  }
+  const double claim = claimed - last_claimed_;
+  last_claimed_ = claimed;
+  const double credit = std::min(claim, bucket_);
+  bucket_ -= credit;
+  credited_ += credit;
+  refused_ += claim - credit;
+  over_ += claim - credit;
+  return over_ > cap.burst_J ? Verdict::kOverCap : Verdict::kCredited;
+}
+
+}  // namespace haptic::federation
