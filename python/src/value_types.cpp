@@ -458,6 +458,11 @@ void bind_reports(py::module_& m) {
       .readonly("items_refused", &FederationStats::items_refused, "refused by this site's checks")
       .readonly("wrenches_accepted", &FederationStats::wrenches_accepted, "ROS 2 wrenches taken in")
       .readonly("wrenches_refused", &FederationStats::wrenches_refused, "refused (frame, NaN)")
+      .readonly("samples_refused", &FederationStats::samples_refused,
+                "other sites' tool and mass samples refused (another site's name, NaN, cut off)")
+      .readonly("energy_refused_j", &FederationStats::energy_refused_j,
+                "energy other sites claimed and were not credited (over the cap), J")
+      .readonly("sites_cut_off", &FederationStats::sites_cut_off, "sites cut off: their energy books did not add up")
       .readonly("couplings", &FederationStats::couplings, "list of CouplingStats")
       .finish();
   StructBinder<Stats>(m, "Stats", "The server's counters (GetStats).")

@@ -582,6 +582,9 @@ Stats from_proto(const v1::Stats& s) {
     federation.items_refused = f.items_refused();
     federation.wrenches_accepted = f.wrenches_accepted();
     federation.wrenches_refused = f.wrenches_refused();
+    federation.samples_refused = f.samples_refused();
+    federation.energy_refused_j = f.energy_refused_j();
+    federation.sites_cut_off = f.sites_cut_off();
     for (const v1::CouplingStats& c : f.couplings()) {
       federation.couplings.push_back(
           {c.kind() == v1::CouplingStats::MASS ? CouplingStats::Kind::kMass : CouplingStats::Kind::kTool, c.port(),

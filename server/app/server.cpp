@@ -443,6 +443,10 @@ void Server::start() {
       spdlog::warn("federation: this site's copies of shared masses are not published ({}); it still couples to "
                    "the other sites'", relay_->masses_refused());
     }
+    if (!relay_->tools_refused().empty()) {
+      spdlog::warn("federation: this site's tools are not published ({}); its users feel the other sites' tools "
+                   "and are not felt by them", relay_->tools_refused());
+    }
     const v1::FederationConfig& federation = config_.federation();
     spdlog::info("hapticd: federation site \"{}\" in DDS domain {} on {}{}", federation.site(),
                  federation.domain_id(), federation.interface(),
@@ -716,6 +720,9 @@ void Server::federation_stats(v1::FederationStats& out) const {
   out.set_items_refused(replicator_->refused());
   out.set_wrenches_accepted(relay_->wrenches_accepted());
   out.set_wrenches_refused(relay_->wrenches_refused() + counters_.robot_wrenches_refused.load(std::memory_order_relaxed));
+  out.set_samples_refused(relay_->samples_refused());
+  out.set_energy_refused_j(relay_->energy_refused());
+  out.set_sites_cut_off(relay_->sites_cut_off());
   for (std::size_t port = 0; port < ledgers_.size(); ++port) {
     for (std::size_t slot = 0; slot < runtime::kMaxRemoteTools; ++slot) {
       const runtime::CouplingBooks books = ledgers_[port]->books(slot);

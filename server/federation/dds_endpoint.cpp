@@ -22,6 +22,36 @@ Endpoint::Endpoint(const Participant& participant, const dds_topic_descriptor_t*
   }
 }
 
+dds_qos_t* in_site_partition(dds_qos_t* qos, const std::string& site) {
+  dds_qset_partition1(qos, site.c_str());
+  return qos;
+}
+
+dds_qos_t* in_every_partition(dds_qos_t* qos) {
+  dds_qset_partition1(qos, "*");
+  return qos;
+}
+
+const std::string& WriterSites::of(dds_entity_t reader, dds_instance_handle_t writer) {
+  if (const auto it = known_.find(writer); it != known_.end()) return it->second;
+  if (known_.size() >= 256) known_.clear();  // writers come and go over a long run: forget the old
+  std::string site;
+  if (dds_builtintopic_endpoint_t* endpoint = dds_get_matched_publication_data(reader, writer)) {
+    std::uint32_t count = 0;
+    char** names = nullptr;
+    if (endpoint->qos != nullptr && dds_qget_partition(endpoint->qos, &count, &names)) {
+      if (count == 1 && names[0] != nullptr) site = names[0];
+      for (std::uint32_t i = 0; i < count; ++i) dds_free(names[i]);
+      dds_free(names);
+    }
+    dds_builtintopic_free_endpoint(endpoint);
+  } else {
+    static const std::string unknown;  // not matched (any more): not kept, asked again next time
+    return unknown;
+  }
+  return known_.emplace(writer, std::move(site)).first->second;
+}
+
 Endpoint::~Endpoint() {
   if (entity_ > 0) dds_delete(entity_);
 }

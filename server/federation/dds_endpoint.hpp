@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <string>
 
 #include <dds/dds.h>
@@ -42,6 +43,27 @@ class Endpoint {
   Kind kind_;
   dds_entity_t topic_ = 0;
   dds_entity_t entity_ = 0;
+};
+
+/// A site speaks for itself only: each site's writers on the federation's topics are in one
+/// partition, its name, and its readers in every partition ("*"). Under DDS Security a site's
+/// permissions let it publish in its own partition alone (scripts/federation-certs), and every
+/// reader checks a remote writer's partitions against the writer's permissions before it matches,
+/// so the partition a sample comes through is vouched for by its writer's identity; the relay and
+/// the replicator refuse a sample that names another site. Both take `qos` and return it.
+dds_qos_t* in_site_partition(dds_qos_t* qos, const std::string& site);
+dds_qos_t* in_every_partition(dds_qos_t* qos);
+
+/// The site each writer matched by a reader speaks for (its one partition), looked up once per
+/// writer through discovery's data and kept.
+class WriterSites {
+ public:
+  /// The site `writer` (a sample's dds_sample_info_t::publication_handle) speaks for: its
+  /// partition, or "" where it is in none or several, or no longer matched.
+  const std::string& of(dds_entity_t reader, dds_instance_handle_t writer);
+
+ private:
+  std::map<dds_instance_handle_t, std::string> known_;
 };
 
 /// Writes one sample; false, with `error` saying why, when Cyclone refused it.

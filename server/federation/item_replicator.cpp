@@ -20,7 +20,7 @@ ItemReplicator::ItemReplicator(const ReplicatorOptions& options, ReplicatedScene
 void ItemReplicator::open(const Participant& participant) {
   reader_ = std::make_unique<ItemSubscriber>(participant);
   try {
-    writer_ = std::make_unique<ItemPublisher>(participant);
+    writer_ = std::make_unique<ItemPublisher>(participant, options_.site);
   } catch (const std::runtime_error& error) {
     // Under DDS Security an observer's permissions refuse the writer: the site still gets the
     // others' items, and says once why its own are not shared.
@@ -114,6 +114,18 @@ void ItemReplicator::apply_arrivals(std::chrono::steady_clock::time_point now) {
   reader_->take(events_, options_.site);
   for (const SharedItemEvent& event : events_) {
     const std::string which = "site " + event.state.site + " item " + std::to_string(event.state.item);
+    if (event.what != SharedItemEvent::What::kLost && event.writer_site != event.state.site) {
+      // Another site (or a writer in no single partition) speaking for this one: refused, and
+      // nothing of the named site's items changes.
+      refused_.fetch_add(1, std::memory_order_relaxed);
+      log_limited(event.state.site + "\nforged",
+                  "federation: " + which + (event.what == SharedItemEvent::What::kPut ? " (version " + std::to_string(event.state.version) + ")" : std::string(" removal")) +
+                      " refused: its writer speaks for " +
+                      (event.writer_site.empty() ? std::string("no single site") : "site \"" + event.writer_site + "\"") +
+                      " (a site publishes only under its own name)",
+                  now);
+      continue;
+    }
     switch (event.what) {
       case SharedItemEvent::What::kPut: {
         const std::string error = scene_.put_remote(event.state);

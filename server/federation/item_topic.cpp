@@ -35,8 +35,9 @@ bool fill_key(Sample& sample, const std::string& site, std::uint64_t item, std::
 
 }  // namespace
 
-ItemPublisher::ItemPublisher(const Participant& participant)
-    : writer_(participant, &haptic_federation_SharedItem_desc, kItemTopic, Endpoint::Kind::kWriter, item_qos()) {}
+ItemPublisher::ItemPublisher(const Participant& participant, const std::string& site)
+    : writer_(participant, &haptic_federation_SharedItem_desc, kItemTopic, Endpoint::Kind::kWriter,
+              in_site_partition(item_qos(), site)) {}
 
 bool ItemPublisher::put(const SharedItemState& item) {
   Sample sample{};
@@ -66,7 +67,8 @@ bool ItemPublisher::remove(const std::string& site, std::uint64_t item) {
 std::uint32_t ItemPublisher::matched_readers() const { return writer_.matched(); }
 
 ItemSubscriber::ItemSubscriber(const Participant& participant)
-    : reader_(participant, &haptic_federation_SharedItem_desc, kItemTopic, Endpoint::Kind::kReader, item_qos()) {}
+    : reader_(participant, &haptic_federation_SharedItem_desc, kItemTopic, Endpoint::Kind::kReader,
+              in_every_partition(item_qos())) {}
 
 std::size_t ItemSubscriber::take(std::vector<SharedItemEvent>& out, const std::string& own_site) {
   std::size_t taken = 0;
@@ -76,6 +78,9 @@ std::size_t ItemSubscriber::take(std::vector<SharedItemEvent>& out, const std::s
     event.state.site.assign(s.site, strnlen(s.site, sizeof s.site));
     event.state.item = s.item;
     if (event.state.site == own_site) return;
+    if (info.valid_data || info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED) {
+      event.writer_site = writers_.of(reader_.handle(), info.publication_handle);
+    }
     if (info.valid_data) {
       if (s.kind > 1 || s.spec._length > kMaxItemBytes) return;  // not ours to read
       event.what = SharedItemEvent::What::kPut;

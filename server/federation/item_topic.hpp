@@ -47,12 +47,16 @@ struct SharedItemEvent {
   };
   What what = What::kPut;
   SharedItemState state;  // for kRemoved and kLost, only site and item
+  /// For kPut and kRemoved: the site the writer speaks for (its partition, dds_endpoint's
+  /// WriterSites), which must be state.site.
+  std::string writer_site;
 };
 
 class ItemPublisher {
  public:
-  /// Throws std::runtime_error naming what Cyclone refused.
-  explicit ItemPublisher(const Participant& participant);
+  /// In `site`'s partition (in_site_partition). Throws std::runtime_error naming what Cyclone
+  /// refused.
+  ItemPublisher(const Participant& participant, const std::string& site);
   ItemPublisher(const ItemPublisher&) = delete;
   ItemPublisher& operator=(const ItemPublisher&) = delete;
 
@@ -81,6 +85,7 @@ class ItemSubscriber {
 
  private:
   Endpoint reader_;
+  WriterSites writers_;
 };
 
 }  // namespace haptic::federation

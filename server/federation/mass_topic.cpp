@@ -13,8 +13,9 @@ using Sample = haptic_federation_MassSample;
 
 }  // namespace
 
-MassPublisher::MassPublisher(const Participant& participant)
-    : writer_(participant, &haptic_federation_MassSample_desc, kMassTopic, Endpoint::Kind::kWriter, newest_only_qos()) {}
+MassPublisher::MassPublisher(const Participant& participant, const std::string& site)
+    : writer_(participant, &haptic_federation_MassSample_desc, kMassTopic, Endpoint::Kind::kWriter,
+              in_site_partition(newest_only_qos(), site)) {}
 
 bool MassPublisher::publish(const MassState& mass) {
   Sample sample{};
@@ -40,7 +41,8 @@ bool MassPublisher::publish(const MassState& mass) {
 std::uint32_t MassPublisher::matched_readers() const { return writer_.matched(); }
 
 MassSubscriber::MassSubscriber(const Participant& participant)
-    : reader_(participant, &haptic_federation_MassSample_desc, kMassTopic, Endpoint::Kind::kReader, newest_only_qos()) {}
+    : reader_(participant, &haptic_federation_MassSample_desc, kMassTopic, Endpoint::Kind::kReader,
+              in_every_partition(newest_only_qos())) {}
 
 std::size_t MassSubscriber::take(std::vector<MassState>& out, const std::string& own_site) {
   std::size_t taken = 0;
@@ -53,6 +55,7 @@ std::size_t MassSubscriber::take(std::vector<MassState>& out, const std::string&
     mass.tick = s.tick;
     mass.p_WM = {s.position.x, s.position.y, s.position.z};
     mass.v_WM = {s.velocity.x, s.velocity.y, s.velocity.z};
+    mass.writer_site = writers_.of(reader_.handle(), info.publication_handle);
     for (std::uint32_t k = 0; k < s.energy._length && k < kMaxMassCouplings; ++k) {
       mass.sent.emplace_back(s.energy._buffer[k].site, s.energy._buffer[k].sent);
     }

@@ -40,8 +40,9 @@ struct MassState {
 
 class MassPublisher {
  public:
-  /// Throws std::runtime_error naming what Cyclone refused.
-  explicit MassPublisher(const Participant& participant);
+  /// In `site`'s partition (in_site_partition). Throws std::runtime_error naming what Cyclone
+  /// refused.
+  MassPublisher(const Participant& participant, const std::string& site);
   MassPublisher(const MassPublisher&) = delete;
   MassPublisher& operator=(const MassPublisher&) = delete;
 
@@ -62,12 +63,13 @@ class MassSubscriber {
   MassSubscriber& operator=(const MassSubscriber&) = delete;
 
   /// Appends every sample that arrived since the last take, oldest first, leaving out
-  /// `own_site`'s; returns how many.
+  /// `own_site`'s, each with its writer_site; returns how many.
   std::size_t take(std::vector<MassState>& out, const std::string& own_site);
   std::uint32_t matched_writers() const;
 
  private:
   Endpoint reader_;
+  WriterSites writers_;
 };
 
 }  // namespace haptic::federation

@@ -37,11 +37,12 @@ SampleRelay::SampleRelay(const RelayOptions& options, const std::vector<RelayPor
       masses_(masses),
       masses_on_(masses.local != nullptr && masses.remote != nullptr),
       peer_log_(log_window(options)) {
-  dds_ = std::make_unique<DdsTransport>(*participant_, options_.tools, masses_on_);
+  dds_ = std::make_unique<DdsTransport>(*participant_, options_.site, options_.tools, masses_on_);
   transport_ = dds_.get();
   // An observer's permissions refuse the mass topic's writer: this site's copies are not
   // published (it still couples to the others'), and hapticd says so at start.
   masses_refused_ = dds_->masses_refused();
+  tools_refused_ = dds_->tools_refused();
   last_tick_.assign(ports_.size(), 0);
   slots_.resize(ports_.size());
   if (options_.ros2) {
@@ -196,7 +197,7 @@ void SampleRelay::publish() {
       }
     }
     bool ok = true;
-    if (options_.tools) ok = transport_->publish_tool(tool) && ok;
+    if (options_.tools && tools_refused_.empty()) ok = transport_->publish_tool(tool) && ok;
     const bool ros2_period = periods_ % std::max<std::uint32_t>(1, options_.ros2_every) == 0;
     if (!ros2_.empty() && ros2_period) ok = ros2_[port]->publish(tool) && ok;
     (ok ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);

@@ -113,6 +113,9 @@ class SampleRelay {
   /// Why this site's mass copies are not published ("" when they are): an observer's
   /// permissions refuse the mass topic's writer.
   const std::string& masses_refused() const { return masses_refused_; }
+  /// Why this site's tools are not published on the tool topic ("" when they are): an observer's
+  /// permissions refuse that writer too (the ROS 2 topics still carry them).
+  const std::string& tools_refused() const { return tools_refused_; }
   /// The site's participant in the domain (the shared scene's replicator joins through it); only
   /// from the first constructor.
   const Participant& participant() const { return *participant_; }
@@ -178,6 +181,7 @@ class SampleRelay {
   RelayMasses masses_;
   bool masses_on_ = false;                                 // both mailboxes given
   std::string masses_refused_;
+  std::string tools_refused_;
   std::vector<MassState> received_masses_;                 // scratch
   /// When each copy in the mailbox of remote masses was last heard ([mass][copy]).
   std::array<std::array<std::chrono::steady_clock::time_point, engine::kMaxRemoteCopies>, runtime::kMaxSharedMasses>

@@ -17,8 +17,9 @@ engine::Vec3 from_dds(const haptic_federation_Vec3& v) { return {v.x, v.y, v.z};
 
 }  // namespace
 
-ToolPublisher::ToolPublisher(const Participant& participant)
-    : writer_(participant, &haptic_federation_ToolSample_desc, kToolTopic, Endpoint::Kind::kWriter, newest_only_qos()) {}
+ToolPublisher::ToolPublisher(const Participant& participant, const std::string& site)
+    : writer_(participant, &haptic_federation_ToolSample_desc, kToolTopic, Endpoint::Kind::kWriter,
+              in_site_partition(newest_only_qos(), site)) {}
 
 bool ToolPublisher::publish(const ToolState& tool) {
   Sample sample{};
@@ -57,7 +58,8 @@ bool ToolPublisher::publish(const ToolState& tool) {
 std::uint32_t ToolPublisher::matched_readers() const { return writer_.matched(); }
 
 ToolSubscriber::ToolSubscriber(const Participant& participant)
-    : reader_(participant, &haptic_federation_ToolSample_desc, kToolTopic, Endpoint::Kind::kReader, newest_only_qos()) {}
+    : reader_(participant, &haptic_federation_ToolSample_desc, kToolTopic, Endpoint::Kind::kReader,
+              in_every_partition(newest_only_qos())) {}
 
 std::size_t ToolSubscriber::take(std::vector<ToolState>& out, const std::string& own_site) {
   std::size_t taken = 0;
@@ -74,6 +76,7 @@ std::size_t ToolSubscriber::take(std::vector<ToolState>& out, const std::string&
     tool.F_T_W = from_dds(s.force);
     tool.R_WT = {s.orientation.w, s.orientation.x, s.orientation.y, s.orientation.z};
     tool.buttons = s.buttons;
+    tool.writer_site = writers_.of(reader_.handle(), info.publication_handle);
     for (std::uint32_t k = 0; k < s.energy._length && k < kMaxCouplings; ++k) {
       const haptic_federation_CouplingEnergy& e = s.energy._buffer[k];
       tool.energy.push_back({std::string(e.site, strnlen(e.site, sizeof e.site)), e.port, e.sent});

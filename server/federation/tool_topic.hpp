@@ -57,8 +57,9 @@ struct ToolState {
 /// Publishes this site's tools.
 class ToolPublisher {
  public:
-  /// Throws std::runtime_error naming what Cyclone refused.
-  explicit ToolPublisher(const Participant& participant);
+  /// In `site`'s partition (in_site_partition): it publishes that site's tools only. Throws
+  /// std::runtime_error naming what Cyclone refused.
+  ToolPublisher(const Participant& participant, const std::string& site);
   ToolPublisher(const ToolPublisher&) = delete;
   ToolPublisher& operator=(const ToolPublisher&) = delete;
 
@@ -84,11 +85,13 @@ class ToolSubscriber {
   /// Appends every sample that arrived since the last take (at most the newest per tool), oldest
   /// first; returns how many. Samples of `own_site` (this site's own, echoed by the domain) are
   /// left out.
+  /// Each sample's writer_site is set.
   std::size_t take(std::vector<ToolState>& out, const std::string& own_site = {});
   std::uint32_t matched_writers() const;
 
  private:
   Endpoint reader_;
+  WriterSites writers_;
 };
 
 }  // namespace haptic::federation

@@ -4,11 +4,11 @@
 
 namespace haptic::federation {
 
-DdsTransport::DdsTransport(const Participant& participant, bool tools, bool masses) {
+DdsTransport::DdsTransport(const Participant& participant, const std::string& site, bool tools, bool masses) {
   if (masses) {
     masses_in_ = std::make_unique<MassSubscriber>(participant);
     try {
-      masses_out_ = std::make_unique<MassPublisher>(participant);
+      masses_out_ = std::make_unique<MassPublisher>(participant, site);
     } catch (const std::runtime_error& error) {
       // An observer's permissions refuse it: this site's copies are not published, but it still
       // takes the others' (and its relay couples to them).
@@ -16,14 +16,21 @@ DdsTransport::DdsTransport(const Participant& participant, bool tools, bool mass
     }
   }
   if (tools) {
-    tools_out_ = std::make_unique<ToolPublisher>(participant);
     tools_in_ = std::make_unique<ToolSubscriber>(participant);
+    try {
+      tools_out_ = std::make_unique<ToolPublisher>(participant, site);
+    } catch (const std::runtime_error& error) {
+      // An observer's permissions refuse it too: its users feel the others' tools, and are not
+      // felt (members act on what the tool topic carries).
+      tools_refused_ = error.what();
+    }
   }
 }
 
 bool DdsTransport::publish_tool(const ToolState& tool) {
   if (!tools_out_) {
-    error_ = "the tool topic is not open on this transport";
+    error_ = tools_refused_.empty() ? "the tool topic is not open on this transport"
+                                    : "the tool topic's writer was refused: " + tools_refused_;
     return false;
   }
   if (tools_out_->publish(tool)) return true;

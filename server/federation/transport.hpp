@@ -33,7 +33,10 @@ class DdsTransport final : public Transport {
   /// is refused). An observer's permissions may refuse the mass topic's writer: the reader is
   /// still made, masses_refused() says why, and every mass publication is refused. Throws
   /// std::runtime_error naming anything else Cyclone refused.
-  DdsTransport(const Participant& participant, bool tools, bool masses);
+  /// Its writers publish `site`'s samples only (dds_endpoint's in_site_partition). An observer's
+  /// permissions refuse the tool topic's writer too: tools_refused() says why, and every tool
+  /// publication is refused.
+  DdsTransport(const Participant& participant, const std::string& site, bool tools, bool masses);
 
   bool publish_tool(const ToolState& tool) override;
   bool publish_mass(const MassState& mass) override;
@@ -46,6 +49,8 @@ class DdsTransport final : public Transport {
   std::string error() const override { return error_; }
   /// Why the mass topic's writer was refused ("" when it was made, or masses were not asked for).
   const std::string& masses_refused() const { return masses_refused_; }
+  /// Why the tool topic's writer was refused ("" when it was made, or tools were not asked for).
+  const std::string& tools_refused() const { return tools_refused_; }
 
  private:
   std::unique_ptr<ToolPublisher> tools_out_;
@@ -53,6 +58,7 @@ class DdsTransport final : public Transport {
   std::unique_ptr<MassPublisher> masses_out_;
   std::unique_ptr<MassSubscriber> masses_in_;
   std::string masses_refused_;
+  std::string tools_refused_;
   std::string error_;  // the last refusal's
 };
 

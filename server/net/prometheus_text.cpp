@@ -92,6 +92,13 @@ void federation_metrics(Exposition& e, const v1::FederationStats& f) {
            static_cast<double>(f.wrenches_accepted()));
   e.single("hapticd_federation_wrenches_refused_total", "counter",
            "ROS 2 wrenches refused (frame, not finite).", static_cast<double>(f.wrenches_refused()));
+  e.single("hapticd_federation_samples_refused_total", "counter",
+           "Other sites' tool and mass samples refused (another site's name, not finite, cut off).",
+           static_cast<double>(f.samples_refused()));
+  e.single("hapticd_federation_energy_refused_joules_total", "counter",
+           "Energy other sites claimed to have sent and were not credited (over the cap).", f.energy_refused_j());
+  e.single("hapticd_federation_sites_cut_off_total", "counter",
+           "Sites cut off because their energy books did not add up.", static_cast<double>(f.sites_cut_off()));
   // The four books only grow while a coupling lasts (a new coupling starts them at 0); what its
   // layer holds goes up and down.
   e.family("hapticd_federation_coupling_energy_joules_total", "counter",

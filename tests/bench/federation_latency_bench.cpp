@@ -397,7 +397,7 @@ enum class DdsReceive { kListener, kWaitset };
 class DdsTransport final : public Transport {
  public:
   DdsTransport(const std::vector<std::string>& addresses, int index, DdsReceive mode, Received& into)
-      : participant_(options(addresses, index)), publisher_(participant_), subscriber_(participant_),
+      : participant_(options(addresses, index)), publisher_(participant_, site_name(index)), subscriber_(participant_),
         own_(site_name(index)), mode_(mode), into_(into) {
     reader_ = find_reader(participant_.handle());
     if (reader_ <= 0) fail("the tool topic's reader was not found under the participant");

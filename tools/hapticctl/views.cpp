@@ -141,6 +141,10 @@ std::string federation_view(const haptic::FederationStats& f) {
       << " failed; items " << f.items_published << " published, " << f.items_applied
       << " applied, " << f.items_refused << " refused; wrenches " << f.wrenches_accepted
       << " accepted, " << f.wrenches_refused << " refused\n";
+  if (f.samples_refused + f.sites_cut_off > 0 || f.energy_refused_j > 0.0) {
+    out << "  from other sites: " << f.samples_refused << " samples refused, " << fixed(f.energy_refused_j * 1e3, 3)
+        << " mJ claimed and not credited, " << f.sites_cut_off << " sites cut off\n";
+  }
   if (f.couplings.empty()) out << "  no coupling across the network\n";
   const auto mj = [](double joules) { return fixed(joules * 1e3, 3) + " mJ"; };
   for (const haptic::CouplingStats& c : f.couplings) {

@@ -481,6 +481,10 @@ struct FederationStats {
   std::uint64_t items_refused = 0;      ///< refused by this site's checks
   std::uint64_t wrenches_accepted = 0;  ///< ROS 2 wrenches taken in
   std::uint64_t wrenches_refused = 0;   ///< refused (frame, NaN)
+  /// Other sites' tool and mass samples refused (another site's name, NaN, from a site cut off).
+  std::uint64_t samples_refused = 0;
+  double energy_refused_j = 0.0;        ///< energy other sites claimed, not credited (over the cap). J
+  std::uint64_t sites_cut_off = 0;      ///< sites cut off: their energy books did not add up
   std::vector<CouplingStats> couplings;
 };
 

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "federation/item_replicator.hpp"
+#include "federation/item_topic.hpp"
 
 namespace haptic::federation {
 namespace {
@@ -163,6 +164,35 @@ TEST(ItemReplicator, AnItemTheOtherSiteRefusesIsReportedNotApplied) {
   ASSERT_FALSE(log.empty());
   EXPECT_NE(log.front().find("site " + a + " item 4 (version 1) refused: object.impedance.stiffness"), std::string::npos)
       << log.front();
+}
+
+TEST(ItemReplicator, AnItemOrRemovalNamingAnotherSiteIsRefusedAndLoggedAndChangesNothing) {
+  const std::string a = site_name("lab-a"), b = site_name("lab-b"), c = site_name("lab-c");
+  std::vector<std::string> log;
+  MemoryScene scene_a, scene_b;
+  ItemReplicator site_a(options_for(a, &log), scene_a);
+  ItemReplicator site_b(options_for(b), scene_b);
+  scene_b.create(4, "b's wall");
+  ASSERT_TRUE(eventually({&site_a, &site_b}, [&] { return scene_a.remote().count(b + "/4") == 1; }));
+  // A third participant writes under b's name from its own partition: an update, a new item, and
+  // a removal of b's wall.
+  Participant forger(loopback_domain());
+  ItemPublisher publisher(forger, c);
+  ASSERT_TRUE(eventually({&site_a}, [&] { return publisher.matched_readers() > 0; }));
+  ASSERT_TRUE(publisher.put(SharedItemState{b, 4, 9, SharedItemKind::kObject, "a forged wall"})) << publisher.error();
+  ASSERT_TRUE(publisher.put(SharedItemState{b, 5, 1, SharedItemKind::kObject, "a forged box"})) << publisher.error();
+  ASSERT_TRUE(publisher.remove(b, 4)) << publisher.error();
+  // Keep last one per (site, item): the wall's forged update may be overtaken by its forged
+  // removal before site a takes either, so two refusals at least.
+  ASSERT_TRUE(eventually({&site_a, &site_b}, [&] { return site_a.refused() >= 2; }))
+      << "refused " << site_a.refused();
+  EXPECT_EQ(scene_a.remote().at(b + "/4"), "b's wall");
+  EXPECT_EQ(scene_a.remote().count(b + "/5"), 0u);
+  bool logged = false;
+  for (const std::string& line : log) {
+    logged = logged || line.find("refused: its writer speaks for site \"" + c + "\"") != std::string::npos;
+  }
+  EXPECT_TRUE(logged);
 }
 
 }  // namespace

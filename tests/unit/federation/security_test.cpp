@@ -127,7 +127,7 @@ ToolState a_tool() {
 /// Site A publishes until site B has a sample (the handshake takes a few hundred ms), then goes on
 /// for `after` while `outsider` (if any) must receive nothing.
 void exchange(Participant& a, Participant& b, Participant* outsider, std::chrono::milliseconds after) {
-  ToolPublisher publisher(a);
+  ToolPublisher publisher(a, "bench-a");
   ToolSubscriber subscriber(b);
   std::optional<ToolSubscriber> outside;
   if (outsider != nullptr) outside.emplace(*outsider);
@@ -144,6 +144,7 @@ void exchange(Participant& a, Participant& b, Participant* outsider, std::chrono
       std::chrono::seconds(20)))
       << "no sample between two sites of one CA in 20 s";
   EXPECT_EQ(received.back().site, "bench-a");
+  EXPECT_EQ(received.back().writer_site, "bench-a");
   EXPECT_EQ(received.back().p_WT, tool.p_WT);
   if (!outside) return;
   // The outsider has had the whole handshake time and `after` more (the channel demonstrably
@@ -229,32 +230,84 @@ dds_entity_t topic_on(const Participant& site, const char* name) {
   return dds_create_topic(site.handle(), &haptic_federation_ToolSample_desc, name, nullptr, nullptr);
 }
 
-TEST(FederationSecurity, AnObserversPermissionsRefuseWritingItemsAndMassesAndAMembersAllowIt) {
+/// A writer (or reader) on `topic` in `partition` ("": the default partition); Cyclone's entity
+/// or its refusal.
+dds_entity_t endpoint_in(const Participant& site, dds_entity_t topic, const char* partition, bool writer = true) {
+  dds_qos_t* qos = dds_create_qos();
+  if (partition[0] != '\0') dds_qset_partition1(qos, partition);
+  const dds_entity_t entity = writer ? dds_create_writer(site.handle(), topic, qos, nullptr)
+                                     : dds_create_reader(site.handle(), topic, qos, nullptr);
+  dds_delete_qos(qos);
+  return entity;
+}
+
+TEST(FederationSecurity, AnObserverPublishesNothingAMemberActsOnAndAMemberOnlyUnderItsOwnName) {
   REQUIRE_SECURITY();
   const Certs& certs = Certs::get();
   Participant observer(site_domain(1, certs.site("lab", "bench-b")));
-  for (const char* name : {"haptic_federation_items", "haptic_federation_masses"}) {
+  for (const char* name : {"haptic_federation_items", "haptic_federation_masses", "haptic_federation_tool"}) {
     const dds_entity_t topic = topic_on(observer, name);
     ASSERT_GT(topic, 0) << name << ": an observer may make the topic (it subscribes to it)";
-    EXPECT_EQ(dds_create_writer(observer.handle(), topic, nullptr, nullptr), DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
-        << name;
-    EXPECT_GT(dds_create_reader(observer.handle(), topic, nullptr, nullptr), 0) << name;
+    for (const char* partition : {"bench-b", "bench-a", ""}) {
+      EXPECT_EQ(endpoint_in(observer, topic, partition), DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
+          << name << " in partition \"" << partition << "\"";
+    }
+    EXPECT_GT(endpoint_in(observer, topic, "*", false), 0) << name;
   }
-  const dds_entity_t tools = topic_on(observer, "haptic_federation_tool");
-  ASSERT_GT(tools, 0);
-  EXPECT_GT(dds_create_writer(observer.handle(), tools, nullptr, nullptr), 0) << "an observer shares its tools";
   const dds_entity_t pose = topic_on(observer, "rt/hapticd/bench_b/port0/pose");
   ASSERT_GT(pose, 0);
-  EXPECT_GT(dds_create_writer(observer.handle(), pose, nullptr, nullptr), 0) << "ROS 2 topics are open to both";
+  EXPECT_GT(endpoint_in(observer, pose, ""), 0) << "its own ROS 2 topics are open to it";
+  const dds_entity_t wrench = topic_on(observer, "rt/hapticd/bench_a/port0/wrench_command");
+  ASSERT_GT(wrench, 0);
+  EXPECT_EQ(endpoint_in(observer, wrench, ""), DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
+      << "an observer may not command a member's tool";
+  EXPECT_GT(endpoint_in(observer, wrench, "", false), 0);
   EXPECT_LT(topic_on(observer, "some_other_topic"), 0) << "what is not granted is denied";
 
   Participant member(site_domain(2, certs.site("lab", "bench-a")));
   for (const char* name : {"haptic_federation_items", "haptic_federation_masses", "haptic_federation_tool"}) {
     const dds_entity_t topic = topic_on(member, name);
     ASSERT_GT(topic, 0) << name;
-    EXPECT_GT(dds_create_writer(member.handle(), topic, nullptr, nullptr), 0) << name;
-    EXPECT_GT(dds_create_reader(member.handle(), topic, nullptr, nullptr), 0) << name;
+    EXPECT_GT(endpoint_in(member, topic, "bench-a"), 0) << name << ": under its own name";
+    for (const char* partition : {"bench-c", "bench-*", "*", ""}) {
+      EXPECT_EQ(endpoint_in(member, topic, partition), DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
+          << name << " in partition \"" << partition << "\": another site's name, a pattern, or none";
+    }
+    EXPECT_GT(endpoint_in(member, topic, "*", false), 0) << name;
   }
+}
+
+TEST(FederationSecurity, AMemberSpeakingForAnotherSiteIsRefusedByTheRelayAndLogged) {
+  REQUIRE_SECURITY();
+  const Certs& certs = Certs::get();
+  std::vector<std::string> log;
+  runtime::SampleRing ring;
+  runtime::LatestValue<runtime::RemoteToolSet> mailbox;
+  RelayOptions options;
+  options.site = "bench-a";
+  options.domain = site_domain(1, certs.site("lab", "bench-a"));
+  options.log = [&log](const std::string& line) { log.push_back(line); };
+  SampleRelay relay(options, {RelayPort{&ring, 0, &mailbox}});
+  Participant forger(site_domain(2, certs.site("lab", "bench-c")));
+  ToolPublisher publisher(forger, "bench-c");  // its own partition: the only one it may use
+  ToolState tool = a_tool();
+  tool.site = "bench-b";  // another member's name
+  ASSERT_TRUE(eventually(
+      [&] {
+        ++tool.tick;
+        EXPECT_TRUE(publisher.publish(tool)) << publisher.error();
+        relay.step(std::chrono::steady_clock::now());
+        return relay.samples_refused() > 0;
+      },
+      std::chrono::seconds(20)))
+      << "nothing arrived in 20 s";
+  for (const runtime::RemoteTool& remote : mailbox.load().tools) EXPECT_EQ(remote.key, 0u) << "a forged tool was taken";
+  bool logged = false;
+  for (const std::string& line : log) {
+    logged = logged || line.find("naming site \"bench-b\" refused: its writer speaks for site \"bench-c\"") !=
+                           std::string::npos;
+  }
+  EXPECT_TRUE(logged);
 }
 
 TEST(FederationSecurity, AnObserverReadsAMembersSharedItemButCannotPublishOne) {
@@ -262,8 +315,8 @@ TEST(FederationSecurity, AnObserverReadsAMembersSharedItemButCannotPublishOne) {
   const Certs& certs = Certs::get();
   Participant member(site_domain(1, certs.site("lab", "bench-a")));
   Participant observer(site_domain(2, certs.site("lab", "bench-b")));
-  EXPECT_THROW(ItemPublisher refused(observer), std::runtime_error);
-  ItemPublisher publisher(member);
+  EXPECT_THROW(ItemPublisher refused(observer, "bench-b"), std::runtime_error);
+  ItemPublisher publisher(member, "bench-a");
   ItemSubscriber subscriber(observer);
   SharedItemState item;
   item.site = "bench-a";
@@ -278,6 +331,7 @@ TEST(FederationSecurity, AnObserverReadsAMembersSharedItemButCannotPublishOne) {
   EXPECT_EQ(events.front().what, SharedItemEvent::What::kPut);
   EXPECT_EQ(events.front().state.site, "bench-a");
   EXPECT_EQ(events.front().state.spec, "a wall");
+  EXPECT_EQ(events.front().writer_site, "bench-a");
 }
 
 /// A shared scene in memory, for the replicators below: its own items and what it received.
@@ -349,10 +403,12 @@ TEST(FederationSecurity, AnObserversRelayCouplesToSharedMassesWithoutPublishingI
   options.domain = site_domain(3, certs.site("lab", "bench-b"));
   SampleRelay observer(options, {}, RelayMasses{&local, &remote});  // made, not refused
   EXPECT_NE(observer.masses_refused().find("haptic_federation_masses"), std::string::npos) << observer.masses_refused();
+  EXPECT_NE(observer.tools_refused().find("haptic_federation_tool"), std::string::npos) << observer.tools_refused();
   options.site = "bench-a";
   options.domain = site_domain(4, certs.site("lab", "bench-a"));
   SampleRelay member(options, {}, RelayMasses{&local, &remote});
   EXPECT_EQ(member.masses_refused(), "");
+  EXPECT_EQ(member.tools_refused(), "");
 }
 
 TEST(FederationSecurity, PermissionsOfAnotherSiteAreRefusedWhenTheParticipantIsMade) {

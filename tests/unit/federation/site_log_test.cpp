@@ -57,7 +57,7 @@ TEST(SiteLog, AnotherSitesArrivalDepartureAndReturnAreOneLineEach) {
   SampleRelay relay(options, {RelayPort{&ring, 0, &mailbox}});
 
   Participant b(domain);
-  ToolPublisher publisher(b);
+  ToolPublisher publisher(b, "bench-b");
   ASSERT_TRUE(eventually([&] { return publisher.matched_readers() > 0; })) << "no reader matched in 10 s";
   ToolState tool;
   tool.site = "bench-b";
@@ -101,7 +101,7 @@ TEST(SiteLog, ASiteThatComesAndGoesIsLoggedOnceAWindowEachWayAndCounted) {
   options.log = [&](const std::string& line) { lines.push_back(line); };
   SampleRelay relay(options, {RelayPort{&ring, 0, &mailbox}});
   Participant b(domain);
-  ToolPublisher publisher(b);
+  ToolPublisher publisher(b, "bench-b");
   ASSERT_TRUE(eventually([&] { return publisher.matched_readers() > 0; }));
   ToolState tool;
   tool.site = "bench-b";

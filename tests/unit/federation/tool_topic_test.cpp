@@ -40,7 +40,7 @@ TEST(ToolTopic, ASitesToolReachesAnotherParticipantAndItsOwnIsLeftOut) {
   const DomainOptions options = loopback_domain();
   Participant site_a(options);
   Participant site_b(options);
-  ToolPublisher publisher(site_a);
+  ToolPublisher publisher(site_a, "bench-a");
   ToolSubscriber subscriber(site_b);
   ASSERT_TRUE(eventually([&] { return publisher.matched_readers() > 0; })) << "no reader matched in 10 s";
   ToolState tool;
@@ -71,6 +71,7 @@ TEST(ToolTopic, ASitesToolReachesAnotherParticipantAndItsOwnIsLeftOut) {
   EXPECT_EQ(got.F_T_W, tool.F_T_W);
   EXPECT_EQ(got.R_WT.z, 1.0);
   EXPECT_EQ(got.buttons, 2u);
+  EXPECT_EQ(got.writer_site, "bench-a");  // the partition it came through
   ASSERT_EQ(got.energy.size(), 2u);  // what its couplings sent, per other tool
   EXPECT_EQ(got.energy[0].site, "bench-b");
   EXPECT_EQ(got.energy[0].sent, 0.125);
@@ -84,9 +85,29 @@ TEST(ToolTopic, ASitesToolReachesAnotherParticipantAndItsOwnIsLeftOut) {
   EXPECT_TRUE(received.empty());
 }
 
+TEST(ToolTopic, ASampleNamingAnotherSiteArrivesWithTheSiteItsWriterSpeaksFor) {
+  const DomainOptions options = loopback_domain();
+  Participant site_a(options);
+  Participant site_c(options);
+  ToolPublisher forger(site_c, "bench-c");
+  ToolSubscriber subscriber(site_a);
+  ASSERT_TRUE(eventually([&] { return forger.matched_readers() > 0; })) << "no reader matched in 10 s";
+  ToolState tool;
+  tool.site = "bench-b";  // not its own
+  std::vector<ToolState> received;
+  ASSERT_TRUE(eventually([&] {
+    ++tool.tick;
+    EXPECT_TRUE(forger.publish(tool)) << forger.error();
+    subscriber.take(received, "bench-a");
+    return !received.empty();
+  })) << "no sample in 10 s";
+  EXPECT_EQ(received.back().site, "bench-b");
+  EXPECT_EQ(received.back().writer_site, "bench-c");  // which the relay refuses (forging_peer_test)
+}
+
 TEST(ToolTopic, ASiteNameLongerThanTheTypeAllowsIsRefusedNamingIt) {
   Participant site(loopback_domain());
-  ToolPublisher publisher(site);
+  ToolPublisher publisher(site, "bench-x");
   ToolState tool;
   tool.site = std::string(65, 'x');
   EXPECT_FALSE(publisher.publish(tool));

@@ -49,6 +49,14 @@ TEST(HapticctlViews, TheFederationBlockHasItsCountsAndEachCouplingsBooksInMillij
             "federation  0 samples published, 0 failed; items 0 published, 0 applied, 0 refused; "
             "wrenches 0 accepted, 0 refused\n"
             "  no coupling across the network\n");
+  haptic::FederationStats lied_to;
+  lied_to.samples_refused = 12;
+  lied_to.energy_refused_j = 0.5;
+  lied_to.sites_cut_off = 1;
+  EXPECT_NE(federation_view(lied_to).find("  from other sites: 12 samples refused, 500.000 mJ claimed and not "
+                                          "credited, 1 sites cut off\n"),
+            std::string::npos)
+      << federation_view(lied_to);
 }
 
 TEST(HapticctlViews, TheStatusShowsAFederationOnlyWhenTheServerHasOne) {

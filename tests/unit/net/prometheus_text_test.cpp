@@ -163,6 +163,9 @@ TEST(PrometheusText, AFederationsCountersAndEachCouplingsBooks) {
   federation.set_items_refused(4);
   federation.set_wrenches_accepted(60);
   federation.set_wrenches_refused(7);
+  federation.set_samples_refused(8);
+  federation.set_energy_refused_j(0.25);
+  federation.set_sites_cut_off(1);
   v1::CouplingStats& tool = *federation.add_couplings();
   tool.set_kind(v1::CouplingStats::TOOL);
   tool.set_port(1);
@@ -190,6 +193,9 @@ TEST(PrometheusText, AFederationsCountersAndEachCouplingsBooks) {
   EXPECT_EQ(value_of(parsed, "hapticd_federation_items_refused_total"), 4.0);
   EXPECT_EQ(value_of(parsed, "hapticd_federation_wrenches_accepted_total"), 60.0);
   EXPECT_EQ(value_of(parsed, "hapticd_federation_wrenches_refused_total"), 7.0);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_samples_refused_total"), 8.0);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_energy_refused_joules_total"), 0.25);
+  EXPECT_EQ(value_of(parsed, "hapticd_federation_sites_cut_off_total"), 1.0);
 
   const std::string energy = "hapticd_federation_coupling_energy_joules_total";
   const std::string tool_labels = R"(kind="tool",port="1",remote="a1b2c3d4e5f60718")";

@@ -316,6 +316,9 @@ TEST(Conversions, TheFederationsStatsComeBackWholeAndOnlyWithAFederation) {
       {"items_refused", static_cast<double>(f.items_refused)},
       {"wrenches_accepted", static_cast<double>(f.wrenches_accepted)},
       {"wrenches_refused", static_cast<double>(f.wrenches_refused)},
+      {"samples_refused", static_cast<double>(f.samples_refused)},
+      {"energy_refused_j", f.energy_refused_j},
+      {"sites_cut_off", static_cast<double>(f.sites_cut_off)},
   };
   const google::protobuf::Descriptor& descriptor = *v1::FederationStats::descriptor();
   EXPECT_EQ(seen.size() + 1, static_cast<std::size_t>(descriptor.field_count()));  // + couplings
