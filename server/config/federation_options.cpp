@@ -1,6 +1,7 @@
 #include "config/federation_options.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -77,6 +78,13 @@ std::string validate_federation(const v1::FederationConfig& federation, double l
   if (site.empty() || site.size() > 64) {
     return "federation.site: must be 1 to 64 characters (this site's name in the domain), got " +
            std::to_string(site.size());
+  }
+  // The name is the site's DDS partition, where '*', '?' and '[' would be patterns speaking for
+  // other sites, and its certificate's subject (scripts/federation-certs allows the same).
+  const auto plain = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '.' || c == '_' || c == '-'; };
+  if (!std::isalnum(static_cast<unsigned char>(site[0])) || !std::all_of(site.begin(), site.end(), plain)) {
+    return "federation.site: letters, digits, '.', '_' and '-' only, starting with a letter or digit (it is the "
+           "site's DDS partition and certificate subject), got \"" + site + "\"";
   }
   if (std::string e = federation::validate(domain_of(federation)); !e.empty()) return "federation." + e;
   if (!loopback(federation.interface()) && !federation.has_security() && !federation.allow_insecure()) {

@@ -267,6 +267,13 @@ TEST(Config, TheFederationSectionTakesItsDefaultsAndNamesABadField) {
   EXPECT_EQ(config.federation().ros2().rate_hz(), 100.0);
   EXPECT_EQ(config.federation().ros2().frame_id(), "hapticd_world");
   EXPECT_NE(error_of(R"({"federation": {}})").find("federation.site: must be 1 to 64 characters"), std::string::npos);
+  // A site's name is its DDS partition: a pattern would speak for other sites.
+  for (const char* site : {"bench-*", "bench?", "[ab]", "-lead", "bench a"}) {
+    EXPECT_NE(error_of(std::string(R"({"federation": {"site": ")") + site + "\"}}")
+                  .find("federation.site: letters, digits, '.', '_' and '-' only"),
+              std::string::npos)
+        << site;
+  }
   EXPECT_NE(error_of(R"({"federation": {"site": "a", "domain_id": 500}})")
                 .find("federation.domain_id: must be 0 to 232, got 500"),
             std::string::npos);
