@@ -32,6 +32,7 @@ bool MassPublisher::publish(const MassState& mass) {
   sample.tick = mass.tick;
   sample.position = {mass.p_WM.x, mass.p_WM.y, mass.p_WM.z};
   sample.velocity = {mass.v_WM.x, mass.v_WM.y, mass.v_WM.z};
+  sample.settled = mass.settled;
   haptic_federation_MassCoupling couplings[kMaxMassCouplings]{};
   for (std::size_t i = 0; i < mass.sent.size(); ++i) couplings[i] = {mass.sent[i].first, mass.sent[i].second};
   lend(sample.energy, couplings, mass.sent.size(), kMaxMassCouplings);
@@ -55,6 +56,7 @@ std::size_t MassSubscriber::take(std::vector<MassState>& out, const std::string&
     mass.tick = s.tick;
     mass.p_WM = {s.position.x, s.position.y, s.position.z};
     mass.v_WM = {s.velocity.x, s.velocity.y, s.velocity.z};
+    mass.settled = s.settled;
     mass.writer_site = writers_.of(reader_.handle(), info.publication_handle);
     for (std::uint32_t k = 0; k < s.energy._length && k < kMaxMassCouplings; ++k) {
       mass.sent.emplace_back(s.energy._buffer[k].site, s.energy._buffer[k].sent);

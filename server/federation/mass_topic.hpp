@@ -34,6 +34,8 @@ struct MassState {
   /// (other site's key, cumulative energy its coupling with this copy sent it); at most
   /// kMaxMassCouplings.
   std::vector<std::pair<std::uint64_t, double>> sent;
+  /// The copy has its place (runtime::LocalMassCopy::settled).
+  bool settled = true;
   /// As received: the site its writer speaks for (ToolState::writer_site).
   std::optional<std::string> writer_site;
 };

@@ -254,7 +254,8 @@ void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
       changed = true;
       continue;
     }
-    copies[slot] = engine::RemoteMassCopy{site, mass.p_WM, mass.v_WM, mass_credit_[entry][slot].credited()};
+    copies[slot] =
+        engine::RemoteMassCopy{site, mass.p_WM, mass.v_WM, mass_credit_[entry][slot].credited(), mass.settled};
     mass_heard_[entry][slot] = now;
   }
   for (std::size_t i = 0; i < runtime::kMaxSharedMasses; ++i) {
@@ -286,6 +287,7 @@ void SampleRelay::publish_masses() {
     mass.tick = local.tick;
     mass.p_WM = copy.p_WM;
     mass.v_WM = copy.v_WM;
+    mass.settled = copy.settled;
     for (std::size_t k = 0; k < engine::kMaxRemoteCopies; ++k) {
       if (copy.coupled_site[k] != 0) mass.sent.emplace_back(copy.coupled_site[k], copy.sent[k]);
     }

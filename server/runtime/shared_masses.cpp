@@ -1,6 +1,6 @@
 #include "runtime/shared_masses.hpp"
 
-#include <span>
+#include <array>
 
 namespace haptic::runtime {
 
@@ -53,6 +53,8 @@ void SharedMassStage::run(const engine::CompiledScene& scene, std::uint64_t tick
         slot = i;
         slots_[i].mass_key = key;
         slots_[i].couplings.clear();
+        slots_[i].settled = false;
+        slots_[i].first_tick = tick;
       }
     }
     if (slot == kMaxSharedMasses) {
@@ -60,15 +62,37 @@ void SharedMassStage::run(const engine::CompiledScene& scene, std::uint64_t tick
       continue;
     }
     seen[slot] = true;
-    std::span<const engine::RemoteMassCopy> copies;
+    Slot& s = slots_[slot];
+    // The copies this one couples to: the settled ones, once it is settled itself.
+    std::array<engine::RemoteMassCopy, engine::kMaxRemoteCopies> settled{};
+    const engine::RemoteMassCopy* first_settled = nullptr;
     for (const RemoteMassCopies& entry : remote.masses) {
-      if (entry.mass_key == key) copies = entry.copies;
+      if (entry.mass_key != key) continue;
+      for (std::size_t i = 0; i < engine::kMaxRemoteCopies; ++i) {
+        const engine::RemoteMassCopy& copy = entry.copies[i];
+        if (copy.key == 0 || !copy.settled) continue;
+        settled[i] = copy;
+        if (first_settled == nullptr && engine::is_finite(copy.p_WM) && engine::is_finite(copy.v_WM)) {
+          first_settled = &entry.copies[i];
+        }
+      }
     }
+    if (!s.settled) {
+      if (first_settled != nullptr) {
+        // Joining a mass others have: take it where they have it, before anything couples.
+        engine::place_mass(scene, contact, first_settled->p_WM, first_settled->v_WM);
+        s.settled = true;
+      } else if (static_cast<double>(tick - s.first_tick) * params_.period >= kSettleTime) {
+        s.settled = true;  // nobody had it: it is where this site made it
+      }
+    }
+    if (!s.settled) settled = {};
     const engine::MassNow now = engine::mass_now(scene, contact);
-    const engine::Vec3 F = slots_[slot].couplings.force(copies, {now.p_WO, now.v_WO}, compiled.object_mass, params_);
+    const engine::Vec3 F = s.couplings.force(settled, {now.p_WO, now.v_WO}, compiled.object_mass, params_);
     engine::push_mass(scene, contact, F);
     LocalMassCopy& out = local.masses[slot];
     out.mass_key = key;
+    out.settled = s.settled;
     out.p_WM = now.p_WO;
     out.v_WM = now.v_WO;
     for (std::size_t i = 0; i < engine::kMaxRemoteCopies; ++i) {

@@ -51,6 +51,9 @@ struct LocalMassCopy {
   std::array<double, engine::kMaxRemoteCopies> injected{};
   std::array<double, engine::kMaxRemoteCopies> given{};
   std::array<double, engine::kMaxRemoteCopies> reservoir{};
+  /// It has its place: it took a settled copy's state when it joined, or found none to take
+  /// within kSettleTime. Other sites couple to it only then.
+  bool settled = false;
 };
 struct LocalMassTable {
   std::uint64_t tick = 0;  // the tick that moved them
@@ -63,6 +66,18 @@ struct MassCouplingParams {
   double damping = 2.0;      // B_s. Unit: N·s/m.
 };
 
+/// How long a new copy waits for a settled copy of another site to take its state from before it
+/// settles where it is (the first copy, or every copy new at once). Longer than a site's first
+/// samples take to arrive; shorter than the relay's silence before it drops a copy. Unit: s.
+inline constexpr double kSettleTime = 0.25;
+
+/// A copy that joins takes the shared mass where it is. A site that creates its copy (it joins
+/// late, or restarted) has the mass where the item's description put it, which the others' users
+/// may have pushed far from; coupled at once, it would drag their copies back with nobody touching
+/// them. So a new copy does not couple while it is not settled, and no site couples to a copy
+/// that is not: when a settled copy of another site arrives, the new copy takes its position and
+/// velocity (late by the network's one-way delay) and settles; without one for kSettleTime it
+/// settles where it is.
 class SharedMassStage {
  public:
   /// own_site: this site's key; in: the other sites' copies (written by the federation); out:
@@ -89,6 +104,8 @@ class SharedMassStage {
   struct Slot {
     std::uint64_t mass_key = 0;
     engine::CopyCouplings couplings;
+    bool settled = false;
+    std::uint64_t first_tick = 0;  // the tick the copy came into the slot
   };
 
   std::uint64_t own_site_;

@@ -1042,6 +1042,13 @@ void push_mass(const CompiledScene& scene, std::uint32_t contact, const Vec3& F)
   scene.state->motions[scene.contacts[contact].state].reaction_W += F;
 }
 
+void place_mass(const CompiledScene& scene, std::uint32_t contact, const Vec3& p_WO, const Vec3& v_WO) {
+  const CompiledContact& compiled = scene.contacts[contact];
+  ContactMotion& m = scene.state->motions[compiled.state];
+  m.displacement_W = p_WO - compiled.X_WO.p_WO;
+  m.velocity_W = v_WO;
+}
+
 void advance_scene(const CompiledScene& scene, double dt) {
   SceneState& state = *scene.state;
   for (const std::uint32_t index : scene.masses) {

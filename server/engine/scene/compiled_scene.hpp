@@ -338,6 +338,9 @@ struct MassNow {
 MassNow mass_now(const CompiledScene& scene, std::uint32_t contact);
 /// On the loop: adds F (N, W) to what moves virtual mass `contact` at the next advance_scene.
 void push_mass(const CompiledScene& scene, std::uint32_t contact, const Vec3& F);
+/// On the loop: puts virtual mass `contact` at p_WO (m, W) moving at v_WO (m/s), as the next
+/// advance_scene starts it (a shared mass's copy taking the state of another site's).
+void place_mass(const CompiledScene& scene, std::uint32_t contact, const Vec3& p_WO, const Vec3& v_WO);
 
 /// Advances every virtual mass by dt under the reactions the ports accumulated this tick, held
 /// over the tick (000 eq. 7.1, integrated exactly), clears the accumulators and publishes the

@@ -58,6 +58,9 @@ struct RemoteMassCopy {
   Vec3 p_WM;                      // its centre. Unit: m.
   Vec3 v_WM;                      // Unit: m/s.
   double energy_sent_to_us = 0.0; // what its coupling with this copy has sent, cumulative. Unit: J.
+  /// The copy has its place (runtime/shared_masses: a joining copy takes a settled one's state
+  /// before anyone couples to it).
+  bool settled = true;
 };
 
 struct SharedMassState {

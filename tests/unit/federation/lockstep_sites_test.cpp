@@ -351,5 +351,66 @@ TEST(LockstepSites, ASiteThatGoesQuietIsDroppedAtTheOthersAfterSilence) {
   EXPECT_EQ(a.counters.force_faults.load(), 0u);
 }
 
+/// Whether site `s`'s copy of the mass is coupled to `other`'s.
+bool coupled_to(const Site& s, const Site& other) {
+  const engine::CopyCouplings* couplings = s.stage.couplings_of(kMassKey);
+  for (std::size_t k = 0; couplings != nullptr && k < engine::kMaxRemoteCopies; ++k) {
+    if (couplings->key(k) == other.key) return true;
+  }
+  return false;
+}
+
+TEST(LockstepSites, ALateJoinerAndARestartedSiteTakeTheSharedMassWhereItIs) {
+  constexpr std::uint64_t kDelay = 10;  // one way, ticks
+  constexpr std::uint64_t kJoin = 6'000, kRestart = 10'000, kEnd = 14'000;
+  test::DelayLineNetwork network(kDelay, 0.0);
+  // Site 0 alone makes the mass (at the origin) and its user pushes it along +x, then lets go.
+  Site a(0, {-0.05, 0, 0}, network);
+  const engine::Vec3 aside{0.0, 0.12, 0.0};  // where site 1's user keeps its tool: far from the mass
+  std::unique_ptr<Site> b;
+  double join_offset = -1.0, restart_offset = -1.0;  // site 1's copy from site 0's when they couple. m
+  engine::Vec3 a_at_join, a_at_restart;
+  double drag_after_join = 0.0, drag_after_restart = 0.0;  // site 0's copy moved since. m
+  bool was_coupled = false;
+  for (std::uint64_t tick = 1; tick <= kEnd; ++tick) {
+    if (tick == 500) a.device.set_hand(hand_towards({-0.05, 0, 0}, {0.065, 0, 0}));
+    if (tick == 3'000) a.device.set_hand(hand_towards({0.065, 0, 0}, {0.065, -0.08, 0}));
+    if (tick == kJoin || tick == kRestart) {
+      b.reset();  // a restart: the site's process and its copy go, and a new one starts
+      b = std::make_unique<Site>(1, aside, network);
+      was_coupled = false;
+      (tick == kJoin ? a_at_join : a_at_restart) = a.out.load().masses[0].p_WM;
+    }
+    a.runner.run(tick, static_cast<std::int64_t>(tick - 1) * 1'000'000);
+    if (b) b->runner.run(tick, static_cast<std::int64_t>(tick - 1) * 1'000'000);
+    a.relay.step(clock_at(tick));
+    if (b) b->relay.step(clock_at(tick));
+    network.advance();
+    if (!b) continue;
+    const engine::Vec3 at_a = a.out.load().masses[0].p_WM;
+    if (!was_coupled && coupled_to(*b, a)) {
+      was_coupled = true;
+      (tick < kRestart ? join_offset : restart_offset) = engine::norm(b->out.load().masses[0].p_WM - at_a);
+    }
+    if (tick < kRestart) {
+      drag_after_join = std::max(drag_after_join, engine::norm(at_a - a_at_join));
+    } else {
+      drag_after_restart = std::max(drag_after_restart, engine::norm(at_a - a_at_restart));
+    }
+  }
+  std::printf("the shared mass at %.1f mm when site 1 joined, %.1f mm when it restarted (made at 0 mm): its copy "
+              "coupled %.3f mm and %.3f mm from site 0's; site 0's copy moved %.3f mm and %.3f mm after\n",
+              engine::norm(a_at_join) * 1e3, engine::norm(a_at_restart) * 1e3, join_offset * 1e3,
+              restart_offset * 1e3, drag_after_join * 1e3, drag_after_restart * 1e3);
+  EXPECT_GT(engine::norm(a_at_join), 0.04) << "the user did not push the mass far";
+  ASSERT_GE(join_offset, 0.0) << "the joiner never coupled";
+  ASSERT_GE(restart_offset, 0.0) << "the restarted site never coupled";
+  EXPECT_LE(join_offset, 1e-3);
+  EXPECT_LE(restart_offset, 1e-3);
+  EXPECT_LE(drag_after_join, 1e-3) << "the joiner dragged site 0's copy with nobody touching it";
+  EXPECT_LE(drag_after_restart, 1e-3) << "the restarted site dragged site 0's copy";
+  EXPECT_TRUE(coupled_to(a, *b) && coupled_to(*b, a));
+}
+
 }  // namespace
 }  // namespace haptic::federation
