@@ -20,6 +20,7 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/analysis/growth.hpp"
 #include "engine/core/integrator.hpp"
 #include "engine/core/vec3.hpp"
 
@@ -146,6 +147,11 @@ void validate_cases(const std::vector<StudyCase>& cases);
 
 /// Runs the cases (validated first) and returns one row per case × variant × scheme × step.
 StudyReport run_study(const std::vector<StudyCase>& cases, const StudyOptions& options);
+
+/// How fast `trajectory`'s energy envelope grows over the case's second half (in eighths of it;
+/// engine::envelope_growth, windows at or below `floor` J left out): a run whose rate exceeds its
+/// reference's (or 0) by engine::kRingUpRate is unstable.
+engine::GrowthFit energy_growth(const StudyCase& c, const Trajectory& trajectory, double floor);
 
 /// The rows as CSV (header: case,group,variant,scheme,step_s,error,relative_error,
 /// cpu_s_per_sim_s,stable,energy_drift,note; stable 1/0; error inf for a run that did not finish).

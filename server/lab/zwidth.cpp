@@ -20,7 +20,9 @@ void require(bool ok, const std::string& message) {
 
 /// (c): the wall in permanent contact (it may pull, as the linear theory assumes), the device
 /// stepped exactly, the hand as a continuous spring-damper-mass; stable if the last half second's
-/// largest excursion is below the 1 mm the run starts from.
+/// largest excursion is below the 1 mm the run starts from: a verdict by growth (the amplitude
+/// after 3 s against the amplitude at the start), which sees a slow ring-up — a pole at 1.001 a
+/// tick grows 20× in 3 s at 1 kHz — and places the boundary within 0.5 % of the eigenvalues'.
 bool simulate(const ZWidthParams& p, double K, double B) {
   engine::PointMassParams device;
   device.mass = p.mass;

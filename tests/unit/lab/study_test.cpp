@@ -291,5 +291,45 @@ TEST(StudyOdeCases, TheWholeServerRendersTheVelocityLawsDifferenceEquationAtEver
       << "the force guard keeps it finite";
 }
 
+TEST(StudyRunner, ARunWithAPoleAt1Point001IsUnstableThoughItNeverGrowsTenfold) {
+  // x = p^(t/h) cos(ω t) sampled every 10 ms over 0.5 s, its energy ½ x-amplitude²: at h = 1 ms a
+  // pole p = 1.001 grows 1.65× over the run, which the size criterion (10× the reference) passes.
+  constexpr double kOmega = 300.0;
+  const auto trajectory = [](double pole, double step) {
+    Trajectory t;
+    for (int k = 0; k <= 50; ++k) {
+      const double time = 0.01 * k;
+      const double amplitude = std::pow(pole, time / step);
+      t.samples.push_back({amplitude * std::cos(kOmega * time), 0.0, 0.0});
+      t.energy.push_back(0.5 * amplitude * amplitude);
+    }
+    return t;
+  };
+  StudyCase c;
+  c.name = "pole_1_001";
+  c.title = "an oscillation with a closed-loop pole at 1.001 per step";
+  c.source = "this test";
+  c.observable = "x";
+  c.schemes = {Scheme::kExactZoh};
+  c.steps_s = {1e-3};
+  c.variants = {"steady", "growing"};
+  c.exact = [trajectory] { return trajectory(1.0, 1e-3); };
+  c.simulate = [trajectory](Scheme, double step, const std::string& variant) {
+    return trajectory(variant == "growing" ? 1.001 : 1.0, step);
+  };
+  StudyOptions options;
+  options.min_cpu_s = 0.0;
+  const StudyReport report = run_study({c}, options);
+  ASSERT_EQ(report.results.size(), 2u);
+  for (const StudyResult& r : report.results) {
+    if (r.variant == "growing") {
+      EXPECT_FALSE(r.stable) << r.note;
+      EXPECT_NE(r.note.find("rings up"), std::string::npos) << r.note;
+    } else {
+      EXPECT_TRUE(r.stable) << r.note;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace haptic::lab
