@@ -50,6 +50,10 @@ void fill_federation_defaults(v1::FederationConfig& federation) {
   if (!avatar_config.has_stiffness()) avatar_config.set_stiffness(avatar.stiffness);
   if (!avatar_config.has_damping()) avatar_config.set_damping(avatar.damping);
   const runtime::MassCouplingParams coupling;
+  const federation::CreditCap credit;
+  v1::PeerCreditConfig& peer_credit = *federation.mutable_peer_credit();
+  if (!peer_credit.has_max_power_w()) peer_credit.set_max_power_w(credit.max_power_W);
+  if (!peer_credit.has_burst_j()) peer_credit.set_burst_j(credit.burst_J);
   v1::SharedMassConfig& masses = *federation.mutable_shared_masses();
   if (!masses.has_coupling_stiffness()) masses.set_coupling_stiffness(coupling.stiffness);
   if (!masses.has_coupling_damping()) masses.set_coupling_damping(coupling.damping);
@@ -105,7 +109,9 @@ std::string validate_federation(const v1::FederationConfig& federation, double l
                                in_range("avatar.stiffness", federation.avatar().stiffness(), 0.0, 1e5, false),
                                in_range("avatar.damping", federation.avatar().damping(), 0.0, 1e3, false),
                                in_range("shared_masses.coupling_stiffness", federation.shared_masses().coupling_stiffness(), 0.0, 1e5, false),
-                               in_range("shared_masses.coupling_damping", federation.shared_masses().coupling_damping(), 0.0, 1e3, false)}) {
+                               in_range("shared_masses.coupling_damping", federation.shared_masses().coupling_damping(), 0.0, 1e3, false),
+                               in_range("peer_credit.max_power_w", federation.peer_credit().max_power_w(), 0.0, 1e3, true),
+                               in_range("peer_credit.burst_j", federation.peer_credit().burst_j(), 0.0, 100.0, true)}) {
     if (!e.empty()) return e;
   }
   if (federation.has_ros2()) {
@@ -136,6 +142,7 @@ federation::RelayOptions relay_options(const v1::FederationConfig& federation, d
   options.site = federation.site();
   options.domain = domain_of(federation);
   options.rate_hz = loop_rate_hz;  // every site's tools at loop rate
+  options.credit = federation::CreditCap{federation.peer_credit().max_power_w(), federation.peer_credit().burst_j()};
   if (federation.has_ros2()) {
     options.ros2 = ros2_of(federation.ros2());
     options.ros2_every = static_cast<std::uint32_t>(std::max(1.0, std::round(loop_rate_hz / federation.ros2().rate_hz())));

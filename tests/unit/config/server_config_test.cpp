@@ -266,6 +266,16 @@ TEST(Config, TheFederationSectionTakesItsDefaultsAndNamesABadField) {
   EXPECT_EQ(config.federation().ros2().ros_namespace(), "/hapticd/bench_a_lab");
   EXPECT_EQ(config.federation().ros2().rate_hz(), 100.0);
   EXPECT_EQ(config.federation().ros2().frame_id(), "hapticd_world");
+  EXPECT_EQ(config.federation().peer_credit().max_power_w(), 1.0);  // federation::CreditCap's
+  EXPECT_EQ(config.federation().peer_credit().burst_j(), 0.1);
+  EXPECT_EQ(relay_options(parse_config(R"({"federation": {"site": "a", "peer_credit": {"max_power_w": 0.25}}})", "x")
+                              .federation(),
+                          1000.0)
+                .credit.max_power_W,
+            0.25);
+  EXPECT_NE(error_of(R"({"federation": {"site": "a", "peer_credit": {"burst_j": 0}}})")
+                .find("federation.peer_credit.burst_j: must be > 0 and at most 100, got 0"),
+            std::string::npos);
   EXPECT_NE(error_of(R"({"federation": {}})").find("federation.site: must be 1 to 64 characters"), std::string::npos);
   // A site's name is its DDS partition: a pattern would speak for other sites.
   for (const char* site : {"bench-*", "bench?", "[ab]", "-lead", "bench a"}) {
