@@ -220,5 +220,48 @@ TEST(ForgingPeer, EnergyClaimedOverTheCapCutsTheSiteOff) {
   }
 }
 
+TEST(ForgingPeer, AMassCopyWithANaNIsRefusedAndOneClaimingOverTheCapCutsItsSiteOff) {
+  test::DelayLineNetwork network(kDelay, 0.0);
+  std::vector<std::string> log;
+  runtime::LatestValue<runtime::LocalMassTable> local;
+  runtime::LatestValue<runtime::RemoteMassTable> remote;
+  SampleRelay victim(victim_options(&log), network.site(kVictim), {}, RelayMasses{&local, &remote});
+  Transport& forger = network.site(kForger);
+  const std::uint64_t mass = runtime::shared_mass_key(runtime::site_key(kVictim), 1);
+  const auto copies_of_forger = [&] {
+    std::size_t copies = 0;
+    for (const runtime::RemoteMassCopies& entry : remote.load().masses) {
+      for (const engine::RemoteMassCopy& copy : entry.copies) copies += copy.key == runtime::site_key(kForger);
+    }
+    return copies;
+  };
+  bool coupled = false;
+  for (std::uint64_t tick = 1; tick <= 3000; ++tick) {
+    MassState copy;
+    copy.site = kForger;
+    copy.mass = mass;
+    copy.tick = tick;
+    copy.p_WM = {tick < 1000 ? 0.0 : NAN, 0.0, 0.0};  // a NaN from 1 s to 2 s
+    if (tick >= 2000) copy.p_WM = {};
+    copy.sent = {{runtime::site_key(kVictim), tick < 2500 ? 0.0 : 100.0}};  // 100 J "sent" at 2.5 s
+    forger.publish_mass(copy);
+    victim.step(clock_at(tick));
+    network.advance();
+    if (tick == 900) coupled = copies_of_forger() == 1;
+  }
+  EXPECT_TRUE(coupled) << "an honest copy was not taken";
+  EXPECT_GE(victim.samples_refused(), 1000u - kDelay);  // the NaNs, then everything after the cut
+  EXPECT_EQ(victim.sites_cut_off(), 1u);
+  EXPECT_EQ(copies_of_forger(), 0u) << "the cut-off site's copy is still coupled";
+  std::size_t nan_lines = 0, cut_lines = 0;
+  for (const std::string& line : log) {
+    nan_lines += line.find("a mass copy sample from site \"site-9\" refused: it holds a NaN") != std::string::npos;
+    cut_lines += line.find("site \"site-9\" cut off: its books do not add up: the energy its copy of a shared mass") !=
+                 std::string::npos;
+  }
+  EXPECT_EQ(nan_lines, 1u);
+  EXPECT_EQ(cut_lines, 1u);
+}
+
 }  // namespace
 }  // namespace haptic::federation
