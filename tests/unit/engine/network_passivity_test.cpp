@@ -186,6 +186,23 @@ TEST(NetworkPassivity, APushReachesTheOtherSiteAcrossTheDelay) {
   EXPECT_GT(far.min_channel_energy, -1e-2);
 }
 
+TEST(NetworkPassivity, ReceivedEnergyIsCreditedOnceAndAnOlderTotalChangesNothing) {
+  // The other site's cumulative total: what it adds beyond the last total taken goes into the
+  // reservoir, once; a total older than one taken (reordered, or from before a loss) adds nothing.
+  NetworkPassivity layer(NetworkPassivityParams{});
+  layer.receive(0.010);
+  EXPECT_DOUBLE_EQ(layer.reservoir(), 0.010);
+  EXPECT_DOUBLE_EQ(layer.received(), 0.010);
+  layer.receive(0.004);
+  EXPECT_DOUBLE_EQ(layer.reservoir(), 0.010);
+  layer.receive(0.025);
+  EXPECT_DOUBLE_EQ(layer.reservoir(), 0.025);
+  EXPECT_DOUBLE_EQ(layer.received(), 0.025);
+  // What it may give is what it holds: a push along v is not damped while the reservoir pays.
+  const NetworkPassivityStep step = layer.apply({1.0, 0, 0}, {0.1, 0, 0}, {}, 0.0);
+  EXPECT_EQ(step.alpha, 0.0);
+}
+
 TEST(NetworkPassivity, ApplyAllocatesNothing) {
   NetworkPassivity layer(NetworkPassivityParams{});
   double sink = 0.0;
