@@ -33,6 +33,30 @@ std::string host_of(std::string address) {
   return colon == std::string::npos ? address : address.substr(0, colon);
 }
 
+bool stays_on_this_host(const std::string& target) {
+  // A Unix socket (by path or abstract name) is this machine's.
+  for (const char* local : {"unix:", "unix-abstract:"}) {
+    if (target.rfind(local, 0) == 0) return true;
+  }
+  // An address list (ipv4:a:p,b:p or ipv6:[a]:p,[b]:p) stays only if every member does; gRPC
+  // may pick any of them.
+  for (const char* scheme : {"ipv4:", "ipv6:"}) {
+    const std::string prefix(scheme);
+    if (target.rfind(prefix, 0) != 0 || target.find(',') == std::string::npos) continue;
+    std::size_t start = prefix.size();
+    for (;;) {
+      const std::size_t comma = target.find(',', start);
+      const std::string member = target.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+      if (member.empty() || !io::is_loopback_literal(host_of(prefix + member))) return false;
+      if (comma == std::string::npos) return true;
+      start = comma + 1;
+    }
+  }
+  // dns:host, dns:///host and a bare host: the host must be a loopback literal. dns://authority/…
+  // (another resolver) keeps its "//authority/" in the host and so is never loopback.
+  return io::is_loopback_literal(host_of(target));
+}
+
 namespace {
 
 /// The port of ClientConfig::udp_address ("host:port" or "[v6]:port").
@@ -49,16 +73,9 @@ std::uint16_t udp_port_of(const std::string& address) {
   return static_cast<std::uint16_t>(port);
 }
 
-/// A host no other machine can listen on: localhost, a numeric address in 127.0.0.0/8, ::1 or
-/// ::ffff:127.0.0.0/104, or a Unix socket target. Another name is not, whatever it resolves to.
-bool is_loopback(const std::string& server_address) {
-  if (server_address.rfind("unix:", 0) == 0) return true;
-  return io::is_loopback_literal(host_of(server_address));
-}
-
 void check_config(const ClientConfig& config) {
   if (config.server_address.empty()) throw InvalidArgumentError("ClientConfig: server_address: must not be empty");
-  if (!config.token.empty() && !config.tls && !is_loopback(config.server_address)) {
+  if (!config.token.empty() && !config.tls && !stays_on_this_host(config.server_address)) {
     if (!config.allow_plaintext_token) {
       throw InvalidArgumentError(
           "ClientConfig: token: would be sent in clear to '" + config.server_address +

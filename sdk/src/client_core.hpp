@@ -25,6 +25,11 @@ namespace haptic::detail {
 /// The host part of "host:port", "[v6]:port" or a gRPC target such as "dns:///host:port" or
 /// "ipv4:host:port": the UDP data plane lives on the same host as the control plane.
 std::string host_of(std::string address);
+/// Whether a gRPC target reaches this machine only, so a token may go in clear: a Unix socket, or
+/// every address it names a loopback literal (localhost, 127.0.0.0/8, ::1, ::ffff:127.0.0.0/104;
+/// haptic/io/loopback) — in a bare host:port, dns:, dns:/// or each member of an ipv4:/ipv6: list.
+/// Any other name is not, whatever it resolves to, nor is another resolver's dns://authority/.
+bool stays_on_this_host(const std::string& target);
 
 class ClientCore {
  public:

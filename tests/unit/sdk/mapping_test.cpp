@@ -8,6 +8,7 @@
 #include <variant>
 #include <vector>
 
+#include "client_core.hpp"
 #include "conversions.hpp"
 #include "haptic/client.hpp"
 #include "status_mapping.hpp"
@@ -393,6 +394,28 @@ TEST(Client, ATokenIsNeverSentInClearToAnotherHostUnlessAllowed) {
   }
   EXPECT_NE(::testing::internal::GetCapturedStderr().find("sending the bearer token in clear to '0.0.0.0:1'"),
             std::string::npos);
+}
+
+TEST(Client, ATargetStaysOnThisHostOnlyWhenEveryAddressItNamesIsLoopback) {
+  // Each form gRPC takes: a token may go in clear to these...
+  for (const char* local : {"localhost:50051", "127.0.0.1:50051", "127.8.9.10:1", "[::1]:50051",
+                            "[::ffff:127.0.0.1]:1", "dns:localhost:50051", "dns:///localhost:50051",
+                            "dns:///127.0.0.1:50051", "ipv4:127.0.0.1:50051", "ipv6:[::1]:50051",
+                            "ipv4:127.0.0.1:1,127.0.0.2:2", "ipv6:[::1]:1,[::ffff:127.0.0.1]:2",
+                            "unix:/run/hapticd/control.sock", "unix:///run/hapticd/control.sock",
+                            "unix-abstract:hapticd"}) {
+    EXPECT_TRUE(stays_on_this_host(local)) << local;
+  }
+  // ...and to none of these: another host, a name whatever it resolves to, another resolver, a
+  // list with one member elsewhere (the ipv6 list's first member alone was looked at before).
+  for (const char* remote : {"0.0.0.0:1", "10.0.127.1:50051", "192.168.1.5:50051", "[fe80::1]:1",
+                             "[::ffff:10.0.0.1]:1", "bench-a:50051", "127.example.com:50051",
+                             "dns:bench-a:50051", "dns:///127.example.com:50051",
+                             "dns://8.8.8.8/localhost:50051", "ipv4:127.0.0.1:1,10.0.0.2:2",
+                             "ipv4:10.0.0.2:2,127.0.0.1:1", "ipv6:[::1]:1,[fe80::1]:2", "ipv4:127.0.0.1:1,",
+                             "vsock:3:50051"}) {
+    EXPECT_FALSE(stays_on_this_host(remote)) << remote;
+  }
 }
 
 TEST(Client, UnreachableServerIsAConnectionError) {
