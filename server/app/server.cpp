@@ -448,6 +448,7 @@ void Server::start() {
                    "and are not felt by them", relay_->tools_refused());
     }
     const v1::FederationConfig& federation = config_.federation();
+    for (const std::string& warning : config::federation_warnings(federation)) spdlog::warn("{}", warning);
     spdlog::info("hapticd: federation site \"{}\" in DDS domain {} on {}{}", federation.site(),
                  federation.domain_id(), federation.interface(),
                  federation.has_ros2() ? fmt::format(", ROS 2 topics under {} at {:g} Hz{}",

@@ -137,6 +137,26 @@ std::string validate_federation(const v1::FederationConfig& federation, double l
   return {};
 }
 
+std::vector<std::string> federation_warnings(const v1::FederationConfig& federation) {
+  std::vector<std::string> warnings;
+  const bool on_loopback = loopback(federation.interface());
+  if (!on_loopback && !federation.has_security() && federation.allow_insecure()) {
+    warnings.push_back("federation: interface \"" + federation.interface() +
+                       "\" without DDS Security (allow_insecure): anyone on that network can read the tools and "
+                       "join the domain; federation.security (scripts/federation-certs) closes it");
+  }
+  if (on_loopback) {
+    for (const std::string& peer : federation.peers()) {
+      if (!io::is_loopback_literal(peer)) {
+        warnings.push_back("federation: peer \"" + peer + "\" is not on this host, but the interface is \"" +
+                           federation.interface() + "\": it is never reached; set federation.interface to the "
+                           "interface (or address) on that peer's network");
+      }
+    }
+  }
+  return warnings;
+}
+
 federation::RelayOptions relay_options(const v1::FederationConfig& federation, double loop_rate_hz) {
   federation::RelayOptions options;
   options.site = federation.site();

@@ -3,6 +3,7 @@
 // defaults, validation naming the field ("federation.domain_id: …"), and what a SampleRelay takes.
 
 #include <string>
+#include <vector>
 
 #include "federation/sample_relay.hpp"
 #include "runtime/remote_tools.hpp"
@@ -20,6 +21,10 @@ std::string validate_federation(const v1::FederationConfig& federation, double l
 
 /// The relay's options from a valid, defaulted section, for a loop at loop_rate_hz.
 federation::RelayOptions relay_options(const v1::FederationConfig& federation, double loop_rate_hz);
+/// What a valid federation section does that its writer may not mean, one line each, for hapticd
+/// to log as warnings at start: allow_insecure on an interface off this host (the domain in the
+/// clear), and a loopback interface with peers elsewhere (they are never reached).
+std::vector<std::string> federation_warnings(const v1::FederationConfig& federation);
 
 /// How other sites' tools are rendered, and the couplings of shared masses, from a valid,
 /// defaulted section.

@@ -260,6 +260,30 @@ TEST(Config, TheSixDofPointMassTakesItsRotationsDefaultsAndNamesABadValue) {
             std::string::npos);
 }
 
+TEST(Config, AFederationThatWouldLeaveItsDomainInTheClearOrNeverReachItsPeersIsWarnedOf) {
+  const auto warnings_of = [](const char* json) {
+    return federation_warnings(parse_config(json, "x").federation());
+  };
+  // allow_insecure on a LAN address: accepted, and said.
+  const std::vector<std::string> clear =
+      warnings_of(R"({"federation": {"site": "a", "interface": "192.168.10.11", "allow_insecure": true}})");
+  ASSERT_EQ(clear.size(), 1u);
+  EXPECT_NE(clear[0].find("federation: interface \"192.168.10.11\" without DDS Security (allow_insecure)"),
+            std::string::npos)
+      << clear[0];
+  // The default interface "lo" with a peer on the LAN: that peer is never reached.
+  const std::vector<std::string> unreachable =
+      warnings_of(R"({"federation": {"site": "a", "peers": ["127.0.0.1", "192.168.10.12", "bench-b"]}})");
+  ASSERT_EQ(unreachable.size(), 2u);
+  EXPECT_NE(unreachable[0].find("peer \"192.168.10.12\" is not on this host, but the interface is \"lo\""),
+            std::string::npos)
+      << unreachable[0];
+  EXPECT_NE(unreachable[1].find("peer \"bench-b\""), std::string::npos) << unreachable[1];
+  // Nothing to say on loopback with peers on this host, or with none.
+  EXPECT_TRUE(warnings_of(R"({"federation": {"site": "a", "peers": ["127.0.0.1"]}})").empty());
+  EXPECT_TRUE(warnings_of(R"({"federation": {"site": "a"}})").empty());
+}
+
 TEST(Config, TheFederationSectionTakesItsDefaultsAndNamesABadField) {
   const v1::ServerConfig config = parse_config(R"({"federation": {"site": "bench-a.lab", "ros2": {}}})", "x");
   EXPECT_EQ(config.federation().interface(), "lo");
