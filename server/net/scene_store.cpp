@@ -4,6 +4,8 @@
 #include <map>
 #include <string>
 
+#include "haptic/io/session_id.hpp"
+
 namespace haptic::net {
 namespace {
 
@@ -306,7 +308,7 @@ grpc::Status SceneStore::reset(std::uint64_t session_id, const std::vector<engin
   if (!others.empty()) {
     const auto& [other, count] = *others.begin();
     return {grpc::StatusCode::FAILED_PRECONDITION,
-            "session " + std::to_string(other) + " holds " + std::to_string(count) +
+            "session " + io::format_session_id(other) + " holds " + std::to_string(count) +
                 " objects and fields; a reset would take them from under it: close it or remove "
                 "them first"};
   }

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <future>
 #include <mutex>
@@ -188,7 +189,10 @@ TEST(LockstepReset, IsRefusedChangingNothingWhileAnotherSessionHoldsItems) {
     client.reset();
     ADD_FAILURE() << "reset went ahead under another session's items";
   } catch (const FailedPreconditionError& error) {
-    EXPECT_EQ(std::string(error.what()).rfind("Reset: session " + std::to_string(other.session_id()) +
+    // The session id as every other message writes it: 16 hex digits.
+    char id[17];
+    std::snprintf(id, sizeof id, "%016llx", static_cast<unsigned long long>(other.session_id()));
+    EXPECT_EQ(std::string(error.what()).rfind("Reset: session " + std::string(id) +
                                                   " holds 1 objects and fields",
                                               0),
               0u)
