@@ -342,6 +342,21 @@ TEST(Recorder, BadOptionsAreRefusedNamingTheFieldAndLeaveNothingBehind) {
   Recorder replaced(client, {.path = dir.file("kept.h5"), .overwrite = true});
   EXPECT_EQ(replaced.close().write_errors, 0u);
   EXPECT_GT(H5Fis_hdf5(dir.file("kept.h5").c_str()), 0);
+
+  // A link is not written through, even with overwrite: the file it points at stays as it was.
+  std::ofstream(dir.file("precious.txt")) << "mine";
+  fs::create_symlink(dir.file("precious.txt"), dir.file("link.csv"));
+  fs::create_symlink(dir.file("precious.txt"), dir.file("link.h5"));
+  fs::create_symlink(dir.file("precious.txt"), dir.file("linked.events.csv"));
+  refused({.path = dir.file("link.csv"), .overwrite = true},
+          "record: path: '" + dir.file("link.csv") + "' is a symbolic link");
+  refused({.path = dir.file("link.h5"), .overwrite = true}, "is a symbolic link");
+  refused({.path = dir.file("linked.csv"), .overwrite = true},
+          "record: path: '" + dir.file("linked.events.csv") + "' is a symbolic link");
+  std::string precious;
+  std::getline(std::ifstream(dir.file("precious.txt")), precious);
+  EXPECT_EQ(precious, "mine");
+  EXPECT_FALSE(fs::exists(dir.file("linked.csv")));
 }
 
 TEST(Recorder, ARecorderThatOutlivesItsClientClosesWhatItHas) {

@@ -245,6 +245,15 @@ std::shared_ptr<RecorderSink> make_recorder_sink(const RecorderOptions& options,
                       ? (file.parent_path() / (file.stem().string() + ".events.csv")).string()
                       : path;
   }
+  // A link is never written through, overwrite or not: "replace my recording" must not truncate
+  // whatever file the link points at (another user's, a system file).
+  for (const std::string& name : {path, events_path}) {
+    if (!name.empty() && std::filesystem::is_symlink(name, error)) {
+      throw InvalidArgumentError("record: path: '" + name +
+                                 "' is a symbolic link: the recorder does not write through links (give the "
+                                 "file's own path, or remove the link)");
+    }
+  }
   if (!options.overwrite) {
     for (const std::string& name : {path, events_path}) {
       if (!name.empty() && std::filesystem::exists(name, error)) {
