@@ -155,10 +155,9 @@ void SampleRelay::receive(std::chrono::steady_clock::time_point now) {
       for (const CouplingEnergy& energy : tool.energy) {
         if (energy.site == options_.site && energy.port == port) to_us = &energy;
       }
-      if (to_us != nullptr && !credit(s.credit, to_us->sent, tool.site,
-                                      "its tool " + std::to_string(tool.port) + " to this site's tool " +
-                                          std::to_string(port),
-                                      now)) {
+      if (to_us != nullptr &&
+          !credit(s.credit, to_us->sent, tool.site, CouplingName{static_cast<long>(tool.port), static_cast<long>(port)},
+                  now)) {
         s = Slot{};
         set.tools[slot] = runtime::RemoteTool{};
         continue;
@@ -249,7 +248,7 @@ void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
     for (const auto& [to, sent] : mass.sent) {
       if (to == own) to_us = &sent;
     }
-    if (to_us != nullptr && !credit(mass_credit_[entry][slot], *to_us, mass.site, "its copy of a shared mass", now)) {
+    if (to_us != nullptr && !credit(mass_credit_[entry][slot], *to_us, mass.site, CouplingName{}, now)) {
       copies[slot] = engine::RemoteMassCopy{};
       changed = true;
       continue;
@@ -401,7 +400,7 @@ bool SampleRelay::admit(const std::string& site, const std::optional<std::string
   return false;
 }
 
-bool SampleRelay::credit(CreditAccount& account, double claimed, const std::string& site, const std::string& coupling,
+bool SampleRelay::credit(CreditAccount& account, double claimed, const std::string& site, CouplingName name,
                          std::chrono::steady_clock::time_point now) {
   const double refused_before = account.refused();
   const CreditAccount::Verdict verdict = account.take(claimed, now, options_.credit);
@@ -409,6 +408,10 @@ bool SampleRelay::credit(CreditAccount& account, double claimed, const std::stri
   if (verdict == CreditAccount::Verdict::kCredited) return true;
   if (cut_off_.insert(site).second) {
     sites_cut_off_.fetch_add(1, std::memory_order_relaxed);
+    // Named here only, on the way out: the relay builds no text per sample.
+    const std::string coupling = name.remote_port < 0 ? std::string("its copy of a shared mass")
+                                                      : "its tool " + std::to_string(name.remote_port) +
+                                                            " to this site's tool " + std::to_string(name.local_port);
     char cap[96];
     std::snprintf(cap, sizeof cap, "%.3g W, %.3g J at once", options_.credit.max_power_W, options_.credit.burst_J);
     std::string reason;

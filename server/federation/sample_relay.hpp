@@ -149,11 +149,17 @@ class SampleRelay {
   /// transport cannot say), with finite values or not, is taken; what is not is counted and logged.
   bool admit(const std::string& site, const std::optional<std::string>& writer_site, bool finite, const char* what,
              std::chrono::steady_clock::time_point now);
-  /// Credits a claimed total on `account`; a claim that shows the site's books do not add up cuts
-  /// the site off (logged) and returns false.
   /// Whether the site of this key (runtime::site_key) is cut off.
   bool cut_off_key(std::uint64_t site) const;
-  bool credit(CreditAccount& account, double claimed, const std::string& site, const std::string& coupling,
+  /// Which coupling a claim is for, named only in a cut-off's log line: a remote tool's port and
+  /// this site's, or (remote_port < 0) a copy of a shared mass.
+  struct CouplingName {
+    long remote_port = -1;
+    long local_port = -1;
+  };
+  /// Credits a claimed total on `account`; a claim that shows the site's books do not add up cuts
+  /// the site off (logged) and returns false.
+  bool credit(CreditAccount& account, double claimed, const std::string& site, CouplingName name,
               std::chrono::steady_clock::time_point now);
 
   /// Which remote tool each mailbox slot of a port holds.

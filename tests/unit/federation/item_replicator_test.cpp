@@ -16,17 +16,12 @@
 
 #include "federation/item_replicator.hpp"
 #include "federation/item_topic.hpp"
+#include "support/loopback_dds.hpp"
 
 namespace haptic::federation {
 namespace {
 
-DomainOptions loopback_domain() {
-  DomainOptions options;
-  options.domain_id = 100 + static_cast<std::uint32_t>(getpid() % 120);
-  options.interface = "lo";
-  options.peers = {"127.0.0.1"};
-  return options;
-}
+using test::loopback_domain;
 
 /// A site's scene in memory: its own items (id → description, version key) and the other sites'
 /// (site/item → description). put_remote refuses a description that starts with "bad".

@@ -18,31 +18,15 @@
 #include "federation/dds_participant.hpp"
 #include "federation/sample_relay.hpp"
 #include "federation/tool_topic.hpp"
+#include "support/loopback_dds.hpp"
 
 namespace haptic::federation {
 namespace {
 
 using std::chrono::milliseconds;
 using std::chrono::seconds;
-
-/// A domain of this test process's own (ctest runs tests in parallel).
-DomainOptions loopback_domain() {
-  DomainOptions options;
-  options.domain_id = 100 + static_cast<std::uint32_t>(getpid() % 120);
-  options.interface = "lo";
-  options.peers = {"127.0.0.1"};
-  return options;
-}
-
-template <class Condition>
-bool eventually(Condition&& condition, std::chrono::milliseconds limit = seconds(10)) {
-  const auto deadline = std::chrono::steady_clock::now() + limit;
-  while (std::chrono::steady_clock::now() < deadline) {
-    if (condition()) return true;
-    std::this_thread::sleep_for(milliseconds(5));
-  }
-  return condition();
-}
+using test::eventually;
+using test::loopback_domain;
 
 TEST(SiteLog, AnotherSitesArrivalDepartureAndReturnAreOneLineEach) {
   const DomainOptions domain = loopback_domain();

@@ -12,29 +12,13 @@
 
 #include "federation/dds_participant.hpp"
 #include "federation/tool_topic.hpp"
+#include "support/loopback_dds.hpp"
 
 namespace haptic::federation {
 namespace {
 
-/// A domain of this test process's own (ctest runs tests in parallel; loopback discovery would
-/// otherwise mix their samples).
-DomainOptions loopback_domain() {
-  DomainOptions options;
-  options.domain_id = 100 + static_cast<std::uint32_t>(getpid() % 120);
-  options.interface = "lo";
-  options.peers = {"127.0.0.1"};
-  return options;
-}
-
-template <class Condition>
-bool eventually(Condition&& condition, std::chrono::milliseconds limit = std::chrono::seconds(10)) {
-  const auto deadline = std::chrono::steady_clock::now() + limit;
-  while (std::chrono::steady_clock::now() < deadline) {
-    if (condition()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return condition();
-}
+using test::eventually;
+using test::loopback_domain;
 
 TEST(ToolTopic, ASitesToolReachesAnotherParticipantAndItsOwnIsLeftOut) {
   const DomainOptions options = loopback_domain();
