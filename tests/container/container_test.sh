@@ -3,7 +3,8 @@
 # BINARIES=prebuilt: the runtime stage users get, without compiling everything a second time),
 # runs it in lockstep, checks its user, that it holds hapticd alone and that the runtime's health
 # status (the image's HEALTHCHECK) turns healthy, and drives it with the host's touch_wall in
-# lockstep.
+# lockstep; then runs each container command the documentation gives, as typed, and checks that
+# nothing listens beyond loopback (documented_commands.py).
 # podman, runc and debootstrap missing fail it; HAPTIC_SKIP_CONTAINER=1 skips it (exit 77):
 # base_image.sh.
 # Usage: container_test.sh <source-dir> <hapticd binary> <touch_wall binary>
@@ -81,3 +82,9 @@ echo "$output" | tail -5
 echo "$output" | grep -q "^  2.960      -10.00    -1.311      1.738  yes$" \
   || { echo "FAIL: touch_wall did not settle at z = -1.311 mm, 1.738 N"; exit 1; }
 echo "PASS: the container served touch_wall in lockstep"
+podman "${podman_opts[@]}" rm -f "$container" >/dev/null 2>&1 || true
+container=""
+
+# Every documented `docker run` / `podman run`, as typed, against this image: what listens where.
+/usr/bin/python3 "$source_dir/tests/container/documented_commands.py" "$source_dir" \
+  localhost/hapticd:test "$hapticd" "${run_opts[@]}"
