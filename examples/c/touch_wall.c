@@ -68,10 +68,11 @@ static void sleep_until_s(double t) {
 }
 
 /* The exit status for a failed call, as the C++ example maps its exceptions. */
-static int failed(const haptic_error* err, const char* address) {
+static int failed(const haptic_error* err) {
   if (err->code == HAPTIC_ERROR_CONNECTION) {
-    fprintf(stderr, "touch_wall: cannot reach hapticd at %s (%s). Is it running? "
-                    "Start it with ./scripts/run\n", address, err->message);
+    /* Starting a server is the fix only when nothing listens; a TLS or token mismatch says its own. */
+    fprintf(stderr, "touch_wall: %s%s\n", err->message,
+            strstr(err->message, "nothing listens") != NULL ? ". Start one with ./scripts/run" : "");
     return 1;
   }
   fprintf(stderr, "touch_wall: %s\n", err->message);
@@ -319,7 +320,7 @@ int main(int argc, char** argv) {
   }
   config.server_address = address;
   config.client_name = "touch_wall";
-  if (haptic_client_open(&config, &client, &err) != HAPTIC_OK) return failed(&err, address);
+  if (haptic_client_open(&config, &client, &err) != HAPTIC_OK) return failed(&err);
 
   info.size = sizeof(info);
   haptic_wall_spec_init(&wall);
@@ -336,7 +337,7 @@ int main(int argc, char** argv) {
   }
   haptic_object_release(wall_object);  /* it goes with the session */
   if (status != 0) {
-    status = failed(&err, address);
+    status = failed(&err);
     haptic_client_close(client, NULL);
     return status;
   }

@@ -219,8 +219,9 @@ static class TouchWall
         {
             if (e.Code == ErrorCode.Connection)
             {
-                Console.Error.Write("touch_wall: cannot reach hapticd at " + address + " (" + e.Message + "). Is it running? " +
-                                    "Start it with ./scripts/run\n");
+                // Starting a server is the fix only when nothing listens; a TLS or token mismatch says its own.
+                bool nothingListens = e.Message.Contains("nothing listens");
+                Console.Error.Write("touch_wall: " + e.Message + (nothingListens ? ". Start one with ./scripts/run" : "") + "\n");
                 return 1;
             }
             Console.Error.Write("touch_wall: " + e.Message + "\n");

@@ -133,8 +133,9 @@ int main(int argc, char** argv) {
                   last->velocity.x * 1e3, v_predicted * 1e3);
     }
   } catch (const haptic::ConnectionError& error) {
-    std::fprintf(stderr, "multi_user: cannot reach hapticd at %s (%s). Start it with "
-                         "./scripts/run --config config/multi_user.json\n", address.c_str(), error.what());
+    const bool nothing_listens = std::strstr(error.what(), "nothing listens") != nullptr;
+    std::fprintf(stderr, "multi_user: %s%s\n", error.what(),
+                 nothing_listens ? ". Start one with ./scripts/run --config config/multi_user.json" : "");
     return 1;
   } catch (const haptic::Error& error) {
     std::fprintf(stderr, "multi_user: %s\n", error.what());

@@ -96,8 +96,9 @@ def main():
             print(f"touch_wall.py: done; {client.receive_counters().accepted} datagrams received")
             del wall, spring  # both leave the server here
     except hapticd.ConnectionError as error:
-        sys.exit(f"touch_wall.py: cannot reach hapticd at {args.address} ({error}). "
-                 "Is it running? Start it with ./scripts/run")
+        # Starting a server is the fix only when nothing listens; a TLS or token mismatch says its own.
+        start = ". Start one with ./scripts/run" if "nothing listens" in str(error) else ""
+        sys.exit(f"touch_wall.py: {error}{start}")
     except hapticd.Error as error:
         sys.exit(f"touch_wall.py: {error}")
 

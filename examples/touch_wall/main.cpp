@@ -249,8 +249,10 @@ int main(int argc, char** argv) {
       }
     }
   } catch (const haptic::ConnectionError& error) {
-    std::fprintf(stderr, "touch_wall: cannot reach hapticd at %s (%s). Is it running? "
-                         "Start it with ./scripts/run\n", address.c_str(), error.what());
+    // Starting a server is the fix only when nothing listens; a TLS or token mismatch says its own.
+    const bool nothing_listens = std::strstr(error.what(), "nothing listens") != nullptr;
+    std::fprintf(stderr, "touch_wall: %s%s\n", error.what(),
+                 nothing_listens ? ". Start one with ./scripts/run" : "");
     return 1;
   } catch (const haptic::InvalidArgumentError& error) {
     std::fprintf(stderr, "touch_wall: %s\n", error.what());  // the options given (a token in clear, ...)

@@ -57,4 +57,5 @@ def test_an_unreachable_server_is_named():
     done = subprocess.run([sys.executable, str(EXAMPLE / "touch_wall.py"), "127.0.0.1:1"],
                           capture_output=True, text=True, timeout=60)
     assert done.returncode != 0
-    assert "cannot reach hapticd at 127.0.0.1:1" in done.stderr
+    assert "cannot connect to 127.0.0.1:1: nothing listens there" in done.stderr
+    assert "Start one with ./scripts/run" in done.stderr

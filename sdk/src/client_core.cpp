@@ -113,6 +113,7 @@ std::string read_pem(const char* field, const std::string& path) {
 }
 
 std::shared_ptr<grpc::Channel> make_channel(const ClientConfig& config) {
+  quiet_grpc_log_unless_asked();  // the SDK's errors say it in the user's terms
   grpc::ChannelArguments arguments;
   if (!config.tls) {
     return grpc::CreateCustomChannel(config.server_address, grpc::InsecureChannelCredentials(),
@@ -164,10 +165,24 @@ v1::OpenSessionResponse ClientCore::open_session_saying_why() {
   } catch (const ConnectionError& error) {
     // gRPC reports a TLS mismatch as a reset, a verify failure or a decryption error; one
     // handshake of our own says which setting to change.
+    TlsAttempt attempt{config_.server_address, config_.tls.has_value(), {}, {}, {}, {}, sdk_setting_names()};
+    if (config_.tls) {
+      attempt.ca_file = config_.tls->ca_file;
+      attempt.cert_file = config_.tls->cert_file;
+      attempt.key_file = config_.tls->key_file;
+      attempt.server_name = config_.tls->server_name;
+    }
     const std::string why = diagnose_tls_mismatch(
-        config_, std::min<std::chrono::milliseconds>(config_.rpc_timeout, std::chrono::seconds(1)));
+        attempt, std::min<std::chrono::milliseconds>(config_.rpc_timeout, std::chrono::seconds(1)));
+    if (why.empty() && std::string_view(error.what()).find("Connection refused") != std::string_view::npos) {
+      throw ConnectionError("cannot connect to " + config_.server_address +
+                            ": nothing listens there (is hapticd running, and on that port?) [gRPC: " +
+                            error.what() + "]");
+    }
     if (why.empty()) throw;
-    throw ConnectionError(std::string(error.what()) + ". Likely: " + why);
+    // The cause and its fix first; gRPC's own words after, for a search or a bug report.
+    throw ConnectionError("cannot connect to " + config_.server_address + ": " + why + " [gRPC: " +
+                          error.what() + "]");
   }
 }
 

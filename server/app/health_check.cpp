@@ -3,11 +3,14 @@
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
 
+#include <algorithm>
 #include <fstream>
 #include <future>
 #include <regex>
 #include <sstream>
 #include <vector>
+
+#include "tls_diagnosis.hpp"
 
 namespace haptic::app {
 
@@ -24,6 +27,7 @@ std::string read_pem(const std::string& path) {
 
 bool check_health(const std::string& address, std::chrono::milliseconds timeout, std::string& why,
                   const HealthTls& tls) {
+  detail::quiet_grpc_log_unless_asked();  // its own failure is said in one line below
   grpc::ChannelArguments arguments;
   // A channel of its own: never a connection shared with (and kept alive by) anyone else.
   arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
@@ -51,8 +55,18 @@ bool check_health(const std::string& address, std::chrono::milliseconds timeout,
                  [&done](grpc::Status status) { done.set_value(std::move(status)); });
   const grpc::Status status = done.get_future().get();
   if (!status.ok()) {
-    why = "no answer from " + address + ": " + status.error_message() + " (gRPC code " +
-          std::to_string(static_cast<int>(status.error_code())) + ")";
+    const std::string said = status.error_message() + " (gRPC code " +
+                             std::to_string(static_cast<int>(status.error_code())) + ")";
+    // gRPC says "Connection reset by peer" for every TLS mismatch; one handshake of our own says
+    // which option to change, in --health-check's terms.
+    const detail::TlsSettingNames names{
+        "give --health-ca with the CA that signed its certificate", "leave out --health-ca", "--health-ca",
+        "--health-cert", "--health-key", "dial it by one of them (HOST in --health-check HOST:PORT)"};
+    const std::string cause = detail::diagnose_tls_mismatch(
+        {address, !tls.ca_file.empty(), tls.ca_file, tls.cert_file, tls.key_file, {}, names},
+        std::min<std::chrono::milliseconds>(timeout, std::chrono::seconds(1)));
+    why = cause.empty() ? "no answer from " + address + ": " + said
+                        : "no answer from " + address + ": " + cause + " [gRPC: " + said + "]";
     return false;
   }
   std::vector<grpc::Slice> slices;

@@ -175,16 +175,16 @@ TEST(Security, AClientThatDoesNotTrustTheServersCaIsRefusedSayingSo) {
   ServerProcess server(secured_config());
   const std::string other_ca = refusal<ConnectionError>(
       [&] { Client client(tls_client(server, "other-ca", kAdminToken, kCerts + "/other_ca.pem")); });
-  EXPECT_NE(other_ca.find("Likely: the server's certificate is not trusted by the CA in tls.ca_file"),
+  EXPECT_NE(other_ca.find("which tls.ca_file (--ca) '" + kCerts + "/other_ca.pem'"),
             std::string::npos) << other_ca;
   ClientConfig plaintext = config_for(server, "plaintext");  // no TLS at all
   plaintext.token = kAdminToken;
   const std::string no_tls = refusal<ConnectionError>([&] { Client client(plaintext); });
-  EXPECT_NE(no_tls.find("Likely: the server speaks TLS: give ClientConfig::tls"), std::string::npos) << no_tls;
+  EXPECT_NE(no_tls.find("the server speaks TLS: turn it on with ClientConfig::tls"), std::string::npos) << no_tls;
   ClientConfig wrong_name = tls_client(server, "wrong-name", kAdminToken);
   wrong_name.tls->server_name = "haptics.other.lab";
   const std::string name = refusal<ConnectionError>([&] { Client client(wrong_name); });
-  EXPECT_NE(name.find("Likely: the server's certificate does not carry the name 'haptics.other.lab'"),
+  EXPECT_NE(name.find("not 'haptics.other.lab': connect by one of them, or give one with tls.server_name"),
             std::string::npos) << name;
 }
 
@@ -195,15 +195,15 @@ TEST(Security, ATlsClientOfAPlaintextServerIsToldTheServerDoesNotSpeakTls) {
   config.tls->ca_file = kCerts + "/ca.pem";
   config.rpc_timeout = std::chrono::milliseconds(3000);
   const std::string message = refusal<ConnectionError>([&] { Client client(config); });
-  EXPECT_NE(message.find("Likely: the server does not speak TLS"), std::string::npos) << message;
+  EXPECT_NE(message.find("the server does not speak TLS"), std::string::npos) << message;
 }
 
 TEST(Security, MutualTlsRefusesAClientWithoutACertificateSayingItWantsOne) {
   ServerProcess server(secured_config(/*client_ca=*/true));
   const std::string message =
       refusal<ConnectionError>([&] { Client client(tls_client(server, "no-cert", kControllerToken)); });
-  EXPECT_NE(message.find("Likely: the server asks for a client certificate (mutual TLS): give "
-                         "tls.cert_file and tls.key_file"),
+  EXPECT_NE(message.find("the server asks for a client certificate (mutual TLS): give one with "
+                         "tls.cert_file (--cert) and its key with tls.key_file (--key)"),
             std::string::npos) << message;
   ClientConfig with_cert = tls_client(server, "with-cert", kControllerToken);
   with_cert.tls->cert_file = kCerts + "/client.pem";
