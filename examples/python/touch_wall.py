@@ -3,22 +3,44 @@
 z < 0) and a weak spring field, has the server's simulated hand press the tool into the wall, and
 prints time, hand target, tool height and force at about 20 Hz; --plot draws them.
 
-Usage: touch_wall.py [host:port] [--lockstep] [--plot FILE.png]
+Usage: touch_wall.py [host:port] [--lockstep] [--plot FILE.png] [--token T | --token-file F]
+                     [--ca CA.pem [--cert C.pem --key K.pem] [--server-name NAME]]
   --lockstep  the server runs in LOCKSTEP time (hapticd --lockstep): this program advances it,
               and the output is the same on every run.
   --plot      also save a chart of height and force against time (needs matplotlib).
+  --token, --token-file, --ca, --cert, --key, --server-name: a secured server (TLS, mutual TLS,
+              tokens), as touch_wall and hapticctl take them (docs/deployment.md).
 
-PYTHONPATH must reach the hapticd package: <build>/python after a build, or nothing once
-installed (cmake --install).
+The hapticd package is found on PYTHONPATH (<build>/python after a build), installed
+(python3-hapticd, cmake --install), or in the build tree beside this file. It is a compiled module
+for the interpreter that built it (Debian's /usr/bin/python3): run the example with that one.
 """
 
 import argparse
+import pathlib
 import sys
+import sysconfig
 import time
 
-import numpy as np
+try:
+    import hapticd
+except ImportError:
+    # Not on PYTHONPATH: the build tree beside this file, if one is there.
+    build_package = pathlib.Path(__file__).resolve().parents[2] / "build" / "python"
+    sys.path.insert(0, str(build_package))
+    try:
+        import hapticd
+    except ImportError as missing:
+        built = sorted(p.name for p in (build_package / "hapticd").glob("_native*.so"))
+        sys.exit(f"touch_wall.py: cannot import hapticd ({missing}) with {sys.executable} "
+                 f"(Python {sys.version.split()[0]}, module suffix "
+                 f"{sysconfig.get_config_var('EXT_SUFFIX')}); "
+                 + (f"the build tree holds {', '.join(built)}: run this with the interpreter "
+                    "that built it (/usr/bin/python3 on Debian)" if built else
+                    "build the project first (./scripts/run or cmake --build build), or install "
+                    "python3-hapticd"))
 
-import hapticd
+import numpy as np  # after hapticd, whose absence is the likelier and better explained one
 
 START_Z = 0.02        # hand target at the start, m
 END_Z = -0.01         # 10 mm below the wall's surface, m
@@ -70,10 +92,29 @@ def main():
     parser.add_argument("address", nargs="?", default="127.0.0.1:50051")
     parser.add_argument("--lockstep", action="store_true")
     parser.add_argument("--plot", metavar="FILE.png")
+    parser.add_argument("--token", default="", help="bearer token (its role must allow it)")
+    parser.add_argument("--token-file", metavar="F", help="read the token from F (first line)")
+    parser.add_argument("--ca", metavar="CA.pem", help="speak TLS, trusting this CA")
+    parser.add_argument("--cert", metavar="C.pem", help="with --ca: this client certificate (mTLS)")
+    parser.add_argument("--key", metavar="K.pem", help="with --cert: its private key")
+    parser.add_argument("--server-name", metavar="NAME", help="with --ca: the name to check")
     args = parser.parse_args()
+    if args.token_file:
+        try:
+            with open(args.token_file, encoding="utf-8") as file:
+                args.token = file.readline().rstrip("\n")
+        except OSError as error:
+            parser.error(f"--token-file: cannot read '{args.token_file}': {error.strerror}")
+    tls = None
+    if args.ca:
+        tls = hapticd.TlsOptions(ca_file=args.ca, cert_file=args.cert or "", key_file=args.key or "",
+                                 server_name=args.server_name or "")
+    elif args.cert or args.key or args.server_name:
+        parser.error("--cert, --key and --server-name need --ca (TLS)")
 
     try:
-        with hapticd.Client(server_address=args.address, client_name="touch_wall.py") as client:
+        with hapticd.Client(server_address=args.address, client_name="touch_wall.py", tls=tls,
+                            token=args.token) as client:
             rate = client.device_info.loop_rate_hz
             client.subscribe(max(1, int(rate / 20)))
             wall = client.add_wall(hapticd.WallSpec(
@@ -99,6 +140,9 @@ def main():
         # Starting a server is the fix only when nothing listens; a TLS or token mismatch says its own.
         start = ". Start one with ./scripts/run" if "nothing listens" in str(error) else ""
         sys.exit(f"touch_wall.py: {error}{start}")
+    except hapticd.InvalidArgumentError as error:  # the options given (a token in clear, ...)
+        print(f"touch_wall.py: {error}", file=sys.stderr)
+        sys.exit(2)
     except hapticd.Error as error:
         sys.exit(f"touch_wall.py: {error}")
 

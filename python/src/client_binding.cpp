@@ -434,7 +434,18 @@ void bind_client_class(py::module_& m) {
       .def("receive_counters", &Client::receive_counters, "ReceiveCounters")
       .def("close", &Client::close, ReleaseGil(),
            "Closes the session now; raises hapticd.Error if the server refuses.");
-  def_context_manager(cls, [](Client& client) { client.close(); }, "Closes the session.");
+  def_context_manager(
+      cls,
+      [](Client& client) {
+        // A server that cannot be reached is not an error on leaving the block: the session ends
+        // there when its lease runs out, and raising here would hide the block's own exception.
+        try {
+          client.close();
+        } catch (const ConnectionError&) {
+        }
+      },
+      "Closes the session; a server that cannot be reached (stopped, restarting) ends it itself "
+      "when its lease runs out, so leaving the block does not raise for that.");
 }
 
 }  // namespace

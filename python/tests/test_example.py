@@ -59,3 +59,49 @@ def test_an_unreachable_server_is_named():
     assert done.returncode != 0
     assert "cannot connect to 127.0.0.1:1: nothing listens there" in done.stderr
     assert "Start one with ./scripts/run" in done.stderr
+
+
+CERTS = pathlib.Path(os.environ.get("HAPTIC_TEST_CERTS", ""))
+TOKEN = "python-example-token-0123456789"
+
+
+def test_the_example_reaches_a_server_with_mutual_tls_and_a_token(tmp_path):
+    security = {"tls": {"cert_file": str(CERTS / "server.pem"), "key_file": str(CERTS / "server.key"),
+                        "client_ca_file": str(CERTS / "ca.pem")},
+                "tokens": [{"name": "rig", "token": TOKEN, "role": "CONTROLLER"}]}
+    server = ServerProcess(lockstep_config(security=security))
+    token_file = tmp_path / "token"
+    token_file.write_text(TOKEN + "\n")
+    token_file.chmod(0o600)
+    example = [sys.executable, str(EXAMPLE / "touch_wall.py"), server.address, "--lockstep"]
+    try:
+        secured = subprocess.run([*example, "--ca", str(CERTS / "ca.pem"), "--cert", str(CERTS / "client.pem"),
+                                  "--key", str(CERTS / "client.key"), "--token-file", str(token_file)],
+                                 capture_output=True, text=True, timeout=120)
+        plaintext = subprocess.run(example, capture_output=True, text=True, timeout=60)
+        no_token = subprocess.run([*example, "--ca", str(CERTS / "ca.pem"), "--cert", str(CERTS / "client.pem"),
+                                   "--key", str(CERTS / "client.key")], capture_output=True, text=True, timeout=60)
+        half = subprocess.run([*example, "--cert", str(CERTS / "client.pem")], capture_output=True, text=True,
+                              timeout=60)
+    finally:
+        server.stop()
+    assert secured.returncode == 0, secured.stderr
+    rows = [line for line in secured.stdout.splitlines() if line.strip()[:1].isdigit()]
+    assert len(rows) == 60 and rows[-1].split()[4] == "yes"
+    assert plaintext.returncode == 1
+    assert "the server speaks TLS" in plaintext.stderr and "(--ca)" in plaintext.stderr
+    assert no_token.returncode == 1 and "token" in no_token.stderr.lower(), no_token.stderr
+    assert half.returncode == 2 and "--cert, --key and --server-name need --ca" in half.stderr
+
+
+def test_the_example_names_the_interpreter_when_the_module_is_not_found(tmp_path):
+    # A copy of the example where no build tree sits beside it, and no PYTHONPATH: as run by a
+    # python3 that is not the one the module was built for.
+    copy = tmp_path / "examples" / "python" / "touch_wall.py"
+    copy.parent.mkdir(parents=True)
+    copy.write_text((EXAMPLE / "touch_wall.py").read_text())
+    environment = {key: value for key, value in os.environ.items() if key != "PYTHONPATH"}
+    done = subprocess.run([sys.executable, "-S", str(copy)], capture_output=True, text=True, timeout=60,
+                          env=environment)
+    assert done.returncode == 1
+    assert f"cannot import hapticd" in done.stderr and sys.executable in done.stderr, done.stderr
