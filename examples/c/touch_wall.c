@@ -38,6 +38,28 @@ static void print_row(double t, double target, const haptic_state* state) {
          state->force.z, state->contact_count > 0 ? "yes" : "no");
 }
 
+/* The time column in real time: the server's clock from its first row. A restarted server counts
+ * from zero again; the rows then carry on from the last one's time instead of going negative.
+ * Unit: s. */
+typedef struct row_clock {
+  int started;
+  double first;  /* server time at row time 0 */
+  double last_server_time;
+  double last_row_time;
+} row_clock;
+
+static double row_clock_at(row_clock* clock, double server_time) {
+  if (!clock->started) {
+    clock->started = 1;
+    clock->first = server_time;
+  } else if (server_time < clock->last_server_time) {
+    clock->first = server_time - clock->last_row_time; /* a new server: carry on */
+  }
+  clock->last_server_time = server_time;
+  clock->last_row_time = server_time - clock->first;
+  return clock->last_row_time;
+}
+
 /* A row without a target: the hand is a person's, or the device's own. */
 static void print_hand_row(double t, const haptic_state* state) {
   printf("%7.3f  %10s  %8.3f  %9.3f  %s\n", t, "-", state->position.z * 1e3, state->force.z,
@@ -116,14 +138,18 @@ static int watch(haptic_client* client, const haptic_device_info* info, int lock
       }
     }
   } else {
-    double first_server_time = -1.0;
+    row_clock clock = {0, 0.0, 0.0, 0.0};
     const double end = now_s() + seconds;
     while (interrupted == 0 && now_s() < end) {
+      if (haptic_client_connection_state(client) == HAPTIC_CONNECTION_ENDED) {
+        /* An ADMIN's kick or an expired token: the client does not reconnect after that. */
+        fprintf(stderr, "touch_wall: the server ended this session\n");
+        return -2;
+      }
       const int polled = haptic_client_poll_state(client, &state, 100, err);
       if (polled == HAPTIC_TIMEOUT) continue;
       if (polled != HAPTIC_OK) return -1;
-      if (first_server_time < 0) first_server_time = state.server_time;
-      print_hand_row(state.server_time - first_server_time, &state);
+      print_hand_row(row_clock_at(&clock, state.server_time), &state);
       if (state.position.z * 1e3 < deepest_mm) deepest_mm = state.position.z * 1e3;
       if (state.force.z > strongest_n) strongest_n = state.force.z;
     }
@@ -187,7 +213,8 @@ static int press(haptic_client* client, const haptic_device_info* info, int lock
     }
   } else {
     const double start = now_s();
-    double next_update = start, t = 0.0, first_server_time = -1.0;
+    double next_update = start, t = 0.0;
+    row_clock clock = {0, 0.0, 0.0, 0.0};
     while (t < duration) {
       t = now_s() - start;
       target.z = target_at(t);
@@ -196,8 +223,7 @@ static int press(haptic_client* client, const haptic_device_info* info, int lock
         break;
       }
       if (haptic_client_poll_state(client, &state, 0, err) == HAPTIC_OK) {
-        if (first_server_time < 0) first_server_time = state.server_time;
-        print_row(state.server_time - first_server_time, target_at(t), &state);
+        print_row(row_clock_at(&clock, state.server_time), target_at(t), &state);
       }
       next_update += 0.010;
       sleep_until_s(next_update);
@@ -336,6 +362,10 @@ int main(int argc, char** argv) {
     status = press(client, &info, lockstep, &err);
   }
   haptic_object_release(wall_object);  /* it goes with the session */
+  if (status == -2) { /* said already: the server ended the session */
+    haptic_client_close(client, NULL);
+    return 1;
+  }
   if (status != 0) {
     status = failed(&err);
     haptic_client_close(client, NULL);

@@ -77,13 +77,18 @@ def run_lockstep(client, rate, rows):
 def run_real_time(client, rows):
     """Moves the target every 10 ms of wall-clock time and prints what has arrived."""
     start = time.monotonic()
-    first_server_time = None
+    first = last_server_time = last_row_time = None
     while (t := time.monotonic() - start) < DESCENT_S + HOLD_S:
         client.set_operator(hand(t))
         state = client.poll_state(timeout=0.0)
         if state is not None:
-            first_server_time = first_server_time if first_server_time is not None else state.server_time
-            rows.append((state.server_time - first_server_time, target_at(t), state))
+            if first is None:
+                first = state.server_time
+            elif state.server_time < last_server_time:
+                # A restarted server counts from 0 again: carry on from the last row's time.
+                first = state.server_time - last_row_time
+            last_server_time, last_row_time = state.server_time, state.server_time - first
+            rows.append((last_row_time, target_at(t), state))
         time.sleep(0.01)
 
 

@@ -23,6 +23,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -51,6 +52,51 @@ void print_hand_row(double t, const haptic::State& state) {
   std::printf("%7.3f  %10s  %8.3f  %9.3f  %s\n", t, "-", state.position.z * 1e3, state.force.z,
               state.contact_count > 0 ? "yes" : "no");
 }
+
+/// The time column in real time: the server's clock from its first row. A restarted server
+/// counts from zero again; the rows then carry on from the last one's time instead of going
+/// negative. Unit: s.
+class RowClock {
+ public:
+  double at(double server_time) {
+    if (!started_) {
+      started_ = true;
+      first_ = server_time;
+    } else if (server_time < last_server_time_) {
+      first_ = server_time - last_row_time_;  // a new server: carry on from the last row
+    }
+    last_server_time_ = server_time;
+    last_row_time_ = server_time - first_;
+    return last_row_time_;
+  }
+
+ private:
+  bool started_ = false;
+  double first_ = 0.0;  // server time at row time 0 (negative once a restarted server is followed)
+  double last_server_time_ = 0.0;
+  double last_row_time_ = 0.0;
+};
+
+/// Why the server ended this session (an ADMIN's kick, an expired token), once it has; the
+/// client does not reconnect after that, so the program must say so and stop.
+class SessionEnd {
+ public:
+  void watch(haptic::Client& client) {
+    client.on_connection([this](const haptic::ConnectionChange& change) {
+      if (change.state != haptic::ConnectionChange::State::kEnded) return;
+      std::lock_guard lock(mutex_);
+      reason_ = change.reason.empty() ? "no reason given" : change.reason;
+    });
+  }
+  std::optional<std::string> reason() const {
+    std::lock_guard lock(mutex_);
+    return reason_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::optional<std::string> reason_;
+};
 
 volatile std::sig_atomic_t interrupted = 0;
 void on_interrupt(int) { interrupted = 1; }
@@ -122,10 +168,12 @@ int main(int argc, char** argv) {
   } else if (!tls.cert_file.empty() || !tls.key_file.empty() || !tls.server_name.empty()) {
     return usage_error("--cert, --key and --server-name need --ca (TLS)");
   }
+  SessionEnd session_end;  // before the client, so it outlives every callback the client makes
   try {
     config.server_address = address;
     config.client_name = "touch_wall";
     haptic::Client client(config);
+    session_end.watch(client);
     const double rate = client.device_info().loop_rate_hz;
     const auto ticks_per_row = static_cast<std::uint32_t>(rate / 20.0);  // ~20 Hz output
     client.subscribe(ticks_per_row);
@@ -168,12 +216,15 @@ int main(int argc, char** argv) {
           }
         }
       } else {
-        double first_server_time = -1.0;
+        RowClock clock;
         const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
         while (interrupted == 0 && std::chrono::steady_clock::now() < end) {
+          if (const auto ended = session_end.reason()) {
+            std::fprintf(stderr, "touch_wall: the server ended this session: %s\n", ended->c_str());
+            return 1;
+          }
           if (!client.poll_state(state, std::chrono::milliseconds(100))) continue;
-          if (first_server_time < 0) first_server_time = state.server_time;
-          note(state.server_time - first_server_time);
+          note(clock.at(state.server_time));
         }
       }
       std::printf("touch_wall: done; deepest %.3f mm into the wall, largest push back %.3f N, %llu "
@@ -219,14 +270,13 @@ int main(int argc, char** argv) {
       const auto start = std::chrono::steady_clock::now();
       auto next_update = start;
       double t = 0.0;
-      double first_server_time = -1.0;
+      RowClock clock;
       while (t < duration) {
         t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         client.set_operator(haptic::OperatorInput::follow({0, 0, target_at(t)}, kHandStiffness,
                                                           kHandDamping));
         if (client.poll_state(state, std::chrono::milliseconds(0))) {
-          if (first_server_time < 0) first_server_time = state.server_time;
-          print_row(state.server_time - first_server_time, target_at(t), state);
+          print_row(clock.at(state.server_time), target_at(t), state);
         }
         next_update += std::chrono::milliseconds(10);
         std::this_thread::sleep_until(next_update);

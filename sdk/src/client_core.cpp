@@ -57,6 +57,15 @@ bool stays_on_this_host(const std::string& target) {
   return io::is_loopback_literal(host_of(target));
 }
 
+std::chrono::milliseconds next_reconnect_delay(std::chrono::milliseconds previous,
+                                               std::chrono::milliseconds outage, const ClientConfig& config) {
+  const auto minimum = config.reconnect_backoff_min;
+  const auto maximum = std::max(config.reconnect_backoff_max, minimum);
+  const auto doubled = previous.count() <= 0 ? minimum : std::min(previous * 2, maximum);
+  if (outage < kFastReconnectWindow) return std::min(doubled, std::max(kFastReconnectPeriod, minimum));
+  return doubled;
+}
+
 namespace {
 
 /// The port of ClientConfig::udp_address ("host:port" or "[v6]:port").
@@ -632,7 +641,7 @@ ClientCore::Probe ClientCore::probe(std::string& why) {
 bool ClientCore::recover(std::string why) {
   const auto lost_at = std::chrono::steady_clock::now();
   announce({ConnectionChange::State::kLost, session_id_, false, 0, why, {}});
-  auto backoff = config_.reconnect_backoff_min;
+  std::chrono::milliseconds backoff{0};
   bool gone = false;
   for (;;) {
     std::string now_why;
@@ -678,8 +687,10 @@ bool ClientCore::recover(std::string why) {
       announce(resumed);
       return true;
     }
+    backoff = next_reconnect_delay(backoff, std::chrono::duration_cast<std::chrono::milliseconds>(
+                                                std::chrono::steady_clock::now() - lost_at),
+                                   config_);
     if (!supervisor_wait(backoff)) return false;
-    backoff = std::min(backoff * 2, config_.reconnect_backoff_max);
   }
 }
 

@@ -31,6 +31,18 @@ std::string host_of(std::string address);
 /// Any other name is not, whatever it resolves to, nor is another resolver's dns://authority/.
 bool stays_on_this_host(const std::string& target);
 
+/// The first kFastReconnectWindow of a loss is retried at least every kFastReconnectPeriod: a
+/// server restarting (systemd's RestartSec is 2 s, and it starts in a fraction of one) is then met
+/// within a tenth of a second of being ready, not after a backoff that has grown to a second.
+inline constexpr std::chrono::milliseconds kFastReconnectWindow{10'000};
+inline constexpr std::chrono::milliseconds kFastReconnectPeriod{100};
+/// How long a lost client waits before its next try, `outage` into the loss, after waiting
+/// `previous` (zero before the first): ClientConfig::reconnect_backoff_min doubling, capped at
+/// kFastReconnectPeriod (or the min, if larger) through kFastReconnectWindow, then doubling on to
+/// reconnect_backoff_max (a server that stays away is not asked ten times a second for ever).
+std::chrono::milliseconds next_reconnect_delay(std::chrono::milliseconds previous,
+                                               std::chrono::milliseconds outage, const ClientConfig& config);
+
 class ClientCore {
  public:
   explicit ClientCore(ClientConfig config);

@@ -6,11 +6,19 @@
 
 #include <gtest/gtest.h>
 
+#include <signal.h>
+
+#include <future>
+#include <memory>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "haptic/client.hpp"
+
 #include "integration/run_program.hpp"
+#include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
 #include "integration/touch_wall_output.hpp"
 
@@ -53,6 +61,78 @@ TEST(TouchWall, OnASecuredServerItPrintsWhatItPrintsOnAPlainOne) {
                                       kCerts + "/ca.pem"});
   EXPECT_EQ(no_cert.exit_code, 1) << no_cert.output;
   EXPECT_NE(no_cert.output.find("asks for a client certificate"), std::string::npos) << no_cert.output;
+}
+
+constexpr const char* kRealTime = R"({"udp_address": "127.0.0.1", "status_period_s": 0,
+    "real_time": {"use_fifo": false}})";
+
+/// Waits (up to 20 s) until `server` holds a session of touch_wall's; its id, or 0.
+std::uint64_t touch_wall_session(Client& admin) {
+  for (int i = 0; i < 400; ++i) {
+    for (const SessionSummary& session : admin.sessions()) {
+      if (session.client_name == "touch_wall") return session.session_id;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return 0;
+}
+
+// A kicked `touch_wall --hand` used to print nothing and exit 0 when its time was up.
+TEST(TouchWall, KickedWhileWatchingTheHandItSaysWhyAndExitsOne) {
+  for (const std::string binary : {TOUCH_WALL_BINARY, TOUCH_WALL_C_BINARY}) {
+    ServerProcess server(kRealTime);
+    auto run = std::async(std::launch::async, [&] {
+      return run_program(binary, {server.address(), "--hand", "--seconds", "30"});
+    });
+    Client admin(config_for(server, "admin"));
+    const std::uint64_t session = touch_wall_session(admin);
+    ASSERT_NE(session, 0u) << binary;
+    // Once its wall is in, touch_wall is watching (a kick before that fails its add_wall instead).
+    for (int i = 0; i < 400 && admin.stats().objects == 0; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    admin.kick_session(session, "the rig is needed elsewhere");
+    ASSERT_EQ(run.wait_for(std::chrono::seconds(20)), std::future_status::ready) << binary << ": still running";
+    const Outcome outcome = run.get();
+    EXPECT_EQ(outcome.exit_code, 1) << binary << "\n" << outcome.output;
+    EXPECT_NE(outcome.output.find("touch_wall: the server ended this session"), std::string::npos)
+        << binary << "\n" << outcome.output;
+    if (binary == TOUCH_WALL_BINARY) {  // the C API's connection state carries no reason
+      EXPECT_NE(outcome.output.find("the rig is needed elsewhere"), std::string::npos) << outcome.output;
+    }
+  }
+}
+
+// After a server restart the new server's clock starts at 0 again: the rows' time used to go
+// negative there. It carries on from the last row instead.
+TEST(TouchWall, AcrossAServerRestartItsTimeColumnNeverGoesBack) {
+  auto first = std::make_unique<ServerProcess>(kRealTime);
+  const std::uint16_t grpc_port = first->grpc_port();
+  const std::uint16_t udp_port = first->udp_port();
+  const std::string address = first->address();
+  auto run = std::async(std::launch::async, [&] { return touch_wall({address, "--hand", "--seconds", "6"}); });
+  {
+    Client admin(config_for(*first, "admin"));
+    ASSERT_NE(touch_wall_session(admin), 0u);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // rows from the first server
+  ::kill(first->pid(), SIGKILL);
+  first->wait();
+  first.reset();
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ServerProcess second(kRealTime, {}, 0, grpc_port, udp_port);
+  const Outcome outcome = run.get();
+  ASSERT_EQ(outcome.exit_code, 0) << outcome.output;
+  std::istringstream rows(rows_of(outcome.output));
+  double previous = -1.0;
+  int count = 0;
+  for (std::string line; std::getline(rows, line); ++count) {
+    const double t = std::stod(line);
+    EXPECT_GE(t, previous) << "the time column went back at\n" << line << "\n" << outcome.output;
+    previous = t;
+  }
+  EXPECT_GT(count, 20) << outcome.output;  // rows from both servers (20 a second)
+  EXPECT_GT(previous, 2.5) << "no rows from the restarted server\n" << outcome.output;
 }
 
 TEST(TouchWall, OnADeviceWithoutASimulatedHandItRendersTheWallAndPrintsWhatTheToolDoes) {

@@ -76,7 +76,9 @@ struct ClientConfig {
   std::uint32_t device_index = 0;
   /// Reconnect on its own when the server stops answering or forgets the session (a restart):
   /// probes a quiet connection every lease_timeout / 4 (at most 500 ms), retries after
-  /// reconnect_backoff_min, doubling to reconnect_backoff_max. Client::on_connection tells.
+  /// reconnect_backoff_min, doubling to at most 100 ms for the first 10 s of a loss (a restarting
+  /// server is met within a tenth of a second of being ready), then on to reconnect_backoff_max.
+  /// Client::on_connection tells.
   bool reconnect = true;
   std::chrono::milliseconds reconnect_backoff_min{50};
   std::chrono::milliseconds reconnect_backoff_max{1000};

@@ -1,6 +1,7 @@
 // The SDK's translations: grpc::Status -> exception types, SDK values <-> haptic.v1 messages.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstddef>
 #include <string>
 #include <typeinfo>
@@ -423,6 +424,32 @@ TEST(Client, UnreachableServerIsAConnectionError) {
   config.server_address = "127.0.0.1:1";
   config.rpc_timeout = std::chrono::milliseconds(200);
   EXPECT_THROW(Client{config}, ConnectionError);
+}
+
+// A server restart takes systemd's RestartSec (2 s) and a start: through the first 10 s of a loss
+// the client tries at least every 100 ms, so it is back within a tenth of a second of the server
+// being ready (the backoff used to double to 1 s within the first second).
+TEST(Client, ALostClientRetriesEveryTenthOfASecondThroughARestartThenBacksOff) {
+  using std::chrono::milliseconds;
+  const ClientConfig config;  // reconnect_backoff_min 50 ms, reconnect_backoff_max 1 s
+  milliseconds outage{0}, previous{0};
+  std::vector<milliseconds> delays;
+  while (outage < milliseconds(10'000)) {
+    previous = next_reconnect_delay(previous, outage, config);
+    delays.push_back(previous);
+    outage += previous + milliseconds(5);  // each try itself takes a few ms (connection refused)
+  }
+  EXPECT_EQ(delays.front(), milliseconds(50));
+  for (const milliseconds delay : delays) EXPECT_LE(delay, milliseconds(100));
+  EXPECT_GT(delays.size(), 90u);  // about ten tries a second
+  // Past the window: doubling to the configured maximum, and no further.
+  for (int i = 0; i < 8; ++i) previous = next_reconnect_delay(previous, milliseconds(20'000), config);
+  EXPECT_EQ(previous, milliseconds(1000));
+  // A configured minimum above the fast period is kept: the user asked for calmer retries.
+  ClientConfig calm;
+  calm.reconnect_backoff_min = milliseconds(400);
+  EXPECT_EQ(next_reconnect_delay(milliseconds(0), milliseconds(0), calm), milliseconds(400));
+  EXPECT_EQ(next_reconnect_delay(milliseconds(400), milliseconds(500), calm), milliseconds(400));
 }
 
 }  // namespace
