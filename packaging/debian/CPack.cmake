@@ -38,16 +38,36 @@ set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 set(haptic_deb_version "${PROJECT_VERSION}-${HAPTIC_PACKAGE_RELEASE}")
 
 set(CPACK_COMPONENTS_ALL server tools c dev)
+
+# Descriptions: a synopsis, then lines of at most 79 characters that cpack indents by one space
+# (an empty line becomes the " ." between paragraphs).
+# Every package's /usr/share/doc/<package>/copyright (machine-readable, DEP-5) and
+# changelog.Debian.gz (gzip -9n: the same bytes on every build), as Debian policy 12.5 and 12.7
+# ask and lintian checks (tests/packaging/deb_install_test.sh runs it on every package).
+set(haptic_deb_doc_dir ${CMAKE_BINARY_DIR}/packaging/debian)
+configure_file(${CMAKE_CURRENT_LIST_DIR}/common/copyright ${haptic_deb_doc_dir}/copyright @ONLY)
+configure_file(${CMAKE_CURRENT_LIST_DIR}/common/changelog.in ${haptic_deb_doc_dir}/changelog @ONLY)
+execute_process(COMMAND gzip -9nc ${haptic_deb_doc_dir}/changelog
+                OUTPUT_FILE ${haptic_deb_doc_dir}/changelog.Debian.gz COMMAND_ERROR_IS_FATAL ANY)
+function(haptic_deb_docs component package)
+  install(FILES ${haptic_deb_doc_dir}/copyright ${haptic_deb_doc_dir}/changelog.Debian.gz
+          DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/doc/${package} COMPONENT ${component})
+endfunction()
+haptic_deb_docs(server hapticd)
+haptic_deb_docs(tools hapticd-tools)
+haptic_deb_docs(c libhaptic-c1)
+haptic_deb_docs(dev libhapticd-dev)
 set(CPACK_DEBIAN_SERVER_PACKAGE_NAME hapticd)
 set(CPACK_DEBIAN_SERVER_PACKAGE_SECTION science)
 set(CPACK_COMPONENT_SERVER_DESCRIPTION "networked haptic server
- hapticd runs a haptic device's control loop (a simulated point mass, or a device through a
- driver) and serves it to clients over gRPC and UDP: walls, springs, meshes and force fields
- rendered at the loop's rate.
- .
- This package holds the server, its default configuration (/etc/hapticd/config.json), the systemd
- unit (installed, not enabled), the hapticd system account (sysusers.d), the viewer's web page,
- the device drivers and haptic-driver-kit.")
+hapticd runs a haptic device's control loop (a simulated point mass, or a
+device through a driver) and serves it to clients over gRPC and UDP: walls,
+springs, meshes and force fields rendered at the loop's rate.
+
+This package holds the server, its default configuration
+(/etc/hapticd/config.json), the systemd unit (installed, not enabled), the
+hapticd system account (sysusers.d), the viewer's web page, the device drivers
+and haptic-driver-kit.")
 # The account and /run/hapticd: systemd-sysusers and systemd-tmpfiles where systemd is installed,
 # useradd (passwd) and install(1) where it is not, as in a container.
 set(CPACK_DEBIAN_SERVER_PACKAGE_DEPENDS "passwd")
@@ -59,15 +79,18 @@ set(CPACK_DEBIAN_SERVER_PACKAGE_CONTROL_EXTRA
 set(CPACK_DEBIAN_TOOLS_PACKAGE_NAME hapticd-tools)
 set(CPACK_DEBIAN_TOOLS_PACKAGE_SECTION science)
 set(CPACK_COMPONENT_TOOLS_DESCRIPTION "hapticd's command-line clients
- hapticctl looks at and administers a running hapticd (status, sessions, stats, events, scene,
- kick, record); touch_wall and multi_user are the SDK's example clients. None needs the server
- on the same machine.")
+hapticctl looks at and administers a running hapticd (status, sessions, stats,
+events, scene, kick, record); touch_wall and multi_user are the SDK's example
+clients. None needs the server on the same machine.")
 
 set(CPACK_DEBIAN_C_PACKAGE_NAME libhaptic-c1)
 set(CPACK_DEBIAN_C_PACKAGE_SECTION libs)
+# The loader cache through dpkg's ldconfig trigger (lintian: lacks-ldconfig-trigger).
+set(CPACK_DEBIAN_C_PACKAGE_CONTROL_EXTRA ${CMAKE_CURRENT_LIST_DIR}/libhaptic-c1/triggers)
 set(CPACK_COMPONENT_C_DESCRIPTION "hapticd client SDK, C API (runtime)
- libhaptic_c.so.1: the hapticd client SDK behind a C ABI (haptic/haptic_c.h), for C programs and
- for languages that load a C library (C# P/Invoke, MATLAB loadlibrary).")
+libhaptic_c.so.1: the hapticd client SDK behind a C ABI (haptic/haptic_c.h),
+for C programs and for languages that load a C library (C# P/Invoke, MATLAB
+loadlibrary).")
 
 set(CPACK_DEBIAN_DEV_PACKAGE_NAME libhapticd-dev)
 set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)
@@ -80,9 +103,10 @@ if(TARGET haptic_recorder)  # haptic::recorder links HDF5 (find_dependency(HDF5)
   string(APPEND CPACK_DEBIAN_DEV_PACKAGE_DEPENDS ", libhdf5-dev")
 endif()
 set(CPACK_COMPONENT_DEV_DESCRIPTION "hapticd client SDK, development files
- The headers (haptic/*.hpp, the C API's haptic/haptic_c.h, the driver ABI's haptic/driver.h), the
- static SDK (haptic::sdk), the C API's link (haptic::c, -lhaptic_c) and the CMake package:
- find_package(hapticd CONFIG). The C example in /usr/share/doc/libhapticd-dev/examples.")
+The headers (haptic/*.hpp, the C API's haptic/haptic_c.h, the driver ABI's
+haptic/driver.h), the static SDK (haptic::sdk), the C API's link (haptic::c,
+-lhaptic_c) and the CMake package: find_package(hapticd CONFIG). The C example
+in /usr/share/doc/libhapticd-dev/examples.")
 
 # The C example, built against the installed package as its header says (cc touch_wall.c
 # -lhaptic_c -lm).
@@ -105,12 +129,14 @@ if(TARGET haptic_python)
   set(CPACK_DEBIAN_PYTHON_PACKAGE_DEPENDS "python3 (>= ${haptic_python_version}~), \
 python3 (<< ${haptic_python_major}.${haptic_python_minor}), python3-numpy")
   set(CPACK_COMPONENT_PYTHON_DESCRIPTION "hapticd client SDK for Python
- The hapticd package (import hapticd): the client SDK for Python ${haptic_python_version},
- with its type stubs. Examples in /usr/share/doc/python3-hapticd/examples.")
+The hapticd package (import hapticd): the client SDK for Python
+${haptic_python_version}, with its type stubs. Examples in
+/usr/share/doc/python3-hapticd/examples.")
   set(CPACK_DEBIAN_PYTHON_PACKAGE_CONTROL_EXTRA ${CMAKE_CURRENT_LIST_DIR}/python3-hapticd/postinst
       ${CMAKE_CURRENT_LIST_DIR}/python3-hapticd/prerm)
   install(FILES ${PROJECT_SOURCE_DIR}/examples/python/touch_wall.py
           DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/doc/python3-hapticd/examples COMPONENT python)
+  haptic_deb_docs(python python3-hapticd)
 endif()
 
 include(CPack)

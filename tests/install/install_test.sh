@@ -32,3 +32,13 @@ cmake -S "$source_dir/tests/install/c_consumer" -B "$work/c_consumer" -G Ninja \
   "${c_launcher[@]}" >/dev/null
 cmake --build "$work/c_consumer" >/dev/null
 "$work/c_consumer/c_consumer"
+# The same C program through pkg-config (haptic_c.pc), as a Makefile would build it.
+if command -v pkg-config >/dev/null; then
+  pc_flags=$(PKG_CONFIG_PATH=$(dirname "$(find "$work/prefix" -name haptic_c.pc)") pkg-config --cflags --libs haptic_c)
+  echo "pkg-config --cflags --libs haptic_c: $pc_flags"
+  # shellcheck disable=SC2086
+  cc -std=c99 $flags "$source_dir/tests/install/c_consumer/main.c" $pc_flags -o "$work/pc_consumer"
+  LD_LIBRARY_PATH=$(dirname "$(find "$work/prefix" -name 'libhaptic_c.so.1')") "$work/pc_consumer"
+else
+  echo "FAIL: pkg-config is missing (scripts/setup installs pkgconf)"; exit 1
+fi

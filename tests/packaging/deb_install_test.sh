@@ -63,6 +63,14 @@ for package in "${packages[@]}"; do
   cp "$deb" "$work/test/debs/"
 done
 echo "packages made in $(( $(date +%s) - started )) s"
+# What an archive would check first: lintian, no error on any package (its warnings printed).
+command -v lintian >/dev/null 2>&1 ||
+  { echo "FAIL: lintian is missing (scripts/setup installs it)"; exit 1; }
+if ! lintian --fail-on error --tag-display-limit 0 "$work"/test/debs/*.deb >"$work/lintian.log" 2>&1; then
+  grep -v 'root privileges' "$work/lintian.log"; echo "FAIL: lintian reports errors"; exit 1
+fi
+echo "lintian: no error; $(grep -c '^W: ' "$work/lintian.log" || true) warnings:"
+grep '^W: ' "$work/lintian.log" | sed 's/^/  /' || true
 
 cp "$source_dir/tests/packaging/deb_install_inside.sh" "$work/test/"
 cp -r "$source_dir/tests/install/consumer" "$work/test/consumer"
