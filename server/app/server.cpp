@@ -114,11 +114,12 @@ Server::Server(const v1::ServerConfig& config)
       scenes_(empty_scene(static_cast<std::uint32_t>(devices_.size()))),
       samples_(make_rings(devices_.size())),
       sessions_(net::SessionLimits{config.max_sessions(), config.max_sessions_per_peer(),
+                                   config.max_sessions_per_token(),
                                    std::chrono::milliseconds(config.lease_timeout_ms()),
                                    config.udp_any_source(), config.session_open_rate_per_peer(),
                                    config.session_open_burst_per_peer()}),
       events_(net::WatchLimits{config.max_event_streams_per_session(), config.max_event_streams(),
-                               config.max_event_streams_per_peer()}),
+                               config.max_event_streams_per_peer(), config.max_event_streams_per_token()}),
       udp_(sessions_, ring_pointers(samples_)) {
   const double rate = config.loop_rate_hz();
   const auto ports = static_cast<std::uint32_t>(devices_.size());

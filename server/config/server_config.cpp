@@ -146,6 +146,10 @@ void fill_defaults(v1::ServerConfig& config) {
   if (config.max_event_streams_per_peer() == 0) {
     config.set_max_event_streams_per_peer(static_cast<std::uint32_t>(half(config.max_event_streams())));
   }
+  if (config.max_sessions_per_token() == 0) config.set_max_sessions_per_token(config.max_sessions_per_peer());
+  if (config.max_event_streams_per_token() == 0) {
+    config.set_max_event_streams_per_token(config.max_event_streams_per_peer());
+  }
 
   fill_point_mass_defaults(*config.mutable_simulated_point_mass());
   for (v1::DeviceConfig& extra : *config.mutable_extra_devices()) {
@@ -231,7 +235,11 @@ std::string validate(const v1::ServerConfig& config) {
         std::tuple{"max_scene_bytes_per_peer", config.max_scene_bytes_per_peer(), "max_scene_bytes",
                    config.max_scene_bytes()},
         std::tuple{"max_event_streams_per_peer", std::uint64_t{config.max_event_streams_per_peer()},
-                   "max_event_streams", std::uint64_t{config.max_event_streams()}}}) {
+                   "max_event_streams", std::uint64_t{config.max_event_streams()}},
+        std::tuple{"max_event_streams_per_token", std::uint64_t{config.max_event_streams_per_token()},
+                   "max_event_streams", std::uint64_t{config.max_event_streams()}},
+        std::tuple{"max_sessions_per_token", std::uint64_t{config.max_sessions_per_token()}, "max_sessions",
+                   std::uint64_t{config.max_sessions()}}}) {
     if (share_value > whole_value) {
       return std::string(share) + ": must be at most " + whole + " (" + std::to_string(whole_value) +
              "), got " + std::to_string(share_value);

@@ -21,7 +21,7 @@ bool EventHub::Watcher::finished() const {
 }
 
 std::shared_ptr<EventHub::Watcher> EventHub::watch(std::uint64_t session_id, std::string& refusal,
-                                                   const std::string& host) {
+                                                   const std::string& host, const std::string& token) {
   std::lock_guard lock(mutex_);
   if (closed_) {
     refusal = "the server is shutting down";
@@ -52,9 +52,21 @@ std::shared_ptr<EventHub::Watcher> EventHub::watch(std::uint64_t session_id, std
       return nullptr;
     }
   }
+  if (limits_.per_token > 0 && !token.empty()) {
+    const auto with_token = static_cast<std::size_t>(std::count_if(
+        watchers_.begin(), watchers_.end(),
+        [&](const std::shared_ptr<Watcher>& w) { return w->token_ == token; }));
+    if (with_token >= limits_.per_token) {
+      refusal = "the sessions of token '" + token + "' already hold " + std::to_string(with_token) +
+                " event streams, the most one token may from all hosts together "
+                "(max_event_streams_per_token = " + std::to_string(limits_.per_token) + ")";
+      return nullptr;
+    }
+  }
   auto watcher = std::make_shared<Watcher>();
   watcher->session_id_ = session_id;
   watcher->host_ = host;
+  watcher->token_ = token;
   watchers_.push_back(watcher);
   return watcher;
 }

@@ -22,6 +22,7 @@ struct WatchLimits {
   std::size_t per_session = 4;  // WatchEvents streams one session may hold at once
   std::size_t total = 32;       // ... and all sessions together
   std::size_t per_peer = 0;     // ... and the sessions of one host together; 0: no share
+  std::size_t per_token = 0;    // ... and the sessions of one token, from any hosts; 0: no share
 };
 
 class EventHub {
@@ -37,7 +38,8 @@ class EventHub {
    private:
     friend class EventHub;
     std::uint64_t session_id_ = 0;
-    std::string host_;  // the host its session was opened from
+    std::string host_;   // the host its session was opened from
+    std::string token_;  // the name of the token its session was opened with ("" without)
     mutable std::mutex mutex_;
     std::condition_variable ready_;
     std::deque<v1::Event> queue_;
@@ -49,10 +51,11 @@ class EventHub {
 
   explicit EventHub(WatchLimits limits = {}) : limits_(limits) {}
 
-  /// A new watch for `session_id`, opened from `host`; nullptr, with `refusal` naming the limit,
-  /// when the session, the host or the server already holds its most.
+  /// A new watch for `session_id`, opened from `host` with the token named `token`; nullptr,
+  /// with `refusal` naming the limit, when the session, the host, the token or the server already
+  /// holds its most.
   std::shared_ptr<Watcher> watch(std::uint64_t session_id, std::string& refusal,
-                                 const std::string& host = {});
+                                 const std::string& host = {}, const std::string& token = {});
   void unwatch(const std::shared_ptr<Watcher>& watcher);
   void publish(const v1::Event& event);
   /// Ends the session's watches once they have delivered what is queued (the session's own

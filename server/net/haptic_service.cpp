@@ -483,7 +483,8 @@ grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
   if (auto status = check_session(context, request->session_id(), Permission::kObserve, "WatchEvents"); !status.ok()) return status;
   std::string refusal;
   auto watcher = deps_.events.watch(request->session_id(), refusal,
-                                    deps_.sessions.peer_of(request->session_id()));
+                                    deps_.sessions.peer_of(request->session_id()),
+                                    deps_.sessions.token_of(request->session_id()));
   if (!watcher) return {grpc::StatusCode::RESOURCE_EXHAUSTED, refusal};
   // Tell the client the watch is live, so it can act knowing it will miss nothing from here on.
   v1::Event started;

@@ -46,7 +46,7 @@ std::string peer_host(const std::string& grpc_peer) {
 SessionRegistry::SessionRegistry(const SessionLimits& limits) : limits_(limits) {}
 
 SessionRegistry::SessionRegistry(std::uint32_t max_sessions, std::chrono::milliseconds lease_timeout)
-    : limits_{max_sessions, max_sessions, lease_timeout} {}
+    : limits_{max_sessions, max_sessions, max_sessions, lease_timeout} {}
 
 std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
                                                  std::uint32_t device_index,
@@ -90,6 +90,19 @@ std::optional<SessionInfo> SessionRegistry::open(const std::string& client_name,
                  std::to_string(limits_.max_sessions_per_peer) + ", max_sessions_per_peer)";
     }
     return std::nullopt;
+  }
+  if (limits_.max_sessions_per_token > 0 && !caller.token_name.empty()) {
+    const auto with_token = static_cast<std::uint32_t>(std::count_if(
+        sessions_.begin(), sessions_.end(),
+        [&](const auto& entry) { return entry.second.info.caller.token_name == caller.token_name; }));
+    if (with_token >= limits_.max_sessions_per_token) {
+      if (refusal) {
+        *refusal = "too many sessions open with token '" + caller.token_name + "': " +
+                   std::to_string(with_token) + ", the most one token may hold from all hosts together (" +
+                   std::to_string(limits_.max_sessions_per_token) + ", max_sessions_per_token)";
+      }
+      return std::nullopt;
+    }
   }
   Session session;
   do {
@@ -198,6 +211,12 @@ std::optional<std::uint32_t> SessionRegistry::device_index_of(std::uint64_t sess
   auto it = sessions_.find(session_id);
   if (it == sessions_.end()) return std::nullopt;
   return it->second.info.device_index;
+}
+
+std::string SessionRegistry::token_of(std::uint64_t session_id) const {
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(session_id);
+  return it == sessions_.end() ? std::string() : it->second.info.caller.token_name;
 }
 
 std::string SessionRegistry::peer_of(std::uint64_t session_id) const {

@@ -52,6 +52,7 @@ struct SessionInfo {
 struct SessionLimits {
   std::uint32_t max_sessions = 32;
   std::uint32_t max_sessions_per_peer = 16;  // from any one host, so one cannot take every slot
+  std::uint32_t max_sessions_per_token = 16;  // opened with one token, from any hosts; 0: no share
   std::chrono::milliseconds lease_timeout{1000};
   /// False (default): a session's datagrams count only from the host that opened it over gRPC
   /// (its peer), so no one can point a stream at another host at all. True: from anywhere that
@@ -175,6 +176,8 @@ class SessionRegistry {
   std::optional<std::uint32_t> device_index_of(std::uint64_t session_id) const;
   /// The host it was opened from (peer_host()'s form); "" if the session does not exist.
   std::string peer_of(std::uint64_t session_id) const;
+  /// The name of the token it was opened with; "" without tokens, or if it does not exist.
+  std::string token_of(std::uint64_t session_id) const;
 
   /// A heartbeat authenticated with the session's key, from `from`. Renews the lease unless it is
   /// refused (see HeartbeatOutcome). State only ever goes to an address that has answered a

@@ -315,6 +315,52 @@ TEST(ResourceLimitsOfSessions, OneHostHoldsAtMostItsShareOfTheEventStreams) {
   for (auto& stream : open) stream->context.TryCancel();
 }
 
+// A token's sessions share a token's share as well as their host's: one OBSERVER token cannot hold
+// every stream by being used from several hosts (unit tests: two hosts; here its share, 3, is
+// below the host's, 16, so one host shows it).
+TEST(ResourceLimitsOfSessions, OneTokenHoldsAtMostItsShareOfTheEventStreamsAndSessions) {
+  constexpr const char* kObserver = "observer-token-0123456789abc";
+  test::ServerProcess server(test::lockstep_config(
+      R"("lease_timeout_ms": 10000, "max_event_streams_per_token": 3, "max_sessions_per_token": 4,
+         "security": {"tokens": [{"name": "lab-observers", "token": ")" + std::string(kObserver) +
+      R"(", "role": "OBSERVER"}]})"));
+  test::RawClient client(server.address(), std::nullopt, kObserver);
+  struct Stream {
+    grpc::ClientContext context;
+    std::unique_ptr<grpc::ClientReader<v1::Event>> reader;
+  };
+  std::vector<std::unique_ptr<Stream>> open;
+  std::string message;
+  for (int s = 0; s < 4; ++s) {  // four sessions, a stream each
+    v1::OpenSessionResponse session;
+    ASSERT_TRUE(client.open(session, "observer-" + std::to_string(s)).ok());
+    auto stream = std::make_unique<Stream>();
+    stream->context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    stream->context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
+    stream->context.AddMetadata("authorization", std::string("Bearer ") + kObserver);
+    v1::WatchEventsRequest request;
+    request.set_session_id(session.session_id());
+    stream->reader = client.stub().WatchEvents(&stream->context, request);
+    v1::Event first;
+    if (stream->reader->Read(&first) && first.kind() == v1::Event::WATCH_STARTED) {
+      open.push_back(std::move(stream));
+      continue;
+    }
+    const grpc::Status status = stream->reader->Finish();
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+    message = status.error_message();
+  }
+  EXPECT_EQ(open.size(), 3u);
+  EXPECT_EQ(message, "the sessions of token 'lab-observers' already hold 3 event streams, the most one "
+                     "token may from all hosts together (max_event_streams_per_token = 3)");
+  v1::OpenSessionResponse fifth;
+  const grpc::Status refused = client.open(fifth, "observer-5");
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_NE(refused.error_message().find("too many sessions open with token 'lab-observers': 4"),
+            std::string::npos) << refused.error_message();
+  for (auto& stream : open) stream->context.TryCancel();
+}
+
 /// `count` TCP connections to `port` on loopback that never say a word.
 std::vector<int> flood(std::uint16_t port, int count) {
   std::vector<int> sockets;

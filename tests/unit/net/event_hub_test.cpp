@@ -35,6 +35,25 @@ TEST(EventHub, OneHostsSessionsHoldNoMoreThanTheHostsShareOfTheStreams) {
   EXPECT_NE(hub.watch(4, refusal, "10.0.0.1"), nullptr);  // room again
 }
 
+// One OBSERVER token used from two hosts held all 32 streams (16 a host); a token's sessions now
+// share its own share as well, from however many hosts.
+TEST(EventHub, OneTokensSessionsFromManyHostsHoldNoMoreThanTheTokensShare) {
+  EventHub hub(WatchLimits{4, 32, 16, 3});
+  std::string refusal;
+  std::vector<std::shared_ptr<EventHub::Watcher>> held;
+  for (std::uint64_t session = 1; session <= 3; ++session) {
+    held.push_back(hub.watch(session, refusal, "10.0.0." + std::to_string(session), "lab-observers"));
+    ASSERT_NE(held.back(), nullptr) << refusal;
+  }
+  EXPECT_EQ(hub.watch(4, refusal, "10.0.0.4", "lab-observers"), nullptr);
+  EXPECT_EQ(refusal, "the sessions of token 'lab-observers' already hold 3 event streams, the most one "
+                     "token may from all hosts together (max_event_streams_per_token = 3)");
+  EXPECT_NE(hub.watch(5, refusal, "10.0.0.4", "rig-1"), nullptr);  // another token has its own
+  EXPECT_NE(hub.watch(6, refusal, "10.0.0.4"), nullptr);           // no token: no such share
+  hub.unwatch(held.front());
+  EXPECT_NE(hub.watch(4, refusal, "10.0.0.4", "lab-observers"), nullptr);  // room again
+}
+
 TEST(EventHub, WatchesAreCappedPerSessionAndInAllNamingTheLimit) {
   EventHub hub(WatchLimits{2, 3});
   std::string refusal;

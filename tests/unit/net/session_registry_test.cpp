@@ -116,7 +116,7 @@ TEST(SessionRegistry, ALatePathResponseDoesNotReopenSpentHeartbeatSequences) {
 }
 
 TEST(SessionRegistry, AnySourceLetsAnotherHostAnswerTheChallenge) {
-  SessionRegistry registry(SessionLimits{4, 4, std::chrono::milliseconds(1000), true});
+  SessionRegistry registry(SessionLimits{4, 4, 0, std::chrono::milliseconds(1000), true});
   const auto session = registry.open("behind-nat", 0, "127.0.0.1");
   const HeartbeatOutcome outcome = registry.on_heartbeat(session->id, 1, host("10.9.8.7", 5000));
   ASSERT_EQ(outcome.verdict, Verdict::kChallenge);
@@ -193,7 +193,7 @@ TEST(SessionRegistry, AcknowledgementsOfNewStatesPassTheHeartbeatBudgetAndNoMore
 }
 
 TEST(SessionRegistry, OneHostCannotTakeEverySlot) {
-  SessionRegistry registry(SessionLimits{4, 2, std::chrono::milliseconds(1000)});
+  SessionRegistry registry(SessionLimits{4, 2, 0, std::chrono::milliseconds(1000)});
   std::string refusal;
   ASSERT_TRUE(registry.open("a", 0, "10.0.0.7"));
   ASSERT_TRUE(registry.open("b", 0, "10.0.0.7"));
@@ -206,6 +206,24 @@ TEST(SessionRegistry, OneHostCannotTakeEverySlot) {
   EXPECT_EQ(last->peer, "10.0.0.9");
   EXPECT_FALSE(registry.open("f", 0, "10.0.0.10", &refusal));
   EXPECT_EQ(refusal, "too many sessions open: the server's most is 4 (max_sessions)");
+}
+
+// One token used from several hosts was held to each host's share alone, so two hosts together
+// took every slot; its sessions now share the token's share too.
+TEST(SessionRegistry, OneTokenFromManyHostsCannotTakeEverySlot) {
+  SessionRegistry registry(SessionLimits{8, 4, 2, std::chrono::milliseconds(1000)});
+  const Caller observer{"lab-observers", v1::OBSERVER};
+  std::string refusal;
+  ASSERT_TRUE(registry.open("a", 0, "10.0.0.7", &refusal, observer));
+  ASSERT_TRUE(registry.open("b", 0, "10.0.0.8", &refusal, observer));
+  EXPECT_FALSE(registry.open("c", 0, "10.0.0.9", &refusal, observer));
+  EXPECT_EQ(refusal, "too many sessions open with token 'lab-observers': 2, the most one token may hold "
+                     "from all hosts together (2, max_sessions_per_token)");
+  // Another token, and no token at all, are not counted against it.
+  EXPECT_TRUE(registry.open("d", 0, "10.0.0.9", &refusal, Caller{"rig-1", v1::CONTROLLER}));
+  EXPECT_TRUE(registry.open("e", 0, "10.0.0.9", &refusal));
+  EXPECT_EQ(registry.token_of(registry.open("f", 0, "10.0.0.10", &refusal, Caller{"rig-2", v1::CONTROLLER})->id),
+            "rig-2");
 }
 
 TEST(SessionRegistry, PeerHostIsTheAddressOfAGrpcPeer) {
