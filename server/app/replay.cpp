@@ -311,8 +311,13 @@ ReplayReport replay_recording(const std::string& path,
     throw ReplayError(error.what());
   }
   v1::Record record;
-  if (!reader->next(record) || !record.has_header() ||
-      record.header().format() != "hapticd-recording") {
+  const bool read = reader->next(record);
+  if (!read && !reader->error().empty() && reader->records() == 0 && reader->file_bytes() > 0 &&
+      reader->error().find("checksum") != std::string::npos) {
+    // The reader decompresses ahead: a small file's wrong checksum shows before its first record.
+    throw ReplayError("'" + path + "' is damaged: " + reader->error());
+  }
+  if (!read || !record.has_header() || record.header().format() != "hapticd-recording") {
     throw ReplayError("'" + path + "' is not a hapticd recording" +
                       (reader->error().empty() ? std::string() : " (" + reader->error() + ")"));
   }
@@ -373,7 +378,28 @@ ReplayReport replay_recording(const std::string& path,
     }
   }
   compare_ahead();
-  if (ended) return replay.report();
+  if (ended) {
+    // The end record is not the end of the file: after it comes the compressed stream's end and
+    // its checksum, which is what says the records read are the ones written. A file without it
+    // (its last bytes lost) or with a wrong one is not a whole recording.
+    v1::Record after;
+    const bool more = reader->next(after);
+    const std::string where = "ends after its end record (record " + std::to_string(reader->records()) +
+                              ", " + std::to_string(reader->file_bytes()) + " bytes of file)";
+    if (more) throw ReplayError("'" + path + "' is damaged: it holds records after its end record");
+    if (!reader->error().empty() && !reader->cut_short()) {
+      throw ReplayError("'" + path + "' is damaged: it " + where + ", but " + reader->error());
+    }
+    if (reader->cut_short()) {
+      replay.report().stopped_because = "was cut short";
+      throw ReplayCutShort("'" + path + "' is cut short: it " + where +
+                               " but before its compressed stream's end and checksum, so what it "
+                               "holds cannot be verified (zstd -t calls it premature); replayed as "
+                               "far as it goes",
+                           replay.report());
+    }
+    return replay.report();
+  }
   // No end record. What was written is replayed all the same; but a whole run it is not.
   const std::string last_record =
       last == Last::kSample   ? "the sample of tick " + std::to_string(last_tick) + " port " +

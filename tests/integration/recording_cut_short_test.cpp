@@ -206,6 +206,28 @@ TEST(RecordingCutShort, AWholeRecordingCutAtAnyByteIsReplayedAsFarAsItGoes) {
   EXPECT_EQ(stop->why,
             "the file ends in the middle of its compressed stream, at the end of a block, after a "
             "whole record: cut short (its writer killed?)");
+
+  // Without the last 1 to 4 bytes, the checksum: every record is there, the end record too, but
+  // nothing says they are the ones written (it replayed "bit for bit" with exit 0 before; zstd -t
+  // calls it premature). And with a wrong checksum the file is damaged.
+  for (const std::size_t missing : {1, 2, 4}) {
+    cut_file(path, cut, bytes.size() - missing);
+    const Replayed short_of_checksum = replay(cut);
+    EXPECT_EQ(short_of_checksum.status, app::kReplayCutShort)
+        << missing << ": " << short_of_checksum.out << short_of_checksum.err;
+    EXPECT_NE(short_of_checksum.err.find("ends after its end record"), std::string::npos) << short_of_checksum.err;
+    EXPECT_NE(short_of_checksum.err.find("before its compressed stream's end and checksum"), std::string::npos)
+        << short_of_checksum.err;
+  }
+  {
+    std::string wrong = bytes;
+    wrong.back() = static_cast<char>(wrong.back() ^ 0x5a);
+    std::ofstream(cut, std::ios::binary) << wrong;
+  }
+  const Replayed wrong_checksum = replay(cut);
+  EXPECT_EQ(wrong_checksum.status, app::kReplayRefused) << wrong_checksum.out << wrong_checksum.err;
+  EXPECT_NE(wrong_checksum.err.find("is damaged"), std::string::npos) << wrong_checksum.err;
+  EXPECT_NE(wrong_checksum.err.find("checksum"), std::string::npos) << wrong_checksum.err;
   std::filesystem::remove(cut);
   std::filesystem::remove(path);
 }
