@@ -21,6 +21,12 @@ unit="$prefix/lib/systemd/system/hapticd.service"
 grep -qx "ExecStart=$prefix/bin/hapticd --config /etc/hapticd/config.json" "$unit" ||
   { echo "FAIL: the unit does not start the installed binary:"; grep ExecStart "$unit"; exit 1; }
 grep -qx "RuntimeDirectory=hapticd" "$unit" || { echo "FAIL: no RuntimeDirectory=hapticd"; exit 1; }
+# Under a prefix other than /usr nothing reads <prefix>/etc/hapticd/config.json (the unit reads
+# /etc's): the default configuration is an example to copy, under share.
+[ ! -e "$prefix/etc/hapticd/config.json" ] ||
+  { echo "FAIL: $prefix/etc/hapticd/config.json is installed, but the unit reads /etc/hapticd/config.json"; exit 1; }
+"$prefix/bin/hapticd" --config "$prefix/share/hapticd/config.example.json" --print-config >/dev/null ||
+  { echo "FAIL: no usable example configuration at $prefix/share/hapticd/config.example.json"; exit 1; }
 grep -qx "RestartPreventExitStatus=2" "$unit" || { echo "FAIL: a configuration error would restart"; exit 1; }
 # verify reads the unit as systemd would (settings, ExecStart's binary); any complaint fails it.
 if ! out="$(systemd-analyze verify "$unit" 2>&1)" || [ -n "$out" ]; then
