@@ -61,6 +61,11 @@ class Hdf5Writer final : public RecordWriter {
       : path_(path) {
     bool ok = false;
     std::string why;
+    std::error_code ignored;
+    // What a failed creation removes: a file it made (HDF5 may make one and then fail to write
+    // its superblock, a full device), or one `overwrite` had already truncated; never one it was
+    // told not to touch.
+    const bool was_there = std::filesystem::exists(path, ignored);
     H5E_BEGIN_TRY {
       string_type_ = H5Tcopy(H5T_C_S1);
       H5Tset_size(string_type_, H5T_VARIABLE);
@@ -84,10 +89,8 @@ class Hdf5Writer final : public RecordWriter {
     }
     H5E_END_TRY;
     if (!ok) {
-      const bool created = file_ >= 0;
       release();
-      if (created) {
-        std::error_code ignored;
+      if (!(was_there && !overwrite) && std::filesystem::exists(path, ignored)) {
         std::filesystem::remove(path, ignored);
       }
       throw InvalidArgumentError("record: path: cannot create '" + path + "': " + why);

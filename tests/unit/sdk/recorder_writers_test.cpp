@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
+#include <sched.h>
+#include <sys/mount.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -217,6 +220,70 @@ TEST(Hdf5Writer, EveryValueReadsBackExactlyInItsNativeType) {
   }
   H5Fclose(file);
   fs::remove(path);
+}
+
+/// Descriptors of this process open on `path`.
+int descriptors_on(const std::string& path) {
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator("/proc/self/fd")) {
+    std::error_code error;
+    if (fs::read_symlink(entry.path(), error) == path) ++count;
+  }
+  return count;
+}
+
+// A device that fails under the recording (the disk fills): the write fails and is said, closing
+// fails and is said, and neither the HDF5 file handle nor its descriptor is left open (the
+// recorder used to keep both until the process exited). A 96 KiB tmpfs in a mount namespace of
+// this test's own stands in for the failing device.
+TEST(Hdf5Writer, ADeviceThatFailsLeavesNoHandleOrDescriptorOpen) {
+  if (::unshare(CLONE_NEWNS) != 0 || ::mount("none", "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0) {
+    GTEST_SKIP() << "no mount namespace here (not root?)";
+  }
+  const std::string dir = temp_file("tiny-device");
+  fs::create_directories(dir);
+  ASSERT_EQ(::mount("tmpfs", dir.c_str(), "tmpfs", 0, "size=96k"), 0) << std::strerror(errno);
+  const std::string path = dir + "/full.h5";
+  const ssize_t handles_before = H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_FILE);
+  {
+    auto writer = make_hdf5_writer(path, false, false, RecordingInfo{"unit", "", "", "", 0.0, 0, 1});
+    std::vector<State> batch(256, plain_state());
+    std::string error;
+    bool failed = false;
+    for (int i = 0; i < 400 && !failed; ++i) {  // 100 k samples: far more than 96 KiB holds
+      failed = writer->write_samples(batch, error) == 0 || !writer->flush(error);
+    }
+    ASSERT_TRUE(failed) << "the device never filled";
+    EXPECT_FALSE(error.empty());
+    std::string closing;
+    EXPECT_FALSE(writer->close(closing)) << "closing a file whose flush fails must say so";
+    EXPECT_FALSE(closing.empty());
+    EXPECT_EQ(H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_FILE), handles_before) << "an HDF5 file handle is left";
+    EXPECT_EQ(descriptors_on(path), 0) << "a descriptor on the file is left";
+  }
+  EXPECT_EQ(H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_FILE), handles_before);
+  EXPECT_EQ(descriptors_on(path), 0);
+  // A device too full for even the file's layout: refused at once, naming the path, nothing left
+  // open and no file left behind.
+  fs::remove(path);
+  const std::string filler = dir + "/filler";
+  {
+    std::ofstream fill(filler, std::ios::binary);
+    const std::string block(1024, 'x');
+    while (fill.write(block.data(), block.size())) {
+    }
+  }
+  fs::resize_file(filler, fs::file_size(filler) - 1024);  // room for the superblock, not the layout
+  try {
+    (void)make_hdf5_writer(path, true, false, RecordingInfo{"unit", "", "", "", 0.0, 0, 1});
+    ADD_FAILURE() << "a file was made on a full device";
+  } catch (const InvalidArgumentError& refused) {
+    EXPECT_NE(std::string(refused.what()).find("cannot create '" + path + "'"), std::string::npos) << refused.what();
+  }
+  EXPECT_EQ(H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_FILE), handles_before) << "an HDF5 file handle is left";
+  EXPECT_EQ(descriptors_on(path), 0) << "a descriptor on the file is left";
+  EXPECT_FALSE(fs::exists(path));
+  ::umount2(dir.c_str(), MNT_DETACH);
 }
 
 }  // namespace
