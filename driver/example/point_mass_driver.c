@@ -5,7 +5,8 @@
  *   v(t) = F/b + (v0 − F/b) e^(−b t / m),  x(t) = x0 + (F/b) t + (v0 − F/b)(m/b)(1 − e^(−b t / m))
  * (b = 0: x0 + v0 t + F t² / 2m), F the command plus the push.
  *
- * params (all optional): {"mass": 0.01 kg, "damping": 0.02 N·s/m, "initial": [x, y, z] m,
+ * params (all optional; any other key, or a value of the wrong kind, is refused naming it):
+ * {"mass": 0.01 kg, "damping": 0.02 N·s/m, "initial": [x, y, z] m,
  *   "push": [fx, fy, fz] N, "max_force": 10 N, "button_period_s": 0 (0: no button; else button 0
  *   is pressed for every other period), "servo_rate_hz": 0 (nonzero: device-clocked at that rate),
  *   "turn_rate": 0 rad/s (nonzero: the tool reports an orientation turning about z at this rate)
@@ -62,8 +63,9 @@ static void say(const point_mass* d, int level, const char* message) {
 #endif
 }
 
-/* A minimal reader for the flat JSON object hapticd passes: finds "key": and parses a number or
- * a [a, b, c] triple or a "string" after it. Returns 1 when found. */
+/* A minimal reader for the flat JSON object hapticd passes: finds "key": and parses a number, a
+ * [a, b, c] triple or a "string" after it. Each returns 1 when found, 0 when absent, and -1 with
+ * `error` naming the key and what was expected when the value is of another kind. */
 static const char* find_key(const char* json, const char* key) {
   char quoted[64];
   snprintf(quoted, sizeof quoted, "\"%s\"", key);
@@ -72,40 +74,112 @@ static const char* find_key(const char* json, const char* key) {
   at = strchr(at + strlen(quoted), ':');
   return at == NULL ? NULL : at + 1;
 }
-static int number(const char* json, const char* key, double* out) {
+static int wrong(char* error, const char* key, const char* expected) {
+  snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "params.%s: expected %s", key, expected);
+  return -1;
+}
+static int number(const char* json, const char* key, double* out, char* error) {
   const char* at = find_key(json, key);
   if (at == NULL) return 0;
   char* end = NULL;
   const double value = strtod(at, &end);
-  if (end == at) return -1;
+  if (end == at) return wrong(error, key, "a number");
+  while (*end == ' ' || *end == '\t' || *end == '\n' || *end == '\r') ++end;
+  if (*end != ',' && *end != '}') return wrong(error, key, "a number");
   *out = value;
   return 1;
 }
-static int triple(const char* json, const char* key, double out[3]) {
+static int triple(const char* json, const char* key, double out[3], char* error) {
   const char* at = find_key(json, key);
   if (at == NULL) return 0;
-  at = strchr(at, '[');
-  if (at == NULL) return -1;
+  while (*at == ' ') ++at;
+  if (*at != '[') return wrong(error, key, "[x, y, z] (three numbers)");
   ++at;
   for (int i = 0; i < 3; ++i) {
     char* end = NULL;
     out[i] = strtod(at, &end);
-    if (end == at) return -1;
+    if (end == at) return wrong(error, key, "[x, y, z] (three numbers)");
     at = end;
     while (*at == ' ' || *at == ',') ++at;
   }
+  if (*at != ']') return wrong(error, key, "[x, y, z] (three numbers)");
   return 1;
 }
-static int text(const char* json, const char* key, char* out, size_t size) {
+static int text(const char* json, const char* key, char* out, size_t size, char* error) {
   const char* at = find_key(json, key);
   if (at == NULL) return 0;
-  at = strchr(at, '"');
-  if (at == NULL) return -1;
+  while (*at == ' ') ++at;
+  if (*at != '"') return wrong(error, key, "a string");
   const char* end = strchr(at + 1, '"');
-  if (end == NULL || (size_t)(end - at - 1) >= size) return -1;
+  if (end == NULL || (size_t)(end - at - 1) >= size) return wrong(error, key, "a short string");
   memcpy(out, at + 1, (size_t)(end - at - 1));
   out[end - at - 1] = '\0';
   return 1;
+}
+
+/* The keys this driver takes: any other in params is refused, naming it (a misspelt "damping"
+ * must not leave the default in force unseen). */
+static const char* const kKeys[] = {"mass", "damping", "initial", "push", "max_force", "button_period_s",
+                                    "servo_rate_hz", "turn_rate", "fault", "fault_after", "reported_mass"};
+
+/* Checks that every key of the flat object `json` is one of kKeys; -1 with `error` naming the first
+ * that is not (or what is not an object). Values are skipped: numbers, strings, [ ... ]. */
+static int only_known_keys(const char* json, char* error) {
+  const char* at = json;
+  while (*at == ' ' || *at == '\n' || *at == '\t' || *at == '\r') ++at;
+  if (*at != '{') {
+    snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "params: expected a JSON object");
+    return -1;
+  }
+  ++at;
+  for (;;) {
+    while (*at == ' ' || *at == ',' || *at == '\n' || *at == '\t' || *at == '\r') ++at;
+    if (*at == '}' || *at == '\0') return 0;
+    if (*at != '"') {
+      snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "params: expected a quoted key");
+      return -1;
+    }
+    const char* end = strchr(at + 1, '"');
+    if (end == NULL) {
+      snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "params: unterminated key");
+      return -1;
+    }
+    const size_t length = (size_t)(end - at - 1);
+    int known = 0;
+    for (size_t k = 0; k < sizeof kKeys / sizeof kKeys[0]; ++k) {
+      known |= strlen(kKeys[k]) == length && strncmp(kKeys[k], at + 1, length) == 0;
+    }
+    if (!known) {
+      snprintf(error, HAPTIC_DRIVER_ERROR_SIZE,
+               "params.%.*s: not an option of this driver (it takes mass, damping, initial, push, "
+               "max_force, button_period_s, servo_rate_hz, turn_rate, fault, fault_after, reported_mass)",
+               (int)(length < 64 ? length : 64), at + 1);
+      return -1;
+    }
+    at = end + 1;
+    while (*at == ' ' || *at == ':') ++at;
+    /* The value: a string, a bracketed list (nested brackets and strings inside), or a bare word. */
+    int depth = 0;
+    while (*at != '\0') {
+      if (*at == '"') {
+        const char* close = strchr(at + 1, '"');
+        if (close == NULL) break;
+        at = close + 1;
+        if (depth == 0) break;
+        continue;
+      }
+      if (*at == '[' || *at == '{') ++depth;
+      if (*at == ']' || *at == '}') {
+        if (depth == 0) break;  /* the object's own end */
+        --depth;
+        ++at;
+        if (depth == 0) break;
+        continue;
+      }
+      if (*at == ',' && depth == 0) break;
+      ++at;
+    }
+  }
 }
 
 static void* create(const char* params, char* error) {
@@ -119,16 +193,17 @@ static void* create(const char* params, char* error) {
   d->max_force = 10.0;
   strcpy(d->fault, "none");
   double fault_after = 0.0;
-  if (number(params, "mass", &d->mass) < 0 || number(params, "damping", &d->damping) < 0 ||
-      number(params, "max_force", &d->max_force) < 0 ||
-      number(params, "button_period_s", &d->button_period_s) < 0 ||
-      number(params, "servo_rate_hz", &d->servo_rate_hz) < 0 ||
-      number(params, "turn_rate", &d->turn_rate) < 0 ||
-      number(params, "fault_after", &fault_after) < 0 || triple(params, "initial", d->p) < 0 ||
-      triple(params, "push", d->push) < 0 || text(params, "fault", d->fault, sizeof d->fault) < 0 ||
-      (d->reports_mass = triple(params, "reported_mass", d->reported_mass)) < 0) {
-    snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "params: cannot parse %s", params);
-    free(d);
+  if (only_known_keys(params, error) < 0 || number(params, "mass", &d->mass, error) < 0 ||
+      number(params, "damping", &d->damping, error) < 0 ||
+      number(params, "max_force", &d->max_force, error) < 0 ||
+      number(params, "button_period_s", &d->button_period_s, error) < 0 ||
+      number(params, "servo_rate_hz", &d->servo_rate_hz, error) < 0 ||
+      number(params, "turn_rate", &d->turn_rate, error) < 0 ||
+      number(params, "fault_after", &fault_after, error) < 0 || triple(params, "initial", d->p, error) < 0 ||
+      triple(params, "push", d->push, error) < 0 ||
+      text(params, "fault", d->fault, sizeof d->fault, error) < 0 ||
+      (d->reports_mass = triple(params, "reported_mass", d->reported_mass, error)) < 0) {
+    free(d);  /* `error` names the key */
     return NULL;
   }
   if (!(d->mass > 0.0) || !(d->damping >= 0.0) || !(d->max_force > 0.0)) {

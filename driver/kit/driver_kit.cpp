@@ -7,6 +7,8 @@
 #include <sstream>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 #include "runtime/cartesian_model.hpp"
 #include "runtime/device_port.hpp"
 #include "runtime/driver_device.hpp"
@@ -54,6 +56,57 @@ std::string describes_itself(const KitOptions& options, std::ostream& log) {
   if (options.cartesian && d.joints < 3) {
     return "a Cartesian driver's joints 0..2 are x, y, z: it declares " + std::to_string(d.joints);
   }
+  return {};
+}
+
+/// `params_json` with `"key": value` added as its first member.
+std::string with_member(const std::string& params_json, const std::string& member) {
+  const auto open = params_json.find('{');
+  if (open == std::string::npos) return params_json;
+  const auto next = params_json.find_first_not_of(" \t\r\n", open + 1);
+  const bool empty = next == std::string::npos || params_json[next] == '}';
+  return params_json.substr(0, open + 1) + member + (empty ? "" : ", ") + params_json.substr(open + 1);
+}
+
+/// "" when creating the driver with `params_json` is refused naming `name`; else what happened.
+std::string refused_naming(const KitOptions& options, const std::string& params_json, const std::string& name,
+                           const std::string& what_it_was) {
+  KitOptions changed = options;
+  changed.params_json = params_json;
+  try {
+    runtime::DriverDevice device(driver_options(changed));
+  } catch (const std::exception& error) {
+    if (std::string(error.what()).find(name) != std::string::npos) return {};
+    return "it refused " + what_it_was + " without naming '" + name + "': " + error.what();
+  }
+  return "it took " + what_it_was + " without a word (" + params_json +
+         "): a misspelt or mistyped option would leave its default in force unseen";
+}
+
+std::string refuses_params_it_does_not_take(const KitOptions& options, std::ostream& log) {
+  const std::string unknown = "haptic_kit_not_an_option";
+  if (std::string why = refused_naming(options, with_member(options.params_json, "\"" + unknown + "\": 1"),
+                                       unknown, "a key it does not have");
+      !why.empty()) {
+    return why;
+  }
+  // Each option given, with a value no flat option takes (an object): refused, naming it.
+  const nlohmann::json given = nlohmann::json::parse(options.params_json, nullptr, false);
+  std::size_t retyped = 0;
+  if (given.is_object()) {
+    for (const auto& [key, value] : given.items()) {
+      nlohmann::json changed = given;
+      changed[key] = nlohmann::json::object({{"haptic_kit", true}});
+      if (std::string why = refused_naming(options, changed.dump(), key, "an object as params." + key);
+          !why.empty()) {
+        return why;
+      }
+      ++retyped;
+    }
+  }
+  log << "  params: an unknown key refused by name" << (retyped > 0 ? ", and each of the " : "")
+      << (retyped > 0 ? std::to_string(retyped) + " given with a value of the wrong kind" : std::string())
+      << "\n";
   return {};
 }
 
@@ -138,6 +191,8 @@ std::vector<CheckResult> run_kit(const KitOptions& options, std::ostream& log) {
       {"its readings are finite and fresh, zero commands are taken, the safe state can be entered",
        reads_and_takes_commands, false},
       {"a force along each axis of W moves the tool along that axis", axes_are_those_of_w, true},
+      {"it refuses params it does not take, and values of the wrong kind, naming them",
+       refuses_params_it_does_not_take, false},
   };
   std::vector<CheckResult> results;
   for (const Check& check : kChecks) {

@@ -39,8 +39,36 @@ std::vector<driver_kit::CheckResult> kit(const std::string& library, const std::
 
 TEST(DriverKit, TheExampleDriverPassesEveryCheck) {
   const auto results = kit(POINT_MASS_DRIVER);
-  ASSERT_EQ(results.size(), 3u);
+  ASSERT_EQ(results.size(), 4u);
   for (const auto& result : results) EXPECT_TRUE(result.passed) << result.name << ": " << result.detail;
+}
+
+// The example driver took any key in params and let a wrongly typed value say only "cannot parse";
+// the vendor drivers refused both. Now the kit checks every driver for it, and the example passes.
+TEST(DriverKit, UnknownParamsAndValuesOfTheWrongKindAreRefusedNamingThem) {
+  const auto results = kit(POINT_MASS_DRIVER, R"({"mass": 0.05, "initial": [0, 0, 0.01], "fault": "none"})");
+  ASSERT_EQ(results.size(), 4u);
+  EXPECT_TRUE(results[3].passed) << results[3].detail;
+  const auto refusal = [](const std::string& params) {
+    try {
+      runtime::DriverOptions options;
+      options.library = POINT_MASS_DRIVER;
+      options.params_json = params;
+      runtime::DriverDevice device(options);
+    } catch (const std::exception& error) {
+      return std::string(error.what());
+    }
+    return std::string("(taken)");
+  };
+  EXPECT_NE(refusal(R"({"dampnig": 0.5})").find("params.dampnig: not an option of this driver (it takes mass, damping"),
+            std::string::npos) << refusal(R"({"dampnig": 0.5})");
+  EXPECT_NE(refusal(R"({"mass": "heavy"})").find("params.mass: expected a number"), std::string::npos)
+      << refusal(R"({"mass": "heavy"})");
+  EXPECT_NE(refusal(R"({"push": 1})").find("params.push: expected [x, y, z] (three numbers)"), std::string::npos)
+      << refusal(R"({"push": 1})");
+  EXPECT_NE(refusal(R"({"fault": 3})").find("params.fault: expected a string"), std::string::npos)
+      << refusal(R"({"fault": 3})");
+  EXPECT_EQ(refusal(R"({"mass": 0.02, "push": [0, 0, -1], "fault": "none"})"), "(taken)");
 }
 
 TEST(DriverKit, ADriverReadingNaNFailsTheReadingsCheckSayingWhere) {
