@@ -41,10 +41,13 @@ std::shared_ptr<EventHub::Watcher> EventHub::watch(std::uint64_t session_id, std
               " event streams, its most (max_event_streams = " + std::to_string(limits_.total) + ")";
     return nullptr;
   }
+  // The watches whose `field` (their host, their token) is `value`.
+  const auto held_by = [&](std::string Watcher::*field, const std::string& value) {
+    return static_cast<std::size_t>(std::count_if(watchers_.begin(), watchers_.end(),
+                                                  [&](const std::shared_ptr<Watcher>& w) { return (*w).*field == value; }));
+  };
   if (limits_.per_peer > 0 && !host.empty()) {
-    const auto from_host = static_cast<std::size_t>(std::count_if(
-        watchers_.begin(), watchers_.end(),
-        [&](const std::shared_ptr<Watcher>& w) { return w->host_ == host; }));
+    const std::size_t from_host = held_by(&Watcher::host_, host);
     if (from_host >= limits_.per_peer) {
       refusal = "the sessions from " + host + " already hold " + std::to_string(from_host) +
                 " event streams, the most one host may (max_event_streams_per_peer = " +
@@ -53,9 +56,7 @@ std::shared_ptr<EventHub::Watcher> EventHub::watch(std::uint64_t session_id, std
     }
   }
   if (limits_.per_token > 0 && !token.empty()) {
-    const auto with_token = static_cast<std::size_t>(std::count_if(
-        watchers_.begin(), watchers_.end(),
-        [&](const std::shared_ptr<Watcher>& w) { return w->token_ == token; }));
+    const std::size_t with_token = held_by(&Watcher::token_, token);
     if (with_token >= limits_.per_token) {
       refusal = "the sessions of token '" + token + "' already hold " + std::to_string(with_token) +
                 " event streams, the most one token may from all hosts together "

@@ -275,37 +275,46 @@ TEST(ResourceLimitsOfTheScene, OneSessionHoldsAtMostItsShareOfTheTriangles) {
             "items included) to 6, over max_scene_triangles_per_peer (4)");
 }
 
+/// A WatchEvents stream held open, and how to ask for one: nullptr, with `refusal` set, when the
+/// server refuses it (RESOURCE_EXHAUSTED expected).
+struct EventStream {
+  grpc::ClientContext context;
+  std::unique_ptr<grpc::ClientReader<v1::Event>> reader;
+};
+std::unique_ptr<EventStream> watch_events(test::RawClient& client, const v1::OpenSessionResponse& session,
+                                          std::string& refusal, const std::string& token = {}) {
+  auto stream = std::make_unique<EventStream>();
+  stream->context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  stream->context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
+  if (!token.empty()) stream->context.AddMetadata("authorization", "Bearer " + token);
+  v1::WatchEventsRequest request;
+  request.set_session_id(session.session_id());
+  stream->reader = client.stub().WatchEvents(&stream->context, request);
+  v1::Event first;
+  if (stream->reader->Read(&first) && first.kind() == v1::Event::WATCH_STARTED) return stream;
+  const grpc::Status status = stream->reader->Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  refusal = status.error_message();
+  return nullptr;
+}
+
 TEST(ResourceLimitsOfSessions, OneHostHoldsAtMostItsShareOfTheEventStreams) {
   // The defaults: 32 streams in all, 4 a session, half of the 32 a host. Six sessions of one host
   // ask for 4 streams each.
   test::ServerProcess server(test::lockstep_config(R"("lease_timeout_ms": 10000)"));
   test::RawClient client(server.address());
-  struct Stream {
-    grpc::ClientContext context;
-    std::unique_ptr<grpc::ClientReader<v1::Event>> reader;
-  };
-  std::vector<std::unique_ptr<Stream>> open;
+  std::vector<std::unique_ptr<EventStream>> open;
   int refused = 0;
   std::string message;
   for (int s = 0; s < 6; ++s) {
     v1::OpenSessionResponse session;
     ASSERT_TRUE(client.open(session, "watcher-" + std::to_string(s)).ok());
     for (int i = 0; i < 4; ++i) {
-      auto stream = std::make_unique<Stream>();
-      stream->context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
-      stream->context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
-      v1::WatchEventsRequest request;
-      request.set_session_id(session.session_id());
-      stream->reader = client.stub().WatchEvents(&stream->context, request);
-      v1::Event first;
-      if (stream->reader->Read(&first) && first.kind() == v1::Event::WATCH_STARTED) {
+      if (auto stream = watch_events(client, session, message)) {
         open.push_back(std::move(stream));
-        continue;
+      } else {
+        ++refused;
       }
-      const grpc::Status status = stream->reader->Finish();
-      EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-      message = status.error_message();
-      ++refused;
     }
   }
   EXPECT_EQ(open.size(), 16u);
@@ -325,30 +334,12 @@ TEST(ResourceLimitsOfSessions, OneTokenHoldsAtMostItsShareOfTheEventStreamsAndSe
          "security": {"tokens": [{"name": "lab-observers", "token": ")" + std::string(kObserver) +
       R"(", "role": "OBSERVER"}]})"));
   test::RawClient client(server.address(), std::nullopt, kObserver);
-  struct Stream {
-    grpc::ClientContext context;
-    std::unique_ptr<grpc::ClientReader<v1::Event>> reader;
-  };
-  std::vector<std::unique_ptr<Stream>> open;
+  std::vector<std::unique_ptr<EventStream>> open;
   std::string message;
   for (int s = 0; s < 4; ++s) {  // four sessions, a stream each
     v1::OpenSessionResponse session;
     ASSERT_TRUE(client.open(session, "observer-" + std::to_string(s)).ok());
-    auto stream = std::make_unique<Stream>();
-    stream->context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
-    stream->context.AddMetadata(io::kSessionSecretMetadataKey, session.session_secret());
-    stream->context.AddMetadata("authorization", std::string("Bearer ") + kObserver);
-    v1::WatchEventsRequest request;
-    request.set_session_id(session.session_id());
-    stream->reader = client.stub().WatchEvents(&stream->context, request);
-    v1::Event first;
-    if (stream->reader->Read(&first) && first.kind() == v1::Event::WATCH_STARTED) {
-      open.push_back(std::move(stream));
-      continue;
-    }
-    const grpc::Status status = stream->reader->Finish();
-    EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-    message = status.error_message();
+    if (auto stream = watch_events(client, session, message, kObserver)) open.push_back(std::move(stream));
   }
   EXPECT_EQ(open.size(), 3u);
   EXPECT_EQ(message, "the sessions of token 'lab-observers' already hold 3 event streams, the most one "
