@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstddef>
 #include <cstring>
 #include <exception>
 #include <new>
@@ -107,22 +108,75 @@ void require(const void* pointer, const char* call, const char* field) {
   if (pointer == nullptr) throw InvalidArgumentError(std::string(call) + ": " + field + ": is NULL");
 }
 
-/// A caller's struct that starts with a size: NULL or smaller than version 1's is refused.
+/// How much of a struct that starts with `size` version 1 of this header holds: today all of it.
+/// Fields are only appended; when one is, this becomes offsetof(that struct, its first appended
+/// field) for it, as the driver ABI's driver_struct_sizes does, so that a program built against
+/// version 1 keeps working. The growth test builds the library with a field appended to every
+/// such struct (HAPTIC_C_TEST_GROWN: tests/integration/grow_c_header.py) and runs a version 1
+/// program against it.
 template <typename CStruct>
-const CStruct& sized(const void* pointer, const char* call, const char* field) {
+constexpr std::uint32_t version1_size() {
+#ifdef HAPTIC_C_TEST_GROWN
+  return static_cast<std::uint32_t>(offsetof(CStruct, grown_by_test));
+#else
+  return static_cast<std::uint32_t>(sizeof(CStruct));
+#endif
+}
+
+/// A caller's struct that starts with a size, as this library's struct: its first min(size,
+/// sizeof) bytes, the fields it predates zero (an appended field takes 0 as "not given"). NULL, or
+/// smaller than version 1's, is refused. Never reads past the caller's `size`.
+template <typename CStruct>
+CStruct sized(const void* pointer, const char* call, const char* field) {
   require(pointer, call, field);
   std::uint32_t size = 0;
   std::memcpy(&size, pointer, sizeof(size));
-  if (size < sizeof(CStruct)) {
+  if (size < version1_size<CStruct>()) {
     throw InvalidArgumentError(std::string(call) + ": " + field + ": size " + std::to_string(size) +
-                               " is smaller than version 1's " + std::to_string(sizeof(CStruct)));
+                               " is smaller than version 1's " + std::to_string(version1_size<CStruct>()));
   }
-  return *static_cast<const CStruct*>(pointer);
+  CStruct value{};
+  std::memcpy(&value, pointer, std::min<std::size_t>(size, sizeof(CStruct)));
+  return value;
 }
+
+/// Writes `value`, a struct the library filled, as the caller's struct of `size` bytes: its first
+/// min(size, sizeof) bytes, with `size` as the caller's.
 template <typename CStruct>
-CStruct& sized_out(void* pointer, const char* call, const char* field) {
-  return const_cast<CStruct&>(sized<CStruct>(pointer, call, field));
+void write_as_callers(void* out, CStruct value, std::uint32_t size) {
+  value.size = size;
+  std::memcpy(out, &value, std::min<std::size_t>(size, sizeof(CStruct)));
 }
+
+/// A caller's struct the library fills: checked as sized() checks it, filled here (`*out`), and
+/// written back when this ends, its first min(size, sizeof) bytes with the caller's own `size`:
+/// never past what the caller has.
+template <typename CStruct>
+class SizedOut {
+ public:
+  SizedOut(void* pointer, const char* call, const char* field)
+      : pointer_(pointer), value_(sized<CStruct>(pointer, call, field)), size_(value_.size) {}
+  SizedOut(const SizedOut&) = delete;
+  SizedOut& operator=(const SizedOut&) = delete;
+  ~SizedOut() { write_as_callers(pointer_, value_, size_); }
+  CStruct& operator*() { return value_; }
+
+ private:
+  void* pointer_;
+  CStruct value_;
+  std::uint32_t size_;
+};
+
+// Each *_init twice (haptic_c.h): _init_sized writes the defaults as far as the caller's `size`
+// and keeps that size; the plain function, for callers without the header's macro, writes version
+// 1's fields and size. The parentheses keep the header's macro of the same name from expanding.
+#define HAPTIC_C_INIT(Struct, defaults)                                          \
+  void Struct##_init_sized(Struct* out, uint32_t size) {                         \
+    if (out != nullptr) write_as_callers(out, defaults, size);                   \
+  }                                                                              \
+  void(Struct##_init)(Struct * out) {                                            \
+    if (out != nullptr) write_as_callers(out, defaults, version1_size<Struct>()); \
+  }
 
 /// A problem with one field of a C struct, found while converting it; the call that read the
 /// struct turns it into InvalidArgumentError "<call>: <struct>.<field>: <problem>".
@@ -444,8 +498,8 @@ typename CTwin<Cpp>::type spec_to_c(const Cpp& s) {
 }
 
 template <typename CSpec>
-void init_spec(CSpec* spec) {
-  if (spec != nullptr) *spec = spec_to_c(typename SpecTraits<CSpec>::Cpp{});
+CSpec spec_defaults() {
+  return spec_to_c(typename SpecTraits<CSpec>::Cpp{});
 }
 
 template <typename CSpec>
@@ -547,13 +601,14 @@ void copy_spec(const Variant& v, void* out, const char* call) {
     using Cpp = std::decay_t<decltype(spec)>;
     using CSpec = typename CTwin<Cpp>::type;
     static_assert(std::is_same_v<typename SpecTraits<CSpec>::Cpp, Cpp>);
-    sized_out<CSpec>(out, call, SpecTraits<CSpec>::name) = spec_to_c(spec);
+    *SizedOut<CSpec>(out, call, SpecTraits<CSpec>::name) = spec_to_c(spec);
   }, v);
 }
 
 // ---- state, stability, events ----
 
-void copy_state(const haptic::State& s, haptic_state* out) {
+void copy_state(const haptic::State& s, haptic_state& state) {
+  haptic_state* out = &state;
   const std::uint32_t size = out->size;
   *out = haptic_state{};
   out->size = size;
@@ -605,7 +660,8 @@ void copy_report(const haptic::StabilityReport& r, haptic_stability_report& out)
 
 void copy_recording(const haptic::RecordingStatus& r, haptic_recording_status* out) {
   if (out == nullptr) return;
-  haptic_recording_status& c = sized_out<haptic_recording_status>(out, "Recording", "status");
+  SizedOut<haptic_recording_status> written(out, "Recording", "status");
+  haptic_recording_status& c = *written;
   const std::uint32_t size = c.size;
   c = haptic_recording_status{};
   c.size = size;
@@ -699,11 +755,11 @@ uint32_t haptic_c_version(void) { return HAPTIC_C_VERSION; }
 
 // ---- client ----
 
-void haptic_client_config_init(haptic_client_config* config) {
-  if (config == nullptr) return;
+namespace {
+haptic_client_config client_config_defaults() {
+  haptic_client_config value{};
+  haptic_client_config* config = &value;
   const haptic::ClientConfig& d = defaults();
-  *config = haptic_client_config{};
-  config->size = sizeof(haptic_client_config);
   config->server_address = d.server_address.c_str();
   config->client_name = d.client_name.c_str();
   config->token = "";
@@ -720,7 +776,10 @@ void haptic_client_config_init(haptic_client_config* config) {
   config->allow_plaintext_token = d.allow_plaintext_token;
   config->reconnect_backoff_min_ms = static_cast<uint32_t>(d.reconnect_backoff_min.count());
   config->reconnect_backoff_max_ms = static_cast<uint32_t>(d.reconnect_backoff_max.count());
+  return value;
 }
+}  // namespace
+HAPTIC_C_INIT(haptic_client_config, client_config_defaults())
 
 int haptic_client_open(const haptic_client_config* config, haptic_client** out, haptic_error* err) {
   return guarded(err, [&] {
@@ -769,7 +828,8 @@ int haptic_client_close(haptic_client* client, haptic_error* err) {
 int haptic_client_device_info(const haptic_client* client, haptic_device_info* out, haptic_error* err) {
   return guarded(err, [&] {
     require(client, "device_info", "client");
-    auto& c = sized_out<haptic_device_info>(out, "device_info", "out");
+    SizedOut<haptic_device_info> written(out, "device_info", "out");
+    auto& c = *written;
     const haptic::DeviceInfo& d = client->client.device_info();
     const std::uint32_t size = c.size;
     c = haptic_device_info{};
@@ -826,7 +886,7 @@ int haptic_client_poll_state(haptic_client* client, haptic_state* out, uint32_t 
     sized<haptic_state>(out, "poll_state", "state");
     haptic::State s;
     if (!client->client.poll_state(s, std::chrono::milliseconds(timeout_ms))) return HAPTIC_TIMEOUT;
-    copy_state(s, out);
+    copy_state(s, *SizedOut<haptic_state>(out, "poll_state", "state"));
     return HAPTIC_OK;
   });
 }
@@ -840,7 +900,7 @@ int haptic_client_wait_for_tick(haptic_client* client, uint64_t tick, haptic_sta
     if (!client->client.wait_for_tick(tick, s, std::chrono::milliseconds(timeout_ms))) {
       return HAPTIC_TIMEOUT;
     }
-    copy_state(s, out);
+    copy_state(s, *SizedOut<haptic_state>(out, "wait_for_tick", "state"));
     return HAPTIC_OK;
   });
 }
@@ -864,7 +924,7 @@ int haptic_client_on_state(haptic_client* client, haptic_state_callback callback
     client->client.on_state([callback, user_data](const haptic::State& s) {
       haptic_state c{};
       c.size = sizeof(c);
-      copy_state(s, &c);
+      copy_state(s, c);
       callback(&c, user_data);
     });
     return HAPTIC_OK;
@@ -925,11 +985,18 @@ int haptic_client_receive_counters(const haptic_client* client, haptic_receive_c
                                    haptic_error* err) {
   return guarded(err, [&] {
     require(client, "receive_counters", "client");
-    auto& c = sized_out<haptic_receive_counters>(out, "receive_counters", "out");
+    SizedOut<haptic_receive_counters> written(out, "receive_counters", "out");
+    auto& c = *written;
     const haptic::ReceiveCounters r = client->client.receive_counters();
-    const std::uint32_t size = c.size;
-    c = haptic_receive_counters{size,       r.accepted, r.rejected,  r.skipped,   r.challenges_answered,
-                                r.callback_skipped, r.lost, r.reordered, r.duplicates, r.reconnects};
+    c.accepted = r.accepted;
+    c.rejected = r.rejected;
+    c.skipped = r.skipped;
+    c.challenges_answered = r.challenges_answered;
+    c.callback_skipped = r.callback_skipped;
+    c.lost = r.lost;
+    c.reordered = r.reordered;
+    c.duplicates = r.duplicates;
+    c.reconnects = r.reconnects;
     return HAPTIC_OK;
   });
 }
@@ -944,20 +1011,20 @@ int haptic_client_set_heartbeats_enabled(haptic_client* client, int32_t enabled,
 
 // ---- specs ----
 
-void haptic_wall_spec_init(haptic_wall_spec* spec) { init_spec(spec); }
-void haptic_sphere_spec_init(haptic_sphere_spec* spec) { init_spec(spec); }
-void haptic_box_spec_init(haptic_box_spec* spec) { init_spec(spec); }
-void haptic_capsule_spec_init(haptic_capsule_spec* spec) { init_spec(spec); }
-void haptic_tangent_plane_spec_init(haptic_tangent_plane_spec* spec) { init_spec(spec); }
-void haptic_mesh_spec_init(haptic_mesh_spec* spec) { init_spec(spec); }
-void haptic_spring_field_spec_init(haptic_spring_field_spec* spec) { init_spec(spec); }
-void haptic_distance_spring_spec_init(haptic_distance_spring_spec* spec) { init_spec(spec); }
-void haptic_potential_field_spec_init(haptic_potential_field_spec* spec) { init_spec(spec); }
-void haptic_linear_field_spec_init(haptic_linear_field_spec* spec) { init_spec(spec); }
-void haptic_viscous_field_spec_init(haptic_viscous_field_spec* spec) { init_spec(spec); }
-void haptic_detent_field_spec_init(haptic_detent_field_spec* spec) { init_spec(spec); }
-void haptic_orientation_spring_spec_init(haptic_orientation_spring_spec* spec) { init_spec(spec); }
-void haptic_orientation_detent_spec_init(haptic_orientation_detent_spec* spec) { init_spec(spec); }
+HAPTIC_C_INIT(haptic_wall_spec, spec_defaults<haptic_wall_spec>())
+HAPTIC_C_INIT(haptic_sphere_spec, spec_defaults<haptic_sphere_spec>())
+HAPTIC_C_INIT(haptic_box_spec, spec_defaults<haptic_box_spec>())
+HAPTIC_C_INIT(haptic_capsule_spec, spec_defaults<haptic_capsule_spec>())
+HAPTIC_C_INIT(haptic_tangent_plane_spec, spec_defaults<haptic_tangent_plane_spec>())
+HAPTIC_C_INIT(haptic_mesh_spec, spec_defaults<haptic_mesh_spec>())
+HAPTIC_C_INIT(haptic_spring_field_spec, spec_defaults<haptic_spring_field_spec>())
+HAPTIC_C_INIT(haptic_distance_spring_spec, spec_defaults<haptic_distance_spring_spec>())
+HAPTIC_C_INIT(haptic_potential_field_spec, spec_defaults<haptic_potential_field_spec>())
+HAPTIC_C_INIT(haptic_linear_field_spec, spec_defaults<haptic_linear_field_spec>())
+HAPTIC_C_INIT(haptic_viscous_field_spec, spec_defaults<haptic_viscous_field_spec>())
+HAPTIC_C_INIT(haptic_detent_field_spec, spec_defaults<haptic_detent_field_spec>())
+HAPTIC_C_INIT(haptic_orientation_spring_spec, spec_defaults<haptic_orientation_spring_spec>())
+HAPTIC_C_INIT(haptic_orientation_detent_spec, spec_defaults<haptic_orientation_detent_spec>())
 
 #define HAPTIC_C_ADD_OBJECT(NAME, CSPEC)                                                        \
   int haptic_client_add_##NAME(haptic_client* client, const CSPEC* spec, haptic_object** out,  \
@@ -1034,7 +1101,7 @@ int haptic_object_stability(const haptic_object* object, haptic_stability_report
                             haptic_error* err) {
   return guarded(err, [&] {
     require(object, "stability", "object");
-    copy_report(object->handle.stability(), sized_out<haptic_stability_report>(out, "stability", "out"));
+    copy_report(object->handle.stability(), *SizedOut<haptic_stability_report>(out, "stability", "out"));
     return HAPTIC_OK;
   });
 }
@@ -1043,7 +1110,8 @@ int haptic_field_stability(const haptic_field* field, haptic_stability_report* o
                            haptic_error* err) {
   return guarded(err, [&] {
     require(field, "stability", "field");
-    auto& c = sized_out<haptic_stability_report>(out, "stability", "out");
+    SizedOut<haptic_stability_report> written(out, "stability", "out");
+    auto& c = *written;
     if (field->handle.stability()) {
       copy_report(*field->handle.stability(), c);
     } else {
@@ -1120,7 +1188,7 @@ int haptic_applied_scene_stability(const haptic_applied_scene* scene, uint32_t i
                                  " objects");
     }
     copy_report(scene->stability[index],
-                sized_out<haptic_stability_report>(out, "last_scene_stability", "out"));
+                *SizedOut<haptic_stability_report>(out, "last_scene_stability", "out"));
     return HAPTIC_OK;
   });
 }
@@ -1171,7 +1239,8 @@ int haptic_registered_scene_object(const haptic_registered_scene* scene, uint32_
   return guarded(err, [&] {
     require(scene, "scene.objects", "scene");
     check_index(scene->scene.scene.objects, index, "scene.objects");
-    auto& c = sized_out<haptic_scene_entry>(out, "scene.objects", "out");
+    SizedOut<haptic_scene_entry> written(out, "scene.objects", "out");
+    auto& c = *written;
     c.kind = kind_of(scene->scene.scene.objects[index]);
     c.id = scene->scene.object_ids[index];
     c.session_id = scene->scene.object_sessions[index];
@@ -1184,7 +1253,8 @@ int haptic_registered_scene_field(const haptic_registered_scene* scene, uint32_t
   return guarded(err, [&] {
     require(scene, "scene.fields", "scene");
     check_index(scene->scene.scene.fields, index, "scene.fields");
-    auto& c = sized_out<haptic_scene_entry>(out, "scene.fields", "out");
+    SizedOut<haptic_scene_entry> written(out, "scene.fields", "out");
+    auto& c = *written;
     c.kind = kind_of(scene->scene.scene.fields[index]);
     c.id = scene->scene.field_ids[index];
     c.session_id = scene->scene.field_sessions[index];
@@ -1241,11 +1311,11 @@ int haptic_client_object_states(haptic_client* client, haptic_object_state* out,
 
 // ---- operator, lockstep ----
 
-void haptic_operator_input_init(haptic_operator_input* input) {
-  if (input == nullptr) return;
+namespace {
+haptic_operator_input operator_input_defaults() {
+  haptic_operator_input value{};
+  haptic_operator_input* input = &value;
   const haptic::OperatorInput d;
-  *input = haptic_operator_input{};
-  input->size = sizeof(*input);
   input->mode = static_cast<int32_t>(d.mode);
   input->target = to_c(d.target);
   input->stiffness = d.stiffness;
@@ -1265,7 +1335,10 @@ void haptic_operator_input_init(haptic_operator_input* input) {
   input->profile_frequency_hz = d.profile.frequency_hz;
   input->profile_offset = to_c(d.profile.offset);
   input->profile_sample_period_s = d.profile.sample_period_s;
+  return value;
 }
+}  // namespace
+HAPTIC_C_INIT(haptic_operator_input, operator_input_defaults())
 
 int haptic_client_set_operator(haptic_client* client, const haptic_operator_input* input,
                                haptic_error* err) {
@@ -1412,7 +1485,8 @@ int haptic_client_stats(haptic_client* client, haptic_stats* out, haptic_stream_
                         uint32_t couplings_capacity, haptic_error* err) {
   return guarded(err, [&] {
     require(client, "GetStats", "client");
-    auto& c = sized_out<haptic_stats>(out, "GetStats", "out");
+    SizedOut<haptic_stats> written(out, "GetStats", "out");
+    auto& c = *written;
     if (clients_capacity > 0) require(clients, "GetStats", "clients");
     if (couplings_capacity > 0) require(couplings, "GetStats", "couplings");
     const haptic::Stats s = client->client.stats();
@@ -1529,19 +1603,20 @@ void copy_recorder_stats(const haptic::RecorderStats& r, haptic_recorder_stats& 
   c.write_errors = r.write_errors;
   copy_text(c.first_error, sizeof(c.first_error), r.first_error);
 }
-}  // namespace
 
-void haptic_recorder_options_init(haptic_recorder_options* options) {
-  if (options == nullptr) return;
+haptic_recorder_options recorder_options_defaults() {
+  haptic_recorder_options value{};
+  haptic_recorder_options* options = &value;
   const haptic::RecorderOptions d;
-  *options = haptic_recorder_options{};
-  options->size = sizeof(*options);
   options->path = "";
   options->format = static_cast<int32_t>(d.format);
   options->events = d.events;
   options->overwrite = d.overwrite;
   options->queue_capacity = d.queue_capacity;
+  return value;
 }
+}  // namespace
+HAPTIC_C_INIT(haptic_recorder_options, recorder_options_defaults())
 
 int haptic_client_record(haptic_client* client, const haptic_recorder_options* options,
                          haptic_recorder** out, haptic_error* err) {
@@ -1567,7 +1642,7 @@ int haptic_recorder_get_stats(const haptic_recorder* recorder, haptic_recorder_s
                               haptic_error* err) {
   return guarded(err, [&] {
     require(recorder, "recorder_stats", "recorder");
-    copy_recorder_stats(recorder->recorder.stats(), sized_out<haptic_recorder_stats>(out, "recorder_stats", "out"));
+    copy_recorder_stats(recorder->recorder.stats(), *SizedOut<haptic_recorder_stats>(out, "recorder_stats", "out"));
     return HAPTIC_OK;
   });
 }
@@ -1587,7 +1662,9 @@ int haptic_recorder_close(haptic_recorder* recorder, haptic_recorder_stats* tota
   });
   if (recorder == nullptr) return status;
   const haptic::RecorderStats stats = recorder->recorder.close();  // never throws
-  if (status == HAPTIC_OK && totals != nullptr) copy_recorder_stats(stats, *totals);
+  if (status == HAPTIC_OK && totals != nullptr) {
+    copy_recorder_stats(stats, *SizedOut<haptic_recorder_stats>(totals, "recorder_close", "totals"));
+  }
   delete recorder;
   return status;
 }

@@ -21,7 +21,12 @@
  *
  * Versioning, as the driver ABI (haptic/driver.h): HAPTIC_C_VERSION is the header's version and
  * haptic_c_version() the library's; a program compares them before calling anything else. Within
- * a version, structs only grow at their end; a library reads a caller's struct up to its `size`. */
+ * a version, structs only grow at their end; a library reads a caller's struct up to its `size`
+ * (a later library, whose struct has more fields, takes them as 0, "not given") and writes into it
+ * no further than its `size`. So the *_init functions are macros in C: they pass the struct's size
+ * as this header has it (haptic_wall_spec_init(&spec) is haptic_wall_spec_init_sized(&spec,
+ * sizeof spec)); the functions of the same name, for languages that call the library without this
+ * header (C#'s P/Invoke, MATLAB), fill version 1's fields and set version 1's size. */
 #ifndef HAPTIC_HAPTIC_C_H
 #define HAPTIC_HAPTIC_C_H
 
@@ -157,6 +162,8 @@ typedef struct haptic_client_config {
 
 /** Fills `config` with haptic::ClientConfig's defaults and sets its size. */
 void haptic_client_config_init(haptic_client_config* config);
+void haptic_client_config_init_sized(haptic_client_config* config, uint32_t size);
+#define haptic_client_config_init(config) haptic_client_config_init_sized((config), (uint32_t)sizeof(*(config)))
 
 /** Opens a session (Client's constructor). On success *out is the client; on failure *out is NULL. */
 int haptic_client_open(const haptic_client_config* config, haptic_client** out, haptic_error* err);
@@ -477,19 +484,47 @@ typedef struct haptic_orientation_detent_spec {
 
 /** Fill a spec with the C++ SDK's defaults and set its size. */
 void haptic_wall_spec_init(haptic_wall_spec* spec);
+void haptic_wall_spec_init_sized(haptic_wall_spec* spec, uint32_t size);
+#define haptic_wall_spec_init(spec) haptic_wall_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_sphere_spec_init(haptic_sphere_spec* spec);
+void haptic_sphere_spec_init_sized(haptic_sphere_spec* spec, uint32_t size);
+#define haptic_sphere_spec_init(spec) haptic_sphere_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_box_spec_init(haptic_box_spec* spec);
+void haptic_box_spec_init_sized(haptic_box_spec* spec, uint32_t size);
+#define haptic_box_spec_init(spec) haptic_box_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_capsule_spec_init(haptic_capsule_spec* spec);
+void haptic_capsule_spec_init_sized(haptic_capsule_spec* spec, uint32_t size);
+#define haptic_capsule_spec_init(spec) haptic_capsule_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_tangent_plane_spec_init(haptic_tangent_plane_spec* spec);
+void haptic_tangent_plane_spec_init_sized(haptic_tangent_plane_spec* spec, uint32_t size);
+#define haptic_tangent_plane_spec_init(spec) haptic_tangent_plane_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_mesh_spec_init(haptic_mesh_spec* spec);
+void haptic_mesh_spec_init_sized(haptic_mesh_spec* spec, uint32_t size);
+#define haptic_mesh_spec_init(spec) haptic_mesh_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_spring_field_spec_init(haptic_spring_field_spec* spec);
+void haptic_spring_field_spec_init_sized(haptic_spring_field_spec* spec, uint32_t size);
+#define haptic_spring_field_spec_init(spec) haptic_spring_field_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_distance_spring_spec_init(haptic_distance_spring_spec* spec);
+void haptic_distance_spring_spec_init_sized(haptic_distance_spring_spec* spec, uint32_t size);
+#define haptic_distance_spring_spec_init(spec) haptic_distance_spring_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_potential_field_spec_init(haptic_potential_field_spec* spec);
+void haptic_potential_field_spec_init_sized(haptic_potential_field_spec* spec, uint32_t size);
+#define haptic_potential_field_spec_init(spec) haptic_potential_field_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_linear_field_spec_init(haptic_linear_field_spec* spec);
+void haptic_linear_field_spec_init_sized(haptic_linear_field_spec* spec, uint32_t size);
+#define haptic_linear_field_spec_init(spec) haptic_linear_field_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_viscous_field_spec_init(haptic_viscous_field_spec* spec);
+void haptic_viscous_field_spec_init_sized(haptic_viscous_field_spec* spec, uint32_t size);
+#define haptic_viscous_field_spec_init(spec) haptic_viscous_field_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_detent_field_spec_init(haptic_detent_field_spec* spec);
+void haptic_detent_field_spec_init_sized(haptic_detent_field_spec* spec, uint32_t size);
+#define haptic_detent_field_spec_init(spec) haptic_detent_field_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_orientation_spring_spec_init(haptic_orientation_spring_spec* spec);
+void haptic_orientation_spring_spec_init_sized(haptic_orientation_spring_spec* spec, uint32_t size);
+#define haptic_orientation_spring_spec_init(spec) haptic_orientation_spring_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 void haptic_orientation_detent_spec_init(haptic_orientation_detent_spec* spec);
+void haptic_orientation_detent_spec_init_sized(haptic_orientation_detent_spec* spec, uint32_t size);
+#define haptic_orientation_detent_spec_init(spec) haptic_orientation_detent_spec_init_sized((spec), (uint32_t)sizeof(*(spec)))
 
 /** Register an object or field. On success *out is its handle; on failure NULL, and nothing was
  * made on the server (the message names the bad field: "CreateObject: object.radius: …"). */
@@ -730,6 +765,8 @@ typedef struct haptic_operator_input {
 
 /** Fills `input` with a release (OperatorInput's defaults) and sets its size. */
 void haptic_operator_input_init(haptic_operator_input* input);
+void haptic_operator_input_init_sized(haptic_operator_input* input, uint32_t size);
+#define haptic_operator_input_init(input) haptic_operator_input_init_sized((input), (uint32_t)sizeof(*(input)))
 /** Sets what the simulated hand does; HAPTIC_ERROR_FAILED_PRECONDITION on real hardware. */
 int haptic_client_set_operator(haptic_client* client, const haptic_operator_input* input,
                                haptic_error* err);
@@ -972,6 +1009,8 @@ typedef struct haptic_recorder_stats {
 
 /** Fills `options` with RecorderOptions' defaults (no path) and sets its size. */
 void haptic_recorder_options_init(haptic_recorder_options* options);
+void haptic_recorder_options_init_sized(haptic_recorder_options* options, uint32_t size);
+#define haptic_recorder_options_init(options) haptic_recorder_options_init_sized((options), (uint32_t)sizeof(*(options)))
 /** Creates the file(s) and starts recording `client` (haptic::Recorder's constructor): on
  * success *out is the recorder; refused (a bad path, an existing file, capacity 0), *out is NULL,
  * the message names the field ("record: path: …") and no file is left behind. Several recorders
