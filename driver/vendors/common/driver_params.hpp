@@ -1,17 +1,17 @@
 #pragma once
 // The "params" object hapticd hands a vendor driver's create() (JSON text), read for the flat keys
-// a driver takes: numbers, booleans, strings and [a, b, c] triples. Header-only and free of any
-// library, so a driver stays built against <haptic/driver.h> alone. Unknown keys are refused, so
-// a misspelt option is an error at start rather than a silent default.
+// a driver takes: numbers, booleans, strings and [a, b, c] triples. Parsed with nlohmann/json
+// (header-only, as hapticd's own configuration is), so a nested value, an escape or a bracket
+// inside a string reads as JSON says. Unknown keys are refused, so a misspelt option is an error
+// at start rather than a silent default; a value of the wrong kind is refused naming its key.
 
 #include <array>
-#include <cctype>
-#include <cstdlib>
 #include <initializer_list>
-#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 namespace haptic::vendor {
 
@@ -25,32 +25,10 @@ class DriverParams {
  public:
   /// Parses `json` (an object of flat values) and refuses any key not in `known`.
   DriverParams(const std::string& json, std::initializer_list<const char*> known) {
-    std::size_t at = skip(json, 0);
-    if (at >= json.size() || json[at] != '{') throw ParamsError("params: expected a JSON object");
-    at = skip(json, at + 1);
-    while (at < json.size() && json[at] != '}') {
-      const std::string key = string_at(json, at);
-      at = skip(json, at);
-      if (at >= json.size() || json[at] != ':') throw ParamsError("params." + key + ": expected ':'");
-      at = skip(json, at + 1);
-      const std::size_t start = at;
-      if (json[at] == '"') {
-        (void)string_at(json, at);
-      } else if (json[at] == '[' || json[at] == '{') {
-        const char close = json[at] == '[' ? ']' : '}';
-        at = json.find(close, at);
-        if (at == std::string::npos) throw ParamsError("params." + key + ": unterminated value");
-        ++at;
-      } else {
-        while (at < json.size() && json[at] != ',' && json[at] != '}') ++at;
-      }
-      std::string value = json.substr(start, at - start);
-      while (!value.empty() && std::isspace(static_cast<unsigned char>(value.back()))) value.pop_back();
-      values_[key] = value;
-      at = skip(json, at);
-      if (at < json.size() && json[at] == ',') at = skip(json, at + 1);
-    }
-    for (const auto& [key, value] : values_) {
+    values_ = nlohmann::json::parse(json, nullptr, /*allow_exceptions=*/false);
+    if (values_.is_discarded()) throw ParamsError("params: not valid JSON: " + json.substr(0, 200));
+    if (!values_.is_object()) throw ParamsError("params: expected a JSON object");
+    for (const auto& [key, value] : values_.items()) {
       bool listed = false;
       for (const char* name : known) listed = listed || key == name;
       if (!listed) {
@@ -61,70 +39,47 @@ class DriverParams {
     }
   }
 
-  bool has(const std::string& key) const { return values_.count(key) != 0; }
+  bool has(const std::string& key) const { return values_.contains(key); }
 
   std::optional<double> number(const std::string& key) const {
-    const auto found = values_.find(key);
-    if (found == values_.end()) return std::nullopt;
-    char* end = nullptr;
-    const double value = std::strtod(found->second.c_str(), &end);
-    if (end == found->second.c_str() || *end != '\0') throw ParamsError("params." + key + ": expected a number");
-    return value;
+    const nlohmann::json* value = find(key);
+    if (value == nullptr) return std::nullopt;
+    if (!value->is_number()) throw ParamsError("params." + key + ": expected a number");
+    return value->get<double>();
   }
   std::optional<bool> boolean(const std::string& key) const {
-    const auto found = values_.find(key);
-    if (found == values_.end()) return std::nullopt;
-    if (found->second == "true") return true;
-    if (found->second == "false") return false;
-    throw ParamsError("params." + key + ": expected true or false");
+    const nlohmann::json* value = find(key);
+    if (value == nullptr) return std::nullopt;
+    if (!value->is_boolean()) throw ParamsError("params." + key + ": expected true or false");
+    return value->get<bool>();
   }
   std::optional<std::string> text(const std::string& key) const {
-    const auto found = values_.find(key);
-    if (found == values_.end()) return std::nullopt;
-    if (found->second.size() < 2 || found->second.front() != '"') {
-      throw ParamsError("params." + key + ": expected a string");
-    }
-    std::size_t at = 0;
-    return string_at(found->second, at);
+    const nlohmann::json* value = find(key);
+    if (value == nullptr) return std::nullopt;
+    if (!value->is_string()) throw ParamsError("params." + key + ": expected a string");
+    return value->get<std::string>();
   }
   std::optional<std::array<double, 3>> triple(const std::string& key) const {
-    const auto found = values_.find(key);
-    if (found == values_.end()) return std::nullopt;
-    const std::string& v = found->second;
-    std::array<double, 3> out{};
-    const char* at = v.c_str();
-    if (*at != '[') throw ParamsError("params." + key + ": expected [x, y, z]");
-    ++at;
-    for (double& value : out) {
-      char* end = nullptr;
-      value = std::strtod(at, &end);
-      if (end == at) throw ParamsError("params." + key + ": expected [x, y, z] (three numbers)");
-      at = end;
-      while (*at == ' ' || *at == ',') ++at;
+    const nlohmann::json* value = find(key);
+    if (value == nullptr) return std::nullopt;
+    if (!value->is_array() || value->size() != 3) {
+      throw ParamsError("params." + key + ": expected [x, y, z] (three numbers)");
     }
-    if (*at != ']') throw ParamsError("params." + key + ": expected [x, y, z] (three numbers)");
+    std::array<double, 3> out{};
+    for (std::size_t i = 0; i < 3; ++i) {
+      if (!(*value)[i].is_number()) throw ParamsError("params." + key + ": expected [x, y, z] (three numbers)");
+      out[i] = (*value)[i].get<double>();
+    }
     return out;
   }
 
  private:
-  static std::size_t skip(const std::string& s, std::size_t at) {
-    while (at < s.size() && std::isspace(static_cast<unsigned char>(s[at]))) ++at;
-    return at;
-  }
-  /// The string starting at s[at] == '"' (escapes \" and \\ only); `at` ends past its quote.
-  static std::string string_at(const std::string& s, std::size_t& at) {
-    if (at >= s.size() || s[at] != '"') throw ParamsError("params: expected a quoted key or string");
-    std::string out;
-    for (++at; at < s.size() && s[at] != '"'; ++at) {
-      if (s[at] == '\\' && at + 1 < s.size()) ++at;
-      out += s[at];
-    }
-    if (at >= s.size()) throw ParamsError("params: unterminated string");
-    ++at;
-    return out;
+  const nlohmann::json* find(const std::string& key) const {
+    const auto found = values_.find(key);
+    return found == values_.end() ? nullptr : &*found;
   }
 
-  std::map<std::string, std::string> values_;
+  nlohmann::json values_;
 };
 
 }  // namespace haptic::vendor
