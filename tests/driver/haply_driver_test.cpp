@@ -7,6 +7,7 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "driver_kit.hpp"
 #include "driver_test_support.hpp"
@@ -130,6 +131,32 @@ TEST(Haply, AnUnpluggedDeviceFaultsSayingSoAndComesBack) {
   ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
   EXPECT_EQ(device.read(reading), DeviceStatus::kOk);
   EXPECT_EQ(device.fault_reason(), "");
+  device.stop();
+}
+
+// A service that answers what the driver does not expect (a position's coordinate as a string):
+// the JSON library throws reading it, and that used to cross the C ABI and end hapticd. Now the
+// read fails, saying why, and the next good answer reads again.
+TEST(Haply, AnAnswerItCannotReadIsAFaultNotACrash) {
+  Service service;
+  DriverDevice device(haply(service));
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  ASSERT_EQ(service.control("garble 049D"), "ok");
+  ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+  EXPECT_EQ(device.read(reading), DeviceStatus::kError);
+  EXPECT_NE(device.fault_reason().find("the driver failed"), std::string::npos) << device.fault_reason();
+  ASSERT_EQ(service.control("ungarble 049D"), "ok");
+  ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+  EXPECT_EQ(device.read(reading), DeviceStatus::kOk);
+  // enter_safe_state from another thread beside the loop's writes, as hapticd's watchdog calls it:
+  // both build messages (the session's handshake flag is atomic now), and the process lives.
+  std::thread safe([&] {
+    for (int i = 0; i < 50; ++i) device.enter_safe_state();
+  });
+  for (int i = 0; i < 50; ++i) (void)device.write(DeviceCommand{}, kT);
+  safe.join();
   device.stop();
 }
 

@@ -37,6 +37,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
+#include <atomic>
 #include <cstring>
 #include <exception>
 #include <memory>
@@ -47,6 +48,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/driver_params.hpp"
+#include "common/entry_guard.hpp"
 
 namespace {
 
@@ -174,7 +176,9 @@ struct Device {
   std::uint64_t seen = 0;      // messages taken so far
   std::uint64_t sequence = 0;  // samples given to hapticd
   std::string session_name = "hapticd";
-  bool session_sent = false;
+  // Whether the session's configuration went out: the loop's write and another thread's
+  // enter_safe_state may build a message at once, and exactly one of them must carry it.
+  std::atomic<bool> session_sent{false};
   // The newest sample, from the service's newest answer.
   double position_W[3] = {0, 0, 0}, velocity_W[3] = {0, 0, 0}, orientation_W[4] = {1, 0, 0, 0};
   std::uint32_t buttons = 0;
@@ -215,7 +219,8 @@ bool take(Device& device, const std::string& text) {
     return false;
   }
   if (message.contains("error")) {
-    device.fail("the service refused: " + message["error"].dump());
+    // Replacing what is not UTF-8 rather than throwing on it: the text goes into an error message.
+    device.fail("the service refused: " + message["error"].dump(-1, ' ', false, Json::error_handler_t::replace));
     return false;
   }
   const Json* arm = find_device(message, "inverse3", device.device_id);
@@ -256,9 +261,8 @@ bool take(Device& device, const std::string& text) {
 /// time (§3.2: its handshake).
 std::string command_message(Device& device, Json commands) {
   Json message = Json::object();
-  if (!device.session_sent) {
+  if (!device.session_sent.exchange(true)) {
     message["session"] = {{"configure", {{"profile", {{"name", device.session_name}}}}}};
-    device.session_sent = true;
   }
   message["inverse3"] = Json::array({{{"device_id", device.device_id}, {"commands", std::move(commands)}}});
   return message.dump();
@@ -343,83 +347,106 @@ void* create(const char* params_json, char* error) {
   }
 }
 
+/// An entry point's body, so that nothing it throws crosses the C ABI: the failure is the
+/// device's, said through last_error (common/entry_guard.hpp).
+template <typename Body>
+int guarded(Device& device, Body&& body) noexcept {
+  return haptic::vendor::guarded([&device](const std::string& why) { device.fail(why); }, body);
+}
+template <typename Body>
+void guarded_void(Device& device, Body&& body) noexcept {
+  haptic::vendor::guarded_void([&device](const std::string& why) { device.fail(why); }, body);
+}
+
 void destroy(void* driver) { delete static_cast<Device*>(driver); }
 
 int describe(void* driver, haptic_driver_info* info) {
-  const auto* device = static_cast<const Device*>(driver);
-  std::memset(info, 0, sizeof *info);
-  std::snprintf(info->name, sizeof info->name, "Haply Inverse3 %s%s%s", device->device_id.c_str(),
-                device->grip_id.empty() ? "" : " with VerseGrip ", device->grip_id.c_str());
-  info->joints = 3;
-  info->dof = 3;
-  info->buttons = device->grip_id.empty() ? 0 : (device->grip_kind == "wireless_verse_grip" ? 3 : 1);
-  info->capabilities = HAPTIC_DRIVER_MEASURED_RATES;  // the service's cursor velocity
-  if (!device->grip_id.empty()) info->capabilities |= HAPTIC_DRIVER_ORIENTATION;
-  info->max_force = device->max_force;
-  for (int i = 0; i < 3; ++i) {
-    info->workspace_min[i] = device->centre_W[i] - device->workspace_radius;
-    info->workspace_max[i] = device->centre_W[i] + device->workspace_radius;
-    info->apparent_mass[i] = device->apparent_mass[i];
-    info->apparent_damping[i] = device->apparent_damping[i];
-  }
-  return HAPTIC_DRIVER_OK;
+  auto* device = static_cast<Device*>(driver);
+  return guarded(*device, [&] {
+    std::memset(info, 0, sizeof *info);
+    std::snprintf(info->name, sizeof info->name, "Haply Inverse3 %s%s%s", device->device_id.c_str(),
+                  device->grip_id.empty() ? "" : " with VerseGrip ", device->grip_id.c_str());
+    info->joints = 3;
+    info->dof = 3;
+    info->buttons = device->grip_id.empty() ? 0 : (device->grip_kind == "wireless_verse_grip" ? 3 : 1);
+    info->capabilities = HAPTIC_DRIVER_MEASURED_RATES;  // the service's cursor velocity
+    if (!device->grip_id.empty()) info->capabilities |= HAPTIC_DRIVER_ORIENTATION;
+    info->max_force = device->max_force;
+    for (int i = 0; i < 3; ++i) {
+      info->workspace_min[i] = device->centre_W[i] - device->workspace_radius;
+      info->workspace_max[i] = device->centre_W[i] + device->workspace_radius;
+      info->apparent_mass[i] = device->apparent_mass[i];
+      info->apparent_damping[i] = device->apparent_damping[i];
+    }
+    return HAPTIC_DRIVER_OK;
+  });
 }
 
 int start(void* driver) {
   auto* device = static_cast<Device*>(driver);
-  if (!device->connection->send(probe(*device))) {  // the first state comes back for the first read
-    device->fail("the Haply Inverse Service closed the connection");
-    return HAPTIC_DRIVER_FAILED;
-  }
-  if (device->log != nullptr) {
-    device->log(device->log_context, HAPTIC_DRIVER_LOG_INFO,
-                ("driving Inverse3 " + device->device_id + " through " + device->url).c_str());
-  }
-  return HAPTIC_DRIVER_OK;
+  return guarded(*device, [&] {
+    if (!device->connection->send(probe(*device))) {  // the first state comes back for the first read
+      device->fail("the Haply Inverse Service closed the connection");
+      return HAPTIC_DRIVER_FAILED;
+    }
+    if (device->log != nullptr) {
+      device->log(device->log_context, HAPTIC_DRIVER_LOG_INFO,
+                  ("driving Inverse3 " + device->device_id + " through " + device->url).c_str());
+    }
+    return HAPTIC_DRIVER_OK;
+  });
 }
 
 void stop(void* driver) {
   auto* device = static_cast<Device*>(driver);
-  device->connection->send(probe(*device));  // a message without a force: the device idles (§3.3)
+  guarded_void(*device, [&] {
+    device->connection->send(probe(*device));  // a message without a force: the device idles (§3.3)
+  });
 }
 
 int read_sensors(void* driver, haptic_driver_reading* reading) {
   auto* device = static_cast<Device*>(driver);
-  std::string text;
-  // The answer to the last message (the previous tick's force, or start's probe).
-  if (device->connection->wait_newer(device->seen, device->reply_timeout, text)) {
-    if (!take(*device, text)) return HAPTIC_DRIVER_FAILED;
-    ++device->sequence;  // a new sample; none new leaves it, and hapticd calls that stale
-  } else if (!device->connection->connected()) {
-    device->fail("the Haply Inverse Service closed the connection");
-    return HAPTIC_DRIVER_FAILED;
-  }
-  for (int i = 0; i < 3; ++i) {
-    reading->q[i] = device->position_W[i];
-    reading->q_dot[i] = device->velocity_W[i];
-  }
-  std::memcpy(reading->orientation_W, device->orientation_W, sizeof device->orientation_W);
-  reading->buttons = device->buttons;
-  reading->sequence = device->sequence;
-  return HAPTIC_DRIVER_OK;
+  return guarded(*device, [&] {
+    std::string text;
+    // The answer to the last message (the previous tick's force, or start's probe).
+    if (device->connection->wait_newer(device->seen, device->reply_timeout, text)) {
+      if (!take(*device, text)) return HAPTIC_DRIVER_FAILED;
+      ++device->sequence;  // a new sample; none new leaves it, and hapticd calls that stale
+    } else if (!device->connection->connected()) {
+      device->fail("the Haply Inverse Service closed the connection");
+      return HAPTIC_DRIVER_FAILED;
+    }
+    for (int i = 0; i < 3; ++i) {
+      reading->q[i] = device->position_W[i];
+      reading->q_dot[i] = device->velocity_W[i];
+    }
+    std::memcpy(reading->orientation_W, device->orientation_W, sizeof device->orientation_W);
+    reading->buttons = device->buttons;
+    reading->sequence = device->sequence;
+    return HAPTIC_DRIVER_OK;
+  });
 }
 
 int write_command(void* driver, const haptic_driver_command* command, double /*dt*/) {
   auto* device = static_cast<Device*>(driver);
-  // W to Haply's frame: X = y_W, Y = -x_W, Z = z_W.
-  const Json force = {{"x", command->tau[1]}, {"y", -command->tau[0]}, {"z", command->tau[2]}};
-  Json commands = {{"set_cursor_force", {{device->force_key, force}}}};
-  if (!device->connection->send(command_message(*device, std::move(commands)))) {
-    device->fail("the Haply Inverse Service closed the connection");
-    return HAPTIC_DRIVER_FAILED;
-  }
-  return HAPTIC_DRIVER_OK;
+  return guarded(*device, [&] {
+    // W to Haply's frame: X = y_W, Y = -x_W, Z = z_W.
+    const Json force = {{"x", command->tau[1]}, {"y", -command->tau[0]}, {"z", command->tau[2]}};
+    Json commands = {{"set_cursor_force", {{device->force_key, force}}}};
+    if (!device->connection->send(command_message(*device, std::move(commands)))) {
+      device->fail("the Haply Inverse Service closed the connection");
+      return HAPTIC_DRIVER_FAILED;
+    }
+    return HAPTIC_DRIVER_OK;
+  });
 }
 
 void enter_safe_state(void* driver) {
-  // A message without a force: commands are per message, so the device idles (§3.3).
   auto* device = static_cast<Device*>(driver);
-  device->connection->send(probe(*device));
+  guarded_void(*device, [&] {
+    // A message without a force: commands are per message, so the device idles (§3.3).
+    device->connection->send(probe(*device));
+  });
 }
 
 void set_log(void* driver, haptic_driver_log_fn log, void* context) {

@@ -75,6 +75,9 @@ struct Device {
   std::array<double, 4> q{1, 0, 0, 0};
   bool a = false, b = false, c = false;  // wireless: state.buttons {a,b,c}; wired: a = state.button
   double battery = kBatteryLevel;
+  // The tests' fault, no part of Haply's protocol: state.cursor_position.x sent as a string (a
+  // service answering what a driver does not expect).
+  bool garbled = false;
 };
 
 struct Client {
@@ -285,7 +288,9 @@ struct Service::Impl {
       // control_mode: "force" in a step with set_cursor_force, else "idle" (the stand-in's
       // reading of §3.3 "if you stop sending them, the device returns to idle").
       const Vec3 zero{};
-      return json{{"cursor_position", vec_json(d.p)},
+      json position = vec_json(d.p);
+      if (d.garbled) position["x"] = "not a number";
+      return json{{"cursor_position", position},
                   {"cursor_velocity", vec_json(d.v)},
                   {"angular_position", angles_json()},
                   {"angular_velocity", angles_json()},
@@ -586,6 +591,13 @@ struct Service::Impl {
       if (!d) return "error: no device " + name;
       d->plugged = verb == "replug";
       d->v = {};  // at rest when it comes back
+      return "ok";
+    }
+    if (verb == "garble" || verb == "ungarble") {
+      if (!(in >> name) || !rest_ok()) return "error: usage: " + verb + " ID";
+      Device* d = find_named(name);
+      if (!d || d->kind != Kind::inverse3) return "error: no inverse3 " + name;
+      d->garbled = verb == "garble";
       return "ok";
     }
     if (verb == "stall") {
