@@ -1,8 +1,9 @@
 #!/usr/bin/python3
-"""Fails naming every #include that goes against the server's layering (docs/architecture.md):
-each library under server/ may include only itself and the layers listed for it, so the graph
-stays one-way (no lab -> app/net, no runtime -> schema, nothing -> app).
-Usage: layers.py SERVER_DIR"""
+"""Fails naming every #include that goes against the layering (docs/architecture.md): each
+library under server/ may include only itself and the layers listed for it, so the graph stays
+one-way (no lab -> app/net, no runtime -> schema, nothing -> app); and driver/ (the ABI and the
+drivers) and sdk/ (the client SDK, which builds without the server) include nothing of server/.
+Usage: layers.py SOURCE_DIR"""
 import pathlib
 import re
 import sys
@@ -21,7 +22,8 @@ ALLOWED = {
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/')
 
-server = pathlib.Path(sys.argv[1])
+source = pathlib.Path(sys.argv[1])
+server = source / "server"
 bad, checked = [], 0
 for library, allowed in ALLOWED.items():
     for path in sorted((server / library).rglob("*")):
@@ -37,6 +39,24 @@ for library, allowed in ALLOWED.items():
                 continue
             bad.append(f"{path.relative_to(server)}:{number}: {library} includes {target}/ "
                        f"(allowed: {', '.join(sorted(allowed | {library})) or 'itself'})")
+# Outside server/: what may be included by "dir/..." from each tree (its own folders, the public
+# "haptic/" headers); a server library's name is a back edge.
+OUTSIDE = {"driver": {"haptic", "common"}, "sdk": {"haptic"}}
+for tree, allowed in OUTSIDE.items():
+    for path in sorted((source / tree).rglob("*")):
+        if path.suffix not in (".hpp", ".cpp", ".h", ".c"):
+            continue
+        for number, line in enumerate(path.read_text().splitlines(), 1):
+            match = INCLUDE.match(line)
+            if not match:
+                continue
+            checked += 1
+            if match.group(1) in ALLOWED:
+                bad.append(f"{path.relative_to(source)}:{number}: {tree}/ includes the server's "
+                           f"{match.group(1)}/ (it must build without the server)")
+            elif match.group(1) not in allowed:
+                bad.append(f"{path.relative_to(source)}:{number}: {tree}/ includes {match.group(1)}/ "
+                           f"(allowed: {', '.join(sorted(allowed))})")
 unknown = sorted(p.name for p in server.iterdir() if p.is_dir() and p.name not in ALLOWED)
 for line in bad:
     print(line)
