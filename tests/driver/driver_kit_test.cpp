@@ -1,4 +1,4 @@
-// The driver test kit (driver/kit, the program haptic-driver-kit) and hapticd's handling of a
+// The driver test kit (tools/driver_kit, the program haptic-driver-kit) and hapticd's handling of a
 // driver's faults. DriverKit.* runs the kit's checks against the example driver
 // (driver/example/point_mass_driver.c), where all pass, and against drivers that break what hapticd
 // needs, where the right check fails saying why; it also tests the example's own physics.
