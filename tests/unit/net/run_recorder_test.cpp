@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "net/recorder.hpp"
+#include "net/run_recorder.hpp"
 #include "net/recording_file.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/simulated_point_mass_device.hpp"
@@ -305,7 +305,7 @@ TEST(RecordingFile, DamageIsNamedNotMistakenForAnEnd) {
 
 // The ticking thread publishes samples as always; the recorder's thread writes them. Ticking with
 // a recording running allocates nothing, and every tick's sample is in the file exactly.
-TEST(Recorder, EveryTickIsRecordedWithoutAllocatingOnTheTickingThread) {
+TEST(RunRecorder, EveryTickIsRecordedWithoutAllocatingOnTheTickingThread) {
   runtime::SimulatedPointMassDevice device(engine::PointMassParams{},
                                            engine::PointMassState{{0.0, 0.0, 0.01}, {}}, 20.0);
   runtime::CartesianModel model;
@@ -319,7 +319,7 @@ TEST(Recorder, EveryTickIsRecordedWithoutAllocatingOnTheTickingThread) {
   device.set_hand(push);
 
   std::atomic<std::uint64_t> completed{0};
-  Recorder recorder([&] { return completed.load(); }, {&ring});
+  RunRecorder recorder([&] { return completed.load(); }, {&ring});
   const std::string path = temp_path("recorder");
   ASSERT_EQ(recorder.start(path, v1::ServerConfig{}), "");
   v1::RecordedChange change;
@@ -385,7 +385,7 @@ TEST(Recorder, EveryTickIsRecordedWithoutAllocatingOnTheTickingThread) {
 
 // A write that fails (a full disk: /dev/full fails every one with ENOSPC) is counted and said, at
 // once in the log and at the end in the RecordEnd and the end line, not reported as "0 missed".
-TEST(Recorder, AFailedWriteIsCountedAndReported) {
+TEST(RunRecorder, AFailedWriteIsCountedAndReported) {
   std::ostringstream log_text;
   const auto previous = spdlog::default_logger();
   spdlog::set_default_logger(std::make_shared<spdlog::logger>(
@@ -393,7 +393,7 @@ TEST(Recorder, AFailedWriteIsCountedAndReported) {
 
   runtime::SampleRing ring;
   std::atomic<std::uint64_t> completed{0};
-  Recorder recorder([&] { return completed.load(); }, {&ring});
+  RunRecorder recorder([&] { return completed.load(); }, {&ring});
   ASSERT_EQ(recorder.start("/dev/full", v1::ServerConfig{}), "");
   v1::RecordedChange change;
   change.mutable_opened()->set_client_name("tester");

@@ -1,6 +1,8 @@
 #pragma once
-// Records a run to a file (recording_file.hpp): the changes clients make, stamped with the tick
-// after which they take effect, and every tick's sample of every device port. The loop is not
+// net::RunRecorder records a run on the server to a file (recording_file.hpp; hapticd --record,
+// StartRecording), not the SDK's haptic::Recorder, which records what one client receives: the
+// changes clients make, stamped with the tick after which they take effect, and every tick's
+// sample of every device port. The loop is not
 // touched: the recorder's own thread reads the samples from the rings the loop already publishes
 // (as the UDP sender does) and does all the encoding, compression and writing; a change is queued
 // by the control-plane thread that made it. A sample the ring overwrote before the recorder read
@@ -27,16 +29,16 @@ namespace haptic::net {
 
 class RecordingWriter;
 
-class Recorder {
+class RunRecorder {
  public:
   /// `completed_ticks`: the loop's count of ticks completed (LoopThread::completed_ticks: a
   /// tick's samples are in the rings before it counts). `rings`: each device port's samples, in
   /// port order.
-  Recorder(std::function<std::uint64_t()> completed_ticks,
+  RunRecorder(std::function<std::uint64_t()> completed_ticks,
            std::vector<const runtime::SampleRing*> rings);
-  ~Recorder();
-  Recorder(const Recorder&) = delete;
-  Recorder& operator=(const Recorder&) = delete;
+  ~RunRecorder();
+  RunRecorder(const RunRecorder&) = delete;
+  RunRecorder& operator=(const RunRecorder&) = delete;
 
   /// Starts recording into `path` (created or truncated), the header holding `config` (without
   /// its security section). Returns "" on success, else why not (already recording, the file).

@@ -1,4 +1,4 @@
-#include "net/recorder.hpp"
+#include "net/run_recorder.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -15,13 +15,13 @@ constexpr auto kFlushPeriod = std::chrono::seconds(1);
 
 }  // namespace
 
-Recorder::Recorder(std::function<std::uint64_t()> completed_ticks,
+RunRecorder::RunRecorder(std::function<std::uint64_t()> completed_ticks,
                    std::vector<const runtime::SampleRing*> rings)
     : completed_ticks_(std::move(completed_ticks)), rings_(std::move(rings)) {}
 
-Recorder::~Recorder() { stop("shutdown"); }
+RunRecorder::~RunRecorder() { stop("shutdown"); }
 
-std::string Recorder::start(const std::string& path, const v1::ServerConfig& config) {
+std::string RunRecorder::start(const std::string& path, const v1::ServerConfig& config) {
   std::unique_lock lock(mutex_);
   if (writer_) return "already recording to '" + writer_->path() + "'";
   std::unique_ptr<RecordingWriter> writer;
@@ -57,7 +57,7 @@ std::string Recorder::start(const std::string& path, const v1::ServerConfig& con
   return {};
 }
 
-std::optional<v1::RecordEnd> Recorder::stop(const std::string& why) {
+std::optional<v1::RecordEnd> RunRecorder::stop(const std::string& why) {
   {
     std::lock_guard lock(mutex_);
     if (!writer_ || stopping_) return std::nullopt;
@@ -89,12 +89,12 @@ std::optional<v1::RecordEnd> Recorder::stop(const std::string& why) {
   return totals_;
 }
 
-std::string Recorder::path() const {
+std::string RunRecorder::path() const {
   std::lock_guard lock(mutex_);
   return writer_ ? writer_->path() : std::string();
 }
 
-void Recorder::record(v1::RecordedChange change) {
+void RunRecorder::record(v1::RecordedChange change) {
   if (!active()) return;
   std::lock_guard lock(mutex_);
   if (!writer_) return;
@@ -104,7 +104,7 @@ void Recorder::record(v1::RecordedChange change) {
   queued_.push_back(std::move(change));
 }
 
-bool Recorder::wait_written_through(std::uint64_t tick, std::chrono::milliseconds timeout) const {
+bool RunRecorder::wait_written_through(std::uint64_t tick, std::chrono::milliseconds timeout) const {
   const auto give_up = std::chrono::steady_clock::now() + timeout;
   while (active() && written_through_.load(std::memory_order_acquire) < tick) {
     if (std::chrono::steady_clock::now() > give_up) return false;
@@ -113,7 +113,7 @@ bool Recorder::wait_written_through(std::uint64_t tick, std::chrono::millisecond
   return true;
 }
 
-void Recorder::run() {
+void RunRecorder::run() {
   std::unique_lock lock(mutex_);
   while (!stopping_) {
     wake_.wait_for(lock, kRound, [this] { return stopping_; });
@@ -125,7 +125,7 @@ void Recorder::run() {
   write_due();  // what was due when stop() came
 }
 
-void Recorder::write_due() {
+void RunRecorder::write_due() {
   std::vector<v1::RecordedChange> changes;
   std::uint64_t completed = 0;
   {
