@@ -21,6 +21,7 @@
 #include "integration/run_program.hpp"
 #include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
+#include "support/zstd_blocks.hpp"
 
 namespace haptic {
 namespace {
@@ -74,25 +75,6 @@ std::optional<Stop> stop_of(const std::string& said) {
   return Stop{std::stoull(match[1]), std::stoull(match[2]), std::stoull(match[3]), match[4]};
 }
 
-/// Where each block of the zstd frame in `bytes` ends (RFC 8878: the frame header, then blocks of
-/// a 3-byte header and their content).
-std::vector<std::size_t> block_ends(const std::string& bytes) {
-  const auto byte = [&](std::size_t at) { return static_cast<unsigned char>(bytes.at(at)); };
-  const unsigned descriptor = byte(4);
-  const unsigned content_size_flag = descriptor >> 6;
-  const bool single_segment = ((descriptor >> 5) & 1) != 0;
-  const std::size_t dictionary_bytes[] = {0, 1, 2, 4};
-  std::size_t at = 5 + (single_segment ? 0 : 1) + dictionary_bytes[descriptor & 3] +
-                   (content_size_flag == 0 ? (single_segment ? 1 : 0) : std::size_t{1} << content_size_flag);
-  std::vector<std::size_t> ends;
-  while (at + 3 <= bytes.size()) {
-    const std::uint32_t header = byte(at) | byte(at + 1) << 8 | byte(at + 2) << 16;
-    at += 3 + (((header >> 1) & 3) == 1 ? 1 : header >> 3);  // an RLE block holds one byte
-    ends.push_back(at);
-    if ((header & 1) != 0) break;  // the last block
-  }
-  return ends;
-}
 
 void cut_file(const std::string& from, const std::string& to, std::uintmax_t size) {
   std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing);
@@ -173,7 +155,7 @@ TEST(RecordingCutShort, AWholeRecordingCutAtAnyByteIsReplayedAsFarAsItGoes) {
     std::ifstream file(path, std::ios::binary);
     bytes.assign(std::istreambuf_iterator<char>(file), {});
   }
-  const std::vector<std::size_t> blocks = block_ends(bytes);
+  const std::vector<std::size_t> blocks = test::zstd_block_ends(bytes);
   ASSERT_GE(blocks.size(), 4u);
   ASSERT_EQ(blocks.back(), bytes.size() - 4);  // then the checksum
   const std::string cut = temp_path("whole-cut");

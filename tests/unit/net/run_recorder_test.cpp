@@ -23,6 +23,7 @@
 #include "runtime/simulated_point_mass_device.hpp"
 #include "runtime/tick_runner.hpp"
 #include "support/allocation_counter.hpp"
+#include "support/zstd_blocks.hpp"
 
 namespace haptic::net {
 namespace {
@@ -129,26 +130,6 @@ TEST(RecordingFile, ReadingAllocatesNoMoreThanParsingDoes) {
   std::filesystem::remove(path);
 }
 
-/// Where each compressed block of the zstd frame in `bytes` ends (RFC 8878: frame header, then
-/// blocks of a 3-byte header and their content).
-std::vector<std::size_t> block_ends(const std::string& bytes) {
-  const auto byte = [&](std::size_t at) { return static_cast<unsigned char>(bytes.at(at)); };
-  const unsigned descriptor = byte(4);
-  const unsigned content_size_flag = descriptor >> 6;
-  const bool single_segment = ((descriptor >> 5) & 1) != 0;
-  const std::size_t dictionary_bytes[] = {0, 1, 2, 4};
-  std::size_t at = 5 + (single_segment ? 0 : 1) + dictionary_bytes[descriptor & 3] +
-                   (content_size_flag == 0 ? (single_segment ? 1 : 0) : std::size_t{1} << content_size_flag);
-  std::vector<std::size_t> ends;
-  while (at + 3 <= bytes.size()) {
-    const std::uint32_t header = byte(at) | byte(at + 1) << 8 | byte(at + 2) << 16;
-    const unsigned type = (header >> 1) & 3;
-    at += 3 + (type == 1 ? 1 : header >> 3);  // an RLE block holds one byte
-    ends.push_back(at);
-    if ((header & 1) != 0) break;  // the last block
-  }
-  return ends;
-}
 
 // A recording cut short (its writer killed): whatever the byte the file ends at, every whole record
 // before it reads back as written, and the reader says it was cut short and where: right after a
@@ -233,7 +214,7 @@ TEST(RecordingFile, ACutFileReadsToItsLastWholeRecordAndSaysWhere) {
   EXPECT_TRUE(has(read.error, "ends in the middle of a compressed block (")) << read.error;
 
   // Inside a record: at the end of a block that holds the big record's beginning only.
-  const std::vector<std::size_t> blocks = block_ends(bytes);
+  const std::vector<std::size_t> blocks = test::zstd_block_ends(bytes);
   const auto inside = std::find_if(blocks.begin(), blocks.end(),
                                    [&](std::size_t end) { return end > after_100 && end < after_big; });
   ASSERT_NE(inside, blocks.end());
