@@ -248,17 +248,6 @@ std::string server_certificate_refused(const TlsAttempt& attempt, long verified,
 
 }  // namespace
 
-const TlsSettingNames& sdk_setting_names() {
-  static const TlsSettingNames names{
-      "turn it on with ClientConfig::tls, giving the CA that signed its certificate (--ca)",
-      "drop ClientConfig::tls (leave out --ca)",
-      "tls.ca_file (--ca)",
-      "tls.cert_file (--cert)",
-      "tls.key_file (--key)",
-      "connect by one of them, or give one with tls.server_name (--server-name)"};
-  return names;
-}
-
 std::string diagnose_tls_mismatch(const TlsAttempt& attempt, std::chrono::milliseconds timeout) {
   if (std::string own = check_own_certificate(attempt); !own.empty()) return own;
   Target target;

@@ -22,9 +22,6 @@ struct TlsSettingNames {
   std::string server_name;  ///< the fix for a name the certificate lacks ("connect by one of them, or ...")
 };
 
-/// The SDK's names: ClientConfig's fields, with the options of hapticctl and touch_wall.
-const TlsSettingNames& sdk_setting_names();
-
 /// What the client tried.
 struct TlsAttempt {
   std::string address;      ///< gRPC target: host:port, [v6]:port, dns:, ipv4:/ipv6: (first member)

@@ -57,6 +57,21 @@ bool stays_on_this_host(const std::string& target) {
   return io::is_loopback_literal(host_of(target));
 }
 
+namespace {
+/// How an SDK user sets what a TLS diagnosis may tell them to change: ClientConfig's fields, with
+/// the options of hapticctl and touch_wall.
+const TlsSettingNames& sdk_setting_names() {
+  static const TlsSettingNames names{
+      "turn it on with ClientConfig::tls, giving the CA that signed its certificate (--ca)",
+      "drop ClientConfig::tls (leave out --ca)",
+      "tls.ca_file (--ca)",
+      "tls.cert_file (--cert)",
+      "tls.key_file (--key)",
+      "connect by one of them, or give one with tls.server_name (--server-name)"};
+  return names;
+}
+}  // namespace
+
 std::chrono::milliseconds next_reconnect_delay(std::chrono::milliseconds previous,
                                                std::chrono::milliseconds outage, const ClientConfig& config) {
   const auto minimum = config.reconnect_backoff_min;

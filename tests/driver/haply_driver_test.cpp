@@ -115,21 +115,30 @@ TEST(Haply, TheGripsOrientationAndButtonsAreRead) {
   device.stop();
 }
 
+/// Starts `device` and reads once; then the control command `fault` must make the read after a
+/// write an error, and `recover` the one after that a reading again. Returns the error's reason.
+std::string fault_then_recovery(Service& service, DriverDevice& device, const std::string& fault,
+                                const std::string& recover) {
+  EXPECT_EQ(device.start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  EXPECT_EQ(device.read(reading), DeviceStatus::kOk);
+  EXPECT_EQ(service.control(fault), "ok");
+  EXPECT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+  EXPECT_EQ(device.read(reading), DeviceStatus::kError);
+  const std::string reason = device.fault_reason();
+  EXPECT_EQ(service.control(recover), "ok");
+  EXPECT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
+  EXPECT_EQ(device.read(reading), DeviceStatus::kOk);
+  return reason;
+}
+
 TEST(Haply, AnUnpluggedDeviceFaultsSayingSoAndComesBack) {
   Service service;
   DriverDevice device(haply(service));
-  ASSERT_EQ(device.start(), DeviceStatus::kOk);
-  DeviceReading reading;
-  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
-  ASSERT_EQ(service.control("unplug 049D"), "ok");
-  ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
-  EXPECT_EQ(device.read(reading), DeviceStatus::kError);
+  const std::string reason = fault_then_recovery(service, device, "unplug 049D", "replug 049D");
   // In the service's words (it refuses a command for a device it lost) or the driver's.
-  EXPECT_NE(device.fault_reason().find("049D"), std::string::npos) << device.fault_reason();
-  EXPECT_NE(device.fault_reason().find("unplugged"), std::string::npos) << device.fault_reason();
-  ASSERT_EQ(service.control("replug 049D"), "ok");
-  ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
-  EXPECT_EQ(device.read(reading), DeviceStatus::kOk);
+  EXPECT_NE(reason.find("049D"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("unplugged"), std::string::npos) << reason;
   EXPECT_EQ(device.fault_reason(), "");
   device.stop();
 }
@@ -140,16 +149,8 @@ TEST(Haply, AnUnpluggedDeviceFaultsSayingSoAndComesBack) {
 TEST(Haply, AnAnswerItCannotReadIsAFaultNotACrash) {
   Service service;
   DriverDevice device(haply(service));
-  ASSERT_EQ(device.start(), DeviceStatus::kOk);
-  DeviceReading reading;
-  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
-  ASSERT_EQ(service.control("garble 049D"), "ok");
-  ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
-  EXPECT_EQ(device.read(reading), DeviceStatus::kError);
-  EXPECT_NE(device.fault_reason().find("the driver failed"), std::string::npos) << device.fault_reason();
-  ASSERT_EQ(service.control("ungarble 049D"), "ok");
-  ASSERT_EQ(device.write(DeviceCommand{}, kT), DeviceStatus::kOk);
-  EXPECT_EQ(device.read(reading), DeviceStatus::kOk);
+  const std::string reason = fault_then_recovery(service, device, "garble 049D", "ungarble 049D");
+  EXPECT_NE(reason.find("the driver failed"), std::string::npos) << reason;
   // enter_safe_state from another thread beside the loop's writes, as hapticd's watchdog calls it:
   // both build messages (the session's handshake flag is atomic now), and the process lives.
   std::thread safe([&] {

@@ -24,39 +24,39 @@ INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/')
 
 source = pathlib.Path(sys.argv[1])
 server = source / "server"
-bad, checked = [], 0
-for library, allowed in ALLOWED.items():
-    for path in sorted((server / library).rglob("*")):
-        if path.suffix not in (".hpp", ".cpp", ".h"):
+
+
+def includes(folder, suffixes=(".hpp", ".cpp", ".h", ".c")):
+    """(path, line number, first folder) of each #include "folder/..." in the sources under `folder`."""
+    for path in sorted(folder.rglob("*")):
+        if path.suffix not in suffixes:
             continue
         for number, line in enumerate(path.read_text().splitlines(), 1):
             match = INCLUDE.match(line)
-            if not match:
-                continue
-            checked += 1
-            target = match.group(1)
-            if target in (library, "haptic") or target in allowed:
-                continue
-            bad.append(f"{path.relative_to(server)}:{number}: {library} includes {target}/ "
-                       f"(allowed: {', '.join(sorted(allowed | {library})) or 'itself'})")
+            if match:
+                yield path, number, match.group(1)
+
+
+bad, checked = [], 0
+for library, allowed in ALLOWED.items():
+    for path, number, target in includes(server / library):
+        checked += 1
+        if target in (library, "haptic") or target in allowed:
+            continue
+        bad.append(f"{path.relative_to(server)}:{number}: {library} includes {target}/ "
+                   f"(allowed: {', '.join(sorted(allowed | {library})) or 'itself'})")
 # Outside server/: what may be included by "dir/..." from each tree (its own folders, the public
 # "haptic/" headers); a server library's name is a back edge.
 OUTSIDE = {"driver": {"haptic", "common"}, "sdk": {"haptic"}}
 for tree, allowed in OUTSIDE.items():
-    for path in sorted((source / tree).rglob("*")):
-        if path.suffix not in (".hpp", ".cpp", ".h", ".c"):
-            continue
-        for number, line in enumerate(path.read_text().splitlines(), 1):
-            match = INCLUDE.match(line)
-            if not match:
-                continue
-            checked += 1
-            if match.group(1) in ALLOWED:
-                bad.append(f"{path.relative_to(source)}:{number}: {tree}/ includes the server's "
-                           f"{match.group(1)}/ (it must build without the server)")
-            elif match.group(1) not in allowed:
-                bad.append(f"{path.relative_to(source)}:{number}: {tree}/ includes {match.group(1)}/ "
-                           f"(allowed: {', '.join(sorted(allowed))})")
+    for path, number, target in includes(source / tree):
+        checked += 1
+        if target in ALLOWED:
+            bad.append(f"{path.relative_to(source)}:{number}: {tree}/ includes the server's "
+                       f"{target}/ (it must build without the server)")
+        elif target not in allowed:
+            bad.append(f"{path.relative_to(source)}:{number}: {tree}/ includes {target}/ "
+                       f"(allowed: {', '.join(sorted(allowed))})")
 unknown = sorted(p.name for p in server.iterdir() if p.is_dir() and p.name not in ALLOWED)
 for line in bad:
     print(line)
