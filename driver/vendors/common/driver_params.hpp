@@ -6,6 +6,7 @@
 // at start rather than a silent default; a value of the wrong kind is refused naming its key.
 
 #include <array>
+#include <cstddef>
 #include <initializer_list>
 #include <optional>
 #include <stdexcept>
@@ -15,25 +16,38 @@
 
 namespace haptic::vendor {
 
-/// Thrown with a message that names the key and what was wrong ("params.index: expected a number").
-class ParamsError : public std::runtime_error {
+/// Why a driver refuses to open a device (or to list them), in words hapticd shows as they are.
+class Refusal : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+/// Thrown with a message that names the key and what was wrong ("params.index: expected a number").
+class ParamsError : public Refusal {
+ public:
+  using Refusal::Refusal;
 };
 
 class DriverParams {
  public:
   /// Parses `json` (an object of flat values) and refuses any key not in `known`.
-  DriverParams(const std::string& json, std::initializer_list<const char*> known) {
+  DriverParams(const std::string& json, std::initializer_list<const char*> known)
+      : DriverParams(json, known.begin(), known.end()) {}
+  template <std::size_t N>
+  DriverParams(const std::string& json, const char* const (&known)[N]) : DriverParams(json, known, known + N) {}
+
+  DriverParams(const std::string& json, const char* const* known_begin, const char* const* known_end) {
     values_ = nlohmann::json::parse(json, nullptr, /*allow_exceptions=*/false);
     if (values_.is_discarded()) throw ParamsError("params: not valid JSON: " + json.substr(0, 200));
     if (!values_.is_object()) throw ParamsError("params: expected a JSON object");
     for (const auto& [key, value] : values_.items()) {
       bool listed = false;
-      for (const char* name : known) listed = listed || key == name;
+      for (auto name = known_begin; name != known_end; ++name) listed = listed || key == *name;
       if (!listed) {
         std::string names;
-        for (const char* name : known) names += std::string(names.empty() ? "" : ", ") + name;
+        for (auto name = known_begin; name != known_end; ++name) {
+          names += std::string(names.empty() ? "" : ", ") + *name;
+        }
         throw ParamsError("params." + key + ": not an option of this driver (it takes " + names + ")");
       }
     }

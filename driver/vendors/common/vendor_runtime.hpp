@@ -1,13 +1,17 @@
 #pragma once
 // What every vendor driver does with its vendor's runtime library and its readings, written once:
 // loading the library under its usual names (saying which were tried), and a rotation matrix as
-// the quaternion hapticd's reading takes. Header-only, free of any library but libdl.
+// the quaternion hapticd's reading takes. Header-only, free of any library but libdl (and the JSON
+// library driver_params.hpp reads params with).
 
 #include <dlfcn.h>
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "common/driver_params.hpp"
 
 namespace haptic::vendor {
 
@@ -26,21 +30,42 @@ inline void* load_first(const std::vector<std::string>& names, std::string& trie
   return nullptr;
 }
 
+/// A runtime loaded: dlclosed however the scope that holds it ends.
+struct LibraryCloser {
+  void operator()(void* library) const { dlclose(library); }
+};
+using LoadedLibrary = std::unique_ptr<void, LibraryCloser>;
+
+/// Where a vendor's runtime is looked for, and what to say when it is not there.
+struct RuntimeSearch {
+  std::vector<std::string> defaults;  // names dlopen tries in order when params.library is not given
+  std::string runtime;                // for people: "Force Dimension runtime"
+  std::string install;                // what to install: "install the Force Dimension SDK (...)"
+};
+
 /// Loads a vendor's runtime: `wanted` (params.library) alone when given, else the first of
-/// `defaults` that loads. On failure returns nullptr and sets `error`: for the defaults, that
-/// `runtime` was not found, what was tried, and `install` (what to install); for `wanted`, that it
-/// cannot load and why.
-inline void* load_runtime(const std::string& wanted, const std::vector<std::string>& defaults,
-                          const std::string& runtime, const std::string& install, std::string& error) {
+/// `search.defaults` that loads; then resolves its function table `api` with
+/// `resolve(library, api)`, which returns the first required function missing ("" when none).
+/// Throws Refusal: for the defaults, that the runtime was not found, what was tried and what to
+/// install; for `wanted`, that it cannot load and why; for a missing function, which.
+template <typename Api, typename Resolve>
+LoadedLibrary open_runtime(const std::string& wanted, const RuntimeSearch& search, Api& api, Resolve&& resolve) {
   std::string tried;
-  void* handle = load_first(wanted.empty() ? defaults : std::vector<std::string>{wanted}, tried);
-  if (handle == nullptr) {
-    error = wanted.empty() ? "the " + runtime + " was not found (tried " + tried + "): " + install +
-                                 ", or set params.library to it"
-                           : "params.library: cannot load " + tried;
+  LoadedLibrary library(load_first(wanted.empty() ? search.defaults : std::vector<std::string>{wanted}, tried));
+  if (library == nullptr) {
+    throw Refusal(wanted.empty() ? "the " + search.runtime + " was not found (tried " + tried + "): " +
+                                       search.install + ", or set params.library to it"
+                                 : "params.library: cannot load " + tried);
   }
-  return handle;
+  if (const std::string missing = resolve(library.get(), api); !missing.empty()) {
+    throw Refusal("the " + search.runtime + " lacks " + missing);
+  }
+  return library;
 }
+
+/// A function table's member from a list entry X(return type, name, parameters) (each driver
+/// lists its runtime's functions once and makes the table's members and their lookup from it).
+#define HAPTIC_RUNTIME_FUNCTION(type, name, params) type(*name) params = nullptr;
 
 /// Looks a runtime's functions up by name into typed pointers, remembering the first one missing.
 class Symbols {

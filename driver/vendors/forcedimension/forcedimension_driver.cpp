@@ -42,7 +42,6 @@
 // rather than only asking for the brakes, which the SDK's modes do not apply in FORCE mode.
 #include <haptic/driver.h>
 
-#include <dlfcn.h>
 
 #include <algorithm>
 #include <atomic>
@@ -56,7 +55,7 @@
 #include <string>
 #include <vector>
 
-#include "common/driver_params.hpp"
+#include "common/driver_adapter.hpp"
 #include "common/vendor_runtime.hpp"
 
 namespace {
@@ -107,41 +106,50 @@ const char* force_off_words(int cause) {
 /// A person turned the forces off (the force button, the dead-man switch): theirs to turn on.
 bool by_person(int cause) { return cause == 1 || cause == 6; }
 
+// The runtime's functions as declared from §1.3, one list each: X(return type, name, parameters).
+// The symbol is "dhd" + name for the DHD's, the name itself for the DRD's.
+#define DHD_REQUIRED(X)                                                    \
+  X(int, GetDeviceCount, ())                                               \
+  X(int, OpenID, (char id))                                                \
+  X(int, OpenSerial, (int serial))                                         \
+  X(int, Close, (char id))                                                 \
+  X(int, GetSystemType, (char id))                                         \
+  X(const char*, GetSystemName, (char id))                                 \
+  X(int, GetSerialNumber, (ushort* sn, char id))                           \
+  X(int, EnableForce, (uchar val, char id))                                \
+  X(int, SetGravityCompensation, (int val, char id))                       \
+  X(int, Stop, (char id))                                                  \
+  X(int, GetPosition, (double* px, double* py, double* pz, char id))       \
+  X(int, GetLinearVelocity, (double* vx, double* vy, double* vz, char id)) \
+  X(uint, GetButtonMask, (char id))                                        \
+  X(int, SetForce, (double fx, double fy, double fz, char id))             \
+  X(int, GetStatus, (int status[kStatusSize], char id))                    \
+  X(int, ErrorGetLast, ())                                                 \
+  X(const char*, ErrorGetStr, (int error))
+// Optional: a device without a wrist or gripper needs none of these, and a runtime without them
+// drives such devices (a device that has them is refused at create, naming what is missing).
+#define DHD_OPTIONAL(X)                                                                     \
+  X(int, GetOrientationFrame, (double matrix[3][3], char id))                               \
+  X(int, GetAngularVelocityRad, (double* wx, double* wy, double* wz, char id))              \
+  X(int, GetGripperAngleRad, (double* a, char id))                                          \
+  X(int, SetForceAndTorqueAndGripperForce,                                                  \
+    (double fx, double fy, double fz, double tx, double ty, double tz, double fg, char id)) \
+  X(bool, HasWrist, (char id))                                                              \
+  X(bool, HasActiveWrist, (char id))                                                        \
+  X(bool, HasGripper, (char id))                                                            \
+  X(bool, HasActiveGripper, (char id))                                                      \
+  X(bool, IsLeftHanded, (char id))
+// DRD, in libdrd only (§1.1: libdrd holds every dhd function too); absent with a bare libdhd.
+#define DRD_OPTIONAL(X)                \
+  X(bool, drdIsSupported, (char id))   \
+  X(bool, drdIsInitialized, (char id)) \
+  X(int, drdAutoInit, (char id))       \
+  X(int, drdStop, (bool frc, char id))
+
 struct DhdApi {
-  int (*GetDeviceCount)() = nullptr;
-  int (*OpenID)(char id) = nullptr;
-  int (*OpenSerial)(int serial) = nullptr;
-  int (*Close)(char id) = nullptr;
-  int (*GetSystemType)(char id) = nullptr;
-  const char* (*GetSystemName)(char id) = nullptr;
-  int (*GetSerialNumber)(ushort* sn, char id) = nullptr;
-  int (*EnableForce)(uchar val, char id) = nullptr;
-  int (*SetGravityCompensation)(int val, char id) = nullptr;
-  int (*Stop)(char id) = nullptr;
-  int (*GetPosition)(double* px, double* py, double* pz, char id) = nullptr;
-  int (*GetLinearVelocity)(double* vx, double* vy, double* vz, char id) = nullptr;
-  uint (*GetButtonMask)(char id) = nullptr;
-  int (*SetForce)(double fx, double fy, double fz, char id) = nullptr;
-  int (*GetStatus)(int status[kStatusSize], char id) = nullptr;
-  int (*ErrorGetLast)() = nullptr;
-  const char* (*ErrorGetStr)(int error) = nullptr;
-  // Optional: a device without a wrist or gripper needs none of these, and a runtime without them
-  // drives such devices (a device that has them is refused at create, naming what is missing).
-  int (*GetOrientationFrame)(double matrix[3][3], char id) = nullptr;
-  int (*GetAngularVelocityRad)(double* wx, double* wy, double* wz, char id) = nullptr;
-  int (*GetGripperAngleRad)(double* a, char id) = nullptr;
-  int (*SetForceAndTorqueAndGripperForce)(double fx, double fy, double fz, double tx, double ty,
-                                          double tz, double fg, char id) = nullptr;
-  bool (*HasWrist)(char id) = nullptr;
-  bool (*HasActiveWrist)(char id) = nullptr;
-  bool (*HasGripper)(char id) = nullptr;
-  bool (*HasActiveGripper)(char id) = nullptr;
-  bool (*IsLeftHanded)(char id) = nullptr;
-  // DRD, in libdrd only (§1.1: libdrd holds every dhd function too); absent with a bare libdhd.
-  bool (*drdIsSupported)(char id) = nullptr;
-  bool (*drdIsInitialized)(char id) = nullptr;
-  int (*drdAutoInit)(char id) = nullptr;
-  int (*drdStop)(bool frc, char id) = nullptr;
+  DHD_REQUIRED(HAPTIC_RUNTIME_FUNCTION)
+  DHD_OPTIONAL(HAPTIC_RUNTIME_FUNCTION)
+  DRD_OPTIONAL(HAPTIC_RUNTIME_FUNCTION)
 };
 
 /// What this driver knows of each model (the type codes of §1.5). Force, workspace radius, torque
@@ -188,58 +196,46 @@ const Model* model_of(int type) {
   return nullptr;
 }
 
-/// Loads the runtime: `wanted`, or the default names of §1.1. Empty `error` on success.
-void* load_runtime(const std::string& wanted, std::string& error) {
+/// Where the runtime is looked for (§1.1) and what to install when it is not there.
+haptic::vendor::RuntimeSearch runtime_search() {
   std::vector<std::string> names = {"libdrd.so.3", "libdrd.so", "libdhd.so.3", "libdhd.so"};
   if (const char* sdk = std::getenv("FDSDK")) names.push_back(std::string(sdk) + "/lib/release/lin-x86_64-gcc/libdrd.so");
-  return haptic::vendor::load_runtime(wanted, names, "Force Dimension runtime",
-                                      "install the Force Dimension SDK (its lib/release/lin-*-gcc files; "
-                                      "it needs libusb-1.0)",
-                                      error);
+  return {names, "Force Dimension runtime",
+          "install the Force Dimension SDK (its lib/release/lin-*-gcc files; it needs libusb-1.0)"};
 }
 
-/// Resolves every function; empty on success, else the first missing one.
+/// Resolves every function; empty on success, else the first missing required one.
 std::string resolve(void* library, DhdApi& api) {
   haptic::vendor::Symbols symbols(library);
-  auto need = [&symbols](auto& slot, const char* name) { symbols.need(slot, name); };
-  need(api.GetDeviceCount, "dhdGetDeviceCount");
-  need(api.OpenID, "dhdOpenID");
-  need(api.OpenSerial, "dhdOpenSerial");
-  need(api.Close, "dhdClose");
-  need(api.GetSystemType, "dhdGetSystemType");
-  need(api.GetSystemName, "dhdGetSystemName");
-  need(api.GetSerialNumber, "dhdGetSerialNumber");
-  need(api.EnableForce, "dhdEnableForce");
-  need(api.SetGravityCompensation, "dhdSetGravityCompensation");
-  need(api.Stop, "dhdStop");
-  need(api.GetPosition, "dhdGetPosition");
-  need(api.GetLinearVelocity, "dhdGetLinearVelocity");
-  need(api.GetButtonMask, "dhdGetButtonMask");
-  need(api.SetForce, "dhdSetForce");
-  need(api.GetStatus, "dhdGetStatus");
-  need(api.ErrorGetLast, "dhdErrorGetLast");
-  need(api.ErrorGetStr, "dhdErrorGetStr");
-  // Optional: the wrist, gripper and handedness (absent: none of them).
-  symbols.may(api.GetOrientationFrame, "dhdGetOrientationFrame");
-  symbols.may(api.GetAngularVelocityRad, "dhdGetAngularVelocityRad");
-  symbols.may(api.GetGripperAngleRad, "dhdGetGripperAngleRad");
-  symbols.may(api.SetForceAndTorqueAndGripperForce, "dhdSetForceAndTorqueAndGripperForce");
-  symbols.may(api.HasWrist, "dhdHasWrist");
-  symbols.may(api.HasActiveWrist, "dhdHasActiveWrist");
-  symbols.may(api.HasGripper, "dhdHasGripper");
-  symbols.may(api.HasActiveGripper, "dhdHasActiveGripper");
-  symbols.may(api.IsLeftHanded, "dhdIsLeftHanded");
-  // Optional: calibration needs libdrd.
-  symbols.may(api.drdIsSupported, "drdIsSupported");
-  symbols.may(api.drdIsInitialized, "drdIsInitialized");
-  symbols.may(api.drdAutoInit, "drdAutoInit");
-  symbols.may(api.drdStop, "drdStop");
+#define NEED_DHD(type, name, params) symbols.need(api.name, "dhd" #name);
+#define MAY_DHD(type, name, params) symbols.may(api.name, "dhd" #name);
+#define MAY_DRD(type, name, params) symbols.may(api.name, #name);
+  DHD_REQUIRED(NEED_DHD)
+  DHD_OPTIONAL(MAY_DHD)
+  DRD_OPTIONAL(MAY_DRD)
+#undef NEED_DHD
+#undef MAY_DHD
+#undef MAY_DRD
   return symbols.missing();
 }
 
-struct Device {
-  void* library = nullptr;
+/// One device through the runtime: the driver's device (common/driver_adapter.hpp).
+struct Device : haptic::vendor::VendorDevice {
+  static constexpr const char* kParams[] = {"library",          "index",         "serial",
+                                            "calibrate",        "gravity_compensation", "max_force",
+                                            "workspace_radius", "apparent_mass", "apparent_damping",
+                                            "status_period",    "resume_speed"};
+  static constexpr bool kDeviceClocked = false;  // the SDK has no servo callback to hand the loop
+
+  HAPTIC_VENDOR_DEVICE(Device);
+
+  ~Device() {
+    if (opened) haptic::vendor::quietly([this] { api.Close(id); });
+  }
+
+  haptic::vendor::LoadedLibrary library;  // declared first: closed after the destructor's dhdClose
   DhdApi api;
+  bool opened = false;  // `id` names a device this driver opened (closed by the destructor)
   char id = -1;
   int type = 0;
   std::string name;
@@ -263,12 +259,7 @@ struct Device {
   // (code 0: `failed_call` is the whole text, the driver's own words or a force-off cause).
   std::atomic<int> failed_code{0};
   std::atomic<const char*> failed_call{nullptr};
-  haptic_driver_log_fn log = nullptr;
-  void* log_context = nullptr;
 
-  void say(int level, const std::string& message) const {
-    if (log != nullptr) log(log_context, level, message.c_str());
-  }
   /// Records a failed call (a negative return, §1.4) for last_error; returns HAPTIC_DRIVER_FAILED.
   int failed(const char* call) {
     forces_off.store(true, std::memory_order_relaxed);  // the SDK may have dropped them (§1.5)
@@ -299,29 +290,13 @@ std::string vendor_error(const DhdApi& api) {
   return (text != nullptr ? text : "error") + std::string(" (DHD error ") + std::to_string(code) + ")";
 }
 
-/// The params this driver takes (header comment), refusing any other.
-haptic::vendor::DriverParams read_params(const char* params_json) {
-  return haptic::vendor::DriverParams(params_json, {"library", "index", "serial", "calibrate",
-                                                    "gravity_compensation", "max_force", "workspace_radius",
-                                                    "apparent_mass", "apparent_damping", "status_period",
-                                                    "resume_speed"});
-}
-
-void* create(const char* params_json, char* error) {
-  auto refuse = [error](const std::string& why) -> void* {
-    std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", why.c_str());
-    return nullptr;
-  };
-  try {
-    const haptic::vendor::DriverParams params = read_params(params_json);
-    auto device = std::make_unique<Device>();
+std::unique_ptr<Device> Device::open(const haptic::vendor::DriverParams& params) {
+  using haptic::vendor::Refusal;
+  auto device = std::make_unique<Device>();
+  {
+    device->library = haptic::vendor::open_runtime(params.text("library").value_or(""), runtime_search(),
+                                                   device->api, resolve);
     std::string why;
-    device->library = load_runtime(params.text("library").value_or(""), why);
-    if (device->library == nullptr) return refuse(why);
-    if (const std::string missing = resolve(device->library, device->api); !missing.empty()) {
-      dlclose(device->library);
-      return refuse("the Force Dimension runtime lacks " + missing + " (an SDK older than 3.17?)");
-    }
     DhdApi& api = device->api;
     int opened = -1;
     if (params.has("serial")) {
@@ -344,11 +319,9 @@ void* create(const char* params_json, char* error) {
         if (opened < 0) why = "opening device " + std::to_string(static_cast<int>(index)) + ": " + vendor_error(api);
       }
     }
-    if (opened < 0) {
-      dlclose(device->library);
-      return refuse(why);
-    }
+    if (opened < 0) throw Refusal(why);
     device->id = static_cast<char>(opened);
+    device->opened = true;
     device->type = api.GetSystemType(device->id);
     const char* name = api.GetSystemName(device->id);
     device->name = name != nullptr ? name : "Force Dimension device";
@@ -358,9 +331,7 @@ void* create(const char* params_json, char* error) {
     if (auto f = params.number("max_force")) device->model.max_force = *f;
     if (auto r = params.number("workspace_radius")) device->model.workspace_radius = *r;
     if (!(device->model.max_force > 0.0 && device->model.workspace_radius > 0.0)) {
-      api.Close(device->id);
-      dlclose(device->library);
-      return refuse("device type " + std::to_string(device->type) + " (" + device->name +
+      throw Refusal("device type " + std::to_string(device->type) + " (" + device->name +
                     ") is not one this driver knows: give params.max_force (N) and "
                     "params.workspace_radius (m) from its manual");
     }
@@ -381,9 +352,7 @@ void* create(const char* params_json, char* error) {
       lacking = "dhdSetForceAndTorqueAndGripperForce";
     }
     if (lacking != nullptr) {
-      api.Close(device->id);
-      dlclose(device->library);
-      return refuse("the Force Dimension runtime lacks " + std::string(lacking) + ", which the " + device->name +
+      throw Refusal("the Force Dimension runtime lacks " + std::string(lacking) + ", which the " + device->name +
                     "'s wrist or gripper needs (an SDK older than 3.17?)");
     }
     device->calibrate = params.boolean("calibrate").value_or(true);
@@ -392,314 +361,245 @@ void* create(const char* params_json, char* error) {
     if (auto b = params.triple("apparent_damping")) std::copy(b->begin(), b->end(), device->apparent_damping);
     if (auto n = params.number("status_period")) {
       if (!(*n >= 1.0 && *n <= 1000.0 && *n == std::floor(*n))) {
-        api.Close(device->id);
-        dlclose(device->library);
-        return refuse("params.status_period: a whole number of reads, 1 to 1000");
+        throw Refusal("params.status_period: a whole number of reads, 1 to 1000");
       }
       device->status_period = static_cast<unsigned>(*n);
     }
     if (auto v = params.number("resume_speed")) {
       if (!(*v > 0.0 && std::isfinite(*v))) {
-        api.Close(device->id);
-        dlclose(device->library);
-        return refuse("params.resume_speed: a speed > 0 (m/s)");
+        throw Refusal("params.resume_speed: a speed > 0 (m/s)");
       }
       device->resume_speed = *v;
     }
-    return device.release();
-  } catch (const std::exception& failure) {
-    return refuse(failure.what());
   }
+  return device;
 }
 
-void destroy(void* driver) {
-  auto* device = static_cast<Device*>(driver);
-  device->api.Close(device->id);
-  dlclose(device->library);
-  delete device;
-}
-
-int describe(void* driver, haptic_driver_info* info) {
-  const auto* device = static_cast<const Device*>(driver);
-  std::memset(info, 0, sizeof *info);
-  std::snprintf(info->name, sizeof info->name, "Force Dimension %s, serial %u", device->name.c_str(),
-                static_cast<unsigned>(device->serial));
-  info->joints = 3;
-  info->dof = 3;
-  info->buttons = device->model.buttons;
-  info->capabilities = HAPTIC_DRIVER_MEASURED_RATES;  // the SDK's own velocity estimate (§1.5)
-  if (device->wrist) info->capabilities |= HAPTIC_DRIVER_ORIENTATION;
-  if (device->active_wrist && device->model.max_torque > 0.0) info->capabilities |= HAPTIC_DRIVER_TORQUE_OUTPUT;
-  if (device->active_gripper && device->model.gripper_force > 0.0) info->capabilities |= HAPTIC_DRIVER_GRIPPER;
-  info->max_force = device->model.max_force;
+void Device::describe(haptic_driver_info& info) const {
+  std::snprintf(info.name, sizeof info.name, "Force Dimension %s, serial %u", name.c_str(),
+                static_cast<unsigned>(serial));
+  info.joints = 3;
+  info.dof = 3;
+  info.buttons = model.buttons;
+  info.capabilities = HAPTIC_DRIVER_MEASURED_RATES;  // the SDK's own velocity estimate (§1.5)
+  if (wrist) info.capabilities |= HAPTIC_DRIVER_ORIENTATION;
+  if (active_wrist && model.max_torque > 0.0) info.capabilities |= HAPTIC_DRIVER_TORQUE_OUTPUT;
+  if (active_gripper && model.gripper_force > 0.0) info.capabilities |= HAPTIC_DRIVER_GRIPPER;
+  info.max_force = model.max_force;
   for (int i = 0; i < 3; ++i) {
-    info->workspace_min[i] = -device->model.workspace_radius;
-    info->workspace_max[i] = device->model.workspace_radius;
-    info->apparent_mass[i] = device->apparent_mass[i];
-    info->apparent_damping[i] = device->apparent_damping[i];
+    info.workspace_min[i] = -model.workspace_radius;
+    info.workspace_max[i] = model.workspace_radius;
+    info.apparent_mass[i] = apparent_mass[i];
+    info.apparent_damping[i] = apparent_damping[i];
   }
-  info->max_torque = device->model.max_torque;
-  info->gripper_max_force = device->model.gripper_force;
-  info->gripper_min = 0.0;
-  info->gripper_max = device->model.gripper_max;
-  return HAPTIC_DRIVER_OK;
+  info.max_torque = model.max_torque;
+  info.gripper_max_force = model.gripper_force;
+  info.gripper_min = 0.0;
+  info.gripper_max = model.gripper_max;
 }
 
-int start(void* driver) {
-  auto* device = static_cast<Device*>(driver);
-  DhdApi& api = device->api;
+int Device::start() {
   // Calibration (§1.3, DRD): a device in RESET mode is not initialized; drdAutoInit moves it to a
   // known position and resets its encoders, then the robotic controller is stopped (as CHAI3D does).
   // Only a device the DRD supports (drdIsSupported: its regulation is built in) is calibrated so;
   // for another (a Falcon) the status's RESET says whether it must be calibrated by hand.
   const bool drd = api.drdIsInitialized != nullptr && api.drdAutoInit != nullptr &&
-                   (api.drdIsSupported == nullptr || api.drdIsSupported(device->id));
+                   (api.drdIsSupported == nullptr || api.drdIsSupported(id));
   bool needs_calibration = false;
   if (drd) {
-    needs_calibration = !api.drdIsInitialized(device->id);
+    needs_calibration = !api.drdIsInitialized(id);
   } else {
     int status[kStatusSize] = {};
-    if (api.GetStatus(status, device->id) < 0) return device->failed("dhdGetStatus");
+    if (api.GetStatus(status, id) < 0) return failed("dhdGetStatus");
     needs_calibration = status[kStatusReset] != 0;
   }
   if (needs_calibration) {
-    if (!device->calibrate) {
-      device->say(HAPTIC_DRIVER_LOG_ERROR, "the device is not calibrated and params.calibrate is false");
-      device->says("the device is not calibrated and params.calibrate is false");
+    if (!calibrate) {
+      say(HAPTIC_DRIVER_LOG_ERROR, "the device is not calibrated and params.calibrate is false");
+      says("the device is not calibrated and params.calibrate is false");
       return HAPTIC_DRIVER_FAILED;
     }
     if (!drd) {
       const char* why = "the device is not calibrated (RESET mode) and the DRD cannot calibrate it "
                         "(drdIsSupported: false): calibrate it by hand as its manual says, then start again";
-      device->say(HAPTIC_DRIVER_LOG_ERROR, why);
-      device->says(why);
+      say(HAPTIC_DRIVER_LOG_ERROR, why);
+      says(why);
       return HAPTIC_DRIVER_FAILED;
     }
-    device->say(HAPTIC_DRIVER_LOG_WARNING, "calibrating: the device moves to its reset position (keep clear)");
-    if (api.drdAutoInit(device->id) < 0) return device->failed("drdAutoInit");
-    if (api.drdStop != nullptr) api.drdStop(true, device->id);
-    device->say(HAPTIC_DRIVER_LOG_INFO, "calibrated");
+    say(HAPTIC_DRIVER_LOG_WARNING, "calibrating: the device moves to its reset position (keep clear)");
+    if (api.drdAutoInit(id) < 0) return failed("drdAutoInit");
+    if (api.drdStop != nullptr) api.drdStop(true, id);
+    say(HAPTIC_DRIVER_LOG_INFO, "calibrated");
   }
-  if (api.SetGravityCompensation(device->gravity_compensation ? kDhdOn : kDhdOff, device->id) < 0) {
-    return device->failed("dhdSetGravityCompensation");
+  if (api.SetGravityCompensation(gravity_compensation ? kDhdOn : kDhdOff, id) < 0) {
+    return failed("dhdSetGravityCompensation");
   }
-  if (api.EnableForce(kDhdOn, device->id) < 0) return device->failed("dhdEnableForce");
+  if (api.EnableForce(kDhdOn, id) < 0) return failed("dhdEnableForce");
   // Zero force at once: the gravity compensation goes out with a command only (§1.6), and until
   // the loop's first write the arm would fall.
   const char* zero_call = nullptr;
-  if (device->command_zero(zero_call) < 0) return device->failed(zero_call);
-  device->forces_off.store(false);
-  device->person_off = false;
-  device->reads_since_status = 0;
-  device->commands.store(0);
-  device->saturated.store(0);
-  device->failed_code.store(0);
-  device->failed_call.store(nullptr);
-  device->say(HAPTIC_DRIVER_LOG_INFO, "forces enabled on " + device->name + (device->gravity_compensation
+  if (command_zero(zero_call) < 0) return failed(zero_call);
+  forces_off.store(false);
+  person_off = false;
+  reads_since_status = 0;
+  commands.store(0);
+  saturated.store(0);
+  failed_code.store(0);
+  failed_call.store(nullptr);
+  say(HAPTIC_DRIVER_LOG_INFO, "forces enabled on " + name + (gravity_compensation
                                                                               ? ", the SDK's gravity compensation on"
                                                                               : ", gravity compensation off"));
-  if (device->left_handed && device->gripper) {
-    device->say(HAPTIC_DRIVER_LOG_INFO, "a left-handed device: its gripper's angle and force are mirrored");
+  if (left_handed && gripper) {
+    say(HAPTIC_DRIVER_LOG_INFO, "a left-handed device: its gripper's angle and force are mirrored");
   }
   return HAPTIC_DRIVER_OK;
 }
 
-void stop(void* driver) {
-  auto* device = static_cast<Device*>(driver);
-  device->api.SetForce(0.0, 0.0, 0.0, device->id);
-  device->api.Stop(device->id);  // forces off, brakes on
-  if (const std::uint64_t saturated = device->saturated.load(); saturated > 0) {
-    device->say(HAPTIC_DRIVER_LOG_WARNING,
-                std::to_string(saturated) + " of " + std::to_string(device->commands.load()) +
-                    " force commands came back DHD_MOTOR_SATURATED: the device scaled them down (a motor "
-                    "could not deliver its share), so it applied less than hapticd reported");
+void Device::stop() {
+  api.SetForce(0.0, 0.0, 0.0, id);
+  api.Stop(id);  // forces off, brakes on
+  if (const std::uint64_t scaled = saturated.load(); scaled > 0) {
+    say(HAPTIC_DRIVER_LOG_WARNING,
+        std::to_string(scaled) + " of " + std::to_string(commands.load()) +
+            " force commands came back DHD_MOTOR_SATURATED: the device scaled them down (a motor "
+            "could not deliver its share), so it applied less than hapticd reported");
   }
 }
 
 // Each getter returns 0 or DHD_TIMEGUARD (1) on success, -1 on error (§1.4): success is >= 0.
-int read_sensors(void* driver, haptic_driver_reading* reading) {
-  auto* device = static_cast<Device*>(driver);
-  const DhdApi& api = device->api;
-  const char id = device->id;
-  reading->safe_state = 0;  // hapticd hands the same reading back each call
-  if (api.GetPosition(&reading->q[0], &reading->q[1], &reading->q[2], id) < 0) {
-    return device->failed("dhdGetPosition");
+int Device::read(haptic_driver_reading& reading) {
+  reading.safe_state = 0;  // hapticd hands the same reading back each call
+  if (api.GetPosition(&reading.q[0], &reading.q[1], &reading.q[2], id) < 0) {
+    return failed("dhdGetPosition");
   }
-  if (api.GetLinearVelocity(&reading->q_dot[0], &reading->q_dot[1], &reading->q_dot[2], id) < 0) {
-    return device->failed("dhdGetLinearVelocity");
+  if (api.GetLinearVelocity(&reading.q_dot[0], &reading.q_dot[1], &reading.q_dot[2], id) < 0) {
+    return failed("dhdGetLinearVelocity");
   }
-  if (device->wrist) {
+  if (wrist) {
     double matrix[3][3];
-    if (api.GetOrientationFrame(matrix, id) < 0) return device->failed("dhdGetOrientationFrame");
-    haptic::vendor::quaternion_of(matrix, reading->orientation_W);  // R(i,j) = matrix[i][j] (§1.6)
-    double* w = reading->angular_velocity_W;
-    if (api.GetAngularVelocityRad(&w[0], &w[1], &w[2], id) < 0) return device->failed("dhdGetAngularVelocityRad");
+    if (api.GetOrientationFrame(matrix, id) < 0) return failed("dhdGetOrientationFrame");
+    haptic::vendor::quaternion_of(matrix, reading.orientation_W);  // R(i,j) = matrix[i][j] (§1.6)
+    double* w = reading.angular_velocity_W;
+    if (api.GetAngularVelocityRad(&w[0], &w[1], &w[2], id) < 0) return failed("dhdGetAngularVelocityRad");
   } else {
-    reading->orientation_W[0] = 1.0;
+    reading.orientation_W[0] = 1.0;
   }
-  if (device->gripper) {
-    if (api.GetGripperAngleRad(&reading->gripper, id) < 0) return device->failed("dhdGetGripperAngleRad");
-    if (device->left_handed) reading->gripper = -reading->gripper;  // negative on a left hand (§1.6)
+  if (gripper) {
+    if (api.GetGripperAngleRad(&reading.gripper, id) < 0) return failed("dhdGetGripperAngleRad");
+    if (left_handed) reading.gripper = -reading.gripper;  // negative on a left hand (§1.6)
   }
-  reading->buttons = api.GetButtonMask(id);
-  reading->sequence = ++device->sequence;  // each call reads the device afresh
+  reading.buttons = api.GetButtonMask(id);
+  reading.sequence = ++sequence;  // each call reads the device afresh
   // The force state, every status_period reads, and every read while forces are off.
-  const bool off = device->forces_off.load(std::memory_order_relaxed);
-  if (!off && ++device->reads_since_status < device->status_period) return HAPTIC_DRIVER_OK;
-  device->reads_since_status = 0;
+  const bool off = forces_off.load(std::memory_order_relaxed);
+  if (!off && ++reads_since_status < status_period) return HAPTIC_DRIVER_OK;
+  reads_since_status = 0;
   int status[kStatusSize] = {};
-  if (api.GetStatus(status, id) < 0) return device->failed("dhdGetStatus");
+  if (api.GetStatus(status, id) < 0) return failed("dhdGetStatus");
   const bool on = status[kStatusForce] != 0;
   if (!off) {
     if (on) return HAPTIC_DRIVER_OK;
     // The device turned them off itself while its setters went on succeeding.
     const int cause = status[kStatusForceOffCause];
-    device->person_off = by_person(cause);
-    device->forces_off.store(true, std::memory_order_relaxed);
-    device->says(force_off_words(cause));
-    reading->safe_state = 1;
+    person_off = by_person(cause);
+    forces_off.store(true, std::memory_order_relaxed);
+    says(force_off_words(cause));
+    reading.safe_state = 1;
     return HAPTIC_DRIVER_OK;
   }
   // Forces are off: a person's are theirs to turn on; others are turned on once the hand is slow.
-  if (device->person_off) {
+  if (person_off) {
     if (!on) {
-      reading->safe_state = 1;
+      reading.safe_state = 1;
       return HAPTIC_DRIVER_OK;
     }
   } else {
     for (int i = 0; i < 3; ++i) {
-      if (!(std::fabs(reading->q_dot[i]) < device->resume_speed)) {
-        reading->safe_state = 1;
+      if (!(std::fabs(reading.q_dot[i]) < resume_speed)) {
+        reading.safe_state = 1;
         return HAPTIC_DRIVER_OK;
       }
     }
-    if (api.EnableForce(kDhdOn, id) < 0) return device->failed("dhdEnableForce");
+    if (api.EnableForce(kDhdOn, id) < 0) return failed("dhdEnableForce");
   }
   const char* zero_call = nullptr;
-  if (device->command_zero(zero_call) < 0) return device->failed(zero_call);  // zero first
-  device->person_off = false;
-  device->forces_off.store(false, std::memory_order_relaxed);
+  if (command_zero(zero_call) < 0) return failed(zero_call);  // zero first
+  person_off = false;
+  forces_off.store(false, std::memory_order_relaxed);
   return HAPTIC_DRIVER_OK;
 }
 
 // The setters return 0 or DHD_MOTOR_SATURATED (2) on success, -1 on error (§1.4).
-int write_command(void* driver, const haptic_driver_command* command, double /*dt*/) {
-  auto* device = static_cast<Device*>(driver);
-  const DhdApi& api = device->api;
-  const double* f = command->tau;
+int Device::write(const haptic_driver_command& command, double /*dt*/) {
+  const double* f = command.tau;
   int result;
-  if (device->active_wrist || device->active_gripper) {
-    const double* t = command->torque_W;
+  if (active_wrist || active_gripper) {
+    const double* t = command.torque_W;
     // A left-handed device's gripper force is mirrored as its angle is (CHAI3D negates both, §1.6).
-    const double fg = device->active_gripper ? (device->left_handed ? -1.0 : 1.0) * command->gripper_force : 0.0;
-    result = api.SetForceAndTorqueAndGripperForce(f[0], f[1], f[2], device->active_wrist ? t[0] : 0.0,
-                                                  device->active_wrist ? t[1] : 0.0,
-                                                  device->active_wrist ? t[2] : 0.0, fg, device->id);
-    if (result < 0) return device->failed("dhdSetForceAndTorqueAndGripperForce");
+    const double fg = active_gripper ? (left_handed ? -1.0 : 1.0) * command.gripper_force : 0.0;
+    result = api.SetForceAndTorqueAndGripperForce(f[0], f[1], f[2], active_wrist ? t[0] : 0.0,
+                                                  active_wrist ? t[1] : 0.0,
+                                                  active_wrist ? t[2] : 0.0, fg, id);
+    if (result < 0) return failed("dhdSetForceAndTorqueAndGripperForce");
   } else {
-    result = api.SetForce(f[0], f[1], f[2], device->id);
-    if (result < 0) return device->failed("dhdSetForce");
+    result = api.SetForce(f[0], f[1], f[2], id);
+    if (result < 0) return failed("dhdSetForce");
   }
-  device->commands.fetch_add(1, std::memory_order_relaxed);
-  if (result == kMotorSaturated) device->saturated.fetch_add(1, std::memory_order_relaxed);
+  commands.fetch_add(1, std::memory_order_relaxed);
+  if (result == kMotorSaturated) saturated.fetch_add(1, std::memory_order_relaxed);
   return HAPTIC_DRIVER_OK;
 }
 
 // Forces off, which puts the device in BRAKE mode ([FDC-DOCS] Device Modes); dhdSetBrakes alone
 // leaves a device in FORCE mode. The DHD API is thread-safe ([FDC-DOCS] Threading), so this may
 // run beside a hung read. The next read with the hand slow turns them on again, zero force first.
-void enter_safe_state(void* driver) {
-  auto* device = static_cast<Device*>(driver);
-  device->forces_off.store(true, std::memory_order_relaxed);
-  device->api.SetForce(0.0, 0.0, 0.0, device->id);
-  device->api.EnableForce(kDhdOff, device->id);
+void Device::enter_safe_state() {
+  forces_off.store(true, std::memory_order_relaxed);
+  api.SetForce(0.0, 0.0, 0.0, id);
+  api.EnableForce(kDhdOff, id);
 }
 
-void set_log(void* driver, haptic_driver_log_fn log, void* context) {
-  auto* device = static_cast<Device*>(driver);
-  device->log = log;
-  device->log_context = context;
-}
-
-int list_devices(const char* params_json, char* list, size_t size) {
-  std::string out;
-  int found = -1;
-  try {
-    const haptic::vendor::DriverParams params = read_params(params_json);
-    std::string why;
-    void* library = load_runtime(params.text("library").value_or(""), why);
-    if (library == nullptr) {
-      out = why;
-    } else {
-      DhdApi api;
-      if (const std::string missing = resolve(library, api); !missing.empty()) {
-        out = "the Force Dimension runtime lacks " + missing;
-      } else {
-        const int count = api.GetDeviceCount();
-        if (count < 0) {
-          out = "dhdGetDeviceCount: " + vendor_error(api);
-        } else {
-          found = count;
-          for (int index = 0; index < count; ++index) {
-            const int id = api.OpenID(static_cast<char>(index));
-            std::string description = "(in use or unreadable: " + vendor_error(api) + ")";
-            if (id >= 0) {
-              ushort serial = 0;
-              api.GetSerialNumber(&serial, static_cast<char>(id));
-              const char* name = api.GetSystemName(static_cast<char>(id));
-              description = std::string("Force Dimension ") + (name != nullptr ? name : "device") +
-                            ", serial " + std::to_string(serial);
-              api.Close(static_cast<char>(id));
-            }
-            out += "{\"index\": " + std::to_string(index) + "}\t" + description + "\n";
-          }
-        }
-      }
-      dlclose(library);
-    }
-  } catch (const std::exception& failure) {
-    out = failure.what();
+int Device::list_devices(const haptic::vendor::DriverParams& params, std::string& out) {
+  DhdApi api;
+  const haptic::vendor::LoadedLibrary library =
+      haptic::vendor::open_runtime(params.text("library").value_or(""), runtime_search(), api, resolve);
+  const int count = api.GetDeviceCount();
+  if (count < 0) {
+    out = "dhdGetDeviceCount: " + vendor_error(api);
+    return -1;
   }
-  std::snprintf(list, size, "%s", out.c_str());
-  return found;
+  for (int index = 0; index < count; ++index) {
+    const int id = api.OpenID(static_cast<char>(index));
+    std::string description = "(in use or unreadable: " + vendor_error(api) + ")";
+    if (id >= 0) {
+      ushort serial = 0;
+      api.GetSerialNumber(&serial, static_cast<char>(id));
+      const char* name = api.GetSystemName(static_cast<char>(id));
+      description = std::string("Force Dimension ") + (name != nullptr ? name : "device") + ", serial " +
+                    std::to_string(serial);
+      api.Close(static_cast<char>(id));
+    }
+    out += "{\"index\": " + std::to_string(index) + "}\t" + description + "\n";
+  }
+  return count;
 }
 
-void last_error(void* driver, char* error) {
-  const auto* device = static_cast<const Device*>(driver);
-  const char* call = device->failed_call.load(std::memory_order_acquire);
+void Device::last_error(char* error) const {
+  const char* call = failed_call.load(std::memory_order_acquire);
   if (call == nullptr) {
     error[0] = '\0';
     return;
   }
-  const int code = device->failed_code.load(std::memory_order_relaxed);
+  const int code = failed_code.load(std::memory_order_relaxed);
   if (code == 0) {  // this driver's own words (a refusal, a force-off cause), not a runtime error
     std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", call);
     return;
   }
-  const char* text = device->api.ErrorGetStr(code);  // a fixed string of the runtime's
+  const char* text = api.ErrorGetStr(code);  // a fixed string of the runtime's
   std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s: %s (DHD error %d)", call,
                 text != nullptr ? text : "error", code);
 }
 
-const haptic_driver_api kApi = {
-    HAPTIC_DRIVER_ABI_VERSION,
-    sizeof(haptic_driver_info),
-    sizeof(haptic_driver_reading),
-    sizeof(haptic_driver_command),
-    create,
-    destroy,
-    describe,
-    start,
-    stop,
-    read_sensors,
-    write_command,
-    enter_safe_state,
-    nullptr,  // server-clocked: the SDK has no servo callback to hand the loop
-    set_log,
-    list_devices,
-    last_error,
-};
-
 }  // namespace
 
-extern "C" HAPTIC_DRIVER_EXPORT const haptic_driver_api* haptic_driver_entry(void) { return &kApi; }
+HAPTIC_VENDOR_DRIVER(Device)

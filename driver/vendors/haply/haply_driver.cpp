@@ -48,7 +48,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/driver_params.hpp"
-#include "common/entry_guard.hpp"
+#include "common/driver_adapter.hpp"
 
 namespace {
 
@@ -166,7 +166,15 @@ class Connection {
   std::uint64_t received_ = 0;
 };
 
-struct Device {
+/// One Inverse3 (and its grip) through the service: the driver's device (common/driver_adapter.hpp).
+struct Device : haptic::vendor::VendorDevice {
+  static constexpr const char* kParams[] = {"url",           "device_id",        "grip_id",
+                                            "force_key",     "max_force",        "workspace_radius",
+                                            "reply_timeout_ms", "apparent_mass", "apparent_damping"};
+  static constexpr bool kDeviceClocked = false;  // the service answers each message: no clock to lend
+
+  HAPTIC_VENDOR_DEVICE(Device);
+
   std::string url, device_id, grip_id, grip_kind, force_key = "vector";
   double max_force = 3.0, workspace_radius = 0.10;
   double centre_W[3] = {0, 0, 0};
@@ -179,13 +187,15 @@ struct Device {
   // Whether the session's configuration went out: the loop's write and another thread's
   // enter_safe_state may build a message at once, and exactly one of them must carry it.
   std::atomic<bool> session_sent{false};
+  // Each enter_safe_state moves it on, under `send_mutex` with its message: a write that began
+  // before it (a late one, beside hapticd's watchdog) sends nothing after the safe state's message.
+  std::atomic<std::uint64_t> safe_epoch{0};
+  std::mutex send_mutex;
   // The newest sample, from the service's newest answer.
   double position_W[3] = {0, 0, 0}, velocity_W[3] = {0, 0, 0}, orientation_W[4] = {1, 0, 0, 0};
   std::uint32_t buttons = 0;
   std::string failure;  // the most recent failure, for last_error (written and read under `failure_mutex`)
-  std::mutex failure_mutex;
-  haptic_driver_log_fn log = nullptr;
-  void* log_context = nullptr;
+  mutable std::mutex failure_mutex;
 
   void fail(const std::string& why) {
     std::lock_guard lock(failure_mutex);
@@ -272,249 +282,172 @@ std::string probe(Device& device) {
   return command_message(device, {{"probe_position", Json::object()}});
 }
 
-/// The params this driver takes (header comment), refusing any other.
-haptic::vendor::DriverParams read_params(const char* params_json) {
-  return haptic::vendor::DriverParams(params_json, {"url", "device_id", "grip_id", "force_key", "max_force",
-                                                    "workspace_radius", "reply_timeout_ms", "apparent_mass",
-                                                    "apparent_damping"});
-}
-
-void* create(const char* params_json, char* error) {
-  auto refuse = [error](const std::string& why) -> void* {
-    std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", why.c_str());
-    return nullptr;
-  };
-  try {
-    const haptic::vendor::DriverParams params = read_params(params_json);
-    auto device = std::make_unique<Device>();
-    device->url = params.text("url").value_or(kDefaultUrl);
-    device->force_key = params.text("force_key").value_or("vector");
-    if (device->force_key != "vector" && device->force_key != "values") {
-      return refuse("params.force_key: \"vector\" or \"values\", got \"" + device->force_key + "\"");
-    }
-    device->max_force = params.number("max_force").value_or(3.0);
-    device->workspace_radius = params.number("workspace_radius").value_or(0.10);
-    if (!(device->max_force > 0.0) || !(device->workspace_radius > 0.0)) {
-      return refuse("params.max_force and params.workspace_radius must be > 0");
-    }
-    device->reply_timeout = std::chrono::microseconds(
-        static_cast<long>(1000.0 * params.number("reply_timeout_ms").value_or(5.0)));
-    if (auto m = params.triple("apparent_mass")) std::copy(m->begin(), m->end(), device->apparent_mass);
-    if (auto b = params.triple("apparent_damping")) std::copy(b->begin(), b->end(), device->apparent_damping);
-    device->connection = std::make_unique<Connection>();
-    if (std::string why = device->connection->open(device->url, std::chrono::milliseconds(2000)); !why.empty()) {
-      return refuse(why + ": is the Haply Inverse Service running (Haply Hub, or systemctl start "
-                          "haply-inverse-service)?");
-    }
-    // The inventory comes first (§3.2): choose the devices from it.
-    std::string text;
-    if (!device->connection->wait_newer(device->seen, std::chrono::seconds(2), text)) {
-      return refuse("the Haply Inverse Service at " + device->url + " sent no inventory within 2 s");
-    }
-    const Json inventory = Json::parse(text, nullptr, /*allow_exceptions=*/false);
-    if (inventory.is_discarded() || !inventory.is_object()) {
-      return refuse("the Haply Inverse Service's inventory is not a JSON object");
-    }
-    const std::string first = first_id(inventory, "inverse3");
-    if (first.empty()) return refuse("the Haply Inverse Service lists no Inverse3: is one connected and powered?");
-    device->device_id = params.text("device_id").value_or(first);
-    if (find_device(inventory, "inverse3", device->device_id) == nullptr) {
-      std::string ids;
-      for (const Json& arm : inventory["inverse3"]) ids += (ids.empty() ? "" : ", ") + arm.value("device_id", std::string());
-      return refuse("params.device_id \"" + device->device_id + "\": the service lists " + ids);
-    }
-    if (auto grip = params.text("grip_id")) {
-      device->grip_id = *grip;
-      device->grip_kind = find_device(inventory, "wireless_verse_grip", *grip) != nullptr ? "wireless_verse_grip"
-                                                                                           : "verse_grip";
-    } else {
-      for (const char* kind : {"wireless_verse_grip", "verse_grip"}) {
-        if (std::string id = first_id(inventory, kind); !id.empty()) {
-          device->grip_id = id;
-          device->grip_kind = kind;
-          break;
-        }
+std::unique_ptr<Device> Device::open(const haptic::vendor::DriverParams& params) {
+  using haptic::vendor::Refusal;
+  auto device = std::make_unique<Device>();
+  device->url = params.text("url").value_or(kDefaultUrl);
+  device->force_key = params.text("force_key").value_or("vector");
+  if (device->force_key != "vector" && device->force_key != "values") {
+    throw Refusal("params.force_key: \"vector\" or \"values\", got \"" + device->force_key + "\"");
+  }
+  device->max_force = params.number("max_force").value_or(3.0);
+  device->workspace_radius = params.number("workspace_radius").value_or(0.10);
+  if (!(device->max_force > 0.0) || !(device->workspace_radius > 0.0)) {
+    throw Refusal("params.max_force and params.workspace_radius must be > 0");
+  }
+  device->reply_timeout = std::chrono::microseconds(
+      static_cast<long>(1000.0 * params.number("reply_timeout_ms").value_or(5.0)));
+  if (auto m = params.triple("apparent_mass")) std::copy(m->begin(), m->end(), device->apparent_mass);
+  if (auto b = params.triple("apparent_damping")) std::copy(b->begin(), b->end(), device->apparent_damping);
+  device->connection = std::make_unique<Connection>();
+  if (std::string why = device->connection->open(device->url, std::chrono::milliseconds(2000)); !why.empty()) {
+    throw Refusal(why + ": is the Haply Inverse Service running (Haply Hub, or systemctl start "
+                        "haply-inverse-service)?");
+  }
+  // The inventory comes first (§3.2): choose the devices from it.
+  std::string text;
+  if (!device->connection->wait_newer(device->seen, std::chrono::seconds(2), text)) {
+    throw Refusal("the Haply Inverse Service at " + device->url + " sent no inventory within 2 s");
+  }
+  const Json inventory = Json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (inventory.is_discarded() || !inventory.is_object()) {
+    throw Refusal("the Haply Inverse Service's inventory is not a JSON object");
+  }
+  const std::string first = first_id(inventory, "inverse3");
+  if (first.empty()) throw Refusal("the Haply Inverse Service lists no Inverse3: is one connected and powered?");
+  device->device_id = params.text("device_id").value_or(first);
+  if (find_device(inventory, "inverse3", device->device_id) == nullptr) {
+    std::string ids;
+    for (const Json& arm : inventory["inverse3"]) ids += (ids.empty() ? "" : ", ") + arm.value("device_id", std::string());
+    throw Refusal("params.device_id \"" + device->device_id + "\": the service lists " + ids);
+  }
+  if (auto grip = params.text("grip_id")) {
+    device->grip_id = *grip;
+    device->grip_kind = find_device(inventory, "wireless_verse_grip", *grip) != nullptr ? "wireless_verse_grip"
+                                                                                         : "verse_grip";
+  } else {
+    for (const char* kind : {"wireless_verse_grip", "verse_grip"}) {
+      if (std::string id = first_id(inventory, kind); !id.empty()) {
+        device->grip_id = id;
+        device->grip_kind = kind;
+        break;
       }
     }
-    if (!take(*device, text)) {
-      std::lock_guard lock(device->failure_mutex);
-      return refuse(device->failure);
-    }
-    std::copy(device->position_W, device->position_W + 3, device->centre_W);
-    return device.release();
-  } catch (const std::exception& failure) {
-    return refuse(failure.what());
+  }
+  if (!take(*device, text)) {
+    std::lock_guard lock(device->failure_mutex);
+    throw Refusal(device->failure);
+  }
+  std::copy(device->position_W, device->position_W + 3, device->centre_W);
+  return device;
+}
+
+void Device::describe(haptic_driver_info& info) const {
+  std::snprintf(info.name, sizeof info.name, "Haply Inverse3 %s%s%s", device_id.c_str(),
+                grip_id.empty() ? "" : " with VerseGrip ", grip_id.c_str());
+  info.joints = 3;
+  info.dof = 3;
+  info.buttons = grip_id.empty() ? 0 : (grip_kind == "wireless_verse_grip" ? 3 : 1);
+  info.capabilities = HAPTIC_DRIVER_MEASURED_RATES;  // the service's cursor velocity
+  if (!grip_id.empty()) info.capabilities |= HAPTIC_DRIVER_ORIENTATION;
+  info.max_force = max_force;
+  for (int i = 0; i < 3; ++i) {
+    info.workspace_min[i] = centre_W[i] - workspace_radius;
+    info.workspace_max[i] = centre_W[i] + workspace_radius;
+    info.apparent_mass[i] = apparent_mass[i];
+    info.apparent_damping[i] = apparent_damping[i];
   }
 }
 
-/// An entry point's body, so that nothing it throws crosses the C ABI: the failure is the
-/// device's, said through last_error (common/entry_guard.hpp).
-template <typename Body>
-int guarded(Device& device, Body&& body) noexcept {
-  return haptic::vendor::guarded([&device](const std::string& why) { device.fail(why); }, body);
-}
-template <typename Body>
-void guarded_void(Device& device, Body&& body) noexcept {
-  haptic::vendor::guarded_void([&device](const std::string& why) { device.fail(why); }, body);
-}
-
-void destroy(void* driver) { delete static_cast<Device*>(driver); }
-
-int describe(void* driver, haptic_driver_info* info) {
-  auto* device = static_cast<Device*>(driver);
-  return guarded(*device, [&] {
-    std::memset(info, 0, sizeof *info);
-    std::snprintf(info->name, sizeof info->name, "Haply Inverse3 %s%s%s", device->device_id.c_str(),
-                  device->grip_id.empty() ? "" : " with VerseGrip ", device->grip_id.c_str());
-    info->joints = 3;
-    info->dof = 3;
-    info->buttons = device->grip_id.empty() ? 0 : (device->grip_kind == "wireless_verse_grip" ? 3 : 1);
-    info->capabilities = HAPTIC_DRIVER_MEASURED_RATES;  // the service's cursor velocity
-    if (!device->grip_id.empty()) info->capabilities |= HAPTIC_DRIVER_ORIENTATION;
-    info->max_force = device->max_force;
-    for (int i = 0; i < 3; ++i) {
-      info->workspace_min[i] = device->centre_W[i] - device->workspace_radius;
-      info->workspace_max[i] = device->centre_W[i] + device->workspace_radius;
-      info->apparent_mass[i] = device->apparent_mass[i];
-      info->apparent_damping[i] = device->apparent_damping[i];
-    }
-    return HAPTIC_DRIVER_OK;
-  });
-}
-
-int start(void* driver) {
-  auto* device = static_cast<Device*>(driver);
-  return guarded(*device, [&] {
-    if (!device->connection->send(probe(*device))) {  // the first state comes back for the first read
-      device->fail("the Haply Inverse Service closed the connection");
-      return HAPTIC_DRIVER_FAILED;
-    }
-    if (device->log != nullptr) {
-      device->log(device->log_context, HAPTIC_DRIVER_LOG_INFO,
-                  ("driving Inverse3 " + device->device_id + " through " + device->url).c_str());
-    }
-    return HAPTIC_DRIVER_OK;
-  });
-}
-
-void stop(void* driver) {
-  auto* device = static_cast<Device*>(driver);
-  guarded_void(*device, [&] {
-    device->connection->send(probe(*device));  // a message without a force: the device idles (§3.3)
-  });
-}
-
-int read_sensors(void* driver, haptic_driver_reading* reading) {
-  auto* device = static_cast<Device*>(driver);
-  return guarded(*device, [&] {
-    std::string text;
-    // The answer to the last message (the previous tick's force, or start's probe).
-    if (device->connection->wait_newer(device->seen, device->reply_timeout, text)) {
-      if (!take(*device, text)) return HAPTIC_DRIVER_FAILED;
-      ++device->sequence;  // a new sample; none new leaves it, and hapticd calls that stale
-    } else if (!device->connection->connected()) {
-      device->fail("the Haply Inverse Service closed the connection");
-      return HAPTIC_DRIVER_FAILED;
-    }
-    for (int i = 0; i < 3; ++i) {
-      reading->q[i] = device->position_W[i];
-      reading->q_dot[i] = device->velocity_W[i];
-    }
-    std::memcpy(reading->orientation_W, device->orientation_W, sizeof device->orientation_W);
-    reading->buttons = device->buttons;
-    reading->sequence = device->sequence;
-    return HAPTIC_DRIVER_OK;
-  });
-}
-
-int write_command(void* driver, const haptic_driver_command* command, double /*dt*/) {
-  auto* device = static_cast<Device*>(driver);
-  return guarded(*device, [&] {
-    // W to Haply's frame: X = y_W, Y = -x_W, Z = z_W.
-    const Json force = {{"x", command->tau[1]}, {"y", -command->tau[0]}, {"z", command->tau[2]}};
-    Json commands = {{"set_cursor_force", {{device->force_key, force}}}};
-    if (!device->connection->send(command_message(*device, std::move(commands)))) {
-      device->fail("the Haply Inverse Service closed the connection");
-      return HAPTIC_DRIVER_FAILED;
-    }
-    return HAPTIC_DRIVER_OK;
-  });
-}
-
-void enter_safe_state(void* driver) {
-  auto* device = static_cast<Device*>(driver);
-  guarded_void(*device, [&] {
-    // A message without a force: commands are per message, so the device idles (§3.3).
-    device->connection->send(probe(*device));
-  });
-}
-
-void set_log(void* driver, haptic_driver_log_fn log, void* context) {
-  auto* device = static_cast<Device*>(driver);
-  device->log = log;
-  device->log_context = context;
-}
-
-int list_devices(const char* params_json, char* list, size_t size) {
-  std::string out;
-  int found = -1;
-  try {
-    const haptic::vendor::DriverParams params = read_params(params_json);
-    const std::string url = params.text("url").value_or(kDefaultUrl);
-    Connection connection;
-    if (std::string why = connection.open(url, std::chrono::milliseconds(1000)); !why.empty()) {
-      out = why + ": start the Haply Inverse Service (Haply Hub)";
-    } else {
-      std::string text;
-      std::uint64_t seen = 0;
-      if (!connection.wait_newer(seen, std::chrono::seconds(1), text)) {
-        out = "the service at " + url + " sent no inventory";
-      } else {
-        const Json inventory = Json::parse(text, nullptr, /*allow_exceptions=*/false);
-        found = 0;
-        if (inventory.is_object() && inventory.contains("inverse3") && inventory["inverse3"].is_array()) {
-          for (const Json& arm : inventory["inverse3"]) {
-            const std::string id = arm.value("device_id", std::string());
-            const std::string hand = member(arm, "config").value("handedness", std::string("?"));
-            out += "{\"device_id\": \"" + id + "\"}\tHaply Inverse3 " + id + " (" + hand + "-handed)\n";
-            ++found;
-          }
-        }
-      }
-    }
-  } catch (const std::exception& failure) {
-    out = failure.what();
-    found = -1;
+int Device::start() {
+  if (!connection->send(probe(*this))) {  // the first state comes back for the first read
+    fail("the Haply Inverse Service closed the connection");
+    return HAPTIC_DRIVER_FAILED;
   }
-  std::snprintf(list, size, "%s", out.c_str());
+  say(HAPTIC_DRIVER_LOG_INFO, "driving Inverse3 " + device_id + " through " + url);
+  return HAPTIC_DRIVER_OK;
+}
+
+void Device::stop() {
+  connection->send(probe(*this));  // a message without a force: the device idles (§3.3)
+}
+
+int Device::read(haptic_driver_reading& reading) {
+  std::string text;
+  // The answer to the last message (the previous tick's force, or start's probe).
+  if (connection->wait_newer(seen, reply_timeout, text)) {
+    if (!take(*this, text)) return HAPTIC_DRIVER_FAILED;
+    ++sequence;  // a new sample; none new leaves it, and hapticd calls that stale
+  } else if (!connection->connected()) {
+    fail("the Haply Inverse Service closed the connection");
+    return HAPTIC_DRIVER_FAILED;
+  }
+  for (int i = 0; i < 3; ++i) {
+    reading.q[i] = position_W[i];
+    reading.q_dot[i] = velocity_W[i];
+  }
+  std::memcpy(reading.orientation_W, orientation_W, sizeof orientation_W);
+  reading.buttons = buttons;
+  reading.sequence = sequence;
+  return HAPTIC_DRIVER_OK;
+}
+
+int Device::write(const haptic_driver_command& command, double /*dt*/) {
+  const std::uint64_t epoch = safe_epoch.load(std::memory_order_acquire);
+  // W to Haply's frame: X = y_W, Y = -x_W, Z = z_W.
+  const Json force = {{"x", command.tau[1]}, {"y", -command.tau[0]}, {"z", command.tau[2]}};
+  Json commands = {{"set_cursor_force", {{force_key, force}}}};
+  const std::string message = command_message(*this, std::move(commands));
+  std::lock_guard lock(send_mutex);
+  // The safe state came while this write was being made: its force is not to follow it (driver.h).
+  if (safe_epoch.load(std::memory_order_relaxed) != epoch) return HAPTIC_DRIVER_OK;
+  if (!connection->send(message)) {
+    fail("the Haply Inverse Service closed the connection");
+    return HAPTIC_DRIVER_FAILED;
+  }
+  return HAPTIC_DRIVER_OK;
+}
+
+void Device::enter_safe_state() {
+  // A message without a force: commands are per message, so the device idles (§3.3) until the
+  // next write.
+  const std::string message = probe(*this);
+  std::lock_guard lock(send_mutex);
+  safe_epoch.fetch_add(1, std::memory_order_acq_rel);
+  connection->send(message);
+}
+
+int Device::list_devices(const haptic::vendor::DriverParams& params, std::string& out) {
+  const std::string url = params.text("url").value_or(kDefaultUrl);
+  Connection connection;
+  if (std::string why = connection.open(url, std::chrono::milliseconds(1000)); !why.empty()) {
+    out = why + ": start the Haply Inverse Service (Haply Hub)";
+    return -1;
+  }
+  std::string text;
+  std::uint64_t seen = 0;
+  if (!connection.wait_newer(seen, std::chrono::seconds(1), text)) {
+    out = "the service at " + url + " sent no inventory";
+    return -1;
+  }
+  const Json inventory = Json::parse(text, nullptr, /*allow_exceptions=*/false);
+  int found = 0;
+  if (inventory.is_object() && inventory.contains("inverse3") && inventory["inverse3"].is_array()) {
+    for (const Json& arm : inventory["inverse3"]) {
+      const std::string id = arm.value("device_id", std::string());
+      const std::string hand = member(arm, "config").value("handedness", std::string("?"));
+      out += "{\"device_id\": \"" + id + "\"}\tHaply Inverse3 " + id + " (" + hand + "-handed)\n";
+      ++found;
+    }
+  }
   return found;
 }
 
-void last_error(void* driver, char* error) {
-  auto* device = static_cast<Device*>(driver);
-  std::lock_guard lock(device->failure_mutex);
-  std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", device->failure.c_str());
+void Device::last_error(char* error) const {
+  std::lock_guard lock(failure_mutex);
+  std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", failure.c_str());
 }
-
-const haptic_driver_api kApi = {
-    HAPTIC_DRIVER_ABI_VERSION,
-    sizeof(haptic_driver_info),
-    sizeof(haptic_driver_reading),
-    sizeof(haptic_driver_command),
-    create,
-    destroy,
-    describe,
-    start,
-    stop,
-    read_sensors,
-    write_command,
-    enter_safe_state,
-    nullptr,  // server-clocked: the service answers each message, it has no clock to lend
-    set_log,
-    list_devices,
-    last_error,
-};
 
 }  // namespace
 
-extern "C" HAPTIC_DRIVER_EXPORT const haptic_driver_api* haptic_driver_entry(void) { return &kApi; }
+HAPTIC_VENDOR_DRIVER(Device)

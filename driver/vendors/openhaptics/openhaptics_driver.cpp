@@ -31,7 +31,6 @@
 //             one's own identification (3D Systems publishes none; default unknown)
 #include <haptic/driver.h>
 
-#include <dlfcn.h>
 #include <time.h>
 
 #include <algorithm>
@@ -47,7 +46,7 @@
 #include <string>
 #include <vector>
 
-#include "common/driver_params.hpp"
+#include "common/driver_adapter.hpp"
 #include "common/vendor_runtime.hpp"
 
 namespace {
@@ -91,61 +90,48 @@ constexpr int kStyleAuto = 2;                       // HD_CALIBRATION_AUTO
 constexpr int kStyleInkwell = 4;                    // HD_CALIBRATION_INKWELL
 constexpr int kButtonCount = 2;                     // HD_DEVICE_BUTTON_1/_2 on a Touch's stylus
 
+// The HDAPI's functions as declared from §2.2-§2.3, one list: X(return type, name, parameters);
+// the symbol is "hd" + name.
+#define HD_REQUIRED(X)                                                        \
+  X(HHD, InitDevice, (HDstring config_name))                                  \
+  X(void, DisableDevice, (HHD handle))                                        \
+  X(void, MakeCurrentDevice, (HHD handle))                                    \
+  X(void, BeginFrame, (HHD handle))                                           \
+  X(void, EndFrame, (HHD handle))                                             \
+  X(HDErrorInfo, GetError, ())                                                \
+  X(HDstring, GetErrorString, (HDerror code))                                 \
+  X(void, Enable, (HDenum cap))                                               \
+  X(void, Disable, (HDenum cap))                                              \
+  X(void, GetIntegerv, (HDenum name, int* values))                            \
+  X(void, GetDoublev, (HDenum name, double* values))                          \
+  X(HDstring, GetString, (HDenum name))                                       \
+  X(void, SetDoublev, (HDenum name, const double* values))                    \
+  X(HDenum, CheckCalibration, ())                                             \
+  X(void, UpdateCalibration, (HDenum style))                                  \
+  X(void, StartScheduler, ())                                                 \
+  X(void, StopScheduler, ())                                                  \
+  X(void, SetSchedulerRate, (unsigned long rate))                             \
+  X(HDSchedulerHandle, ScheduleAsynchronous,                                  \
+    (HDSchedulerCallback callback, void* user_data, unsigned short priority)) \
+  X(void, Unschedule, (HDSchedulerHandle handle))
+
 struct HdApi {
-  HHD (*InitDevice)(HDstring config_name) = nullptr;
-  void (*DisableDevice)(HHD handle) = nullptr;
-  void (*MakeCurrentDevice)(HHD handle) = nullptr;
-  void (*BeginFrame)(HHD handle) = nullptr;
-  void (*EndFrame)(HHD handle) = nullptr;
-  HDErrorInfo (*GetError)() = nullptr;
-  HDstring (*GetErrorString)(HDerror code) = nullptr;
-  void (*Enable)(HDenum cap) = nullptr;
-  void (*Disable)(HDenum cap) = nullptr;
-  void (*GetIntegerv)(HDenum name, int* values) = nullptr;
-  void (*GetDoublev)(HDenum name, double* values) = nullptr;
-  HDstring (*GetString)(HDenum name) = nullptr;
-  void (*SetDoublev)(HDenum name, const double* values) = nullptr;
-  HDenum (*CheckCalibration)() = nullptr;
-  void (*UpdateCalibration)(HDenum style) = nullptr;
-  void (*StartScheduler)() = nullptr;
-  void (*StopScheduler)() = nullptr;
-  void (*SetSchedulerRate)(unsigned long rate) = nullptr;
-  HDSchedulerHandle (*ScheduleAsynchronous)(HDSchedulerCallback callback, void* user_data,
-                                            unsigned short priority) = nullptr;
-  void (*Unschedule)(HDSchedulerHandle handle) = nullptr;
+  HD_REQUIRED(HAPTIC_RUNTIME_FUNCTION)
 };
 
-void* load_runtime(const std::string& wanted, std::string& error) {
-  return haptic::vendor::load_runtime(wanted, {"libHD.so", "libHD.so.3.4", "libHD.so.3.4.0", "libHD.so.3.0"},
-                                      "OpenHaptics runtime",
-                                      "install OpenHaptics (libHD.so in /usr/lib) and the device's driver "
-                                      "(Touch: libPhantomIOLib42.so, GTDD_HOME)",
-                                      error);
+/// Where the runtime is looked for (§2.1) and what to install when it is not there.
+haptic::vendor::RuntimeSearch runtime_search() {
+  return {{"libHD.so", "libHD.so.3.4", "libHD.so.3.4.0", "libHD.so.3.0"},
+          "OpenHaptics runtime",
+          "install OpenHaptics (libHD.so in /usr/lib) and the device's driver (Touch: libPhantomIOLib42.so, "
+          "GTDD_HOME)"};
 }
 
 std::string resolve(void* library, HdApi& api) {
   haptic::vendor::Symbols symbols(library);
-  auto need = [&symbols](auto& slot, const char* name) { symbols.need(slot, name); };
-  need(api.InitDevice, "hdInitDevice");
-  need(api.DisableDevice, "hdDisableDevice");
-  need(api.MakeCurrentDevice, "hdMakeCurrentDevice");
-  need(api.BeginFrame, "hdBeginFrame");
-  need(api.EndFrame, "hdEndFrame");
-  need(api.GetError, "hdGetError");
-  need(api.GetErrorString, "hdGetErrorString");
-  need(api.Enable, "hdEnable");
-  need(api.Disable, "hdDisable");
-  need(api.GetIntegerv, "hdGetIntegerv");
-  need(api.GetDoublev, "hdGetDoublev");
-  need(api.GetString, "hdGetString");
-  need(api.SetDoublev, "hdSetDoublev");
-  need(api.CheckCalibration, "hdCheckCalibration");
-  need(api.UpdateCalibration, "hdUpdateCalibration");
-  need(api.StartScheduler, "hdStartScheduler");
-  need(api.StopScheduler, "hdStopScheduler");
-  need(api.SetSchedulerRate, "hdSetSchedulerRate");
-  need(api.ScheduleAsynchronous, "hdScheduleAsynchronous");
-  need(api.Unschedule, "hdUnschedule");
+#define NEED_HD(type, name, params) symbols.need(api.name, "hd" #name);
+  HD_REQUIRED(NEED_HD)
+#undef NEED_HD
   return symbols.missing();
 }
 
@@ -209,8 +195,31 @@ struct Sample {
   std::uint64_t tick = 0;
 };
 
-struct Device {
-  void* library = nullptr;
+/// The failure code the servo thread records when a runtime call threw (no HD error is 0xffff).
+constexpr HDerror kRuntimeThrew = 0xffff;
+
+/// One device through the runtime's scheduler: the driver's device (common/driver_adapter.hpp).
+struct Device : haptic::vendor::VendorDevice {
+  static constexpr const char* kParams[] = {"library",   "device",        "rate",
+                                            "calibrate", "apparent_mass", "apparent_damping"};
+  static constexpr bool kDeviceClocked = true;  // run_servo: hapticd's tick inside the callback
+
+  HAPTIC_VENDOR_DEVICE(Device);
+  int run_servo(haptic_driver_tick_fn tick, void* context);
+
+  ~Device() {
+    if (handle != kInvalidHandle) haptic::vendor::quietly([this] { api.DisableDevice(handle); });
+  }
+
+  /// The safe state on (enter_safe_state, stop): zero force from the next frame, a new epoch.
+  void hold_safe() {
+    std::uint64_t word = safe_word.load(std::memory_order_relaxed);
+    while (!safe_word.compare_exchange_weak(word, (((word >> 1) + 1) << 1) | 1u, std::memory_order_acq_rel)) {
+    }
+  }
+  bool safe() const { return (safe_word.load(std::memory_order_acquire) & 1u) != 0; }
+
+  haptic::vendor::LoadedLibrary library;  // declared first: closed after the destructor's hdDisableDevice
   HdApi api;
   HHD handle = kInvalidHandle;
   std::string config_name, model, serial;
@@ -220,8 +229,6 @@ struct Device {
   double rate_hz = 1000.0;
   bool calibrate = true;
   double apparent_mass[3] = {0, 0, 0}, apparent_damping[3] = {0, 0, 0};
-  haptic_driver_log_fn log = nullptr;
-  void* log_context = nullptr;
 
   HDSchedulerHandle servo = 0;
   bool scheduled = false;
@@ -229,7 +236,10 @@ struct Device {
   std::atomic<std::uint64_t> sample_version{0};
   Sample sample;
   std::atomic<std::uint64_t> force_bits[3] = {{0}, {0}, {0}};
-  std::atomic<bool> safe{false};       // enter_safe_state: zero force until the next write
+  // Bit 0: the safe state holds (zero force until the next write); above it, how many times it
+  // was entered, so that a write that began before the latest enter_safe_state (a late one, beside
+  // hapticd's watchdog) does not end it.
+  std::atomic<std::uint64_t> safe_word{0};
   std::atomic<bool> failed{false};     // the runtime reported an error on the servo thread
   std::atomic<HDerror> failed_code{kSuccess};
   std::uint64_t ticks = 0;              // servo ticks (servo thread only)
@@ -240,10 +250,6 @@ struct Device {
   std::mutex servo_mutex;
   std::condition_variable servo_done;
   bool servo_finished = false;
-
-  void say(int level, const std::string& message) const {
-    if (log != nullptr) log(log_context, level, message.c_str());
-  }
 };
 
 double load_double(const std::atomic<std::uint64_t>& bits) {
@@ -258,10 +264,18 @@ void store_double(std::atomic<std::uint64_t>& bits, double value) {
   bits.store(raw, std::memory_order_relaxed);
 }
 
-/// The scheduler's callback, once per servo tick on its thread (§2.3): the frame's state into the
-/// sample, hapticd's tick where device-clocked, the newest force out.
-HDCallbackCode servo_tick(void* user_data) {
-  auto* device = static_cast<Device*>(user_data);
+/// hapticd's tick, device-clocked (none server-clocked): true when run_servo is to end.
+bool tick_hapticd(Device* device) {
+  haptic_driver_tick_fn tick = device->tick_fn.load(std::memory_order_acquire);
+  if (tick == nullptr) return false;
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return tick(device->tick_context, static_cast<int64_t>(now.tv_sec) * 1000000000LL + now.tv_nsec) != 0;
+}
+
+/// One servo frame: its state into the sample, hapticd's tick where device-clocked (`ticked` then),
+/// the newest force out. True when run_servo is to end.
+bool servo_frame(Device* device, bool& ticked) {
   const HdApi& api = device->api;
   api.BeginFrame(device->handle);
   double position[3] = {0, 0, 0}, velocity[3] = {0, 0, 0}, angular[3] = {0, 0, 0};
@@ -296,14 +310,10 @@ HDCallbackCode servo_tick(void* user_data) {
   }
   // Device-clocked: hapticd's tick, between the state and the force (a failed frame too, so the
   // loop sees the fault).
-  bool stop = false;
-  if (haptic_driver_tick_fn tick = device->tick_fn.load(std::memory_order_acquire)) {
-    timespec now{};
-    clock_gettime(CLOCK_MONOTONIC, &now);
-    stop = tick(device->tick_context, static_cast<int64_t>(now.tv_sec) * 1000000000LL + now.tv_nsec) != 0;
-  }
+  ticked = true;
+  const bool stop = tick_hapticd(device);
   double force_w[3] = {0, 0, 0};
-  if (!device->safe.load(std::memory_order_acquire) && !device->failed.load(std::memory_order_acquire)) {
+  if (!device->safe() && !device->failed.load(std::memory_order_acquire)) {
     for (int i = 0; i < 3; ++i) force_w[i] = load_double(device->force_bits[i]);
   }
   double force_hd[3];
@@ -316,6 +326,23 @@ HDCallbackCode servo_tick(void* user_data) {
     device->failed.store(true, std::memory_order_release);
     clear_errors(api);
   }
+  return stop;
+}
+
+/// The scheduler's callback, once per servo tick on its thread (§2.3). A runtime call that throws
+/// fails the device (as a frame the runtime could not read does) rather than ending the process on
+/// the vendor's thread; hapticd's tick still runs, so the loop sees the fault.
+HDCallbackCode servo_tick(void* user_data) {
+  auto* device = static_cast<Device*>(user_data);
+  bool ticked = false;
+  bool stop = false;
+  try {
+    stop = servo_frame(device, ticked);
+  } catch (...) {
+    device->failed_code.store(kRuntimeThrew, std::memory_order_relaxed);
+    device->failed.store(true, std::memory_order_release);
+    if (!ticked) stop = tick_hapticd(device);
+  }
   if (stop) {
     std::lock_guard lock(device->servo_mutex);
     device->tick_fn.store(nullptr, std::memory_order_release);
@@ -325,35 +352,19 @@ HDCallbackCode servo_tick(void* user_data) {
   return kCallbackContinue;
 }
 
-/// The params this driver takes (header comment), refusing any other.
-haptic::vendor::DriverParams read_params(const char* params_json) {
-  return haptic::vendor::DriverParams(
-      params_json, {"library", "device", "rate", "calibrate", "apparent_mass", "apparent_damping"});
-}
-
-void* create(const char* params_json, char* error) {
-  auto refuse = [error](const std::string& why) -> void* {
-    std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", why.c_str());
-    return nullptr;
-  };
-  try {
-    const haptic::vendor::DriverParams params = read_params(params_json);
-    auto device = std::make_unique<Device>();
-    std::string why;
-    device->library = load_runtime(params.text("library").value_or(""), why);
-    if (device->library == nullptr) return refuse(why);
-    if (const std::string missing = resolve(device->library, device->api); !missing.empty()) {
-      dlclose(device->library);
-      return refuse("the OpenHaptics runtime lacks " + missing);
-    }
+std::unique_ptr<Device> Device::open(const haptic::vendor::DriverParams& params) {
+  using haptic::vendor::Refusal;
+  auto device = std::make_unique<Device>();
+  {
+    device->library = haptic::vendor::open_runtime(params.text("library").value_or(""), runtime_search(),
+                                                   device->api, resolve);
     HdApi& api = device->api;
     device->config_name = params.text("device").value_or("");
     // HD_DEFAULT_DEVICE is a NULL string: the first device (§2.3).
     device->handle = api.InitDevice(device->config_name.empty() ? nullptr : device->config_name.c_str());
     const std::string init_errors = drain_errors(api);
     if (device->handle == kInvalidHandle || !init_errors.empty()) {
-      dlclose(device->library);
-      return refuse("hdInitDevice(" + (device->config_name.empty() ? std::string("the first device")
+      throw Refusal("hdInitDevice(" + (device->config_name.empty() ? std::string("the first device")
                                                                    : "\"" + device->config_name + "\"") +
                     "): " + (init_errors.empty() ? "no device" : init_errors) +
                     ": is it connected and set up (Touch_Setup), and may this user open it?");
@@ -377,48 +388,33 @@ void* create(const char* params_json, char* error) {
     if (auto m = params.triple("apparent_mass")) std::copy(m->begin(), m->end(), device->apparent_mass);
     if (auto b = params.triple("apparent_damping")) std::copy(b->begin(), b->end(), device->apparent_damping);
     if (const std::string errors = drain_errors(api); !errors.empty() || !(device->max_force > 0.0)) {
-      api.DisableDevice(device->handle);
-      dlclose(device->library);
-      return refuse("reading the device's description: " +
+      throw Refusal("reading the device's description: " +
                     (errors.empty() ? "HD_NOMINAL_MAX_FORCE is not > 0" : errors));
     }
-    return device.release();
-  } catch (const std::exception& failure) {
-    return refuse(failure.what());
   }
+  return device;
 }
 
-void destroy(void* driver) {
-  auto* device = static_cast<Device*>(driver);
-  device->api.DisableDevice(device->handle);
-  dlclose(device->library);
-  delete device;
-}
-
-int describe(void* driver, haptic_driver_info* info) {
-  const auto* device = static_cast<const Device*>(driver);
-  std::memset(info, 0, sizeof *info);
-  std::snprintf(info->name, sizeof info->name, "3D Systems %s, serial %s", device->model.c_str(),
-                device->serial.c_str());
-  info->joints = 3;
-  info->dof = 3;
-  info->buttons = kButtonCount;
+void Device::describe(haptic_driver_info& info) const {
+  std::snprintf(info.name, sizeof info.name, "3D Systems %s, serial %s", model.c_str(), serial.c_str());
+  info.joints = 3;
+  info.dof = 3;
+  info.buttons = kButtonCount;
   // The runtime's smoothed velocity (§2.5); the gimbal's orientation on a 6-DOF input device.
-  info->capabilities = HAPTIC_DRIVER_MEASURED_RATES;
-  if (device->input_dof >= 6) info->capabilities |= HAPTIC_DRIVER_ORIENTATION;
-  info->max_force = device->max_force;
+  info.capabilities = HAPTIC_DRIVER_MEASURED_RATES;
+  if (input_dof >= 6) info.capabilities |= HAPTIC_DRIVER_ORIENTATION;
+  info.max_force = max_force;
   for (int i = 0; i < 3; ++i) {
-    info->workspace_min[i] = std::min(device->workspace_min[i], device->workspace_max[i]);
-    info->workspace_max[i] = std::max(device->workspace_min[i], device->workspace_max[i]);
-    info->apparent_mass[i] = device->apparent_mass[i];
-    info->apparent_damping[i] = device->apparent_damping[i];
+    info.workspace_min[i] = std::min(workspace_min[i], workspace_max[i]);
+    info.workspace_max[i] = std::max(workspace_min[i], workspace_max[i]);
+    info.apparent_mass[i] = apparent_mass[i];
+    info.apparent_damping[i] = apparent_damping[i];
   }
-  info->servo_rate_hz = device->rate_hz;
-  return HAPTIC_DRIVER_OK;
+  info.servo_rate_hz = rate_hz;
 }
 
 /// Calibrates the current device if it needs it (§2.3: update with its style until OK).
-std::string calibrate(Device& device) {
+std::string calibrate_if_needed(Device& device) {
   const HdApi& api = device.api;
   if (api.CheckCalibration() == kCalibrationOk) return {};
   if (!device.calibrate) return "the device needs calibration and params.calibrate is false";
@@ -442,61 +438,56 @@ std::string calibrate(Device& device) {
   return {};
 }
 
-int start(void* driver) {
-  auto* device = static_cast<Device*>(driver);
-  HdApi& api = device->api;
-  api.MakeCurrentDevice(device->handle);
-  if (const std::string why = calibrate(*device); !why.empty()) {
-    device->say(HAPTIC_DRIVER_LOG_ERROR, why);
+int Device::start() {
+  api.MakeCurrentDevice(handle);
+  if (const std::string why = calibrate_if_needed(*this); !why.empty()) {
+    say(HAPTIC_DRIVER_LOG_ERROR, why);
     return HAPTIC_DRIVER_FAILED;
   }
-  for (auto& bits : device->force_bits) store_double(bits, 0.0);
-  device->safe.store(false);
+  for (auto& bits : force_bits) store_double(bits, 0.0);
+  safe_word.store(0, std::memory_order_release);
   api.Enable(kForceOutput);
-  api.SetSchedulerRate(static_cast<unsigned long>(device->rate_hz));
-  device->servo = api.ScheduleAsynchronous(&servo_tick, device, kMaxPriority);
-  device->scheduled = true;
+  api.SetSchedulerRate(static_cast<unsigned long>(rate_hz));
+  servo = api.ScheduleAsynchronous(&servo_tick, this, kMaxPriority);
+  scheduled = true;
   api.StartScheduler();
   if (const std::string errors = drain_errors(api); !errors.empty()) {
-    device->say(HAPTIC_DRIVER_LOG_ERROR, "starting the servo loop: " + errors);
+    say(HAPTIC_DRIVER_LOG_ERROR, "starting the servo loop: " + errors);
     return HAPTIC_DRIVER_FAILED;
   }
-  device->say(HAPTIC_DRIVER_LOG_INFO, "servo loop running at " + std::to_string(std::lround(device->rate_hz)) +
-                                          " Hz, forces on " + device->model);
+  say(HAPTIC_DRIVER_LOG_INFO,
+      "servo loop running at " + std::to_string(std::lround(rate_hz)) + " Hz, forces on " + model);
   return HAPTIC_DRIVER_OK;
 }
 
-void stop(void* driver) {
-  auto* device = static_cast<Device*>(driver);
-  HdApi& api = device->api;
-  device->safe.store(true, std::memory_order_release);  // the next frames command zero
+void Device::stop() {
+  hold_safe();  // the next frames command zero
   {
-    std::lock_guard lock(device->servo_mutex);  // a run_servo waiting: let it return
-    device->tick_fn.store(nullptr, std::memory_order_release);
-    device->servo_finished = true;
-    device->servo_done.notify_all();
+    std::lock_guard lock(servo_mutex);  // a run_servo waiting: let it return
+    tick_fn.store(nullptr, std::memory_order_release);
+    servo_finished = true;
+    servo_done.notify_all();
   }
   api.StopScheduler();
-  if (device->scheduled) api.Unschedule(device->servo);
-  device->scheduled = false;
+  if (scheduled) api.Unschedule(servo);
+  scheduled = false;
   api.Disable(kForceOutput);
   drain_errors(api);
 }
 
-int read_sensors(void* driver, haptic_driver_reading* reading) {
-  auto* device = static_cast<Device*>(driver);
-  if (device->failed.load(std::memory_order_acquire)) return HAPTIC_DRIVER_FAILED;
+int Device::read(haptic_driver_reading& reading) {
+  if (failed.load(std::memory_order_acquire)) return HAPTIC_DRIVER_FAILED;
   // Before the servo loop's first tick there is no sample: wait for it (only at the start), rather
   // than report the device where it is not. 50 ms at most, not two periods: a loaded host may not
   // run the runtime's new scheduler thread that soon (a CI run failed the kit at tick 0 so). The
   // wait sleeps in steps of 0.2 ms rather than spinning: on a busy host a spinning reader takes
   // the very CPU time the scheduler thread needs to make its first tick.
-  if (device->sample_version.load(std::memory_order_acquire) == 0) {
+  if (sample_version.load(std::memory_order_acquire) == 0) {
     timespec start{};
     clock_gettime(CLOCK_MONOTONIC, &start);
-    const double limit_s = std::max(2.0 / device->rate_hz, 0.050);
+    const double limit_s = std::max(2.0 / rate_hz, 0.050);
     for (;;) {
-      if (device->sample_version.load(std::memory_order_acquire) != 0) break;
+      if (sample_version.load(std::memory_order_acquire) != 0) break;
       timespec now{};
       clock_gettime(CLOCK_MONOTONIC, &now);
       if ((now.tv_sec - start.tv_sec) + 1e-9 * (now.tv_nsec - start.tv_nsec) > limit_s) {
@@ -508,129 +499,88 @@ int read_sensors(void* driver, haptic_driver_reading* reading) {
   }
   Sample copy;
   for (;;) {  // the seqlock: retry while the servo thread writes
-    const std::uint64_t before = device->sample_version.load(std::memory_order_acquire);
+    const std::uint64_t before = sample_version.load(std::memory_order_acquire);
     if (before % 2 != 0) continue;
-    copy = device->sample;
+    copy = sample;
     std::atomic_thread_fence(std::memory_order_acquire);
-    if (device->sample_version.load(std::memory_order_relaxed) == before) break;
+    if (sample_version.load(std::memory_order_relaxed) == before) break;
   }
   for (int i = 0; i < 3; ++i) {
-    reading->q[i] = copy.position_W[i];
-    reading->q_dot[i] = copy.velocity_W[i];
-    reading->angular_velocity_W[i] = copy.angular_velocity_W[i];
+    reading.q[i] = copy.position_W[i];
+    reading.q_dot[i] = copy.velocity_W[i];
+    reading.angular_velocity_W[i] = copy.angular_velocity_W[i];
   }
-  std::memcpy(reading->orientation_W, copy.orientation_W, sizeof copy.orientation_W);
-  reading->buttons = copy.buttons;
-  reading->sequence = copy.tick;  // a new sample each servo tick
+  std::memcpy(reading.orientation_W, copy.orientation_W, sizeof copy.orientation_W);
+  reading.buttons = copy.buttons;
+  reading.sequence = copy.tick;  // a new sample each servo tick
   return HAPTIC_DRIVER_OK;
 }
 
-int write_command(void* driver, const haptic_driver_command* command, double /*dt*/) {
-  auto* device = static_cast<Device*>(driver);
+int Device::write(const haptic_driver_command& command, double /*dt*/) {
+  // Taken first: an enter_safe_state from here on is newer than this command (driver.h).
+  const std::uint64_t safe_at_entry = safe_word.load(std::memory_order_acquire);
   for (int i = 0; i < 3; ++i) {
-    if (!std::isfinite(command->tau[i])) return HAPTIC_DRIVER_FAILED;
+    if (!std::isfinite(command.tau[i])) return HAPTIC_DRIVER_FAILED;
   }
-  for (int i = 0; i < 3; ++i) store_double(device->force_bits[i], command->tau[i]);
-  // A command after the safe state is the loop driving the device again (it writes only after a
-  // good reading, and a zero command right after entering the safe state): forces flow again, as
-  // the Force Dimension driver's next dhdSetForce does, without a restart.
-  device->safe.store(false, std::memory_order_release);
-  return device->failed.load(std::memory_order_acquire) ? HAPTIC_DRIVER_FAILED : HAPTIC_DRIVER_OK;
+  for (int i = 0; i < 3; ++i) store_double(force_bits[i], command.tau[i]);
+  // A command after the safe state is the loop driving the device again (driver.h): forces flow
+  // from the next frame, unless the safe state was entered again since this write began.
+  if ((safe_at_entry & 1u) != 0) {
+    std::uint64_t expected = safe_at_entry;
+    safe_word.compare_exchange_strong(expected, safe_at_entry & ~std::uint64_t{1}, std::memory_order_acq_rel);
+  }
+  return failed.load(std::memory_order_acquire) ? HAPTIC_DRIVER_FAILED : HAPTIC_DRIVER_OK;
 }
 
-void enter_safe_state(void* driver) {
-  static_cast<Device*>(driver)->safe.store(true, std::memory_order_release);  // zero from the next frame
-}
+void Device::enter_safe_state() { hold_safe(); }  // zero from the next frame
 
-int run_servo(void* driver, haptic_driver_tick_fn tick, void* context) {
-  auto* device = static_cast<Device*>(driver);
-  std::unique_lock lock(device->servo_mutex);
-  device->tick_context = context;
-  device->servo_finished = false;
-  device->tick_fn.store(tick, std::memory_order_release);
-  device->servo_done.wait(lock, [device] { return device->servo_finished; });
+int Device::run_servo(haptic_driver_tick_fn tick, void* context) {
+  std::unique_lock lock(servo_mutex);
+  tick_context = context;
+  servo_finished = false;
+  tick_fn.store(tick, std::memory_order_release);
+  servo_done.wait(lock, [this] { return servo_finished; });
   return HAPTIC_DRIVER_OK;
 }
 
-void set_log(void* driver, haptic_driver_log_fn log, void* context) {
-  auto* device = static_cast<Device*>(driver);
-  device->log = log;
-  device->log_context = context;
-}
-
-int list_devices(const char* params_json, char* list, size_t size) {
-  std::string out;
-  int found = -1;
-  try {
-    const haptic::vendor::DriverParams params = read_params(params_json);
-    std::string why;
-    void* library = load_runtime(params.text("library").value_or(""), why);
-    if (library == nullptr) {
-      out = why;
-    } else {
-      HdApi api;
-      if (const std::string missing = resolve(library, api); !missing.empty()) {
-        out = "the OpenHaptics runtime lacks " + missing;
-      } else {
-        // The HDAPI cannot enumerate: it opens devices by the names Touch_Setup gave them. Ask
-        // for the one named (or the first).
-        const std::string name = params.text("device").value_or("");
-        const HHD handle = api.InitDevice(name.empty() ? nullptr : name.c_str());
-        const std::string errors = drain_errors(api);
-        if (handle == kInvalidHandle || !errors.empty()) {
-          out = "hdInitDevice(" + (name.empty() ? std::string("the first device") : "\"" + name + "\"") +
-                "): " + (errors.empty() ? std::string("no device") : errors);
-        } else {
-          api.MakeCurrentDevice(handle);
-          const char* model = api.GetString(kDeviceModelType);
-          const char* serial = api.GetString(kDeviceSerialNumber);
-          out = (name.empty() ? std::string("{}") : "{\"device\": \"" + name + "\"}") + "\t3D Systems " +
-                (model != nullptr ? model : "device") + ", serial " + (serial != nullptr ? serial : "?") +
-                (name.empty() ? " (the first device; others by their Touch_Setup names)" : "") + "\n";
-          api.DisableDevice(handle);
-          found = 1;
-        }
-      }
-      dlclose(library);
-    }
-  } catch (const std::exception& failure) {
-    out = failure.what();
+int Device::list_devices(const haptic::vendor::DriverParams& params, std::string& out) {
+  HdApi api;
+  const haptic::vendor::LoadedLibrary library =
+      haptic::vendor::open_runtime(params.text("library").value_or(""), runtime_search(), api, resolve);
+  // The HDAPI cannot enumerate: it opens devices by the names Touch_Setup gave them. Ask for the
+  // one named (or the first).
+  const std::string name = params.text("device").value_or("");
+  const HHD handle = api.InitDevice(name.empty() ? nullptr : name.c_str());
+  if (const std::string errors = drain_errors(api); handle == kInvalidHandle || !errors.empty()) {
+    out = "hdInitDevice(" + (name.empty() ? std::string("the first device") : "\"" + name + "\"") +
+          "): " + (errors.empty() ? std::string("no device") : errors);
+    return -1;
   }
-  std::snprintf(list, size, "%s", out.c_str());
-  return found;
+  api.MakeCurrentDevice(handle);
+  const char* model = api.GetString(kDeviceModelType);
+  const char* serial = api.GetString(kDeviceSerialNumber);
+  out = (name.empty() ? std::string("{}") : "{\"device\": \"" + name + "\"}") + "\t3D Systems " +
+        (model != nullptr ? model : "device") + ", serial " + (serial != nullptr ? serial : "?") +
+        (name.empty() ? " (the first device; others by their Touch_Setup names)" : "") + "\n";
+  api.DisableDevice(handle);
+  return 1;
 }
 
-void last_error(void* driver, char* error) {
-  const auto* device = static_cast<const Device*>(driver);
-  if (!device->failed.load(std::memory_order_acquire)) {
+void Device::last_error(char* error) const {
+  if (!failed.load(std::memory_order_acquire)) {
     error[0] = '\0';
     return;
   }
-  const HDerror code = device->failed_code.load(std::memory_order_relaxed);
-  const char* words = device->api.GetErrorString(code);  // a fixed string of the runtime's
+  const HDerror code = failed_code.load(std::memory_order_relaxed);
+  if (code == kRuntimeThrew) {
+    std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "the servo loop: a call into the OpenHaptics runtime threw");
+    return;
+  }
+  const char* words = api.GetErrorString(code);  // a fixed string of the runtime's
   std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "the servo loop: %s (HD error 0x%04x)",
                 words != nullptr ? words : "error", code);
 }
 
-const haptic_driver_api kApi = {
-    HAPTIC_DRIVER_ABI_VERSION,
-    sizeof(haptic_driver_info),
-    sizeof(haptic_driver_reading),
-    sizeof(haptic_driver_command),
-    create,
-    destroy,
-    describe,
-    start,
-    stop,
-    read_sensors,
-    write_command,
-    enter_safe_state,
-    run_servo,
-    set_log,
-    list_devices,
-    last_error,
-};
-
 }  // namespace
 
-extern "C" HAPTIC_DRIVER_EXPORT const haptic_driver_api* haptic_driver_entry(void) { return &kApi; }
+HAPTIC_VENDOR_DRIVER(Device)
