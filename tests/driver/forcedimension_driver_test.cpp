@@ -359,8 +359,9 @@ TEST(ForceDimension, ForcesAreCommandedZeroAsSoonAsTheyAreEnabled) {
 }
 
 // Issue 38: dhdSetBrakes does not take a device out of FORCE mode (SOURCES.md §1.6): the safe
-// state turns forces off. A write after it is taken but applies nothing; the next read with the
-// hand slow turns forces on again, zero first.
+// state turns forces off. A write after it is taken (OK) but applies nothing; the next read with the
+// hand slow turns forces on again, zero first: the device leaves its safe state its own way, as
+// driver.h allows, and the writes from then on apply (the next test).
 TEST(ForceDimension, TheSafeStateTurnsForcesOffAndTheNextSlowReadTurnsThemOnZeroFirst) {
   Standin standin("omega.3");
   DriverDevice device(fd());

@@ -161,6 +161,42 @@ TEST(Haply, AnAnswerItCannotReadIsAFaultNotACrash) {
   device.stop();
 }
 
+// The same in the inventory create() reads: a refusal saying so, not a crash; the listing, which
+// reads only the ids, still lists the device.
+TEST(Haply, AnInventoryItCannotReadIsARefusalNotACrash) {
+  Service service;
+  ASSERT_EQ(service.control("garble 049D"), "ok");
+  const std::string why = refusal(haply(service));
+  EXPECT_NE(why.find("create() refused: the driver failed: "), std::string::npos) << why;
+  EXPECT_EQ(list_driver_devices(HAPLY_DRIVER, params(service)).devices.size(), 1u);
+}
+
+// driver.h: enter_safe_state sends a message without a force (the device idles, §3.3) and the
+// next write drives the device again, returning OK.
+TEST(Haply, AfterTheSafeStateTheNextWriteDrivesTheDeviceAgain) {
+  Service service;
+  DriverDevice device(haply(service));
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  DeviceReading reading;
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  DeviceCommand push;
+  push.tau[0] = 1.0;
+  ASSERT_EQ(device.write(push, kT), DeviceStatus::kOk);
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  ASSERT_EQ(service.control("clear"), "ok");
+  device.enter_safe_state();
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  ASSERT_EQ(device.write(push, kT), DeviceStatus::kOk);
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  const std::string calls = service.control("calls");
+  const std::size_t idle = calls.find("probe_position"), force = calls.find("set_cursor_force");
+  ASSERT_NE(idle, std::string::npos) << calls;
+  ASSERT_NE(force, std::string::npos) << calls;
+  EXPECT_LT(idle, force) << calls;  // the safe state's message first, then the write's force
+  EXPECT_EQ(calls.find("set_cursor_force", force + 1), std::string::npos) << calls;
+  device.stop();
+}
+
 // Both forms of set_cursor_force (§3.3: the 3.5 documentation's "vector", 3.1-era clients'
 // "values") push the same way.
 TEST(Haply, EitherForceFormPushesTheCursor) {

@@ -115,6 +115,34 @@ TEST(OpenHaptics, AWallHoldsAHandWhereTheSpringSaysWithTheAxesOfW) {
   device.stop();
 }
 
+// driver.h: after enter_safe_state the device holds zero force until the next write, which drives
+// it again (the force goes out from the next servo frame), and returns OK. On the manual clock.
+TEST(OpenHaptics, AfterTheSafeStateTheNextWriteDrivesTheDeviceAgain) {
+  Standin standin("rig=Touch", true);
+  DriverDevice device(oh(R"("device": "rig")"));
+  ASSERT_EQ(device.start(), DeviceStatus::kOk);
+  ASSERT_EQ(standin.control("tick 1"), 0);
+  DeviceReading reading;
+  ASSERT_EQ(device.read(reading), DeviceStatus::kOk);
+  DeviceCommand push;
+  push.tau[0] = 0.5;  // N along W's x, the HD frame's z (SOURCES.md §2.5)
+  const std::string pushed = "hdSetDoublev 0x2700 0 0 0.5\n", zero = "hdSetDoublev 0x2700 0 0 0\n";
+  ASSERT_EQ(device.write(push, kT), DeviceStatus::kOk);
+  standin.clear();
+  ASSERT_EQ(standin.control("tick 1"), 0);
+  EXPECT_NE(standin.calls().find(pushed), std::string::npos) << standin.calls();
+  device.enter_safe_state();
+  standin.clear();
+  ASSERT_EQ(standin.control("tick 2"), 0);
+  EXPECT_NE(standin.calls().find(zero), std::string::npos) << standin.calls();
+  EXPECT_EQ(standin.calls().find(pushed), std::string::npos) << standin.calls();
+  ASSERT_EQ(device.write(push, kT), DeviceStatus::kOk);
+  standin.clear();
+  ASSERT_EQ(standin.control("tick 1"), 0);
+  EXPECT_NE(standin.calls().find(pushed), std::string::npos) << standin.calls();
+  device.stop();
+}
+
 // The gimbal turned about each of HD's axes reads as the same turn about the matching axis of W
 // (the one the position's axes map to: W x = HD z, W y = HD x, W z = HD y, SOURCES.md §2.5), on
 // the manual clock.

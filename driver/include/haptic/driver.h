@@ -158,7 +158,15 @@ typedef struct haptic_driver_api {
   int (*read)(void* driver, haptic_driver_reading* reading);
   /* dt: the tick the command is held over. Unit: s. */
   int (*write)(void* driver, const haptic_driver_command* command, double dt);
-  /* Motors to zero, brakes on, at once; see the threads note above. */
+  /* Motors to zero, brakes on, at once; see the threads note above. The device stays so until
+   * the next write. A write after enter_safe_state is hapticd commanding the device again (it writes
+   * a zero command right after entering the safe state, and forces only after a good reading): the
+   * driver applies it as any write, or, where the device must leave its safe state in its own way
+   * first (forces turned on again only with the hand slow), keeps the motors at zero, reports
+   * safe_state in each reading until the device has left it, and applies the commands written from
+   * then on. Such a write returns HAPTIC_DRIVER_OK: a device still safe is not a failed call. A write
+   * already running when enter_safe_state is called (a late one, beside hapticd's watchdog) must not
+   * end the safe state: its command is dropped or held at zero until the next write. */
   void (*enter_safe_state)(void* driver);
 
   /* Optional (NULL: server-clocked). Runs the vendor's servo loop on the calling thread, calling

@@ -208,6 +208,10 @@ struct Device : haptic::vendor::VendorDevice {
   int run_servo(haptic_driver_tick_fn tick, void* context);
 
   ~Device() {
+    if (scheduled) {  // a stop that failed midway: the callback must not outlive the device
+      haptic::vendor::quietly([this] { api.StopScheduler(); });
+      haptic::vendor::quietly([this] { api.Unschedule(servo); });
+    }
     if (handle != kInvalidHandle) haptic::vendor::quietly([this] { api.DisableDevice(handle); });
   }
 
@@ -242,6 +246,9 @@ struct Device : haptic::vendor::VendorDevice {
   std::atomic<std::uint64_t> safe_word{0};
   std::atomic<bool> failed{false};     // the runtime reported an error on the servo thread
   std::atomic<HDerror> failed_code{kSuccess};
+  // What a runtime call on the servo thread threw (failed_code kRuntimeThrew): last_error's text.
+  mutable std::mutex servo_exception_mutex;
+  char servo_exception[HAPTIC_DRIVER_ERROR_SIZE] = {};
   std::uint64_t ticks = 0;              // servo ticks (servo thread only)
   std::uint64_t last_read_tick = 0;     // read() only
   // Device-clocked: hapticd's tick, called inside the callback; and run_servo's end.
@@ -339,6 +346,11 @@ HDCallbackCode servo_tick(void* user_data) {
   try {
     stop = servo_frame(device, ticked);
   } catch (...) {
+    {
+      std::lock_guard lock(device->servo_exception_mutex);
+      std::snprintf(device->servo_exception, sizeof device->servo_exception, "the servo loop: %s",
+                    haptic::vendor::current_exception_text());
+    }
     device->failed_code.store(kRuntimeThrew, std::memory_order_relaxed);
     device->failed.store(true, std::memory_order_release);
     if (!ticked) stop = tick_hapticd(device);
@@ -573,7 +585,8 @@ void Device::last_error(char* error) const {
   }
   const HDerror code = failed_code.load(std::memory_order_relaxed);
   if (code == kRuntimeThrew) {
-    std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "the servo loop: a call into the OpenHaptics runtime threw");
+    std::lock_guard lock(servo_exception_mutex);
+    std::snprintf(error, HAPTIC_DRIVER_ERROR_SIZE, "%s", servo_exception);
     return;
   }
   const char* words = api.GetErrorString(code);  // a fixed string of the runtime's

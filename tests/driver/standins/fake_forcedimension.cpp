@@ -263,6 +263,7 @@ void load_locked(State& s) {
   s.script_next = 0;
   s.sdk[0] = kSdkMajor, s.sdk[1] = kSdkMinor, s.sdk[2] = kSdkRelease, s.sdk[3] = kSdkRevision;
   s.log.clear();
+  s.log.throw_from("");
 
   const char* env = std::getenv("FAKE_DHD_DEVICES");
   const std::string list = env ? env : "omega.3";
@@ -483,6 +484,12 @@ int control_locked(State& s, const std::string& command) {
     for (Device& d : s.devices) d.hang_pending = false;
     ++s.release_gen;
     s.cv.notify_all();
+    return 0;
+  }
+  if (verb == "throw") {  // `throw FUNCTION`: its calls throw from now on; `throw none` ends it
+    std::string function;
+    if (!(in >> function) || !at_end(in)) return -1;
+    s.log.throw_from(function == "none" ? "" : function);
     return 0;
   }
   if (verb == "log") {  // `log off|on`: the call log allocates, which a driver's allocation test must not see

@@ -291,6 +291,7 @@ void load_locked(State& s) {
   s.script.clear();
   s.script_next = 0;
   s.log.clear();
+  s.log.throw_from("");
 
   const char* env = std::getenv("FAKE_HD_DEVICES");
   const std::string list = env ? env : "Default Device=Touch";
@@ -639,6 +640,11 @@ int control_locked(State& s, const std::string& command) {
   const Words w = split(command);
   if (w.words.empty()) return -1;
   const std::string& verb = w.words[0];
+  if (verb == "throw") {  // `throw FUNCTION`: its calls throw from now on; `throw none` ends it
+    if (w.words.size() != 2) return -1;
+    s.log.throw_from(w.words[1] == "none" ? "" : w.words[1]);
+    return 0;
+  }
   if (verb == "release") {
     if (w.words.size() != 1) return -1;
     for (Device& d : s.devices) d.hang_pending = false;
