@@ -17,7 +17,9 @@
 #include "engine/control/disturbance_observer.hpp"
 #include "engine/control/joint_walls.hpp"
 #include "engine/control/state_estimator.hpp"
+#ifdef HAPLY_DRIVER  // the Haply driver is built (HAPTIC_BUILD_HAPLY_DRIVER)
 #include "fake_haply_service.hpp"
+#endif
 #include "runtime/cartesian_model.hpp"
 #include "runtime/dc_motor_model.hpp"
 #include "runtime/device_port.hpp"
@@ -209,6 +211,7 @@ void BM_Device_DriverOpenHaptics(benchmark::State& state) {
 }
 BENCHMARK(BM_Device_DriverOpenHaptics)->Arg(0)->Arg(1)->ArgName("driver_thread");
 
+#ifdef HAPLY_DRIVER
 // The Haply driver against the stand-in of the Inverse Service (in-process, loopback WebSocket):
 // each tick sends the force as JSON and takes the service's answer, so the figure is the round
 // trip through the service and back, on the driver thread (the driver's JSON allocates: it is
@@ -234,6 +237,7 @@ void BM_Device_DriverHaply(benchmark::State& state) {
   service.stop();
 }
 BENCHMARK(BM_Device_DriverHaply);
+#endif
 
 // ---- Controllers on their own: one tick's computation each.
 
