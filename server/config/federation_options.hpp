@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "federation/sample_relay.hpp"
+#include "federation/options.hpp"
 #include "runtime/remote_tools.hpp"
 #include "runtime/robot_wrench.hpp"
 #include "runtime/shared_masses.hpp"

@@ -6,17 +6,6 @@
 
 namespace haptic::federation {
 
-std::string validate(const CreditCap& cap) {
-  const auto check = [](const char* field, double value, double high) {
-    if (std::isfinite(value) && value > 0.0 && value <= high) return std::string();
-    std::ostringstream out;
-    out << field << ": must be > 0 and at most " << high << ", got " << value;
-    return out.str();
-  };
-  if (std::string e = check("max_power_W", cap.max_power_W, 1000.0); !e.empty()) return e;
-  return check("burst_J", cap.burst_J, 100.0);
-}
-
 CreditAccount::Verdict CreditAccount::take(double claimed, std::chrono::steady_clock::time_point now,
                                            const CreditCap& cap) {
   if (!std::isfinite(claimed) || claimed < 0.0) return Verdict::kNotFinite;

@@ -14,19 +14,9 @@
 #include <chrono>
 #include <string>
 
+#include "federation/options.hpp"
+
 namespace haptic::federation {
-
-/// The most energy a peer is credited per coupling. Give every site the same.
-struct CreditCap {
-  /// Sustained. Unit: W. > 0. Honest peers in the lockstep runs of whole sites (hands pushing each
-  /// other's tools and a shared mass, 0 to 100 ms one way, 20 % loss) never send more than 0.2 W
-  /// over 0.02 J (a cap of 0.05 W, 5 mJ refuses them 0.3 mJ at most).
-  double max_power_W = 1.0;
-  double burst_J = 0.1;      // at once: the bucket's size, and how far claims may run over it. Unit: J. > 0.
-};
-
-/// "" or one message naming the bad field ("max_power_W: must be > 0 and at most 1000, got -1").
-std::string validate(const CreditCap& cap);
 
 class CreditAccount {
  public:

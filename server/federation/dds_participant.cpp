@@ -1,53 +1,13 @@
 #include "federation/dds_participant.hpp"
 
-#include <filesystem>
-#include <fstream>
 #include <stdexcept>
+
+static_assert(haptic::federation::kDdsDomainDefault == DDS_DOMAIN_DEFAULT,
+              "options.hpp's DDS_DOMAIN_DEFAULT is dds/dds.h's");
 
 namespace haptic::federation {
 
 namespace {
-
-/// What may go into the XML as a name or address: letters, digits and . : - _ only (an interface
-/// name, a host name, an IPv4 or IPv6 address), so no option can inject configuration.
-bool plain(const std::string& text) {
-  if (text.empty() || text.size() > 253) return false;
-  for (const char c : text) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '.' || c == ':' || c == '-' || c == '_';
-    if (!ok) return false;
-  }
-  return true;
-}
-
-/// An absolute file path of letters, digits and / . _ - + only: it goes into the XML as a file:
-/// URI, so nothing in it may end the element or be read as markup.
-bool plain_path(const std::string& path) {
-  if (path.size() < 2 || path.size() > 1024 || path.front() != '/') return false;
-  for (const char c : path) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '/' || c == '.' || c == '_' || c == '-' || c == '+';
-    if (!ok) return false;
-  }
-  return true;
-}
-
-/// A regular file this process can open for reading.
-bool readable_file(const std::string& path) {
-  std::error_code error;
-  if (!std::filesystem::is_regular_file(path, error)) return false;
-  return std::ifstream(path).good();
-}
-
-/// Each security file with its option's name, in the order they are checked.
-std::vector<std::pair<const char*, const std::string*>> security_fields(const SecurityFiles& files) {
-  return {{"identity_ca", &files.identity_ca},
-          {"identity_certificate", &files.identity_certificate},
-          {"identity_private_key", &files.identity_private_key},
-          {"permissions_ca", &files.permissions_ca},
-          {"governance", &files.governance},
-          {"permissions", &files.permissions}};
-}
 
 /// The Library element of one plugin: a full path when the plugins' folder is known (Debian's
 /// is off the loader's search path, and Cyclone loads a plugin with dlopen), else the name
@@ -87,41 +47,6 @@ bool security_plugins_available() {
     if (!readable_file(dir + "/libdds_security_" + name + ".so")) return false;
   }
   return true;
-}
-
-std::string validate(const DomainOptions& options) {
-  // DDSI's default port mapping (PB 7400, DG 250) leaves room for domains 0 ... 232.
-  if (options.domain_id > 232) {
-    return "domain_id: must be 0 to 232, got " + std::to_string(options.domain_id);
-  }
-  if (!plain(options.interface)) {
-    return "interface: must be an interface name or address (letters, digits, . : - _), got \"" +
-           options.interface + "\"";
-  }
-  for (std::size_t i = 0; i < options.peers.size(); ++i) {
-    if (!plain(options.peers[i])) {
-      return "peers[" + std::to_string(i) + "]: must be a host name or address, got \"" + options.peers[i] + "\"";
-    }
-  }
-  if (options.local_domain_id && *options.local_domain_id == DDS_DOMAIN_DEFAULT) {
-    return "local_domain_id: must not be DDS_DOMAIN_DEFAULT";
-  }
-  if (options.security) {
-    // Governance and permissions documents name domains 0 to 230 (Cyclone's parser refuses more).
-    if (options.domain_id > 230) {
-      return "domain_id: must be 0 to 230 with security (the DDS Security documents name no higher), got " +
-             std::to_string(options.domain_id);
-    }
-    for (const auto& [name, path] : security_fields(*options.security)) {
-      const std::string field = std::string("security.") + name;
-      if (path->empty()) return field + ": required with security (a file's absolute path)";
-      if (!plain_path(*path)) {
-        return field + ": must be an absolute path of letters, digits and / . _ - +, got \"" + *path + "\"";
-      }
-      if (!readable_file(*path)) return field + ": cannot read " + *path;
-    }
-  }
-  return {};
 }
 
 std::string cyclone_config(const DomainOptions& options) {

@@ -12,37 +12,9 @@
 
 #include <dds/dds.h>
 
+#include "federation/options.hpp"
+
 namespace haptic::federation {
-
-/// DDS Security (OMG DDS Security 1.1, Cyclone's builtin plugins): a site's files, each an absolute
-/// path. scripts/federation-certs makes them; docs/federation.md, "Security", says what they do.
-struct SecurityFiles {
-  std::string identity_ca;           // PEM: the CA that signed every site's identity
-  std::string identity_certificate;  // PEM: this site's identity, signed by identity_ca
-  std::string identity_private_key;  // PEM, unencrypted: the identity's key
-  std::string permissions_ca;        // PEM: the CA that signed the governance and permissions
-  std::string governance;            // S/MIME: the domain's rules, the same at every site
-  std::string permissions;           // S/MIME: what this site may publish and subscribe
-};
-
-struct DomainOptions {
-  std::uint32_t domain_id = 0;  // DDS domain, 0 ... 232 (the RTPS port mapping's range); with security 0 ... 230.
-  /// The one network interface the domain uses, by name ("lo", "eth0") or address.
-  std::string interface = "lo";
-  /// Unicast discovery: the addresses of the other sites' hosts. Empty: multicast discovery.
-  std::vector<std::string> peers;
-  /// Set: authenticated, access-controlled and encrypted (the governance document says how much);
-  /// only sites with an identity from identity_ca take part.
-  std::optional<SecurityFiles> security;
-  /// Cyclone's domain inside this process when it is not domain_id (which is then the domain on
-  /// the network): each such domain has a configuration of its own, so several sites with
-  /// different identities can share one process, as tests need. Unset: domain_id.
-  std::optional<std::uint32_t> local_domain_id;
-};
-
-/// "" or one message naming the bad option ("domain_id: must be 0 to 232, got 300",
-/// "security.governance: cannot read /x/gov.p7s").
-std::string validate(const DomainOptions& options);
 
 /// Cyclone's configuration XML for the options (the interface, multicast only without peers, and
 /// with security its <Security> element naming the plugins and the files).

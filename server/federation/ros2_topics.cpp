@@ -19,12 +19,10 @@ struct TopicKind {
   const char* suffix;
   const dds_topic_descriptor_t* type;
 };
-const TopicKind kTopics[] = {{"/pose", &geometry_msgs_msg_dds__PoseStamped__desc},
-                             {"/twist", &geometry_msgs_msg_dds__TwistStamped__desc},
-                             {"/wrench", &geometry_msgs_msg_dds__WrenchStamped__desc},
-                             {"/joy", &sensor_msgs_msg_dds__Joy__desc}};
-
-bool name_char(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_'; }
+const TopicKind kTopics[] = {{kRos2PublishedTopics[kPose], &geometry_msgs_msg_dds__PoseStamped__desc},
+                             {kRos2PublishedTopics[kTwist], &geometry_msgs_msg_dds__TwistStamped__desc},
+                             {kRos2PublishedTopics[kWrench], &geometry_msgs_msg_dds__WrenchStamped__desc},
+                             {kRos2PublishedTopics[kJoy], &sensor_msgs_msg_dds__Joy__desc}};
 
 /// The header: stamped at `stamp_ns` (ns since the clock's epoch), in `frame_id`.
 std_msgs_msg_dds__Header_ header(std::int64_t stamp_ns, const std::string& frame_id) {
@@ -63,38 +61,6 @@ std::int64_t wall_clock_ns() {
 }
 
 }  // namespace
-
-std::string validate(const Ros2Options& options) {
-  const std::string& ns = options.ros_namespace;
-  bool ok = ns.size() >= 2 && ns.size() <= 200 && ns.front() == '/' && ns.back() != '/';
-  for (std::size_t i = 1; ok && i < ns.size(); ++i) {
-    ok = name_char(ns[i]) || (ns[i] == '/' && ns[i - 1] != '/');
-  }
-  if (!ok) {
-    return "ros_namespace: must be '/' and names of letters, digits and '_' separated by '/', got \"" + ns + "\"";
-  }
-  if (options.frame_id.empty() || options.frame_id.size() > 200) {
-    return "frame_id: must be 1 to 200 characters, got " + std::to_string(options.frame_id.size());
-  }
-  if (options.buttons > 32) return "buttons: at most 32, got " + std::to_string(options.buttons);
-  if (!options.wrench_topic.empty()) {
-    const std::string& topic = options.wrench_topic;
-    bool relative = topic.size() <= 200 && topic.front() != '/' && topic.back() != '/';
-    for (std::size_t i = 0; relative && i < topic.size(); ++i) {
-      relative = name_char(topic[i]) || (topic[i] == '/' && topic[i - 1] != '/');
-    }
-    if (!relative) {
-      return "wrench_topic: must be names of letters, digits and '_' separated by '/' (under the namespace), got \"" +
-             topic + "\"";
-    }
-    for (const TopicKind& published : kTopics) {
-      if ("/" + topic == published.suffix) {
-        return "wrench_topic: \"" + topic + "\" is one hapticd publishes";
-      }
-    }
-  }
-  return {};
-}
 
 std::string dds_topic_of(const std::string& ros_topic) { return "rt" + ros_topic; }
 

@@ -28,27 +28,10 @@
 
 #include "engine/core/vec3.hpp"
 #include "federation/dds_participant.hpp"
+#include "federation/options.hpp"
 #include "federation/tool_topic.hpp"
 
 namespace haptic::federation {
-
-struct Ros2Options {
-  /// The ROS namespace of the topics, "/hapticd/<site>/port0" say: a leading '/', then names of
-  /// letters, digits and '_' separated by '/'.
-  std::string ros_namespace = "/hapticd";
-  std::string frame_id = "hapticd_world";  // header.frame_id: the device's W
-  std::uint32_t buttons = 0;               // how many buttons Joy reports
-  /// The topic a ROS 2 node sends the tool's force on, under ros_namespace ("wrench_command":
-  /// <namespace>/wrench_command): a relative ROS name, not one of the four published. "": none.
-  std::string wrench_topic;
-  /// What header.stamp counts: the host's wall clock at publication (what ROS tools compare), or
-  /// the tick's server time (reproducible in lockstep).
-  enum class StampClock { kSystemTime, kServerTime };
-  StampClock stamp_clock = StampClock::kSystemTime;
-};
-
-/// "" or one message naming the bad option.
-std::string validate(const Ros2Options& options);
 
 /// The DDS topic name of a ROS 2 topic: "rt" + the ROS name ("/hapticd/pose" → "rt/hapticd/pose").
 std::string dds_topic_of(const std::string& ros_topic);

@@ -36,6 +36,7 @@
 #include "federation/dds_participant.hpp"
 #include "federation/log_limiter.hpp"
 #include "federation/mass_topic.hpp"
+#include "federation/options.hpp"
 #include "federation/ros2_topics.hpp"
 #include "federation/tool_topic.hpp"
 #include "federation/transport.hpp"
@@ -46,26 +47,6 @@
 #include "runtime/shared_masses.hpp"
 
 namespace haptic::federation {
-
-struct RelayOptions {
-  std::string site;                 // this site's name (1 ... 64 characters)
-  DomainOptions domain;
-  std::optional<Ros2Options> ros2;  // ros2.ros_namespace is the site's; ports add "/port<N>"
-  double rate_hz = 1000.0;          // the relay's periods per second (the loop's rate). Unit: Hz.
-  std::uint32_t ros2_every = 10;    // ROS 2 topics every this many periods (≥ 1)
-  bool tools = true;                // the tool topic: publish this site's tools, render the others'
-  /// A remote tool or mass copy not heard from for this long is dropped from the mailboxes (its
-  /// site stopped or left the network): its avatar and its coupling go. Unit: s.
-  double silence_s = 0.5;
-  /// Where the relay says what it refused (a ROS 2 wrench's frame, ...) and which sites come and
-  /// go; unset: nowhere.
-  std::function<void(const std::string&)> log;
-  /// A site's arrivals, and its departures, logged at most once in this long each (further ones
-  /// counted, then summarized). Unit: s.
-  double log_window_s = 10.0;
-  /// The most energy another site is credited per coupling (tools' and mass copies').
-  CreditCap credit;
-};
 
 /// One port's ring, the buttons its device reports, and (with the tool topic) its mailbox of
 /// remote tools and the ledger of its couplings. Not owned.

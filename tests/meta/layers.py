@@ -37,10 +37,22 @@ def includes(folder, suffixes=(".hpp", ".cpp", ".h", ".c")):
                 yield path, number, match.group(1)
 
 
+# Where a library may include only some headers of a layer it may include: config takes the
+# federation's options alone (federation/options.hpp is free of DDS), so that it, and haptic-lab
+# through it, do not link Cyclone DDS.
+ONLY = {("config", "federation"): {"federation/options.hpp"}}
+HEADER = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
+
 bad, checked = [], 0
 for library, allowed in ALLOWED.items():
     for path, number, target in includes(server / library):
         checked += 1
+        if (library, target) in ONLY:
+            header = HEADER.match(path.read_text().splitlines()[number - 1]).group(1)
+            if header not in ONLY[(library, target)]:
+                bad.append(f"{path.relative_to(server)}:{number}: {library} includes {header} "
+                           f"(of {target}/ it may include only {', '.join(sorted(ONLY[(library, target)]))})")
+            continue
         if target in (library, "haptic") or target in allowed:
             continue
         bad.append(f"{path.relative_to(server)}:{number}: {library} includes {target}/ "
