@@ -22,16 +22,6 @@ Endpoint::Endpoint(const Participant& participant, const dds_topic_descriptor_t*
   }
 }
 
-dds_qos_t* in_site_partition(dds_qos_t* qos, const std::string& site) {
-  dds_qset_partition1(qos, site.c_str());
-  return qos;
-}
-
-dds_qos_t* in_every_partition(dds_qos_t* qos) {
-  dds_qset_partition1(qos, "*");
-  return qos;
-}
-
 const std::string& WriterSites::of(dds_entity_t reader, dds_instance_handle_t writer) {
   if (const auto it = known_.find(writer); it != known_.end()) return it->second;
   if (known_.size() >= 256) known_.clear();  // writers come and go over a long run: forget the old

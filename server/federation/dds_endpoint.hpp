@@ -11,6 +11,7 @@
 #include <dds/dds.h>
 
 #include "federation/dds_participant.hpp"
+#include "federation/dds_qos.hpp"
 
 namespace haptic::federation {
 
@@ -24,7 +25,9 @@ inline std::uint32_t matched_count(dds_entity_t entity, bool publication) {
   return dds_get_subscription_matched_status(entity, &status) == DDS_RETCODE_OK ? status.current_count : 0;
 }
 
-/// A writer or a reader on one topic of a participant (the topic made for it), deleted with it.
+/// A writer or a reader on one topic of a participant (the topic made for it), deleted with it:
+/// every writer and reader of the federation is one (the ROS 2 topics' too), so none leaks when a
+/// later one cannot be made.
 class Endpoint {
  public:
   enum class Kind { kWriter, kReader };
@@ -44,15 +47,6 @@ class Endpoint {
   dds_entity_t topic_ = 0;
   dds_entity_t entity_ = 0;
 };
-
-/// A site speaks for itself only: each site's writers on the federation's topics are in one
-/// partition, its name, and its readers in every partition ("*"). Under DDS Security a site's
-/// permissions let it publish in its own partition alone (scripts/federation-certs), and every
-/// reader checks a remote writer's partitions against the writer's permissions before it matches,
-/// so the partition a sample comes through is vouched for by its writer's identity; the relay and
-/// the replicator refuse a sample that names another site. Both take `qos` and return it.
-dds_qos_t* in_site_partition(dds_qos_t* qos, const std::string& site);
-dds_qos_t* in_every_partition(dds_qos_t* qos);
 
 /// The site each writer matched by a reader speaks for (its one partition), looked up once per
 /// writer through discovery's data and kept.

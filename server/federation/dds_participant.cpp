@@ -72,14 +72,6 @@ std::string cyclone_config(const DomainOptions& options) {
 
 std::string dds_error(dds_return_t code) { return dds_strretcode(code); }
 
-dds_qos_t* newest_only_qos() {
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
-  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
-  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
-  return qos;
-}
-
 Participant::Participant(const DomainOptions& options) : options_(options) {
   if (std::string error = validate(options); !error.empty()) throw std::runtime_error("federation." + error);
   const std::string config = cyclone_config(options);

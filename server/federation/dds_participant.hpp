@@ -48,10 +48,6 @@ class Participant {
   dds_entity_t participant_ = 0;
 };
 
-/// QoS for state that is worth only its newest sample (tools, ROS 2's sensor-data profile): best
-/// effort, keep last one, volatile. The caller deletes it (dds_delete_qos).
-dds_qos_t* newest_only_qos();
-
 /// Cyclone's words for a return code ("DDS_RETCODE_TIMEOUT").
 std::string dds_error(dds_return_t code);
 

@@ -111,7 +111,7 @@ void ItemReplicator::publish_changes() {
 
 void ItemReplicator::apply_arrivals(std::chrono::steady_clock::time_point now) {
   events_.clear();
-  reader_->take(events_, options_.site);
+  reader_->take(events_);
   for (const SharedItemEvent& event : events_) {
     const std::string which = "site " + event.state.site + " item " + std::to_string(event.state.item);
     if (event.what != SharedItemEvent::What::kLost && event.writer_site != event.state.site) {

@@ -12,16 +12,6 @@ namespace {
 
 using Sample = haptic_federation_SharedItem;
 
-/// Reliable, transient-local, keep last one per item, liveliness automatic with kItemLease.
-dds_qos_t* item_qos() {
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
-  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
-  dds_qset_liveliness(qos, DDS_LIVELINESS_AUTOMATIC, DDS_MSECS(kItemLease.count()));
-  return qos;
-}
-
 /// The key of a sample: false where the site's name does not fit.
 bool fill_key(Sample& sample, const std::string& site, std::uint64_t item, std::string& error) {
   if (site.empty() || site.size() >= sizeof sample.site) {
@@ -37,7 +27,7 @@ bool fill_key(Sample& sample, const std::string& site, std::uint64_t item, std::
 
 ItemPublisher::ItemPublisher(const Participant& participant, const std::string& site)
     : writer_(participant, &haptic_federation_SharedItem_desc, kItemTopic, Endpoint::Kind::kWriter,
-              in_site_partition(item_qos(), site)) {}
+              in_site_partition(shared_item_qos(kItemLease), site)) {}
 
 bool ItemPublisher::put(const SharedItemState& item) {
   Sample sample{};
@@ -68,16 +58,15 @@ std::uint32_t ItemPublisher::matched_readers() const { return writer_.matched();
 
 ItemSubscriber::ItemSubscriber(const Participant& participant)
     : reader_(participant, &haptic_federation_SharedItem_desc, kItemTopic, Endpoint::Kind::kReader,
-              in_every_partition(item_qos())) {}
+              from_other_sites(shared_item_qos(kItemLease))) {}
 
-std::size_t ItemSubscriber::take(std::vector<SharedItemEvent>& out, const std::string& own_site) {
+std::size_t ItemSubscriber::take(std::vector<SharedItemEvent>& out) {
   std::size_t taken = 0;
   take_each<Sample>(reader_.handle(), [&](const Sample& s, const dds_sample_info_t& info) {
     SharedItemEvent event;
     // An invalid sample (no data) still carries the instance's key.
     event.state.site.assign(s.site, strnlen(s.site, sizeof s.site));
     event.state.item = s.item;
-    if (event.state.site == own_site) return;
     if (info.valid_data || info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED) {
       event.writer_site = writers_.of(reader_.handle(), info.publication_handle);
     }

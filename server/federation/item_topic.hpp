@@ -78,9 +78,9 @@ class ItemSubscriber {
   ItemSubscriber(const ItemSubscriber&) = delete;
   ItemSubscriber& operator=(const ItemSubscriber&) = delete;
 
-  /// Appends what happened since the last take, oldest first; `own_site`'s items (echoed by the
-  /// domain) are left out. Returns how many.
-  std::size_t take(std::vector<SharedItemEvent>& out, const std::string& own_site);
+  /// Appends what happened to the other sites' items since the last take, oldest first (this
+  /// participant's own writers never match: from_other_sites). Returns how many.
+  std::size_t take(std::vector<SharedItemEvent>& out);
   std::uint32_t matched_writers() const;
 
  private:

@@ -43,15 +43,14 @@ std::uint32_t MassPublisher::matched_readers() const { return writer_.matched();
 
 MassSubscriber::MassSubscriber(const Participant& participant)
     : reader_(participant, &haptic_federation_MassSample_desc, kMassTopic, Endpoint::Kind::kReader,
-              in_every_partition(newest_only_qos())) {}
+              from_other_sites(newest_only_qos())) {}
 
-std::size_t MassSubscriber::take(std::vector<MassState>& out, const std::string& own_site) {
+std::size_t MassSubscriber::take(std::vector<MassState>& out) {
   std::size_t taken = 0;
   take_each<Sample>(reader_.handle(), [&](const Sample& s, const dds_sample_info_t& info) {
     if (!info.valid_data) return;
     MassState mass;
     mass.site.assign(s.site, strnlen(s.site, sizeof s.site));
-    if (mass.site == own_site) return;
     mass.mass = s.mass;
     mass.tick = s.tick;
     mass.p_WM = {s.position.x, s.position.y, s.position.z};

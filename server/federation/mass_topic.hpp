@@ -64,9 +64,10 @@ class MassSubscriber {
   MassSubscriber(const MassSubscriber&) = delete;
   MassSubscriber& operator=(const MassSubscriber&) = delete;
 
-  /// Appends every sample that arrived since the last take, oldest first, leaving out
-  /// `own_site`'s, each with its writer_site; returns how many.
-  std::size_t take(std::vector<MassState>& out, const std::string& own_site);
+  /// Appends every sample of the other sites that arrived since the last take (this participant's
+  /// own writers never match: from_other_sites), oldest first, each with its writer_site; returns
+  /// how many.
+  std::size_t take(std::vector<MassState>& out);
   std::uint32_t matched_writers() const;
 
  private:

@@ -42,18 +42,6 @@ std_msgs_msg_dds__Header_ header(std::int64_t stamp_ns, const std::string& frame
 
 geometry_msgs_msg_dds__Vector3_ vector(const engine::Vec3& v) { return {v.x, v.y, v.z}; }
 
-/// The publishers' QoS: reliable, so that a ROS 2 subscriber with the default profile (reliable,
-/// keep last 10) matches as well as one with the sensor-data profile (best effort); keep last 1,
-/// so that the writer never waits on a slow reader (history replaces what was not yet taken);
-/// volatile, as ROS 2's default.
-dds_qos_t* publisher_qos() {
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(1));
-  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
-  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
-  return qos;
-}
-
 std::int64_t wall_clock_ns() {
   timespec now{};
   clock_gettime(CLOCK_REALTIME, &now);
@@ -67,25 +55,14 @@ std::string dds_topic_of(const std::string& ros_topic) { return "rt" + ros_topic
 Ros2ToolPublisher::Ros2ToolPublisher(const Participant& participant, const Ros2Options& options)
     : options_(options) {
   if (std::string error = validate(options); !error.empty()) throw std::runtime_error("ros2." + error);
-  dds_qos_t* qos = publisher_qos();
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < 4; ++i) {  // one that cannot be made throws, and those made before are deleted
     const std::string name = dds_topic_of(options.ros_namespace + kTopics[i].suffix);
-    const dds_entity_t topic = dds_create_topic(participant.handle(), kTopics[i].type, name.c_str(), nullptr, nullptr);
-    writers_[i] = topic < 0 ? topic : dds_create_writer(participant.handle(), topic, qos, nullptr);
-    if (writers_[i] < 0) {
-      const std::string reason = dds_error(writers_[i]);
-      dds_delete_qos(qos);
-      throw std::runtime_error("DDS topic " + name + ": " + reason);
-    }
+    writers_[i] = std::make_unique<Endpoint>(participant, kTopics[i].type, name.c_str(), Endpoint::Kind::kWriter,
+                                             ros2_publisher_qos());
   }
-  dds_delete_qos(qos);
 }
 
-Ros2ToolPublisher::~Ros2ToolPublisher() {
-  for (const dds_entity_t writer : writers_) {
-    if (writer > 0) dds_delete(writer);
-  }
-}
+Ros2ToolPublisher::~Ros2ToolPublisher() = default;
 
 bool Ros2ToolPublisher::publish(const ToolState& tool) {
   const std_msgs_msg_dds__Header_ stamp =
@@ -113,40 +90,30 @@ bool Ros2ToolPublisher::publish(const ToolState& tool) {
   joy.buttons._release = false;
   const void* messages[4] = {&pose, &twist, &wrench, &joy};
   for (int i = 0; i < 4; ++i) {
-    const dds_return_t done = dds_write(writers_[i], messages[i]);
-    if (done != DDS_RETCODE_OK) {
-      error_ = std::string("dds_write on ") + kTopics[i].suffix + ": " + dds_error(done);
+    if (!write_sample(*writers_[i], messages[i], error_)) {
+      error_ = std::string(kTopics[i].suffix) + ": " + error_;
       return false;
     }
   }
   return true;
 }
 
-std::uint32_t Ros2ToolPublisher::matched_readers() const {
-  dds_publication_matched_status_t status{};
-  return dds_get_publication_matched_status(writers_[kPose], &status) == DDS_RETCODE_OK ? status.current_count : 0;
-}
+std::uint32_t Ros2ToolPublisher::matched_readers() const { return writers_[kPose]->matched(); }
 
 Ros2WrenchSubscriber::Ros2WrenchSubscriber(const Participant& participant, const std::string& ros_topic,
                                            const std::string& frame_id)
-    : ros_topic_(ros_topic), frame_id_(frame_id) {
-  const std::string name = dds_topic_of(ros_topic);
-  topic_ = dds_create_topic(participant.handle(), &geometry_msgs_msg_dds__WrenchStamped__desc, name.c_str(), nullptr,
-                            nullptr);
-  dds_qos_t* qos = newest_only_qos();  // best effort: matches a reliable or a best-effort node
-  reader_ = topic_ < 0 ? topic_ : dds_create_reader(participant.handle(), topic_, qos, nullptr);
-  dds_delete_qos(qos);
-  if (reader_ < 0) throw std::runtime_error("DDS reader of " + name + ": " + dds_error(reader_));
-}
+    : ros_topic_(ros_topic),
+      frame_id_(frame_id),
+      // best effort: matches a reliable or a best-effort node
+      reader_(participant, &geometry_msgs_msg_dds__WrenchStamped__desc, dds_topic_of(ros_topic).c_str(),
+              Endpoint::Kind::kReader, newest_only_qos()) {}
 
-Ros2WrenchSubscriber::~Ros2WrenchSubscriber() {
-  if (reader_ > 0) dds_delete(reader_);
-}
+Ros2WrenchSubscriber::~Ros2WrenchSubscriber() = default;
 
 WrenchTaken Ros2WrenchSubscriber::take() {
   WrenchTaken out;
   using Sample = geometry_msgs_msg_dds__WrenchStamped_;
-  take_each<Sample>(reader_, [&](const Sample& s, const dds_sample_info_t& info) {
+  take_each<Sample>(reader_.handle(), [&](const Sample& s, const dds_sample_info_t& info) {
     if (!info.valid_data) return;
     const char* frame = s.header.frame_id != nullptr ? s.header.frame_id : "";
     if (std::strcmp(frame, frame_id_.c_str()) != 0) {
@@ -169,6 +136,6 @@ WrenchTaken Ros2WrenchSubscriber::take() {
   return out;
 }
 
-std::uint32_t Ros2WrenchSubscriber::matched_writers() const { return matched_count(reader_, false); }
+std::uint32_t Ros2WrenchSubscriber::matched_writers() const { return reader_.matched(); }
 
 }  // namespace haptic::federation

@@ -7,7 +7,8 @@
 //   <namespace>/twist   geometry_msgs/msg/TwistStamped  v_WT (m/s); angular 0 (not published yet)
 //   <namespace>/wrench  geometry_msgs/msg/WrenchStamped F_T_W (N), the force on the tool; torque 0
 //   <namespace>/joy     sensor_msgs/msg/Joy             the buttons, 1 pressed (no axes)
-// QoS as ROS 2's sensor-data profile: best effort, keep last 1, volatile.
+// QoS: ros2_publisher_qos (dds_qos.hpp: reliable, keep last 1, volatile), which a node with the
+// default profile or the sensor-data one matches.
 // Off the loop (Cyclone's write may allocate): a sender thread publishes at the configured rate.
 //
 // And, where configured, one topic a ROS 2 node publishes to (Ros2WrenchSubscriber):
@@ -27,6 +28,7 @@
 #include <dds/dds.h>
 
 #include "engine/core/vec3.hpp"
+#include "federation/dds_endpoint.hpp"
 #include "federation/dds_participant.hpp"
 #include "federation/options.hpp"
 #include "federation/tool_topic.hpp"
@@ -53,7 +55,7 @@ class Ros2ToolPublisher {
 
  private:
   Ros2Options options_;
-  dds_entity_t writers_[4] = {0, 0, 0, 0};  // pose, twist, wrench, joy
+  std::unique_ptr<Endpoint> writers_[4];  // pose, twist, wrench, joy
   std::string error_;
 };
 
@@ -89,8 +91,7 @@ class Ros2WrenchSubscriber {
  private:
   std::string ros_topic_;
   std::string frame_id_;
-  dds_entity_t topic_ = 0;
-  dds_entity_t reader_ = 0;
+  Endpoint reader_;
 };
 
 }  // namespace haptic::federation

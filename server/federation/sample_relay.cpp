@@ -113,7 +113,7 @@ void SampleRelay::step(std::chrono::steady_clock::time_point now) {
 
 void SampleRelay::receive(std::chrono::steady_clock::time_point now) {
   received_.clear();
-  transport_->take_tools(received_, options_.site);
+  transport_->take_tools(received_);
   std::erase_if(received_, [&](const ToolState& tool) {
     const bool finite = engine::is_finite(tool.p_WT) && engine::is_finite(tool.v_WT) && engine::is_finite(tool.F_T_W);
     return !admit(tool.site, tool.writer_site, finite, "tool", now);
@@ -209,7 +209,7 @@ namespace haptic::federation {
 
 void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
   received_masses_.clear();
-  transport_->take_masses(received_masses_, options_.site);
+  transport_->take_masses(received_masses_);
   std::erase_if(received_masses_, [&](const MassState& mass) {
     return !admit(mass.site, mass.writer_site, engine::is_finite(mass.p_WM) && engine::is_finite(mass.v_WM), "mass copy", now);
   });

@@ -59,15 +59,14 @@ std::uint32_t ToolPublisher::matched_readers() const { return writer_.matched();
 
 ToolSubscriber::ToolSubscriber(const Participant& participant)
     : reader_(participant, &haptic_federation_ToolSample_desc, kToolTopic, Endpoint::Kind::kReader,
-              in_every_partition(newest_only_qos())) {}
+              from_other_sites(newest_only_qos())) {}
 
-std::size_t ToolSubscriber::take(std::vector<ToolState>& out, const std::string& own_site) {
+std::size_t ToolSubscriber::take(std::vector<ToolState>& out) {
   std::size_t taken = 0;
   take_each<Sample>(reader_.handle(), [&](const Sample& s, const dds_sample_info_t& info) {
     if (!info.valid_data) return;
     ToolState tool;
     tool.site.assign(s.site, strnlen(s.site, sizeof s.site));
-    if (!own_site.empty() && tool.site == own_site) return;
     tool.port = s.port;
     tool.tick = s.tick;
     tool.time_ns = s.time_ns;

@@ -82,11 +82,10 @@ class ToolSubscriber {
   ToolSubscriber(const ToolSubscriber&) = delete;
   ToolSubscriber& operator=(const ToolSubscriber&) = delete;
 
-  /// Appends every sample that arrived since the last take (at most the newest per tool), oldest
-  /// first; returns how many. Samples of `own_site` (this site's own, echoed by the domain) are
-  /// left out.
-  /// Each sample's writer_site is set.
-  std::size_t take(std::vector<ToolState>& out, const std::string& own_site = {});
+  /// Appends every sample of the other sites that arrived since the last take (at most the newest
+  /// per tool; this participant's own writers never match: from_other_sites), oldest first, each
+  /// with its writer_site; returns how many.
+  std::size_t take(std::vector<ToolState>& out);
   std::uint32_t matched_writers() const;
 
  private:

@@ -19,10 +19,10 @@ class Transport {
   /// Sends one sample to every other site; false (and error() says why) when refused.
   virtual bool publish_tool(const ToolState& tool) = 0;
   virtual bool publish_mass(const MassState& mass) = 0;
-  /// Appends what arrived from the other sites since the last take, oldest first (own_site's
-  /// samples left out).
-  virtual void take_tools(std::vector<ToolState>& out, const std::string& own_site) = 0;
-  virtual void take_masses(std::vector<MassState>& out, const std::string& own_site) = 0;
+  /// Appends what arrived from the other sites since the last take, oldest first (never this
+  /// site's own samples).
+  virtual void take_tools(std::vector<ToolState>& out) = 0;
+  virtual void take_masses(std::vector<MassState>& out) = 0;
   virtual std::string error() const = 0;
 };
 
@@ -40,11 +40,11 @@ class DdsTransport final : public Transport {
 
   bool publish_tool(const ToolState& tool) override;
   bool publish_mass(const MassState& mass) override;
-  void take_tools(std::vector<ToolState>& out, const std::string& own_site) override {
-    if (tools_in_) tools_in_->take(out, own_site);
+  void take_tools(std::vector<ToolState>& out) override {
+    if (tools_in_) tools_in_->take(out);
   }
-  void take_masses(std::vector<MassState>& out, const std::string& own_site) override {
-    if (masses_in_) masses_in_->take(out, own_site);
+  void take_masses(std::vector<MassState>& out) override {
+    if (masses_in_) masses_in_->take(out);
   }
   std::string error() const override { return error_; }
   /// Why the mass topic's writer was refused ("" when it was made, or masses were not asked for).

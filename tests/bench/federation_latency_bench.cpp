@@ -398,7 +398,7 @@ class DdsTransport final : public Transport {
  public:
   DdsTransport(const std::vector<std::string>& addresses, int index, DdsReceive mode, Received& into)
       : participant_(options(addresses, index)), publisher_(participant_, site_name(index)), subscriber_(participant_),
-        own_(site_name(index)), mode_(mode), into_(into) {
+        mode_(mode), into_(into) {
     reader_ = find_reader(participant_.handle());
     if (reader_ <= 0) fail("the tool topic's reader was not found under the participant");
     if (mode == DdsReceive::kListener) {
@@ -452,13 +452,12 @@ class DdsTransport final : public Transport {
 
   void take_into(Received& into) {
     batch_.clear();
-    if (subscriber_.take(batch_, own_) > 0) into.deliver(batch_, now_ns());
+    if (subscriber_.take(batch_) > 0) into.deliver(batch_, now_ns());
   }
 
   haptic::federation::Participant participant_;
   haptic::federation::ToolPublisher publisher_;
   haptic::federation::ToolSubscriber subscriber_;
-  std::string own_;
   DdsReceive mode_;
   Received& into_;
   dds_entity_t reader_ = 0;

@@ -53,8 +53,8 @@ class DelayLineNetwork {
       network_.send(name_, sent, &End::masses_);
       return true;
     }
-    void take_tools(std::vector<federation::ToolState>& out, const std::string&) override { deliver(tools_, out); }
-    void take_masses(std::vector<federation::MassState>& out, const std::string&) override { deliver(masses_, out); }
+    void take_tools(std::vector<federation::ToolState>& out) override { deliver(tools_, out); }
+    void take_masses(std::vector<federation::MassState>& out) override { deliver(masses_, out); }
     std::string error() const override { return {}; }
 
     std::deque<Message<federation::ToolState>> tools_;

@@ -325,7 +325,7 @@ TEST(FederationSecurity, AnObserverReadsAMembersSharedItemButCannotPublishOne) {
   item.spec = "a wall";
   ASSERT_TRUE(publisher.put(item)) << publisher.error();  // reliable, transient-local: sent once
   std::vector<SharedItemEvent> events;
-  ASSERT_TRUE(eventually([&] { return subscriber.take(events, "bench-b") > 0 || !events.empty(); },
+  ASSERT_TRUE(eventually([&] { return subscriber.take(events) > 0 || !events.empty(); },
                          std::chrono::seconds(20)))
       << "the observer did not get the member's item in 20 s";
   EXPECT_EQ(events.front().what, SharedItemEvent::What::kPut);
