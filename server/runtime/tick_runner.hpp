@@ -1,8 +1,10 @@
 #pragma once
 // One tick of the loop, in the order of docs/architecture.md:
 //   adopt scene -> per device port: device.read -> estimate -> kinematics -> compiled scene at
-//   that port -> passivity -> force guard -> Jᵀ -> device.write -> publish that port's sample
-//   -> advance the virtual masses.
+//   that port -> passivity -> avatars -> ROS 2 wrench -> force guard -> torque -> Jᵀ ->
+//   device.write -> publish that port's sample -> shared masses -> advance the virtual masses.
+// The federation's steps are stages of their own (RemoteToolStage, RobotWrenchStage,
+// SharedMassStage), present only where configured.
 // Separate from the thread that paces it so tests can run ticks directly (lockstep, allocation
 // counting) and both time modes share exactly this code.
 
@@ -20,11 +22,12 @@
 #include "runtime/loop_stats.hpp"
 #include "runtime/sample_ring.hpp"
 #include "runtime/snapshot_exchange.hpp"
-#include "engine/safety/network_passivity.hpp"
 #include "engine/safety/passivity.hpp"
 #include "runtime/latest_value.hpp"
+#include "runtime/remote_tool_stage.hpp"
 #include "runtime/remote_tools.hpp"
 #include "runtime/robot_wrench.hpp"
+#include "runtime/robot_wrench_stage.hpp"
 #include "runtime/shared_masses.hpp"
 
 namespace haptic::runtime {
@@ -61,7 +64,7 @@ struct TickPort {
   /// passivity layer; null: none, and no avatar work at all. Not owned.
   const LatestValue<RemoteToolSet>* remote = nullptr;
   CouplingLedger* ledger = nullptr;  // with remote: what each coupling sent. Not owned.
-  AvatarParams avatar;
+  AvatarParams avatar{};
   /// A ROS 2 node's wrench for this tool (federation.ros2.wrench_input): its force, scaled, through
   /// a network passivity layer of its own whose reservoir holds only what this port's user did
   /// against it (first scaled down to what that pays for over the coming period, its push on the
@@ -117,32 +120,9 @@ class TickRunner {
     /// The torque's guard (NaN to zero, the device's max_torque, its rate): only for a device
     /// that measures orientation and takes torques up to a known max_torque; without one no orientation work is done.
     std::optional<engine::ForceGuard> torque_guard;
-    /// Federation: the remote tools, this port's coupling with each (by slot), their keys.
-    const LatestValue<RemoteToolSet>* remote = nullptr;
-    CouplingLedger* ledger = nullptr;
-    AvatarParams avatar;
-    std::array<std::optional<engine::NetworkPassivity>, kMaxRemoteTools> couplings{};
-    std::array<std::uint64_t, kMaxRemoteTools> coupling_keys{};
-    /// A remote tool that left its slot fades out over the output ramp, its avatar held where it
-    /// was last heard and still through its coupling's layer: ticks left (0: not fading), and
-    /// the tool as last heard.
-    std::array<std::int64_t, kMaxRemoteTools> fade_left{};
-    std::array<RemoteTool, kMaxRemoteTools> last_heard{};
-    /// Federation: a ROS 2 node's wrench, and its layer (made with the port).
-    const LatestValue<RobotWrench>* robot = nullptr;
-    RobotWrenchParams robot_params{};
-    std::optional<engine::NetworkPassivity> robot_layer{};
-    std::uint64_t robot_sequence = 0;  // the newest wrench seen
-    engine::Vec3 robot_F_T_W{};        // the newest finite one's force, scaled. Unit: N.
-    std::int64_t robot_age_ticks = 0;  // ticks since it came (counted until it is stale)
-    double robot_gain = 0.0;           // its ramp: 0 ... 1
-    /// Its torque, where the device takes torques and knows its inertia: the layer, the newest
-    /// finite torque (scaled; N·m), and the handle's rotation summed since the port was made (rad).
-    std::optional<engine::NetworkPassivity> robot_torque_layer{};
-    engine::Vec3 robot_tau_T_W{};
-    engine::Vec3 robot_theta_W{};
-    engine::Quat robot_R_previous{};
-    bool robot_R_known = false;
+    /// Federation's stages, where configured: other sites' tools, a ROS 2 node's wrench.
+    std::optional<RemoteToolStage> remote_tools{};
+    std::optional<RobotWrenchStage> robot{};
   };
 
   double output_gain(std::uint64_t tick) const;
@@ -152,12 +132,6 @@ class TickRunner {
   /// What a guard let through (force or torque), its fault and saturation flagged in the sample
   /// and counted.
   engine::Vec3 guarded(const engine::GuardedForce& out, TickSample& sample);
-  /// The other sites' tools' force on this port's tool, each through its coupling's layer.
-  engine::Vec3 avatar_force(Port& port, const ToolReading& reading);
-  /// The ROS 2 node's force on this port's tool, ramped by staleness, through its layer.
-  engine::Vec3 robot_force(Port& port, const ToolReading& reading);
-  /// Its torque on the handle, with the force's ramp, through a layer of its own.
-  engine::Vec3 robot_torque(Port& port, const ToolReading& reading);
   /// The orientation fields' torque at this port, guarded; zero without them.
   engine::Vec3 port_torque(const engine::CompiledScene& scene, std::uint32_t index,
                            const ToolReading& reading, std::uint64_t tick, double gain,
