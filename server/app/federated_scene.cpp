@@ -54,7 +54,7 @@ std::string FederatedScene::put_remote(const federation::SharedItemState& item) 
     // Only its site changes it: here it is no session's to update.
     converted.shared = false;
     // A mass shared across sites keeps its key from its site: this copy couples to that one's.
-    converted.origin_site = runtime::site_key(item.site);
+    converted.origin_site = engine::site_key(item.site);
     converted.origin_id = item.item;
     spec = std::move(converted);
     source.object = std::move(object);

@@ -138,7 +138,7 @@ Server::Server(const v1::ServerConfig& config)
       }
     }
     mass_stage_ = std::make_unique<runtime::SharedMassStage>(
-        runtime::site_key(config.federation().site()), config::mass_coupling(config.federation()), tick.period_s,
+        engine::site_key(config.federation().site()), config::mass_coupling(config.federation()), tick.period_s,
         &remote_masses_, &local_masses_);
     tick.shared_masses = mass_stage_.get();
   }
@@ -743,10 +743,10 @@ void Server::federation_stats(v1::FederationStats& out) const {
   const runtime::LocalMassTable masses = local_masses_.load();
   for (const runtime::LocalMassCopy& copy : masses.masses) {
     for (std::size_t i = 0; copy.mass_key != 0 && i < engine::kMaxRemoteCopies; ++i) {
-      if (copy.coupled_site[i] == 0) continue;
+      if (!copy.coupled_site[i]) continue;
       v1::CouplingStats& coupling = *out.add_couplings();
       coupling.set_kind(v1::CouplingStats::MASS);
-      coupling.set_remote(copy.coupled_site[i]);
+      coupling.set_remote(copy.coupled_site[i].value);
       coupling.set_mass(copy.mass_key);
       coupling.set_injected_j(copy.injected[i]);
       coupling.set_given_j(copy.given[i]);

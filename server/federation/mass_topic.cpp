@@ -34,7 +34,7 @@ bool MassPublisher::publish(const MassState& mass) {
   sample.velocity = {mass.v_WM.x, mass.v_WM.y, mass.v_WM.z};
   sample.settled = mass.settled;
   haptic_federation_MassCoupling couplings[kMaxMassCouplings]{};
-  for (std::size_t i = 0; i < mass.sent.size(); ++i) couplings[i] = {mass.sent[i].first, mass.sent[i].second};
+  for (std::size_t i = 0; i < mass.sent.size(); ++i) couplings[i] = {mass.sent[i].first.value, mass.sent[i].second};
   lend(sample.energy, couplings, mass.sent.size(), kMaxMassCouplings);
   return write_sample(writer_, &sample, error_);
 }
@@ -58,7 +58,7 @@ std::size_t MassSubscriber::take(std::vector<MassState>& out) {
     mass.settled = s.settled;
     mass.writer_site = writers_.of(reader_.handle(), info.publication_handle);
     for (std::uint32_t k = 0; k < s.energy._length && k < kMaxMassCouplings; ++k) {
-      mass.sent.emplace_back(s.energy._buffer[k].site, s.energy._buffer[k].sent);
+      mass.sent.emplace_back(engine::SiteKey{s.energy._buffer[k].site}, s.energy._buffer[k].sent);
     }
     out.push_back(std::move(mass));
     ++taken;

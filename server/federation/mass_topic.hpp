@@ -14,6 +14,7 @@
 
 #include <dds/dds.h>
 
+#include "engine/core/site_key.hpp"
 #include "engine/core/vec3.hpp"
 #include "federation/dds_endpoint.hpp"
 
@@ -27,13 +28,13 @@ inline constexpr std::size_t kMaxMassCouplings = 8;
 /// One site's copy of one shared mass at one tick. W frame; m, m/s, J.
 struct MassState {
   std::string site;           // the publishing site (at most 64 characters)
-  std::uint64_t mass = 0;     // runtime::shared_mass_key
+  std::uint64_t mass = 0;     // engine::shared_mass_key
   std::uint64_t tick = 0;
   engine::Vec3 p_WM;
   engine::Vec3 v_WM;
   /// (other site's key, cumulative energy its coupling with this copy sent it); at most
   /// kMaxMassCouplings.
-  std::vector<std::pair<std::uint64_t, double>> sent;
+  std::vector<std::pair<engine::SiteKey, double>> sent;
   /// The copy has its place (runtime::LocalMassCopy::settled).
   bool settled = true;
   /// As received: the site its writer speaks for (ToolState::writer_site).

@@ -22,13 +22,6 @@ std::string seconds(std::chrono::steady_clock::duration d) {
 
 }  // namespace
 
-std::uint64_t remote_key(const std::string& site, std::uint32_t port) {
-  // FNV-1a over the site's name, a 0 byte and the port: the same key at every site, 0 never.
-  const char tail[5] = {0, static_cast<char>(port), static_cast<char>(port >> 8), static_cast<char>(port >> 16),
-                        static_cast<char>(port >> 24)};
-  const std::uint64_t hash = runtime::fnv1a(std::string_view(tail, sizeof tail), runtime::fnv1a(site));
-  return hash == 0 ? 1 : hash;
-}
 
 SampleRelay::SampleRelay(const RelayOptions& options, const std::vector<RelayPort>& ports, RelayMasses masses)
     : options_(options),
@@ -162,7 +155,7 @@ void SampleRelay::receive(std::chrono::steady_clock::time_point now) {
         set.tools[slot] = runtime::RemoteTool{};
         continue;
       }
-      set.tools[slot] = runtime::RemoteTool{remote_key(tool.site, tool.port), tool.p_WT, tool.v_WT, s.credit.credited()};
+      set.tools[slot] = runtime::RemoteTool{engine::tool_key(tool.site, tool.port), tool.p_WT, tool.v_WT, s.credit.credited()};
     }
     ports_[port].remote->store(set);
   }
@@ -190,7 +183,7 @@ void SampleRelay::publish() {
     if (const runtime::CouplingLedger* ledger = ports_[port].ledger) {
       for (std::size_t slot = 0; slot < runtime::kMaxRemoteTools; ++slot) {
         const Slot& s = slots_[port][slot];
-        if (s.used && ledger->key(slot) == remote_key(s.site, s.port)) {
+        if (s.used && ledger->key(slot) == engine::tool_key(s.site, s.port)) {
           tool.energy.push_back({s.site, s.port, ledger->sent(slot)});
         }
       }
@@ -216,7 +209,7 @@ void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
   for (const MassState& mass : received_masses_) heard(mass.site, now);
   const auto silence = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
       std::chrono::duration<double>(options_.silence_s));
-  const std::uint64_t own = runtime::site_key(options_.site);
+  const engine::SiteKey own = engine::site_key(options_.site);
   runtime::RemoteMassTable table = masses_.remote->load();
   bool changed = !received_masses_.empty();
   for (const MassState& mass : received_masses_) {
@@ -233,14 +226,14 @@ void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
       }
     }
     if (entry == runtime::kMaxSharedMasses) continue;
-    const std::uint64_t site = runtime::site_key(mass.site);
+    const engine::SiteKey site = engine::site_key(mass.site);
     auto& copies = table.masses[entry].copies;
     std::size_t slot = engine::kMaxRemoteCopies;
     for (std::size_t i = 0; i < engine::kMaxRemoteCopies && slot == engine::kMaxRemoteCopies; ++i) {
       if (copies[i].key == site) slot = i;
     }
     for (std::size_t i = 0; i < engine::kMaxRemoteCopies && slot == engine::kMaxRemoteCopies; ++i) {
-      if (copies[i].key == 0) slot = i;
+      if (!copies[i].key) slot = i;
     }
     if (slot == engine::kMaxRemoteCopies) continue;
     if (copies[slot].key != site) mass_credit_[entry][slot] = CreditAccount{};  // a new coupling
@@ -263,11 +256,11 @@ void SampleRelay::receive_masses(std::chrono::steady_clock::time_point now) {
     for (std::size_t k = 0; k < engine::kMaxRemoteCopies; ++k) {
       engine::RemoteMassCopy& copy = table.masses[i].copies[k];
       // Its site went quiet, or was cut off: uncoupled.
-      if (copy.key != 0 && (now - mass_heard_[i][k] > silence || cut_off_key(copy.key))) {
+      if (copy.key && (now - mass_heard_[i][k] > silence || cut_off_key(copy.key))) {
         copy = engine::RemoteMassCopy{};
         changed = true;
       }
-      any = any || copy.key != 0;
+      any = any || static_cast<bool>(copy.key);
     }
     if (!any) table.masses[i].mass_key = 0;
   }
@@ -288,7 +281,7 @@ void SampleRelay::publish_masses() {
     mass.v_WM = copy.v_WM;
     mass.settled = copy.settled;
     for (std::size_t k = 0; k < engine::kMaxRemoteCopies; ++k) {
-      if (copy.coupled_site[k] != 0) mass.sent.emplace_back(copy.coupled_site[k], copy.sent[k]);
+      if (copy.coupled_site[k]) mass.sent.emplace_back(copy.coupled_site[k], copy.sent[k]);
     }
     const bool ok = masses_refused_.empty() && transport_->publish_mass(mass);
     (ok ? published_ : failed_).fetch_add(1, std::memory_order_relaxed);
@@ -371,9 +364,9 @@ void SampleRelay::watch_sites(std::chrono::steady_clock::time_point now) {
 
 namespace haptic::federation {
 
-bool SampleRelay::cut_off_key(std::uint64_t site) const {
+bool SampleRelay::cut_off_key(engine::SiteKey site) const {
   for (const std::string& name : cut_off_) {
-    if (runtime::site_key(name) == site) return true;
+    if (engine::site_key(name) == site) return true;
   }
   return false;
 }

@@ -67,9 +67,6 @@ struct RelayMasses {
   runtime::LatestValue<runtime::RemoteMassTable>* remote = nullptr;
 };
 
-/// The key a remote tool has in the mailboxes: nonzero, the same at every site.
-std::uint64_t remote_key(const std::string& site, std::uint32_t port);
-
 class SampleRelay {
  public:
   /// Joins the domain and makes the writers (off the loop): a DdsTransport on the site's
@@ -130,8 +127,8 @@ class SampleRelay {
   /// transport cannot say), with finite values or not, is taken; what is not is counted and logged.
   bool admit(const std::string& site, const std::optional<std::string>& writer_site, bool finite, const char* what,
              std::chrono::steady_clock::time_point now);
-  /// Whether the site of this key (runtime::site_key) is cut off.
-  bool cut_off_key(std::uint64_t site) const;
+  /// Whether the site of this key is cut off.
+  bool cut_off_key(engine::SiteKey site) const;
   /// Which coupling a claim is for, named only in a cut-off's log line: a remote tool's port and
   /// this site's, or (remote_port < 0) a copy of a shared mass.
   struct CouplingName {

@@ -19,7 +19,7 @@ inline constexpr std::size_t kMaxRemoteTools = 8;
 /// Another site's tool as it arrived. Slot i of a RemoteToolSet keeps one remote tool while its
 /// key stays; a new key in a slot starts a new coupling there.
 struct RemoteTool {
-  std::uint64_t key = 0;         // the remote site and port; 0: an empty slot
+  std::uint64_t key = 0;         // the remote site and port (engine::tool_key); 0: an empty slot
   engine::Vec3 p_WT;             // its position as received (late by the network's delay). Unit: m.
   engine::Vec3 v_WT;             // Unit: m/s.
   double energy_sent_to_us = 0.0;  // what its coupling with this port has sent, cumulative. Unit: J.

@@ -4,29 +4,7 @@
 
 namespace haptic::runtime {
 
-std::uint64_t fnv1a(std::string_view bytes, std::uint64_t hash) {
-  for (const char c : bytes) {
-    hash ^= static_cast<unsigned char>(c);
-    hash *= 1099511628211ull;
-  }
-  return hash;
-}
-
-std::uint64_t site_key(std::string_view site) {
-  const std::uint64_t hash = fnv1a(site);
-  return hash != 0 ? hash : 1;
-}
-
-std::uint64_t shared_mass_key(std::uint64_t origin_site, std::uint64_t origin_id) {
-  // splitmix64's finaliser over the pair: distinct pairs give distinct keys but for a 2^-64 chance.
-  std::uint64_t z = origin_site ^ (origin_id + 0x9e3779b97f4a7c15ull + (origin_site << 6) + (origin_site >> 2));
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  z ^= z >> 31;
-  return z != 0 ? z : 1;
-}
-
-SharedMassStage::SharedMassStage(std::uint64_t own_site, const MassCouplingParams& coupling, double period_s,
+SharedMassStage::SharedMassStage(engine::SiteKey own_site, const MassCouplingParams& coupling, double period_s,
                                  const LatestValue<RemoteMassTable>* in, LatestValue<LocalMassTable>* out)
     : own_site_(own_site), in_(in), out_(out) {
   params_.coupling_stiffness = coupling.stiffness;
@@ -43,7 +21,7 @@ void SharedMassStage::run(const engine::CompiledScene& scene, std::uint64_t tick
   for (const std::uint32_t contact : scene.shared_masses) {
     const engine::CompiledContact& compiled = scene.contacts[contact];
     const std::uint64_t key =
-        shared_mass_key(compiled.origin_site != 0 ? compiled.origin_site : own_site_, compiled.origin_id);
+        engine::shared_mass_key(compiled.origin_site ? compiled.origin_site : own_site_, compiled.origin_id);
     std::size_t slot = kMaxSharedMasses;
     for (std::size_t i = 0; i < kMaxSharedMasses && slot == kMaxSharedMasses; ++i) {
       if (slots_[i].mass_key == key) slot = i;
@@ -70,7 +48,7 @@ void SharedMassStage::run(const engine::CompiledScene& scene, std::uint64_t tick
       if (entry.mass_key != key) continue;
       for (std::size_t i = 0; i < engine::kMaxRemoteCopies; ++i) {
         const engine::RemoteMassCopy& copy = entry.copies[i];
-        if (copy.key == 0 || !copy.settled) continue;
+        if (!copy.key || !copy.settled) continue;
         settled[i] = copy;
         if (first_settled == nullptr && engine::is_finite(copy.p_WM) && engine::is_finite(copy.v_WM)) {
           first_settled = &entry.copies[i];

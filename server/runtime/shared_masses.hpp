@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <string_view>
 
+#include "engine/core/site_key.hpp"
 #include "engine/scene/compiled_scene.hpp"
 #include "engine/scene/shared_mass.hpp"
 #include "runtime/latest_value.hpp"
@@ -20,15 +21,6 @@ namespace haptic::runtime {
 
 /// Most masses shared across sites one scene couples (a mailbox is copied every tick).
 inline constexpr std::size_t kMaxSharedMasses = 4;
-
-/// FNV-1a (64 bit) over `bytes`, continuing from `hash` (the offset basis to start).
-inline constexpr std::uint64_t kFnvOffsetBasis = 14695981039346656037ull;
-std::uint64_t fnv1a(std::string_view bytes, std::uint64_t hash = kFnvOffsetBasis);
-
-/// A site's key: FNV-1a of its name, never 0 (the same at every site).
-std::uint64_t site_key(std::string_view site);
-/// A shared mass's key at every site: its origin site's key and its id there. Never 0.
-std::uint64_t shared_mass_key(std::uint64_t origin_site, std::uint64_t origin_id);
 
 /// The other sites' copies of one shared mass as they arrived; copy i's key is its site's key.
 struct RemoteMassCopies {
@@ -44,7 +36,7 @@ struct LocalMassCopy {
   std::uint64_t mass_key = 0;  // 0: unused
   engine::Vec3 p_WM;           // where its origin is. Unit: m.
   engine::Vec3 v_WM;           // Unit: m/s.
-  std::array<std::uint64_t, engine::kMaxRemoteCopies> coupled_site{};  // 0: no coupling in the slot
+  std::array<engine::SiteKey, engine::kMaxRemoteCopies> coupled_site{};  // none: no coupling in the slot
   std::array<double, engine::kMaxRemoteCopies> sent{};                 // cumulative. Unit: J.
   /// The rest of each coupling's books (cumulative, J), for the stats.
   std::array<double, engine::kMaxRemoteCopies> received{};
@@ -82,7 +74,7 @@ class SharedMassStage {
  public:
   /// own_site: this site's key; in: the other sites' copies (written by the federation); out:
   /// this site's copies (read by it). Neither owned.
-  SharedMassStage(std::uint64_t own_site, const MassCouplingParams& coupling, double period_s,
+  SharedMassStage(engine::SiteKey own_site, const MassCouplingParams& coupling, double period_s,
                   const LatestValue<RemoteMassTable>* in, LatestValue<LocalMassTable>* out);
 
   /// On the loop, after every port and before engine::advance_scene. Nothing for a scene without
@@ -108,7 +100,7 @@ class SharedMassStage {
     std::uint64_t first_tick = 0;  // the tick the copy came into the slot
   };
 
-  std::uint64_t own_site_;
+  engine::SiteKey own_site_;
   engine::SharedMassParams params_;  // the couplings' stiffness, damping, period
   const LatestValue<RemoteMassTable>* in_;
   LatestValue<LocalMassTable>* out_;

@@ -48,7 +48,7 @@ inline std::unique_ptr<const engine::CompiledScene> shared_sphere_at(int site, c
   sphere.object_damping = 1.0;
   sphere.across_sites = true;
   if (site != 0) {
-    sphere.origin_site = runtime::site_key(origin);
+    sphere.origin_site = engine::site_key(origin);
     sphere.origin_id = 1;
   }
   engine::SceneDescription description;
@@ -70,7 +70,7 @@ struct LockstepSiteOptions {
 
 /// One site's loop. Its hand holds the tool where it starts until the test moves it.
 struct LockstepSite {
-  LockstepSite(std::uint64_t site, const engine::Vec3& start, std::unique_ptr<const engine::CompiledScene> scene,
+  LockstepSite(engine::SiteKey site, const engine::Vec3& start, std::unique_ptr<const engine::CompiledScene> scene,
                const LockstepSiteOptions& options)
       : key(site),
         device(device_params(), engine::PointMassState{start, {}}, options.max_force_N),
@@ -93,7 +93,7 @@ struct LockstepSite {
     return p;
   }
 
-  std::uint64_t key;
+  engine::SiteKey key;
   runtime::SimulatedPointMassDevice device;
   runtime::CartesianModel model;
   runtime::SceneExchange scenes;

@@ -70,7 +70,7 @@ struct CompiledContact {
   double object_damping = 0.0;  // B_V. Unit: N·s/m.
   /// A virtual mass shared across sites: its key (ObjectSpec::origin_site, origin_id, the id
   /// resolved to the item's own where 0).
-  std::uint64_t origin_site = 0;
+  SiteKey origin_site;
   std::uint64_t origin_id = 0;
   ItemRamp ramp;
   std::uint32_t state = 0;   // index into SceneState::contacts

@@ -10,6 +10,7 @@
 #include <variant>
 #include <vector>
 
+#include "engine/core/site_key.hpp"
 #include "engine/core/vec3.hpp"
 #include "engine/scene/fields.hpp"
 #include "engine/scene/mesh.hpp"
@@ -83,10 +84,9 @@ struct ObjectSpec {
   bool shared = false;
   /// A virtual mass shared across the sites of a federation (docs/federation.md, "Shared
   /// masses"): each site's copy is coupled to the others'. Its key at every site: the site that
-  /// made it (origin_site, a site key; 0: this site) and its id there (origin_id; 0: this item's
-  /// own id).
+  /// made it (origin_site; none: this site) and its id there (origin_id; 0: this item's own id).
   bool across_sites = false;
-  std::uint64_t origin_site = 0;
+  SiteKey origin_site;
   std::uint64_t origin_id = 0;
 };
 

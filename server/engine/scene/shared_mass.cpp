@@ -50,7 +50,7 @@ Vec3 CopyCouplings::force(std::span<const RemoteMassCopy> remotes, const SharedM
   // its share of it.
   std::size_t active = 0;
   for (std::size_t slot = 0; slot < std::min(remotes.size(), kMaxRemoteCopies); ++slot) {
-    if (remotes[slot].key != 0) ++active;
+    if (remotes[slot].key) ++active;
   }
   const double max_damping = mass / params.period / static_cast<double>(std::max<std::size_t>(active, 1));
   Vec3 total;
@@ -61,7 +61,7 @@ Vec3 CopyCouplings::force(std::span<const RemoteMassCopy> remotes, const SharedM
       // Another copy in this slot (or none): a new coupling, with nothing booked.
       keys_[slot] = remote.key;
       couplings_[slot].reset();
-      if (remote.key != 0) {
+      if (remote.key) {
         NetworkPassivityParams layer;
         layer.period = params.period;
         // A copy is no device with sensor noise: the damper acts down to µm/s, or the delayed

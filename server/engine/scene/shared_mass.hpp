@@ -26,6 +26,7 @@
 #include <span>
 #include <string>
 
+#include "engine/core/site_key.hpp"
 #include "engine/core/vec3.hpp"
 #include "engine/device/exact_step.hpp"
 #include "engine/safety/network_passivity.hpp"
@@ -54,7 +55,7 @@ std::string validate(const SharedMassParams& params);
 
 /// Another site's copy as it arrived (late by the network's delay).
 struct RemoteMassCopy {
-  std::uint64_t key = 0;          // the remote site's copy; 0: an empty slot
+  SiteKey key;                    // the remote site's copy; none: an empty slot
   Vec3 p_WM;                      // its centre. Unit: m.
   Vec3 v_WM;                      // Unit: m/s.
   double energy_sent_to_us = 0.0; // what its coupling with this copy has sent, cumulative. Unit: J.
@@ -79,7 +80,7 @@ class CopyCouplings {
   Vec3 force(std::span<const RemoteMassCopy> remotes, const SharedMassState& copy, double mass,
              const SharedMassParams& params);
 
-  std::uint64_t key(std::size_t slot) const { return keys_[slot]; }
+  SiteKey key(std::size_t slot) const { return keys_[slot]; }
   double energy_sent(std::size_t slot) const { return couplings_[slot] ? couplings_[slot]->sent() : 0.0; }
   const NetworkPassivity* coupling(std::size_t slot) const {
     return couplings_[slot] ? &*couplings_[slot] : nullptr;
@@ -90,7 +91,7 @@ class CopyCouplings {
   void clear();
 
  private:
-  std::array<std::uint64_t, kMaxRemoteCopies> keys_{};
+  std::array<SiteKey, kMaxRemoteCopies> keys_{};
   std::array<std::optional<NetworkPassivity>, kMaxRemoteCopies> couplings_{};
   std::array<Vec3, kMaxRemoteCopies> forces_{};
 };
@@ -112,7 +113,7 @@ class SharedMass {
 
   /// Slot i's coupling: the remote copy it couples to (0: none), what it sent (cumulative, J),
   /// and its layer's books. The energy sent goes to that remote site with this copy's state.
-  std::uint64_t coupling_key(std::size_t slot) const { return couplings_.key(slot); }
+  SiteKey coupling_key(std::size_t slot) const { return couplings_.key(slot); }
   double energy_sent(std::size_t slot) const { return couplings_.energy_sent(slot); }
   const NetworkPassivity* coupling(std::size_t slot) const { return couplings_.coupling(slot); }
   /// The force slot i's coupling applied over the last period (after its layer). Unit: N.

@@ -40,7 +40,7 @@ std::unique_ptr<const engine::CompiledScene> empty_scene() {
 /// The victim: one port, its tool at the origin, held there by the hand (200 N/m).
 struct Victim : test::LockstepSite {
   Victim(test::DelayLineNetwork& network, const RelayOptions& options)
-      : LockstepSite(runtime::site_key(kVictim), {0, 0, 0}, empty_scene(),
+      : LockstepSite(engine::site_key(kVictim), {0, 0, 0}, empty_scene(),
                      {.period_s = kPeriod, .max_force_N = 20.0, .remote_tools = true, .avatar_radius_m = 0.01}),
         relay(options, network.site(kVictim), {RelayPort{&samples, 0, &remote, &ledger}}) {}
   SampleRelay relay;
@@ -227,11 +227,11 @@ TEST(ForgingPeer, AMassCopyWithANaNIsRefusedAndOneClaimingOverTheCapCutsItsSiteO
   runtime::LatestValue<runtime::RemoteMassTable> remote;
   SampleRelay victim(victim_options(&log), network.site(kVictim), {}, RelayMasses{&local, &remote});
   Transport& forger = network.site(kForger);
-  const std::uint64_t mass = runtime::shared_mass_key(runtime::site_key(kVictim), 1);
+  const std::uint64_t mass = engine::shared_mass_key(engine::site_key(kVictim), 1);
   const auto copies_of_forger = [&] {
     std::size_t copies = 0;
     for (const runtime::RemoteMassCopies& entry : remote.load().masses) {
-      for (const engine::RemoteMassCopy& copy : entry.copies) copies += copy.key == runtime::site_key(kForger);
+      for (const engine::RemoteMassCopy& copy : entry.copies) copies += copy.key == engine::site_key(kForger);
     }
     return copies;
   };
@@ -243,7 +243,7 @@ TEST(ForgingPeer, AMassCopyWithANaNIsRefusedAndOneClaimingOverTheCapCutsItsSiteO
     copy.tick = tick;
     copy.p_WM = {tick < 1000 ? 0.0 : NAN, 0.0, 0.0};  // a NaN from 1 s to 2 s
     if (tick >= 2000) copy.p_WM = {};
-    copy.sent = {{runtime::site_key(kVictim), tick < 2500 ? 0.0 : 100.0}};  // 100 J "sent" at 2.5 s
+    copy.sent = {{engine::site_key(kVictim), tick < 2500 ? 0.0 : 100.0}};  // 100 J "sent" at 2.5 s
     forger.publish_mass(copy);
     victim.step(clock_at(tick));
     network.advance();

@@ -21,8 +21,8 @@
 namespace haptic::federation {
 namespace {
 
-using runtime::shared_mass_key;
-using runtime::site_key;
+using engine::shared_mass_key;
+using engine::site_key;
 using test::hand_towards;
 using test::Phase;
 
@@ -272,7 +272,7 @@ TEST(LockstepSites, ASiteThatGoesQuietIsDroppedAtTheOthersAfterSilence) {
   Site a(0, script[0][0].target, network), b(1, script[1][0].target, network);
   a.device.set_hand(hand_towards(script[0][0].target, script[0][1].target));
   b.device.set_hand(hand_towards(script[1][0].target, script[1][1].target));
-  const std::uint64_t b_tool = remote_key(b.name, 0);
+  const std::uint64_t b_tool = engine::tool_key(b.name, 0);
   const auto b_in_mailbox = [&] {
     for (const runtime::RemoteTool& tool : a.remote.load().tools) {
       if (tool.key == b_tool) return true;

@@ -23,7 +23,7 @@ constexpr double kPeriod = 1e-3;
 /// One site: its device held by a hand whose target moves from `start` to `end` over 1.5 s.
 struct Site : test::LockstepSite {
   Site(const engine::Vec3& start, const engine::Vec3& end, std::uint64_t site)
-      : LockstepSite(site, start,
+      : LockstepSite(engine::SiteKey{site}, start,
                      std::make_unique<const engine::CompiledScene>(engine::compile_scene({}, 50, 1, kPeriod)),
                      {.period_s = kPeriod, .max_force_N = 20.0, .remote_tools = true, .avatar_radius_m = 0.01}) {
     device.set_hand(test::hand_towards(start, end));
@@ -54,7 +54,7 @@ double run(Site& a, Site& b, std::uint64_t delay, double loss, std::uint64_t tic
         const Message m = lines[1 - i].front();
         lines[1 - i].pop_front();
         if (m.lost) continue;
-        set.tools[0] = RemoteTool{sites[1 - i]->key, m.p_WT, m.v_WT, m.sent};
+        set.tools[0] = RemoteTool{sites[1 - i]->key.value, m.p_WT, m.v_WT, m.sent};
       }
       sites[i]->remote.store(set);
       sites[i]->runner.run(tick, static_cast<std::int64_t>(tick - 1) * 1'000'000);

@@ -23,6 +23,8 @@ constexpr double kPeriod = 1e-3;
 constexpr std::uint64_t kTicks = 60'000;
 constexpr double kMaxForce = 20.0;  // the devices' limit. N
 
+using engine::shared_mass_key;
+using engine::site_key;
 using test::hand_towards;
 using test::Phase;
 
@@ -149,7 +151,7 @@ TEST(SharedMasses, KeysAreTheSameAtEverySiteAndNeverZero) {
   EXPECT_NE(site_key("lab-a"), site_key("lab-b"));
   EXPECT_NE(shared_mass_key(site_key("lab-a"), 1), shared_mass_key(site_key("lab-a"), 2));
   EXPECT_NE(shared_mass_key(site_key("lab-a"), 1), shared_mass_key(site_key("lab-b"), 1));
-  EXPECT_NE(shared_mass_key(0, 0), 0u);
+  EXPECT_NE(shared_mass_key(engine::SiteKey{}, 0), 0u);
 }
 
 TEST(SharedMasses, ATickWithASharedMassAllocatesNothing) {
