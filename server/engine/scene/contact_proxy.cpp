@@ -40,7 +40,7 @@ ContactForce contact_force(const LocalShapeQuery& query_at_tool, const ObjectPos
   out.n_W = rotate(X_WO.R_WO, query_at_tool.n_O);
   out.p_WP = to_world(X_WO, p_OP);
   // Normal part of eq. (1): K d − B v·n̂, clamped at zero so the surface never pulls (a damper
-  // that pulled would hold the tool inside while it leaves; as in compiled_scene.cpp).
+  // that pulled would hold the tool inside while it leaves; as in evaluate_scene.cpp).
   const double normal =
       std::max(0.0, material.stiffness * out.penetration - material.damping * dot(v_WT, out.n_W));
   out.F_T_W = normal * out.n_W;

@@ -76,7 +76,7 @@ ContactForce contact_force(const LocalShapeQuery& query_at_tool, const ObjectPos
 ContactForce no_contact(const Vec3& p_WT);
 
 /// Frictionless contact, stateless: F = max(0, K d − B (v_WT · n̂)) n̂ with n̂ the outward normal
-/// at the surface point S closest to T (the law of compiled_scene.cpp for walls and spheres).
+/// at the surface point S closest to T (the law of evaluate_scene.cpp for walls and spheres).
 /// v_WT is the tool's velocity relative to the object (for a moving object, subtract the
 /// object's velocity at S). Unit: m/s. Uses only stiffness and damping of the material.
 template <typename Shape>

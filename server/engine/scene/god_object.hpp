@@ -32,7 +32,7 @@
 // u = (p_WP - p_WT) / d and v_n = u . (v_WT - v_surface) the tool's approach speed relative to the
 // object's surface point at the proxy. That is F = K (p_WP - p_WT) - B v with the damping taken
 // along the contact direction and the total clamped so a surface only pushes, the contact law of
-// compiled_scene.cpp. In free space F = 0 and p_WP = p_WT exactly.
+// evaluate_scene.cpp. In free space F = 0 and p_WP = p_WT exactly.
 //
 // Numerical margin: the proxy is kept at least `margin` (default 1e-6 m, so K = 1000 N/m
 // shifts the force by 1 mN) off every plane it is constrained by; starting that far off,
