@@ -360,6 +360,12 @@ std::uint64_t SessionRegistry::subscribers_version() const {
 
 std::vector<Subscriber> SessionRegistry::subscribers() const {
   std::vector<Subscriber> out;
+  subscribers(out);
+  return out;
+}
+
+void SessionRegistry::subscribers(std::vector<Subscriber>& out) const {
+  out.clear();
   std::lock_guard lock(mutex_);
   for (const auto& [id, session] : sessions_) {
     if (session.decimation == 0 || !session.address) continue;
@@ -368,7 +374,6 @@ std::vector<Subscriber> SessionRegistry::subscribers() const {
                              session.ack_window, session.sequenced, session.acknowledged,
                              session.unsent});
   }
-  return out;
 }
 
 bool SessionRegistry::any_subscribed() const {

@@ -211,6 +211,10 @@ class SessionRegistry {
   /// Changes whenever the subscriber list would change; lets the sender copy it only then.
   std::uint64_t subscribers_version() const;
   std::vector<Subscriber> subscribers() const;
+  /// The same into `out`, reusing its storage: the real-time sender, which reserves room for
+  /// max_sessions() once, refills it without allocating.
+  void subscribers(std::vector<Subscriber>& out) const;
+  std::uint32_t max_sessions() const { return limits_.max_sessions; }
   /// Whether any session is subscribed to the state stream now.
   bool any_subscribed() const;
 

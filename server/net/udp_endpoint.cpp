@@ -14,6 +14,8 @@
 #include <cerrno>
 #include <cstring>
 #include <future>
+#include <optional>
+#include <span>
 #include <stdexcept>
 #include <vector>
 
@@ -244,6 +246,176 @@ void UdpEndpoint::acknowledgement_arrived() {
   acknowledgement_cv_.notify_all();
 }
 
+namespace {
+
+/// One datagram of a wake-up, encoded and waiting for sendmmsg with the others.
+struct Outgoing {
+  std::array<std::uint8_t, wire::kMaxDatagramSize> bytes;
+  iovec iov;
+  const Subscriber* subscriber;
+  std::int64_t stamp_ns;  // the tick's time stamp (server time)
+};
+
+/// A tick's sample as the State datagram's payload.
+wire::StatePayload state_payload(const runtime::TickSample& sample) {
+  wire::StatePayload state;
+  state.tick = sample.tick;
+  state.p_WT = {sample.p_WT.x, sample.p_WT.y, sample.p_WT.z};
+  state.v_WT = {sample.v_WT.x, sample.v_WT.y, sample.v_WT.z};
+  state.F_T_W = {sample.F_T_W.x, sample.F_T_W.y, sample.F_T_W.z};
+  state.p_WP = {sample.p_WP.x, sample.p_WP.y, sample.p_WP.z};
+  state.contact_count = sample.contact_count;
+  state.flags = sample.flags;
+  state.buttons = sample.buttons;
+  state.has_orientation = sample.has_orientation;  // only then R_WT and tau_T_W go out
+  state.R_WT = {sample.R_WT.w, sample.R_WT.x, sample.R_WT.y, sample.R_WT.z};
+  state.tau_T_W = {sample.tau_T_W.x, sample.tau_T_W.y, sample.tau_T_W.z};
+  return state;
+}
+
+/// Lockstep flow control over the sender's wake-ups: how far the flow-controlled subscribers'
+/// windows let a round go, and which subscriber has stalled (nothing acknowledged for
+/// kAckStallTimeout while its window was full), to be sent on without waiting until it catches up.
+class FlowControl {
+ public:
+  /// Room for `capacity` subscribers, so that a change of subscribers up to it allocates nothing.
+  explicit FlowControl(std::size_t capacity) {
+    waiting_since_.reserve(capacity);
+    unpaced_.reserve(capacity);
+    acknowledged_at_stall_.reserve(capacity);
+  }
+
+  /// The subscribers changed: every one starts paced, waiting for nothing.
+  void reset(std::size_t subscribers) {
+    waiting_since_.assign(subscribers, std::nullopt);
+    unpaced_.assign(subscribers, false);
+    acknowledged_at_stall_.assign(subscribers, 0);
+  }
+
+  /// The newest tick, at most `published`, that this round may send without a paced subscriber's
+  /// unacknowledged sequence numbers passing its window; a stall found is counted in `stalls`.
+  std::uint64_t newest(std::span<const Subscriber> subscribers, std::uint64_t published, std::uint64_t last_tick,
+                       std::atomic<std::uint64_t>& stalls) {
+    std::uint64_t newest = published;
+    const auto now = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < subscribers.size(); ++i) {
+      const Subscriber& subscriber = subscribers[i];
+      if (subscriber.ack_window == 0) continue;
+      const std::uint64_t sequenced = subscriber.sequenced->load(std::memory_order_relaxed);
+      const std::uint64_t acknowledged = subscriber.acknowledged->load(std::memory_order_acquire);
+      const std::uint64_t limit = flow_limit(subscriber, sequenced, acknowledged, last_tick);
+      if (unpaced_[i]) {
+        // Sent on without waiting since it stalled; paced again once it acknowledges again
+        // and has caught up to within its window.
+        if (acknowledged > acknowledged_at_stall_[i] && sequenced <= acknowledged + subscriber.ack_window) {
+          unpaced_[i] = false;
+        }
+        continue;
+      }
+      if (limit >= published) {
+        waiting_since_[i].reset();
+        continue;
+      }
+      if (!waiting_since_[i]) waiting_since_[i] = now;
+      if (now - *waiting_since_[i] >= kAckStallTimeout) {
+        unpaced_[i] = true;
+        acknowledged_at_stall_[i] = acknowledged;
+        waiting_since_[i].reset();
+        stalls.fetch_add(1, std::memory_order_relaxed);
+        continue;
+      }
+      newest = std::min(newest, limit);
+    }
+    return newest;
+  }
+
+ private:
+  // Per subscriber (by index): since when its full window has held the sender up, whether it is
+  // being sent on without waiting, and what it had acknowledged when it stalled.
+  std::vector<std::optional<std::chrono::steady_clock::time_point>> waiting_since_;
+  std::vector<bool> unpaced_;
+  std::vector<std::uint64_t> acknowledged_at_stall_;
+};
+
+/// Encodes the planned sends into `outgoing` (grown as needed): each tick's samples read once from
+/// `rings`, each due sample numbered in its subscriber's sequence whether it is sent or not (a
+/// sample the ring no longer holds is missed, counted). Returns how many datagrams it encoded.
+std::size_t encode_plan(std::span<const PlannedSend> plan, std::span<const Subscriber> subscribers,
+                        std::span<runtime::SampleRing* const> rings, std::vector<runtime::TickSample>& samples,
+                        std::vector<bool>& present, std::vector<Outgoing>& outgoing, UdpCounters& counters) {
+  if (outgoing.size() < plan.size()) outgoing.resize(plan.size());
+  std::size_t count = 0;
+  std::uint64_t read_tick = 0;  // the tick whose samples are in `samples`
+  for (const PlannedSend& send : plan) {
+    const Subscriber& subscriber = subscribers[send.subscriber];
+    if (subscriber.device_index >= rings.size()) continue;
+    if (send.tick != read_tick) {  // each tick's samples read once, for whoever is sent them
+      for (std::size_t port = 0; port < rings.size(); ++port) present[port] = rings[port]->read(send.tick, samples[port]);
+      read_tick = send.tick;
+    }
+    const std::uint64_t sequence = subscriber.sequenced->load(std::memory_order_relaxed) + send.skipped_before + 1;
+    subscriber.sequenced->store(sequence, std::memory_order_release);
+    const bool missed = !present[subscriber.device_index];
+    if (const std::uint64_t unsent = send.skipped_before + (missed ? 1 : 0); unsent > 0 && subscriber.unsent) {
+      subscriber.unsent->fetch_add(unsent, std::memory_order_relaxed);
+    }
+    if (missed) {
+      counters.samples_missed.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    const runtime::TickSample& sample = samples[subscriber.device_index];
+    wire::Header header;
+    header.session_id = subscriber.session_id;
+    header.sequence = sequence;
+    header.time_ns = sample.time_ns;
+    Outgoing& out = outgoing[count++];
+    const std::size_t size = wire::encode_state(header, state_payload(sample), subscriber.key, out.bytes);
+    out.iov = {out.bytes.data(), size};
+    out.subscriber = &subscriber;
+    out.stamp_ns = sample.time_ns;
+  }
+  return count;
+}
+
+/// Hands the first `count` of `outgoing` to the kernel (sendmmsg, in batches of UIO_MAXIOV). Each
+/// client's count goes up before its datagram leaves (and down again if it could not): a client
+/// that reports what it received (its heartbeat) never reports more than was sent. A datagram the
+/// kernel refused (its socket buffer full, an unreachable address) is counted and the rest go on.
+/// Returns when (CLOCK_MONOTONIC, ns) the first was handed over where `stamp`, else 0.
+std::int64_t send_batch(int socket, std::span<const Outgoing> outgoing, std::size_t count,
+                        std::vector<mmsghdr>& messages, UdpCounters& counters, bool stamp) {
+  messages.assign(count, mmsghdr{});
+  for (std::size_t i = 0; i < count; ++i) {
+    msghdr& m = messages[i].msg_hdr;
+    m.msg_name = const_cast<sockaddr_storage*>(&outgoing[i].subscriber->address.storage);
+    m.msg_namelen = outgoing[i].subscriber->address.length;
+    m.msg_iov = const_cast<iovec*>(&outgoing[i].iov);
+    m.msg_iovlen = 1;
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    if (const auto& per_client = outgoing[i].subscriber->sent) per_client->fetch_add(1, std::memory_order_relaxed);
+  }
+  const std::int64_t handed_ns = stamp ? runtime::monotonic_now_ns() : 0;
+  for (std::size_t first = 0; first < count;) {
+    const unsigned chunk = static_cast<unsigned>(std::min<std::size_t>(count - first, UIO_MAXIOV));
+    const int sent = ::sendmmsg(socket, messages.data() + first, chunk, MSG_DONTWAIT);
+    const std::size_t done = sent > 0 ? static_cast<std::size_t>(sent) : 0;
+    counters.sent.fetch_add(done, std::memory_order_relaxed);
+    first += done;
+    if (done < chunk) {
+      counters.send_errors.fetch_add(1, std::memory_order_relaxed);
+      if (const auto& per_client = outgoing[first].subscriber->sent) {
+        per_client->fetch_sub(1, std::memory_order_relaxed);
+      }
+      if (const auto& unsent = outgoing[first].subscriber->unsent) unsent->fetch_add(1, std::memory_order_relaxed);
+      ++first;
+    }
+  }
+  return handed_ns;
+}
+
+}  // namespace
+
 void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, SendFrom from) {
   // Real time conflates: when this thread has fallen behind (the host was busy), each subscriber
   // gets only its newest due sample and the older ones are skipped and counted, never queued —
@@ -254,14 +426,10 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, SendFrom
   // missed: a client sees each one it did not get as a gap.
   const bool conflate = time_origin_ns.has_value();
   std::vector<Subscriber> subscribers;
-  std::vector<PlannedSend> plan;
+  subscribers.reserve(sessions_.max_sessions());  // refilled in place as sessions come and go
   std::uint64_t subscribers_version = ~0ull;
-  // Flow control: per subscriber (by index in `subscribers`), since when its full window has
-  // held the sender up, and whether it is being sent on without waiting (it stalled, and has not
-  // caught up since).
-  std::vector<std::optional<std::chrono::steady_clock::time_point>> waiting_since;
-  std::vector<bool> unpaced;
-  std::vector<std::uint64_t> acknowledged_at_stall;
+  FlowControl flow(sessions_.max_sessions());
+  std::vector<PlannedSend> plan;
   // The loop publishes the ports in order, the last port last: once its ring holds a tick, every
   // port's ring does.
   const runtime::SampleRing& last_ring = *rings_.back();
@@ -271,12 +439,6 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, SendFrom
   std::vector<bool> present(rings_.size());
   // A wake-up's datagrams, encoded first and handed to the kernel together (sendmmsg): one
   // system call per batch instead of one per subscriber.
-  struct Outgoing {
-    std::array<std::uint8_t, wire::kMaxDatagramSize> bytes;
-    iovec iov;
-    const Subscriber* subscriber;
-    std::int64_t stamp_ns;  // the tick's time stamp (server time)
-  };
   std::vector<Outgoing> outgoing;
   std::vector<mmsghdr> messages;
   while (!last_ring.stopping()) {
@@ -291,50 +453,20 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, SendFrom
     }
     const std::uint64_t published = last_ring.newest();
     if (const auto version = sessions_.subscribers_version(); version != subscribers_version) {
-      subscribers = sessions_.subscribers();
+      sessions_.subscribers(subscribers);
       subscribers_version = version;
-      waiting_since.assign(subscribers.size(), std::nullopt);
-      unpaced.assign(subscribers.size(), false);
-      acknowledged_at_stall.assign(subscribers.size(), 0);
+      flow.reset(subscribers.size());
     }
-    // How far the flow-controlled subscribers' windows let this round go (lockstep only).
-    // (Lockstep only: the real-time sender takes no lock here.)
+    // How far the flow-controlled subscribers' windows let this round go (lockstep only: the
+    // real-time sender takes no lock here).
     std::uint64_t acknowledgements_seen = 0;
-    if (!conflate) {
-      std::lock_guard lock(acknowledgement_mutex_);
-      acknowledgements_seen = acknowledgements_;
-    }
     std::uint64_t newest = published;
     if (!conflate) {
-      const auto now = std::chrono::steady_clock::now();
-      for (std::size_t i = 0; i < subscribers.size(); ++i) {
-        const Subscriber& subscriber = subscribers[i];
-        if (subscriber.ack_window == 0) continue;
-        const std::uint64_t sequenced = subscriber.sequenced->load(std::memory_order_relaxed);
-        const std::uint64_t acknowledged = subscriber.acknowledged->load(std::memory_order_acquire);
-        const std::uint64_t limit = flow_limit(subscriber, sequenced, acknowledged, last_tick);
-        if (unpaced[i]) {
-          // Sent on without waiting since it stalled; paced again once it acknowledges again
-          // and has caught up to within its window.
-          if (acknowledged > acknowledged_at_stall[i] && sequenced <= acknowledged + subscriber.ack_window) {
-            unpaced[i] = false;
-          }
-          continue;
-        }
-        if (limit >= published) {
-          waiting_since[i].reset();
-          continue;
-        }
-        if (!waiting_since[i]) waiting_since[i] = now;
-        if (now - *waiting_since[i] >= kAckStallTimeout) {
-          unpaced[i] = true;
-          acknowledged_at_stall[i] = acknowledged;
-          waiting_since[i].reset();
-          counters_.ack_stalls.fetch_add(1, std::memory_order_relaxed);
-          continue;
-        }
-        newest = std::min(newest, limit);
+      {
+        std::lock_guard lock(acknowledgement_mutex_);
+        acknowledgements_seen = acknowledgements_;
       }
+      newest = flow.newest(subscribers, published, last_tick, counters_.ack_stalls);
     }
     if (newest <= last_tick) {
       // Every window that matters is full: wait for an acknowledgement (or the stall deadline;
@@ -347,87 +479,8 @@ void UdpEndpoint::send_loop(std::optional<std::int64_t> time_origin_ns, SendFrom
     std::uint64_t skipped = 0;
     plan_sends(subscribers, last_tick, newest, conflate, plan, skipped);
     counters_.samples_skipped.fetch_add(skipped, std::memory_order_relaxed);
-    if (outgoing.size() < plan.size()) outgoing.resize(plan.size());
-    std::size_t count = 0;
-    std::uint64_t read_tick = 0;  // the tick whose samples are in `samples`
-    for (const PlannedSend& send : plan) {
-      const Subscriber& subscriber = subscribers[send.subscriber];
-      if (subscriber.device_index >= rings_.size()) continue;
-      if (send.tick != read_tick) {  // each tick's samples read once, for whoever is sent them
-        for (std::size_t port = 0; port < rings_.size(); ++port) {
-          present[port] = rings_[port]->read(send.tick, samples[port]);
-        }
-        read_tick = send.tick;
-      }
-      const std::uint64_t sequence =
-          subscriber.sequenced->load(std::memory_order_relaxed) + send.skipped_before + 1;
-      subscriber.sequenced->store(sequence, std::memory_order_release);
-      const bool missed = !present[subscriber.device_index];
-      if (const std::uint64_t unsent = send.skipped_before + (missed ? 1 : 0); unsent > 0 && subscriber.unsent) {
-        subscriber.unsent->fetch_add(unsent, std::memory_order_relaxed);
-      }
-      if (missed) {
-        counters_.samples_missed.fetch_add(1, std::memory_order_relaxed);
-        continue;
-      }
-      const runtime::TickSample& sample = samples[subscriber.device_index];
-      wire::Header header;
-      header.session_id = subscriber.session_id;
-      header.sequence = sequence;
-      header.time_ns = sample.time_ns;
-      wire::StatePayload state;
-      state.tick = sample.tick;
-      state.p_WT = {sample.p_WT.x, sample.p_WT.y, sample.p_WT.z};
-      state.v_WT = {sample.v_WT.x, sample.v_WT.y, sample.v_WT.z};
-      state.F_T_W = {sample.F_T_W.x, sample.F_T_W.y, sample.F_T_W.z};
-      state.p_WP = {sample.p_WP.x, sample.p_WP.y, sample.p_WP.z};
-      state.contact_count = sample.contact_count;
-      state.flags = sample.flags;
-      state.buttons = sample.buttons;
-      state.has_orientation = sample.has_orientation;  // only then R_WT and tau_T_W go out
-      state.R_WT = {sample.R_WT.w, sample.R_WT.x, sample.R_WT.y, sample.R_WT.z};
-      state.tau_T_W = {sample.tau_T_W.x, sample.tau_T_W.y, sample.tau_T_W.z};
-      Outgoing& out = outgoing[count++];
-      const std::size_t size = wire::encode_state(header, state, subscriber.key, out.bytes);
-      out.iov = {out.bytes.data(), size};
-      out.subscriber = &subscriber;
-      out.stamp_ns = sample.time_ns;
-    }
-    messages.assign(count, mmsghdr{});
-    for (std::size_t i = 0; i < count; ++i) {
-      msghdr& m = messages[i].msg_hdr;
-      m.msg_name = const_cast<sockaddr_storage*>(&outgoing[i].subscriber->address.storage);
-      m.msg_namelen = outgoing[i].subscriber->address.length;
-      m.msg_iov = &outgoing[i].iov;
-      m.msg_iovlen = 1;
-    }
-    // Each client's count goes up before its datagram leaves (and down again if it could not):
-    // a client that reports what it received (its heartbeat) never reports more than was sent.
-    for (std::size_t i = 0; i < count; ++i) {
-      if (const auto& per_client = outgoing[i].subscriber->sent) {
-        per_client->fetch_add(1, std::memory_order_relaxed);
-      }
-    }
-    const std::int64_t handed_ns = time_origin_ns ? runtime::monotonic_now_ns() : 0;
-    for (std::size_t first = 0; first < count;) {
-      const unsigned chunk = static_cast<unsigned>(std::min<std::size_t>(count - first, UIO_MAXIOV));
-      const int sent = ::sendmmsg(socket_, messages.data() + first, chunk, MSG_DONTWAIT);
-      // A message the kernel refused (its socket buffer full, an unreachable address) is counted
-      // and the rest go on.
-      const std::size_t done = sent > 0 ? static_cast<std::size_t>(sent) : 0;
-      counters_.sent.fetch_add(done, std::memory_order_relaxed);
-      first += done;
-      if (done < chunk) {
-        counters_.send_errors.fetch_add(1, std::memory_order_relaxed);
-        if (const auto& per_client = outgoing[first].subscriber->sent) {
-          per_client->fetch_sub(1, std::memory_order_relaxed);
-        }
-        if (const auto& unsent = outgoing[first].subscriber->unsent) {
-          unsent->fetch_add(1, std::memory_order_relaxed);
-        }
-        ++first;
-      }
-    }
+    const std::size_t count = encode_plan(plan, subscribers, rings_, samples, present, outgoing, counters_);
+    const std::int64_t handed_ns = send_batch(socket_, outgoing, count, messages, counters_, time_origin_ns.has_value());
     if (time_origin_ns && count > 0) {
       // The tick's datagrams were handed to the kernel at handed_ns; the first left then.
       counters_.send_delay.record(handed_ns - (*time_origin_ns + outgoing[0].stamp_ns), handed_ns);
