@@ -11,8 +11,8 @@ namespace haptic::engine {
 
 /// The shortest time in which the guard lets a force go from zero to full scale (or back): the
 /// rate limit is max_force / this. A glitch (a jump of the proxy, a client's bad update) then
-/// reaches the hand as a 5 ms ramp, not as a step; a contact entered at K v below the limit (a
-/// 1000 N/m wall at up to 4 m/s on a 20 N device) is untouched. Unit: s.
+/// reaches the hand as a 2 ms ramp, not as a step; a contact entered at K v below the limit (a
+/// 1000 N/m wall at up to 10 m/s on a 20 N device: 20 N / 2 ms = 10,000 N/s) is untouched. Unit: s.
 inline constexpr double kFullScaleForceRampTime = 0.002;
 
 struct ForceLimits {
