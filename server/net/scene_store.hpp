@@ -40,7 +40,7 @@ struct SceneBudget {
   std::uint64_t max_bytes_per_peer = 0;
   /// The host a session was opened from (SessionRegistry::peer_of); needed for the per-host
   /// shares, none without them.
-  std::function<std::string(std::uint64_t session_id)> host_of_session;
+  std::function<std::string(std::uint64_t session_id)> host_of_session{};
 };
 
 /// What an item holds in memory.

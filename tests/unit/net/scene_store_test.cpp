@@ -190,7 +190,7 @@ TEST(SceneStore, TheWholeScenesTriangleAndMemoryBudgetsHoldAcrossSessions) {
   runtime::SceneExchange exchange{std::make_unique<const engine::CompiledScene>()};
   std::int64_t next_tick = 1;
   SceneStore store{exchange, [&] { return next_tick; }, 50, 256, 1e-3, 0.0, 1,
-                   SceneBudget{1000, 0}};
+                   SceneBudget{.max_triangles = 1000}};
   std::uint64_t first = 0, second = 0, id = 0;
   ASSERT_TRUE(store.create(1, ItemKind::kObject, mesh(600, 0.0), first).ok());
   ASSERT_TRUE(store.create(2, ItemKind::kObject, mesh(400, 0.01), second).ok());  // exactly 1000
@@ -257,7 +257,7 @@ TEST(SceneStore, TheMemoryBudgetCountsAMeshAndItsHierarchy) {
   EXPECT_EQ(cost_of(wall(0.0)).triangles, 0u);
   runtime::SceneExchange exchange{std::make_unique<const engine::CompiledScene>()};
   SceneStore store{exchange, [] { return std::int64_t{1}; }, 50, 256, 1e-3, 0.0, 1,
-                   SceneBudget{0, large.bytes + small.bytes}};
+                   SceneBudget{.max_bytes = large.bytes + small.bytes}};
   std::uint64_t id = 0;
   ASSERT_TRUE(store.create(1, ItemKind::kObject, mesh(2000, 0.0), id).ok());
   const grpc::Status over = store.create(2, ItemKind::kObject, mesh(20, 0.0), id);

@@ -300,10 +300,14 @@ TEST(RobotWrench, OnTheFiveBarsEncodersTheChannelStaysPassive) {
     std::printf("five-bar, %s: the hand put in %.4f J, got back %.4f J; channel energy down to %.3g J, %.4f J at "
                 "the end; the tool went %.3g m from where it started\n",
                 amplitude > 0.0 ? "moved ±2 cm at 0.5 Hz" : "held", injected, injected - channel, lowest, channel, moved);
-    if (amplitude == 0.0) EXPECT_LT(moved, 1e-4);
+    if (amplitude == 0.0) {
+      EXPECT_LT(moved, 1e-4);
+    }
     EXPECT_GT(lowest, -2e-3) << amplitude;
     EXPECT_GE(channel, 0.0) << amplitude;
-    if (amplitude > 0.0) EXPECT_GT(injected, 0.1);
+    if (amplitude > 0.0) {
+      EXPECT_GT(injected, 0.1);
+    }
     EXPECT_EQ(counters.force_faults.load(), 0u);
   }
 }
