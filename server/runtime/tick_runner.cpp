@@ -88,12 +88,34 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
   // device.read -> estimate -> kinematics: the tool point's state.
   const bool read_good = device.sense();
   ToolReading reading = device.tool();
+  const bool read_ok = read_good && !reading.safe_state;
   engine::Vec3 F_command;
   bool command_ok = false;
-  if (read_good && !reading.safe_state) {
+  if (read_ok) {
     port.last_good_reading = reading;
-    // scene -> passivity -> avatars -> ROS 2 wrench -> guard; the torque; Jᵀ.
-    F_command = port_force(scene, index, reading, tick, gain, sample);
+    const engine::SceneForce scene_force = engine::evaluate_scene_port(
+        scene, index, reading.p_WT, reading.v_WT, static_cast<std::int64_t>(tick), config_.period_s);
+    sample.p_WP = scene_force.p_WP;
+    sample.contact_count = scene_force.contact_count;
+    if (scene_force.ramping || gain < 1.0) sample.flags |= wire::kFlagRampingOut;
+    engine::Vec3 F_scene = scene_force.F_T_W;
+    if (port.passivity) {
+      // The port is watched every tick, in contact or not, so the held force's work is booked
+      // for every period. Out of contact the account keeps a deficit — a stiff wall's bounce
+      // lasts two or three samples and ends owing energy — but drops a surplus, so a long passive
+      // contact cannot bank energy that hides a later active one.
+      const engine::Vec3 F_contacts = scene_force.F_T_W - scene_force.F_fields_W;
+      const engine::PassivityStep step = port.passivity->apply(F_contacts, reading.v_WT, reading.p_WT);
+      if (step.alpha > 0.0) counters_.passivity_active_ticks.fetch_add(1, std::memory_order_relaxed);
+      F_scene = step.F_T_W + scene_force.F_fields_W;
+      if (F_contacts == engine::Vec3{} && port.passivity->energy() > 0.0) port.passivity->reset();
+    }
+    // Other sites' tools (federation): each through its own network passivity layer, after the
+    // port's controller (which watches this site's contacts) and before the guard.
+    if (port.remote_tools) F_scene += port.remote_tools->force(reading);
+    // A ROS 2 node's wrench (a robot's), through a layer of its own, before the guard too.
+    if (port.robot) F_scene += port.robot->force(reading);
+    F_command = guarded(port.guard.apply(F_scene, config_.period_s, gain), sample);
     const engine::Vec3 tau_command = port_torque(scene, index, reading, tick, gain, sample);
     // Jᵀ: the joint command for that force (the torque goes to the handle as it is).
     command_ok = device.joint_command(ToolCommand{F_command, tau_command}, config_.period_s) ==
@@ -101,7 +123,18 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
     if (command_ok) sample.tau_T_W = tau_command;
     if (!command_ok) counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
   } else {
-    reading = device_fault(port, read_good, reading, sample);
+    // A failed or non-finite reading is a device fault: command zero at once (no ramp: nothing
+    // justifies any force), and publish the last good state, never a NaN.
+    counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
+    sample.flags |= wire::kFlagDeviceFault;
+    if (read_good) {
+      port.last_good_reading = reading;  // a device holding its safe state still reports where it is
+    } else {
+      reading = port.last_good_reading;
+    }
+    sample.p_WP = reading.p_WT;
+    port.guard.reset();
+    if (port.torque_guard) port.torque_guard->reset();
   }
   if (!command_ok) {
     F_command = {};
@@ -112,52 +145,7 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
     counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
     device.enter_safe_state();
   }
-  publish(port, reading, F_command, sample);
-}
 
-engine::Vec3 TickRunner::port_force(const engine::CompiledScene& scene, std::uint32_t index,
-                                    const ToolReading& reading, std::uint64_t tick, double gain,
-                                    TickSample& sample) {
-  Port& port = ports_[index];
-  const engine::SceneForce scene_force = engine::evaluate_scene_port(
-      scene, index, reading.p_WT, reading.v_WT, static_cast<std::int64_t>(tick), config_.period_s);
-  sample.p_WP = scene_force.p_WP;
-  sample.contact_count = scene_force.contact_count;
-  if (scene_force.ramping || gain < 1.0) sample.flags |= wire::kFlagRampingOut;
-  engine::Vec3 F_scene = scene_force.F_T_W;
-  if (port.passivity) {
-    // The port is watched every tick, in contact or not, so the held force's work is booked
-    // for every period. Out of contact the account keeps a deficit — a stiff wall's bounce
-    // lasts two or three samples and ends owing energy — but drops a surplus, so a long passive
-    // contact cannot bank energy that hides a later active one.
-    const engine::Vec3 F_contacts = scene_force.F_T_W - scene_force.F_fields_W;
-    const engine::PassivityStep step = port.passivity->apply(F_contacts, reading.v_WT, reading.p_WT);
-    if (step.alpha > 0.0) counters_.passivity_active_ticks.fetch_add(1, std::memory_order_relaxed);
-    F_scene = step.F_T_W + scene_force.F_fields_W;
-    if (F_contacts == engine::Vec3{} && port.passivity->energy() > 0.0) port.passivity->reset();
-  }
-  // Other sites' tools (federation): each through its own network passivity layer, after the
-  // port's controller (which watches this site's contacts) and before the guard.
-  if (port.remote_tools) F_scene += port.remote_tools->force(reading);
-  // A ROS 2 node's wrench (a robot's), through a layer of its own, before the guard too.
-  if (port.robot) F_scene += port.robot->force(reading);
-  return guarded(port.guard.apply(F_scene, config_.period_s, gain), sample);
-}
-
-ToolReading TickRunner::device_fault(Port& port, bool read_good, const ToolReading& reading, TickSample& sample) {
-  // A failed or non-finite reading is a device fault: command zero at once (no ramp: nothing
-  // justifies any force), and publish the last good state, never a NaN.
-  counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
-  sample.flags |= wire::kFlagDeviceFault;
-  // A device holding its safe state still reports where it is.
-  if (read_good) port.last_good_reading = reading;
-  sample.p_WP = port.last_good_reading.p_WT;
-  port.guard.reset();
-  if (port.torque_guard) port.torque_guard->reset();
-  return port.last_good_reading;
-}
-
-void TickRunner::publish(Port& port, const ToolReading& reading, const engine::Vec3& F_command, TickSample& sample) {
   sample.p_WT = reading.p_WT;
   sample.v_WT = reading.v_WT;
   sample.R_WT = reading.R_WT;

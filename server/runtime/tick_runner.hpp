@@ -129,15 +129,6 @@ class TickRunner {
   void make_ports(const std::vector<TickPort>& ports);
   void run_port(const engine::CompiledScene& scene, std::uint32_t index, std::uint64_t tick,
                 std::int64_t time_ns, double gain);
-  /// A good reading's force at this port: the scene, the passivity controller, the federation's
-  /// stages, the force guard (docs/architecture.md steps 3-7). Unit: N, in W.
-  engine::Vec3 port_force(const engine::CompiledScene& scene, std::uint32_t index, const ToolReading& reading,
-                          std::uint64_t tick, double gain, TickSample& sample);
-  /// A failed reading, or a device holding its safe state: counted and flagged, both guards reset;
-  /// returns the reading to publish (the last good one, never a NaN).
-  ToolReading device_fault(Port& port, bool read_good, const ToolReading& reading, TickSample& sample);
-  /// The tick's sample, with the state `reading` gives and the force commanded, into the port's ring.
-  void publish(Port& port, const ToolReading& reading, const engine::Vec3& F_command, TickSample& sample);
   /// What a guard let through (force or torque), its fault and saturation flagged in the sample
   /// and counted.
   engine::Vec3 guarded(const engine::GuardedForce& out, TickSample& sample);
