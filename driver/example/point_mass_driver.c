@@ -10,11 +10,12 @@
  *   "push": [fx, fy, fz] N, "max_force": 10 N, "button_period_s": 0 (0: no button; else button 0
  *   is pressed for every other period), "servo_rate_hz": 0 (nonzero: device-clocked at that rate),
  *   "turn_rate": 0 rad/s (nonzero: the tool reports an orientation turning about z at this rate)
- *   "fault": "none" | "nan" | "stale" | "hang" | "fail_start", "fault_after": 0 ticks,
+ *   "fault": "none" | "nan" | "stale" | "hang" | "fail_start" | "fail_when_safe", "fault_after": 0 ticks,
  *   "reported_mass": [mx, my, mz] kg (ABI 2: the apparent mass it reports instead of its own, for
  *   tests of what hapticd makes of a driver's model)}
  * The faults are for hapticd's driver test kit: from tick fault_after on, "nan" reads NaN,
- * "stale" stops the sample sequence, "hang" blocks read() until stop().
+ * "stale" stops the sample sequence, "hang" blocks read() until stop(); "fail_when_safe" fails
+ * every write after enter_safe_state (against driver.h, which says such a write is taken).
  * ABI 2: it reports its mass and damping as the port's apparent mass-damper (so hapticd's
  * stability report and passivity controller know the device), its angular velocity with the
  * turning orientation, says in hapticd's log when it starts, and lists itself for
@@ -215,9 +216,9 @@ static void* create(const char* params, char* error) {
   }
   if (strcmp(d->fault, "none") != 0 && strcmp(d->fault, "nan") != 0 &&
       strcmp(d->fault, "stale") != 0 && strcmp(d->fault, "hang") != 0 &&
-      strcmp(d->fault, "fail_start") != 0) {
+      strcmp(d->fault, "fail_start") != 0 && strcmp(d->fault, "fail_when_safe") != 0) {
     snprintf(error, HAPTIC_DRIVER_ERROR_SIZE,
-             "params.fault: expected none, nan, stale, hang or fail_start, got \"%s\"", d->fault);
+             "params.fault: expected none, nan, stale, hang, fail_start or fail_when_safe, got \"%s\"", d->fault);
     free(d);
     return NULL;
   }
@@ -343,6 +344,7 @@ static int read_sensors(void* driver, haptic_driver_reading* reading) {
 static int write_command(void* driver, const haptic_driver_command* command, double dt) {
   point_mass* d = driver;
   if (!(dt > 0.0)) return HAPTIC_DRIVER_FAILED;
+  if (d->safe && strcmp(d->fault, "fail_when_safe") == 0) return HAPTIC_DRIVER_FAILED;
   int ok = 1;
   for (int i = 0; i < 3; ++i) ok = ok && isfinite(command->tau[i]);
   const double m = d->mass, b = d->damping;

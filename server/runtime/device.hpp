@@ -72,8 +72,8 @@ struct ToolReading {
 
 /// The force (and, for a device that takes torques, the torque) the scene asks of the tool.
 struct ToolCommand {
-  engine::Vec3 F_T_W;    // Force on the tool, in W. Unit: N.
-  engine::Vec3 tau_T_W;  // Torque on the tool, in W (capabilities.torque). Unit: N·m.
+  engine::Vec3 F_T_W{};    // Force on the tool, in W. Unit: N.
+  engine::Vec3 tau_T_W{};  // Torque on the tool, in W (capabilities.torque). Unit: N·m.
 };
 
 /// What a device has, so the tick and the device compute only those terms (a balanced device gets

@@ -84,6 +84,15 @@ TEST(DriverKit, ADriverWhoseSequenceStopsFailsAsStale) {
   EXPECT_NE(results[1].detail.find("stale"), std::string::npos) << results[1].detail;
 }
 
+// driver.h: a write after enter_safe_state is taken (the device may stay safe): one that fails
+// it fails the readings check, saying so.
+TEST(DriverKit, ADriverThatFailsAWriteAfterTheSafeStateFailsSayingWhy) {
+  const auto results = kit(POINT_MASS_DRIVER, R"({"fault": "fail_when_safe"})");
+  EXPECT_TRUE(results[0].passed) << results[0].detail;
+  EXPECT_FALSE(results[1].passed);
+  EXPECT_NE(results[1].detail.find("right after enter_safe_state()"), std::string::npos) << results[1].detail;
+}
+
 TEST(DriverKit, ADriverThatPushesTheWrongWayFailsTheAxesCheck) {
   // A push of its own along -x beats the kit's 5 % of max_force along +x: the tool moves the
   // wrong way, as with a negated axis.

@@ -140,6 +140,12 @@ std::string reads_and_takes_commands(const KitOptions& options, std::ostream& /*
           " stale readings: the sample sequence must move with every new sample";
   }
   device.enter_safe_state();  // callable at any time
+  // driver.h: a write after enter_safe_state is hapticd commanding the device again (its zero
+  // command first); a device still in its safe state is not a failed call.
+  if (why.empty() && device.write(runtime::DeviceCommand{}, kT) != runtime::DeviceStatus::kOk) {
+    why = "write() of a zero command right after enter_safe_state() failed: a write after the safe state "
+          "must be taken (driver.h), the device staying safe as long as it must";
+  }
   device.stop();
   return why;
 }
@@ -188,7 +194,8 @@ std::vector<CheckResult> run_kit(const KitOptions& options, std::ostream& log) {
   };
   static const Check kChecks[] = {
       {"it loads and describes itself sanely", describes_itself, false},
-      {"its readings are finite and fresh, zero commands are taken, the safe state can be entered",
+      {"its readings are finite and fresh, zero commands are taken, the safe state can be entered and a "
+       "write after it is taken",
        reads_and_takes_commands, false},
       {"a force along each axis of W moves the tool along that axis", axes_are_those_of_w, true},
       {"it refuses params it does not take, and values of the wrong kind, naming them",

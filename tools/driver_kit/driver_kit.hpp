@@ -2,7 +2,8 @@
 // The driver test kit: what any driver owes hapticd, checked against a driver library as hapticd
 // loads it (runtime::DriverDevice). It loads and describes itself sanely; it refuses a params key
 // it does not take, and each given option with a value of the wrong kind, naming it; 200 ticks of reading
-// and a zero command give finite, fresh readings, and the safe state can be entered at any time;
+// and a zero command give finite, fresh readings, the safe state can be entered at any time and a
+// write after it is taken (driver.h);
 // for a Cartesian driver, 5 % of max_force along each axis of W for 20 ms moves the tool along
 // that axis, positively, with at least 90 % of the motion on it. It commands forces: run it on
 // hardware that is free to move. The program haptic-driver-kit runs it (docs/devices.md).
