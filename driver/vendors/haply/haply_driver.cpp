@@ -397,10 +397,12 @@ int Device::write(const haptic_driver_command& command, double /*dt*/) {
   // W to Haply's frame: X = y_W, Y = -x_W, Z = z_W.
   const Json force = {{"x", command.tau[1]}, {"y", -command.tau[0]}, {"z", command.tau[2]}};
   Json commands = {{"set_cursor_force", {{force_key, force}}}};
-  const std::string message = command_message(*this, std::move(commands));
   std::lock_guard lock(send_mutex);
   // The safe state came while this write was being made: its force is not to follow it (driver.h).
+  // Checked before the message is made, so that a dropped write never takes the session's
+  // configuration with it.
   if (safe_epoch.load(std::memory_order_relaxed) != epoch) return HAPTIC_DRIVER_OK;
+  const std::string message = command_message(*this, std::move(commands));
   if (!connection->send(message)) {
     fail("the Haply Inverse Service closed the connection");
     return HAPTIC_DRIVER_FAILED;
