@@ -15,7 +15,7 @@
 #include "app/health_check.hpp"
 #include "app/list_devices.hpp"
 #include "runtime/driver_device.hpp"
-#include "app/replay.hpp"
+#include "app/replay_server.hpp"
 #include "app/server.hpp"
 #include "haptic/driver.h"
 #include "haptic/v1/service.pb.h"
@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
                  "record the run into FILE from its first tick: every change and every tick's "
                  "sample (zstd; hapticd --replay FILE reproduces it)");
   std::string replay_path;
-  cli.add_option("--replay", replay_path, haptic::app::kReplayHelp)
+  cli.add_option("--replay", replay_path, haptic::recording::kReplayHelp)
       ->check(CLI::ExistingFile);
   bool list_devices = false;
   cli.add_flag("--list-devices", list_devices,
@@ -138,7 +138,7 @@ int main(int argc, char** argv) {
 
   if (!replay_path.empty()) {
     spdlog::set_level(spdlog::level::warn);  // the replay's own server need not announce itself
-    return haptic::app::replay_command(replay_path);
+    return haptic::recording::replay_command(replay_path, haptic::app::replay_servers());
   }
 
   if (cli.count("--health-check") > 0) {

@@ -232,7 +232,7 @@ Server::Server(const v1::ServerConfig& config)
   const config::SecurityMaterial security = config::load_security(config.security());
   std::vector<const runtime::SampleRing*> rings;
   for (const auto& ring : samples_) rings.push_back(ring.get());
-  recorder_ = std::make_unique<net::RunRecorder>([this] { return loop_->completed_ticks(); },
+  recorder_ = std::make_unique<recording::RunRecorder>([this] { return loop_->completed_ticks(); },
                                              std::move(rings));
   const net::AccessControl access(credentials(security.tokens));
   const int token_count = security.tokens.tokens_size();

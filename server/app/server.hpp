@@ -19,7 +19,6 @@
 #include "net/event_hub.hpp"
 #include "net/haptic_service.hpp"
 #include "net/metrics_endpoint.hpp"
-#include "net/run_recorder.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
 #include "app/federated_scene.hpp"
@@ -27,6 +26,7 @@
 #include "federation/sample_relay.hpp"
 #include "net/udp_endpoint.hpp"
 #include "net/viewer_endpoint.hpp"
+#include "recording/run_recorder.hpp"
 #include "runtime/loop_cpu.hpp"
 #include "runtime/loop_thread.hpp"
 #include "config/devices.hpp"
@@ -61,7 +61,7 @@ class Server {
   v1::Stats stats(runtime::LatenessHistogram::Counts* lateness_bins = nullptr) const;
   /// The federation's part of the stats (with a federation).
   void federation_stats(v1::FederationStats& out) const;
-  /// Starts recording the run into `path` (net::RunRecorder): before start(), from the first tick.
+  /// Starts recording the run into `path` (recording::RunRecorder): before start(), from the first tick.
   /// Returns "" or why not.
   std::string start_recording(const std::string& path);
   /// Stops a recording; its totals, or nullopt when none ran.
@@ -117,7 +117,7 @@ class Server {
   std::string security_summary_;
   std::unique_ptr<net::MetricsEndpoint> metrics_;  // when metrics_address is set
   std::unique_ptr<net::ViewerEndpoint> viewer_;    // when viewer_address is set
-  std::unique_ptr<net::RunRecorder> recorder_;
+  std::unique_ptr<recording::RunRecorder> recorder_;
   std::unique_ptr<federation::SampleRelay> relay_;  // when federation is configured
   /// The shared scene across sites (with the federation; after relay_, whose participant owns
   /// the domain, so it goes first).

@@ -11,7 +11,7 @@
 #include "haptic/v1/service.grpc.pb.h"
 #include "net/access_control.hpp"
 #include "net/event_hub.hpp"
-#include "net/run_recorder.hpp"
+#include "recording/run_recorder.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
 #include "schema/scene_specs.hpp"
@@ -41,7 +41,7 @@ struct ServiceDependencies {
   /// A lockstep reset for the session (Reset); empty: refused.
   std::function<grpc::Status(std::uint64_t)> reset;
   /// Where accepted changes are recorded (when a recording runs); none: never.
-  RunRecorder* recorder = nullptr;
+  recording::RunRecorder* recorder = nullptr;
   /// StartRecording's folder ("" refuses it) and how a recording starts (the header's config).
   std::string recording_dir;
   std::function<std::string(const std::string& path)> start_recording;

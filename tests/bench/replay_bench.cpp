@@ -20,10 +20,10 @@
 #include <string>
 #include <vector>
 
-#include "app/replay.hpp"
+#include "app/replay_server.hpp"
 #include "app/server.hpp"
 #include "config/server_config.hpp"
-#include "net/recording_file.hpp"
+#include "recording/recording_file.hpp"
 
 namespace {
 
@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
   std::vector<double> replay_s;
   for (int round = 0; round < rounds; ++round) {
     const auto reading = Clock::now();
-    haptic::net::RecordingReader reader(path);
+    haptic::recording::RecordingReader reader(path);
     haptic::v1::Record record;
     std::uint64_t count = 0;
     while (reader.next(record)) ++count;
@@ -112,7 +112,8 @@ int main(int argc, char** argv) {
     records = count;
 
     const auto replaying = Clock::now();
-    const haptic::app::ReplayReport report = haptic::app::replay_recording(path);
+    const haptic::recording::ReplayReport report =
+        haptic::recording::replay_recording(path, haptic::app::replay_servers());
     replay_s.push_back(seconds_since(replaying));
     if (!report.identical()) {
       std::fprintf(stderr, "replay_bench: the replay differs: %s\n", report.first_difference.c_str());

@@ -15,7 +15,7 @@
 #include "integration/run_program.hpp"
 #include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
-#include "net/recording_file.hpp"
+#include "recording/recording_file.hpp"
 
 namespace haptic {
 namespace {
@@ -73,8 +73,8 @@ TEST(RecordReplay, AForceChangedByOneUlpIsFoundAndNamed) {
   const std::string tampered = temp_path("tampered");
   std::string recorded_z;
   {
-    net::RecordingReader reader(path);
-    net::RecordingWriter writer(tampered);
+    recording::RecordingReader reader(path);
+    recording::RecordingWriter writer(tampered);
     v1::Record record;
     while (reader.next(record)) {
       if (record.has_sample() && record.sample().tick() == 1000) {
@@ -99,7 +99,7 @@ TEST(RecordReplay, AForceChangedByOneUlpIsFoundAndNamed) {
 TEST(RecordReplay, WhatCannotBeReplayedIsRefusedSayingWhy) {
   const std::string path = temp_path("refused");
   {
-    net::RecordingWriter writer(path);
+    recording::RecordingWriter writer(path);
     v1::Record header;
     header.mutable_header()->set_format("hapticd-recording");
     header.mutable_header()->set_version(1);

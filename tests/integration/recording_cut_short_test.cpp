@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "app/replay.hpp"
+#include "app/replay_server.hpp"
 #include "integration/run_program.hpp"
 #include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
@@ -32,7 +32,7 @@ std::string temp_path(const std::string& name) {
       .string();
 }
 
-/// hapticd --replay as main() runs it (app::replay_command), in this process: the exit status and
+/// hapticd --replay as main() runs it (recording::replay_command), in this process: the exit status and
 /// what it printed to stdout and to stderr.
 struct Replayed {
   int status = -1;
@@ -53,7 +53,7 @@ Replayed replay(const std::string& path) {
   std::FILE* out = std::tmpfile();
   std::FILE* err = std::tmpfile();
   Replayed replayed;
-  replayed.status = app::replay_command(path, out, err);
+  replayed.status = recording::replay_command(path, app::replay_servers(), out, err);
   replayed.out = read_back(out);
   replayed.err = read_back(err);
   return replayed;
@@ -101,8 +101,8 @@ TEST(RecordingCutShort, AServerKilledWhileRecordingReplaysToItsLastWholeRecordAn
   ASSERT_EQ(stepped, 22'000u);
 
   const Replayed replayed = replay(path);
-  EXPECT_EQ(replayed.status, app::kReplayCutShort) << replayed.out << replayed.err;
-  EXPECT_EQ(app::kReplayCutShort, 3);
+  EXPECT_EQ(replayed.status, recording::kReplayCutShort) << replayed.out << replayed.err;
+  EXPECT_EQ(recording::kReplayCutShort, 3);
   const std::optional<Stop> stop = stop_of(replayed.err);
   ASSERT_TRUE(stop.has_value()) << replayed.err;
   // The writer hands the file whole blocks of records every 64 kB of them and every second: what
@@ -149,7 +149,7 @@ TEST(RecordingCutShort, AWholeRecordingCutAtAnyByteIsReplayedAsFarAsItGoes) {
     }
     ASSERT_EQ(server.stop(), 0);
   }
-  ASSERT_EQ(replay(path).status, app::kReplaySame);
+  ASSERT_EQ(replay(path).status, recording::kReplaySame);
   std::string bytes;
   {
     std::ifstream file(path, std::ios::binary);
@@ -166,7 +166,7 @@ TEST(RecordingCutShort, AWholeRecordingCutAtAnyByteIsReplayedAsFarAsItGoes) {
     const std::size_t at = (blocks[block - 1] + blocks[block]) / 2;
     cut_file(path, cut, at);
     const Replayed replayed = replay(cut);
-    EXPECT_EQ(replayed.status, app::kReplayCutShort) << at << ": " << replayed.out << replayed.err;
+    EXPECT_EQ(replayed.status, recording::kReplayCutShort) << at << ": " << replayed.out << replayed.err;
     const std::optional<Stop> stop = stop_of(replayed.err);
     ASSERT_TRUE(stop.has_value()) << at << ": " << replayed.err;
     EXPECT_GT(stop->tick, previous_tick);
@@ -182,7 +182,7 @@ TEST(RecordingCutShort, AWholeRecordingCutAtAnyByteIsReplayedAsFarAsItGoes) {
   // whole records).
   cut_file(path, cut, blocks[blocks.size() / 2]);
   const Replayed replayed = replay(cut);
-  EXPECT_EQ(replayed.status, app::kReplayCutShort) << replayed.out << replayed.err;
+  EXPECT_EQ(replayed.status, recording::kReplayCutShort) << replayed.out << replayed.err;
   const std::optional<Stop> stop = stop_of(replayed.err);
   ASSERT_TRUE(stop.has_value()) << replayed.err;
   EXPECT_EQ(stop->why,
@@ -195,7 +195,7 @@ TEST(RecordingCutShort, AWholeRecordingCutAtAnyByteIsReplayedAsFarAsItGoes) {
   for (const std::size_t missing : {1, 2, 4}) {
     cut_file(path, cut, bytes.size() - missing);
     const Replayed short_of_checksum = replay(cut);
-    EXPECT_EQ(short_of_checksum.status, app::kReplayCutShort)
+    EXPECT_EQ(short_of_checksum.status, recording::kReplayCutShort)
         << missing << ": " << short_of_checksum.out << short_of_checksum.err;
     EXPECT_NE(short_of_checksum.err.find("ends after its end record"), std::string::npos) << short_of_checksum.err;
     EXPECT_NE(short_of_checksum.err.find("before its compressed stream's end and checksum"), std::string::npos)
@@ -207,7 +207,7 @@ TEST(RecordingCutShort, AWholeRecordingCutAtAnyByteIsReplayedAsFarAsItGoes) {
     std::ofstream(cut, std::ios::binary) << wrong;
   }
   const Replayed wrong_checksum = replay(cut);
-  EXPECT_EQ(wrong_checksum.status, app::kReplayRefused) << wrong_checksum.out << wrong_checksum.err;
+  EXPECT_EQ(wrong_checksum.status, recording::kReplayRefused) << wrong_checksum.out << wrong_checksum.err;
   EXPECT_NE(wrong_checksum.err.find("is damaged"), std::string::npos) << wrong_checksum.err;
   EXPECT_NE(wrong_checksum.err.find("checksum"), std::string::npos) << wrong_checksum.err;
   std::filesystem::remove(cut);

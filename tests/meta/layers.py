@@ -15,9 +15,10 @@ ALLOWED = {
     "runtime": {"engine"},
     "schema": {"engine"},
     "config": {"engine", "runtime", "schema", "federation"},
-    "net": {"engine", "runtime", "schema"},
+    "recording": {"engine", "runtime", "schema"},
+    "net": {"engine", "runtime", "schema", "recording"},
     "federation": {"engine", "runtime"},
-    "app": {"engine", "runtime", "schema", "config", "net", "federation"},
+    "app": {"engine", "runtime", "schema", "config", "recording", "net", "federation"},
     "lab": {"engine", "runtime", "schema", "config"},
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/')

@@ -26,7 +26,7 @@
 #include "integration/raw_client.hpp"
 #include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
-#include "net/recording_file.hpp"
+#include "recording/recording_file.hpp"
 
 namespace haptic {
 namespace {
@@ -424,7 +424,7 @@ TEST(Soak, SigtermUnderLoadExitsCleanlyThroughTheRamp) {
   EXPECT_EQ(exit_code, 0);
 
   // The recording has every tick to the end: the force after the shutdown began.
-  net::RecordingReader reader(recording);
+  recording::RecordingReader reader(recording);
   v1::Record record;
   std::uint64_t shutdown_after = 0;
   bool shutting_down = false;

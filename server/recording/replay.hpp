@@ -4,15 +4,45 @@
 // bit for bit. The changes go through the control plane as the clients sent them (one replay
 // session per recorded session, over loopback gRPC), each after the tick it followed; so a replay
 // also shows that the same calls give the same run.
+//
+// The server replayed on is the application's (app::Server, through app/replay_server.hpp): this
+// folder knows it only as a ReplayServer, so the recording sits below net and app, and both use it.
 
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
-namespace haptic::app {
+#include "haptic/v1/config.pb.h"
+#include "runtime/sample_ring.hpp"
+
+namespace haptic::recording {
+
+/// A started server a replay runs on: its control plane on loopback, each device port's samples.
+class ReplayServer {
+ public:
+  virtual ~ReplayServer() = default;
+  /// The control plane's port on 127.0.0.1.
+  virtual std::uint16_t grpc_port() const = 0;
+  virtual std::size_t device_ports() const = 0;
+  /// Port `port`'s samples, as the loop publishes them.
+  virtual const runtime::SampleRing& samples(std::size_t port) const = 0;
+  /// The server's shutdown, its ramp of the device's force to zero included; again is nothing.
+  virtual void shutdown() = 0;
+};
+
+/// How a replay gets its server. The configuration handed over is the recording's, already made to
+/// replay (lockstep, loopback, ephemeral ports, no security).
+struct ReplayServers {
+  /// "" when `config` can be run here, else why not.
+  std::function<std::string(const v1::ServerConfig& config)> validate;
+  /// A started server running `config`.
+  std::function<std::unique_ptr<ReplayServer>(const v1::ServerConfig& config)> start;
+};
 
 /// A recording that cannot be replayed: not a recording, damaged, begun mid-run, or a change the
 /// server refused this time. The message says which and where.
@@ -48,7 +78,7 @@ struct ReplayCutShort : ReplayError {
 /// Replays the recording at `path`. `progress` (may be empty) hears the ticks run so far now and
 /// then. Throws ReplayCutShort (a ReplayError) for a recording cut short, ReplayError for one that
 /// cannot be replayed.
-ReplayReport replay_recording(const std::string& path,
+ReplayReport replay_recording(const std::string& path, const ReplayServers& servers,
                               const std::function<void(std::uint64_t ticks)>& progress = {});
 
 /// hapticd --replay's exit statuses.
@@ -61,6 +91,7 @@ extern const char* const kReplayHelp;
 
 /// hapticd --replay FILE: replays the recording, prints the result to `out` (what went wrong and
 /// where to `err`, and the progress too when `err` is a terminal) and returns the exit status.
-int replay_command(const std::string& path, std::FILE* out = stdout, std::FILE* err = stderr);
+int replay_command(const std::string& path, const ReplayServers& servers, std::FILE* out = stdout,
+                   std::FILE* err = stderr);
 
-}  // namespace haptic::app
+}  // namespace haptic::recording

@@ -1,4 +1,4 @@
-#include "app/replay.hpp"
+#include "recording/replay.hpp"
 
 #include <grpcpp/grpcpp.h>
 
@@ -11,14 +11,12 @@
 #include <utility>
 #include <vector>
 
-#include "app/server.hpp"
-#include "config/server_config.hpp"
 #include "haptic/io/session_secret.hpp"
 #include "haptic/v1/recording.pb.h"
 #include "haptic/v1/service.grpc.pb.h"
-#include "net/recording_file.hpp"
+#include "recording/recording_file.hpp"
 
-namespace haptic::app {
+namespace haptic::recording {
 namespace {
 
 using Stub = v1::Haptic::Stub;
@@ -78,25 +76,26 @@ bool same_bits(const engine::Vec3& recorded, const engine::Vec3& replayed) {
 
 class Replay {
  public:
-  explicit Replay(const v1::RecordHeader& header)
-      : server_(replay_config(header)) {
-    server_.start();
-    stub_ = v1::Haptic::NewStub(grpc::CreateChannel("127.0.0.1:" + std::to_string(server_.grpc_port()),
+  Replay(const v1::RecordHeader& header, const ReplayServers& servers)
+      : server_(servers.start(replay_config(header))) {
+    stub_ = v1::Haptic::NewStub(grpc::CreateChannel("127.0.0.1:" + std::to_string(server_->grpc_port()),
                                                     grpc::InsecureChannelCredentials()));
     // A session of the replay's own steps the loop (stepping is no recorded client's change).
     stepper_ = open("hapticd-replay", 0);
   }
-  ~Replay() { server_.shutdown(); }
+  ~Replay() {
+    if (!shut_down_) server_->shutdown();
+  }
 
   /// The recorded server's shutdown: the same ramp to zero, its ticks kept for comparison.
   void shut_down() {
-    server_.shutdown();
+    server_->shutdown();
     shut_down_ = true;
     for (std::uint64_t t = completed_ + 1;; ++t) {
       bool any = false;
-      for (std::size_t port = 0; port < server_.device_ports(); ++port) {
+      for (std::size_t port = 0; port < server_->device_ports(); ++port) {
         runtime::TickSample sample;
-        if (server_.samples(port).read(t, sample)) {
+        if (server_->samples(port).read(t, sample)) {
           replayed_[{t, port}] = sample;
           any = true;
         }
@@ -118,9 +117,9 @@ class Replay {
       v1::StepResponse reply;
       call("Step", &Stub::Step, stepper_, request, reply);
       for (std::uint64_t t = completed_ + 1; t <= reply.tick(); ++t) {
-        for (std::size_t port = 0; port < server_.device_ports(); ++port) {
+        for (std::size_t port = 0; port < server_->device_ports(); ++port) {
           runtime::TickSample sample;
-          if (server_.samples(port).read(t, sample)) replayed_[{t, port}] = sample;
+          if (server_->samples(port).read(t, sample)) replayed_[{t, port}] = sample;
         }
       }
       completed_ = reply.tick();
@@ -289,7 +288,7 @@ class Replay {
     }
   }
 
-  Server server_;
+  std::unique_ptr<ReplayServer> server_;
   std::unique_ptr<Stub> stub_;
   ReplaySession stepper_;
   std::map<std::uint64_t, ReplaySession> sessions_;  // recorded id -> replay session
@@ -302,11 +301,11 @@ class Replay {
 
 }  // namespace
 
-ReplayReport replay_recording(const std::string& path,
+ReplayReport replay_recording(const std::string& path, const ReplayServers& servers,
                               const std::function<void(std::uint64_t ticks)>& progress) {
-  std::unique_ptr<net::RecordingReader> reader;
+  std::unique_ptr<RecordingReader> reader;
   try {
-    reader = std::make_unique<net::RecordingReader>(path);
+    reader = std::make_unique<RecordingReader>(path);
   } catch (const std::exception& error) {
     throw ReplayError(error.what());
   }
@@ -332,10 +331,10 @@ ReplayReport replay_recording(const std::string& path,
                       "replayed (record from the start: hapticd --record, or StartRecording "
                       "before the first Step or after a Reset)");
   }
-  if (const std::string error = config::validate(replay_config(header)); !error.empty()) {
+  if (const std::string error = servers.validate(replay_config(header)); !error.empty()) {
     throw ReplayError("'" + path + "': its configuration does not validate here: " + error);
   }
-  Replay replay(header);
+  Replay replay(header, servers);
   replay.on_progress(progress);
   replay.report().real_time = header.config().time_mode() != v1::LOCKSTEP;
   // Samples are held until a change, the end or kAhead of them: the replay then runs their ticks
@@ -428,7 +427,8 @@ const char* const kReplayHelp =
     "short (no end record: its recorder was killed, or its disk filled) and what it holds is the "
     "same up to its last whole record";
 
-int replay_command(const std::string& path, std::FILE* out, std::FILE* err) {
+int replay_command(const std::string& path, const ReplayServers& servers, std::FILE* out,
+                   std::FILE* err) {
   // Progress on a terminal only: a log or a pipe gets the result alone.
   const bool terminal = ::isatty(::fileno(err)) != 0;
   const auto progress = [terminal, err](std::uint64_t ticks) {
@@ -437,7 +437,7 @@ int replay_command(const std::string& path, std::FILE* out, std::FILE* err) {
   ReplayReport report;
   std::string cut_short;
   try {
-    report = replay_recording(path, progress);
+    report = replay_recording(path, servers, progress);
   } catch (const ReplayCutShort& cut) {
     report = cut.report;
     cut_short = cut.what();
@@ -487,4 +487,4 @@ int replay_command(const std::string& path, std::FILE* out, std::FILE* err) {
   return kReplaySame;
 }
 
-}  // namespace haptic::app
+}  // namespace haptic::recording

@@ -1,11 +1,11 @@
-#include "net/run_recorder.hpp"
+#include "recording/run_recorder.hpp"
 
 #include <spdlog/spdlog.h>
 
-#include "net/recording_file.hpp"
+#include "recording/recording_file.hpp"
 #include "schema/scene_specs.hpp"
 
-namespace haptic::net {
+namespace haptic::recording {
 namespace {
 
 constexpr auto kRound = std::chrono::milliseconds(2);  // a round per 2 ticks at 1 kHz; the ring holds 1024
@@ -175,4 +175,4 @@ void RunRecorder::write_due() {
   written_through_.store(completed, std::memory_order_release);
 }
 
-}  // namespace haptic::net
+}  // namespace haptic::recording

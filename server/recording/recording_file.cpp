@@ -1,4 +1,4 @@
-#include "net/recording_file.hpp"
+#include "recording/recording_file.hpp"
 
 #include <zstd.h>
 
@@ -7,7 +7,7 @@
 #include <cstring>
 #include <stdexcept>
 
-namespace haptic::net {
+namespace haptic::recording {
 namespace {
 
 constexpr std::size_t kFlushBytes = 64 * 1024;  // records gathered before a compression step
@@ -223,4 +223,4 @@ bool RecordingReader::next(v1::Record& record) {
   return true;
 }
 
-}  // namespace haptic::net
+}  // namespace haptic::recording

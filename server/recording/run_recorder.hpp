@@ -1,5 +1,5 @@
 #pragma once
-// net::RunRecorder records a run on the server to a file (recording_file.hpp; hapticd --record,
+// recording::RunRecorder records a run on the server to a file (recording_file.hpp; hapticd --record,
 // StartRecording), not the SDK's haptic::Recorder, which records what one client receives: the
 // changes clients make, stamped with the tick after which they take effect, and every tick's
 // sample of every device port. The loop is not
@@ -25,7 +25,7 @@
 #include "haptic/v1/recording.pb.h"
 #include "runtime/sample_ring.hpp"
 
-namespace haptic::net {
+namespace haptic::recording {
 
 class RecordingWriter;
 
@@ -85,4 +85,4 @@ class RunRecorder {
   std::thread thread_;
 };
 
-}  // namespace haptic::net
+}  // namespace haptic::recording

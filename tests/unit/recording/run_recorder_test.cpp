@@ -17,15 +17,15 @@
 #include <string>
 #include <vector>
 
-#include "net/run_recorder.hpp"
-#include "net/recording_file.hpp"
+#include "recording/run_recorder.hpp"
+#include "recording/recording_file.hpp"
 #include "runtime/cartesian_model.hpp"
 #include "runtime/simulated_point_mass_device.hpp"
 #include "runtime/tick_runner.hpp"
 #include "support/allocation_counter.hpp"
 #include "support/zstd_blocks.hpp"
 
-namespace haptic::net {
+namespace haptic::recording {
 namespace {
 
 std::string temp_path(const std::string& name) {
@@ -427,4 +427,4 @@ TEST(RecordingFile, RecordsAfterAFailedWriteAreCountedNotWritten) {
 }
 
 }  // namespace
-}  // namespace haptic::net
+}  // namespace haptic::recording

@@ -18,7 +18,7 @@
 struct ZSTD_CCtx_s;
 struct ZSTD_DCtx_s;
 
-namespace haptic::net {
+namespace haptic::recording {
 
 class RecordingWriter {
  public:
@@ -108,4 +108,4 @@ class RecordingReader {
   std::string error_;
 };
 
-}  // namespace haptic::net
+}  // namespace haptic::recording
