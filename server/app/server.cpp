@@ -283,7 +283,8 @@ Server::Server(const v1::ServerConfig& config)
   quota.SetMaxThreads(static_cast<int>(config.max_event_streams()) + kUnaryCallThreads);
   builder.SetResourceQuota(quota);
   grpc::EnableDefaultHealthCheckService(true);  // grpc.health.v1, for hapticd --health-check
-  builder.RegisterService(service_.get());
+  grpc_face_ = std::make_unique<net::GrpcFace>(*service_);
+  builder.RegisterService(grpc_face_.get());
   grpc_server_ = builder.BuildAndStart();
   if (!grpc_server_) throw std::runtime_error("cannot start the gRPC server");
   grpc_port_ = listener_->port();

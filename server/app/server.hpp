@@ -17,6 +17,7 @@
 #include "haptic/v1/config.pb.h"
 #include "net/control_listener.hpp"
 #include "net/event_hub.hpp"
+#include "net/grpc_face.hpp"
 #include "net/haptic_service.hpp"
 #include "net/metrics_endpoint.hpp"
 #include "net/scene_store.hpp"
@@ -110,6 +111,7 @@ class Server {
   net::EventHub events_;
   net::UdpEndpoint udp_;
   std::unique_ptr<net::HapticService> service_;
+  std::unique_ptr<net::GrpcFace> grpc_face_;  // the service over gRPC
   std::unique_ptr<net::ControlListener> listener_;  // accepts gRPC's connections for it
   std::unique_ptr<grpc::Server> grpc_server_;
   std::uint16_t grpc_port_ = 0;

@@ -78,15 +78,12 @@ AccessControl::AccessControl(std::vector<Credential> credentials)
 
 std::uint64_t AccessControl::refusals() const { return log_->refusals.load(std::memory_order_relaxed); }
 
-grpc::Status AccessControl::authorize(const grpc::ServerContext& context, Permission permission,
+grpc::Status AccessControl::authorize(const CallContext& context, Permission permission,
                                       const char* call, Caller* caller, const std::string& peer,
                                       std::chrono::system_clock::time_point now) const {
   if (!enabled()) return grpc::Status::OK;
-  const auto& metadata = context.client_metadata();
-  const auto found = metadata.find(kAuthorizationMetadataKey);
-  if (found == metadata.end()) return authorize_header(nullptr, permission, call, caller, now, peer);
-  const std::string header(found->second.data(), found->second.size());
-  return authorize_header(&header, permission, call, caller, now, peer);
+  const std::optional<std::string> header = context.metadata(kAuthorizationMetadataKey);
+  return authorize_header(header ? &*header : nullptr, permission, call, caller, now, peer);
 }
 
 grpc::Status AccessControl::authorize_header(const std::string* header, Permission permission,

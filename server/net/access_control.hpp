@@ -4,7 +4,7 @@
 // "authorization: Bearer <token>", and each RPC needs a role: OBSERVER < CONTROLLER < ADMIN, each
 // including the ones before it.
 
-#include <grpcpp/server_context.h>
+#include <grpcpp/support/status.h>
 
 #include <chrono>
 #include <cstdint>
@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "haptic/v1/types.pb.h"
+#include "net/call_context.hpp"
 
 namespace haptic::net {
 
@@ -53,7 +54,7 @@ class AccessControl {
   /// call (the caller's own error says which call it made). Every refusal is logged with `peer`
   /// (the caller's host), the token's name ("none", "an unknown token") and `call`: at most one
   /// line a second, with the number held back.
-  grpc::Status authorize(const grpc::ServerContext& context, Permission permission,
+  grpc::Status authorize(const CallContext& context, Permission permission,
                          const char* call, Caller* caller, const std::string& peer,
                          std::chrono::system_clock::time_point now =
                              std::chrono::system_clock::now()) const;

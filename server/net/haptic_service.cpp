@@ -10,7 +10,6 @@
 
 #include "haptic/io/session_id.hpp"
 #include "haptic/io/session_secret.hpp"
-#include "net/control_listener.hpp"
 #include "net/read_back.hpp"
 #include "schema/stability.hpp"
 
@@ -44,16 +43,6 @@ constexpr std::uint32_t kMaxStepTicks = 1'000'000;
 constexpr std::uint32_t kMinAckWindow = 16;
 constexpr std::uint32_t kMaxAckWindow = 65536;
 
-/// The host a call comes from. Connections hapticd accepted itself (net::ControlListener) show
-/// as "fd:N" in gRPC's peer string: their address is the socket's own.
-std::string caller_host(const grpc::ServerContext* context) {
-  const std::string peer = context->peer();
-  if (peer.rfind("fd:", 0) == 0) {
-    return ControlListener::host_of_connection(static_cast<int>(std::strtol(peer.c_str() + 3, nullptr, 10)));
-  }
-  return peer_host(peer);
-}
-
 grpc::Status invalid(const std::string& message) {
   return {grpc::StatusCode::INVALID_ARGUMENT, message};
 }
@@ -78,18 +67,16 @@ std::string check_client_name(const std::string& name) {
 
 }  // namespace
 
-grpc::Status HapticService::check_session(const grpc::ServerContext* context,
+grpc::Status HapticService::check_session(const CallContext* context,
                                           std::uint64_t session_id, Permission permission,
                                           const char* call, Caller* caller) const {
-  if (auto status = deps_.access.authorize(*context, permission, call, caller, caller_host(context));
+  if (auto status = deps_.access.authorize(*context, permission, call, caller, context->peer_host());
       !status.ok()) {
     return status;
   }
+  const std::optional<std::string> sent = context->metadata(io::kSessionSecretMetadataKey);
   std::span<const std::uint8_t> secret;
-  const auto& metadata = context->client_metadata();
-  if (const auto found = metadata.find(io::kSessionSecretMetadataKey); found != metadata.end()) {
-    secret = {reinterpret_cast<const std::uint8_t*>(found->second.data()), found->second.size()};
-  }
+  if (sent) secret = {reinterpret_cast<const std::uint8_t*>(sent->data()), sent->size()};
   switch (session_id == 0 ? Access::kNoSuchSession : deps_.sessions.authorize(session_id, secret)) {
     case Access::kGranted:
       return grpc::Status::OK;
@@ -204,11 +191,11 @@ v1::DeviceInfo HapticService::device_info(std::uint32_t port) const {
   return info;
 }
 
-grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::OpenSessionRequest* request,
+grpc::Status HapticService::OpenSession(CallContext* context, const v1::OpenSessionRequest* request,
                                         v1::OpenSessionResponse* response) {
   Caller caller;
   if (auto status = deps_.access.authorize(*context, Permission::kObserve, "OpenSession", &caller,
-                                              caller_host(context));
+                                              context->peer_host());
       !status.ok()) {
     return status;
   }
@@ -225,7 +212,7 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::
   }
   std::string refusal;
   const auto session = deps_.sessions.open(request->client_name(), request->device_index(),
-                                           caller_host(context), &refusal, caller);
+                                           context->peer_host(), &refusal, caller);
   if (!session) return {grpc::StatusCode::RESOURCE_EXHAUSTED, refusal};
   response->set_session_id(session->id);
   response->set_udp_key(std::string(session->key.begin(), session->key.end()));
@@ -251,7 +238,7 @@ grpc::Status HapticService::OpenSession(grpc::ServerContext* context, const v1::
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::CloseSession(grpc::ServerContext* context, const v1::SessionRef* request,
+grpc::Status HapticService::CloseSession(CallContext* context, const v1::SessionRef* request,
                                          v1::Empty*) {
   if (auto status = check_session(context, request->session_id(), Permission::kObserve, "CloseSession"); !status.ok()) return status;
   deps_.sessions.close(request->session_id());
@@ -259,7 +246,7 @@ grpc::Status HapticService::CloseSession(grpc::ServerContext* context, const v1:
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1::CreateObjectRequest* request,
+grpc::Status HapticService::CreateObject(CallContext* context, const v1::CreateObjectRequest* request,
                                          v1::ItemRef* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "CreateObject"); !status.ok()) return status;
   if (request->object().across_sites() && !deps_.federated) return not_federated("object");
@@ -287,7 +274,7 @@ grpc::Status HapticService::CreateObject(grpc::ServerContext* context, const v1:
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1::UpdateObjectRequest* request,
+grpc::Status HapticService::UpdateObject(CallContext* context, const v1::UpdateObjectRequest* request,
                                          v1::ItemRef* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "UpdateObject"); !status.ok()) return status;
   if (request->object().across_sites() && !deps_.federated) return not_federated("object");
@@ -315,7 +302,7 @@ grpc::Status HapticService::UpdateObject(grpc::ServerContext* context, const v1:
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::DeleteObject(grpc::ServerContext* context, const v1::DeleteRequest* request,
+grpc::Status HapticService::DeleteObject(CallContext* context, const v1::DeleteRequest* request,
                                          v1::Empty*) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "DeleteObject"); !status.ok()) return status;
   if (auto status = deps_.scene.remove(request->session_id(), ItemKind::kObject, request->id());
@@ -329,7 +316,7 @@ grpc::Status HapticService::DeleteObject(grpc::ServerContext* context, const v1:
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::CreateFieldRequest* request,
+grpc::Status HapticService::CreateField(CallContext* context, const v1::CreateFieldRequest* request,
                                         v1::ItemRef* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "CreateField"); !status.ok()) return status;
   if (request->field().across_sites() && !deps_.federated) return not_federated("field");
@@ -357,7 +344,7 @@ grpc::Status HapticService::CreateField(grpc::ServerContext* context, const v1::
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::UpdateField(grpc::ServerContext* context, const v1::UpdateFieldRequest* request,
+grpc::Status HapticService::UpdateField(CallContext* context, const v1::UpdateFieldRequest* request,
                                         v1::Empty*) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "UpdateField"); !status.ok()) return status;
   if (request->field().across_sites() && !deps_.federated) return not_federated("field");
@@ -379,7 +366,7 @@ grpc::Status HapticService::UpdateField(grpc::ServerContext* context, const v1::
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::DeleteField(grpc::ServerContext* context, const v1::DeleteRequest* request,
+grpc::Status HapticService::DeleteField(CallContext* context, const v1::DeleteRequest* request,
                                         v1::Empty*) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "DeleteField"); !status.ok()) return status;
   if (auto status = deps_.scene.remove(request->session_id(), ItemKind::kField, request->id());
@@ -393,7 +380,7 @@ grpc::Status HapticService::DeleteField(grpc::ServerContext* context, const v1::
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext* context, const v1::SessionRef* request,
+grpc::Status HapticService::GetSceneEnergy(CallContext* context, const v1::SessionRef* request,
                                            v1::SceneEnergy* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kObserve, "GetSceneEnergy"); !status.ok()) return status;
   for (const engine::ItemEnergyTotals& item : deps_.scene.energy()) {
@@ -407,21 +394,21 @@ grpc::Status HapticService::GetSceneEnergy(grpc::ServerContext* context, const v
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::GetObjectStates(grpc::ServerContext* context, const v1::SessionRef* request,
+grpc::Status HapticService::GetObjectStates(CallContext* context, const v1::SessionRef* request,
                                             v1::ObjectStates* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kObserve, "GetObjectStates"); !status.ok()) return status;
   *response = to_object_states(deps_.scene.motions());
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::GetScene(grpc::ServerContext* context, const v1::GetSceneRequest* request,
+grpc::Status HapticService::GetScene(CallContext* context, const v1::GetSceneRequest* request,
                                      v1::SceneContents* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kObserve, "GetScene"); !status.ok()) return status;
   *response = to_scene_contents(deps_.scene.read(request->session_id(), request->all_sessions()));
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::ApplySceneRequest* request,
+grpc::Status HapticService::ApplyScene(CallContext* context, const v1::ApplySceneRequest* request,
                                        v1::ApplySceneResponse* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "ApplyScene"); !status.ok()) return status;
   for (int i = 0; i < request->scene().objects_size() && !deps_.federated; ++i) {
@@ -463,23 +450,23 @@ grpc::Status HapticService::ApplyScene(grpc::ServerContext* context, const v1::A
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::GetDeviceInfo(grpc::ServerContext* context, const v1::SessionRef* request,
+grpc::Status HapticService::GetDeviceInfo(CallContext* context, const v1::SessionRef* request,
                                           v1::DeviceInfo* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kObserve, "GetDeviceInfo"); !status.ok()) return status;
   *response = device_info(deps_.sessions.device_index_of(request->session_id()).value_or(0));
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::GetStats(grpc::ServerContext* context, const v1::SessionRef* request,
+grpc::Status HapticService::GetStats(CallContext* context, const v1::SessionRef* request,
                                      v1::Stats* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kAdmin, "GetStats"); !status.ok()) return status;
   *response = deps_.stats();
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
+grpc::Status HapticService::WatchEvents(CallContext* context,
                                         const v1::WatchEventsRequest* request,
-                                        grpc::ServerWriter<v1::Event>* writer) {
+                                        StreamWriter<v1::Event>* writer) {
   if (auto status = check_session(context, request->session_id(), Permission::kObserve, "WatchEvents"); !status.ok()) return status;
   std::string refusal;
   auto watcher = deps_.events.watch(request->session_id(), refusal,
@@ -491,19 +478,19 @@ grpc::Status HapticService::WatchEvents(grpc::ServerContext* context,
   started.set_kind(v1::Event::WATCH_STARTED);
   started.set_session_id(request->session_id());
   started.set_server_time_s(static_cast<double>(deps_.loop.server_time_ns()) * 1e-9);
-  writer->Write(started);
+  writer->write(started);
   // Until the client cancels, or the session (or the server) ends: a watch never outlives its
   // session, so a client cannot keep threads by abandoning sessions.
-  while (!context->IsCancelled() && !watcher->finished()) {
+  while (!context->cancelled() && !watcher->finished()) {
     if (auto event = watcher->next(std::chrono::milliseconds(100))) {
-      if (!writer->Write(*event)) break;
+      if (!writer->write(*event)) break;
     }
   }
   deps_.events.unwatch(watcher);
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::ListSessions(grpc::ServerContext* context, const v1::SessionRef* request,
+grpc::Status HapticService::ListSessions(CallContext* context, const v1::SessionRef* request,
                                          v1::SessionList* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kAdmin, "ListSessions");
       !status.ok()) {
@@ -524,7 +511,7 @@ grpc::Status HapticService::ListSessions(grpc::ServerContext* context, const v1:
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::KickSession(grpc::ServerContext* context,
+grpc::Status HapticService::KickSession(CallContext* context,
                                         const v1::KickSessionRequest* request, v1::Empty*) {
   Caller caller;
   if (auto status =
@@ -548,7 +535,7 @@ grpc::Status HapticService::KickSession(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::StartRecording(grpc::ServerContext* context,
+grpc::Status HapticService::StartRecording(CallContext* context,
                                            const v1::StartRecordingRequest* request,
                                            v1::RecordingStatus* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kAdmin, "StartRecording");
@@ -577,7 +564,7 @@ grpc::Status HapticService::StartRecording(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::StopRecording(grpc::ServerContext* context, const v1::SessionRef* request,
+grpc::Status HapticService::StopRecording(CallContext* context, const v1::SessionRef* request,
                                           v1::RecordingStatus* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kAdmin, "StopRecording");
       !status.ok()) {
@@ -595,7 +582,7 @@ grpc::Status HapticService::StopRecording(grpc::ServerContext* context, const v1
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::SubscribeState(grpc::ServerContext* context,
+grpc::Status HapticService::SubscribeState(CallContext* context,
                                            const v1::SubscribeStateRequest* request,
                                            v1::SubscribeStateResponse* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kObserve, "SubscribeState"); !status.ok()) return status;
@@ -621,7 +608,7 @@ grpc::Status HapticService::SubscribeState(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::SetOperator(grpc::ServerContext* context, const v1::SetOperatorRequest* request,
+grpc::Status HapticService::SetOperator(CallContext* context, const v1::SetOperatorRequest* request,
                                         v1::Empty*) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "SetOperator"); !status.ok()) return status;
   const DevicePort& port = port_of(request->session_id());
@@ -640,7 +627,7 @@ grpc::Status HapticService::SetOperator(grpc::ServerContext* context, const v1::
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::Reset(grpc::ServerContext* context, const v1::SessionRef* request,
+grpc::Status HapticService::Reset(CallContext* context, const v1::SessionRef* request,
                                   v1::ResetResponse* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "Reset"); !status.ok()) return status;
   if (!deps_.reset) return {grpc::StatusCode::FAILED_PRECONDITION, "this server cannot be reset"};
@@ -651,7 +638,7 @@ grpc::Status HapticService::Reset(grpc::ServerContext* context, const v1::Sessio
   return grpc::Status::OK;
 }
 
-grpc::Status HapticService::Step(grpc::ServerContext* context, const v1::StepRequest* request,
+grpc::Status HapticService::Step(CallContext* context, const v1::StepRequest* request,
                                  v1::StepResponse* response) {
   if (auto status = check_session(context, request->session_id(), Permission::kControl, "Step"); !status.ok()) return status;
   if (deps_.loop.config().mode != runtime::TimeMode::kLockstep) {

@@ -1,15 +1,19 @@
 #pragma once
-// The control plane: haptic.v1.Haptic over gRPC. Every request is validated in full before
-// anything changes (INVALID_ARGUMENT names the field); another session's item is
-// PERMISSION_DENIED; limits are RESOURCE_EXHAUSTED. Any request renews its session's lease.
+// The control plane: haptic.v1.Haptic, whichever face carries the call (gRPC: net/grpc_face; JSON
+// over HTTP: net/json_face). Every request is validated in full before anything changes
+// (INVALID_ARGUMENT names the field); another session's item is PERMISSION_DENIED; limits are
+// RESOURCE_EXHAUSTED. Any request renews its session's lease.
 
 #include <chrono>
 #include <cstdint>
 #include <functional>
 #include <vector>
 
-#include "haptic/v1/service.grpc.pb.h"
+#include <grpcpp/support/status.h>
+
+#include "haptic/v1/service.pb.h"
 #include "net/access_control.hpp"
+#include "net/call_context.hpp"
 #include "net/event_hub.hpp"
 #include "recording/run_recorder.hpp"
 #include "net/scene_store.hpp"
@@ -18,6 +22,33 @@
 #include "runtime/device.hpp"
 #include "runtime/loop_thread.hpp"
 #include "engine/operator/simulated_hand.hpp"
+
+/// Every unary call of haptic.v1.Haptic, X(name, request, response), in service.proto's order:
+/// the one list the service's handlers, the gRPC face and the JSON face are made from (a test
+/// checks it against the service's descriptor). WatchEvents, a server stream, is apart.
+#define HAPTIC_V1_UNARY_RPCS(X)                                 \
+  X(OpenSession, OpenSessionRequest, OpenSessionResponse)       \
+  X(CloseSession, SessionRef, Empty)                            \
+  X(CreateObject, CreateObjectRequest, ItemRef)                 \
+  X(UpdateObject, UpdateObjectRequest, ItemRef)                 \
+  X(DeleteObject, DeleteRequest, Empty)                         \
+  X(CreateField, CreateFieldRequest, ItemRef)                   \
+  X(UpdateField, UpdateFieldRequest, Empty)                     \
+  X(DeleteField, DeleteRequest, Empty)                          \
+  X(ApplyScene, ApplySceneRequest, ApplySceneResponse)          \
+  X(GetDeviceInfo, SessionRef, DeviceInfo)                      \
+  X(GetStats, SessionRef, Stats)                                \
+  X(GetSceneEnergy, SessionRef, SceneEnergy)                    \
+  X(GetObjectStates, SessionRef, ObjectStates)                  \
+  X(GetScene, GetSceneRequest, SceneContents)                   \
+  X(ListSessions, SessionRef, SessionList)                      \
+  X(KickSession, KickSessionRequest, Empty)                     \
+  X(StartRecording, StartRecordingRequest, RecordingStatus)     \
+  X(StopRecording, SessionRef, RecordingStatus)                 \
+  X(SubscribeState, SubscribeStateRequest, SubscribeStateResponse) \
+  X(SetOperator, SetOperatorRequest, Empty)                     \
+  X(Step, StepRequest, StepResponse)                            \
+  X(Reset, SessionRef, ResetResponse)
 
 namespace haptic::net {
 
@@ -53,7 +84,7 @@ struct ServiceDependencies {
   std::function<bool(std::uint64_t tick, std::chrono::milliseconds timeout)> wait_streamed_through;
 };
 
-class HapticService final : public v1::Haptic::Service {
+class HapticService {
  public:
   explicit HapticService(ServiceDependencies deps) : deps_(std::move(deps)) {}
 
@@ -72,44 +103,13 @@ class HapticService final : public v1::Haptic::Service {
   /// expired tokens; `reason` (if any) goes into the event. Logs one line naming the session.
   void end_session(std::uint64_t session_id, v1::Event::Kind why, const std::string& reason = {});
 
-  grpc::Status OpenSession(grpc::ServerContext*, const v1::OpenSessionRequest*,
-                           v1::OpenSessionResponse*) override;
-  grpc::Status CloseSession(grpc::ServerContext*, const v1::SessionRef*, v1::Empty*) override;
-  grpc::Status CreateObject(grpc::ServerContext*, const v1::CreateObjectRequest*,
-                            v1::ItemRef*) override;
-  grpc::Status UpdateObject(grpc::ServerContext*, const v1::UpdateObjectRequest*,
-                            v1::ItemRef*) override;
-  grpc::Status DeleteObject(grpc::ServerContext*, const v1::DeleteRequest*, v1::Empty*) override;
-  grpc::Status CreateField(grpc::ServerContext*, const v1::CreateFieldRequest*,
-                           v1::ItemRef*) override;
-  grpc::Status UpdateField(grpc::ServerContext*, const v1::UpdateFieldRequest*,
-                           v1::Empty*) override;
-  grpc::Status DeleteField(grpc::ServerContext*, const v1::DeleteRequest*, v1::Empty*) override;
-  grpc::Status ApplyScene(grpc::ServerContext*, const v1::ApplySceneRequest*,
-                          v1::ApplySceneResponse*) override;
-  grpc::Status GetDeviceInfo(grpc::ServerContext*, const v1::SessionRef*,
-                             v1::DeviceInfo*) override;
-  grpc::Status GetSceneEnergy(grpc::ServerContext*, const v1::SessionRef* request,
-                              v1::SceneEnergy* response) override;
-  grpc::Status GetObjectStates(grpc::ServerContext*, const v1::SessionRef* request,
-                               v1::ObjectStates* response) override;
-  grpc::Status GetScene(grpc::ServerContext*, const v1::GetSceneRequest* request,
-                        v1::SceneContents* response) override;
-  grpc::Status GetStats(grpc::ServerContext*, const v1::SessionRef*, v1::Stats*) override;
-  grpc::Status WatchEvents(grpc::ServerContext*, const v1::WatchEventsRequest*,
-                           grpc::ServerWriter<v1::Event>*) override;
-  grpc::Status ListSessions(grpc::ServerContext*, const v1::SessionRef*, v1::SessionList*) override;
-  grpc::Status StartRecording(grpc::ServerContext*, const v1::StartRecordingRequest*,
-                              v1::RecordingStatus*) override;
-  grpc::Status StopRecording(grpc::ServerContext*, const v1::SessionRef*, v1::RecordingStatus*) override;
-  grpc::Status KickSession(grpc::ServerContext*, const v1::KickSessionRequest*, v1::Empty*) override;
-  grpc::Status SubscribeState(grpc::ServerContext*, const v1::SubscribeStateRequest*,
-                              v1::SubscribeStateResponse*) override;
-  grpc::Status SetOperator(grpc::ServerContext*, const v1::SetOperatorRequest*,
-                           v1::Empty*) override;
-  grpc::Status Step(grpc::ServerContext*, const v1::StepRequest*, v1::StepResponse*) override;
-  grpc::Status Reset(grpc::ServerContext*, const v1::SessionRef* request,
-                     v1::ResetResponse* response) override;
+  // haptic.v1.Haptic's calls (proto/haptic/v1/service.proto), one handler each, for both faces.
+#define HAPTIC_DECLARE_UNARY(name, Request, Response) \
+  grpc::Status name(CallContext* context, const v1::Request* request, v1::Response* response);
+  HAPTIC_V1_UNARY_RPCS(HAPTIC_DECLARE_UNARY)
+#undef HAPTIC_DECLARE_UNARY
+  grpc::Status WatchEvents(CallContext* context, const v1::WatchEventsRequest* request,
+                           StreamWriter<v1::Event>* writer);
 
   /// Ends every session opened with a token that has expired since (a session's heartbeats would
   /// otherwise keep its items in the scene after its holder lost the right to them). Returns how
@@ -126,7 +126,7 @@ class HapticService final : public v1::Haptic::Service {
   /// PERMISSION_DENIED naming `call` otherwise), the session exists and the call carries its
   /// secret (the lease is then renewed); NOT_FOUND or PERMISSION_DENIED naming the session otherwise.
   /// `caller` (if given) receives the token's holder and role.
-  grpc::Status check_session(const grpc::ServerContext* context, std::uint64_t session_id,
+  grpc::Status check_session(const CallContext* context, std::uint64_t session_id,
                              Permission permission, const char* call, Caller* caller = nullptr) const;
   /// The device port an open session is bound to (port 0's if it has just gone).
   const DevicePort& port_of(std::uint64_t session_id) const;
