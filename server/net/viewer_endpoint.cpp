@@ -1,25 +1,13 @@
 #include "net/viewer_endpoint.hpp"
 
-#include <google/protobuf/util/json_util.h>
-
 #include <stdexcept>
 
+#include "net/proto_json.hpp"
 #include "net/read_back.hpp"
 #include "runtime/realtime.hpp"
 
 namespace haptic::net {
 namespace {
-
-std::string to_json(const google::protobuf::Message& message) {
-  google::protobuf::util::JsonPrintOptions options;
-  options.preserve_proto_field_names = true;
-  options.always_print_primitive_fields = true;
-  std::string out;
-  if (const auto status = google::protobuf::util::MessageToJsonString(message, &out, options); !status.ok()) {
-    throw std::runtime_error("cannot write " + message.GetTypeName() + " as JSON: " + status.ToString());
-  }
-  return out;
-}
 
 /// The host a Host header names, without its port or an IPv6 address's brackets.
 std::string host_of_header(const std::string& host_header) {
