@@ -2,7 +2,8 @@
 // against a real lockstep hapticd (first argument): enabled, it opens a session and takes the
 // state stream; a second session pushes the tool along W's +y, and the component places its
 // transform where the tool is (W's y is Unity's z, scaled), between samples by the binding's
-// interpolation; Update runs on the server's clock; disabled, it closes the session.
+// interpolation; Update runs on the server's clock; disabled, it closes the session. Given an
+// address where no server listens, it says so in the console and the scene goes on.
 using System;
 using System.Reflection;
 using System.Threading;
@@ -69,6 +70,22 @@ static class UnityComponentTest
             Call(follower, "OnDisable");
             Check(follower.Client == null && driver.Sessions().Length == 1, "disabled, its session closed");
         }
+        var nowhere = new HapticToolFollower { serverAddress = "127.0.0.1:1", clientName = "unity-nowhere" };
+        int logged = UnityEngine.Debug.Logged.Count;
+        try
+        {
+            Call(nowhere, "OnEnable");
+            Call(nowhere, "Update");
+            Call(nowhere, "OnDisable");
+        }
+        catch (Exception e)
+        {
+            Check(false, "a connection refused must not throw into the scene: " + e);
+        }
+        Check(nowhere.Client == null, "no session where no server listens");
+        var said = UnityEngine.Debug.Logged.GetRange(logged, UnityEngine.Debug.Logged.Count - logged);
+        Check(said.Count == 1 && said[0].StartsWith("LogError: hapticd: cannot connect to 127.0.0.1:1 ("),
+              "the refusal said once in the console: " + string.Join(" | ", said));
         Console.WriteLine(failures == 0 ? "the Unity component's checks passed" : failures + " checks failed");
         return failures == 0 ? 0 : 1;
     }

@@ -36,7 +36,12 @@ namespace UnityEngine
 
     public static class Debug
     {
-        public static void LogError(object message) { Console.Error.WriteLine("LogError: " + message); }
+        /// Every line logged, for the tests to read: "LogError: …", "LogWarning: …", "Log: …".
+        public static readonly System.Collections.Generic.List<string> Logged = new System.Collections.Generic.List<string>();
+        public static void LogError(object message) { Write("LogError: " + message); }
+        public static void LogWarning(object message) { Write("LogWarning: " + message); }
+        public static void Log(object message) { Write("Log: " + message); }
+        static void Write(string line) { lock (Logged) Logged.Add(line); Console.Error.WriteLine(line); }
     }
 
     [AttributeUsage(AttributeTargets.Field)]

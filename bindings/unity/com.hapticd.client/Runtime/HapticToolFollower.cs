@@ -4,9 +4,14 @@
 // between the samples (a little behind, always between two real samples) or predicted past the
 // newest (no added lag, a small error when the hand accelerates). docs/unity.md.
 //
+// A connection it cannot make (for any reason: refused, no server, no native library) is reported
+// in the console and leaves the scene running without the tool; one lost, resumed or ended later
+// is reported from the next frame's Update, on Unity's main thread.
+//
 // Frames: hapticd's W is right-handed with z up (as every simulated device and example uses it);
 // Unity's world is left-handed with y up. W (x, y, z) maps to Unity (x, z, y) times `unitsPerMeter`.
 using System;
+using System.Collections.Generic;
 using UnityEngine;
 
 namespace Hapticd.Unity
@@ -32,20 +37,27 @@ namespace Hapticd.Unity
         private readonly object gate_ = new object();
         private State previous_, latest_;
         private int samples_;
+        private readonly Queue<ConnectionChange> connectionChanges_ = new Queue<ConnectionChange>();  // under gate_
+        private bool updateFailed_;
 
         /// <summary>The session, once enabled (null before, or if the server could not be reached).</summary>
         public Client Client { get { return client_; } }
 
         private void OnEnable()
         {
+            updateFailed_ = false;
             try
             {
                 client_ = new Client(new ClientConfig { ServerAddress = serverAddress, ClientName = clientName, DeviceIndex = (uint)deviceIndex });
+                client_.OnConnection(OnConnectionChange);
                 client_.OnState(OnSample);
             }
-            catch (HapticException e)
+            catch (Exception e)
             {
-                Debug.LogError("hapticd: " + e.Message);
+                // Not only HapticException: a missing native library (DllNotFoundException) or any
+                // other failure must not take the scene down with it.
+                Debug.LogError("hapticd: cannot connect to " + serverAddress + " (" + Describe(e) + "); the tool will not move");
+                if (client_ != null) client_.Dispose();
                 client_ = null;
             }
         }
@@ -54,6 +66,7 @@ namespace Hapticd.Unity
         {
             if (client_ == null) return;
             client_.OnState(null);
+            client_.OnConnection(null);
             client_.Dispose();
             client_ = null;
             lock (gate_) samples_ = 0;
@@ -70,12 +83,62 @@ namespace Hapticd.Unity
             }
         }
 
+        // On the SDK's thread: kept for Update to report on the main thread.
+        private void OnConnectionChange(ConnectionChange change)
+        {
+            lock (gate_) connectionChanges_.Enqueue(change);
+        }
+
         private void Update()
         {
             if (client_ == null) return;
-            double? now = client_.ServerTimeNow();
-            if (!now.HasValue) return;
-            PlaceAt(smoothing == Smoothing.Interpolate ? now.Value - interpolationDelay : now.Value);
+            ReportConnectionChanges();
+            try
+            {
+                double? now = client_.ServerTimeNow();
+                if (!now.HasValue) return;
+                PlaceAt(smoothing == Smoothing.Interpolate ? now.Value - interpolationDelay : now.Value);
+                updateFailed_ = false;
+            }
+            catch (Exception e)
+            {
+                // Once per run of failures: a frame's error must not flood the console every frame.
+                if (!updateFailed_) Debug.LogError("hapticd: cannot place the tool (" + Describe(e) + ")");
+                updateFailed_ = true;
+            }
+        }
+
+        private void ReportConnectionChanges()
+        {
+            while (true)
+            {
+                ConnectionChange change;
+                lock (gate_)
+                {
+                    if (connectionChanges_.Count == 0) return;
+                    change = connectionChanges_.Dequeue();
+                }
+                string reason = string.IsNullOrEmpty(change.Reason) ? "" : ": " + change.Reason;
+                switch (change.State)
+                {
+                    case ConnectionState.Lost:
+                        Debug.LogWarning("hapticd: the connection to " + serverAddress + " is lost" + reason + "; reconnecting, the tool holds still");
+                        break;
+                    case ConnectionState.Resumed:
+                        Debug.Log("hapticd: the connection to " + serverAddress + " is back after " + change.OutageMs + " ms" +
+                                  (change.NewSession ? " in a new session (" + change.ItemsNotRestored + " items not restored)" : ""));
+                        break;
+                    case ConnectionState.Ended:
+                        Debug.LogError("hapticd: the session with " + serverAddress + " has ended" + reason);
+                        break;
+                }
+            }
+        }
+
+        private static string Describe(Exception e)
+        {
+            var haptic = e as HapticException;
+            return haptic != null ? haptic.Message : e.GetType().Name + ": " + e.Message;
         }
 
         /// <summary>Places the transform where the tool is at server time `serverTime` (s); false
