@@ -1,15 +1,21 @@
 #include "net/http_server.hpp"
 
-#include <poll.h>
 #include <pthread.h>
 #include <sys/socket.h>
-#include <unistd.h>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
 #include <exception>
 #include <map>
+#include <optional>
+#include <thread>
 #include <tuple>
 
 #include "net/tcp_listen.hpp"
@@ -17,20 +23,18 @@
 namespace haptic::net {
 namespace {
 
-constexpr int kPollMs = 100;  // how often the thread looks for stop() when nothing happens
+namespace asio = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+using tcp = asio::ip::tcp;
 
-const char* reason_phrase(int status) {
-  switch (status) {
-    case 200: return "OK";
-    case 400: return "Bad Request";
-    case 401: return "Unauthorized";
-    case 403: return "Forbidden";
-    case 404: return "Not Found";
-    case 405: return "Method Not Allowed";
-    case 431: return "Request Header Fields Too Large";
-    case 500: return "Internal Server Error";
-    default: return "Unknown";
-  }
+/// How long accepting pauses when the process is out of descriptors.
+constexpr std::chrono::milliseconds kAcceptPause{100};
+
+std::string lower(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
 }
 
 std::string_view trim(std::string_view text) {
@@ -41,329 +45,397 @@ std::string_view trim(std::string_view text) {
   return text;
 }
 
-std::string lower(std::string_view text) {
-  std::string out(text);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
+/// A head Beast has parsed, as the handler sees it; "" or why it is refused (400).
+std::string to_request(const http::request_header<>& head, HttpRequest& out) {
+  out = HttpRequest{};
+  const auto method = head.method_string();
+  const auto target = head.target();
+  out.method.assign(method.data(), method.size());
+  out.target.assign(target.data(), target.size());
+  out.version = head.version() == 11 ? "HTTP/1.1" : "HTTP/1.0";
+  if (head.version() != 11 && head.version() != 10) {
+    return "only HTTP/1.0 and HTTP/1.1 are served, got HTTP/" + std::to_string(head.version() / 10) +
+           "." + std::to_string(head.version() % 10);
+  }
+  if (out.target.empty() || out.target.front() != '/') {
+    return "the target must be a path starting with '/', got '" + out.target.substr(0, 200) + "'";
+  }
+  out.path = out.target.substr(0, out.target.find('?'));
+  for (const auto& field : head) {
+    const auto name = field.name_string();
+    const auto value = field.value();
+    out.headers[lower({name.data(), name.size()})] = std::string(trim({value.data(), value.size()}));
+  }
+  const std::string* connection = out.header("connection");
+  const std::string token = connection != nullptr ? lower(*connection) : std::string();
+  out.keep_alive = head.version() == 11 ? token.find("close") == std::string::npos
+                                        : token.find("keep-alive") != std::string::npos;
+  return {};
 }
 
-/// The end of the head (the index past its blank line) in `buffer`, or npos while incomplete.
-/// A bare LF ends lines too.
-std::size_t head_end(const std::string& buffer, std::size_t& head_length) {
-  const std::size_t crlf = buffer.find("\r\n\r\n");
-  const std::size_t lf = buffer.find("\n\n");
-  if (crlf != std::string::npos && (lf == std::string::npos || crlf < lf)) {
-    head_length = crlf;
-    return crlf + 4;
+/// Beast's parser error for a request, as a 400 says it: what the client should have sent, and
+/// Beast's own word for what it found.
+std::string parse_error(const beast::error_code& error) {
+  std::string what = "the request is not HTTP/1.x";
+  if (error == http::error::bad_method || error == http::error::bad_target ||
+      error == http::error::bad_version) {
+    what = "the request line must be 'METHOD /path HTTP/1.x'";
+  } else if (error == http::error::bad_field || error == http::error::bad_value) {
+    what = "a header line must be 'Name: value'";
+  } else if (error == http::error::bad_line_ending) {
+    what = "every line must end in CR LF";
+  } else if (error == http::error::bad_content_length || error == http::error::bad_transfer_encoding ||
+             error == http::error::bad_chunk || error == http::error::bad_chunk_extension) {
+    what = "the body's framing is not valid";
   }
-  if (lf != std::string::npos) {
-    head_length = lf;
-    return lf + 2;
-  }
-  return std::string::npos;
+  return what + " (" + error.message() + ")";
 }
 
 }  // namespace
 
 std::string parse_request_head(std::string_view head, HttpRequest& out) {
   out = HttpRequest{};
-  const std::size_t line_end = std::min(head.find('\n'), head.size());
-  const std::string_view line = trim(head.substr(0, line_end));
-  const std::size_t first_space = line.find(' ');
-  const std::size_t second_space =
-      first_space == std::string_view::npos ? first_space : line.find(' ', first_space + 1);
-  if (second_space == std::string_view::npos || line.find(' ', second_space + 1) != std::string_view::npos) {
-    return "the request line must be 'METHOD TARGET HTTP/1.x', got '" + std::string(line.substr(0, 200)) +
-           "'";
+  http::request_parser<http::empty_body> parser;
+  parser.header_limit(static_cast<std::uint32_t>(std::min<std::size_t>(head.size() + 4, UINT32_MAX)));
+  parser.eager(false);
+  const std::string whole = std::string(head) + "\r\n\r\n";
+  beast::error_code error;
+  parser.put(asio::buffer(whole), error);
+  if (error == http::error::need_more || (!error && !parser.is_header_done())) {
+    return "the request head is not whole";
   }
-  out.method = line.substr(0, first_space);
-  out.target = line.substr(first_space + 1, second_space - first_space - 1);
-  out.version = line.substr(second_space + 1);
-  if (out.version != "HTTP/1.1" && out.version != "HTTP/1.0") {
-    return "only HTTP/1.0 and HTTP/1.1 are served, got '" + out.version.substr(0, 20) + "'";
+  if (error) return parse_error(error);
+  return to_request(parser.get().base(), out);
+}
+
+/// Everything that runs on the I/O thread, and the handler threads beside it.
+struct HttpServer::Impl {
+  Impl(HttpServer& owner, Handler handle) : server(owner), handler(std::move(handle)) {}
+
+  HttpServer& server;
+  Handler handler;
+  asio::io_context io{1};
+  asio::io_context handlers;  // the handler threads run this
+  std::optional<asio::executor_work_guard<asio::io_context::executor_type>> handlers_work;
+  std::vector<std::unique_ptr<tcp::acceptor>> acceptors;
+  asio::steady_timer accept_pause{io};
+  std::vector<Session*> sessions;  // open ones, on the I/O thread only
+  std::thread io_thread;
+  std::vector<std::thread> handler_threads;
+
+  void accept(tcp::acceptor& acceptor);
+  void accepted(tcp::socket socket);
+  /// Makes room for a connection from `host`, displacing another host's if need be (HttpLimits);
+  /// "" when there is room, else the share that was met, for the 503.
+  std::string make_room(const std::string& host);
+};
+
+/// One connection: a request read, handled, its reply written; then the next.
+struct HttpServer::Session : std::enable_shared_from_this<HttpServer::Session> {
+  Session(Impl& owner, tcp::socket socket, std::string peer)
+      : impl(owner), stream(std::move(socket)), host(std::move(peer)),
+        accepted_at(std::chrono::steady_clock::now()) {}
+
+  Impl& impl;
+  beast::tcp_stream stream;
+  beast::flat_buffer buffer;
+  std::optional<http::request_parser<http::string_body>> parser;
+  http::response<http::string_body> response;
+  std::optional<http::response_serializer<http::string_body>> serializer;
+  std::string host;
+  std::chrono::steady_clock::time_point accepted_at;
+  std::uint64_t answered = 0;      // replies queued on it: its progress, with received
+  std::size_t received = 0;        // bytes of the request being read
+  bool busy = false;               // a request handled or a reply written: not displaced then
+  bool closed = false;
+
+  const HttpLimits& limits() const { return impl.server.limits_; }
+  const std::string& name() const { return impl.server.name_; }
+
+  void read_next() {
+    parser.emplace();
+    parser->header_limit(static_cast<std::uint32_t>(limits().max_request_bytes));
+    parser->body_limit(limits().max_body_bytes);
+    received = 0;
+    busy = false;
+    // The whole request within the timeout of the reply before it (or of the accept).
+    stream.expires_after(limits().timeout);
+    read_some();
   }
-  if (out.method.empty() || out.target.empty() || out.target.front() != '/') {
-    return "the target must be a path starting with '/', got '" + out.target.substr(0, 200) + "'";
+
+  void read_some() {
+    http::async_read_some(stream, buffer, *parser,
+                          [self = shared_from_this()](beast::error_code error, std::size_t bytes) {
+                            self->on_read(error, bytes);
+                          });
   }
-  out.path = out.target.substr(0, out.target.find('?'));
-  for (std::size_t at = line_end + 1; at < head.size();) {
-    const std::size_t end = std::min(head.find('\n', at), head.size());
-    const std::string_view header = trim(head.substr(at, end - at));
-    at = end + 1;
-    if (header.empty()) continue;
-    const std::size_t colon = header.find(':');
-    // The name is checked after trimming: a line of "\r: x" would otherwise give an empty one.
-    const std::string_view name = colon == std::string_view::npos ? std::string_view() : trim(header.substr(0, colon));
-    if (name.empty()) {
-      return "a header line must be 'Name: value', got '" + std::string(header.substr(0, 200)) + "'";
+
+  void on_read(beast::error_code error, std::size_t bytes) {
+    if (closed) return;
+    received += bytes;
+    if (error == http::error::header_limit) {
+      reply(HttpResponse::text(431, "hapticd " + name() + ": the request head is longer than " +
+                                        std::to_string(limits().max_request_bytes) + " bytes\n"),
+            false, false);
+      return;
     }
-    out.headers[lower(name)] = std::string(trim(header.substr(colon + 1)));
+    if (error == http::error::body_limit) {
+      reply(HttpResponse::text(413, "hapticd " + name() + ": " +
+                                        (limits().max_body_bytes == 0
+                                             ? std::string("this endpoint takes no request body")
+                                             : "the request body is longer than " +
+                                                   std::to_string(limits().max_body_bytes) + " bytes") +
+                                        "\n"),
+            false, false);
+      return;
+    }
+    if (error == beast::error::timeout) {
+      impl.server.timeouts_.fetch_add(1, std::memory_order_relaxed);
+      close();
+      return;
+    }
+    if (error == http::error::end_of_stream || error == asio::error::eof ||
+        error == asio::error::connection_reset || error == asio::error::operation_aborted) {
+      close();
+      return;
+    }
+    if (error && error.category() == http::make_error_code(http::error::bad_target).category()) {
+      // Beast's parser refused what arrived.
+      reply(HttpResponse::text(400, "hapticd " + name() + ": " + parse_error(error) + "\n"), false, false);
+      return;
+    }
+    if (error) {
+      close();
+      return;
+    }
+    if (!parser->is_done()) {
+      read_some();
+      return;
+    }
+    stream.expires_never();  // the handler may take its time; the next limit is on the reply
+    HttpRequest request;
+    const std::string refused = to_request(parser->get().base(), request);
+    request.peer = host;
+    if (!refused.empty()) {
+      reply(HttpResponse::text(400, "hapticd " + name() + ": " + refused + "\n"), false, false);
+      return;
+    }
+    request.body = std::move(parser->get().body());
+    const auto& methods = limits().methods;
+    if (std::find(methods.begin(), methods.end(), request.method) == methods.end()) {
+      std::string allow;
+      for (const std::string& method : methods) allow += (allow.empty() ? "" : ", ") + method;
+      HttpResponse refusal =
+          HttpResponse::text(405, "hapticd " + name() + ": " + request.method + " is not served here (" +
+                                      allow + " only)\n");
+      refusal.headers.emplace_back("Allow", allow);
+      reply(refusal, false, false);
+      return;
+    }
+    busy = true;
+    asio::post(impl.handlers, [self = shared_from_this(), request = std::move(request)]() mutable {
+      HttpResponse handled;
+      try {
+        handled = self->impl.handler(request);
+      } catch (const std::exception& e) {
+        handled = HttpResponse::text(500, "hapticd " + self->name() + ": " + e.what() + "\n");
+      } catch (...) {
+        handled = HttpResponse::text(500, "hapticd " + self->name() + ": the handler failed\n");
+      }
+      const bool head_only = request.method == "HEAD";
+      const bool keep_alive = request.keep_alive;
+      asio::post(self->impl.io, [self, handled = std::move(handled), head_only, keep_alive]() mutable {
+        if (!self->closed) self->reply(std::move(handled), head_only, keep_alive);
+      });
+    });
   }
-  const std::string* connection = out.header("connection");
-  const std::string token = connection != nullptr ? lower(*connection) : std::string();
-  out.keep_alive = out.version == "HTTP/1.1" ? token.find("close") == std::string::npos
-                                             : token.find("keep-alive") != std::string::npos;
+
+  /// Writes `reply` (its head alone for HEAD, with the body's length); then reads the next
+  /// request, or closes.
+  void reply(HttpResponse reply, bool head_only, bool keep_alive) {
+    busy = true;
+    response = {};
+    response.version(11);
+    response.result(static_cast<unsigned>(reply.status));
+    response.set(http::field::content_type, reply.content_type);
+    // Every body is what its Content-Type says: an error line that echoes a path or a Host is
+    // never taken for a page.
+    response.set("X-Content-Type-Options", "nosniff");
+    for (const auto& [field, value] : reply.headers) response.insert(field, value);
+    response.keep_alive(keep_alive);
+    // Said either way (Beast leaves out HTTP/1.1's default): a client need not know the default.
+    response.set(http::field::connection, keep_alive ? "keep-alive" : "close");
+    response.content_length(reply.body.size());
+    if (!head_only) response.body() = std::move(reply.body);
+    ++answered;
+    impl.server.replies_.fetch_add(1, std::memory_order_relaxed);
+    serializer.emplace(response);
+    write_some();
+  }
+
+  void write_some() {
+    // The limit is on a reader that stops, not on a large reply read slowly: each piece renews it.
+    stream.expires_after(limits().timeout);
+    http::async_write_some(stream, *serializer,
+                           [self = shared_from_this()](beast::error_code error, std::size_t) {
+                             self->on_written(error);
+                           });
+  }
+
+  void on_written(beast::error_code error) {
+    if (closed) return;
+    if (error == beast::error::timeout) impl.server.timeouts_.fetch_add(1, std::memory_order_relaxed);
+    if (error) {
+      close();
+      return;
+    }
+    if (!serializer->is_done()) {
+      write_some();
+      return;
+    }
+    const bool keep_alive = response.keep_alive();
+    serializer.reset();
+    if (!keep_alive) {
+      close();
+      return;
+    }
+    read_next();
+  }
+
+  void close() {
+    if (closed) return;
+    closed = true;
+    beast::error_code ignored;
+    stream.socket().shutdown(tcp::socket::shutdown_send, ignored);
+    stream.socket().close(ignored);
+    std::erase(impl.sessions, this);
+  }
+};
+
+void HttpServer::Impl::accept(tcp::acceptor& acceptor) {
+  acceptor.async_accept(io, [this, &acceptor](beast::error_code error, tcp::socket socket) {
+    if (error == asio::error::operation_aborted) return;
+    if (error == asio::error::no_descriptors || error == asio::error::no_buffer_space ||
+        error == asio::error::no_memory || error.value() == ENFILE) {
+      // Out of descriptors, a listener stays readable: wait rather than spin on it.
+      accept_pause.expires_after(kAcceptPause);
+      accept_pause.async_wait([this, &acceptor](beast::error_code waited) {
+        if (!waited) accept(acceptor);
+      });
+      return;
+    }
+    if (!error) accepted(std::move(socket));
+    accept(acceptor);
+  });
+}
+
+void HttpServer::Impl::accepted(tcp::socket socket) {
+  sockaddr_storage peer{};
+  socklen_t length = sizeof peer;
+  const int fd = socket.native_handle();
+  const std::string host =
+      ::getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &length) == 0 ? host_of_peer(peer, length) : "";
+  if (const std::string share = make_room(host); !share.empty()) {
+    server.refused_.fetch_add(1, std::memory_order_relaxed);  // counted before the peer sees the close
+    // Said in one try, never waited for: the refusal names the share it met.
+    const std::string why = "hapticd " + server.name_ + ": " + share + "\n";
+    const std::string reply = "HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain; "
+                              "charset=utf-8\r\nContent-Length: " + std::to_string(why.size()) +
+                              "\r\nConnection: close\r\nRetry-After: 1\r\n\r\n" + why;
+    (void)::send(fd, reply.data(), reply.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+    beast::error_code ignored;
+    socket.close(ignored);
+    return;
+  }
+  auto session = std::make_shared<Session>(*this, std::move(socket), host);
+  sessions.push_back(session.get());
+  session->read_next();
+}
+
+std::string HttpServer::Impl::make_room(const std::string& host) {
+  const HttpLimits& limits = server.limits_;
+  std::map<std::string, std::size_t> per_host;
+  for (const Session* s : sessions) ++per_host[s->host];
+  const std::size_t from_host = per_host[host];
+  if (from_host >= limits.max_connections_per_peer) {
+    return "this host holds " + std::to_string(limits.max_connections_per_peer) +
+           " connections, the most one host may";
+  }
+  if (sessions.size() < limits.max_connections) return {};
+  // Full: the least progress among the connections of hosts holding more than this one's, and
+  // not busy with a request (its client is waiting for the reply).
+  Session* victim = nullptr;
+  const auto progress = [](const Session& s) { return std::tuple(s.answered, s.received, s.accepted_at); };
+  for (Session* s : sessions) {
+    if (s->busy || per_host[s->host] <= from_host + 1) continue;
+    if (victim == nullptr || progress(*s) < progress(*victim)) victim = s;
+  }
+  if (victim == nullptr) {
+    return "the endpoint holds " + std::to_string(limits.max_connections) + " connections, its most";
+  }
+  server.evicted_.fetch_add(1, std::memory_order_relaxed);  // counted before the peer sees the close
+  victim->close();
   return {};
 }
 
-std::string format_response(const HttpResponse& response, bool head_only, bool keep_alive) {
-  std::string bytes = "HTTP/1.1 " + std::to_string(response.status) + " " + reason_phrase(response.status) +
-                      "\r\nContent-Type: " + response.content_type +
-                      "\r\nContent-Length: " + std::to_string(response.body.size()) +
-                      "\r\nConnection: " + (keep_alive ? "keep-alive" : "close") +
-                      // Every body is what its Content-Type says: an error line that echoes a path
-                      // or a Host is never taken for a page.
-                      "\r\nX-Content-Type-Options: nosniff\r\n";
-  for (const auto& [name, value] : response.headers) bytes += name + ": " + value + "\r\n";
-  bytes += "\r\n";
-  if (!head_only) bytes += response.body;
-  return bytes;
+HttpServer::HttpServer(std::string name, HttpLimits limits) : name_(std::move(name)), limits_(std::move(limits)) {
+  impl_ = std::make_unique<Impl>(*this, Handler{});
 }
-
-struct HttpServer::Connection {
-  int fd = -1;
-  std::string host;  // the client's
-  std::uint64_t answered = 0;  // replies queued on it: its progress, with received.size()
-  std::chrono::steady_clock::time_point accepted_at;
-  std::string received;
-  std::string pending;  // the reply being sent
-  std::size_t sent = 0;
-  bool close_when_sent = false;
-  std::chrono::steady_clock::time_point deadline;
-};
-
-HttpServer::HttpServer(std::string name, HttpLimits limits) : name_(std::move(name)), limits_(limits) {}
 
 HttpServer::~HttpServer() { stop(); }
 
 void HttpServer::bind(const std::string& address, const std::string& field) {
   ListeningSockets sockets = listen_tcp(address, name_, field);
-  listening_ = std::move(sockets.fds);
   port_ = sockets.port;
+  for (const int fd : sockets.fds) {
+    sockaddr_storage local{};
+    socklen_t length = sizeof local;
+    ::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &length);
+    auto acceptor = std::make_unique<tcp::acceptor>(impl_->io);
+    acceptor->assign(local.ss_family == AF_INET6 ? tcp::v6() : tcp::v4(), fd);
+    impl_->acceptors.push_back(std::move(acceptor));
+  }
 }
 
 void HttpServer::start(Handler handler) {
-  handler_ = std::move(handler);
-  stopping_.store(false);
-  thread_ = std::thread([this] { serve_loop(); });
+  impl_->handler = std::move(handler);
+  for (auto& acceptor : impl_->acceptors) impl_->accept(*acceptor);
+  impl_->handlers_work.emplace(impl_->handlers.get_executor());
+  for (std::size_t i = 0; i < std::max<std::size_t>(1, limits_.handler_threads); ++i) {
+    impl_->handler_threads.emplace_back([this] {
+      ::pthread_setname_np(::pthread_self(), ("http-" + name_ + "-h").substr(0, 15).c_str());
+      impl_->handlers.run();
+    });
+  }
+  // "http-viewer", "http-metrics": top -H and /proc tell the endpoints' threads apart.
+  impl_->io_thread = std::thread([this] {
+    ::pthread_setname_np(::pthread_self(), ("http-" + name_).substr(0, 15).c_str());
+    impl_->io.run();
+  });
 }
 
 void HttpServer::stop() {
-  stopping_.store(true);
-  if (thread_.joinable()) thread_.join();
-  for (const int fd : listening_) ::close(fd);
-  listening_.clear();
-}
-
-void HttpServer::serve_loop() {
-  // "http-viewer", "http-metrics": top -H and /proc tell the endpoints' threads apart.
-  ::pthread_setname_np(::pthread_self(), ("http-" + name_).substr(0, 15).c_str());
-  std::vector<Connection> connections;
-  std::vector<pollfd> polled;
-  while (!stopping_.load()) {
-    polled.clear();
-    // Out of descriptors, a listener stays readable: it is left out until the pause ends rather
-    // than waking this thread again at once.
-    const bool accepting = std::chrono::steady_clock::now() >= accept_paused_until_;
-    for (const int fd : listening_) polled.push_back({fd, static_cast<short>(accepting ? POLLIN : 0), 0});
-    auto wake = std::chrono::steady_clock::now() + std::chrono::milliseconds(kPollMs);
-    for (const Connection& c : connections) {
-      polled.push_back({c.fd, static_cast<short>(c.pending.empty() ? POLLIN : POLLOUT), 0});
-      wake = std::min(wake, c.deadline);
-    }
-    const auto wait = std::chrono::ceil<std::chrono::milliseconds>(wake - std::chrono::steady_clock::now());
-    if (::poll(polled.data(), polled.size(), static_cast<int>(std::max<std::int64_t>(0, wait.count()))) < 0 &&
-        errno != EINTR) {
-      continue;
-    }
-    // Connections first (their pollfds follow the listeners'), then new ones.
-    const std::size_t listeners = listening_.size();
-    const auto now = std::chrono::steady_clock::now();
-    std::vector<Connection> kept;
-    kept.reserve(connections.size());
-    for (std::size_t i = 0; i < connections.size(); ++i) {
-      Connection& c = connections[i];
-      const short events = polled[listeners + i].revents;
-      bool alive = true;
-      try {
-        if ((events & POLLOUT) != 0) alive = flush(c);
-        if (alive && (events & (POLLIN | POLLHUP | POLLERR)) != 0 && c.pending.empty()) alive = receive(c);
-        // Every whole request already received, in turn (a reply sent at once makes room for the next).
-        while (alive && c.pending.empty() && answer(c)) alive = flush(c);
-      } catch (const std::exception&) {
-        // Out of memory for one reply or one request's bytes: that connection goes, the server
-        // (and the device it holds) stays.
-        alive = false;
-      }
-      // A reply queued or sent moved the deadline on; bytes that make no whole request do not.
-      if (alive && now >= c.deadline) {
-        timeouts_.fetch_add(1, std::memory_order_relaxed);
-        alive = false;
-      }
-      if (alive) {
-        kept.push_back(std::move(c));
-      } else {
-        ::close(c.fd);
-      }
-    }
-    connections = std::move(kept);
-    for (std::size_t i = 0; i < listeners; ++i) {
-      if ((polled[i].revents & POLLIN) != 0) accept_from(polled[i].fd, connections);
-    }
+  // The listeners and every connection close on the I/O thread, which then ends; what the closes
+  // leave pending (their aborted reads and writes) goes with the context.
+  if (impl_->io_thread.joinable()) {
+    asio::post(impl_->io, [impl = impl_.get()] {
+      beast::error_code ignored;
+      for (auto& acceptor : impl->acceptors) acceptor->close(ignored);
+      impl->accept_pause.cancel();
+      const std::vector<Session*> open = impl->sessions;
+      for (Session* session : open) session->close();
+      impl->io.stop();
+    });
+    impl_->io_thread.join();
   }
-  for (const Connection& c : connections) ::close(c.fd);
-}
-
-void HttpServer::accept_from(int listening_fd, std::vector<Connection>& connections) {
-  for (;;) {
-    sockaddr_storage peer{};
-    socklen_t length = sizeof peer;
-    const int fd = ::accept4(listening_fd, reinterpret_cast<sockaddr*>(&peer), &length,
-                             SOCK_NONBLOCK | SOCK_CLOEXEC);
-    if (fd < 0) {
-      if (errno == EINTR || errno == ECONNABORTED) continue;
-      if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
-        accept_paused_until_ = std::chrono::steady_clock::now() + std::chrono::milliseconds(kPollMs);
-      }
-      return;
-    }
-    const std::string host = host_of_peer(peer, length);
-    if (const std::string share = make_room(host, connections); !share.empty()) {
-      refused_.fetch_add(1, std::memory_order_relaxed);  // counted before the peer sees the close
-      // Said in one try, never waited for: the refusal names the share it met.
-      const std::string why = "hapticd " + name_ + ": " + share + "\n";
-      const std::string reply = "HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain; "
-                                "charset=utf-8\r\nContent-Length: " + std::to_string(why.size()) +
-                                "\r\nConnection: close\r\nRetry-After: 1\r\n\r\n" + why;
-      (void)::send(fd, reply.data(), reply.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-      ::close(fd);
-      continue;
-    }
-    Connection connection;
-    connection.fd = fd;
-    connection.host = host;
-    connection.accepted_at = std::chrono::steady_clock::now();
-    connection.deadline = std::chrono::steady_clock::now() + limits_.timeout;
-    connections.push_back(std::move(connection));
-  }
-}
-
-std::string HttpServer::make_room(const std::string& host, std::vector<Connection>& connections) {
-  std::map<std::string, std::size_t> per_host;
-  for (const Connection& c : connections) ++per_host[c.host];
-  const std::size_t from_host = per_host[host];
-  if (from_host >= limits_.max_connections_per_peer) {
-    return "this host holds " + std::to_string(limits_.max_connections_per_peer) +
-           " connections, the most one host may";
-  }
-  if (connections.size() < limits_.max_connections) return {};
-  // Full: the least progress among the connections of hosts holding more than this one's, and
-  // not in the middle of a reply (its reader is waiting for it).
-  auto victim = connections.end();
-  const auto progress = [](const Connection& c) {
-    return std::tuple(c.answered, c.received.size(), c.accepted_at);
-  };
-  for (auto it = connections.begin(); it != connections.end(); ++it) {
-    if (!it->pending.empty() || per_host[it->host] <= from_host + 1) continue;
-    if (victim == connections.end() || progress(*it) < progress(*victim)) victim = it;
-  }
-  if (victim == connections.end()) {
-    return "the endpoint holds " + std::to_string(limits_.max_connections) + " connections, its most";
-  }
-  evicted_.fetch_add(1, std::memory_order_relaxed);  // counted before the peer sees the close
-  ::close(victim->fd);
-  connections.erase(victim);
-  return {};
-}
-
-bool HttpServer::receive(Connection& connection) {
-  char buffer[4096];
-  for (;;) {
-    const ssize_t got = ::recv(connection.fd, buffer, sizeof buffer, 0);
-    if (got > 0) {
-      connection.received.append(buffer, static_cast<std::size_t>(got));
-      if (connection.received.size() > limits_.max_request_bytes) return true;  // answer() refuses it
-      continue;
-    }
-    if (got < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return true;
-    if (got < 0 && errno == EINTR) continue;
-    // Closed by the peer (or failed): a request already whole is still answered.
-    std::size_t head_length = 0;
-    if (head_end(connection.received, head_length) == std::string::npos) return false;
-    connection.close_when_sent = true;
-    return true;
-  }
-}
-
-bool HttpServer::answer(Connection& connection) {
-  std::size_t head_length = 0;
-  const std::size_t end = head_end(connection.received, head_length);
-  const auto reply = [&](const HttpResponse& response, bool head_only, bool keep_alive) {
-    connection.pending = format_response(response, head_only, keep_alive);
-    connection.sent = 0;
-    connection.close_when_sent = connection.close_when_sent || !keep_alive;
-    connection.deadline = std::chrono::steady_clock::now() + limits_.timeout;
-    ++connection.answered;
-    replies_.fetch_add(1, std::memory_order_relaxed);
-  };
-  const bool too_long = end == std::string::npos ? connection.received.size() > limits_.max_request_bytes
-                                                 : head_length > limits_.max_request_bytes;
-  if (too_long) {
-    reply(HttpResponse::text(431, "hapticd " + name_ + ": the request head is longer than " +
-                                      std::to_string(limits_.max_request_bytes) + " bytes\n"),
-          false, false);
-    return true;
-  }
-  if (end == std::string::npos) return false;
-  HttpRequest request;
-  const std::string error =
-      parse_request_head(std::string_view(connection.received).substr(0, head_length), request);
-  connection.received.erase(0, end);
-  request.peer = connection.host;
-  if (!error.empty()) {
-    reply(HttpResponse::text(400, "hapticd " + name_ + ": " + error + "\n"), false, false);
-    return true;
-  }
-  // No bodies are read: a request that announces one ends its connection after the reply.
-  const bool body = request.header("content-length") != nullptr && *request.header("content-length") != "0";
-  const bool keep_alive = request.keep_alive && !body && request.header("transfer-encoding") == nullptr;
-  if (request.method != "GET" && request.method != "HEAD") {
-    HttpResponse refusal =
-        HttpResponse::text(405, "hapticd " + name_ + ": " + request.method +
-                                    " is not served; the endpoint is read-only (GET only)\n");
-    refusal.headers.emplace_back("Allow", "GET, HEAD");
-    reply(refusal, false, false);
-    return true;
-  }
-  HttpResponse response;
-  try {
-    response = handler_(request);
-  } catch (const std::exception& e) {
-    response = HttpResponse::text(500, "hapticd " + name_ + ": " + e.what() + "\n");
-  }
-  reply(response, request.method == "HEAD", keep_alive);
-  return true;
-}
-
-bool HttpServer::flush(Connection& connection) {
-  while (connection.sent < connection.pending.size()) {
-    const ssize_t sent = ::send(connection.fd, connection.pending.data() + connection.sent,
-                                connection.pending.size() - connection.sent, MSG_NOSIGNAL);
-    if (sent > 0) {
-      connection.sent += static_cast<std::size_t>(sent);
-      // The limit is on a reader that stops, not on a large reply read slowly: progress renews it.
-      connection.deadline = std::chrono::steady_clock::now() + limits_.timeout;
-    } else if (sent < 0 && errno == EINTR) {
-      continue;
-    } else {
-      return sent < 0 && (errno == EAGAIN || errno == EWOULDBLOCK);  // wait for POLLOUT
-    }
-  }
-  connection.pending.clear();
-  connection.sent = 0;
-  if (connection.close_when_sent) return false;
-  connection.deadline = std::chrono::steady_clock::now() + limits_.timeout;
-  return true;
+  impl_->handlers_work.reset();
+  impl_->handlers.stop();
+  for (std::thread& thread : impl_->handler_threads) thread.join();
+  impl_->handler_threads.clear();
+  // What is left (sessions held by handlers never run) goes with the contexts.
+  const std::vector<Session*> open = impl_->sessions;
+  for (Session* session : open) session->close();
+  impl_->acceptors.clear();
 }
 
 }  // namespace haptic::net

@@ -1,19 +1,26 @@
 #pragma once
-// A minimal HTTP/1.1 server on its own thread, for the metrics endpoint and the web viewer: GET
-// and HEAD only, no request bodies, keep-alive, one poll loop over every connection. Connections
-// are capped; each must send a whole request head within a timeout of its previous reply (or of
-// its accept) and take each reply within the same timeout, so a stalled or slow client cannot hold
-// the endpoint, and the others are served meanwhile. The handler runs on this thread. Never
-// touches the loop.
+// The HTTP/1.1 server under the metrics endpoint, the web viewer and the control plane's JSON
+// face: Boost.Beast's parser and serializer on Boost.Asio, one I/O thread for every connection,
+// the handler on threads of its own (a call that waits, a lockstep Step, holds up no other
+// connection's reading or writing). Keep-alive and pipelining (each connection's replies in the
+// order of its requests). Connections are capped, in all and per host; each must send a whole
+// request within a timeout of its previous reply (or of its accept), and its reply must make
+// progress within the same timeout, so a stalled or slow client cannot hold the endpoint, and the
+// others are served meanwhile. Never touches the loop.
+//
+// Why Beast (Debian's libboost-dev, header-only): a maintained HTTP/1.1 parser with limits on the
+// head and the body, a serializer that writes a reply piece by piece (a timeout on progress, not
+// on the whole reply), WebSocket on the same connections, and TLS through Asio's OpenSSL stream;
+// and it compiles as C++20, which websocketpp 0.8 (the Haply driver's) does not.
 
 #include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <string_view>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -28,6 +35,7 @@ struct HttpRequest {
   std::map<std::string, std::string> headers;  // names in lower case, values trimmed
   bool keep_alive = false;                     // 1.1 without "Connection: close", or 1.0 with keep-alive
   std::string peer;                            // the client's host (peer_host()'s form)
+  std::string body;                            // as sent (HttpLimits::max_body_bytes at most)
 
   /// The header's value, or nullptr when it was not sent.
   const std::string* header(const std::string& lower_case_name) const {
@@ -51,13 +59,10 @@ struct HttpResponse {
   }
 };
 
-/// Parses a request head (request line and header lines, without the blank line that ends it).
-/// Returns "" or what is wrong with it, for a 400's message.
+/// Parses a request head (request line and header lines, without the blank line that ends it) as
+/// the server does: Beast's parser, then the same checks and conversion. Returns "" or what is
+/// wrong with it, for a 400's message.
 std::string parse_request_head(std::string_view head, HttpRequest& out);
-
-/// The reply's bytes: status line, Content-Type, Content-Length, Connection, the extra headers and,
-/// unless `head_only` (a HEAD request), the body.
-std::string format_response(const HttpResponse& response, bool head_only, bool keep_alive);
 
 struct HttpLimits {
   // Open at once, in all and from one host. Past the host's share a new connection is accepted
@@ -70,6 +75,11 @@ struct HttpLimits {
   // is not cut off; a reader that stops is).
   std::chrono::milliseconds timeout{2000};
   std::size_t max_request_bytes = 8192;     // a longer head is answered 431 and closed
+  std::size_t max_body_bytes = 0;           // a longer body is answered 413 and closed
+  /// The methods served; any other is answered 405 naming these in Allow.
+  std::vector<std::string> methods{"GET", "HEAD"};
+  /// Threads that run the handler: the most requests handled at once.
+  std::size_t handler_threads = 1;
 };
 
 class HttpServer {
@@ -87,9 +97,11 @@ class HttpServer {
   void bind(const std::string& address, const std::string& field);
   std::uint16_t port() const { return port_; }
 
-  /// Serves until stop(). A method other than GET or HEAD is answered 405 before `handler` sees
-  /// it; a head that does not parse, 400 with the reason. An exception from `handler` is a 500.
+  /// Serves until stop(). A method not in HttpLimits::methods is answered 405 before `handler`
+  /// sees it; a head that does not parse, 400 with the reason. An exception from `handler` is a
+  /// 500. `handler` runs on the server's handler threads, several at once when there are several.
   void start(Handler handler);
+  /// Stops serving: the listeners and every connection close; waits for handlers running.
   void stop();
 
   /// Replies sent, and connections closed at once because a cap was reached.
@@ -101,33 +113,17 @@ class HttpServer {
   std::uint64_t timeouts() const { return timeouts_.load(std::memory_order_relaxed); }
 
  private:
-  struct Connection;
-  void serve_loop();
-  void accept_from(int listening_fd, std::vector<Connection>& connections);
-  /// Makes room for a connection from `host`, displacing another host's if need be (HttpLimits);
-  /// "" when there is room, else the share that was met, for the 503.
-  std::string make_room(const std::string& host, std::vector<Connection>& connections);
-  /// Reads what arrived; false when the connection is done with.
-  bool receive(Connection& connection);
-  /// Queues the reply to the next whole request in the connection's buffer; false when there is
-  /// none yet.
-  bool answer(Connection& connection);
-  /// Sends what is pending; false when the connection is done with.
-  bool flush(Connection& connection);
+  struct Impl;
+  struct Session;
 
   std::string name_;
   HttpLimits limits_;
-  std::vector<int> listening_;
   std::uint16_t port_ = 0;
-  Handler handler_;
-  std::atomic<bool> stopping_{false};
-  // Set when accept ran out of descriptors: the listeners are not polled before then.
-  std::chrono::steady_clock::time_point accept_paused_until_{};
   std::atomic<std::uint64_t> replies_{0};
   std::atomic<std::uint64_t> refused_{0};
   std::atomic<std::uint64_t> evicted_{0};
   std::atomic<std::uint64_t> timeouts_{0};
-  std::thread thread_;
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace haptic::net

@@ -157,7 +157,7 @@ TEST(Viewer, ServesThePageAndRefusesWhatItDoesNotServe) {
   const HttpReply post = test::http_request(port, "POST", "/api/scene");
   EXPECT_EQ(post.status, 405);
   EXPECT_EQ(post.header("Allow"), "GET, HEAD");
-  EXPECT_NE(post.body.find("read-only"), std::string::npos);
+  EXPECT_NE(post.body.find("POST is not served here (GET, HEAD only)"), std::string::npos);
   EXPECT_EQ(test::http_request(port, "DELETE", "/api/scene").status, 405);
   const HttpReply unknown = http_get(port, "/api/objects");
   EXPECT_EQ(unknown.status, 404);
@@ -169,7 +169,7 @@ TEST(Viewer, ServesThePageAndRefusesWhatItDoesNotServe) {
   garbled.send("GET\r\n\r\n");
   const HttpReply bad = garbled.read_reply();
   EXPECT_EQ(bad.status, 400);
-  EXPECT_NE(bad.body.find("the request line must be 'METHOD TARGET HTTP/1.x'"), std::string::npos);
+  EXPECT_NE(bad.body.find("the request line must be 'METHOD /path HTTP/1.x'"), std::string::npos);
 
   // A page from another site whose name resolves to 127.0.0.1 cannot read the API.
   const HttpReply rebound = test::http_request(port, "GET", "/api/scene", "Host: attacker.example:80\r\n");

@@ -1,7 +1,8 @@
-// The HTTP/1.1 server under the metrics endpoint and the viewer: request heads parsed or refused
-// naming why, replies framed by Content-Length, and on loopback pipelined requests, the connection
-// cap, over-long heads, a failing handler, and the timeout: on a reader that stops, not on a big
-// reply read slowly.
+// The HTTP/1.1 server under the metrics endpoint, the viewer and the JSON face: request heads
+// parsed or refused naming why, replies framed by Content-Length, and on loopback pipelined
+// requests, bodies up to their limit, a handler that waits holding up no other connection, the
+// connection caps, over-long heads, a failing handler, and the timeout: on a reader that stops,
+// not on a big reply read slowly.
 #include <gtest/gtest.h>
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -39,7 +40,7 @@ TEST(HttpRequestHead, ParsesTheRequestLineAndHeaders) {
   EXPECT_EQ(request.header("cookie"), nullptr);
   EXPECT_TRUE(request.keep_alive);  // HTTP/1.1's default
 
-  ASSERT_EQ(parse_request_head("GET / HTTP/1.1\nConnection: Close", request), "");  // bare LF too
+  ASSERT_EQ(parse_request_head("GET / HTTP/1.1\r\nConnection: Close", request), "");
   EXPECT_FALSE(request.keep_alive);
   ASSERT_EQ(parse_request_head("GET / HTTP/1.0", request), "");
   EXPECT_FALSE(request.keep_alive);  // HTTP/1.0's default
@@ -50,31 +51,21 @@ TEST(HttpRequestHead, ParsesTheRequestLineAndHeaders) {
 TEST(HttpRequestHead, RefusesWhatIsNotARequestNamingWhy) {
   HttpRequest request;
   EXPECT_EQ(parse_request_head("GET", request),
-            "the request line must be 'METHOD TARGET HTTP/1.x', got 'GET'");
+            "the request line must be 'METHOD /path HTTP/1.x' (bad method)");
   EXPECT_EQ(parse_request_head("GET / HTTP/1.1 extra", request),
-            "the request line must be 'METHOD TARGET HTTP/1.x', got 'GET / HTTP/1.1 extra'");
+            "the request line must be 'METHOD /path HTTP/1.x' (bad version)");
   EXPECT_EQ(parse_request_head("GET / HTTP/2.0", request),
-            "only HTTP/1.0 and HTTP/1.1 are served, got 'HTTP/2.0'");
+            "the request line must be 'METHOD /path HTTP/1.x' (bad version)");
   EXPECT_EQ(parse_request_head("GET http://example.com/ HTTP/1.1", request),
             "the target must be a path starting with '/', got 'http://example.com/'");
   EXPECT_EQ(parse_request_head("GET / HTTP/1.1\r\nno colon here", request),
-            "a header line must be 'Name: value', got 'no colon here'");
+            "a header line must be 'Name: value' (bad field)");
   // A name that is only a carriage return (found by http_request_fuzz) is no name.
   EXPECT_EQ(parse_request_head("GET / HTTP/1.1\r\n\r: x", request),
-            "a header line must be 'Name: value', got '\r: x'");
-}
-
-TEST(HttpResponse, IsFramedByItsContentLength) {
-  HttpResponse response = HttpResponse::text(404, "no such page\n");
-  response.headers.emplace_back("Cache-Control", "no-store");
-  EXPECT_EQ(format_response(response, false, true),
-            "HTTP/1.1 404 Not Found\r\nContent-Type: text/plain; charset=utf-8\r\nContent-Length: 13\r\n"
-            "Connection: keep-alive\r\nX-Content-Type-Options: nosniff\r\nCache-Control: no-store\r\n\r\n"
-            "no such page\n");
-  // HEAD: the same head (the length of the body a GET would get), no body.
-  EXPECT_EQ(format_response(response, true, false),
-            "HTTP/1.1 404 Not Found\r\nContent-Type: text/plain; charset=utf-8\r\nContent-Length: 13\r\n"
-            "Connection: close\r\nX-Content-Type-Options: nosniff\r\nCache-Control: no-store\r\n\r\n");
+            "every line must end in CR LF (bad line ending)");
+  // A bare LF ends no line (lenient parsers that take one are how requests get smuggled).
+  EXPECT_EQ(parse_request_head("GET / HTTP/1.1\nConnection: close", request),
+            "the request line must be 'METHOD /path HTTP/1.x' (bad version)");
 }
 
 /// A server on an ephemeral loopback port that answers with the request's path.
@@ -91,6 +82,70 @@ struct EchoServer {
   }
   HttpServer http;
 };
+
+TEST(HttpServer, FramesEachReplyByItsContentLengthAndSaysWhatItIs) {
+  HttpServer http("test");
+  http.bind("127.0.0.1:0", "test_address");
+  http.start([](const HttpRequest&) {
+    HttpResponse response = HttpResponse::text(404, "no such page\n");
+    response.headers.emplace_back("Cache-Control", "no-store");
+    return response;
+  });
+  test::HttpConnection connection(http.port());
+  connection.send("GET /x HTTP/1.1\r\n\r\n");
+  const test::HttpReply got = connection.read_reply();
+  EXPECT_EQ(got.status, 404);
+  EXPECT_EQ(got.header("Content-Type"), "text/plain; charset=utf-8");
+  EXPECT_EQ(got.header("Content-Length"), "13");
+  EXPECT_EQ(got.header("X-Content-Type-Options"), "nosniff");
+  EXPECT_EQ(got.header("Cache-Control"), "no-store");
+  EXPECT_EQ(got.body, "no such page\n");
+  // HEAD: the same head (the length of the body a GET would get), no body: the next reply on the
+  // connection follows at once.
+  connection.send("HEAD /x HTTP/1.1\r\n\r\nGET /y HTTP/1.1\r\nConnection: close\r\n\r\n");
+  const test::HttpReply head = connection.read_reply(true);
+  EXPECT_EQ(head.status, 404);
+  EXPECT_EQ(head.header("Content-Length"), "13");
+  EXPECT_EQ(head.body, "");
+  EXPECT_EQ(connection.read_reply().body, "no such page\n");
+  EXPECT_TRUE(connection.closed_by_server());
+}
+
+TEST(HttpServer, ReadsABodyUpToItsLimitAndRefusesALongerOne) {
+  HttpServer http("test", HttpLimits{.max_body_bytes = 16, .methods = {"POST"}});
+  http.bind("127.0.0.1:0", "test_address");
+  http.start([](const HttpRequest& request) { return HttpResponse::text(200, request.method + " " + request.body); });
+  test::HttpConnection connection(http.port());
+  connection.send("POST /a HTTP/1.1\r\nContent-Length: 5\r\n\r\nhello");
+  EXPECT_EQ(connection.read_reply().body, "POST hello");
+  connection.send("POST /a HTTP/1.1\r\nContent-Length: 17\r\n\r\n" + std::string(17, 'x'));
+  const test::HttpReply refused = connection.read_reply();
+  EXPECT_EQ(refused.status, 413);
+  EXPECT_EQ(refused.body, "hapticd test: the request body is longer than 16 bytes\n");
+  EXPECT_TRUE(connection.closed_by_server());
+  const test::HttpReply got = test::http_get(http.port(), "/");
+  EXPECT_EQ(got.status, 405);
+  EXPECT_EQ(got.header("Allow"), "POST");
+}
+
+TEST(HttpServer, AHandlerThatWaitsHoldsUpNoOtherConnection) {
+  // Two handler threads; one request waits until released. Another connection's is answered
+  // meanwhile, and the waiting one after.
+  std::atomic<bool> release{false};
+  HttpServer http("test", HttpLimits{.handler_threads = 2});
+  http.bind("127.0.0.1:0", "test_address");
+  http.start([&](const HttpRequest& request) {
+    for (int i = 0; request.path == "/wait" && !release.load() && i < 1000; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));  // bounded: 10 s
+    }
+    return HttpResponse::text(200, request.path);
+  });
+  test::HttpConnection waiting(http.port());
+  waiting.send("GET /wait HTTP/1.1\r\n\r\n");
+  EXPECT_EQ(test::http_get(http.port(), "/other").body, "/other");
+  release.store(true);
+  EXPECT_EQ(waiting.read_reply().body, "/wait");
+}
 
 TEST(HttpServer, AnswersPipelinedRequestsInOrderOnOneConnection) {
   EchoServer server;
@@ -122,6 +177,12 @@ TEST(HttpServer, RefusesAnOverlongHeadAFailingHandlerAndOtherMethods) {
   const test::HttpReply posted = test::http_request(server.http.port(), "POST", "/");
   EXPECT_EQ(posted.status, 405);
   EXPECT_EQ(posted.header("Allow"), "GET, HEAD");
+  test::HttpConnection garbled(server.http.port());
+  garbled.send("GET / HTTP/1.1\r\nno colon here\r\n\r\n");
+  const test::HttpReply bad = garbled.read_reply();
+  EXPECT_EQ(bad.status, 400);
+  EXPECT_EQ(bad.body, "hapticd test: a header line must be 'Name: value' (bad field)\n");
+  EXPECT_TRUE(garbled.closed_by_server());
 }
 
 TEST(HttpServer, ClosesAConnectionPastTheCapAndServesAgainOnceOneGoes) {
