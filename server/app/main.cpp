@@ -37,6 +37,7 @@ void write_ready_file(const std::string& path, const haptic::app::Server& server
     out << "{\"grpc_port\": " << server.grpc_port() << ", \"udp_port\": " << server.udp_port()
         << ", \"metrics_port\": " << server.metrics_port()
         << ", \"viewer_port\": " << server.viewer_port()
+        << ", \"http_port\": " << server.http_port()
         << ", \"grpc_address\": \"" << haptic::app::local_dial_address(bound_address, server.grpc_port())
         << "\"";
     if (const auto origin = server.time_origin_ns()) out << ", \"time_origin_ns\": " << *origin;
@@ -78,6 +79,11 @@ int main(int argc, char** argv) {
   cli.add_option("--http", viewer_address,
                  "override viewer_address: serve the read-only web viewer at http://127.0.0.1:PORT/ "
                  "(PORT alone; 0 picks one) or at HOST:PORT (docs/viewer.md)");
+  std::string http_address;
+  cli.add_option("--http-api", http_address,
+                 "override http_address: serve the control plane over HTTP (JSON) at "
+                 "http://127.0.0.1:PORT/haptic.v1.Haptic/ (PORT alone; 0 picks one) or at HOST:PORT "
+                 "(docs/http.md)");
   cli.add_option("--viewer-root", viewer_root,
                  "override viewer_root: the folder holding the viewer's page (index.html)")
       ->check(CLI::ExistingDirectory);
@@ -85,7 +91,7 @@ int main(int argc, char** argv) {
                "serve non-loopback addresses without TLS or tokens (insecure_remote_access)");
   cli.add_flag("--lockstep", lockstep, "run in LOCKSTEP time: ticks advance only by the Step RPC");
   cli.add_option("--ready-file", ready_file,
-                 "write {\"grpc_port\":..,\"udp_port\":..,\"metrics_port\":..,\"viewer_port\":..,"
+                 "write {\"grpc_port\":..,\"udp_port\":..,\"metrics_port\":..,\"viewer_port\":..,\"http_port\":..,"
                  "\"grpc_address\":..,\"time_origin_ns\":..} here once listening");
   cli.add_flag("--print-config", print_config, "print the effective configuration and exit");
   std::string health_address;
@@ -176,6 +182,10 @@ int main(int argc, char** argv) {
         edited.set_viewer_address(port_only ? "127.0.0.1:" + viewer_address : viewer_address);
       }
       if (!viewer_root.empty()) edited.set_viewer_root(viewer_root);
+      if (!http_address.empty()) {
+        const bool port_only = http_address.find_first_not_of("0123456789") == std::string::npos;
+        edited.set_http_address(port_only ? "127.0.0.1:" + http_address : http_address);
+      }
       if (insecure) edited.set_insecure_remote_access(true);
       if (udp_port >= 0) edited.set_udp_port(static_cast<std::uint32_t>(udp_port));
       if (lockstep) edited.set_time_mode(haptic::v1::LOCKSTEP);

@@ -341,6 +341,13 @@ void Server::join_federation(const schema::SceneLimits& limits) {
 }
 
 void Server::bind_http_endpoints(const net::AccessControl& access) {
+  if (!config_.http_address().empty()) {
+    net::HttpFaceOptions options;
+    options.allowed_origins.assign(config_.http_allowed_origins().begin(), config_.http_allowed_origins().end());
+    options.limits.timeout = std::chrono::milliseconds(config_.handshake_timeout_ms());
+    http_face_ = std::make_unique<net::HttpFace>(*service_, std::move(options));
+    http_face_->bind(config_.http_address());
+  }
   if (!config_.metrics_address().empty()) {
     metrics_ = std::make_unique<net::MetricsEndpoint>();
     metrics_->bind(config_.metrics_address());
@@ -471,6 +478,11 @@ void Server::start() {
                    config_.metrics_address());
     }
   }
+  if (http_face_) {
+    http_face_->start();
+    spdlog::info("hapticd: the control plane over HTTP at http://{}/haptic.v1.Haptic/ (docs/http.md)",
+                 local_dial_address(config_.http_address(), http_face_->port()));
+  }
   if (viewer_) {
     viewer_->start();
     spdlog::info("hapticd: viewer at http://{}/",
@@ -537,6 +549,7 @@ void Server::shutdown() {
   // next poll (up to 100 ms) and a reply in progress, which the force must not wait for.
   if (metrics_) metrics_->stop();
   if (viewer_) viewer_->stop();
+  if (http_face_) http_face_->stop();
   if (control_plane_closer.joinable()) control_plane_closer.join();
   if (listener_) listener_->stop();
   // With the loop stopped, leave every device in its safe state (motors off, brakes on).

@@ -19,6 +19,7 @@
 #include "net/event_hub.hpp"
 #include "net/grpc_face.hpp"
 #include "net/haptic_service.hpp"
+#include "net/http_face.hpp"
 #include "net/metrics_endpoint.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
@@ -53,6 +54,8 @@ class Server {
   std::uint16_t metrics_port() const { return metrics_ ? metrics_->port() : 0; }
   /// The web viewer's port; 0 without one (viewer_address empty).
   std::uint16_t viewer_port() const { return viewer_ ? viewer_->port() : 0; }
+  /// The control plane's HTTP port (http_address); 0 without one.
+  std::uint16_t http_port() const { return http_face_ ? http_face_->port() : 0; }
   std::uint16_t udp_port() const { return udp_.port(); }
   /// Device port `port`'s tick samples (the replay compares them with a recording's).
   const runtime::SampleRing& samples(std::size_t port) const { return *samples_.at(port); }
@@ -119,6 +122,7 @@ class Server {
   std::string security_summary_;
   std::unique_ptr<net::MetricsEndpoint> metrics_;  // when metrics_address is set
   std::unique_ptr<net::ViewerEndpoint> viewer_;    // when viewer_address is set
+  std::unique_ptr<net::HttpFace> http_face_;       // when http_address is set: the service over HTTP
   std::unique_ptr<recording::RunRecorder> recorder_;
   std::unique_ptr<federation::SampleRelay> relay_;  // when federation is configured
   /// The shared scene across sites (with the federation; after relay_, whose participant owns

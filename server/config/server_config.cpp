@@ -46,6 +46,20 @@ std::string check_exposure(const v1::ServerConfig& config) {
   return {};
 }
 
+/// The HTTP face speaks plain HTTP (TLS on it is not built yet): off loopback the tokens and
+/// session secrets it carries would cross the network in clear, whatever security says of gRPC.
+std::string check_http_face_exposure(const v1::ServerConfig& config) {
+  if (config.http_address().empty() || config.insecure_remote_access() ||
+      is_loopback_host(host_of_address(config.http_address()))) {
+    return {};
+  }
+  return "http_address: '" + config.http_address() +
+         "' is not a loopback address, and the control plane's HTTP face speaks plain HTTP (TLS on "
+         "it is not built yet), so anyone on the network could command forces on the device, or "
+         "read the tokens and session secrets it carries. Bind 127.0.0.1 (reach it through an SSH "
+         "tunnel, docs/http.md), or accept the risk with --insecure (insecure_remote_access: true)";
+}
+
 /// An HTTP endpoint's address: empty (none), HOST:PORT or [IPv6]:PORT.
 std::string check_http_address(const char* field, const std::string& address) {
   if (address.empty()) return {};
@@ -76,6 +90,51 @@ std::string check_viewer_exposure(const v1::ServerConfig& config) {
          "page sends would cross the network in clear. Bind 127.0.0.1 (the default of --http PORT) "
          "and reach it through an SSH tunnel (docs/viewer.md), or accept the risk with --insecure "
          "(insecure_remote_access: true)";
+}
+
+/// An origin as a browser sends it: scheme://host[:port], http or https, nothing after.
+std::string check_origin(const std::string& origin) {
+  const auto scheme_end = origin.find("://");
+  if (scheme_end == std::string::npos) return "has no scheme";
+  const std::string scheme = origin.substr(0, scheme_end);
+  if (scheme != "http" && scheme != "https") return "its scheme is not http or https";
+  std::string rest = origin.substr(scheme_end + 3);
+  std::string host;
+  if (!rest.empty() && rest.front() == '[') {
+    const auto close = rest.find(']');
+    if (close == std::string::npos) return "its IPv6 address has no ']'";
+    host = rest.substr(1, close - 1);
+    rest = rest.substr(close + 1);
+    if (host.empty() || host.find_first_not_of("0123456789abcdefABCDEF:.") != std::string::npos) {
+      return "its IPv6 address is not one";
+    }
+  } else {
+    const auto colon = rest.find(':');
+    host = rest.substr(0, colon);
+    rest = colon == std::string::npos ? "" : rest.substr(colon);
+    if (host.empty() || host.find_first_not_of("abcdefghijklmnopqrstuvwxyz"
+                                               "ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789.-") != std::string::npos) {
+      return "its host is not a name or an address (nothing may follow it but :PORT)";
+    }
+  }
+  if (rest.empty()) return {};
+  const std::string port = rest.substr(1);
+  if (rest.front() != ':' || port.empty() || port.size() > 5 ||
+      port.find_first_not_of("0123456789") != std::string::npos || std::stoi(port) > 65535) {
+    return "nothing may follow its host but :PORT (1 to 65535)";
+  }
+  return {};
+}
+
+std::string check_origins(const v1::ServerConfig& config) {
+  for (int i = 0; i < config.http_allowed_origins_size(); ++i) {
+    const std::string& origin = config.http_allowed_origins(i);
+    if (const std::string why = check_origin(origin); !why.empty()) {
+      return "http_allowed_origins[" + std::to_string(i) + "]: '" + origin.substr(0, 200) + "' " + why +
+             "; an origin is http://HOST[:PORT] or https://HOST[:PORT], as a browser sends it";
+    }
+  }
+  return {};
 }
 
 }  // namespace
@@ -195,6 +254,9 @@ std::string validate(const v1::ServerConfig& config) {
   if (auto e = check_http_address("metrics_address", config.metrics_address()); !e.empty()) return e;
   if (auto e = check_http_address("viewer_address", config.viewer_address()); !e.empty()) return e;
   if (auto e = check_viewer_exposure(config); !e.empty()) return e;
+  if (auto e = check_http_address("http_address", config.http_address()); !e.empty()) return e;
+  if (auto e = check_http_face_exposure(config); !e.empty()) return e;
+  if (auto e = check_origins(config); !e.empty()) return e;
   if (config.time_mode() != v1::REAL_TIME && config.time_mode() != v1::LOCKSTEP) {
     return "time_mode: must be REAL_TIME or LOCKSTEP";
   }

@@ -151,8 +151,8 @@ TEST_P(Gate, AtTheCapANewcomerFromAnotherHostDisplacesAnIdleConnection) {
 }
 
 INSTANTIATE_TEST_SUITE_P(PlaintextAndTls, Gate, ::testing::Bool(),
-                         [](const ::testing::TestParamInfo<bool>& info) {
-                           return info.param ? std::string("Tls") : std::string("Plaintext");
+                         [](const ::testing::TestParamInfo<bool>& param_info) {
+                           return param_info.param ? std::string("Tls") : std::string("Plaintext");
                          });
 
 TEST(GateWithTls, TheControlPlaneAcceptsAgainAfterRunningOutOfDescriptors) {

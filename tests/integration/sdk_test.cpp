@@ -217,7 +217,7 @@ TEST_F(SdkIntegration, AnAcrossSitesSphereIsRefusedOutsideAFederationAndNothingI
     EXPECT_EQ(error.code(), ErrorCode::kFailedPrecondition);
   }
   try {
-    (void)client.apply_scene(SceneSpec{.objects = {sphere}});
+    (void)client.apply_scene(SceneSpec{.objects = {sphere}, .fields = {}});
     ADD_FAILURE() << "a scene with an across_sites sphere was applied outside a federation";
   } catch (const FailedPreconditionError& error) {
     EXPECT_EQ(std::string(error.what()), "ApplyScene: scene.objects[0]" + not_federated);

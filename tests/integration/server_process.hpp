@@ -99,6 +99,7 @@ class ServerProcess {
     udp_port_ = read_port(text.str(), "\"udp_port\":");
     metrics_port_ = read_port(text.str(), "\"metrics_port\":");
     viewer_port_ = read_port(text.str(), "\"viewer_port\":");
+    http_port_ = read_port(text.str(), "\"http_port\":");
     const std::string origin_key = "\"time_origin_ns\":";
     if (const auto at = text.str().find(origin_key); at != std::string::npos) {
       time_origin_ = std::chrono::steady_clock::time_point(
@@ -142,6 +143,8 @@ class ServerProcess {
   std::uint16_t metrics_port() const { return metrics_port_; }
   /// The web viewer's port (--http); 0 when the server has none.
   std::uint16_t viewer_port() const { return viewer_port_; }
+  /// The control plane's HTTP port (http_address); 0 without one.
+  std::uint16_t http_port() const { return http_port_; }
   /// The file the server wrote once listening (--ready-file).
   const std::string& ready_file() const { return ready_file_; }
   /// Real time: this host's steady clock at server time 0 (so a sample stamped t was made at
@@ -165,6 +168,7 @@ class ServerProcess {
   std::uint16_t udp_port_ = 0;
   std::uint16_t metrics_port_ = 0;
   std::uint16_t viewer_port_ = 0;
+  std::uint16_t http_port_ = 0;
   std::optional<std::chrono::steady_clock::time_point> time_origin_;
 };
 

@@ -160,6 +160,34 @@ TEST(Config, TheViewersAddressIsCheckedAndWithTokensKeptOnLoopback) {
   EXPECT_EQ(validate(parse_config(R"({"viewer_address": "0.0.0.0:8080"})", "x")), "");
 }
 
+TEST(Config, TheHttpFacesAddressAndOriginsAreCheckedAndItStaysOnLoopback) {
+  EXPECT_EQ(validate(parse_config(R"({"http_address": "127.0.0.1:0"})", "x")), "");
+  const std::string bad = error_of(R"({"http_address": "127.0.0.1"})");
+  EXPECT_NE(bad.find("http_address: must be HOST:PORT or [IPv6]:PORT"), std::string::npos) << bad;
+  // Plain HTTP: off loopback, even with TLS and tokens for gRPC, only with insecure_remote_access.
+  const std::string secured = R"("security": {"tls": {"cert_file": "c", "key_file": "k"},
+      "tokens": [{"name": "v", "token": "observer-token-0123456789", "role": "OBSERVER"}]})";
+  const std::string remote = error_of(R"({"http_address": "0.0.0.0:8081", )" + secured + "}");
+  EXPECT_NE(remote.find("http_address: '0.0.0.0:8081' is not a loopback address, and the control "
+                        "plane's HTTP face speaks plain HTTP"),
+            std::string::npos)
+      << remote;
+  EXPECT_EQ(validate(parse_config(R"({"http_address": "0.0.0.0:8081", "insecure_remote_access": true})", "x")), "");
+  for (const char* good : {"http://lab.example", "https://lab.example:8443", "http://127.0.0.1:8080",
+                           "http://[::1]:8080"}) {
+    EXPECT_EQ(validate(parse_config(std::string(R"({"http_allowed_origins": [")") + good + "\"]}", "x")), "")
+        << good;
+  }
+  for (const char* wrong : {"lab.example", "ftp://lab.example", "http://lab.example/", "http://lab.example:99999",
+                            "*", "http://", "https://lab.example:8443/path", "http://user@lab.example"}) {
+    const std::string error = error_of(std::string(R"({"http_allowed_origins": ["ok.example", ")") + wrong + "\"]}");
+    EXPECT_NE(error.find("http_allowed_origins[0]: 'ok.example' has no scheme"), std::string::npos) << error;
+    const std::string second =
+        error_of(std::string(R"({"http_allowed_origins": ["http://ok.example", ")") + wrong + "\"]}");
+    EXPECT_NE(second.find("http_allowed_origins[1]: '" + std::string(wrong) + "'"), std::string::npos) << second;
+  }
+}
+
 TEST(Config, NonLoopbackAddressesAreRefusedUnlessInsecureRemoteAccessIsAccepted) {
   // Without TLS or tokens, a non-loopback bind would let anyone on the network command forces.
   EXPECT_EQ(error_of(R"({"grpc_address": "0.0.0.0:50051"})").rfind("test.json: grpc_address: '0.0.0.0:50051' is not a loopback address", 0), 0u)

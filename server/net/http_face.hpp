@@ -1,0 +1,66 @@
+#pragma once
+// The control plane over HTTP (http_address; docs/http.md): net::JsonFace on an HttpServer of its
+// own. What the HTTP side adds, and nothing else:
+//   - the call's context: the peer's host, the headers as the call's metadata ("-bin" headers
+//     base64-decoded, as gRPC does: haptic-session-secret-bin), so access control and the
+//     session's secret are checked by the service as over gRPC;
+//   - the body's form from its Content-Type (application/json, application/proto; 415 else);
+//   - browsers: a request carrying an Origin header is served only when that origin is in
+//     http_allowed_origins (403 else, before the service sees it), with CORS headers naming it,
+//     and a CORS preflight (OPTIONS) answered for those origins alone. No secret rides in a URL:
+//     the token and the session secret are headers.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "net/http_server.hpp"
+#include "net/json_face.hpp"
+
+namespace haptic::net {
+
+struct HttpFaceOptions {
+  /// Origins ("https://lab.example:8443") whose pages may call the face; none: no browser page
+  /// may (a request without an Origin header, any non-browser client, is served).
+  std::vector<std::string> allowed_origins;
+  HttpLimits limits = default_limits();
+
+  /// A control plane's limits: bodies up to 4 MiB (gRPC's default message size), POST for calls,
+  /// OPTIONS for a browser's preflight, GET for the index; eight calls handled at once.
+  static HttpLimits default_limits() {
+    HttpLimits limits;
+    limits.max_body_bytes = 4u << 20;
+    limits.methods = {"POST", "OPTIONS", "GET", "HEAD"};
+    limits.handler_threads = 8;
+    limits.max_connections = 64;
+    limits.max_connections_per_peer = 16;
+    return limits;
+  }
+};
+
+class HttpFace {
+ public:
+  HttpFace(HapticService& service, HttpFaceOptions options);
+
+  /// Listens on "host:port" (port 0 picks one). Throws std::runtime_error naming http_address.
+  void bind(const std::string& address) { http_.bind(address, "http_address"); }
+  std::uint16_t port() const { return http_.port(); }
+  void start();
+  void stop() { http_.stop(); }
+
+  /// One request's reply (on a handler thread of the server).
+  HttpResponse handle(const HttpRequest& request) const;
+
+  const HttpServer& server() const { return http_; }
+
+ private:
+  JsonFace face_;
+  HttpFaceOptions options_;
+  HttpServer http_;
+};
+
+/// Decodes base64 (standard or URL-safe alphabet, padding optional, as gRPC's "-bin" metadata
+/// takes it); false when `text` is not base64.
+bool decode_base64(std::string_view text, std::string& out);
+
+}  // namespace haptic::net

@@ -1,0 +1,266 @@
+// The control plane over HTTP (http_address; docs/http.md) of a real hapticd, in lockstep on
+// ephemeral loopback ports: a wall holding a push driven by JSON alone; the same handlers as gRPC
+// (the same device, the same refusal naming the field, word for word); the session's secret and
+// the tokens' roles as over gRPC; browsers' origins; the body's forms; and clear refusals of what
+// is not a call.
+#include <google/protobuf/struct.pb.h>
+#include <google/protobuf/util/json_util.h>
+#include <google/protobuf/util/message_differencer.h>
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "haptic/io/session_secret.hpp"
+#include "haptic/v1/service.grpc.pb.h"
+#include "integration/server_process.hpp"
+#include "support/http_client.hpp"
+
+namespace haptic {
+namespace {
+
+using test::HttpReply;
+
+/// POSTs `body` to the call `call`, as `content_type`, with `headers` ("Name: value\r\n" each).
+HttpReply post(std::uint16_t port, const std::string& call, const std::string& body,
+               const std::string& headers = {}, const std::string& content_type = "application/json") {
+  test::HttpConnection connection(port);
+  connection.send("POST /haptic.v1.Haptic/" + call + " HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: " +
+                  content_type + "\r\nContent-Length: " + std::to_string(body.size()) + "\r\n" + headers +
+                  "\r\n" + body);
+  return connection.read_reply();
+}
+
+google::protobuf::Struct json(const HttpReply& reply) {
+  google::protobuf::Struct out;
+  const auto status = google::protobuf::util::JsonStringToMessage(reply.body, &out);
+  EXPECT_TRUE(status.ok()) << status.ToString() << ": " << reply.body.substr(0, 300);
+  return out;
+}
+
+template <typename Message>
+Message parse(const HttpReply& reply) {
+  Message out;
+  const auto status = google::protobuf::util::JsonStringToMessage(reply.body, &out);
+  EXPECT_TRUE(status.ok()) << status.ToString() << ": " << reply.body.substr(0, 300);
+  return out;
+}
+
+/// OpenSession's body: the API version this build speaks.
+std::string open_body(const std::string& client_name) {
+  return R"({"client_name": ")" + client_name + R"(", "api_version": )" +
+         std::to_string(v1::API_VERSION_CURRENT) + "}";
+}
+
+/// A session opened over HTTP: its id (as JSON writes a uint64, a string) and the header that
+/// carries its secret.
+struct HttpSession {
+  std::string id;
+  std::string secret_header;
+};
+
+HttpSession open_session(std::uint16_t port, const std::string& headers = {}) {
+  const HttpReply reply =
+      post(port, "OpenSession", open_body("http-test"), headers);
+  EXPECT_EQ(reply.status, 200) << reply.body;
+  const auto opened = json(reply);
+  return {opened.fields().at("session_id").string_value(),
+          std::string(io::kSessionSecretMetadataKey) + ": " +
+              opened.fields().at("session_secret").string_value() + "\r\n"};
+}
+
+std::string with_session(const HttpSession& session, const std::string& rest = {}) {
+  return R"({"session_id": ")" + session.id + "\"" + (rest.empty() ? "" : ", " + rest) + "}";
+}
+
+TEST(HttpFace, AWallHoldsAPushDrivenByJsonAlone) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0")"));
+  const std::uint16_t port = server.http_port();
+  ASSERT_NE(port, 0);
+  const HttpSession session = open_session(port);
+  const std::string& secret = session.secret_header;
+  const HttpReply created = post(port, "CreateObject",
+                                 with_session(session, R"("object": {"half_space": {"normal": {"z": 1}},
+                                     "impedance": {"stiffness": 1000, "damping": 1}})"),
+                                 secret);
+  ASSERT_EQ(created.status, 200) << created.body;
+  EXPECT_NE(json(created).fields().at("id").string_value(), "0");
+  ASSERT_EQ(post(port, "SetOperator",
+                 with_session(session, R"("input": {"mode": "APPLY_FORCE", "force": {"z": -5}})"), secret)
+                .status,
+            200);
+  const HttpReply stepped = post(port, "Step", with_session(session, R"("ticks": 3000)"), secret);
+  ASSERT_EQ(stepped.status, 200) << stepped.body;
+  const auto step = parse<v1::StepResponse>(stepped);
+  EXPECT_EQ(step.tick(), 3000u);
+  // 5 N into a 1000 N/m wall: held at 5 mm, the wall pushing back 5 N.
+  EXPECT_NEAR(step.state().position().z(), -0.005, 1e-4) << stepped.body;
+  EXPECT_NEAR(step.state().force().z(), 5.0, 0.05) << stepped.body;
+  EXPECT_EQ(step.state().contact_count(), 1u);
+  EXPECT_EQ(post(port, "CloseSession", with_session(session), secret).status, 200);
+}
+
+TEST(HttpFace, TheSameHandlersAsGrpcTheSameDeviceAndTheSameRefusalWordForWord) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0")"));
+  const HttpSession session = open_session(server.http_port());
+  const HttpReply info = post(server.http_port(), "GetDeviceInfo", with_session(session), session.secret_header);
+  ASSERT_EQ(info.status, 200) << info.body;
+
+  auto stub = v1::Haptic::NewStub(grpc::CreateChannel(server.address(), grpc::InsecureChannelCredentials()));
+  v1::OpenSessionRequest open;
+  open.set_client_name("grpc-test");
+  open.set_api_version(v1::API_VERSION_CURRENT);
+  v1::OpenSessionResponse opened;
+  grpc::ClientContext open_context;
+  ASSERT_TRUE(stub->OpenSession(&open_context, open, &opened).ok());
+  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(parse<v1::DeviceInfo>(info), opened.device()));
+
+  // A sphere of negative radius: refused naming the field, the same words both ways.
+  v1::CreateObjectRequest bad;
+  bad.set_session_id(opened.session_id());
+  bad.mutable_object()->mutable_sphere()->set_radius(-0.01);
+  bad.mutable_object()->mutable_impedance()->set_stiffness(500);
+  grpc::ClientContext bad_context;
+  bad_context.AddMetadata(io::kSessionSecretMetadataKey, opened.session_secret());
+  v1::ItemRef item;
+  const grpc::Status grpc_refusal = stub->CreateObject(&bad_context, bad, &item);
+  ASSERT_EQ(grpc_refusal.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  const HttpReply http_refusal =
+      post(server.http_port(), "CreateObject",
+           with_session(session, R"("object": {"sphere": {"radius": -0.01}, "impedance": {"stiffness": 500}})"),
+           session.secret_header);
+  EXPECT_EQ(http_refusal.status, 400);
+  EXPECT_EQ(http_refusal.header("Content-Type"), "application/json");
+  const auto refusal = json(http_refusal);
+  EXPECT_EQ(refusal.fields().at("code").string_value(), "invalid_argument");
+  EXPECT_EQ(refusal.fields().at("message").string_value(), grpc_refusal.error_message());
+  EXPECT_NE(grpc_refusal.error_message().find("radius"), std::string::npos) << grpc_refusal.error_message();
+
+  // Nothing was half-applied: the session holds no object.
+  const HttpReply scene = post(server.http_port(), "GetScene", with_session(session), session.secret_header);
+  ASSERT_EQ(scene.status, 200) << scene.body;
+  EXPECT_EQ(parse<v1::SceneContents>(scene).object_ids_size(), 0);
+}
+
+TEST(HttpFace, ASessionIsActedForOnlyWithItsSecretAsOverGrpc) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0")"));
+  const std::uint16_t port = server.http_port();
+  const HttpSession session = open_session(port);
+  const HttpReply without = post(port, "GetDeviceInfo", with_session(session));
+  EXPECT_EQ(without.status, 403);
+  EXPECT_EQ(json(without).fields().at("code").string_value(), "permission_denied");
+  EXPECT_NE(json(without).fields().at("message").string_value().find("needs its session secret"), std::string::npos)
+      << without.body;
+  const HttpReply wrong = post(port, "GetDeviceInfo", with_session(session),
+                               std::string(io::kSessionSecretMetadataKey) + ": AAAAAAAAAAAAAAAAAAAAAA==\r\n");
+  EXPECT_EQ(wrong.status, 403);
+  EXPECT_NE(json(wrong).fields().at("message").string_value().find("belongs to another client"), std::string::npos);
+  const HttpReply garbled = post(port, "GetDeviceInfo", with_session(session),
+                                 std::string(io::kSessionSecretMetadataKey) + ": not base64!\r\n");
+  EXPECT_EQ(garbled.status, 400);
+  EXPECT_NE(garbled.body.find("must be base64"), std::string::npos) << garbled.body;
+  const HttpReply none = post(port, "GetDeviceInfo", R"({"session_id": "12345"})");
+  EXPECT_EQ(none.status, 404);
+  EXPECT_EQ(json(none).fields().at("code").string_value(), "not_found");
+}
+
+TEST(HttpFace, TokensAndRolesAsOverGrpc) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0",
+      "security": {"tokens": [
+        {"name": "visitor", "token": "observer-token-0123456789", "role": "OBSERVER"},
+        {"name": "operator", "token": "controller-token-0123456789", "role": "CONTROLLER"}]})"));
+  const std::uint16_t port = server.http_port();
+  const std::string observer = "Authorization: Bearer observer-token-0123456789\r\n";
+  const std::string controller = "Authorization: Bearer controller-token-0123456789\r\n";
+  const HttpReply anonymous = post(port, "OpenSession", open_body("x"));
+  EXPECT_EQ(anonymous.status, 401);
+  EXPECT_EQ(json(anonymous).fields().at("code").string_value(), "unauthenticated");
+  const HttpReply unknown = post(port, "OpenSession", open_body("x"),
+                                 "Authorization: Bearer not-a-token-of-this-server\r\n");
+  EXPECT_EQ(unknown.status, 401);
+
+  const HttpSession watching = open_session(port, observer);
+  const std::string wall = R"("object": {"half_space": {"normal": {"z": 1}}, "impedance": {"stiffness": 500}})";
+  const HttpReply refused = post(port, "CreateObject", with_session(watching, wall), observer + watching.secret_header);
+  EXPECT_EQ(refused.status, 403);
+  EXPECT_EQ(json(refused).fields().at("code").string_value(), "permission_denied");
+
+  const HttpSession driving = open_session(port, controller);
+  EXPECT_EQ(post(port, "CreateObject", with_session(driving, wall), controller + driving.secret_header).status, 200);
+  // Statistics are ADMIN's: neither token has it.
+  EXPECT_EQ(post(port, "GetStats", with_session(driving), controller + driving.secret_header).status, 403);
+}
+
+TEST(HttpFace, ABrowserPageIsServedOnlyFromAnAllowedOrigin) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0",
+      "http_allowed_origins": ["http://lab.example:8080"])"));
+  const std::uint16_t port = server.http_port();
+  const std::string body = open_body("page");
+  const HttpReply foreign = post(port, "OpenSession", body, "Origin: http://attacker.example\r\n");
+  EXPECT_EQ(foreign.status, 403);
+  EXPECT_NE(foreign.body.find("not in http_allowed_origins"), std::string::npos) << foreign.body;
+  EXPECT_EQ(foreign.header("Access-Control-Allow-Origin"), "");
+
+  const HttpReply allowed = post(port, "OpenSession", body, "Origin: http://lab.example:8080\r\n");
+  EXPECT_EQ(allowed.status, 200) << allowed.body;
+  EXPECT_EQ(allowed.header("Access-Control-Allow-Origin"), "http://lab.example:8080");
+
+  const HttpReply preflight = test::http_request(
+      port, "OPTIONS", "/haptic.v1.Haptic/OpenSession",
+      "Origin: http://lab.example:8080\r\nAccess-Control-Request-Method: POST\r\n"
+      "Access-Control-Request-Headers: content-type, authorization\r\n");
+  EXPECT_EQ(preflight.status, 204);
+  EXPECT_EQ(preflight.header("Access-Control-Allow-Origin"), "http://lab.example:8080");
+  EXPECT_NE(preflight.header("Access-Control-Allow-Headers").find("authorization"), std::string::npos);
+  EXPECT_EQ(test::http_request(port, "OPTIONS", "/haptic.v1.Haptic/OpenSession",
+                               "Origin: http://attacker.example\r\n")
+                .status,
+            403);
+  // A client that is no browser sends no Origin, and is served.
+  EXPECT_EQ(post(port, "OpenSession", body).status, 200);
+}
+
+TEST(HttpFace, TheBodysFormsAndWhatIsNotACallAreSaidClearly) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0")"));
+  const std::uint16_t port = server.http_port();
+  // protobuf's binary form, in and out.
+  v1::OpenSessionRequest request;
+  request.set_client_name("binary");
+  request.set_api_version(v1::API_VERSION_CURRENT);
+  const HttpReply binary = post(port, "OpenSession", request.SerializeAsString(), {}, "application/proto");
+  ASSERT_EQ(binary.status, 200) << binary.body;
+  EXPECT_EQ(binary.header("Content-Type"), "application/proto");
+  v1::OpenSessionResponse opened;
+  ASSERT_TRUE(opened.ParseFromString(binary.body));
+  EXPECT_NE(opened.session_id(), 0u);
+  EXPECT_EQ(opened.session_secret().size(), 16u);
+
+  const HttpReply text = post(port, "OpenSession", "{}", {}, "text/plain");
+  EXPECT_EQ(text.status, 415);
+  EXPECT_NE(text.body.find("Content-Type: must be application/json"), std::string::npos) << text.body;
+  const HttpReply unknown_field = post(port, "OpenSession", R"({"client_name": "x", "colour": "red"})");
+  EXPECT_EQ(unknown_field.status, 400);
+  EXPECT_NE(unknown_field.body.find("request body: "), std::string::npos) << unknown_field.body;
+  EXPECT_NE(unknown_field.body.find("colour"), std::string::npos) << unknown_field.body;
+  const HttpReply not_json = post(port, "OpenSession", "{\"client_name\": ");
+  EXPECT_EQ(not_json.status, 400);
+  EXPECT_EQ(json(not_json).fields().at("code").string_value(), "invalid_argument");
+
+  const HttpReply no_call = post(port, "Teleport", "{}");
+  EXPECT_EQ(no_call.status, 501);
+  EXPECT_NE(no_call.body.find("has no call 'Teleport'"), std::string::npos) << no_call.body;
+  const HttpReply stream = post(port, "WatchEvents", "{}");
+  EXPECT_EQ(stream.status, 501);
+  EXPECT_NE(stream.body.find("WebSocket"), std::string::npos) << stream.body;
+  const HttpReply got = test::http_get(port, "/haptic.v1.Haptic/GetStats");
+  EXPECT_EQ(got.status, 405);
+  EXPECT_EQ(got.header("Allow"), "POST");
+  EXPECT_EQ(test::http_get(port, "/index.html").status, 404);
+  const HttpReply huge = post(port, "OpenSession", std::string(5u << 20, ' '));
+  EXPECT_EQ(huge.status, 413);
+}
+
+}  // namespace
+}  // namespace haptic
