@@ -9,11 +9,15 @@
 #include <boost/asio/steady_timer.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
 
 #include <algorithm>
 #include <cctype>
+#include <condition_variable>
+#include <deque>
 #include <exception>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <thread>
 #include <tuple>
@@ -26,7 +30,13 @@ namespace {
 namespace asio = boost::asio;
 namespace beast = boost::beast;
 namespace http = beast::http;
+namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
+
+/// A client's unread messages past which its WebSocket closes (its handler is not reading).
+constexpr std::size_t kMaxUnreadMessages = 16;
+/// A WebSocket silent this long is pinged; one that answers nothing in as long again is closed.
+constexpr std::chrono::seconds kWebSocketIdle{15};
 
 /// How long accepting pauses when the process is out of descriptors.
 constexpr std::chrono::milliseconds kAcceptPause{100};
@@ -122,12 +132,185 @@ struct HttpServer::Impl {
   std::vector<Session*> sessions;  // open ones, on the I/O thread only
   std::thread io_thread;
   std::vector<std::thread> handler_threads;
+  UpgradeCheck upgrade_check;
+  WebSocketHandler websocket_handler;
+  std::vector<WebSocketSession*> websockets;  // open ones, on the I/O thread only
+  // WebSocket handlers running (each on a thread of its own): stop() waits for them to return.
+  std::mutex websocket_threads_mutex;
+  std::condition_variable websocket_threads_done;
+  std::size_t websocket_threads = 0;
 
   void accept(tcp::acceptor& acceptor);
   void accepted(tcp::socket socket);
   /// Makes room for a connection from `host`, displacing another host's if need be (HttpLimits);
   /// "" when there is room, else the share that was met, for the 503.
   std::string make_room(const std::string& host);
+};
+
+/// One WebSocket connection: its reads and writes on the I/O thread, its handler on a thread of
+/// its own, the two meeting in the inbox and the outbox.
+struct HttpServer::WebSocketSession : WebSocketChannel,
+                                      std::enable_shared_from_this<HttpServer::WebSocketSession> {
+  WebSocketSession(Impl& owner, beast::tcp_stream stream, std::string peer)
+      : impl(owner), ws(std::move(stream)), host(std::move(peer)) {}
+
+  Impl& impl;
+  websocket::stream<beast::tcp_stream> ws;
+  std::string host;
+  beast::flat_buffer read_buffer;
+  std::deque<std::pair<std::string, bool>> outbox;  // I/O thread
+  bool writing = false;                              // I/O thread
+  std::optional<websocket::close_reason> close_pending;  // I/O thread: after the outbox
+  bool finished = false;                             // I/O thread
+  std::atomic<std::size_t> queued_bytes{0};
+  std::atomic<bool> closing{false};
+  std::atomic<bool> closed_{false};
+  std::mutex inbox_mutex;
+  std::condition_variable inbox_ready;
+  std::deque<std::string> inbox;
+
+  const HttpLimits& limits() const { return impl.server.limits_; }
+
+  void accept(http::request<http::string_body> request, const HttpRequest& seen) {
+    websocket::stream_base::timeout timeouts;
+    timeouts.handshake_timeout = limits().timeout;
+    timeouts.idle_timeout = kWebSocketIdle;
+    timeouts.keep_alive_pings = true;
+    ws.set_option(timeouts);
+    ws.read_message_max(limits().max_websocket_message_bytes);
+    ws.async_accept(request, [self = shared_from_this(), seen](beast::error_code error) {
+      if (error) {
+        self->finish();
+        return;
+      }
+      self->run_handler(seen);
+      self->read();
+    });
+  }
+
+  void run_handler(const HttpRequest& request) {
+    {
+      std::lock_guard lock(impl.websocket_threads_mutex);
+      ++impl.websocket_threads;
+    }
+    std::thread([self = shared_from_this(), request]() mutable {
+      ::pthread_setname_np(::pthread_self(), ("ws-" + self->impl.server.name_).substr(0, 15).c_str());
+      try {
+        self->impl.websocket_handler(request, *self);
+      } catch (...) {
+        // A handler's fault ends its connection, never the server.
+      }
+      self->close(1000, "");
+      Impl& owner = self->impl;
+      self.reset();  // before stop() may see this thread done and destroy what the session uses
+      std::lock_guard lock(owner.websocket_threads_mutex);
+      --owner.websocket_threads;
+      owner.websocket_threads_done.notify_all();  // under the lock: stop() cannot have returned yet
+    }).detach();
+  }
+
+  void read() {
+    ws.async_read(read_buffer, [self = shared_from_this()](beast::error_code error, std::size_t) {
+      if (error) {
+        self->finish();
+        return;
+      }
+      std::string message = beast::buffers_to_string(self->read_buffer.data());
+      self->read_buffer.consume(self->read_buffer.size());
+      bool overflow = false;
+      {
+        std::lock_guard lock(self->inbox_mutex);
+        overflow = self->inbox.size() >= kMaxUnreadMessages;
+        if (!overflow) self->inbox.push_back(std::move(message));
+      }
+      self->inbox_ready.notify_all();
+      if (overflow) {
+        self->close_now(websocket::close_reason(websocket::close_code::policy_error,
+                                                "more than 16 messages unread"));
+        return;
+      }
+      self->read();
+    });
+  }
+
+  bool send(std::string message, bool binary) override {
+    if (closing.load() || closed_.load()) return false;
+    const std::size_t queued = queued_bytes.fetch_add(message.size()) + message.size();
+    if (queued > limits().max_websocket_queue_bytes) {
+      close(static_cast<std::uint16_t>(websocket::close_code::policy_error),
+            "the client reads too slowly: " + std::to_string(queued) + " bytes waiting");
+      return false;
+    }
+    asio::post(impl.io, [self = shared_from_this(), message = std::move(message), binary]() mutable {
+      if (self->finished) return;
+      self->outbox.emplace_back(std::move(message), binary);
+      if (!self->writing) self->write_next();
+    });
+    return true;
+  }
+
+  void write_next() {
+    writing = true;
+    ws.binary(outbox.front().second);
+    ws.async_write(asio::buffer(outbox.front().first),
+                   [self = shared_from_this()](beast::error_code error, std::size_t) {
+                     self->queued_bytes.fetch_sub(self->outbox.front().first.size());
+                     self->outbox.pop_front();
+                     self->writing = false;
+                     if (error) {
+                       self->finish();
+                       return;
+                     }
+                     if (!self->outbox.empty()) {
+                       self->write_next();
+                     } else if (self->close_pending) {
+                       self->close_now(*self->close_pending);
+                     }
+                   });
+  }
+
+  std::optional<std::string> receive(std::chrono::milliseconds timeout) override {
+    std::unique_lock lock(inbox_mutex);
+    inbox_ready.wait_for(lock, timeout, [this] { return !inbox.empty() || closed_.load(); });
+    if (inbox.empty()) return std::nullopt;
+    std::string message = std::move(inbox.front());
+    inbox.pop_front();
+    return message;
+  }
+
+  bool closed() const override { return closed_.load() || closing.load(); }
+
+  void close(std::uint16_t code, std::string reason) override {
+    if (closing.exchange(true)) return;
+    if (reason.size() > 123) reason.resize(123);  // a close frame's reason: 123 bytes at most
+    asio::post(impl.io, [self = shared_from_this(), code, reason = std::move(reason)] {
+      if (self->finished) return;
+      websocket::close_reason why(static_cast<websocket::close_code>(code), reason);
+      if (self->writing) {
+        self->close_pending = why;  // what is queued goes first
+      } else {
+        self->close_now(why);
+      }
+    });
+  }
+
+  /// On the I/O thread: the close handshake, then the end.
+  void close_now(const websocket::close_reason& why) {
+    closing.store(true);
+    ws.async_close(why, [self = shared_from_this()](beast::error_code) { self->finish(); });
+  }
+
+  /// On the I/O thread: the connection is over.
+  void finish() {
+    if (finished) return;
+    finished = true;
+    closed_.store(true);
+    inbox_ready.notify_all();
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws).socket().close(ignored);
+    std::erase(impl.websockets, this);
+    impl.server.websockets_.fetch_sub(1, std::memory_order_relaxed);
+  }
 };
 
 /// One connection: a request read, handled, its reply written; then the next.
@@ -220,6 +403,10 @@ struct HttpServer::Session : std::enable_shared_from_this<HttpServer::Session> {
       reply(HttpResponse::text(400, "hapticd " + name() + ": " + refused + "\n"), false, false);
       return;
     }
+    if (impl.websocket_handler && websocket::is_upgrade(parser->get())) {
+      upgrade(std::move(request));
+      return;
+    }
     request.body = std::move(parser->get().body());
     const auto& methods = limits().methods;
     if (std::find(methods.begin(), methods.end(), request.method) == methods.end()) {
@@ -248,6 +435,29 @@ struct HttpServer::Session : std::enable_shared_from_this<HttpServer::Session> {
         if (!self->closed) self->reply(std::move(handled), head_only, keep_alive);
       });
     });
+  }
+
+  /// A WebSocket upgrade: refused (as the check answers, or 503 past max_websockets), or the
+  /// connection becomes a WebSocketSession, this session ending without closing it.
+  void upgrade(HttpRequest request) {
+    if (auto refusal = impl.upgrade_check(request)) {
+      reply(std::move(*refusal), false, false);
+      return;
+    }
+    if (impl.websockets.size() >= limits().max_websockets) {
+      HttpResponse full = HttpResponse::text(
+          503, "hapticd " + name() + ": " + std::to_string(limits().max_websockets) +
+                   " WebSocket connections are open, the most this endpoint holds\n");
+      full.headers.emplace_back("Retry-After", "1");
+      reply(std::move(full), false, false);
+      return;
+    }
+    auto channel = std::make_shared<WebSocketSession>(impl, std::move(stream), host);
+    closed = true;
+    std::erase(impl.sessions, this);
+    impl.websockets.push_back(channel.get());
+    impl.server.websockets_.fetch_add(1, std::memory_order_relaxed);
+    channel->accept(parser->release(), request);
   }
 
   /// Writes `reply` (its head alone for HEAD, with the body's length); then reads the next
@@ -356,6 +566,7 @@ std::string HttpServer::Impl::make_room(const std::string& host) {
   const HttpLimits& limits = server.limits_;
   std::map<std::string, std::size_t> per_host;
   for (const Session* s : sessions) ++per_host[s->host];
+  for (const WebSocketSession* w : websockets) ++per_host[w->host];  // counted, never displaced
   const std::size_t from_host = per_host[host];
   if (from_host >= limits.max_connections_per_peer) {
     return "this host holds " + std::to_string(limits.max_connections_per_peer) +
@@ -397,6 +608,11 @@ void HttpServer::bind(const std::string& address, const std::string& field) {
   }
 }
 
+void HttpServer::serve_websockets(UpgradeCheck check, WebSocketHandler handler) {
+  impl_->upgrade_check = std::move(check);
+  impl_->websocket_handler = std::move(handler);
+}
+
 void HttpServer::start(Handler handler) {
   impl_->handler = std::move(handler);
   for (auto& acceptor : impl_->acceptors) impl_->accept(*acceptor);
@@ -424,9 +640,16 @@ void HttpServer::stop() {
       impl->accept_pause.cancel();
       const std::vector<Session*> open = impl->sessions;
       for (Session* session : open) session->close();
+      const std::vector<WebSocketSession*> sockets = impl->websockets;
+      for (WebSocketSession* socket : sockets) socket->finish();
       impl->io.stop();
     });
     impl_->io_thread.join();
+  }
+  {
+    // Every WebSocket's handler sees its connection closed and returns.
+    std::unique_lock lock(impl_->websocket_threads_mutex);
+    impl_->websocket_threads_done.wait(lock, [this] { return impl_->websocket_threads == 0; });
   }
   impl_->handlers_work.reset();
   impl_->handlers.stop();

@@ -19,6 +19,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -64,6 +65,23 @@ struct HttpResponse {
 /// wrong with it, for a 400's message.
 std::string parse_request_head(std::string_view head, HttpRequest& out);
 
+/// A WebSocket connection once its upgrade is accepted, as its handler (on a thread of its own)
+/// sees it. Safe to use from any thread.
+class WebSocketChannel {
+ public:
+  virtual ~WebSocketChannel() = default;
+  /// Queues a message; false once the connection is closed, or when the client reads so slowly
+  /// that HttpLimits::max_websocket_queue_bytes are waiting (the connection is then closed,
+  /// saying so: nothing is dropped unseen).
+  virtual bool send(std::string message, bool binary) = 0;
+  /// The next message from the client, waiting up to `timeout`; nullopt on the timeout or once
+  /// the connection is closed.
+  virtual std::optional<std::string> receive(std::chrono::milliseconds timeout) = 0;
+  virtual bool closed() const = 0;
+  /// Closes (a WebSocket close frame with `code` and `reason`, after what is queued).
+  virtual void close(std::uint16_t code, std::string reason) = 0;
+};
+
 struct HttpLimits {
   // Open at once, in all and from one host. Past the host's share a new connection is accepted
   // and closed at once. At the cap in all, a newcomer from a host holding fewer displaces the
@@ -80,11 +98,22 @@ struct HttpLimits {
   std::vector<std::string> methods{"GET", "HEAD"};
   /// Threads that run the handler: the most requests handled at once.
   std::size_t handler_threads = 1;
+  /// WebSocket connections open at once (each with a thread of its own), past which an upgrade
+  /// is answered 503; a message from a client longer than max_websocket_message_bytes closes its
+  /// connection; so does a queue of messages to it longer than max_websocket_queue_bytes.
+  std::size_t max_websockets = 64;
+  std::size_t max_websocket_message_bytes = 64u << 10;
+  std::size_t max_websocket_queue_bytes = 4u << 20;
 };
 
 class HttpServer {
  public:
   using Handler = std::function<HttpResponse(const HttpRequest&)>;
+  /// For a WebSocket upgrade: nullopt accepts it, a response refuses it (sent as it is). Runs on
+  /// the I/O thread: it must be quick (a path, an Origin).
+  using UpgradeCheck = std::function<std::optional<HttpResponse>(const HttpRequest&)>;
+  /// An accepted WebSocket's life, on a thread of its own; the connection closes when it returns.
+  using WebSocketHandler = std::function<void(const HttpRequest&, WebSocketChannel&)>;
 
   /// `name` says whose endpoint this is in error messages ("metrics", "viewer").
   explicit HttpServer(std::string name, HttpLimits limits = {});
@@ -101,6 +130,10 @@ class HttpServer {
   /// sees it; a head that does not parse, 400 with the reason. An exception from `handler` is a
   /// 500. `handler` runs on the server's handler threads, several at once when there are several.
   void start(Handler handler);
+  /// Serves WebSocket upgrades too (before start()); without, an upgrade is an ordinary request.
+  void serve_websockets(UpgradeCheck check, WebSocketHandler handler);
+  /// WebSocket connections open now.
+  std::size_t websockets() const { return websockets_.load(std::memory_order_relaxed); }
   /// Stops serving: the listeners and every connection close; waits for handlers running.
   void stop();
 
@@ -115,6 +148,7 @@ class HttpServer {
  private:
   struct Impl;
   struct Session;
+  struct WebSocketSession;
 
   std::string name_;
   HttpLimits limits_;
@@ -123,6 +157,7 @@ class HttpServer {
   std::atomic<std::uint64_t> refused_{0};
   std::atomic<std::uint64_t> evicted_{0};
   std::atomic<std::uint64_t> timeouts_{0};
+  std::atomic<std::size_t> websockets_{0};
   std::unique_ptr<Impl> impl_;
 };
 

@@ -19,6 +19,12 @@
 #include <thread>
 #include <vector>
 
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/websocket.hpp>
+
+#include <optional>
+
 #include "net/http_server.hpp"
 #include "support/http_client.hpp"
 
@@ -336,6 +342,126 @@ TEST(HttpServer, KeepsSendingABigReplyToAReaderThatReadsSlowlyButKeepsReading) {
   ::close(fd);
   EXPECT_GT(received, kBigReplyBytes);  // the head and the whole body
   EXPECT_EQ(server.http.timeouts(), 0u);
+}
+
+// WebSocket on the same server (boost::beast's client, as a browser's would speak).
+namespace ws_test {
+
+namespace beast = boost::beast;
+namespace websocket = beast::websocket;
+using tcp = boost::asio::ip::tcp;
+
+struct Client {
+  explicit Client(std::uint16_t port, const std::string& path = "/ws", const std::string& origin = {})
+      : socket(io) {
+    socket.connect(tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port));
+    ws.emplace(std::move(socket));
+    ws->set_option(websocket::stream_base::decorator([origin](websocket::request_type& request) {
+      if (!origin.empty()) request.set(beast::http::field::origin, origin);
+    }));
+    ws->handshake(response, "127.0.0.1", path, error);
+  }
+  std::string read(bool* binary = nullptr) {
+    beast::flat_buffer buffer;
+    ws->read(buffer, error);
+    if (binary != nullptr) *binary = ws->got_binary();
+    return beast::buffers_to_string(buffer.data());
+  }
+  boost::asio::io_context io;
+  tcp::socket socket;
+  std::optional<websocket::stream<tcp::socket>> ws;
+  websocket::response_type response;
+  beast::error_code error;
+};
+
+/// A WebSocket upgrade sent by hand: the reply of a server that declines it.
+test::HttpReply declined_upgrade(std::uint16_t port, const std::string& path) {
+  test::HttpConnection connection(port);
+  connection.send("GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\n"
+                  "Connection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+                  "Sec-WebSocket-Version: 13\r\n\r\n");
+  return connection.read_reply();
+}
+
+}  // namespace ws_test
+
+TEST(HttpServer, AWebSocketRunsItsHandlerOnAThreadOfItsOwnBesideTheRequests) {
+  HttpServer http("test", HttpLimits{.max_websockets = 2});
+  http.bind("127.0.0.1:0", "test_address");
+  http.serve_websockets(
+      [](const HttpRequest& request) -> std::optional<HttpResponse> {
+        if (request.path != "/ws") return HttpResponse::text(404, "no WebSocket here\n");
+        return std::nullopt;
+      },
+      [](const HttpRequest&, WebSocketChannel& channel) {
+        const auto first = channel.receive(std::chrono::seconds(5));
+        if (!first) return;
+        channel.send("you said " + *first, false);
+        channel.send(std::string("\x01\x02\x03", 3), true);
+        // Until the client goes: bounded by its test.
+        while (!channel.closed()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      });
+  http.start([](const HttpRequest& request) { return HttpResponse::text(200, request.path); });
+
+  ws_test::Client client(http.port());
+  ASSERT_FALSE(client.error) << client.error.message();
+  client.ws->write(boost::asio::buffer(std::string("hello")));
+  bool binary = true;
+  EXPECT_EQ(client.read(&binary), "you said hello");
+  EXPECT_FALSE(binary);
+  EXPECT_EQ(client.read(&binary), std::string("\x01\x02\x03", 3));
+  EXPECT_TRUE(binary);
+  EXPECT_EQ(http.websockets(), 1u);
+  // Ordinary requests are served meanwhile.
+  EXPECT_EQ(test::http_get(http.port(), "/plain").body, "/plain");
+
+  const test::HttpReply refused = ws_test::declined_upgrade(http.port(), "/elsewhere");
+  EXPECT_EQ(refused.status, 404);
+  EXPECT_EQ(refused.body, "no WebSocket here\n");
+
+  ws_test::Client second(http.port());
+  ASSERT_FALSE(second.error);
+  const test::HttpReply third = ws_test::declined_upgrade(http.port(), "/ws");
+  EXPECT_EQ(third.status, 503);
+  EXPECT_EQ(third.body, "hapticd test: 2 WebSocket connections are open, the most this endpoint holds\n");
+
+  client.ws->close(boost::beast::websocket::close_code::normal);
+  for (int i = 0; i < 500 && http.websockets() > 1; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_EQ(http.websockets(), 1u);
+  // stop() ends the one still open: its handler sees it closed and returns.
+  http.stop();
+  EXPECT_EQ(http.websockets(), 0u);
+}
+
+TEST(HttpServer, AWebSocketClientThatStopsReadingIsClosedSayingSo) {
+  HttpServer http("test", HttpLimits{.max_websocket_queue_bytes = 1u << 20});
+  http.bind("127.0.0.1:0", "test_address");
+  std::atomic<bool> refused{false};
+  http.serve_websockets([](const HttpRequest&) -> std::optional<HttpResponse> { return std::nullopt; },
+                        [&](const HttpRequest&, WebSocketChannel& channel) {
+                          const std::string chunk(64u << 10, 'x');
+                          // Bounded: 4096 chunks (256 MiB) at the most.
+                          for (int i = 0; i < 4096 && !channel.closed(); ++i) {
+                            if (!channel.send(chunk, true)) {
+                              refused.store(true);
+                              break;
+                            }
+                          }
+                        });
+  http.start([](const HttpRequest&) { return HttpResponse::text(200, ""); });
+  ws_test::Client client(http.port());
+  ASSERT_FALSE(client.error);
+  for (int i = 0; i < 1000 && !refused.load(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_TRUE(refused.load()) << "a client that reads nothing must not be queued for without end";
+  // What it then reads ends in a close naming why.
+  std::string reason;
+  for (int i = 0; i < 10000; ++i) {
+    client.read();
+    if (client.error) break;
+  }
+  EXPECT_EQ(client.error, boost::beast::websocket::error::closed);
+  EXPECT_NE(std::string(client.ws->reason().reason.c_str()).find("reads too slowly"), std::string::npos)
+      << client.ws->reason().reason.c_str();
 }
 
 }  // namespace
