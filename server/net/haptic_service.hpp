@@ -110,6 +110,12 @@ class HapticService {
 #undef HAPTIC_DECLARE_UNARY
   grpc::Status WatchEvents(CallContext* context, const v1::WatchEventsRequest* request,
                            StreamWriter<v1::Event>* writer);
+  /// The state stream for a client without UDP (the HTTP face's WebSocket): each message one
+  /// State datagram of the session's port, as the UDP sender encodes it, with a sequence of its
+  /// own; until the caller goes (cancelled, or a write fails), the session ends or the server
+  /// stops. Renews the session's lease as heartbeats do.
+  grpc::Status StreamState(CallContext* context, const v1::StreamStateRequest* request,
+                           StreamWriter<std::string>* datagrams);
 
   /// Ends every session opened with a token that has expired since (a session's heartbeats would
   /// otherwise keep its items in the scene after its holder lost the right to them). Returns how

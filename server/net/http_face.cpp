@@ -5,6 +5,12 @@
 #include <cctype>
 #include <utility>
 
+#include <google/protobuf/struct.pb.h>
+
+#include "haptic/io/session_secret.hpp"
+#include "net/access_control.hpp"
+#include "net/proto_json.hpp"
+
 namespace haptic::net {
 namespace {
 
@@ -36,6 +42,53 @@ class HttpCall final : public CallContext {
   std::vector<std::pair<std::string, std::string>> decoded_;  // "-bin" headers, decoded
 };
 
+/// A stream's call: the peer, the credentials its opening (or its upgrade) carried, and whether
+/// its WebSocket is still open.
+class StreamCall final : public CallContext {
+ public:
+  StreamCall(const HttpRequest& request, std::vector<std::pair<std::string, std::string>> metadata,
+             const WebSocketChannel& channel)
+      : request_(request), metadata_(std::move(metadata)), channel_(channel) {}
+
+  std::string peer_host() const override { return request_.peer; }
+
+  std::optional<std::string> metadata(std::string_view key) const override {
+    for (const auto& [name, value] : metadata_) {
+      if (name == key) return value;
+    }
+    const std::string* value = request_.header(std::string(key));
+    if (value == nullptr) return std::nullopt;
+    return *value;
+  }
+
+  bool cancelled() const override { return channel_.closed(); }
+
+ private:
+  const HttpRequest& request_;
+  std::vector<std::pair<std::string, std::string>> metadata_;
+  const WebSocketChannel& channel_;
+};
+
+/// Events as text messages, {"event": {...}}.
+class EventMessages final : public StreamWriter<v1::Event> {
+ public:
+  explicit EventMessages(WebSocketChannel& channel) : channel_(channel) {}
+  bool write(const v1::Event& event) override { return channel_.send("{\"event\": " + to_json(event) + "}", false); }
+
+ private:
+  WebSocketChannel& channel_;
+};
+
+/// State datagrams as binary messages.
+class DatagramMessages final : public StreamWriter<std::string> {
+ public:
+  explicit DatagramMessages(WebSocketChannel& channel) : channel_(channel) {}
+  bool write(const std::string& datagram) override { return channel_.send(datagram, true); }
+
+ private:
+  WebSocketChannel& channel_;
+};
+
 HttpResponse from_reply(FaceReply reply) {
   HttpResponse response;
   response.status = reply.http_status;
@@ -55,6 +108,39 @@ std::string lower(std::string_view text) {
 }
 
 }  // namespace
+
+StreamOpening read_opening(const std::string& message) {
+  StreamOpening opening;
+  google::protobuf::Struct parsed;
+  if (const std::string error = from_json(message, parsed); !error.empty()) {
+    opening.error = "the opening message is not a JSON object: " + error;
+    return opening;
+  }
+  for (const auto& [name, value] : parsed.fields()) {
+    if (name == "request") {
+      if (!value.has_struct_value()) {
+        opening.error = "request: must be an object";
+        return opening;
+      }
+      opening.request = to_json(value.struct_value());
+    } else if (name == "authorization" && value.has_string_value()) {
+      opening.authorization = value.string_value();
+    } else if (name == "session_secret" && value.has_string_value()) {
+      std::string bytes;
+      if (!decode_base64(value.string_value(), bytes)) {
+        opening.error = "session_secret: must be base64, as OpenSession's reply writes it";
+        return opening;
+      }
+      opening.session_secret = std::move(bytes);
+    } else {
+      opening.error = "the opening message has '" + name.substr(0, 100) +
+                      "': it takes request (an object), authorization and session_secret (strings)";
+      return opening;
+    }
+  }
+  if (opening.request.empty()) opening.error = "the opening message has no request";
+  return opening;
+}
 
 bool decode_base64(std::string_view text, std::string& out) {
   static constexpr auto kValues = [] {
@@ -85,10 +171,90 @@ bool decode_base64(std::string_view text, std::string& out) {
 }
 
 HttpFace::HttpFace(HapticService& service, HttpFaceOptions options)
-    : face_(service), options_(std::move(options)), http_("http", options_.limits) {}
+    : service_(service), face_(service), options_(std::move(options)), http_("http", options_.limits) {}
 
 void HttpFace::start() {
+  http_.serve_websockets([this](const HttpRequest& request) { return check_upgrade(request); },
+                         [this](const HttpRequest& request, WebSocketChannel& channel) { stream(request, channel); });
   http_.start([this](const HttpRequest& request) { return handle(request); });
+}
+
+bool HttpFace::origin_refused(const HttpRequest& request) const {
+  const std::string* origin = request.header("origin");
+  return origin != nullptr && std::find(options_.allowed_origins.begin(), options_.allowed_origins.end(),
+                                        *origin) == options_.allowed_origins.end();
+}
+
+std::optional<HttpResponse> HttpFace::check_upgrade(const HttpRequest& request) const {
+  if (origin_refused(request)) {
+    return error_response(grpc::StatusCode::PERMISSION_DENIED,
+                          "origin '" + request.header("origin")->substr(0, 200) +
+                              "' may not call this server: it is not in http_allowed_origins");
+  }
+  if (request.path != std::string(JsonFace::kPathPrefix) + "WatchEvents" &&
+      request.path != std::string(JsonFace::kPathPrefix) + "StreamState") {
+    return error_response(grpc::StatusCode::NOT_FOUND,
+                          "no stream at '" + request.path.substr(0, 200) + "': the streams are " +
+                              std::string(JsonFace::kPathPrefix) + "WatchEvents and " +
+                              std::string(JsonFace::kPathPrefix) + "StreamState (docs/http.md)");
+  }
+  return std::nullopt;
+}
+
+void HttpFace::stream(const HttpRequest& request, WebSocketChannel& channel) const {
+  const auto refuse = [&channel](const grpc::Status& status) {
+    channel.send("{\"error\": " + error_reply(status).body + "}", false);
+    channel.close(1008, std::string(code_name(status.error_code())));
+  };
+  const std::optional<std::string> first = channel.receive(options_.limits.timeout);
+  if (!first) {
+    refuse({grpc::StatusCode::DEADLINE_EXCEEDED,
+            "no opening message within " + std::to_string(options_.limits.timeout.count()) +
+                " ms: send {\"request\": {...}} first (docs/http.md)"});
+    return;
+  }
+  StreamOpening opening = read_opening(*first);
+  if (!opening.error.empty()) {
+    refuse({grpc::StatusCode::INVALID_ARGUMENT, opening.error});
+    return;
+  }
+  // Credentials from the opening message, else from the upgrade's headers.
+  std::vector<std::pair<std::string, std::string>> metadata;
+  if (opening.authorization) metadata.emplace_back(kAuthorizationMetadataKey, *opening.authorization);
+  if (opening.session_secret) metadata.emplace_back(io::kSessionSecretMetadataKey, *opening.session_secret);
+  for (const auto& [name, value] : request.headers) {
+    if (name.size() <= 4 || name.compare(name.size() - 4, 4, "-bin") != 0) continue;
+    std::string bytes;
+    if (!decode_base64(value, bytes)) {
+      refuse({grpc::StatusCode::INVALID_ARGUMENT, name + ": must be base64 (a binary header, as in gRPC)"});
+      return;
+    }
+    metadata.emplace_back(name, std::move(bytes));  // after the opening's: those win
+  }
+  StreamCall call(request, std::move(metadata), channel);
+  grpc::Status status;
+  if (request.path.ends_with("WatchEvents")) {
+    v1::WatchEventsRequest watch;
+    if (const std::string error = from_json(opening.request, watch); !error.empty()) {
+      refuse({grpc::StatusCode::INVALID_ARGUMENT, "request: " + error});
+      return;
+    }
+    EventMessages events(channel);
+    status = service_.WatchEvents(&call, &watch, &events);
+  } else {
+    v1::StreamStateRequest state;
+    if (const std::string error = from_json(opening.request, state); !error.empty()) {
+      refuse({grpc::StatusCode::INVALID_ARGUMENT, "request: " + error});
+      return;
+    }
+    DatagramMessages datagrams(channel);
+    status = service_.StreamState(&call, &state, &datagrams);
+  }
+  if (!status.ok()) {
+    refuse(status);
+    return;
+  }
+  channel.close(1000, "the stream has ended");
 }
 
 HttpResponse HttpFace::handle(const HttpRequest& request) const {
@@ -104,7 +270,7 @@ HttpResponse HttpFace::handle(const HttpRequest& request) const {
     }
     return response;
   };
-  if (origin != nullptr && !allowed_origin) {
+  if (origin_refused(request)) {
     return error_response(grpc::StatusCode::PERMISSION_DENIED,
                           "origin '" + origin->substr(0, 200) +
                               "' may not call this server: it is not in http_allowed_origins");

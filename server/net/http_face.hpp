@@ -9,10 +9,18 @@
 //     http_allowed_origins (403 else, before the service sees it), with CORS headers naming it,
 //     and a CORS preflight (OPTIONS) answered for those origins alone. No secret rides in a URL:
 //     the token and the session secret are headers.
+//   - the streams, as WebSockets at /haptic.v1.Haptic/WatchEvents (each Event a text message,
+//     {"event": {...}}) and /haptic.v1.Haptic/StreamState (each sample a binary message, the UDP
+//     State datagram byte for byte). A browser cannot set headers on a WebSocket, so the client's
+//     first message opens the stream: {"request": {...}, "authorization": "Bearer …",
+//     "session_secret": "<base64>"} (the last two may be headers of the upgrade instead). A
+//     refusal is a last text message {"error": {"code": …, "message": …}} and a close (1008).
 
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include <optional>
 
 #include "net/http_server.hpp"
 #include "net/json_face.hpp"
@@ -50,14 +58,33 @@ class HttpFace {
 
   /// One request's reply (on a handler thread of the server).
   HttpResponse handle(const HttpRequest& request) const;
+  /// A WebSocket upgrade: nullopt accepts it, else the refusal (an origin not allowed, no such
+  /// stream).
+  std::optional<HttpResponse> check_upgrade(const HttpRequest& request) const;
+  /// A stream's life on its WebSocket.
+  void stream(const HttpRequest& request, WebSocketChannel& channel) const;
 
   const HttpServer& server() const { return http_; }
 
  private:
+  /// A browser's request from an origin not in allowed_origins.
+  bool origin_refused(const HttpRequest& request) const;
+
+  HapticService& service_;
   JsonFace face_;
   HttpFaceOptions options_;
   HttpServer http_;
 };
+
+/// A stream's opening message, read: the request as JSON, the credentials it carries; or why it
+/// is refused.
+struct StreamOpening {
+  std::string request;                        // the "request" object, as JSON
+  std::optional<std::string> authorization;   // "Bearer …"
+  std::optional<std::string> session_secret;  // decoded
+  std::string error;                          // "" when it reads
+};
+StreamOpening read_opening(const std::string& message);
 
 /// Decodes base64 (standard or URL-safe alphabet, padding optional, as gRPC's "-bin" metadata
 /// takes it); false when `text` is not base64.

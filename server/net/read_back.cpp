@@ -49,4 +49,20 @@ v1::ObjectStates to_object_states(const std::vector<engine::ObjectMotion>& motio
   return states;
 }
 
+wire::StatePayload state_payload(const runtime::TickSample& sample) {
+  wire::StatePayload state;
+  state.tick = sample.tick;
+  state.p_WT = {sample.p_WT.x, sample.p_WT.y, sample.p_WT.z};
+  state.v_WT = {sample.v_WT.x, sample.v_WT.y, sample.v_WT.z};
+  state.F_T_W = {sample.F_T_W.x, sample.F_T_W.y, sample.F_T_W.z};
+  state.p_WP = {sample.p_WP.x, sample.p_WP.y, sample.p_WP.z};
+  state.contact_count = sample.contact_count;
+  state.flags = sample.flags;
+  state.buttons = sample.buttons;
+  state.has_orientation = sample.has_orientation;  // only then R_WT and tau_T_W go out
+  state.R_WT = {sample.R_WT.w, sample.R_WT.x, sample.R_WT.y, sample.R_WT.z};
+  state.tau_T_W = {sample.tau_T_W.x, sample.tau_T_W.y, sample.tau_T_W.z};
+  return state;
+}
+
 }  // namespace haptic::net

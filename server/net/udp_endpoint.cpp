@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "haptic/wire/datagram.hpp"
+#include "net/read_back.hpp"
 #include "runtime/realtime.hpp"
 
 namespace haptic::net {
@@ -255,23 +256,6 @@ struct Outgoing {
   const Subscriber* subscriber;
   std::int64_t stamp_ns;  // the tick's time stamp (server time)
 };
-
-/// A tick's sample as the State datagram's payload.
-wire::StatePayload state_payload(const runtime::TickSample& sample) {
-  wire::StatePayload state;
-  state.tick = sample.tick;
-  state.p_WT = {sample.p_WT.x, sample.p_WT.y, sample.p_WT.z};
-  state.v_WT = {sample.v_WT.x, sample.v_WT.y, sample.v_WT.z};
-  state.F_T_W = {sample.F_T_W.x, sample.F_T_W.y, sample.F_T_W.z};
-  state.p_WP = {sample.p_WP.x, sample.p_WP.y, sample.p_WP.z};
-  state.contact_count = sample.contact_count;
-  state.flags = sample.flags;
-  state.buttons = sample.buttons;
-  state.has_orientation = sample.has_orientation;  // only then R_WT and tau_T_W go out
-  state.R_WT = {sample.R_WT.w, sample.R_WT.x, sample.R_WT.y, sample.R_WT.z};
-  state.tau_T_W = {sample.tau_T_W.x, sample.tau_T_W.y, sample.tau_T_W.z};
-  return state;
-}
 
 /// Lockstep flow control over the sender's wake-ups: how far the flow-controlled subscribers'
 /// windows let a round go, and which subscriber has stalled (nothing acknowledged for

@@ -9,12 +9,18 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/websocket.hpp>
+
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "haptic/io/session_secret.hpp"
 #include "haptic/v1/service.grpc.pb.h"
+#include "haptic/wire/datagram.hpp"
 #include "integration/server_process.hpp"
 #include "support/http_client.hpp"
 
@@ -59,6 +65,8 @@ std::string open_body(const std::string& client_name) {
 struct HttpSession {
   std::string id;
   std::string secret_header;
+  std::string secret;   // base64, as OpenSession's JSON has it
+  std::string udp_key;  // base64
 };
 
 HttpSession open_session(std::uint16_t port, const std::string& headers = {}) {
@@ -68,7 +76,8 @@ HttpSession open_session(std::uint16_t port, const std::string& headers = {}) {
   const auto opened = json(reply);
   return {opened.fields().at("session_id").string_value(),
           std::string(io::kSessionSecretMetadataKey) + ": " +
-              opened.fields().at("session_secret").string_value() + "\r\n"};
+              opened.fields().at("session_secret").string_value() + "\r\n",
+          opened.fields().at("session_secret").string_value(), opened.fields().at("udp_key").string_value()};
 }
 
 std::string with_session(const HttpSession& session, const std::string& rest = {}) {
@@ -260,6 +269,150 @@ TEST(HttpFace, TheBodysFormsAndWhatIsNotACallAreSaidClearly) {
   EXPECT_EQ(test::http_get(port, "/index.html").status, 404);
   const HttpReply huge = post(port, "OpenSession", std::string(5u << 20, ' '));
   EXPECT_EQ(huge.status, 413);
+}
+
+/// A WebSocket to the face's streams (Beast's client, speaking as a browser would).
+struct Stream {
+  Stream(std::uint16_t port, const std::string& path, const std::string& origin = {}) : socket(io) {
+    socket.connect(boost::asio::ip::tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port));
+    ws.emplace(std::move(socket));
+    ws->set_option(boost::beast::websocket::stream_base::decorator(
+        [origin](boost::beast::websocket::request_type& request) {
+          if (!origin.empty()) request.set(boost::beast::http::field::origin, origin);
+        }));
+    ws->handshake("127.0.0.1", "/haptic.v1.Haptic/" + path, error);
+  }
+  void send(const std::string& text) { ws->write(boost::asio::buffer(text), error); }
+  std::string read(bool* binary = nullptr) {
+    boost::beast::flat_buffer buffer;
+    ws->read(buffer, error);
+    if (binary != nullptr) *binary = ws->got_binary();
+    return boost::beast::buffers_to_string(buffer.data());
+  }
+  boost::asio::io_context io;
+  boost::asio::ip::tcp::socket socket;
+  std::optional<boost::beast::websocket::stream<boost::asio::ip::tcp::socket>> ws;
+  boost::beast::error_code error;
+};
+
+std::string opening(const HttpSession& session, const std::string& request_rest = {}) {
+  return R"({"request": {"session_id": ")" + session.id + "\"" +
+         (request_rest.empty() ? "" : ", " + request_rest) + R"(}, "session_secret": ")" + session.secret + "\"}";
+}
+
+TEST(HttpFace, EventsArriveOverAWebSocketAsJson) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0")"));
+  const std::uint16_t port = server.http_port();
+  const HttpSession session = open_session(port);
+  Stream events(port, "WatchEvents");
+  ASSERT_FALSE(events.error) << events.error.message();
+  events.send(opening(session));
+  google::protobuf::Struct started;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(events.read(), &started).ok());
+  EXPECT_EQ(started.fields().at("event").struct_value().fields().at("kind").string_value(), "WATCH_STARTED");
+  ASSERT_EQ(post(port, "CreateObject",
+                 with_session(session, R"("object": {"half_space": {"normal": {"z": 1}}, "impedance": {"stiffness": 500}})"),
+                 session.secret_header)
+                .status,
+            200);
+  google::protobuf::Struct changed;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(events.read(), &changed).ok());
+  const auto& event = changed.fields().at("event").struct_value().fields();
+  EXPECT_EQ(event.at("kind").string_value(), "SCENE_CHANGED");
+  EXPECT_EQ(event.at("message").string_value(), "object 1 created");
+}
+
+TEST(HttpFace, TheStateStreamsOverAWebSocketAsTheUdpDatagramsAtTheRateAsked) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0")"));
+  const std::uint16_t port = server.http_port();
+  const HttpSession session = open_session(port);
+  ASSERT_EQ(post(port, "SetOperator",
+                 with_session(session, R"("input": {"mode": "APPLY_FORCE", "force": {"x": 1}})"),
+                 session.secret_header)
+                .status,
+            200);
+  Stream state(port, "StreamState");
+  ASSERT_FALSE(state.error) << state.error.message();
+  state.send(opening(session, R"("rate_hz": 200)"));
+  const HttpReply stepped = post(port, "Step", with_session(session, R"("ticks": 500)"), session.secret_header);
+  ASSERT_EQ(stepped.status, 200);
+  const auto step = parse<v1::StepResponse>(stepped);
+  std::string key_bytes;
+  {
+    // The session's UDP key, from OpenSession's base64.
+    v1::OpenSessionResponse decoded;
+    ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(R"({"udp_key": ")" + session.udp_key + "\"}", &decoded).ok());
+    key_bytes = decoded.udp_key();
+  }
+  ASSERT_EQ(key_bytes.size(), 16u);
+  wire::Key key{};
+  std::copy(key_bytes.begin(), key_bytes.end(), key.begin());
+  // The stream sends the newest tick, each once: read until the stepped-to tick arrives.
+  std::uint64_t last_sequence = 0;
+  bool found = false;
+  for (int i = 0; i < 400 && !found; ++i) {
+    bool binary = false;
+    const std::string message = state.read(&binary);
+    ASSERT_FALSE(state.error) << state.error.message();
+    ASSERT_TRUE(binary);
+    wire::Header header;
+    wire::StatePayload payload;
+    const std::span<const std::uint8_t> bytes(reinterpret_cast<const std::uint8_t*>(message.data()), message.size());
+    ASSERT_EQ(wire::decode_state(bytes, key, header, payload), wire::DecodeError::kNone);
+    EXPECT_EQ(header.sequence, last_sequence + 1) << "one sequence, no gaps";
+    last_sequence = header.sequence;
+    wire::Key wrong = key;
+    wrong[0] ^= 1;
+    EXPECT_EQ(wire::decode_state(bytes, wrong, header, payload), wire::DecodeError::kBadTag);
+    if (payload.tick == step.tick()) {
+      found = true;
+      EXPECT_EQ(payload.p_WT.x, step.state().position().x());
+      EXPECT_EQ(payload.F_T_W.x, step.state().force().x());
+    }
+  }
+  EXPECT_TRUE(found) << "tick " << step.tick() << " never arrived";
+}
+
+TEST(HttpFace, AStreamIsRefusedSayingWhyAndFromAForeignPageNotOpenedAtAll) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0",
+      "http_allowed_origins": ["http://lab.example"])"));
+  const std::uint16_t port = server.http_port();
+  const HttpSession session = open_session(port);
+  const auto error_of = [](Stream& stream) {
+    google::protobuf::Struct message;
+    EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(stream.read(), &message).ok());
+    const auto& error = message.fields().at("error").struct_value().fields();
+    return error.at("code").string_value() + ": " + error.at("message").string_value();
+  };
+  {
+    Stream wrong(port, "StreamState");
+    HttpSession other = session;
+    other.secret = "AAAAAAAAAAAAAAAAAAAAAA==";
+    wrong.send(opening(other, R"("rate_hz": 60)"));
+    EXPECT_NE(error_of(wrong).find("permission_denied: session_id: session"), std::string::npos);
+  }
+  {
+    Stream fast(port, "StreamState");
+    fast.send(opening(session, R"("rate_hz": 5000)"));
+    EXPECT_NE(error_of(fast).find("invalid_argument: rate_hz: must be 1 to 1000"), std::string::npos);
+  }
+  {
+    Stream garbled(port, "WatchEvents");
+    garbled.send(R"({"request": {"session_id": "1"}, "token": "x"})");
+    EXPECT_NE(error_of(garbled).find("invalid_argument: the opening message has 'token'"), std::string::npos);
+  }
+  {
+    Stream nowhere(port, "Teleport");
+    EXPECT_TRUE(nowhere.error);
+  }
+  {
+    Stream foreign(port, "WatchEvents", "http://attacker.example");
+    EXPECT_TRUE(foreign.error) << "a page from another origin must not open a stream";
+    Stream allowed(port, "WatchEvents", "http://lab.example");
+    ASSERT_FALSE(allowed.error) << allowed.error.message();
+    allowed.send(opening(session));
+    EXPECT_NE(allowed.read().find("WATCH_STARTED"), std::string::npos);
+  }
 }
 
 }  // namespace
