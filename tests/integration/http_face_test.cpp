@@ -17,6 +17,9 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
+#include <atomic>
+#include <vector>
 
 #include "haptic/io/session_secret.hpp"
 #include "haptic/v1/service.grpc.pb.h"
@@ -413,6 +416,99 @@ TEST(HttpFace, AStreamIsRefusedSayingWhyAndFromAForeignPageNotOpenedAtAll) {
     allowed.send(opening(session));
     EXPECT_NE(allowed.read().find("WATCH_STARTED"), std::string::npos);
   }
+}
+
+/// An OpenSession over HTTP from `source` (another loopback address is another host): its status.
+int open_from(std::uint16_t port, const char* source) {
+  test::HttpConnection connection(port, source);
+  const std::string body = open_body("probe");
+  connection.send("POST /haptic.v1.Haptic/OpenSession HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: "
+                  "application/json\r\nContent-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body);
+  return connection.read_reply().status;
+}
+
+// The descriptor flood of the gRPC probes, on the HTTP face and on loopback: hapticd limited to
+// 256 descriptors; six hosts (127.0.0.2 to .7) open 300 connections that never say a word. Another
+// host's calls are answered during it, over HTTP and gRPC, and every flooding host is served within
+// 1 s of its end. Bounded: 300 connections, 3 s of flood, 2 s after.
+TEST(HttpFace, SixHostsFloodingSilentConnectionsLeaveAnotherHostServedAndEachServedAfter) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0",
+      "max_sessions": 64, "max_sessions_per_peer": 64, "session_open_burst_per_peer": 64)"), {}, 256);
+  const std::uint16_t port = server.http_port();
+  const std::vector<std::string> flooders{"127.0.0.2", "127.0.0.3", "127.0.0.4",
+                                          "127.0.0.5", "127.0.0.6", "127.0.0.7"};
+  std::vector<std::unique_ptr<test::HttpConnection>> flood;
+  for (int i = 0; i < 300; ++i) {
+    flood.push_back(std::make_unique<test::HttpConnection>(
+        port, flooders[static_cast<std::size_t>(i) % flooders.size()].c_str()));
+  }
+  auto stub = v1::Haptic::NewStub(grpc::CreateChannel(server.address(), grpc::InsecureChannelCredentials()));
+  int calls = 0, answered = 0, grpc_calls = 0, grpc_answered = 0;
+  const auto flood_until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (std::chrono::steady_clock::now() < flood_until && calls < 30) {
+    ++calls;
+    if (open_from(port, "127.0.0.9") == 200) ++answered;
+    v1::OpenSessionRequest open;
+    open.set_client_name("grpc-during-the-flood");
+    open.set_api_version(v1::API_VERSION_CURRENT);
+    v1::OpenSessionResponse opened;
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+    ++grpc_calls;
+    if (stub->OpenSession(&context, open, &opened).ok()) ++grpc_answered;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  std::printf("  during a flood of 300 silent connections from 6 hosts (256 fds): %d of %d HTTP and "
+              "%d of %d gRPC calls from another host answered\n", answered, calls, grpc_answered, grpc_calls);
+  EXPECT_EQ(answered, calls);
+  EXPECT_EQ(grpc_answered, grpc_calls);
+  flood.clear();
+  const auto ended = std::chrono::steady_clock::now();
+  double slowest_s = 0.0;
+  for (const std::string& host : flooders) {
+    bool served = false;
+    while (!served && std::chrono::steady_clock::now() - ended < std::chrono::seconds(2)) {
+      served = open_from(port, host.c_str()) == 200;
+    }
+    EXPECT_TRUE(served) << host << " was not served after the flood";
+    slowest_s = std::max(slowest_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - ended).count());
+  }
+  std::printf("  after it: every flooding host served within %.3f s\n", slowest_s);
+  EXPECT_LE(slowest_s, 1.0);
+}
+
+// One host's slowloris (64 connections trickling a call's head a byte at a time, made anew every
+// second) leaves another host's calls answered. Bounded: 100 calls, 30 s.
+TEST(HttpFace, ASlowlorisFromOneHostLeavesAnotherHostsCallsAnswered) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0",
+      "max_sessions": 128, "max_sessions_per_peer": 128, "session_open_rate_per_peer": 1000,
+      "session_open_burst_per_peer": 128)"));
+  const std::uint16_t port = server.http_port();
+  std::atomic<bool> stop{false};
+  std::thread slowloris([&] {
+    std::vector<std::unique_ptr<test::HttpConnection>> slow;
+    const std::string head = "POST /haptic.v1.Haptic/OpenSession HTTP/1.1\r\nX-Slow: " + std::string(500, 'x');
+    for (std::size_t sent = 0; !stop.load(); ++sent) {
+      if (sent % 50 == 0) {
+        slow.clear();
+        for (int i = 0; i < 64; ++i) slow.push_back(std::make_unique<test::HttpConnection>(port, "127.0.0.2"));
+      }
+      for (auto& connection : slow) connection->send(std::string(1, head[sent % head.size()]));
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  int answered = 0, attempts = 0;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  for (; attempts < 100 && std::chrono::steady_clock::now() < give_up; ++attempts) {
+    answered += open_from(port, "127.0.0.3") == 200 ? 1 : 0;
+  }
+  stop.store(true);
+  slowloris.join();
+  std::printf("  during a slowloris of 64 connections from one host: %d of %d calls from another "
+              "answered\n", answered, attempts);
+  EXPECT_EQ(attempts, 100);
+  EXPECT_GE(answered, 99);
 }
 
 }  // namespace
