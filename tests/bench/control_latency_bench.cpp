@@ -1,12 +1,18 @@
-// The control plane's unary latency over plaintext, TLS and mutual TLS, in one run: an in-process
-// hapticd (lockstep time, so the loop takes no CPU) and one client calling GetDeviceInfo back to
-// back on one connection. Prints p50 / p99 / p99.9 per mode and each TLS mode's ratio to the
-// plaintext one measured beside it. A benchmark: it prints figures, asserts nothing.
+// The control plane's unary latency over plaintext, TLS and mutual TLS, and over the HTTP face
+// (JSON and binary protobuf bodies, plain HTTP/1.1 kept alive), in one run: an in-process hapticd
+// (lockstep time, so the loop takes no CPU) and one client calling GetDeviceInfo back to back on
+// one connection. Prints p50 / p99 / p99.9 per mode and each mode's ratio to the plaintext gRPC
+// one measured beside it. A benchmark: it prints figures, asserts nothing.
 //
 // Usage: control_latency_bench [--calls N] [--rounds R] [--certs DIR]
 //   --certs: the folder make_test_certs.sh fills (default: the build tree's test certificates).
 
+#include <arpa/inet.h>
 #include <grpcpp/grpcpp.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -21,6 +27,8 @@
 #include "config/server_config.hpp"
 #include "haptic/io/session_secret.hpp"
 #include "haptic/v1/service.grpc.pb.h"
+#include "net/http_face.hpp"
+#include "net/proto_json.hpp"
 
 namespace {
 
@@ -35,13 +43,15 @@ std::string read_file(const std::string& path) {
   return text.str();
 }
 
-enum class Mode { kPlaintext, kTls, kMutualTls };
+enum class Mode { kPlaintext, kTls, kMutualTls, kHttpJson, kHttpProto };
 
 const char* name_of(Mode mode) {
   switch (mode) {
     case Mode::kPlaintext: return "plaintext";
     case Mode::kTls: return "TLS";
     case Mode::kMutualTls: return "mutual TLS";
+    case Mode::kHttpJson: return "HTTP JSON";
+    case Mode::kHttpProto: return "HTTP proto";
   }
   return "?";
 }
@@ -53,7 +63,8 @@ haptic::v1::ServerConfig server_config(Mode mode, const std::string& certs) {
   config.set_udp_address("127.0.0.1");
   config.set_udp_port(0);
   config.set_status_period_s(0);
-  if (mode != Mode::kPlaintext) {
+  if (mode == Mode::kHttpJson || mode == Mode::kHttpProto) config.set_http_address("127.0.0.1:0");
+  if (mode == Mode::kTls || mode == Mode::kMutualTls) {
     auto* tls = config.mutable_security()->mutable_tls();
     tls->set_cert_file(certs + "/server.pem");
     tls->set_key_file(certs + "/server.key");
@@ -82,9 +93,108 @@ double quantile(std::vector<double>& sorted, double q) {
   return sorted[index];
 }
 
+/// One kept-alive HTTP/1.1 connection to the face: a call's request out, its reply's body back.
+class HttpCaller {
+ public:
+  explicit HttpCaller(std::uint16_t port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(port);
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    const int one = 1;
+    ::setsockopt(fd_, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+    if (::connect(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
+      std::fprintf(stderr, "control_latency_bench: cannot connect to the HTTP face\n");
+      std::exit(1);
+    }
+  }
+  ~HttpCaller() { ::close(fd_); }
+
+  /// POSTs `body` to `call`; returns the reply's status, its body in `reply`.
+  int call(const std::string& call, const std::string& body, const std::string& content_type,
+           const std::string& headers, std::string& reply) {
+    const std::string request = "POST /haptic.v1.Haptic/" + call + " HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                                "Content-Type: " + content_type + "\r\nContent-Length: " +
+                                std::to_string(body.size()) + "\r\n" + headers + "\r\n" + body;
+    if (::send(fd_, request.data(), request.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(request.size())) return 0;
+    std::size_t head_end;
+    while ((head_end = buffer_.find("\r\n\r\n")) == std::string::npos) {
+      if (!receive()) return 0;
+    }
+    const int status = std::atoi(buffer_.c_str() + 9);
+    const auto length_at = buffer_.find("Content-Length: ");
+    const std::size_t length = length_at < head_end ? std::strtoul(buffer_.c_str() + length_at + 16, nullptr, 10) : 0;
+    while (buffer_.size() < head_end + 4 + length) {
+      if (!receive()) return 0;
+    }
+    reply = buffer_.substr(head_end + 4, length);
+    buffer_.erase(0, head_end + 4 + length);
+    return status;
+  }
+
+ private:
+  bool receive() {
+    char chunk[65536];
+    const ssize_t got = ::recv(fd_, chunk, sizeof chunk, 0);
+    if (got <= 0) return false;
+    buffer_.append(chunk, static_cast<std::size_t>(got));
+    return true;
+  }
+  int fd_;
+  std::string buffer_;
+};
+
+std::string base64(const std::string& bytes) {
+  haptic::v1::OpenSessionResponse holder;  // protobuf's JSON writes bytes as base64
+  holder.set_session_secret(bytes);
+  const std::string json = haptic::net::to_json(holder);
+  const auto at = json.find("\"session_secret\":\"") + 18;
+  return json.substr(at, json.find('"', at) - at);
+}
+
+Figures measure_http(haptic::app::Server& server, Mode mode, int calls) {
+  HttpCaller caller(server.http_port());
+  haptic::v1::OpenSessionRequest open;
+  open.set_client_name("latency-bench");
+  open.set_api_version(haptic::v1::API_VERSION_CURRENT);
+  std::string reply;
+  if (caller.call("OpenSession", haptic::net::to_json(open), "application/json", {}, reply) != 200) {
+    std::fprintf(stderr, "control_latency_bench: HTTP OpenSession: %s\n", reply.c_str());
+    std::exit(1);
+  }
+  haptic::v1::OpenSessionResponse session;
+  haptic::net::from_json(reply, session);
+  const std::string secret = "haptic-session-secret-bin: " + base64(session.session_secret()) + "\r\n";
+  haptic::v1::SessionRef ref;
+  ref.set_session_id(session.session_id());
+  const bool json = mode == Mode::kHttpJson;
+  const std::string body = json ? haptic::net::to_json(ref) : ref.SerializeAsString();
+  const std::string type = json ? "application/json" : "application/proto";
+  std::vector<double> latencies_us;
+  latencies_us.reserve(static_cast<std::size_t>(calls));
+  const int warm_up = std::max(calls / 10, 10);
+  for (int i = 0; i < warm_up + calls; ++i) {
+    const auto start = std::chrono::steady_clock::now();
+    const int status = caller.call("GetDeviceInfo", body, type, secret, reply);
+    // The reply decoded, as a client must before it has the answer.
+    haptic::v1::DeviceInfo info;
+    const bool decoded = json ? haptic::net::from_json(reply, info).empty() : info.ParseFromString(reply);
+    const auto end = std::chrono::steady_clock::now();
+    if (status != 200 || !decoded) {
+      std::fprintf(stderr, "control_latency_bench: %s: GetDeviceInfo: %d %s\n", name_of(mode), status, reply.c_str());
+      std::exit(1);
+    }
+    if (i >= warm_up) latencies_us.push_back(std::chrono::duration<double, std::micro>(end - start).count());
+  }
+  server.shutdown();
+  std::sort(latencies_us.begin(), latencies_us.end());
+  return {quantile(latencies_us, 0.5), quantile(latencies_us, 0.99), quantile(latencies_us, 0.999)};
+}
+
 Figures measure(Mode mode, const std::string& certs, int calls) {
   haptic::app::Server server(server_config(mode, certs));
   server.start();
+  if (mode == Mode::kHttpJson || mode == Mode::kHttpProto) return measure_http(server, mode, calls);
   grpc::ChannelArguments arguments;
   arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
   if (mode != Mode::kPlaintext) arguments.SetSslTargetNameOverride("localhost");
@@ -159,7 +269,7 @@ int main(int argc, char** argv) {
               "p50/plain", "p99/plain");
   for (int round = 1; round <= rounds; ++round) {
     Figures plain{};
-    for (const Mode mode : {Mode::kPlaintext, Mode::kTls, Mode::kMutualTls}) {
+    for (const Mode mode : {Mode::kPlaintext, Mode::kTls, Mode::kMutualTls, Mode::kHttpJson, Mode::kHttpProto}) {
       const Figures f = measure(mode, certs, calls);
       if (mode == Mode::kPlaintext) plain = f;
       std::printf("%-6d %-11s %9.1f %9.1f %9.1f %12.2f %12.2f\n", round, name_of(mode), f.p50_us,
