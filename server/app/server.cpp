@@ -57,11 +57,13 @@ std::vector<net::Credential> credentials(const v1::AccessTokens& tokens) {
 
 /// TLS for the control plane, terminated by the control listener; with a client CA, clients must
 /// present a certificate it signed.
-std::shared_ptr<const net::TlsServerContext> tls_context(const config::SecurityMaterial& security) {
+/// `alpn`: "h2" for gRPC's listener, "http/1.1" for the HTTP face.
+std::shared_ptr<const net::TlsServerContext> tls_context(const config::SecurityMaterial& security,
+                                                         const std::string& alpn = "h2") {
   if (!security.tls) return nullptr;
   try {
     return std::make_shared<const net::TlsServerContext>(
-        net::TlsServerMaterial{security.cert_pem, security.key_pem, security.client_ca_pem});
+        net::TlsServerMaterial{security.cert_pem, security.key_pem, security.client_ca_pem, alpn});
   } catch (const std::runtime_error& error) {
     throw config::ConfigError(error.what());  // the files' contents: a configuration error
   }
@@ -289,7 +291,7 @@ Server::Server(const v1::ServerConfig& config)
   if (!grpc_server_) throw std::runtime_error("cannot start the gRPC server");
   grpc_port_ = listener_->port();
   listener_->start([server = grpc_server_.get()](int fd) { grpc::AddInsecureChannelFromFd(server, fd); });
-  bind_http_endpoints(access);
+  bind_http_endpoints(access, security);
   join_federation(limits);
 }
 
@@ -340,12 +342,15 @@ void Server::join_federation(const schema::SceneLimits& limits) {
   }
 }
 
-void Server::bind_http_endpoints(const net::AccessControl& access) {
+void Server::bind_http_endpoints(const net::AccessControl& access,
+                                 const config::SecurityMaterial& security) {
   if (!config_.http_address().empty()) {
     net::HttpFaceOptions options;
     options.allowed_origins.assign(config_.http_allowed_origins().begin(), config_.http_allowed_origins().end());
     options.limits.timeout = std::chrono::milliseconds(config_.handshake_timeout_ms());
     http_face_ = std::make_unique<net::HttpFace>(*service_, std::move(options));
+    // With the control plane's TLS (and its client CA: mutual TLS), the face is HTTPS only.
+    if (auto tls = tls_context(security, "http/1.1")) http_face_->use_tls(std::move(tls));
     http_face_->bind(config_.http_address());
   }
   if (!config_.metrics_address().empty()) {
@@ -480,7 +485,8 @@ void Server::start() {
   }
   if (http_face_) {
     http_face_->start();
-    spdlog::info("hapticd: the control plane over HTTP at http://{}/haptic.v1.Haptic/ (docs/http.md)",
+    spdlog::info("hapticd: the control plane over HTTP at {}://{}/haptic.v1.Haptic/ (docs/http.md)",
+                 config_.security().has_tls() ? "https" : "http",
                  local_dial_address(config_.http_address(), http_face_->port()));
   }
   if (viewer_) {

@@ -32,6 +32,7 @@
 #include "runtime/loop_cpu.hpp"
 #include "runtime/loop_thread.hpp"
 #include "config/devices.hpp"
+#include "config/security.hpp"
 #include "runtime/tick_runner.hpp"
 
 namespace haptic::app {
@@ -89,7 +90,7 @@ class Server {
   /// The metrics endpoint and the viewer, when configured (`access`: the control plane's tokens).
   /// With a federation section: joins its DDS domain and makes the relay (started with the loop).
   void join_federation(const schema::SceneLimits& limits);
-  void bind_http_endpoints(const net::AccessControl& access);
+  void bind_http_endpoints(const net::AccessControl& access, const config::SecurityMaterial& security);
   void log_status();
 
   v1::ServerConfig config_;

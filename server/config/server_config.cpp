@@ -43,21 +43,11 @@ std::string check_exposure(const v1::ServerConfig& config) {
     return refuse("grpc_address", config.grpc_address());
   }
   if (!is_loopback_host(config.udp_address())) return refuse("udp_address", config.udp_address());
-  return {};
-}
-
-/// The HTTP face speaks plain HTTP (TLS on it is not built yet): off loopback the tokens and
-/// session secrets it carries would cross the network in clear, whatever security says of gRPC.
-std::string check_http_face_exposure(const v1::ServerConfig& config) {
-  if (config.http_address().empty() || config.insecure_remote_access() ||
-      is_loopback_host(host_of_address(config.http_address()))) {
-    return {};
+  // The HTTP face carries the same calls, with the control plane's TLS when there is one.
+  if (!config.http_address().empty() && !is_loopback_host(host_of_address(config.http_address()))) {
+    return refuse("http_address", config.http_address());
   }
-  return "http_address: '" + config.http_address() +
-         "' is not a loopback address, and the control plane's HTTP face speaks plain HTTP (TLS on "
-         "it is not built yet), so anyone on the network could command forces on the device, or "
-         "read the tokens and session secrets it carries. Bind 127.0.0.1 (reach it through an SSH "
-         "tunnel, docs/http.md), or accept the risk with --insecure (insecure_remote_access: true)";
+  return {};
 }
 
 /// An HTTP endpoint's address: empty (none), HOST:PORT or [IPv6]:PORT.
@@ -255,7 +245,6 @@ std::string validate(const v1::ServerConfig& config) {
   if (auto e = check_http_address("viewer_address", config.viewer_address()); !e.empty()) return e;
   if (auto e = check_viewer_exposure(config); !e.empty()) return e;
   if (auto e = check_http_address("http_address", config.http_address()); !e.empty()) return e;
-  if (auto e = check_http_face_exposure(config); !e.empty()) return e;
   if (auto e = check_origins(config); !e.empty()) return e;
   if (config.time_mode() != v1::REAL_TIME && config.time_mode() != v1::LOCKSTEP) {
     return "time_mode: must be REAL_TIME or LOCKSTEP";

@@ -53,6 +53,8 @@ class HttpFace {
   /// Listens on "host:port" (port 0 picks one). Throws std::runtime_error naming http_address.
   void bind(const std::string& address) { http_.bind(address, "http_address"); }
   std::uint16_t port() const { return http_.port(); }
+  /// HTTPS only, with this context (ALPN "http/1.1"; with a client CA, mutual TLS). Before start().
+  void use_tls(std::shared_ptr<const TlsServerContext> tls) { http_.use_tls(std::move(tls)); }
   void start();
   void stop() { http_.stop(); }
 

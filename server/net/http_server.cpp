@@ -9,7 +9,11 @@
 #include <boost/asio/steady_timer.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/asio/ssl.hpp>
+#include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
+#include <boost/beast/websocket/ssl.hpp>
+#include <openssl/ssl.h>
 
 #include <algorithm>
 #include <cctype>
@@ -23,6 +27,7 @@
 #include <tuple>
 
 #include "net/tcp_listen.hpp"
+#include "net/tls_server_context.hpp"
 
 namespace haptic::net {
 namespace {
@@ -32,6 +37,8 @@ namespace beast = boost::beast;
 namespace http = beast::http;
 namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
+using PlainStream = beast::tcp_stream;
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
 
 /// A client's unread messages past which its WebSocket closes (its handler is not reading).
 constexpr std::size_t kMaxUnreadMessages = 16;
@@ -118,6 +125,19 @@ std::string parse_request_head(std::string_view head, HttpRequest& out) {
   return to_request(parser.get().base(), out);
 }
 
+/// What the I/O thread keeps of every connection, plain or TLS, a request's or a WebSocket's.
+struct HttpServer::Connection {
+  explicit Connection(std::string peer) : host(std::move(peer)) {}
+  virtual ~Connection() = default;
+  std::string host;
+  std::chrono::steady_clock::time_point accepted_at = std::chrono::steady_clock::now();
+  std::uint64_t answered = 0;  // replies queued on it: its progress, with received
+  std::size_t received = 0;    // bytes of the request being read
+  bool busy = false;           // a request handled or a reply written: not displaced then
+  /// Ends it now, on the I/O thread.
+  virtual void end() = 0;
+};
+
 /// Everything that runs on the I/O thread, and the handler threads beside it.
 struct HttpServer::Impl {
   Impl(HttpServer& owner, Handler handle) : server(owner), handler(std::move(handle)) {}
@@ -129,12 +149,13 @@ struct HttpServer::Impl {
   std::optional<asio::executor_work_guard<asio::io_context::executor_type>> handlers_work;
   std::vector<std::unique_ptr<tcp::acceptor>> acceptors;
   asio::steady_timer accept_pause{io};
-  std::vector<Session*> sessions;  // open ones, on the I/O thread only
+  std::vector<Connection*> sessions;  // open ones, on the I/O thread only
+  std::optional<asio::ssl::context> tls;  // with TLS: the server's context
   std::thread io_thread;
   std::vector<std::thread> handler_threads;
   UpgradeCheck upgrade_check;
   WebSocketHandler websocket_handler;
-  std::vector<WebSocketSession*> websockets;  // open ones, on the I/O thread only
+  std::vector<Connection*> websockets;  // open ones, on the I/O thread only
   // WebSocket handlers running (each on a thread of its own): stop() waits for them to return.
   std::mutex websocket_threads_mutex;
   std::condition_variable websocket_threads_done;
@@ -149,14 +170,17 @@ struct HttpServer::Impl {
 
 /// One WebSocket connection: its reads and writes on the I/O thread, its handler on a thread of
 /// its own, the two meeting in the inbox and the outbox.
-struct HttpServer::WebSocketSession : WebSocketChannel,
-                                      std::enable_shared_from_this<HttpServer::WebSocketSession> {
-  WebSocketSession(Impl& owner, beast::tcp_stream stream, std::string peer)
-      : impl(owner), ws(std::move(stream)), host(std::move(peer)) {}
+template <class Stream>
+struct HttpServer::WebSocketSession : Connection,
+                                      WebSocketChannel,
+                                      std::enable_shared_from_this<HttpServer::WebSocketSession<Stream>> {
+  using std::enable_shared_from_this<WebSocketSession<Stream>>::shared_from_this;
+
+  WebSocketSession(Impl& owner, Stream stream, std::string peer)
+      : Connection(std::move(peer)), impl(owner), ws(std::move(stream)) {}
 
   Impl& impl;
-  websocket::stream<beast::tcp_stream> ws;
-  std::string host;
+  websocket::stream<Stream> ws;
   beast::flat_buffer read_buffer;
   std::deque<std::pair<std::string, bool>> outbox;  // I/O thread
   bool writing = false;                              // I/O thread
@@ -300,6 +324,8 @@ struct HttpServer::WebSocketSession : WebSocketChannel,
     ws.async_close(why, [self = shared_from_this()](beast::error_code) { self->finish(); });
   }
 
+  void end() override { finish(); }
+
   /// On the I/O thread: the connection is over.
   void finish() {
     if (finished) return;
@@ -314,23 +340,42 @@ struct HttpServer::WebSocketSession : WebSocketChannel,
 };
 
 /// One connection: a request read, handled, its reply written; then the next.
-struct HttpServer::Session : std::enable_shared_from_this<HttpServer::Session> {
-  Session(Impl& owner, tcp::socket socket, std::string peer)
-      : impl(owner), stream(std::move(socket)), host(std::move(peer)),
-        accepted_at(std::chrono::steady_clock::now()) {}
+template <class Stream>
+struct HttpServer::Session : Connection, std::enable_shared_from_this<HttpServer::Session<Stream>> {
+  using std::enable_shared_from_this<Session<Stream>>::shared_from_this;
+  static constexpr bool kTls = std::is_same_v<Stream, TlsStream>;
+
+  Session(Impl& owner, Stream connection, std::string peer)
+      : Connection(std::move(peer)), impl(owner), stream(std::move(connection)) {}
 
   Impl& impl;
-  beast::tcp_stream stream;
+  Stream stream;
   beast::flat_buffer buffer;
   std::optional<http::request_parser<http::string_body>> parser;
   http::response<http::string_body> response;
   std::optional<http::response_serializer<http::string_body>> serializer;
-  std::string host;
-  std::chrono::steady_clock::time_point accepted_at;
-  std::uint64_t answered = 0;      // replies queued on it: its progress, with received
-  std::size_t received = 0;        // bytes of the request being read
-  bool busy = false;               // a request handled or a reply written: not displaced then
   bool closed = false;
+
+  void end() override { close(); }
+
+  /// With TLS, the handshake first, within the timeout; then the requests.
+  void start() {
+    if constexpr (kTls) {
+      beast::get_lowest_layer(stream).expires_after(limits().timeout);
+      stream.async_handshake(asio::ssl::stream_base::server,
+                             [self = shared_from_this()](beast::error_code error) {
+                               if (self->closed) return;
+                               if (error) {
+                                 self->impl.server.tls_failed_.fetch_add(1, std::memory_order_relaxed);
+                                 self->close();
+                                 return;
+                               }
+                               self->read_next();
+                             });
+    } else {
+      read_next();
+    }
+  }
 
   const HttpLimits& limits() const { return impl.server.limits_; }
   const std::string& name() const { return impl.server.name_; }
@@ -342,7 +387,7 @@ struct HttpServer::Session : std::enable_shared_from_this<HttpServer::Session> {
     received = 0;
     busy = false;
     // The whole request within the timeout of the reply before it (or of the accept).
-    stream.expires_after(limits().timeout);
+    beast::get_lowest_layer(stream).expires_after(limits().timeout);
     read_some();
   }
 
@@ -395,7 +440,7 @@ struct HttpServer::Session : std::enable_shared_from_this<HttpServer::Session> {
       read_some();
       return;
     }
-    stream.expires_never();  // the handler may take its time; the next limit is on the reply
+    beast::get_lowest_layer(stream).expires_never();  // the handler may take its time; the next limit is on the reply
     HttpRequest request;
     const std::string refused = to_request(parser->get().base(), request);
     request.peer = host;
@@ -452,7 +497,8 @@ struct HttpServer::Session : std::enable_shared_from_this<HttpServer::Session> {
       reply(std::move(full), false, false);
       return;
     }
-    auto channel = std::make_shared<WebSocketSession>(impl, std::move(stream), host);
+    beast::get_lowest_layer(stream).expires_never();  // the WebSocket keeps its own timeouts
+    auto channel = std::make_shared<WebSocketSession<Stream>>(impl, std::move(stream), host);
     closed = true;
     std::erase(impl.sessions, this);
     impl.websockets.push_back(channel.get());
@@ -485,7 +531,7 @@ struct HttpServer::Session : std::enable_shared_from_this<HttpServer::Session> {
 
   void write_some() {
     // The limit is on a reader that stops, not on a large reply read slowly: each piece renews it.
-    stream.expires_after(limits().timeout);
+    beast::get_lowest_layer(stream).expires_after(limits().timeout);
     http::async_write_some(stream, *serializer,
                            [self = shared_from_this()](beast::error_code error, std::size_t) {
                              self->on_written(error);
@@ -516,8 +562,8 @@ struct HttpServer::Session : std::enable_shared_from_this<HttpServer::Session> {
     if (closed) return;
     closed = true;
     beast::error_code ignored;
-    stream.socket().shutdown(tcp::socket::shutdown_send, ignored);
-    stream.socket().close(ignored);
+    beast::get_lowest_layer(stream).socket().shutdown(tcp::socket::shutdown_send, ignored);
+    beast::get_lowest_layer(stream).socket().close(ignored);
     std::erase(impl.sessions, this);
   }
 };
@@ -557,16 +603,22 @@ void HttpServer::Impl::accepted(tcp::socket socket) {
     socket.close(ignored);
     return;
   }
-  auto session = std::make_shared<Session>(*this, std::move(socket), host);
-  sessions.push_back(session.get());
-  session->read_next();
+  if (tls) {
+    auto session = std::make_shared<Session<TlsStream>>(*this, TlsStream(PlainStream(std::move(socket)), *tls), host);
+    sessions.push_back(session.get());
+    session->start();
+  } else {
+    auto session = std::make_shared<Session<PlainStream>>(*this, PlainStream(std::move(socket)), host);
+    sessions.push_back(session.get());
+    session->start();
+  }
 }
 
 std::string HttpServer::Impl::make_room(const std::string& host) {
   const HttpLimits& limits = server.limits_;
   std::map<std::string, std::size_t> per_host;
-  for (const Session* s : sessions) ++per_host[s->host];
-  for (const WebSocketSession* w : websockets) ++per_host[w->host];  // counted, never displaced
+  for (const Connection* s : sessions) ++per_host[s->host];
+  for (const Connection* w : websockets) ++per_host[w->host];  // counted, never displaced
   const std::size_t from_host = per_host[host];
   if (from_host >= limits.max_connections_per_peer) {
     return "this host holds " + std::to_string(limits.max_connections_per_peer) +
@@ -575,9 +627,9 @@ std::string HttpServer::Impl::make_room(const std::string& host) {
   if (sessions.size() < limits.max_connections) return {};
   // Full: the least progress among the connections of hosts holding more than this one's, and
   // not busy with a request (its client is waiting for the reply).
-  Session* victim = nullptr;
-  const auto progress = [](const Session& s) { return std::tuple(s.answered, s.received, s.accepted_at); };
-  for (Session* s : sessions) {
+  Connection* victim = nullptr;
+  const auto progress = [](const Connection& s) { return std::tuple(s.answered, s.received, s.accepted_at); };
+  for (Connection* s : sessions) {
     if (s->busy || per_host[s->host] <= from_host + 1) continue;
     if (victim == nullptr || progress(*s) < progress(*victim)) victim = s;
   }
@@ -585,7 +637,7 @@ std::string HttpServer::Impl::make_room(const std::string& host) {
     return "the endpoint holds " + std::to_string(limits.max_connections) + " connections, its most";
   }
   server.evicted_.fetch_add(1, std::memory_order_relaxed);  // counted before the peer sees the close
-  victim->close();
+  victim->end();
   return {};
 }
 
@@ -606,6 +658,12 @@ void HttpServer::bind(const std::string& address, const std::string& field) {
     acceptor->assign(local.ss_family == AF_INET6 ? tcp::v6() : tcp::v4(), fd);
     impl_->acceptors.push_back(std::move(acceptor));
   }
+}
+
+void HttpServer::use_tls(std::shared_ptr<const TlsServerContext> tls) {
+  // Asio's context takes a reference of its own to the one the control plane's TLS is set from.
+  SSL_CTX_up_ref(tls->native());
+  impl_->tls.emplace(tls->native());
 }
 
 void HttpServer::serve_websockets(UpgradeCheck check, WebSocketHandler handler) {
@@ -638,10 +696,10 @@ void HttpServer::stop() {
       beast::error_code ignored;
       for (auto& acceptor : impl->acceptors) acceptor->close(ignored);
       impl->accept_pause.cancel();
-      const std::vector<Session*> open = impl->sessions;
-      for (Session* session : open) session->close();
-      const std::vector<WebSocketSession*> sockets = impl->websockets;
-      for (WebSocketSession* socket : sockets) socket->finish();
+      const std::vector<Connection*> open = impl->sessions;
+      for (Connection* session : open) session->end();
+      const std::vector<Connection*> sockets = impl->websockets;
+      for (Connection* socket : sockets) socket->end();
       impl->io.stop();
     });
     impl_->io_thread.join();
@@ -656,8 +714,8 @@ void HttpServer::stop() {
   for (std::thread& thread : impl_->handler_threads) thread.join();
   impl_->handler_threads.clear();
   // What is left (sessions held by handlers never run) goes with the contexts.
-  const std::vector<Session*> open = impl_->sessions;
-  for (Session* session : open) session->close();
+  const std::vector<Connection*> open = impl_->sessions;
+  for (Connection* session : open) session->end();
   impl_->acceptors.clear();
 }
 

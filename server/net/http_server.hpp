@@ -27,6 +27,8 @@
 
 namespace haptic::net {
 
+class TlsServerContext;
+
 /// One request's head, as parse_request_head read it.
 struct HttpRequest {
   std::string method;                          // "GET", "HEAD", ... as sent
@@ -132,6 +134,11 @@ class HttpServer {
   void start(Handler handler);
   /// Serves WebSocket upgrades too (before start()); without, an upgrade is an ordinary request.
   void serve_websockets(UpgradeCheck check, WebSocketHandler handler);
+  /// Serves HTTPS only (before start()): the TLS context's certificate, and with its client CA
+  /// mutual TLS. A handshake not done within HttpLimits::timeout closes the connection.
+  void use_tls(std::shared_ptr<const TlsServerContext> tls);
+  /// TLS handshakes that failed (a client without a certificate under mutual TLS, say).
+  std::uint64_t tls_failed() const { return tls_failed_.load(std::memory_order_relaxed); }
   /// WebSocket connections open now.
   std::size_t websockets() const { return websockets_.load(std::memory_order_relaxed); }
   /// Stops serving: the listeners and every connection close; waits for handlers running.
@@ -147,7 +154,10 @@ class HttpServer {
 
  private:
   struct Impl;
+  struct Connection;
+  template <class Stream>
   struct Session;
+  template <class Stream>
   struct WebSocketSession;
 
   std::string name_;
@@ -158,6 +168,7 @@ class HttpServer {
   std::atomic<std::uint64_t> evicted_{0};
   std::atomic<std::uint64_t> timeouts_{0};
   std::atomic<std::size_t> websockets_{0};
+  std::atomic<std::uint64_t> tls_failed_{0};
   std::unique_ptr<Impl> impl_;
 };
 

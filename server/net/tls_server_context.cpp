@@ -11,15 +11,15 @@
 namespace haptic::net {
 namespace {
 
-/// The ALPN protocol gRPC speaks (RFC 7540 §3.3), in ALPN's wire form.
-constexpr unsigned char kAlpnH2[] = {2, 'h', '2'};
-
-/// Chooses "h2" from the client's list, or fails the handshake: gRPC clients refuse a server
-/// that selects no protocol, and nothing else is served here.
-int select_h2(SSL* /*ssl*/, const unsigned char** out, unsigned char* out_length,
-              const unsigned char* offered, unsigned int offered_length, void* /*arg*/) {
+/// Chooses the context's one protocol (`arg`: its ALPN wire form, "h2" for gRPC, RFC 7540 §3.3)
+/// from the client's list, or fails the handshake: gRPC clients refuse a server that selects no
+/// protocol, and a browser offering h2 alone must not be taken for an HTTP/1.1 client.
+int select_protocol(SSL* /*ssl*/, const unsigned char** out, unsigned char* out_length,
+                    const unsigned char* offered, unsigned int offered_length, void* arg) {
+  const auto* wanted = static_cast<const std::string*>(arg);
   unsigned char* chosen = nullptr;
-  if (SSL_select_next_proto(&chosen, out_length, kAlpnH2, sizeof kAlpnH2, offered,
+  if (SSL_select_next_proto(&chosen, out_length, reinterpret_cast<const unsigned char*>(wanted->data()),
+                            static_cast<unsigned int>(wanted->size()), offered,
                             offered_length) != OPENSSL_NPN_NEGOTIATED) {
     return SSL_TLSEXT_ERR_ALERT_FATAL;
   }
@@ -73,7 +73,8 @@ TlsServerContext::TlsServerContext(const TlsServerMaterial& material)
   // No resumption: a control-plane client connects once and stays; nothing to cache or ticket.
   SSL_CTX_set_session_cache_mode(context_, SSL_SESS_CACHE_OFF);
   SSL_CTX_set_num_tickets(context_, 0);
-  SSL_CTX_set_alpn_select_cb(context_, select_h2, nullptr);
+  alpn_wire_ = std::string(1, static_cast<char>(material.alpn.size())) + material.alpn;
+  SSL_CTX_set_alpn_select_cb(context_, select_protocol, &alpn_wire_);
 
   // The certificate chain: the leaf, then any intermediates in the same PEM.
   auto chain = memory_bio(material.cert_pem);

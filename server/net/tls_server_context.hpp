@@ -19,6 +19,9 @@ struct TlsServerMaterial {
   std::string cert_pem;       // the server's certificate chain, leaf first
   std::string key_pem;        // its private key
   std::string client_ca_pem;  // empty: no client certificate asked for
+  /// The one application protocol the server selects by ALPN: "h2" for gRPC, "http/1.1" for the
+  /// HTTP face (a client offering neither fails the handshake; one offering none is served).
+  std::string alpn = "h2";
 };
 
 class TlsServerContext {
@@ -34,10 +37,13 @@ class TlsServerContext {
   /// cannot make one (out of memory).
   ssl_st* new_connection(int fd) const;
   bool mutual() const { return mutual_; }
+  /// OpenSSL's context (for Asio's TLS streams on the HTTP face).
+  ssl_ctx_st* native() const { return context_; }
 
  private:
   ssl_ctx_st* context_ = nullptr;
   bool mutual_ = false;
+  std::string alpn_wire_;  // the ALPN protocol in its wire form: a length byte, then the name
 };
 
 /// OpenSSL's queued errors for this thread as one line ("...: certificate verify failed"),

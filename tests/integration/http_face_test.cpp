@@ -10,8 +10,12 @@
 #include <gtest/gtest.h>
 
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
+#include <boost/beast/websocket/ssl.hpp>
 
 #include <cmath>
 #include <memory>
@@ -509,6 +513,66 @@ TEST(HttpFace, ASlowlorisFromOneHostLeavesAnotherHostsCallsAnswered) {
               "answered\n", answered, attempts);
   EXPECT_EQ(attempts, 100);
   EXPECT_GE(answered, 99);
+}
+
+const std::string kCerts = TEST_CERTS_DIR;
+
+/// One call over HTTPS with Beast's client (the test CA trusted; with `client_cert`, the client's
+/// certificate offered): the reply's status, 0 when the handshake failed (`why` says).
+int https_call(std::uint16_t port, const std::string& call, const std::string& body, bool client_cert,
+               std::string& why, std::string* reply_body = nullptr) {
+  namespace ssl = boost::asio::ssl;
+  namespace http = boost::beast::http;
+  boost::asio::io_context io;
+  ssl::context context(ssl::context::tls_client);
+  context.load_verify_file(kCerts + "/ca.pem");
+  context.set_verify_mode(ssl::verify_peer);
+  if (client_cert) {
+    context.use_certificate_chain_file(kCerts + "/client.pem");
+    context.use_private_key_file(kCerts + "/client.key", ssl::context::pem);
+  }
+  boost::beast::ssl_stream<boost::beast::tcp_stream> stream(io, context);
+  SSL_set_tlsext_host_name(stream.native_handle(), "localhost");
+  boost::beast::get_lowest_layer(stream).connect(
+      boost::asio::ip::tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port));
+  boost::beast::error_code error;
+  stream.handshake(ssl::stream_base::client, error);
+  http::request<http::string_body> request{http::verb::post, "/haptic.v1.Haptic/" + call, 11};
+  request.set(http::field::host, "localhost");
+  request.set(http::field::content_type, "application/json");
+  request.body() = body;
+  request.prepare_payload();
+  if (!error) http::write(stream, request, error);
+  if (error) {
+    why = error.message();
+    return 0;
+  }
+  boost::beast::flat_buffer buffer;
+  http::response<http::string_body> response;
+  http::read(stream, buffer, response, error);
+  if (error) {
+    // TLS 1.3 sends the server's refusal of a client certificate after the client's handshake
+    // is done: it arrives here, as the first read fails.
+    why = error.message();
+    return 0;
+  }
+  if (reply_body != nullptr) *reply_body = response.body();
+  return response.result_int();
+}
+
+TEST(HttpFace, WithTheControlPlanesTlsTheFaceIsHttpsOnlyAndMutualTlsWantsTheClientsCertificate) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0",
+      "security": {"tls": {"cert_file": ")" + kCerts + R"(/server.pem", "key_file": ")" + kCerts +
+      R"(/server.key", "client_ca_file": ")" + kCerts + R"(/ca.pem"}})"));
+  const std::uint16_t port = server.http_port();
+  std::string why, body;
+  EXPECT_EQ(https_call(port, "OpenSession", open_body("https"), true, why, &body), 200) << why;
+  EXPECT_NE(body.find("\"session_secret\""), std::string::npos) << body;
+  EXPECT_EQ(https_call(port, "OpenSession", open_body("no-certificate"), false, why), 0)
+      << "a client without a certificate must not be served under mutual TLS";
+  // Plain HTTP to the HTTPS port gets no reply.
+  const HttpReply plain = post(port, "OpenSession", open_body("plain"));
+  EXPECT_EQ(plain.status, 0) << plain.head;
 }
 
 }  // namespace

@@ -160,16 +160,14 @@ TEST(Config, TheViewersAddressIsCheckedAndWithTokensKeptOnLoopback) {
   EXPECT_EQ(validate(parse_config(R"({"viewer_address": "0.0.0.0:8080"})", "x")), "");
 }
 
-TEST(Config, TheHttpFacesAddressAndOriginsAreCheckedAndItStaysOnLoopback) {
+TEST(Config, TheHttpFacesAddressAndOriginsAreCheckedAndItIsExposedAsGrpcIs) {
   EXPECT_EQ(validate(parse_config(R"({"http_address": "127.0.0.1:0"})", "x")), "");
   const std::string bad = error_of(R"({"http_address": "127.0.0.1"})");
   EXPECT_NE(bad.find("http_address: must be HOST:PORT or [IPv6]:PORT"), std::string::npos) << bad;
-  // Plain HTTP: off loopback, even with TLS and tokens for gRPC, only with insecure_remote_access.
-  const std::string secured = R"("security": {"tls": {"cert_file": "c", "key_file": "k"},
-      "tokens": [{"name": "v", "token": "observer-token-0123456789", "role": "OBSERVER"}]})";
-  const std::string remote = error_of(R"({"http_address": "0.0.0.0:8081", )" + secured + "}");
-  EXPECT_NE(remote.find("http_address: '0.0.0.0:8081' is not a loopback address, and the control "
-                        "plane's HTTP face speaks plain HTTP"),
+  // Off loopback as grpc_address: with TLS and tokens (HTTPS), or with insecure_remote_access.
+  const std::string tokens_only = R"("security": {"tokens": [{"name": "v", "token": "observer-token-0123456789", "role": "OBSERVER"}]})";
+  const std::string remote = error_of(R"({"http_address": "0.0.0.0:8081", )" + tokens_only + "}");
+  EXPECT_NE(remote.find("http_address: '0.0.0.0:8081' is not a loopback address, and security has tokens but no TLS"),
             std::string::npos)
       << remote;
   EXPECT_EQ(validate(parse_config(R"({"http_address": "0.0.0.0:8081", "insecure_remote_access": true})", "x")), "");
