@@ -18,37 +18,14 @@ constexpr const char* kCorsAllowedHeaders =
     "authorization, content-type, haptic-session-secret-bin, connect-protocol-version, "
     "connect-timeout-ms";
 
-/// An HTTP request as the service sees a call.
-class HttpCall final : public CallContext {
+/// A call that came over HTTP, as the service sees it: the peer, the metadata the face found
+/// beside the headers (decoded "-bin" headers; a stream's opening's credentials), the headers, and
+/// for a stream whether its WebSocket is still open.
+class FaceCall final : public CallContext {
  public:
-  HttpCall(const HttpRequest& request, std::vector<std::pair<std::string, std::string>> decoded)
-      : request_(request), decoded_(std::move(decoded)) {}
-
-  std::string peer_host() const override { return request_.peer; }
-
-  std::optional<std::string> metadata(std::string_view key) const override {
-    for (const auto& [name, value] : decoded_) {
-      if (name == key) return value;
-    }
-    const std::string* value = request_.header(std::string(key));
-    if (value == nullptr) return std::nullopt;
-    return *value;
-  }
-
-  bool cancelled() const override { return false; }  // unary: the reply is the call's end
-
- private:
-  const HttpRequest& request_;
-  std::vector<std::pair<std::string, std::string>> decoded_;  // "-bin" headers, decoded
-};
-
-/// A stream's call: the peer, the credentials its opening (or its upgrade) carried, and whether
-/// its WebSocket is still open.
-class StreamCall final : public CallContext {
- public:
-  StreamCall(const HttpRequest& request, std::vector<std::pair<std::string, std::string>> metadata,
-             const WebSocketChannel& channel)
-      : request_(request), metadata_(std::move(metadata)), channel_(channel) {}
+  FaceCall(const HttpRequest& request, std::vector<std::pair<std::string, std::string>> metadata,
+           const WebSocketChannel* stream = nullptr)
+      : request_(request), metadata_(std::move(metadata)), stream_(stream) {}
 
   std::string peer_host() const override { return request_.peer; }
 
@@ -61,13 +38,26 @@ class StreamCall final : public CallContext {
     return *value;
   }
 
-  bool cancelled() const override { return channel_.closed(); }
+  /// A unary call ends with its reply; a stream, when its WebSocket closes.
+  bool cancelled() const override { return stream_ != nullptr && stream_->closed(); }
 
  private:
   const HttpRequest& request_;
   std::vector<std::pair<std::string, std::string>> metadata_;
-  const WebSocketChannel& channel_;
+  const WebSocketChannel* stream_;
 };
+
+/// The request's "-bin" headers decoded from base64 (as gRPC decodes its binary metadata) onto
+/// `out`; "" or what is wrong.
+std::string decode_binary_headers(const HttpRequest& request, std::vector<std::pair<std::string, std::string>>& out) {
+  for (const auto& [name, value] : request.headers) {
+    if (name.size() <= 4 || name.compare(name.size() - 4, 4, "-bin") != 0) continue;
+    std::string bytes;
+    if (!decode_base64(value, bytes)) return name + ": must be base64 (a binary header, as in gRPC)";
+    out.emplace_back(name, std::move(bytes));
+  }
+  return {};
+}
 
 /// Events as text messages, {"event": {...}}.
 class EventMessages final : public StreamWriter<v1::Event> {
@@ -222,16 +212,12 @@ void HttpFace::stream(const HttpRequest& request, WebSocketChannel& channel) con
   std::vector<std::pair<std::string, std::string>> metadata;
   if (opening.authorization) metadata.emplace_back(kAuthorizationMetadataKey, *opening.authorization);
   if (opening.session_secret) metadata.emplace_back(io::kSessionSecretMetadataKey, *opening.session_secret);
-  for (const auto& [name, value] : request.headers) {
-    if (name.size() <= 4 || name.compare(name.size() - 4, 4, "-bin") != 0) continue;
-    std::string bytes;
-    if (!decode_base64(value, bytes)) {
-      refuse({grpc::StatusCode::INVALID_ARGUMENT, name + ": must be base64 (a binary header, as in gRPC)"});
-      return;
-    }
-    metadata.emplace_back(name, std::move(bytes));  // after the opening's: those win
+  // The upgrade's "-bin" headers after the opening's credentials: those win.
+  if (const std::string error = decode_binary_headers(request, metadata); !error.empty()) {
+    refuse({grpc::StatusCode::INVALID_ARGUMENT, error});
+    return;
   }
-  StreamCall call(request, std::move(metadata), channel);
+  FaceCall call(request, std::move(metadata), &channel);
   grpc::Status status;
   if (request.path.ends_with("WatchEvents")) {
     v1::WatchEventsRequest watch;
@@ -313,16 +299,10 @@ HttpResponse HttpFace::handle(const HttpRequest& request) const {
     return with_cors(std::move(refusal));
   }
   std::vector<std::pair<std::string, std::string>> decoded;
-  for (const auto& [name, value] : request.headers) {
-    if (name.size() <= 4 || name.compare(name.size() - 4, 4, "-bin") != 0) continue;
-    std::string bytes;
-    if (!decode_base64(value, bytes)) {
-      return with_cors(error_response(grpc::StatusCode::INVALID_ARGUMENT,
-                                      name + ": must be base64 (a binary header, as in gRPC)"));
-    }
-    decoded.emplace_back(name, std::move(bytes));
+  if (const std::string error = decode_binary_headers(request, decoded); !error.empty()) {
+    return with_cors(error_response(grpc::StatusCode::INVALID_ARGUMENT, error));
   }
-  HttpCall call(request, std::move(decoded));
+  FaceCall call(request, std::move(decoded));
   return with_cors(from_reply(face_.call(method, request.body, codec, call)));
 }
 
