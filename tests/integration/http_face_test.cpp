@@ -573,6 +573,35 @@ TEST(HttpFace, WithTheControlPlanesTlsTheFaceIsHttpsOnlyAndMutualTlsWantsTheClie
   // Plain HTTP to the HTTPS port gets no reply.
   const HttpReply plain = post(port, "OpenSession", open_body("plain"));
   EXPECT_EQ(plain.status, 0) << plain.head;
+
+  // The streams over TLS too (wss://): events for a session opened over HTTPS.
+  haptic::v1::OpenSessionResponse opened;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(body, &opened).ok());
+  namespace ssl = boost::asio::ssl;
+  boost::asio::io_context io;
+  ssl::context context(ssl::context::tls_client);
+  context.load_verify_file(kCerts + "/ca.pem");
+  context.set_verify_mode(ssl::verify_peer);
+  context.use_certificate_chain_file(kCerts + "/client.pem");
+  context.use_private_key_file(kCerts + "/client.key", ssl::context::pem);
+  boost::beast::websocket::stream<boost::beast::ssl_stream<boost::beast::tcp_stream>> wss(io, context);
+  SSL_set_tlsext_host_name(wss.next_layer().native_handle(), "localhost");
+  boost::beast::get_lowest_layer(wss).connect(
+      boost::asio::ip::tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port));
+  boost::beast::error_code error;
+  wss.next_layer().handshake(ssl::stream_base::client, error);
+  ASSERT_FALSE(error) << error.message();
+  wss.handshake("localhost", "/haptic.v1.Haptic/WatchEvents", error);
+  ASSERT_FALSE(error) << error.message();
+  const std::string secret = json(HttpReply{200, "", body}).fields().at("session_secret").string_value();
+  wss.write(boost::asio::buffer(R"({"request": {"session_id": ")" + std::to_string(opened.session_id()) +
+                                R"("}, "session_secret": ")" + secret + "\"}"),
+            error);
+  ASSERT_FALSE(error) << error.message();
+  boost::beast::flat_buffer buffer;
+  wss.read(buffer, error);
+  ASSERT_FALSE(error) << error.message();
+  EXPECT_NE(boost::beast::buffers_to_string(buffer.data()).find("WATCH_STARTED"), std::string::npos);
 }
 
 }  // namespace
