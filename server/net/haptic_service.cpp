@@ -506,44 +506,32 @@ grpc::Status HapticService::StreamState(CallContext* context, const v1::StreamSt
   }
   const std::optional<wire::Key> key = deps_.sessions.key_of(session_id);
   if (!key) return {grpc::StatusCode::NOT_FOUND, "session_id: the session has ended"};
-  const runtime::SampleRing& ring = *port_of(session_id).samples;
   const std::optional<std::string> secret_text = context->metadata(io::kSessionSecretMetadataKey);
   const std::string secret = secret_text.value_or(std::string());
   const std::span<const std::uint8_t> secret_bytes(reinterpret_cast<const std::uint8_t*>(secret.data()),
                                                    secret.size());
-  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+  // The datagrams go out on the pacer's thread; this one waits, renewing the session's lease as a
+  // heartbeat would, a few times within it, until the stream ends.
+  StatePacer::Stream stream;
+  stream.session_id = session_id;
+  stream.key = *key;
+  stream.ring = port_of(session_id).samples;
+  stream.period = std::chrono::duration_cast<std::chrono::nanoseconds>(
       std::chrono::duration<double>(1.0 / request->rate_hz()));
-  // The lease is renewed as a heartbeat would, a few times within it.
-  const auto renew_every = std::max(deps_.sessions.lease_timeout() / 4, std::chrono::milliseconds(1));
-  auto renewed = std::chrono::steady_clock::now();
-  std::uint64_t sent_tick = 0;
-  std::uint64_t sequence = 0;
-  std::string datagram(wire::kMaxDatagramSize, '\0');
-  for (auto next = std::chrono::steady_clock::now(); !context->cancelled() && !ring.stopping();
-       next += period) {
-    std::this_thread::sleep_until(next);
-    const auto now = std::chrono::steady_clock::now();
-    if (now - next > 10 * period) next = now;  // fell behind (a stall): no burst to catch up
-    if (now - renewed >= renew_every) {
-      if (deps_.sessions.authorize(session_id, secret_bytes) != Access::kGranted) {
-        return {grpc::StatusCode::NOT_FOUND, "session_id: the session has ended"};
-      }
-      renewed = now;
+  stream.sink = [datagrams](const std::string& datagram) { return datagrams->write(datagram); };
+  const std::uint64_t id = state_pacer_.add(std::move(stream));
+  const auto renew_every = std::clamp(deps_.sessions.lease_timeout() / 4, std::chrono::milliseconds(1),
+                                      std::chrono::milliseconds(50));
+  grpc::Status status = grpc::Status::OK;
+  while (!context->cancelled() && state_pacer_.running(id) && !port_of(session_id).samples->stopping()) {
+    std::this_thread::sleep_for(renew_every);
+    if (deps_.sessions.authorize(session_id, secret_bytes) != Access::kGranted) {
+      status = {grpc::StatusCode::NOT_FOUND, "session_id: the session has ended"};
+      break;
     }
-    const std::uint64_t newest = ring.newest();
-    runtime::TickSample sample;
-    if (newest == sent_tick || !ring.read(newest, sample)) continue;
-    sent_tick = newest;
-    wire::Header header;
-    header.session_id = session_id;
-    header.sequence = ++sequence;
-    header.time_ns = sample.time_ns;
-    const std::size_t size = wire::encode_state(
-        header, state_payload(sample), *key,
-        std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(datagram.data()), datagram.size()));
-    if (!datagrams->write(datagram.substr(0, size))) break;
   }
-  return grpc::Status::OK;
+  state_pacer_.remove(id);
+  return status;
 }
 
 grpc::Status HapticService::ListSessions(CallContext* context, const v1::SessionRef* request,

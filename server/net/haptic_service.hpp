@@ -18,6 +18,7 @@
 #include "recording/run_recorder.hpp"
 #include "net/scene_store.hpp"
 #include "net/session_registry.hpp"
+#include "net/state_pacer.hpp"
 #include "schema/scene_specs.hpp"
 #include "runtime/device.hpp"
 #include "runtime/loop_thread.hpp"
@@ -138,6 +139,7 @@ class HapticService {
   const DevicePort& port_of(std::uint64_t session_id) const;
 
   ServiceDependencies deps_;
+  StatePacer state_pacer_;  // StreamState's datagrams, one thread for every stream
 };
 
 }  // namespace haptic::net

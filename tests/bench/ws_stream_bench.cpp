@@ -20,6 +20,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <filesystem>
+#include <fstream>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -69,6 +71,25 @@ struct StreamFigures {
   std::uint64_t messages = 0;
   std::vector<double> ages_us;
 };
+
+/// Voluntary context switches (wake-ups after a wait) of this process's threads whose name starts
+/// with one of `prefixes`, summed.
+std::uint64_t wakeups_of(const std::vector<std::string>& prefixes) {
+  std::uint64_t total = 0;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream comm(task.path() / "comm");
+    std::string name;
+    std::getline(comm, name);
+    if (std::none_of(prefixes.begin(), prefixes.end(), [&](const std::string& p) { return name.rfind(p, 0) == 0; })) {
+      continue;
+    }
+    std::ifstream status(task.path() / "status");
+    for (std::string line; std::getline(status, line);) {
+      if (line.rfind("voluntary_ctxt_switches:", 0) == 0) total += std::strtoull(line.c_str() + 24, nullptr, 10);
+    }
+  }
+  return total;
+}
 
 struct Phase {
   haptic::v1::Stats stats;
@@ -178,7 +199,11 @@ int main(int argc, char** argv) {
   }
   std::this_thread::sleep_for(std::chrono::seconds(1));  // every stream running first
   count_from_ns.store(monotonic_ns());
+  // The server's stream threads: the WebSockets' handlers and the pacer that sends for them.
+  const std::vector<std::string> stream_threads{"ws-http", "state-pacer"};
+  const std::uint64_t wakeups_before = wakeups_of(stream_threads);
   const Phase streaming = phase();
+  const std::uint64_t wakeups = wakeups_of(stream_threads) - wakeups_before;
   stop.store(true);
   server.shutdown();
   for (std::thread& reader : readers) reader.join();
@@ -196,6 +221,8 @@ int main(int argc, char** argv) {
               (streaming.stats.lateness_p50_us() + 1) / (alone.stats.lateness_p50_us() + 1),
               (streaming.stats.lateness_p99_us() + 1) / (alone.stats.lateness_p99_us() + 1),
               (streaming.stats.lateness_p999_us() + 1) / (alone.stats.lateness_p999_us() + 1));
+  std::printf("the server's stream threads woke %.0f times a second (%d streams at %.0f Hz)\n",
+              static_cast<double>(wakeups) / window_s, streams, rate);
   std::vector<double> ages;
   std::uint64_t least = ~0ull, most = 0;
   for (const StreamFigures& f : figures) {
