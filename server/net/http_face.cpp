@@ -132,6 +132,23 @@ StreamOpening read_opening(const std::string& message) {
   return opening;
 }
 
+std::string encode_base64(std::string_view bytes) {
+  static constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    const std::size_t left = bytes.size() - i;
+    std::uint32_t group = static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[i])) << 16;
+    if (left > 1) group |= static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[i + 1])) << 8;
+    if (left > 2) group |= static_cast<unsigned char>(bytes[i + 2]);
+    out += kAlphabet[(group >> 18) & 63];
+    out += kAlphabet[(group >> 12) & 63];
+    out += left > 1 ? kAlphabet[(group >> 6) & 63] : '=';
+    out += left > 2 ? kAlphabet[group & 63] : '=';
+  }
+  return out;
+}
+
 bool decode_base64(std::string_view text, std::string& out) {
   static constexpr auto kValues = [] {
     std::array<int, 256> values{};
@@ -169,18 +186,19 @@ void HttpFace::start() {
   http_.start([this](const HttpRequest& request) { return handle(request); });
 }
 
-bool HttpFace::origin_refused(const HttpRequest& request) const {
+std::optional<HttpResponse> HttpFace::origin_refusal(const HttpRequest& request) const {
   const std::string* origin = request.header("origin");
-  return origin != nullptr && std::find(options_.allowed_origins.begin(), options_.allowed_origins.end(),
-                                        *origin) == options_.allowed_origins.end();
+  if (origin == nullptr || std::find(options_.allowed_origins.begin(), options_.allowed_origins.end(),
+                                     *origin) != options_.allowed_origins.end()) {
+    return std::nullopt;
+  }
+  return error_response(grpc::StatusCode::PERMISSION_DENIED,
+                        "origin '" + origin->substr(0, 200) +
+                            "' may not call this server: it is not in http_allowed_origins");
 }
 
 std::optional<HttpResponse> HttpFace::check_upgrade(const HttpRequest& request) const {
-  if (origin_refused(request)) {
-    return error_response(grpc::StatusCode::PERMISSION_DENIED,
-                          "origin '" + request.header("origin")->substr(0, 200) +
-                              "' may not call this server: it is not in http_allowed_origins");
-  }
+  if (auto refusal = origin_refusal(request)) return refusal;
   if (request.path != std::string(JsonFace::kPathPrefix) + "WatchEvents" &&
       request.path != std::string(JsonFace::kPathPrefix) + "StreamState") {
     return error_response(grpc::StatusCode::NOT_FOUND,
@@ -218,21 +236,21 @@ void HttpFace::stream(const HttpRequest& request, WebSocketChannel& channel) con
     return;
   }
   FaceCall call(request, std::move(metadata), &channel);
+  // The opening's request, as the stream's message type; false (refused, saying why) when it is not one.
+  const auto read_request = [&](google::protobuf::Message& message) {
+    const std::string error = from_json(opening.request, message);
+    if (!error.empty()) refuse({grpc::StatusCode::INVALID_ARGUMENT, "request: " + error});
+    return error.empty();
+  };
   grpc::Status status;
   if (request.path.ends_with("WatchEvents")) {
     v1::WatchEventsRequest watch;
-    if (const std::string error = from_json(opening.request, watch); !error.empty()) {
-      refuse({grpc::StatusCode::INVALID_ARGUMENT, "request: " + error});
-      return;
-    }
+    if (!read_request(watch)) return;
     EventMessages events(channel);
     status = service_.WatchEvents(&call, &watch, &events);
   } else {
     v1::StreamStateRequest state;
-    if (const std::string error = from_json(opening.request, state); !error.empty()) {
-      refuse({grpc::StatusCode::INVALID_ARGUMENT, "request: " + error});
-      return;
-    }
+    if (!read_request(state)) return;
     DatagramMessages datagrams(channel);
     status = service_.StreamState(&call, &state, &datagrams);
   }
@@ -245,22 +263,15 @@ void HttpFace::stream(const HttpRequest& request, WebSocketChannel& channel) con
 
 HttpResponse HttpFace::handle(const HttpRequest& request) const {
   // A browser says whose page sends the request; only the allowed origins' pages are served.
-  const std::string* origin = request.header("origin");
-  const bool allowed_origin =
-      origin != nullptr && std::find(options_.allowed_origins.begin(), options_.allowed_origins.end(),
-                                     *origin) != options_.allowed_origins.end();
-  const auto with_cors = [&](HttpResponse response) {
-    if (allowed_origin) {
+  if (auto refusal = origin_refusal(request)) return std::move(*refusal);
+  const std::string* origin = request.header("origin");  // past the refusal: an allowed one, if any
+  const auto with_cors = [origin](HttpResponse response) {
+    if (origin != nullptr) {
       response.headers.emplace_back("Access-Control-Allow-Origin", *origin);
       response.headers.emplace_back("Vary", "Origin");
     }
     return response;
   };
-  if (origin_refused(request)) {
-    return error_response(grpc::StatusCode::PERMISSION_DENIED,
-                          "origin '" + origin->substr(0, 200) +
-                              "' may not call this server: it is not in http_allowed_origins");
-  }
   const bool call_path = request.path.rfind(JsonFace::kPathPrefix, 0) == 0;
   if (request.method == "OPTIONS") {
     HttpResponse preflight;

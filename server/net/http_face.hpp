@@ -69,8 +69,9 @@ class HttpFace {
   const HttpServer& server() const { return http_; }
 
  private:
-  /// A browser's request from an origin not in allowed_origins.
-  bool origin_refused(const HttpRequest& request) const;
+  /// The refusal of a browser's request from an origin not in allowed_origins; nullopt for an
+  /// allowed one, or a request without an Origin (a client that is no browser).
+  std::optional<HttpResponse> origin_refusal(const HttpRequest& request) const;
 
   HapticService& service_;
   JsonFace face_;
@@ -87,6 +88,10 @@ struct StreamOpening {
   std::string error;                          // "" when it reads
 };
 StreamOpening read_opening(const std::string& message);
+
+/// Encodes base64 (the standard alphabet, padded), as gRPC's "-bin" metadata and protobuf's JSON
+/// mapping write bytes.
+std::string encode_base64(std::string_view bytes);
 
 /// Decodes base64 (standard or URL-safe alphabet, padding optional, as gRPC's "-bin" metadata
 /// takes it); false when `text` is not base64.

@@ -140,7 +140,7 @@ struct HttpServer::Connection {
 
 /// Everything that runs on the I/O thread, and the handler threads beside it.
 struct HttpServer::Impl {
-  Impl(HttpServer& owner, Handler handle) : server(owner), handler(std::move(handle)) {}
+  explicit Impl(HttpServer& owner) : server(owner) {}
 
   HttpServer& server;
   Handler handler;
@@ -249,8 +249,9 @@ struct HttpServer::WebSocketSession : Connection,
       }
       self->inbox_ready.notify_all();
       if (overflow) {
-        self->close_now(websocket::close_reason(websocket::close_code::policy_error,
-                                                "more than 16 messages unread"));
+        self->close_now(websocket::close_reason(
+            websocket::close_code::policy_error,
+            "more than " + std::to_string(kMaxUnreadMessages) + " messages unread"));
         return;
       }
       self->read();
@@ -642,7 +643,7 @@ std::string HttpServer::Impl::make_room(const std::string& host) {
 }
 
 HttpServer::HttpServer(std::string name, HttpLimits limits) : name_(std::move(name)), limits_(std::move(limits)) {
-  impl_ = std::make_unique<Impl>(*this, Handler{});
+  impl_ = std::make_unique<Impl>(*this);
 }
 
 HttpServer::~HttpServer() { stop(); }
@@ -713,9 +714,7 @@ void HttpServer::stop() {
   impl_->handlers.stop();
   for (std::thread& thread : impl_->handler_threads) thread.join();
   impl_->handler_threads.clear();
-  // What is left (sessions held by handlers never run) goes with the contexts.
-  const std::vector<Connection*> open = impl_->sessions;
-  for (Connection* session : open) session->end();
+  // Every connection was ended on the I/O thread; what they left pending goes with the contexts.
   impl_->acceptors.clear();
 }
 

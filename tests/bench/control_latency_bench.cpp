@@ -7,12 +7,7 @@
 // Usage: control_latency_bench [--calls N] [--rounds R] [--certs DIR]
 //   --certs: the folder make_test_certs.sh fills (default: the build tree's test certificates).
 
-#include <arpa/inet.h>
 #include <grpcpp/grpcpp.h>
-#include <netinet/in.h>
-#include <netinet/tcp.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -29,6 +24,7 @@
 #include "haptic/v1/service.grpc.pb.h"
 #include "net/http_face.hpp"
 #include "net/proto_json.hpp"
+#include "support/http_client.hpp"
 
 namespace {
 
@@ -93,78 +89,31 @@ double quantile(std::vector<double>& sorted, double q) {
   return sorted[index];
 }
 
-/// One kept-alive HTTP/1.1 connection to the face: a call's request out, its reply's body back.
-class HttpCaller {
- public:
-  explicit HttpCaller(std::uint16_t port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_port = htons(port);
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    const int one = 1;
-    ::setsockopt(fd_, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-    if (::connect(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
-      std::fprintf(stderr, "control_latency_bench: cannot connect to the HTTP face\n");
-      std::exit(1);
-    }
-  }
-  ~HttpCaller() { ::close(fd_); }
-
-  /// POSTs `body` to `call`; returns the reply's status, its body in `reply`.
-  int call(const std::string& call, const std::string& body, const std::string& content_type,
-           const std::string& headers, std::string& reply) {
-    const std::string request = "POST /haptic.v1.Haptic/" + call + " HTTP/1.1\r\nHost: 127.0.0.1\r\n"
-                                "Content-Type: " + content_type + "\r\nContent-Length: " +
-                                std::to_string(body.size()) + "\r\n" + headers + "\r\n" + body;
-    if (::send(fd_, request.data(), request.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(request.size())) return 0;
-    std::size_t head_end;
-    while ((head_end = buffer_.find("\r\n\r\n")) == std::string::npos) {
-      if (!receive()) return 0;
-    }
-    const int status = std::atoi(buffer_.c_str() + 9);
-    const auto length_at = buffer_.find("Content-Length: ");
-    const std::size_t length = length_at < head_end ? std::strtoul(buffer_.c_str() + length_at + 16, nullptr, 10) : 0;
-    while (buffer_.size() < head_end + 4 + length) {
-      if (!receive()) return 0;
-    }
-    reply = buffer_.substr(head_end + 4, length);
-    buffer_.erase(0, head_end + 4 + length);
-    return status;
-  }
-
- private:
-  bool receive() {
-    char chunk[65536];
-    const ssize_t got = ::recv(fd_, chunk, sizeof chunk, 0);
-    if (got <= 0) return false;
-    buffer_.append(chunk, static_cast<std::size_t>(got));
-    return true;
-  }
-  int fd_;
-  std::string buffer_;
-};
-
-std::string base64(const std::string& bytes) {
-  haptic::v1::OpenSessionResponse holder;  // protobuf's JSON writes bytes as base64
-  holder.set_session_secret(bytes);
-  const std::string json = haptic::net::to_json(holder);
-  const auto at = json.find("\"session_secret\":\"") + 18;
-  return json.substr(at, json.find('"', at) - at);
+/// One call on a kept-alive connection to the face: the reply's status, its body in `reply`.
+int http_call(haptic::test::HttpConnection& connection, const std::string& call, const std::string& body,
+              const std::string& content_type, const std::string& headers, std::string& reply) {
+  connection.send("POST /haptic.v1.Haptic/" + call + " HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: " +
+                  content_type + "\r\nContent-Length: " + std::to_string(body.size()) + "\r\n" + headers +
+                  "\r\n" + body);
+  haptic::test::HttpReply got = connection.read_reply();
+  reply = std::move(got.body);
+  return got.status;
 }
 
 Figures measure_http(haptic::app::Server& server, Mode mode, int calls) {
-  HttpCaller caller(server.http_port());
+  haptic::test::HttpConnection caller(server.http_port());
   haptic::v1::OpenSessionRequest open;
   open.set_client_name("latency-bench");
   open.set_api_version(haptic::v1::API_VERSION_CURRENT);
   std::string reply;
-  if (caller.call("OpenSession", haptic::net::to_json(open), "application/json", {}, reply) != 200) {
+  if (http_call(caller, "OpenSession", haptic::net::to_json(open), "application/json", {}, reply) != 200) {
     std::fprintf(stderr, "control_latency_bench: HTTP OpenSession: %s\n", reply.c_str());
     std::exit(1);
   }
   haptic::v1::OpenSessionResponse session;
   haptic::net::from_json(reply, session);
-  const std::string secret = "haptic-session-secret-bin: " + base64(session.session_secret()) + "\r\n";
+  const std::string secret =
+      "haptic-session-secret-bin: " + haptic::net::encode_base64(session.session_secret()) + "\r\n";
   haptic::v1::SessionRef ref;
   ref.set_session_id(session.session_id());
   const bool json = mode == Mode::kHttpJson;
@@ -175,7 +124,7 @@ Figures measure_http(haptic::app::Server& server, Mode mode, int calls) {
   const int warm_up = std::max(calls / 10, 10);
   for (int i = 0; i < warm_up + calls; ++i) {
     const auto start = std::chrono::steady_clock::now();
-    const int status = caller.call("GetDeviceInfo", body, type, secret, reply);
+    const int status = http_call(caller, "GetDeviceInfo", body, type, secret, reply);
     // The reply decoded, as a client must before it has the answer.
     haptic::v1::DeviceInfo info;
     const bool decoded = json ? haptic::net::from_json(reply, info).empty() : info.ParseFromString(reply);

@@ -8,11 +8,7 @@
 //
 // Usage: ws_stream_bench [--streams N=8] [--rate HZ=250]
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <time.h>
-#include <unistd.h>
 
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
@@ -34,7 +30,9 @@
 #include "app/server.hpp"
 #include "config/server_config.hpp"
 #include "haptic/wire/datagram.hpp"
+#include "net/http_face.hpp"
 #include "net/proto_json.hpp"
+#include "support/http_client.hpp"
 
 namespace {
 
@@ -49,22 +47,11 @@ std::int64_t monotonic_ns() {
 
 /// One HTTP call on a fresh connection: the reply's body ("" on failure).
 std::string post(std::uint16_t port, const std::string& call, const std::string& body) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(port);
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) return {};
-  const std::string request = "POST /haptic.v1.Haptic/" + call + " HTTP/1.1\r\nHost: 127.0.0.1\r\n"
-                              "Content-Type: application/json\r\nConnection: close\r\nContent-Length: " +
-                              std::to_string(body.size()) + "\r\n\r\n" + body;
-  (void)::send(fd, request.data(), request.size(), MSG_NOSIGNAL);
-  std::string reply;
-  char chunk[4096];
-  for (ssize_t got; (got = ::recv(fd, chunk, sizeof chunk, 0)) > 0;) reply.append(chunk, static_cast<std::size_t>(got));
-  ::close(fd);
-  const auto body_at = reply.find("\r\n\r\n");
-  return body_at == std::string::npos ? std::string() : reply.substr(body_at + 4);
+  haptic::test::HttpConnection connection(port);
+  connection.send("POST /haptic.v1.Haptic/" + call + " HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                  "Content-Type: application/json\r\nContent-Length: " + std::to_string(body.size()) +
+                  "\r\n\r\n" + body);
+  return connection.read_reply().body;
 }
 
 struct StreamFigures {
@@ -164,11 +151,7 @@ int main(int argc, char** argv) {
       socket.connect(tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port));
       beast::websocket::stream<tcp::socket> ws(std::move(socket));
       ws.handshake("127.0.0.1", "/haptic.v1.Haptic/StreamState");
-      haptic::v1::OpenSessionResponse secret_holder;
-      secret_holder.set_session_secret(session.session_secret());
-      const std::string secret_json = haptic::net::to_json(secret_holder);
-      const auto at = secret_json.find("\"session_secret\":\"") + 18;
-      const std::string secret = secret_json.substr(at, secret_json.find('"', at) - at);
+      const std::string secret = haptic::net::encode_base64(session.session_secret());
       char rate_text[32];
       std::snprintf(rate_text, sizeof rate_text, "%g", rate);
       ws.write(boost::asio::buffer(R"({"request": {"session_id": ")" + std::to_string(session.session_id()) +

@@ -135,20 +135,29 @@ TEST(HttpServer, ReadsABodyUpToItsLimitAndRefusesALongerOne) {
 }
 
 TEST(HttpServer, AHandlerThatWaitsHoldsUpNoOtherConnection) {
-  // Two handler threads; one request waits until released. Another connection's is answered
-  // meanwhile, and the waiting one after.
-  std::atomic<bool> release{false};
+  // Two handler threads; one request waits until released. Another connection's request is
+  // answered while it still waits (with one handler thread it could only be answered after), and
+  // the waiting one after.
+  std::atomic<bool> entered{false}, release{false}, still_waiting{false};
   HttpServer http("test", HttpLimits{.handler_threads = 2});
   http.bind("127.0.0.1:0", "test_address");
   http.start([&](const HttpRequest& request) {
-    for (int i = 0; request.path == "/wait" && !release.load() && i < 1000; ++i) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));  // bounded: 10 s
+    if (request.path == "/wait") {
+      still_waiting.store(true);
+      entered.store(true);
+      for (int i = 0; !release.load() && i < 1000; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));  // bounded: 10 s
+      }
+      still_waiting.store(false);
     }
     return HttpResponse::text(200, request.path);
   });
   test::HttpConnection waiting(http.port());
   waiting.send("GET /wait HTTP/1.1\r\n\r\n");
+  for (int i = 0; i < 500 && !entered.load(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_TRUE(entered.load());
   EXPECT_EQ(test::http_get(http.port(), "/other").body, "/other");
+  EXPECT_TRUE(still_waiting.load()) << "the other request was answered only once the waiting one was done";
   release.store(true);
   EXPECT_EQ(waiting.read_reply().body, "/wait");
 }
@@ -430,6 +439,37 @@ TEST(HttpServer, AWebSocketRunsItsHandlerOnAThreadOfItsOwnBesideTheRequests) {
   EXPECT_EQ(http.websockets(), 1u);
   // stop() ends the one still open: its handler sees it closed and returns.
   http.stop();
+  EXPECT_EQ(http.websockets(), 0u);
+}
+
+TEST(HttpServer, AWebSocketClientThatFloodsItsHandlerOrSendsTooLongAMessageIsClosed) {
+  HttpServer http("test", HttpLimits{.max_websocket_message_bytes = 1024});
+  http.bind("127.0.0.1:0", "test_address");
+  // A handler that reads nothing until its connection ends (bounded: 10 s).
+  http.serve_websockets([](const HttpRequest&) -> std::optional<HttpResponse> { return std::nullopt; },
+                        [](const HttpRequest&, WebSocketChannel& channel) {
+                          for (int i = 0; i < 1000 && !channel.closed(); ++i) {
+                            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+                          }
+                        });
+  http.start([](const HttpRequest&) { return HttpResponse::text(200, ""); });
+  {
+    ws_test::Client flood(http.port());
+    ASSERT_FALSE(flood.error);
+    for (int i = 0; i < 17 && !flood.error; ++i) flood.ws->write(boost::asio::buffer(std::string("x")), flood.error);
+    flood.read();  // the close the server sends
+    EXPECT_EQ(flood.error, boost::beast::websocket::error::closed) << flood.error.message();
+    EXPECT_EQ(std::string(flood.ws->reason().reason.c_str()), "more than 16 messages unread");
+  }
+  {
+    ws_test::Client big(http.port());
+    ASSERT_FALSE(big.error);
+    big.ws->write(boost::asio::buffer(std::string(2048, 'x')), big.error);
+    big.read();
+    EXPECT_TRUE(big.error) << "a message over max_websocket_message_bytes must end the connection";
+    EXPECT_EQ(big.ws->reason().code, boost::beast::websocket::close_code::too_big) << big.error.message();
+  }
+  for (int i = 0; i < 500 && http.websockets() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   EXPECT_EQ(http.websockets(), 0u);
 }
 

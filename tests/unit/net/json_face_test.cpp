@@ -1,6 +1,7 @@
 // The JSON face's table and its error form: every call of haptic.v1.Haptic served, with the
 // service's own request and response types; errors as Connect writes them.
 #include "net/json_face.hpp"
+#include "net/http_face.hpp"
 
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
@@ -90,6 +91,24 @@ TEST(JsonFace, AnyMessageMakesJsonQuotesControlsAndBytesThatAreNotUtf8Included) 
   EXPECT_EQ(body.fields().at("message").string_value(),
             "say \"hi\"\\ then\n\t\x01 caf\xc3\xa9 \xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd \xef\xbf\xbd\xef\xbf\xbd"
             " \xf0\x9f\x96\x90");
+}
+
+TEST(Base64, RoundTripsEveryLengthAndReadsBothAlphabetsWithOrWithoutPadding) {
+  std::string bytes;
+  for (int n = 0; n < 40; ++n) {
+    std::string back;
+    ASSERT_TRUE(decode_base64(encode_base64(bytes), back)) << n;
+    EXPECT_EQ(back, bytes) << n;
+    bytes.push_back(static_cast<char>(n * 37 + 251));
+  }
+  EXPECT_EQ(encode_base64("hapticd"), "aGFwdGljZA==");  // RFC 4648's alphabet, padded
+  std::string out;
+  ASSERT_TRUE(decode_base64("aGFwdGljZA", out));  // unpadded
+  EXPECT_EQ(out, "hapticd");
+  ASSERT_TRUE(decode_base64("-_8=", out));  // URL-safe
+  EXPECT_EQ(out, std::string("\xfb\xff"));
+  EXPECT_FALSE(decode_base64("not base64!", out));
+  EXPECT_FALSE(decode_base64("a", out));  // one character is no byte
 }
 
 }  // namespace
