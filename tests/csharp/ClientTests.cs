@@ -5,7 +5,7 @@
 // and the structs laid out as the C library lays them out.
 using System;
 using System.Collections.Generic;
-using System.Runtime.InteropServices;
+using System.Reflection;
 using System.Threading;
 using Hapticd;
 
@@ -95,31 +95,40 @@ static class ClientTests
         return state;
     }
 
-    // Each C struct's size as the library's init sets it equals the binding's marshalled size.
-    static void TheStructsAreLaidOutAsTheLibraryLaysThemOut()
+    // The client is managed code alone: no method of the assembly is extern (P/Invoke or an
+    // internal call), so Unity's IL2CPP and every platform load it as it is; the defaults are the
+    // C++ SDK's (sdk/include/haptic/types.hpp).
+    static void TheAssemblyIsManagedAloneWithTheCppSdksDefaults()
     {
-        currentTest = "layout";
-        Check(WallSpec.Default.size == Marshal.SizeOf(typeof(WallSpec)), "WallSpec " + WallSpec.Default.size + " vs " + Marshal.SizeOf(typeof(WallSpec)));
-        Check(SphereSpec.Default.size == Marshal.SizeOf(typeof(SphereSpec)), "SphereSpec");
-        Check(BoxSpec.Default.size == Marshal.SizeOf(typeof(BoxSpec)), "BoxSpec");
-        Check(CapsuleSpec.Default.size == Marshal.SizeOf(typeof(CapsuleSpec)), "CapsuleSpec");
-        Check(TangentPlaneSpec.Default.size == Marshal.SizeOf(typeof(TangentPlaneSpec)), "TangentPlaneSpec");
-        var mesh = new NativeMeshSpec();
-        Native.haptic_mesh_spec_init(ref mesh);
-        Check(mesh.size == Marshal.SizeOf(typeof(NativeMeshSpec)), "MeshSpec " + mesh.size + " vs " + Marshal.SizeOf(typeof(NativeMeshSpec)));
-        Check(SpringFieldSpec.Default.size == Marshal.SizeOf(typeof(SpringFieldSpec)), "SpringFieldSpec");
-        Check(DistanceSpringSpec.Default.size == Marshal.SizeOf(typeof(DistanceSpringSpec)), "DistanceSpringSpec");
-        Check(PotentialFieldSpec.Default.size == Marshal.SizeOf(typeof(PotentialFieldSpec)), "PotentialFieldSpec");
-        Check(LinearFieldSpec.Default.size == Marshal.SizeOf(typeof(LinearFieldSpec)), "LinearFieldSpec");
-        Check(ViscousFieldSpec.Default.size == Marshal.SizeOf(typeof(ViscousFieldSpec)), "ViscousFieldSpec");
-        Check(DetentFieldSpec.Default.size == Marshal.SizeOf(typeof(DetentFieldSpec)), "DetentFieldSpec");
-        Check(OrientationSpringSpec.Default.size == Marshal.SizeOf(typeof(OrientationSpringSpec)), "OrientationSpringSpec");
-        Check(OrientationDetentSpec.Default.size == Marshal.SizeOf(typeof(OrientationDetentSpec)), "OrientationDetentSpec");
-        // Defaults come from the library: the C++ SDK's.
+        currentTest = "managed";
+        var assembly = typeof(Client).Assembly;
+        int methods = 0;
+        foreach (var type in assembly.GetTypes())
+        {
+            foreach (var m in type.GetMethods(BindingFlags.Public | BindingFlags.NonPublic | BindingFlags.Instance | BindingFlags.Static | BindingFlags.DeclaredOnly))
+            {
+                ++methods;
+                bool pinvoke = (m.Attributes & MethodAttributes.PinvokeImpl) != 0;
+                bool internalCall = (m.GetMethodImplementationFlags() & MethodImplAttributes.InternalCall) != 0;
+                Check(!pinvoke && !internalCall, type.Name + "." + m.Name + " is extern");
+            }
+        }
+        Check(methods > 100, "the assembly's methods were read: " + methods);
+        foreach (var reference in assembly.GetReferencedAssemblies())
+        {
+            Check(reference.Name == "mscorlib" || reference.Name == "System" || reference.Name == "System.Core" || reference.Name == "netstandard",
+                  "references only the base library: " + reference.Name);
+        }
         Check(WallSpec.Default.Normal.Z == 1.0 && BoxSpec.Default.Pose.Orientation.W == 1.0, "defaults");
-        Check(PotentialFieldSpec.Default.Order == 2, "potential order default");
+        Check(PotentialFieldSpec.Default.Order == 2 && DistanceSpringSpec.Default.Anchor.Axis.Z == 1.0, "potential order, distance axis");
+        Check(OrientationSpringSpec.Default.Target.W == 1.0 && TangentPlaneSpec.Default.Normal.Z == 1.0, "orientation target, plane normal");
         var config = new ClientConfig();
-        Check(config.ServerAddress == "127.0.0.1:50051" && config.Reconnect && config.StateDecimation == 1, "config defaults");
+        Check(config.ServerAddress == "127.0.0.1:8081" && config.Reconnect && config.StateDecimation == 1 && config.RpcTimeoutMs == 2000 &&
+              config.HeartbeatPeriodMs == 100 && config.ClientName == "haptic-client", "config defaults");
+        var e = Throws(() => new Client(new ClientConfig { ServerAddress = "no port" }), "a bad address");
+        Check(e.Code == ErrorCode.InvalidArgument && e.Message.StartsWith("ClientConfig: ServerAddress: 'no port'"), e.Message);
+        e = Throws(() => new Client(new ClientConfig { ServerAddress = "10.1.2.3:8081", Token = "secret-token-0123456789" }), "a token in clear");
+        Check(e.Code == ErrorCode.InvalidArgument && e.Message.StartsWith("ClientConfig: token: would be sent in clear"), e.Message);
     }
 
     static void AWallHoldsAPush(Client client)
@@ -335,19 +344,21 @@ static class ClientTests
         return sign + "0x1." + fraction.ToString("x13") + "p" + (exponent - 1023);
     }
 
-    // Records a session to dir/session.csv and dir/session.h5 while the state callback keeps what
+    // Records a session to dir/session.csv while the state callback keeps what
     // it saw, written to dir/seen.csv in the recorder's columns for the test to compare.
     static void TheRecorderWritesWhatTheClientReceived(Client client, string dir)
     {
         currentTest = "recorder";
         var before = client.ReceiveCounters.Accepted;
         var csv = client.Record(new RecorderOptions { Path = dir + "/session.csv" });
-        var hdf5 = client.Record(new RecorderOptions { Path = dir + "/session.h5" });
         Check(csv.Path == dir + "/session.csv" && csv.EventsPath == dir + "/session.events.csv", "paths " + csv.EventsPath);
         var e = Throws(() => client.Record(new RecorderOptions { Path = dir + "/session.txt" }), "unknown extension");
         Check(e.Code == ErrorCode.InvalidArgument && e.Message.StartsWith("record: path: "), e.Message);
-        e = Throws(() => client.Record(new RecorderOptions { Path = dir + "/session.h5" }), "existing file");
+        e = Throws(() => client.Record(new RecorderOptions { Path = dir + "/session.csv" }), "existing file");
         Check(e.Message.Contains("exists"), e.Message);
+        // HDF5 is the C++ SDK's library's: refused, naming the format, and no file left behind.
+        e = Throws(() => client.Record(new RecorderOptions { Path = dir + "/session.h5" }), "HDF5");
+        Check(e.Code == ErrorCode.InvalidArgument && e.Message.StartsWith("record: format: HDF5") && !System.IO.File.Exists(dir + "/session.h5"), e.Message);
 
         var seen = new List<State>();
         var gate = new object();
@@ -371,11 +382,8 @@ static class ClientTests
         client.SetOperator(OperatorInput.Release());
         var accepted = client.ReceiveCounters.Accepted - before;
         var csvTotals = csv.Close();
-        hdf5.Dispose();
-        var hdf5Totals = hdf5.Stats;  // Dispose closed it: the final totals
         Check(csvTotals.SamplesReceived == accepted && csvTotals.SamplesWritten == accepted && csvTotals.Dropped == 0 &&
               csvTotals.WriteErrors == 0 && csvTotals.EventsWritten >= 1, "CSV totals " + csvTotals.SamplesWritten + " of " + accepted);
-        Check(hdf5Totals.SamplesWritten == accepted && hdf5Totals.Dropped == 0, "HDF5 totals");
         Check(!csv.Recording && csv.Close().SamplesWritten == csvTotals.SamplesWritten, "closing again gives the totals again");
         using (var file = new System.IO.StreamWriter(dir + "/seen.csv"))
         {
@@ -399,10 +407,69 @@ static class ClientTests
         Check(seen.Count > 0, "the callback saw samples");
     }
 
+    // Against a server with TLS, mutual TLS and tokens (csharp_test.cpp's): a client with the CA,
+    // its PKCS#12 certificate and the controller's token holds a wall; each thing missing or wrong
+    // is refused, saying which. Mono reads RSA certificates only (its X509 classes know no EC keys).
+    static void TlsMutualTlsAndTokens(string address, string certs)
+    {
+        currentTest = "tls";
+        const string token = "controller-token-0123456789";
+        Func<ClientConfig> good = () => new ClientConfig
+        {
+            ServerAddress = address, ClientName = "csharp-tls", TlsCaFile = certs + "/ca.pem", TlsCertFile = certs + "/client.p12",
+            Token = token, Reconnect = false, RpcTimeoutMs = 5000,
+        };
+        using (var client = new Client(good()))
+        {
+            client.SetOperator(OperatorInput.Push(new Vec3(0, 0, -5.0)));
+            var spec = WallSpec.Default;
+            spec.Impedance = Stiff;
+            using (client.AddWall(spec))
+            {
+                var state = StepAndGet(client, 3000);
+                Near(state.Force.Z, 5.0, 1e-3, "the wall holds the push over TLS");
+            }
+            var kinds = new List<EventKind>();
+            var gate = new object();
+            client.OnEvent(e => { lock (gate) kinds.Add(e.Kind); });
+            for (int i = 0; i < 100; ++i) { lock (gate) if (kinds.Count > 0) break; Thread.Sleep(10); }
+            client.OnEvent(null);
+            lock (gate) Check(kinds.Contains(EventKind.WatchStarted), "events over wss://");
+        }
+        var noCertificate = good();
+        noCertificate.TlsCertFile = "";
+        var e1 = Throws(() => new Client(noCertificate).Dispose(), "no client certificate");
+        Check(e1.Code == ErrorCode.Connection, "without a certificate: " + e1.Code + " " + e1.Message);
+        var otherCa = good();
+        otherCa.TlsCaFile = certs + "/other_ca.pem";
+        var e2 = Throws(() => new Client(otherCa).Dispose(), "another CA");
+        Check(e2.Code == ErrorCode.Connection && e2.Message.Contains("not signed by the CA in TlsCaFile"), e2.Message);
+        var noToken = good();
+        noToken.Token = "";
+        var e3 = Throws(() => new Client(noToken).Dispose(), "no token");
+        Check(e3.Code == ErrorCode.Unauthenticated && e3.Message.StartsWith("OpenSession: "), e3.Code + " " + e3.Message);
+        var pemKey = good();
+        pemKey.TlsCertFile = certs + "/client.pem";
+        pemKey.TlsKeyFile = certs + "/client.key";
+        var e4 = Throws(() => new Client(pemKey).Dispose(), "a PEM key");
+        Check(e4.Code == ErrorCode.InvalidArgument && e4.Message.StartsWith("ClientConfig: TlsKeyFile: "), e4.Message);
+        var plain = good();
+        plain.TlsCaFile = "";
+        plain.TlsCertFile = "";
+        var e5 = Throws(() => new Client(plain).Dispose(), "plain HTTP to the HTTPS face");
+        Check(e5.Code == ErrorCode.Connection, "plain HTTP: " + e5.Code + " " + e5.Message);
+    }
+
     static int Main(string[] args)
     {
-        if (args.Length < 1) { Console.Error.WriteLine("usage: ClientTests.exe host:port [recording-dir]"); return 2; }
-        TheStructsAreLaidOutAsTheLibraryLaysThemOut();
+        if (args.Length < 1) { Console.Error.WriteLine("usage: ClientTests.exe host:port [recording-dir] | --tls host:port certs-dir"); return 2; }
+        TheAssemblyIsManagedAloneWithTheCppSdksDefaults();
+        if (args[0] == "--tls" && args.Length == 3)
+        {
+            TlsMutualTlsAndTokens(args[1], args[2]);
+            Console.WriteLine(failures == 0 ? "all C# checks passed" : failures + " C# checks failed");
+            return failures == 0 ? 0 : 1;
+        }
         using (var client = new Client(new ClientConfig { ServerAddress = args[0], ClientName = "csharp-test", HeartbeatPeriodMs = 20 }))
         {
             AWallHoldsAPush(client);

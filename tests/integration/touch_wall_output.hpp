@@ -22,10 +22,14 @@ inline std::string without_datagram_count(const std::string& output) {
 /// Runs one touch_wall with these arguments to its end.
 using TouchWallRun = std::function<Outcome(const std::vector<std::string>& args)>;
 
+/// What the port's client speaks to: the gRPC address (C, over the C++ SDK) or the HTTP face (C#).
+enum class PortSpeaks { kGrpc, kHttp };
+
 /// `port` prints what the C++ `cpp` prints, each against a fresh lockstep server: the simulated
 /// hand pressing, and the device's own hand watched (the datagram count apart); and it refuses the
 /// same bad options with the same words and status.
-inline void expect_prints_what_cpp_prints(const TouchWallRun& cpp, const TouchWallRun& port) {
+inline void expect_prints_what_cpp_prints(const TouchWallRun& cpp, const TouchWallRun& port,
+                                          PortSpeaks speaks = PortSpeaks::kGrpc) {
   for (const std::vector<std::string>& options :
        {std::vector<std::string>{"--lockstep"}, std::vector<std::string>{"--lockstep", "--hand", "--seconds", "1"}}) {
     ServerProcess for_cpp(lockstep_config());
@@ -35,8 +39,8 @@ inline void expect_prints_what_cpp_prints(const TouchWallRun& cpp, const TouchWa
     ASSERT_EQ(expected.exit_code, 0) << expected.output;
     ASSERT_GT(expected.output.size(), 1000u) << expected.output;
 
-    ServerProcess for_port(lockstep_config());
-    args[0] = for_port.address();
+    ServerProcess for_port(lockstep_config(speaks == PortSpeaks::kHttp ? R"("http_address": "127.0.0.1:0")" : ""));
+    args[0] = speaks == PortSpeaks::kHttp ? "127.0.0.1:" + std::to_string(for_port.http_port()) : for_port.address();
     const Outcome got = port(args);
     ASSERT_EQ(got.exit_code, 0) << got.output;
     EXPECT_EQ(without_datagram_count(got.output), without_datagram_count(expected.output));

@@ -5,14 +5,21 @@
 # neither (a client trusting only that one must be refused). For the TLS diagnosis tests, also the
 # ones that go wrong: a server and a client certificate that expired in 2020 and ones not valid
 # before 2099 (both signed by the CA), and a client certificate the unrelated CA signed.
-# Test material only: valid for 30 days from the build, EC P-256 keys, never used outside the
-# build tree.
+# Test material only: valid for 30 days from the build, EC P-256 keys (RSA 2048 with a second
+# argument "rsa", for Mono, whose X509 classes read no EC keys; then also client.p12, the client's
+# certificate and key as PKCS#12 with the SHA-1/3DES encryption older runtimes read), never used
+# outside the build tree.
 set -euo pipefail
 out="$1"
+algorithm="${2:-ec}"
 mkdir -p "$out"
 cd "$out"
 days=30
-key() { openssl genpkey -algorithm EC -pkeyopt ec_paramgen_curve:P-256 -out "$1" 2>/dev/null; }
+if [ "$algorithm" = rsa ]; then
+  key() { openssl genpkey -algorithm RSA -pkeyopt rsa_keygen_bits:2048 -out "$1" 2>/dev/null; }
+else
+  key() { openssl genpkey -algorithm EC -pkeyopt ec_paramgen_curve:P-256 -out "$1" 2>/dev/null; }
+fi
 
 key ca.key
 openssl req -x509 -new -key ca.key -days "$days" -subj "/CN=hapticd test CA" -out ca.pem
@@ -51,3 +58,7 @@ sign_dated client.csr client.ext ca 20990101000000Z 20991231000000Z client_futur
 openssl x509 -req -in client.csr -CA other_ca.pem -CAkey other_ca.key -CAcreateserial -days "$days" \
   -extfile client.ext -out client_other_ca.pem 2>/dev/null
 rm -f ./*.csr ./*.ext ./*.srl
+if [ "$algorithm" = rsa ]; then
+  openssl pkcs12 -export -in client.pem -inkey client.key -out client.p12 -passout pass: \
+    -certpbe PBE-SHA1-3DES -keypbe PBE-SHA1-3DES -macalg sha1
+fi

@@ -69,7 +69,7 @@ broken("a Unity version in the wrong form", "unity must be 'YYYY.N'",
 broken("a sample outside Samples~", "samples[0].path",
        lambda c: edit_manifest(c, samples=[{"displayName": "x", "description": "x", "path": "Runtime"}]))
 broken("a changelog without the version", "CHANGELOG.md: has no entry",
-       lambda c: edit_manifest(c, version="0.2.0"))
+       lambda c: edit_manifest(c, version="9.9.9"))
 broken("an .asmdef named otherwise than its file", "name must be the file's",
        lambda c: (c / "Runtime" / "Hapticd.Runtime.asmdef").write_text('{"name": "Other"}'))
 broken("a platform Unity does not know", "is not a platform Unity knows",

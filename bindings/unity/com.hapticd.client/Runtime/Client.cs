@@ -1,9 +1,11 @@
-// Hapticd.Client: one session with a hapticd server, over the C API (libhaptic_c). Objects and
-// fields come back as handles (IDisposable: Dispose removes the item); state arrives by callback
-// (on an SDK thread) or by polling; a refused call throws HapticException with the SDK's code and
-// its "call: field: problem" message, and changes nothing.
+// Hapticd.Client: one session with a hapticd server, in managed code alone (no native library):
+// the control plane over hapticd's HTTP face (protobuf JSON, docs/http.md), the state stream over
+// UDP with the C++ SDK's datagrams and SipHash tag (docs/protocol.md), the events over WebSocket.
+// Objects and fields come back as handles (IDisposable: Dispose removes the item); state arrives
+// by callback (on the client's receive thread) or by polling; a refused call throws
+// HapticException with the code and the "call: field: problem" message, and changes nothing.
 //
-//   using (var client = new Hapticd.Client(new Hapticd.ClientConfig { ServerAddress = "host:50051" }))
+//   using (var client = new Hapticd.Client(new Hapticd.ClientConfig { ServerAddress = "host:8081" }))
 //   {
 //       var wall = Hapticd.WallSpec.Default;
 //       wall.Impedance = new Hapticd.Impedance(1000, 1);
@@ -11,126 +13,94 @@
 //   }
 using System;
 using System.Collections.Generic;
-using System.Runtime.InteropServices;
+using System.IO;
+using System.Net;
+using System.Net.Sockets;
+using System.Security.Cryptography.X509Certificates;
 using System.Text;
-
-// The binding's tests read the structs' sizes as the library sets them (tests/csharp).
-[assembly: System.Runtime.CompilerServices.InternalsVisibleTo("ClientTests")]
+using System.Threading;
 
 namespace Hapticd
 {
-    /// <summary>How to reach hapticd (haptic::ClientConfig); the defaults are the C++ SDK's.</summary>
+    /// <summary>How to reach hapticd; the defaults are the C++ SDK's, but for the address: the
+    /// HTTP face's (hapticd --http-api PORT, or http_address in its configuration).</summary>
     public sealed class ClientConfig
     {
-        public string ServerAddress;
-        public string ClientName;
+        /// <summary>host:port of hapticd's HTTP face ("[::1]:8081" for IPv6). An https:// prefix
+        /// asks for TLS as TlsCaFile does (trusting the system's CAs without one).</summary>
+        public string ServerAddress = "127.0.0.1:8081";
+        public string ClientName = "haptic-client";
         public string Token = "";
-        public string TlsCaFile = "";    // non-empty: TLS
-        public string TlsCertFile = "";  // mutual TLS
+        public string TlsCaFile = "";    // non-empty: TLS, the server's certificate signed by this CA (PEM)
+        /// <summary>Mutual TLS: the client's certificate with its private key as PKCS#12
+        /// (.p12/.pfx; openssl pkcs12 -export makes one from PEM files). A PEM certificate with a
+        /// TlsKeyFile is refused, saying so: .NET Standard 2.1 reads no PEM keys.</summary>
+        public string TlsCertFile = "";
         public string TlsKeyFile = "";
-        public string TlsServerName = "";
-        public string UdpAddress = "";
-        public uint RpcTimeoutMs;
-        public uint HeartbeatPeriodMs;
-        public uint StateDecimation;     // state every n-th tick; 0: none
+        public string TlsCertPassword = "";  // of TlsCertFile's PKCS#12; empty: none
+        public string TlsServerName = "";    // the name the server's certificate carries; default: the host
+        public string UdpAddress = "";       // host:port to send datagrams to instead of the server's
+        public uint RpcTimeoutMs = 2000;
+        public uint HeartbeatPeriodMs = 100;
+        public uint StateDecimation = 1;     // state every n-th tick; 0: none
         public uint DeviceIndex;
-        public bool Reconnect;
+        public bool Reconnect = true;
         public bool AllowPlaintextToken;
-        public uint ReconnectBackoffMinMs;
-        public uint ReconnectBackoffMaxMs;
-
-        public ClientConfig()
-        {
-            var d = new NativeClientConfigDefaults();
-            Native.haptic_client_config_init(ref d);
-            ServerAddress = Marshal.PtrToStringAnsi(d.ServerAddress);
-            ClientName = Marshal.PtrToStringAnsi(d.ClientName);
-            RpcTimeoutMs = d.RpcTimeoutMs;
-            HeartbeatPeriodMs = d.HeartbeatPeriodMs;
-            StateDecimation = d.StateDecimation;
-            DeviceIndex = d.DeviceIndex;
-            Reconnect = d.Reconnect != 0;
-            AllowPlaintextToken = d.AllowPlaintextToken != 0;
-            ReconnectBackoffMinMs = d.ReconnectBackoffMinMs;
-            ReconnectBackoffMaxMs = d.ReconnectBackoffMaxMs;
-        }
+        public bool LockstepFlowControl = true;
+        public uint ReconnectBackoffMinMs = 50;
+        public uint ReconnectBackoffMaxMs = 1000;
     }
 
-    internal static class Check
-    {
-        /// <summary>Throws the call's error unless it returned HAPTIC_OK (or, allowed, the timeout).</summary>
-        // The calling thread's haptic_error (int32 code, 512-byte message), made once per thread and
-        // kept for its life: reading it only when a call fails spares every call a string (a poll at
-        // frame rate allocates nothing).
-        [ThreadStatic] private static IntPtr error_;
-        private const int ErrorSize = 4 + 512;
-
-        internal static IntPtr Err
-        {
-            get
-            {
-                if (error_ == IntPtr.Zero)
-                {
-                    error_ = Marshal.AllocHGlobal(ErrorSize);
-                    Marshal.WriteInt32(error_, 0);
-                    Marshal.WriteByte(error_, 4, 0);
-                }
-                return error_;
-            }
-        }
-
-        /// <summary>Throws the call's error (read from this thread's Err) unless it returned
-        /// HAPTIC_OK or, when allowed, the timeout.</summary>
-        internal static int Status(int status, bool timeoutAllowed = false)
-        {
-            if (status == 0 || (timeoutAllowed && status == Native.Timeout)) return status;
-            string message = Marshal.PtrToStringAnsi(new IntPtr(Err.ToInt64() + 4));
-            throw new HapticException((ErrorCode)status, string.IsNullOrEmpty(message) ? "error " + status : message);
-        }
-
-        internal static uint SizeOf<T>() { return (uint)Marshal.SizeOf(typeof(T)); }
-    }
-
-    /// <summary>What ObjectHandle and FieldHandle share: the library's handle of one item. Dispose
-    /// (or Remove) removes the item from the server; a handle that is only collected lets go of it
-    /// (it stays until the session ends).</summary>
+    /// <summary>What ObjectHandle and FieldHandle share: one item of the client's. Dispose (or
+    /// Remove) removes it from the server; a handle only collected lets go of it (the item stays
+    /// until the session ends). A handle from before an ApplyScene or Reset is stale: it removes
+    /// nothing.</summary>
     public abstract class ItemHandle : IDisposable
     {
-        private IntPtr handle_;
-        internal ItemHandle(IntPtr handle) { handle_ = handle; }
-        ~ItemHandle() { if (handle_ != IntPtr.Zero) NativeRelease(handle_); }
-
-        internal abstract ulong NativeId(IntPtr handle);
-        internal abstract int NativeRemove(IntPtr handle);
-        internal abstract ulong NativeRelease(IntPtr handle);
-
-        internal IntPtr Live(string call)
+        internal readonly Client Owner;
+        internal ulong Key;
+        internal readonly ulong Generation;
+        internal StabilityReport StabilityReport_;
+        internal ItemHandle(Client owner, ulong key, ulong generation, StabilityReport stability)
         {
-            if (handle_ == IntPtr.Zero) throw new HapticException(ErrorCode.FailedPrecondition, call + ": handle: removed or released already");
-            return handle_;
+            Owner = owner;
+            Key = key;
+            Generation = generation;
+            StabilityReport_ = stability;
         }
 
-        /// <summary>The item's id on the server now; 0 once removed or released.</summary>
-        public ulong Id { get { return handle_ == IntPtr.Zero ? 0 : NativeId(handle_); } }
-        public bool Owned { get { return handle_ != IntPtr.Zero; } }
+        internal abstract bool IsObject { get; }
+
+        internal ulong Live(string call)
+        {
+            if (Key == 0) throw new HapticException(ErrorCode.FailedPrecondition, call + ": handle: removed or released already");
+            return Key;
+        }
+
+        /// <summary>The item's id on the server now (it changes when a reconnection registers it
+        /// on a restarted server); 0 once removed or released.</summary>
+        public ulong Id { get { return Key == 0 ? 0 : Owner.ServerIdOf(Key, Generation); } }
+        public bool Owned { get { return Key != 0; } }
+
+        /// <summary>The server's stability report for the impedance as registered or last updated.</summary>
+        public StabilityReport Stability { get { Live("stability"); return StabilityReport_; } }
 
         /// <summary>Removes the item now; its force ramps out on the server.</summary>
         public void Remove()
         {
-            if (handle_ == IntPtr.Zero) return;
-            var status = NativeRemove(handle_);  // frees the handle, whatever the result
-            handle_ = IntPtr.Zero;
-            GC.SuppressFinalize(this);
-            Check.Status(status);
+            if (Key == 0) return;
+            var key = Key;
+            Key = 0;
+            Owner.Remove(key, Generation, IsObject);
         }
 
         /// <summary>Stops owning the item (it stays until the session ends); returns its id.</summary>
         public ulong Release()
         {
-            if (handle_ == IntPtr.Zero) return 0;
-            var id = NativeRelease(handle_);
-            handle_ = IntPtr.Zero;
-            GC.SuppressFinalize(this);
+            if (Key == 0) return 0;
+            var id = Owner.ServerIdOf(Key, Generation);
+            Owner.Forget(Key);
+            Key = 0;
             return id;
         }
 
@@ -140,166 +110,33 @@ namespace Hapticd
     /// <summary>A registered object of any kind.</summary>
     public sealed class ObjectHandle : ItemHandle
     {
-        internal ObjectHandle(IntPtr handle) : base(handle) { }
-        internal override ulong NativeId(IntPtr h) { return Native.haptic_object_id(h); }
-        internal override int NativeRemove(IntPtr h) { return Native.haptic_object_remove(h, Check.Err); }
-        internal override ulong NativeRelease(IntPtr h) { return Native.haptic_object_release(h); }
+        internal ObjectHandle(Client owner, ulong key, ulong generation, StabilityReport stability) : base(owner, key, generation, stability) { }
+        internal override bool IsObject { get { return true; } }
 
-        /// <summary>The server's stability report for the impedance as registered or last updated.</summary>
-        public StabilityReport Stability
-        {
-            get
-            {
-                var r = new StabilityReport { size = Check.SizeOf<StabilityReport>() };
-                Check.Status(Native.haptic_object_stability(Live("stability"), ref r, Check.Err));
-                return r;
-            }
-        }
-
-        public void Update(WallSpec s) { s.size = Check.SizeOf<WallSpec>(); Check.Status(Native.haptic_object_update_wall(Live("UpdateObject"), ref s, Check.Err)); }
-        public void Update(SphereSpec s) { s.size = Check.SizeOf<SphereSpec>(); Check.Status(Native.haptic_object_update_sphere(Live("UpdateObject"), ref s, Check.Err)); }
-        public void Update(BoxSpec s) { s.size = Check.SizeOf<BoxSpec>(); Check.Status(Native.haptic_object_update_box(Live("UpdateObject"), ref s, Check.Err)); }
-        public void Update(CapsuleSpec s) { s.size = Check.SizeOf<CapsuleSpec>(); Check.Status(Native.haptic_object_update_capsule(Live("UpdateObject"), ref s, Check.Err)); }
-        public void Update(TangentPlaneSpec s) { s.size = Check.SizeOf<TangentPlaneSpec>(); Check.Status(Native.haptic_object_update_tangent_plane(Live("UpdateObject"), ref s, Check.Err)); }
-        public void Update(MeshSpec mesh)
-        {
-            var target = Live("UpdateObject");
-            using (var pinned = new PinnedMesh(mesh))
-            {
-                var s = pinned.Spec;
-                Check.Status(Native.haptic_object_update_mesh(target, ref s, Check.Err));
-            }
-        }
+        private void Replace(object spec) { StabilityReport_ = Owner.UpdateItem(this, spec); }
+        public void Update(WallSpec s) { Replace(s); }
+        public void Update(SphereSpec s) { Replace(s); }
+        public void Update(BoxSpec s) { Replace(s); }
+        public void Update(CapsuleSpec s) { Replace(s); }
+        public void Update(TangentPlaneSpec s) { Replace(s); }
+        public void Update(MeshSpec mesh) { Replace(mesh); }
     }
 
-    /// <summary>A registered energy field of any kind.</summary>
+    /// <summary>A registered field of any kind.</summary>
     public sealed class FieldHandle : ItemHandle
     {
-        internal FieldHandle(IntPtr handle) : base(handle) { }
-        internal override ulong NativeId(IntPtr h) { return Native.haptic_field_id(h); }
-        internal override int NativeRemove(IntPtr h) { return Native.haptic_field_remove(h, Check.Err); }
-        internal override ulong NativeRelease(IntPtr h) { return Native.haptic_field_release(h); }
+        internal FieldHandle(Client owner, ulong key, ulong generation, StabilityReport stability) : base(owner, key, generation, stability) { }
+        internal override bool IsObject { get { return false; } }
 
-        /// <summary>An orientation spring's stability report (Available false for other fields).</summary>
-        public StabilityReport Stability
-        {
-            get
-            {
-                var r = new StabilityReport { size = Check.SizeOf<StabilityReport>() };
-                Check.Status(Native.haptic_field_stability(Live("stability"), ref r, Check.Err));
-                return r;
-            }
-        }
-
-        public void Update(SpringFieldSpec s) { s.size = Check.SizeOf<SpringFieldSpec>(); Check.Status(Native.haptic_field_update_spring_field(Live("UpdateField"), ref s, Check.Err)); }
-        public void Update(DistanceSpringSpec s) { s.size = Check.SizeOf<DistanceSpringSpec>(); Check.Status(Native.haptic_field_update_distance_spring(Live("UpdateField"), ref s, Check.Err)); }
-        public void Update(PotentialFieldSpec s) { s.size = Check.SizeOf<PotentialFieldSpec>(); Check.Status(Native.haptic_field_update_potential_field(Live("UpdateField"), ref s, Check.Err)); }
-        public void Update(LinearFieldSpec s) { s.size = Check.SizeOf<LinearFieldSpec>(); Check.Status(Native.haptic_field_update_linear_field(Live("UpdateField"), ref s, Check.Err)); }
-        public void Update(ViscousFieldSpec s) { s.size = Check.SizeOf<ViscousFieldSpec>(); Check.Status(Native.haptic_field_update_viscous_field(Live("UpdateField"), ref s, Check.Err)); }
-        public void Update(DetentFieldSpec s) { s.size = Check.SizeOf<DetentFieldSpec>(); Check.Status(Native.haptic_field_update_detent_field(Live("UpdateField"), ref s, Check.Err)); }
-        public void Update(OrientationSpringSpec s) { s.size = Check.SizeOf<OrientationSpringSpec>(); Check.Status(Native.haptic_field_update_orientation_spring(Live("UpdateField"), ref s, Check.Err)); }
-        public void Update(OrientationDetentSpec s) { s.size = Check.SizeOf<OrientationDetentSpec>(); Check.Status(Native.haptic_field_update_orientation_detent(Live("UpdateField"), ref s, Check.Err)); }
-    }
-
-    /// <summary>A mesh's arrays pinned for the length of one call.</summary>
-    internal sealed class PinnedMesh : IDisposable
-    {
-        private GCHandle vertices_, indices_;
-        internal NativeMeshSpec Spec;
-        internal PinnedMesh(MeshSpec mesh)
-        {
-            if (mesh == null) throw new HapticException(ErrorCode.InvalidArgument, "CreateObject: object.mesh: is null");
-            var vertices = mesh.Vertices ?? new Vec3[0];
-            var indices = mesh.Indices ?? new uint[0];
-            vertices_ = GCHandle.Alloc(vertices, GCHandleType.Pinned);
-            indices_ = GCHandle.Alloc(indices, GCHandleType.Pinned);
-            Spec = new NativeMeshSpec
-            {
-                size = Check.SizeOf<NativeMeshSpec>(),
-                Pose = mesh.Pose,
-                Vertices = vertices_.AddrOfPinnedObject(),
-                VertexCount = (uint)vertices.Length,
-                Indices = indices_.AddrOfPinnedObject(),
-                IndexCount = (uint)indices.Length,
-                Impedance = mesh.Impedance,
-                Shared = mesh.Shared,
-                AcrossSites = mesh.AcrossSites,
-            };
-        }
-        public void Dispose()
-        {
-            if (vertices_.IsAllocated) vertices_.Free();
-            if (indices_.IsAllocated) indices_.Free();
-        }
-    }
-
-    /// <summary>A scene's items in unmanaged memory for one call: each spec copied with its size.</summary>
-    internal sealed class NativeScene : IDisposable
-    {
-        internal readonly NativeSceneItem[] Items;
-        private readonly List<IntPtr> blocks_ = new List<IntPtr>();
-        private readonly List<PinnedMesh> meshes_ = new List<PinnedMesh>();
-
-        internal NativeScene(IList<object> items)
-        {
-            Items = new NativeSceneItem[items == null ? 0 : items.Count];
-            try
-            {
-                for (int i = 0; i < Items.Length; ++i) Items[i] = ItemOf(items[i], i);
-            }
-            catch
-            {
-                Dispose();
-                throw;
-            }
-        }
-
-        private IntPtr Copy<T>(T spec, uint size) where T : struct
-        {
-            var block = Marshal.AllocHGlobal(Marshal.SizeOf(typeof(T)));
-            blocks_.Add(block);
-            Marshal.StructureToPtr(spec, block, false);
-            Marshal.WriteInt32(block, (int)size);  // every spec starts with its size
-            return block;
-        }
-
-        private NativeSceneItem Item<T>(Kind kind, T spec) where T : struct
-        {
-            return new NativeSceneItem { Kind = (int)kind, Spec = Copy(spec, Check.SizeOf<T>()) };
-        }
-
-        private NativeSceneItem ItemOf(object spec, int index)
-        {
-            if (spec is WallSpec) return Item(Kind.Wall, (WallSpec)spec);
-            if (spec is SphereSpec) return Item(Kind.Sphere, (SphereSpec)spec);
-            if (spec is BoxSpec) return Item(Kind.Box, (BoxSpec)spec);
-            if (spec is CapsuleSpec) return Item(Kind.Capsule, (CapsuleSpec)spec);
-            if (spec is TangentPlaneSpec) return Item(Kind.TangentPlane, (TangentPlaneSpec)spec);
-            if (spec is MeshSpec)
-            {
-                var pinned = new PinnedMesh((MeshSpec)spec);
-                meshes_.Add(pinned);
-                return Item(Kind.Mesh, pinned.Spec);
-            }
-            if (spec is SpringFieldSpec) return Item(Kind.SpringField, (SpringFieldSpec)spec);
-            if (spec is DistanceSpringSpec) return Item(Kind.DistanceSpring, (DistanceSpringSpec)spec);
-            if (spec is PotentialFieldSpec) return Item(Kind.PotentialField, (PotentialFieldSpec)spec);
-            if (spec is LinearFieldSpec) return Item(Kind.LinearField, (LinearFieldSpec)spec);
-            if (spec is ViscousFieldSpec) return Item(Kind.ViscousField, (ViscousFieldSpec)spec);
-            if (spec is DetentFieldSpec) return Item(Kind.DetentField, (DetentFieldSpec)spec);
-            if (spec is OrientationSpringSpec) return Item(Kind.OrientationSpring, (OrientationSpringSpec)spec);
-            if (spec is OrientationDetentSpec) return Item(Kind.OrientationDetent, (OrientationDetentSpec)spec);
-            throw new HapticException(ErrorCode.InvalidArgument, "ApplyScene: items[" + index + "]: " +
-                (spec == null ? "is null" : spec.GetType().Name + " is not an object or field spec"));
-        }
-
-        public void Dispose()
-        {
-            foreach (var block in blocks_) Marshal.FreeHGlobal(block);
-            blocks_.Clear();
-            foreach (var mesh in meshes_) mesh.Dispose();
-            meshes_.Clear();
-        }
+        private void Replace(object spec) { StabilityReport_ = Owner.UpdateItem(this, spec); }
+        public void Update(SpringFieldSpec s) { Replace(s); }
+        public void Update(DistanceSpringSpec s) { Replace(s); }
+        public void Update(PotentialFieldSpec s) { Replace(s); }
+        public void Update(LinearFieldSpec s) { Replace(s); }
+        public void Update(ViscousFieldSpec s) { Replace(s); }
+        public void Update(DetentFieldSpec s) { Replace(s); }
+        public void Update(OrientationSpringSpec s) { Replace(s); }
+        public void Update(OrientationDetentSpec s) { Replace(s); }
     }
 
     /// <summary>The handles of a scene applied whole, each list in the scene's order.</summary>
@@ -307,11 +144,12 @@ namespace Hapticd
     {
         public List<ObjectHandle> Objects = new List<ObjectHandle>();
         public List<FieldHandle> Fields = new List<FieldHandle>();
-        /// <summary>The objects' stability reports, in order.</summary>
+        /// <summary>One per object, in order.</summary>
         public List<StabilityReport> Stability = new List<StabilityReport>();
     }
 
-    /// <summary>A scene read back from the server: specs (boxed structs, MeshSpec) in id order.</summary>
+    /// <summary>The server's scene as read back: specs (WallSpec, MeshSpec, ...) with their ids
+    /// and sessions, in the server's order.</summary>
     public sealed class RegisteredScene
     {
         public List<object> Objects = new List<object>();
@@ -322,305 +160,652 @@ namespace Hapticd
         public List<ulong> FieldSessions = new List<ulong>();
     }
 
-    /// <summary>One session with a hapticd server. Methods may be called from any thread, except
-    /// that Dispose must not race other calls.</summary>
     public sealed class Client : IDisposable
     {
-        private IntPtr client_;
-        // The delegates the library holds: kept here while it may call them, so that the garbage
-        // collector cannot take them away under a running callback (never read: holding is the job).
-#pragma warning disable 414
-        private NativeStateCallback stateCallback_;
-        private NativeEventCallback eventCallback_;
-        private NativeConnectionCallback connectionCallback_;
-#pragma warning restore 414
+        /// <summary>The haptic.v1 API version this client speaks (OpenSessionRequest.api_version).</summary>
+        public const uint ApiVersion = 5;
+
+        private readonly ClientConfig config_;
+        private readonly Endpoint endpoint_;
+        private readonly HttpChannel channel_;
+        private readonly string token_;
+        private readonly object identity_ = new object();
+        private ulong sessionId_;           // guarded by identity_
+        private string sessionSecret_ = ""; // guarded by identity_: base64, as OpenSession gave it
+        private DeviceInfo deviceInfo_;
+        private long leaseTimeoutMs_;
+        private StateLink link_;
+        private bool closed_;
+        private uint decimation_;
+        private ulong knownRun_;
+        private readonly object runGate_ = new object();
+
+        // Items by the client's own key (stable across reconnections), in the order made.
+        private sealed class Item
+        {
+            internal bool IsObject;
+            internal JsonObject Message;
+            internal ulong ServerId;      // 0: a reconnection could not register it again
+            internal string LostReason = "";
+        }
+        private readonly object itemsGate_ = new object();
+        private readonly SortedDictionary<ulong, Item> items_ = new SortedDictionary<ulong, Item>();
+        private ulong nextKey_ = 1;        // guarded by itemsGate_
+        private long generation_;          // bumped by ApplyScene and Reset: older handles go stale
+
         private Action<State> onState_;
         private Action<Event> onEvent_;
         private Action<ConnectionChange> onConnection_;
+        private readonly object eventsGate_ = new object();
+        private EventWatch events_;        // guarded by eventsGate_
         private long callbackExceptions_;
+
+        private int connectionState_ = (int)ConnectionState.Connected;
+        private volatile bool heartbeatsEnabled_ = true;
+        private Thread supervisor_;
+        private readonly ManualResetEvent stopSupervisor_ = new ManualResetEvent(false);
 
         /// <summary>Connects and opens a session. Throws HapticException (Connection,
         /// VersionMismatch, InvalidArgument naming the field, ...).</summary>
         public Client(ClientConfig config)
         {
-            if (Native.haptic_c_version() != Native.HeaderVersion)
-            {
-                throw new HapticException(ErrorCode.VersionMismatch, "libhaptic_c is C API version " +
-                    Native.haptic_c_version() + ", this binding speaks " + Native.HeaderVersion);
-            }
             if (config == null) throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: config: is null");
-            var c = new NativeClientConfig
+            config_ = config;
+            endpoint_ = EndpointOf(config);
+            token_ = config.Token ?? "";
+            CheckConfig(config, endpoint_);
+            channel_ = new HttpChannel(endpoint_);
+            var opened = OpenSession();
+            try
             {
-                size = Check.SizeOf<NativeClientConfig>(),
-                ServerAddress = config.ServerAddress, ClientName = config.ClientName,
-                Token = config.Token, TlsCaFile = config.TlsCaFile, TlsCertFile = config.TlsCertFile,
-                TlsKeyFile = config.TlsKeyFile, TlsServerName = config.TlsServerName,
-                UdpAddress = config.UdpAddress, RpcTimeoutMs = config.RpcTimeoutMs,
-                HeartbeatPeriodMs = config.HeartbeatPeriodMs, StateDecimation = config.StateDecimation,
-                DeviceIndex = config.DeviceIndex, Reconnect = config.Reconnect ? 1 : 0,
-                AllowPlaintextToken = config.AllowPlaintextToken ? 1 : 0,
-                ReconnectBackoffMinMs = config.ReconnectBackoffMinMs,
-                ReconnectBackoffMaxMs = config.ReconnectBackoffMaxMs,
-            };
-            Check.Status(Native.haptic_client_open(ref c, out client_, Check.Err));
+                link_ = new StateLink(UdpEndpoint(opened.U32("udp_port")), opened.U64("session_id"), KeyOf(opened),
+                                      (int)config.HeartbeatPeriodMs);
+                link_.HeartbeatsEnabled = true;
+                if (config.StateDecimation > 0) Subscribe(config.StateDecimation);
+            }
+            catch
+            {
+                // Do not leave a half-open session holding a lease; report the first failure.
+                try { CloseSession(); } catch (HapticException) { }
+                if (link_ != null) link_.Dispose();
+                channel_.Dispose();
+                throw;
+            }
+            if (config.Reconnect)
+            {
+                supervisor_ = new Thread(Supervise) { IsBackground = true, Name = "hapticd supervisor" };
+                supervisor_.Start();
+            }
         }
 
-        ~Client() { Close(false); }
+        ~Client()
+        {
+            // Collected without Dispose: the server's lease ends the session; only the threads go.
+            if (!closed_) StopThreads();
+        }
 
-        private IntPtr Live
+        // ---- configuration ----
+
+        private static Endpoint EndpointOf(ClientConfig config)
+        {
+            string address = config.ServerAddress ?? "";
+            var endpoint = new Endpoint();
+            if (address.StartsWith("https://")) { endpoint.Tls = true; address = address.Substring(8); }
+            else if (address.StartsWith("http://")) address = address.Substring(7);
+            address = address.TrimEnd('/');
+            string host;
+            int port;
+            if (!SplitHostPort(address, out host, out port))
+            {
+                throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: ServerAddress: '" + config.ServerAddress +
+                                          "' is not host:port with a port 1 to 65535");
+            }
+            endpoint.Host = host;
+            endpoint.Port = port;
+            endpoint.ServerName = config.TlsServerName ?? "";
+            try
+            {
+                if (!string.IsNullOrEmpty(config.TlsCaFile))
+                {
+                    endpoint.Tls = true;
+                    endpoint.TrustedCa = new X509Certificate2(config.TlsCaFile);
+                }
+            }
+            catch (Exception e)
+            {
+                throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: TlsCaFile: cannot read '" + config.TlsCaFile + "': " + Endpoint.Innermost(e).Message);
+            }
+            if (!string.IsNullOrEmpty(config.TlsKeyFile))
+            {
+                throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: TlsKeyFile: a PEM private key is not read by the " +
+                    "managed client: give TlsCertFile as PKCS#12 holding the key (openssl pkcs12 -export -in cert.pem -inkey key.pem " +
+                    "-out client.p12) and leave TlsKeyFile empty");
+            }
+            if (!string.IsNullOrEmpty(config.TlsCertFile))
+            {
+                if (!endpoint.Tls) throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: TlsCertFile: a client certificate needs TLS (TlsCaFile)");
+                try
+                {
+                    endpoint.ClientCertificate = new X509Certificate2(config.TlsCertFile, config.TlsCertPassword ?? "");
+                }
+                catch (Exception e)
+                {
+                    throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: TlsCertFile: cannot read '" + config.TlsCertFile +
+                        "' as PKCS#12 with its key (" + Endpoint.Innermost(e).Message + ")");
+                }
+                if (!endpoint.ClientCertificate.HasPrivateKey)
+                {
+                    throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: TlsCertFile: '" + config.TlsCertFile + "' holds no private key");
+                }
+            }
+            return endpoint;
+        }
+
+        internal static bool SplitHostPort(string address, out string host, out int port)
+        {
+            host = "";
+            port = 0;
+            int colon = address.LastIndexOf(':');
+            if (colon <= 0) return false;
+            host = address.Substring(0, colon);
+            if (host.StartsWith("[") && host.EndsWith("]")) host = host.Substring(1, host.Length - 2);
+            return host.Length > 0 && int.TryParse(address.Substring(colon + 1), out port) && port >= 1 && port <= 65535;
+        }
+
+        private static bool IsLoopback(string host)
+        {
+            if (host == "localhost") return true;
+            IPAddress ip;
+            return IPAddress.TryParse(host, out ip) && IPAddress.IsLoopback(ip);
+        }
+
+        private static void CheckConfig(ClientConfig config, Endpoint endpoint)
+        {
+            if (!string.IsNullOrEmpty(config.Token) && !endpoint.Tls && !IsLoopback(endpoint.Host))
+            {
+                if (!config.AllowPlaintextToken)
+                {
+                    // The C++ SDK's words (every client of the project says the same): tls is
+                    // TlsCaFile here, allow_plaintext_token AllowPlaintextToken.
+                    throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: token: would be sent in clear to '" +
+                        config.ServerAddress + "', where anyone on the network can read it: give tls (TlsOptions with the server's CA), " +
+                        "or set allow_plaintext_token on a network you trust");
+                }
+                Console.Error.WriteLine("haptic: warning: sending the bearer token in clear to '" + config.ServerAddress + "' (AllowPlaintextToken)");
+            }
+            if (string.IsNullOrEmpty(config.ClientName) || config.ClientName.Length > 64)
+            {
+                throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: ClientName: must be 1 to 64 characters");
+            }
+            if (config.RpcTimeoutMs == 0) throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: RpcTimeoutMs: must be positive");
+            if (config.HeartbeatPeriodMs == 0) throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: HeartbeatPeriodMs: must be positive");
+        }
+
+        private static byte[] KeyOf(JsonObject opened)
+        {
+            var key = Convert.FromBase64String(opened.String("udp_key"));
+            if (key.Length != 16) throw new HapticException(ErrorCode.Internal, "OpenSession: udp_key: " + key.Length + " bytes, not 16");
+            return key;
+        }
+
+        /// <summary>Where datagrams go: UdpAddress if given, else the server's host at the port
+        /// OpenSession named.</summary>
+        private IPEndPoint UdpEndpoint(uint udpPort)
+        {
+            string host = endpoint_.Host;
+            int port = (int)udpPort;
+            if (!string.IsNullOrEmpty(config_.UdpAddress) && !SplitHostPort(config_.UdpAddress, out host, out port))
+            {
+                throw new HapticException(ErrorCode.InvalidArgument, "ClientConfig: UdpAddress: '" + config_.UdpAddress + "' is not host:port");
+            }
+            IPAddress ip;
+            if (!IPAddress.TryParse(host, out ip))
+            {
+                try
+                {
+                    var addresses = Dns.GetHostAddresses(host);
+                    ip = Array.Find(addresses, a => a.AddressFamily == AddressFamily.InterNetwork) ?? (addresses.Length > 0 ? addresses[0] : null);
+                }
+                catch (SocketException e)
+                {
+                    throw new HapticException(ErrorCode.Connection, "OpenSession: cannot resolve '" + host + "': " + e.Message);
+                }
+                if (ip == null) throw new HapticException(ErrorCode.Connection, "OpenSession: '" + host + "' has no address");
+            }
+            return new IPEndPoint(ip, port);
+        }
+
+        // ---- calls ----
+
+        private List<KeyValuePair<string, string>> Headers()
+        {
+            var headers = new List<KeyValuePair<string, string>>(2);
+            if (token_.Length > 0) headers.Add(new KeyValuePair<string, string>("Authorization", "Bearer " + token_));
+            lock (identity_)
+            {
+                if (sessionSecret_.Length > 0) headers.Add(new KeyValuePair<string, string>("haptic-session-secret-bin", sessionSecret_));
+            }
+            return headers;
+        }
+
+        /// <summary>One unary call of haptic.v1.Haptic over the HTTP face: the reply's message, or
+        /// HapticException with the gRPC code mapped and "name: " before the server's words.</summary>
+        internal JsonObject Call(string name, JsonObject request, uint timeoutMs = 0)
+        {
+            var reply = channel_.Post("/haptic.v1.Haptic/" + name, Json.Write(request), Headers(),
+                                      (int)Math.Min(int.MaxValue, timeoutMs > 0 ? timeoutMs : config_.RpcTimeoutMs), name);
+            object parsed = null;
+            try { parsed = Json.Parse(reply.Body); }
+            catch (FormatException) { }
+            var message = parsed as JsonObject;
+            if (reply.Status == 200)
+            {
+                if (message == null) throw new HapticException(ErrorCode.Internal, name + ": the reply is not JSON: " + Clip(reply.Body));
+                return message;
+            }
+            if (message != null && message.Has("code")) throw Refusal(name, message.String("code"), message.String("message"));
+            throw new HapticException(reply.Status == 429 ? ErrorCode.ResourceExhausted : reply.Status == 413 ? ErrorCode.InvalidArgument : ErrorCode.Internal,
+                                      name + ": HTTP " + reply.Status + ": " + Clip(reply.Body.Trim()));
+        }
+
+        private static string Clip(string text) { return text.Length > 200 ? text.Substring(0, 200) + "…" : text; }
+
+        /// <summary>A Connect-style error as the SDK's (sdk/src/status_mapping.cpp).</summary>
+        internal static HapticException Refusal(string call, string code, string text)
+        {
+            string message = call + ": " + text;
+            switch (code)
+            {
+                case "unavailable": case "deadline_exceeded": case "canceled": return new HapticException(ErrorCode.Connection, message);
+                case "invalid_argument": case "out_of_range": return new HapticException(ErrorCode.InvalidArgument, message);
+                case "not_found": return new HapticException(ErrorCode.NotFound, message);
+                case "permission_denied": return new HapticException(ErrorCode.PermissionDenied, message);
+                case "unauthenticated": return new HapticException(ErrorCode.Unauthenticated, message);
+                case "resource_exhausted": return new HapticException(ErrorCode.ResourceExhausted, message);
+                case "failed_precondition":
+                    return new HapticException(text.StartsWith("api_version:") ? ErrorCode.VersionMismatch : ErrorCode.FailedPrecondition, message);
+            }
+            return new HapticException(ErrorCode.Internal, message);
+        }
+
+        private JsonObject SessionRef() { return new JsonObject().Add("session_id", SessionId); }
+
+        private JsonObject OpenSession()
+        {
+            var opened = Call("OpenSession", new JsonObject().Add("client_name", config_.ClientName).Add("api_version", ApiVersion)
+                                                              .Add("device_index", config_.DeviceIndex));
+            lock (identity_)
+            {
+                sessionId_ = opened.U64("session_id");
+                sessionSecret_ = opened.String("session_secret");
+            }
+            deviceInfo_ = Conversions.DeviceInfoOf(opened.Object("device"));
+            leaseTimeoutMs_ = opened.U32("lease_timeout_ms");
+            return opened;
+        }
+
+        private void CloseSession()
+        {
+            if (SessionId == 0) return;
+            try
+            {
+                Call("CloseSession", SessionRef());
+            }
+            catch (HapticException e)
+            {
+                // The server ended the session itself (an admin, a lease): nothing is left to close.
+                if (e.Code != ErrorCode.NotFound && e.Code != ErrorCode.PermissionDenied) throw;
+            }
+        }
+
+        private StateLink Link
         {
             get
             {
-                if (client_ == IntPtr.Zero) throw new HapticException(ErrorCode.FailedPrecondition, "Client: closed");
-                return client_;
+                if (closed_) throw new HapticException(ErrorCode.FailedPrecondition, "Client: closed");
+                return link_;
             }
         }
 
         /// <summary>Ends the session; its objects and fields go with it.</summary>
-        public void Dispose() { Close(true); GC.SuppressFinalize(this); }
-
-        private void Close(bool throwOnError)
+        public void Dispose()
         {
-            if (client_ == IntPtr.Zero) return;
-            var status = Native.haptic_client_close(client_, Check.Err);
-            if (status == (int)ErrorCode.FailedPrecondition)
+            if (closed_) return;
+            if (link_ != null && link_.OnReceiveThread || Thread.CurrentThread == supervisor_)
             {
-                // Called from inside one of its own callbacks: the library leaves the client open.
-                if (throwOnError) Check.Status(status);
-                return;
+                throw new HapticException(ErrorCode.FailedPrecondition, "Dispose: called from one of this client's own callbacks");
             }
-            client_ = IntPtr.Zero;
-            stateCallback_ = null;
-            eventCallback_ = null;
-            connectionCallback_ = null;
+            closed_ = true;
+            StopThreads();
+            try { CloseSession(); }
+            catch (HapticException) { }  // the lease cleans up what a failed close leaves
+            channel_.Dispose();
+            GC.SuppressFinalize(this);
+        }
+
+        private void StopThreads()
+        {
+            stopSupervisor_.Set();
+            if (supervisor_ != null && Thread.CurrentThread != supervisor_) supervisor_.Join();
+            EndEvents();
+            if (link_ != null) link_.Dispose();
         }
 
         // ---- the session ----
 
-        public DeviceInfo DeviceInfo
-        {
-            get
-            {
-                var info = new DeviceInfo { size = Check.SizeOf<DeviceInfo>() };
-                Check.Status(Native.haptic_client_device_info(Live, ref info, Check.Err));
-                return info;
-            }
-        }
+        public DeviceInfo DeviceInfo { get { Link.ToString(); return deviceInfo_; } }
+        public ulong SessionId { get { lock (identity_) return sessionId_; } }
+        public long LeaseTimeoutMs { get { return leaseTimeoutMs_; } }
+        public ConnectionState ConnectionState { get { return (ConnectionState)Volatile.Read(ref connectionState_); } }
 
-        public ulong SessionId { get { return Native.haptic_client_session_id(Live); } }
-        public long LeaseTimeoutMs { get { return Native.haptic_client_lease_timeout_ms(Live); } }
-        public ConnectionState ConnectionState { get { return (ConnectionState)Native.haptic_client_connection_state(Live); } }
-
-        /// <summary>Exceptions thrown by this client's callbacks (caught, so that none reaches the SDK's threads).</summary>
-        public long CallbackExceptions { get { return System.Threading.Interlocked.Read(ref callbackExceptions_); } }
-
-        // ---- state ----
-
-        /// <summary>Waits up to timeoutMs for a sample newer than the last one returned: true and the
-        /// newest in `state`, or false on timeout.</summary>
-        public bool PollState(out State state, uint timeoutMs)
-        {
-            state = new State { size = Check.SizeOf<State>() };
-            return Check.Status(Native.haptic_client_poll_state(Live, ref state, timeoutMs, Check.Err), true) == 0;
-        }
-
-        /// <summary>Waits up to timeoutMs until a sample of tick >= `tick` has arrived.</summary>
-        public bool WaitForTick(ulong tick, out State state, uint timeoutMs)
-        {
-            state = new State { size = Check.SizeOf<State>() };
-            return Check.Status(Native.haptic_client_wait_for_tick(Live, tick, ref state, timeoutMs, Check.Err), true) == 0;
-        }
-
-        public void Subscribe(uint decimation) { Check.Status(Native.haptic_client_subscribe(Live, decimation, Check.Err)); }
-
-        /// <summary>Calls `callback` on the SDK's receive thread with each newest State (null stops
-        /// it, returning once a call in progress has). Keep it short; guard what it shares.</summary>
-        public void OnState(Action<State> callback)
-        {
-            if (callback == null)
-            {
-                Check.Status(Native.haptic_client_on_state(Live, null, IntPtr.Zero, Check.Err));
-                stateCallback_ = null;
-                onState_ = null;
-                return;
-            }
-            onState_ = callback;
-            NativeStateCallback native = (ref State state, IntPtr user) =>
-            {
-                try { var cb = onState_; if (cb != null) cb(state); }
-                catch (Exception e) { CallbackFailed(e); }
-            };
-            Check.Status(Native.haptic_client_on_state(Live, native, IntPtr.Zero, Check.Err));
-            stateCallback_ = native;  // the library calls the new one from now on
-        }
-
-        /// <summary>Calls `callback` on an SDK thread with each server event from now on, starting
-        /// with WatchStarted (null stops it).</summary>
-        public void OnEvent(Action<Event> callback)
-        {
-            if (callback == null)
-            {
-                Check.Status(Native.haptic_client_on_event(Live, null, IntPtr.Zero, Check.Err));
-                eventCallback_ = null;
-                onEvent_ = null;
-                return;
-            }
-            onEvent_ = callback;
-            NativeEventCallback native = (ref NativeEvent e, IntPtr user) =>
-            {
-                try
-                {
-                    var cb = onEvent_;
-                    if (cb != null)
-                    {
-                        cb(new Event { Kind = (EventKind)e.Kind, SessionId = e.SessionId, ItemId = e.ItemId,
-                                       ServerTime = e.ServerTime, Message = Marshal.PtrToStringAnsi(e.Message) ?? "" });
-                    }
-                }
-                catch (Exception x) { CallbackFailed(x); }
-            };
-            Check.Status(Native.haptic_client_on_event(Live, native, IntPtr.Zero, Check.Err));
-            eventCallback_ = native;
-        }
-
-        /// <summary>Calls `callback` on the SDK's supervisor thread when the connection is lost and
-        /// when it resumes (null stops it).</summary>
-        public void OnConnection(Action<ConnectionChange> callback)
-        {
-            if (callback == null)
-            {
-                Check.Status(Native.haptic_client_on_connection(Live, null, IntPtr.Zero, Check.Err));
-                connectionCallback_ = null;
-                onConnection_ = null;
-                return;
-            }
-            onConnection_ = callback;
-            NativeConnectionCallback native = (ref NativeConnectionChange c, IntPtr user) =>
-            {
-                try
-                {
-                    var cb = onConnection_;
-                    if (cb != null)
-                    {
-                        cb(new ConnectionChange { State = (ConnectionState)c.State, SessionId = c.SessionId,
-                                                  NewSession = c.NewSession != 0, ItemsNotRestored = c.ItemsNotRestored,
-                                                  OutageMs = c.OutageMs, Reason = Marshal.PtrToStringAnsi(c.Reason) ?? "" });
-                    }
-                }
-                catch (Exception x) { CallbackFailed(x); }
-            };
-            Check.Status(Native.haptic_client_on_connection(Live, native, IntPtr.Zero, Check.Err));
-            connectionCallback_ = native;
-        }
+        /// <summary>Exceptions thrown by this client's callbacks (caught, so that none reaches its threads).</summary>
+        public long CallbackExceptions { get { return Interlocked.Read(ref callbackExceptions_); } }
 
         private void CallbackFailed(Exception e)
         {
-            if (System.Threading.Interlocked.Increment(ref callbackExceptions_) == 1)
+            if (Interlocked.Increment(ref callbackExceptions_) == 1)
             {
                 Console.Error.WriteLine("hapticd: a callback threw (counted in Client.CallbackExceptions): " + e);
             }
         }
 
-        public ReceiveCounters ReceiveCounters
+        // ---- state ----
+
+        /// <summary>Waits up to timeoutMs for a sample newer than the last one returned: true and the
+        /// newest in `state`, or false on timeout.</summary>
+        public bool PollState(out State state, uint timeoutMs) { return Link.Poll(out state, timeoutMs); }
+
+        /// <summary>Waits up to timeoutMs until a sample of tick >= `tick` has arrived.</summary>
+        public bool WaitForTick(ulong tick, out State state, uint timeoutMs) { return Link.WaitForTick(tick, out state, timeoutMs); }
+
+        /// <summary>Sets the state stream's decimation (every n-th tick; 0 stops it); for n > 0
+        /// waits until the server knows this client's UDP address.</summary>
+        public void Subscribe(uint decimation)
         {
-            get
+            var link = Link;
+            if (decimation > 0 && decimation_ == 0) link.NewSubscription();
+            decimation_ = decimation;
+            var request = SessionRef().Add("decimation", decimation);
+            if (config_.LockstepFlowControl) request.Add("ack_window", link.AckWindowCapacity);
+            long giveUp = SteadyClock.Ns() + config_.RpcTimeoutMs * 1000000L;
+            for (;;)
             {
-                var c = new ReceiveCounters { size = Check.SizeOf<ReceiveCounters>() };
-                Check.Status(Native.haptic_client_receive_counters(Live, ref c, Check.Err));
-                return c;
+                var reply = Call("SubscribeState", request);
+                link.AckWindow = reply.U32("ack_window");
+                if (decimation == 0 || reply.Bool("udp_endpoint_known")) return;
+                if (SteadyClock.Ns() > giveUp)
+                {
+                    throw new HapticException(ErrorCode.Connection, "SubscribeState: UDP heartbeats from this client do not reach the " +
+                                              "server's data-plane port (a firewall or NAT dropping UDP?)");
+                }
+                link.SendHeartbeatSoon();
+                Thread.Sleep(5);
             }
         }
 
+        /// <summary>Calls `callback` on the client's receive thread with each newest State (null
+        /// stops it, returning once a call in progress has). Keep it short; guard what it shares.</summary>
+        public void OnState(Action<State> callback)
+        {
+            var link = Link;
+            onState_ = callback;
+            if (callback == null) { link.OnState(null); return; }
+            link.OnState(state =>
+            {
+                try { var cb = onState_; if (cb != null) cb(state); }
+                catch (Exception e) { CallbackFailed(e); }
+            });
+        }
+
+        /// <summary>Calls `callback` on a thread of the client's with each server event from now on,
+        /// starting with WatchStarted (null stops it). The server's refusal is thrown here.</summary>
+        public void OnEvent(Action<Event> callback)
+        {
+            Link.ToString();
+            EndEvents();
+            onEvent_ = callback;
+            if (callback == null) return;
+            var watch = OpenWatch(e =>
+            {
+                try { var cb = onEvent_; if (cb != null) cb(e); }
+                catch (Exception x) { CallbackFailed(x); }
+            });
+            lock (eventsGate_) events_ = watch;
+        }
+
+        private void EndEvents()
+        {
+            EventWatch watch;
+            lock (eventsGate_) { watch = events_; events_ = null; }
+            if (watch != null) watch.End();
+        }
+
+        /// <summary>Opens a WatchEvents stream over WebSocket and runs `deliver` on its thread
+        /// with each event, WatchStarted first; throws the server's refusal.</summary>
+        internal EventWatch OpenWatch(Action<Event> deliver)
+        {
+            var ws = WebSocketChannel.Open(endpoint_, "/haptic.v1.Haptic/WatchEvents", Headers(), (int)config_.RpcTimeoutMs, "WatchEvents");
+            try
+            {
+                ws.SendText(Json.Write(new JsonObject().Add("request", SessionRef())));
+                string reason;
+                var first = ws.Receive(out reason);
+                if (first == null) throw new HapticException(ErrorCode.Connection, "WatchEvents: the stream ended at once: " + reason);
+                var message = Json.Parse(Encoding.UTF8.GetString(first)) as JsonObject ?? new JsonObject();
+                if (message.Has("error"))
+                {
+                    var error = message.Object("error");
+                    throw Refusal("WatchEvents", error.String("code"), error.String("message"));
+                }
+                return new EventWatch(ws, Conversions.EventOf(message.Object("event")), deliver);
+            }
+            catch
+            {
+                ws.Dispose();
+                throw;
+            }
+        }
+
+        /// <summary>Calls `callback` on the supervisor's thread when the connection is lost, when
+        /// it resumes, and when it ends for good (null stops it).</summary>
+        public void OnConnection(Action<ConnectionChange> callback) { onConnection_ = callback; }
+
+        public ReceiveCounters ReceiveCounters { get { return Link.Counters; } }
+
+        /// <summary>Heartbeats off: the client plays one that has vanished (its lease runs out).</summary>
         public void SetHeartbeatsEnabled(bool enabled)
         {
-            Check.Status(Native.haptic_client_set_heartbeats_enabled(Live, enabled ? 1 : 0, Check.Err));
+            heartbeatsEnabled_ = enabled;
+            Link.HeartbeatsEnabled = enabled;
+            if (enabled) link_.SendHeartbeatSoon();
         }
 
         /// <summary>The steady clock's now (ns), the clock of State's local times.</summary>
-        public static long SteadyClockNs() { return Native.haptic_steady_clock_ns(); }
+        public static long SteadyClockNs() { return SteadyClock.Ns(); }
 
         /// <summary>The server's time (s) at local steady-clock time `localNs`, or null before any sample.</summary>
-        public double? ServerTimeAt(long localNs)
-        {
-            double t;
-            return Native.haptic_client_server_time_at(Live, localNs, out t) != 0 ? t : (double?)null;
-        }
+        public double? ServerTimeAt(long localNs) { return Link.ServerTimeAt(localNs); }
 
         /// <summary>The server's time now (s), or null before any sample: a frame's time for Motion.</summary>
         public double? ServerTimeNow() { return ServerTimeAt(SteadyClockNs()); }
 
-        public long? ClockOffsetNs { get { long o; return Native.haptic_client_clock_offset_ns(Live, out o) != 0 ? o : (long?)null; } }
-        public double? ClockDrift { get { double d; return Native.haptic_client_clock_drift(Live, out d) != 0 ? d : (double?)null; } }
+        public long? ClockOffsetNs { get { return Link.ClockOffsetNs; } }
+        public double? ClockDrift { get { return Link.ClockDrift; } }
 
         // ---- objects and fields ----
 
-        public ObjectHandle AddWall(WallSpec s) { IntPtr h; s.size = Check.SizeOf<WallSpec>(); Check.Status(Native.haptic_client_add_wall(Live, ref s, out h, Check.Err)); return new ObjectHandle(h); }
-        public ObjectHandle AddSphere(SphereSpec s) { IntPtr h; s.size = Check.SizeOf<SphereSpec>(); Check.Status(Native.haptic_client_add_sphere(Live, ref s, out h, Check.Err)); return new ObjectHandle(h); }
-        public ObjectHandle AddBox(BoxSpec s) { IntPtr h; s.size = Check.SizeOf<BoxSpec>(); Check.Status(Native.haptic_client_add_box(Live, ref s, out h, Check.Err)); return new ObjectHandle(h); }
-        public ObjectHandle AddCapsule(CapsuleSpec s) { IntPtr h; s.size = Check.SizeOf<CapsuleSpec>(); Check.Status(Native.haptic_client_add_capsule(Live, ref s, out h, Check.Err)); return new ObjectHandle(h); }
-        public ObjectHandle AddTangentPlane(TangentPlaneSpec s) { IntPtr h; s.size = Check.SizeOf<TangentPlaneSpec>(); Check.Status(Native.haptic_client_add_tangent_plane(Live, ref s, out h, Check.Err)); return new ObjectHandle(h); }
+        private ulong Generation { get { return (ulong)Interlocked.Read(ref generation_); } }
+
+        /// <summary>CreateObject or CreateField (`call`, by the spec's kind), kept under a new key.</summary>
+        private ItemHandle Create(object spec, string call)
+        {
+            Link.ToString();
+            bool isObject;
+            var message = Conversions.ToProto(spec, out isObject, call, "spec");
+            var reply = isObject ? Call("CreateObject", SessionRef().Add("object", message))
+                                 : Call("CreateField", SessionRef().Add("field", message));
+            ulong key;
+            lock (itemsGate_)
+            {
+                key = nextKey_++;
+                items_[key] = new Item { IsObject = isObject, Message = message, ServerId = reply.U64("id") };
+            }
+            var stability = Conversions.StabilityOf(reply.Object("stability"), reply.Has("stability"));
+            return isObject ? (ItemHandle)new ObjectHandle(this, key, Generation, stability) : new FieldHandle(this, key, Generation, stability);
+        }
+
+        public ObjectHandle AddWall(WallSpec s) { return (ObjectHandle)Create(s, "CreateObject"); }
+        public ObjectHandle AddSphere(SphereSpec s) { return (ObjectHandle)Create(s, "CreateObject"); }
+        public ObjectHandle AddBox(BoxSpec s) { return (ObjectHandle)Create(s, "CreateObject"); }
+        public ObjectHandle AddCapsule(CapsuleSpec s) { return (ObjectHandle)Create(s, "CreateObject"); }
+        public ObjectHandle AddTangentPlane(TangentPlaneSpec s) { return (ObjectHandle)Create(s, "CreateObject"); }
         public ObjectHandle AddMesh(MeshSpec mesh)
         {
-            var client = Live;
-            using (var pinned = new PinnedMesh(mesh))
-            { IntPtr h;
-                var s = pinned.Spec;
-                Check.Status(Native.haptic_client_add_mesh(client, ref s, out h, Check.Err));
-                return new ObjectHandle(h);
+            if (mesh == null) throw new HapticException(ErrorCode.InvalidArgument, "CreateObject: object.mesh: is null");
+            return (ObjectHandle)Create(mesh, "CreateObject");
+        }
+        public FieldHandle AddField(SpringFieldSpec s) { return (FieldHandle)Create(s, "CreateField"); }
+        public FieldHandle AddField(DistanceSpringSpec s) { return (FieldHandle)Create(s, "CreateField"); }
+        public FieldHandle AddField(PotentialFieldSpec s) { return (FieldHandle)Create(s, "CreateField"); }
+        public FieldHandle AddField(LinearFieldSpec s) { return (FieldHandle)Create(s, "CreateField"); }
+        public FieldHandle AddField(ViscousFieldSpec s) { return (FieldHandle)Create(s, "CreateField"); }
+        public FieldHandle AddField(DetentFieldSpec s) { return (FieldHandle)Create(s, "CreateField"); }
+        public FieldHandle AddField(OrientationSpringSpec s) { return (FieldHandle)Create(s, "CreateField"); }
+        public FieldHandle AddField(OrientationDetentSpec s) { return (FieldHandle)Create(s, "CreateField"); }
+
+        /// <summary>The item's id on the server now; 0 if the client no longer holds it.</summary>
+        internal ulong ServerIdOf(ulong key, ulong generation)
+        {
+            if (generation != Generation) return 0;
+            lock (itemsGate_)
+            {
+                Item item;
+                return items_.TryGetValue(key, out item) ? item.ServerId : 0;
             }
         }
 
-        public FieldHandle AddField(SpringFieldSpec s) { IntPtr h; s.size = Check.SizeOf<SpringFieldSpec>(); Check.Status(Native.haptic_client_add_spring_field(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
-        public FieldHandle AddField(DistanceSpringSpec s) { IntPtr h; s.size = Check.SizeOf<DistanceSpringSpec>(); Check.Status(Native.haptic_client_add_distance_spring(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
-        public FieldHandle AddField(PotentialFieldSpec s) { IntPtr h; s.size = Check.SizeOf<PotentialFieldSpec>(); Check.Status(Native.haptic_client_add_potential_field(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
-        public FieldHandle AddField(LinearFieldSpec s) { IntPtr h; s.size = Check.SizeOf<LinearFieldSpec>(); Check.Status(Native.haptic_client_add_linear_field(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
-        public FieldHandle AddField(ViscousFieldSpec s) { IntPtr h; s.size = Check.SizeOf<ViscousFieldSpec>(); Check.Status(Native.haptic_client_add_viscous_field(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
-        public FieldHandle AddField(DetentFieldSpec s) { IntPtr h; s.size = Check.SizeOf<DetentFieldSpec>(); Check.Status(Native.haptic_client_add_detent_field(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
-        public FieldHandle AddField(OrientationSpringSpec s) { IntPtr h; s.size = Check.SizeOf<OrientationSpringSpec>(); Check.Status(Native.haptic_client_add_orientation_spring(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
-        public FieldHandle AddField(OrientationDetentSpec s) { IntPtr h; s.size = Check.SizeOf<OrientationDetentSpec>(); Check.Status(Native.haptic_client_add_orientation_detent(Live, ref s, out h, Check.Err)); return new FieldHandle(h); }
+        /// <summary>The item's server id, or NotFound naming `call` (an item a reconnection could
+        /// not register again says why; a stale handle's item is gone).</summary>
+        private ulong RequireServerId(ulong key, ulong generation, string call)
+        {
+            lock (itemsGate_)
+            {
+                Item item;
+                if (generation != Generation || !items_.TryGetValue(key, out item))
+                {
+                    throw new HapticException(ErrorCode.NotFound, call + ": the item is no longer this client's (a scene applied or a reset since)");
+                }
+                if (item.ServerId == 0)
+                {
+                    throw new HapticException(ErrorCode.NotFound, call + ": the item was not registered again after a reconnection: " + item.LostReason);
+                }
+                return item.ServerId;
+            }
+        }
+
+        internal StabilityReport UpdateItem(ItemHandle handle, object spec)
+        {
+            string call = handle.IsObject ? "UpdateObject" : "UpdateField";
+            ulong key = handle.Live(call);
+            Link.ToString();
+            bool isObject;
+            var message = Conversions.ToProto(spec, out isObject, call, "spec");
+            ulong id = RequireServerId(key, handle.Generation, call);
+            var reply = handle.IsObject ? Call(call, SessionRef().Add("object_id", id).Add("object", message))
+                                        : Call(call, SessionRef().Add("field_id", id).Add("field", message));
+            lock (itemsGate_)
+            {
+                Item item;
+                if (items_.TryGetValue(key, out item)) item.Message = message;
+            }
+            if (handle.IsObject) return Conversions.StabilityOf(reply.Object("stability"), reply.Has("stability"));
+            return new StabilityReport();  // UpdateField replies with nothing: an updated field's report is not known
+        }
+
+        internal void Remove(ulong key, ulong generation, bool isObject)
+        {
+            if (closed_ || generation != Generation) return;  // stale: its item is gone already
+            ulong id;
+            lock (itemsGate_)
+            {
+                Item item;
+                if (!items_.TryGetValue(key, out item)) return;
+                items_.Remove(key);
+                id = item.ServerId;
+            }
+            if (id == 0) return;
+            Call(isObject ? "DeleteObject" : "DeleteField", SessionRef().Add("id", id));
+        }
+
+        internal void Forget(ulong key) { lock (itemsGate_) items_.Remove(key); }
 
         // ---- scenes ----
+
+        private static JsonObject SceneMessage(IList<object> items, string call, out List<bool> kinds)
+        {
+            var objects = new List<object>();
+            var fields = new List<object>();
+            kinds = new List<bool>();
+            for (int i = 0; i < (items == null ? 0 : items.Count); ++i)
+            {
+                bool isObject;
+                var message = Conversions.ToProto(items[i], out isObject, call, "items[" + i + "]");
+                (isObject ? objects : fields).Add(message);
+                kinds.Add(isObject);
+            }
+            return new JsonObject().Add("objects", objects).Add("fields", fields);
+        }
 
         /// <summary>Replaces this session's whole scene with `items` (object and field specs in any
         /// order); all or nothing. Handles from earlier calls go stale.</summary>
         public AppliedScene ApplyScene(IList<object> items)
         {
-            var client = Live;
-            using (var scene = new NativeScene(items))
-            {
-                IntPtr applied;
-                Check.Status(Native.haptic_client_apply_scene(client, scene.Items, (uint)scene.Items.Length, out applied, Check.Err));
-                return TakeAll(applied);
-            }
+            List<bool> kinds;
+            var scene = SceneMessage(items, "ApplyScene", out kinds);
+            return Apply(scene);
         }
 
-        /// <summary>The same from a scene file (protobuf JSON, as hapticd --scene reads).</summary>
+        /// <summary>The same from a scene file (protobuf JSON of haptic.v1.Scene, as hapticd --scene reads).</summary>
         public AppliedScene ApplySceneFile(string path)
         {
-            IntPtr applied;
-            Check.Status(Native.haptic_client_apply_scene_file(Live, path, out applied, Check.Err));
-            return TakeAll(applied);
+            string text;
+            try { text = File.ReadAllText(path); }
+            catch (Exception e) { throw new HapticException(ErrorCode.InvalidArgument, "ApplySceneFile: path: cannot read '" + path + "': " + e.Message); }
+            JsonObject scene;
+            try { scene = Json.Parse(text) as JsonObject; }
+            catch (FormatException e) { throw new HapticException(ErrorCode.InvalidArgument, "ApplySceneFile: " + path + ": " + e.Message); }
+            if (scene == null) throw new HapticException(ErrorCode.InvalidArgument, "ApplySceneFile: " + path + ": not a JSON object");
+            return Apply(scene);
         }
 
-        private static AppliedScene TakeAll(IntPtr applied)
+        private AppliedScene Apply(JsonObject scene)
         {
+            Link.ToString();
+            var reply = Call("ApplyScene", SessionRef().Add("scene", scene));
             var result = new AppliedScene();
-            try
+            var objectIds = reply.Array("object_ids");
+            var fieldIds = reply.Array("field_ids");
+            var stability = reply.Array("object_stability");
+            var objects = scene.Array("objects");
+            var fields = scene.Array("fields");
+            lock (itemsGate_)
             {
-                uint objects, fields;
-                Native.haptic_applied_scene_counts(applied, out objects, out fields);
-                for (uint i = 0; i < objects; ++i)
+                items_.Clear();
+                ulong generation = (ulong)Interlocked.Increment(ref generation_);
+                for (int i = 0; i < objectIds.Count; ++i)
                 {
-                    result.Objects.Add(new ObjectHandle(Native.haptic_applied_scene_take_object(applied, i)));
-                    var r = new StabilityReport { size = Check.SizeOf<StabilityReport>() };
-                    Check.Status(Native.haptic_applied_scene_stability(applied, i, ref r, Check.Err));
-                    result.Stability.Add(r);
+                    ulong key = nextKey_++;
+                    items_[key] = new Item { IsObject = true, Message = i < objects.Count ? objects[i] as JsonObject : null, ServerId = Json.ToU64(objectIds[i]) };
+                    var report = Conversions.StabilityOf(i < stability.Count ? stability[i] as JsonObject ?? new JsonObject() : new JsonObject(), i < stability.Count);
+                    result.Objects.Add(new ObjectHandle(this, key, generation, report));
+                    result.Stability.Add(report);
                 }
-                for (uint i = 0; i < fields; ++i) result.Fields.Add(new FieldHandle(Native.haptic_applied_scene_take_field(applied, i)));
-            }
-            finally
-            {
-                Native.haptic_applied_scene_free(applied);
+                for (int i = 0; i < fieldIds.Count; ++i)
+                {
+                    ulong key = nextKey_++;
+                    items_[key] = new Item { IsObject = false, Message = i < fields.Count ? fields[i] as JsonObject : null, ServerId = Json.ToU64(fieldIds[i]) };
+                    result.Fields.Add(new FieldHandle(this, key, generation, new StabilityReport()));
+                }
             }
             return result;
         }
@@ -628,126 +813,47 @@ namespace Hapticd
         /// <summary>`items` as a scene file (the JSON ApplySceneFile reads).</summary>
         public static string SceneJson(IList<object> items)
         {
-            using (var scene = new NativeScene(items))
-            {
-                UIntPtr length;
-                Check.Status(Native.haptic_scene_json(scene.Items, (uint)scene.Items.Length, null, UIntPtr.Zero, out length, Check.Err));
-                var buffer = new byte[(int)length.ToUInt64() + 1];
-                Check.Status(Native.haptic_scene_json(scene.Items, (uint)scene.Items.Length, buffer, (UIntPtr)buffer.Length, out length, Check.Err));
-                return Encoding.UTF8.GetString(buffer, 0, (int)length.ToUInt64());
-            }
+            List<bool> kinds;
+            return Json.Write(SceneMessage(items, "ApplyScene", out kinds));
         }
 
         /// <summary>This session's objects and fields as the server holds them; with allSessions, everyone's.</summary>
         public RegisteredScene Scene(bool allSessions = false)
         {
-            IntPtr scene;
-            Check.Status(Native.haptic_client_scene(Live, allSessions ? 1 : 0, out scene, Check.Err));
+            Link.ToString();
+            var reply = Call("GetScene", SessionRef().Add("all_sessions", allSessions));
+            var scene = reply.Object("scene");
             var result = new RegisteredScene();
-            try
-            {
-                uint objects, fields;
-                Native.haptic_registered_scene_counts(scene, out objects, out fields);
-                for (uint i = 0; i < objects; ++i)
-                {
-                    var entry = new NativeSceneEntry { size = Check.SizeOf<NativeSceneEntry>() };
-                    Check.Status(Native.haptic_registered_scene_object(scene, i, ref entry, Check.Err));
-                    result.Objects.Add(ReadSpec(scene, i, (Kind)entry.Kind, true));
-                    result.ObjectIds.Add(entry.Id);
-                    result.ObjectSessions.Add(entry.SessionId);
-                }
-                for (uint i = 0; i < fields; ++i)
-                {
-                    var entry = new NativeSceneEntry { size = Check.SizeOf<NativeSceneEntry>() };
-                    Check.Status(Native.haptic_registered_scene_field(scene, i, ref entry, Check.Err));
-                    result.Fields.Add(ReadSpec(scene, i, (Kind)entry.Kind, false));
-                    result.FieldIds.Add(entry.Id);
-                    result.FieldSessions.Add(entry.SessionId);
-                }
-            }
-            finally
-            {
-                Native.haptic_registered_scene_free(scene);
-            }
+            foreach (var o in scene.Array("objects")) result.Objects.Add(Conversions.ObjectSpecOf(o as JsonObject ?? new JsonObject()));
+            foreach (var f in scene.Array("fields")) result.Fields.Add(Conversions.FieldSpecOf(f as JsonObject ?? new JsonObject()));
+            foreach (var id in reply.Array("object_ids")) result.ObjectIds.Add(Json.ToU64(id));
+            foreach (var id in reply.Array("field_ids")) result.FieldIds.Add(Json.ToU64(id));
+            foreach (var id in reply.Array("object_sessions")) result.ObjectSessions.Add(Json.ToU64(id));
+            foreach (var id in reply.Array("field_sessions")) result.FieldSessions.Add(Json.ToU64(id));
             return result;
-        }
-
-        private static object ReadSpec(IntPtr scene, uint index, Kind kind, bool isObject)
-        {
-            switch (kind)
-            {
-                case Kind.Wall: return Read<WallSpec>(scene, index, isObject);
-                case Kind.Sphere: return Read<SphereSpec>(scene, index, isObject);
-                case Kind.Box: return Read<BoxSpec>(scene, index, isObject);
-                case Kind.Capsule: return Read<CapsuleSpec>(scene, index, isObject);
-                case Kind.TangentPlane: return Read<TangentPlaneSpec>(scene, index, isObject);
-                case Kind.Mesh:
-                {
-                    var n = Read<NativeMeshSpec>(scene, index, isObject);  // arrays point into the scene
-                    var mesh = new MeshSpec { Pose = n.Pose, Impedance = n.Impedance, Shared = n.Shared, AcrossSites = n.AcrossSites };
-                    mesh.Vertices = new Vec3[n.VertexCount];
-                    var stride = Marshal.SizeOf(typeof(Vec3));
-                    for (int v = 0; v < mesh.Vertices.Length; ++v)
-                    {
-                        mesh.Vertices[v] = (Vec3)Marshal.PtrToStructure(new IntPtr(n.Vertices.ToInt64() + v * stride), typeof(Vec3));
-                    }
-                    var indices = new int[n.IndexCount];
-                    if (indices.Length > 0) Marshal.Copy(n.Indices, indices, 0, indices.Length);
-                    mesh.Indices = Array.ConvertAll(indices, i => (uint)i);
-                    return mesh;
-                }
-                case Kind.SpringField: return Read<SpringFieldSpec>(scene, index, isObject);
-                case Kind.DistanceSpring: return Read<DistanceSpringSpec>(scene, index, isObject);
-                case Kind.PotentialField: return Read<PotentialFieldSpec>(scene, index, isObject);
-                case Kind.LinearField: return Read<LinearFieldSpec>(scene, index, isObject);
-                case Kind.ViscousField: return Read<ViscousFieldSpec>(scene, index, isObject);
-                case Kind.DetentField: return Read<DetentFieldSpec>(scene, index, isObject);
-                case Kind.OrientationSpring: return Read<OrientationSpringSpec>(scene, index, isObject);
-                case Kind.OrientationDetent: return Read<OrientationDetentSpec>(scene, index, isObject);
-            }
-            throw new HapticException(ErrorCode.Internal, "GetScene: kind: " + (int)kind + " is not known to this binding");
-        }
-
-        private static T Read<T>(IntPtr scene, uint index, bool isObject) where T : struct
-        {
-            var block = Marshal.AllocHGlobal(Marshal.SizeOf(typeof(T)));
-            try
-            {
-                for (int i = 0; i < Marshal.SizeOf(typeof(T)); ++i) Marshal.WriteByte(block, i, 0);
-                Marshal.WriteInt32(block, (int)Check.SizeOf<T>());
-                Check.Status(isObject ? Native.haptic_registered_scene_object_spec(scene, index, block, Check.Err)
-                                      : Native.haptic_registered_scene_field_spec(scene, index, block, Check.Err));
-                return (T)Marshal.PtrToStructure(block, typeof(T));
-            }
-            finally
-            {
-                Marshal.FreeHGlobal(block);
-            }
         }
 
         public ItemEnergy[] SceneEnergy()
         {
-            uint count;
-            Check.Status(Native.haptic_client_scene_energy(Live, null, 0, out count, Check.Err));
-            var items = new ItemEnergy[count];
-            Check.Status(Native.haptic_client_scene_energy(Live, items, count, out count, Check.Err));
-            return count < items.Length ? SubArray(items, count) : items;
+            var items = new List<ItemEnergy>();
+            foreach (var i in Call("GetSceneEnergy", SessionRef()).Array("items"))
+            {
+                var e = i as JsonObject ?? new JsonObject();
+                items.Add(new ItemEnergy { Id = e.U64("id"), SessionId = e.U64("session_id"), IsObject = e.Bool("is_object"),
+                                           GivenToDevice = e.Double("given_to_device"), AbsorbedFromDevice = e.Double("absorbed_from_device") });
+            }
+            return items.ToArray();
         }
 
         public ObjectState[] ObjectStates()
         {
-            uint count;
-            Check.Status(Native.haptic_client_object_states(Live, null, 0, out count, Check.Err));
-            var states = new ObjectState[count];
-            Check.Status(Native.haptic_client_object_states(Live, states, count, out count, Check.Err));
-            return count < states.Length ? SubArray(states, count) : states;
-        }
-
-        private static T[] SubArray<T>(T[] items, uint count)
-        {
-            var result = new T[count];
-            Array.Copy(items, result, count);
-            return result;
+            var states = new List<ObjectState>();
+            foreach (var i in Call("GetObjectStates", SessionRef()).Array("objects"))
+            {
+                var o = i as JsonObject ?? new JsonObject();
+                states.Add(new ObjectState { Id = o.U64("id"), Position = Conversions.V(o.Object("position")), Velocity = Conversions.V(o.Object("velocity")) });
+            }
+            return states.ToArray();
         }
 
         // ---- the simulated operator, lockstep ----
@@ -755,160 +861,281 @@ namespace Hapticd
         public void SetOperator(OperatorInput input)
         {
             if (input == null) throw new HapticException(ErrorCode.InvalidArgument, "SetOperator: input: is null");
-            var samples = input.ProfileSamples ?? new Vec3[0];
-            var pinned = GCHandle.Alloc(samples, GCHandleType.Pinned);
-            try
-            {
-                var n = new NativeOperatorInput
-                {
-                    size = Check.SizeOf<NativeOperatorInput>(), Mode = (int)input.Mode, Target = input.Target,
-                    Stiffness = input.Stiffness, Damping = input.Damping, Mass = input.Mass, Grip = (int)input.Grip,
-                    PathShape = (int)input.PathShape, PathEnd = input.PathEnd, PathDurationS = input.PathDurationS,
-                    PathAmplitude = input.PathAmplitude, PathFrequencyHz = input.PathFrequencyHz, Force = input.Force,
-                    ProfileShape = (int)input.ProfileShape, ProfileRepeat = input.ProfileRepeat ? 1 : 0,
-                    ProfileStartS = input.ProfileStartS, ProfileRiseS = input.ProfileRiseS,
-                    ProfileFrequencyHz = input.ProfileFrequencyHz, ProfileOffset = input.ProfileOffset,
-                    ProfileSamples = pinned.AddrOfPinnedObject(), ProfileSampleCount = (uint)samples.Length,
-                    ProfileSamplePeriodS = input.ProfileSamplePeriodS,
-                };
-                Check.Status(Native.haptic_client_set_operator(Live, ref n, Check.Err));
-            }
-            finally
-            {
-                pinned.Free();
-            }
+            Call("SetOperator", SessionRef().Add("input", Conversions.OperatorJson(input)));
         }
 
         /// <summary>Lockstep servers only: runs `ticks` ticks; returns the last one's index.</summary>
         public ulong Step(uint ticks)
         {
-            ulong last;
-            Check.Status(Native.haptic_client_step(Live, ticks, out last, Check.Err));
-            return last;
+            var link = Link;
+            // As long as the same ticks take in real time, beyond RpcTimeoutMs: a slow reader slows a Step.
+            double rate = deviceInfo_.LoopRateHz > 0 ? deviceInfo_.LoopRateHz : 1000.0;
+            uint timeout = (uint)Math.Min(uint.MaxValue, config_.RpcTimeoutMs + Math.Ceiling(ticks * 1000.0 / rate));
+            var reply = Call("Step", SessionRef().Add("ticks", ticks), timeout);
+            NoteRun(reply.U64("run"));
+            if (reply.Has("state")) link.Offer(Conversions.StateOf(reply.Object("state"), SteadyClock.Ns()));
+            return reply.U64("tick");
         }
 
-        /// <summary>Lockstep servers with simulated devices only: puts the server back as it started.</summary>
-        public void Reset() { Check.Status(Native.haptic_client_reset(Live, Check.Err)); }
+        /// <summary>A Step reply's run: if another client reset the server since, the ticks this
+        /// client knew are forgotten before the reply's sample is offered.</summary>
+        private void NoteRun(ulong run)
+        {
+            lock (runGate_)
+            {
+                if (run == knownRun_) return;
+                knownRun_ = run;
+            }
+            link_.RestartTicks();
+        }
+
+        /// <summary>Lockstep servers with simulated devices only: puts the server back as it
+        /// started; this session's items are gone (handles go stale) and ticks count from 1.</summary>
+        public void Reset()
+        {
+            var link = Link;
+            var reply = Call("Reset", SessionRef());
+            lock (itemsGate_)
+            {
+                items_.Clear();
+                Interlocked.Increment(ref generation_);
+            }
+            lock (runGate_) knownRun_ = reply.U64("run");
+            link.RestartTicks();
+        }
 
         // ---- administration ----
 
-        public Stats Stats()
-        {
-            var counters = new StatsCounters { size = Check.SizeOf<StatsCounters>() };
-            Check.Status(Native.haptic_client_stats(Live, ref counters, null, 0, null, 0, Check.Err));
-            var stats = new Stats
-            {
-                Clients = new StreamStats[counters.ClientCount + 4],  // room for sessions opened meanwhile
-                Couplings = new CouplingStats[counters.CouplingCount + 4],
-            };
-            Check.Status(Native.haptic_client_stats(Live, ref counters, stats.Clients, (uint)stats.Clients.Length,
-                                                    stats.Couplings, (uint)stats.Couplings.Length, Check.Err));
-            stats.Counters = counters;
-            stats.Clients = SubArray(stats.Clients, Math.Min(counters.ClientCount, (uint)stats.Clients.Length));
-            stats.Couplings = SubArray(stats.Couplings, Math.Min(counters.CouplingCount, (uint)stats.Couplings.Length));
-            return stats;
-        }
+        public Stats Stats() { return Conversions.StatsOf(Call("GetStats", SessionRef())); }
 
         public SessionSummary[] Sessions()
         {
-            uint count;
-            Check.Status(Native.haptic_client_sessions(Live, null, 0, out count, Check.Err));
-            var sessions = new SessionSummary[count + 4];
-            Check.Status(Native.haptic_client_sessions(Live, sessions, (uint)sessions.Length, out count, Check.Err));
-            return SubArray(sessions, Math.Min(count, (uint)sessions.Length));
+            var list = new List<SessionSummary>();
+            foreach (var s in Call("ListSessions", SessionRef()).Array("sessions")) list.Add(Conversions.SessionOf(s as JsonObject ?? new JsonObject()));
+            return list.ToArray();
         }
 
         public void KickSession(ulong sessionId, string reason = "")
         {
-            Check.Status(Native.haptic_client_kick_session(Live, sessionId, reason ?? "", Check.Err));
+            Call("KickSession", SessionRef().Add("target_session_id", sessionId).Add("reason", reason ?? ""));
         }
 
+        /// <summary>Starts the server's own recording (its recording_dir) under `name`.</summary>
         public RecordingStatus StartRecording(string name)
         {
-            var status = new RecordingStatus { size = Check.SizeOf<RecordingStatus>() };
-            Check.Status(Native.haptic_client_start_recording(Live, name, ref status, Check.Err));
-            return status;
+            return Conversions.RecordingOf(Call("StartRecording", SessionRef().Add("name", name ?? "")));
         }
 
-        /// <summary>Starts recording what this client receives into a file (docs/recorder.md).
+        public RecordingStatus StopRecording() { return Conversions.RecordingOf(Call("StopRecording", SessionRef())); }
+
+        /// <summary>Starts recording what this client receives into a CSV file (docs/recorder.md).
         /// Refused (HapticException, InvalidArgument naming the field) for a bad path or an
         /// existing file; nothing is left behind then.</summary>
         public Recorder Record(RecorderOptions options)
         {
             if (options == null) throw new HapticException(ErrorCode.InvalidArgument, "record: options: is null");
-            var n = new NativeRecorderOptions
+            var link = Link;
+            var recorder = new Recorder(options);
+            try
             {
-                size = Check.SizeOf<NativeRecorderOptions>(), Path = options.Path ?? "", Format = (int)options.Format,
-                Events = options.Events ? 1 : 0, Overwrite = options.Overwrite ? 1 : 0, QueueCapacity = options.QueueCapacity,
-            };
-            IntPtr recorder;
-            Check.Status(Native.haptic_client_record(Live, ref n, out recorder, Check.Err));
-            return new Recorder(recorder);
-        }
-
-        public RecordingStatus StopRecording()
-        {
-            var status = new RecordingStatus { size = Check.SizeOf<RecordingStatus>() };
-            Check.Status(Native.haptic_client_stop_recording(Live, ref status, Check.Err));
-            return status;
-        }
-    }
-
-    /// <summary>Records what a client receives into CSV or HDF5 (docs/recorder.md): every State it
-    /// accepts, and the server's events. Dispose (or Close) drains, flushes and closes the file.</summary>
-    public sealed class Recorder : IDisposable
-    {
-        private IntPtr recorder_;
-        private RecorderStats totals_;
-        public string Path { get; private set; }
-        public string EventsPath { get; private set; }
-
-        internal Recorder(IntPtr recorder)
-        {
-            recorder_ = recorder;
-            Path = Marshal.PtrToStringAnsi(Native.haptic_recorder_path(recorder)) ?? "";
-            EventsPath = Marshal.PtrToStringAnsi(Native.haptic_recorder_events_path(recorder)) ?? "";
-        }
-        // A finalizer must not throw (it would end the process); Close only reports a bad size.
-        ~Recorder() { try { Close(); } catch (HapticException) { } }
-
-        public bool Recording { get { return recorder_ != IntPtr.Zero; } }
-
-        /// <summary>The totals so far; after Close, the final ones.</summary>
-        public RecorderStats Stats
-        {
-            get
+                if (options.Events)
+                {
+                    var watch = OpenWatch(recorder.AddEvent);
+                    recorder.Watch = watch;
+                }
+            }
+            catch
             {
-                if (recorder_ == IntPtr.Zero) return totals_;
-                var stats = new RecorderStats { size = Check.SizeOf<RecorderStats>() };
-                Check.Status(Native.haptic_recorder_get_stats(recorder_, ref stats, Check.Err));
-                return stats;
+                recorder.Close();
+                throw;
+            }
+            recorder.Attach(link);
+            return recorder;
+        }
+
+        // ---- the connection's supervision ----
+
+        private void Announce(ConnectionChange change)
+        {
+            Volatile.Write(ref connectionState_, (int)change.State);
+            Recorder.AnnounceAll(change);
+            try { var cb = onConnection_; if (cb != null) cb(change); }
+            catch (Exception e) { CallbackFailed(e); }
+        }
+
+        private enum Probe { Alive, Unreachable, SessionGone, Ended }
+
+        /// <summary>Probes a quiet connection every lease / 4 (20 to 500 ms); a failed probe is a
+        /// loss, recovered with backoff: the same session if it still exists, else a new one with
+        /// the items registered again, the stream and the events resumed (as the C++ SDK).</summary>
+        private void Supervise()
+        {
+            int period = (int)Math.Min(500, Math.Max(20, leaseTimeoutMs_ / 4));
+            while (!stopSupervisor_.WaitOne(period))
+            {
+                if (!heartbeatsEnabled_) continue;  // playing a vanished client: let the lease run out
+                string why;
+                var state = ProbeNow(out why);
+                if (state == Probe.Ended)
+                {
+                    Announce(new ConnectionChange { State = ConnectionState.Ended, SessionId = SessionId, Reason = why });
+                    return;
+                }
+                if (state != Probe.Alive && !Recover(why)) return;
             }
         }
 
-        /// <summary>Stops recording, writes what is queued, flushes and closes the file(s); the
-        /// totals (again on later calls). A failed write is in the totals.</summary>
-        public RecorderStats Close()
+        private Probe ProbeNow(out string why)
         {
-            if (recorder_ == IntPtr.Zero) return totals_;
-            var totals = new RecorderStats { size = Check.SizeOf<RecorderStats>() };
-            var status = Native.haptic_recorder_close(recorder_, ref totals, Check.Err);
-            recorder_ = IntPtr.Zero;
-            totals_ = totals;
-            GC.SuppressFinalize(this);
-            Check.Status(status);
-            return totals_;
+            why = "";
+            // Datagrams within half a lease: the server holds the session and reaches us.
+            long heard = link_.LastHeardNs;
+            if (heard != 0 && SteadyClock.Ns() - heard < leaseTimeoutMs_ * 500000L) return Probe.Alive;
+            try
+            {
+                Call("GetDeviceInfo", SessionRef(), (uint)Math.Max(1, Math.Min(config_.RpcTimeoutMs, leaseTimeoutMs_ / 2)));
+                return Probe.Alive;
+            }
+            catch (HapticException e)
+            {
+                why = e.Message;
+                switch (e.Code)
+                {
+                    case ErrorCode.NotFound: why = "the server no longer knows session " + SessionId + ": " + e.Message; return Probe.SessionGone;
+                    case ErrorCode.Connection: why = "the server does not answer: " + e.Message; return Probe.Unreachable;
+                    case ErrorCode.PermissionDenied: case ErrorCode.Unauthenticated: return Probe.Ended;
+                    default: return Probe.Alive;
+                }
+            }
         }
 
-        public void Dispose() { Close(); }
+        private bool Recover(string why)
+        {
+            long lostAt = SteadyClock.Ns();
+            Announce(new ConnectionChange { State = ConnectionState.Lost, SessionId = SessionId, Reason = why });
+            long backoff = 0;
+            bool gone = false;
+            for (;;)
+            {
+                string nowWhy = "";
+                var state = gone ? Probe.SessionGone : ProbeNow(out nowWhy);
+                if (state == Probe.Ended)
+                {
+                    Announce(new ConnectionChange { State = ConnectionState.Ended, SessionId = SessionId, Reason = nowWhy });
+                    return false;
+                }
+                var resumed = new ConnectionChange { State = ConnectionState.Resumed };
+                bool done = state == Probe.Alive;
+                if (state == Probe.SessionGone)
+                {
+                    gone = true;  // from here on only a new session helps
+                    try
+                    {
+                        Reopen();
+                        done = true;
+                        resumed.NewSession = true;
+                        lock (itemsGate_) foreach (var item in items_.Values) if (item.ServerId == 0) resumed.ItemsNotRestored++;
+                    }
+                    catch (HapticException e) { nowWhy = e.Message; }
+                }
+                if (done)
+                {
+                    resumed.SessionId = SessionId;
+                    resumed.OutageMs = (SteadyClock.Ns() - lostAt) / 1000000L;
+                    resumed.Reason = "after " + resumed.OutageMs + " ms";
+                    if (decimation_ > 0 && resumed.NewSession)
+                    {
+                        link_.CountLost((ulong)(resumed.OutageMs * 1e-3 * deviceInfo_.LoopRateHz / decimation_));
+                    }
+                    link_.CountReconnect();
+                    Announce(resumed);
+                    return true;
+                }
+                long outage = (SteadyClock.Ns() - lostAt) / 1000000L;
+                backoff = NextReconnectDelay(backoff, outage);
+                if (stopSupervisor_.WaitOne((int)backoff)) return false;
+            }
+        }
+
+        /// <summary>The C++ SDK's backoff (client_core.hpp): from the minimum, doubling, at most
+        /// 100 ms through the first 10 s of a loss, then on to the maximum.</summary>
+        private long NextReconnectDelay(long previous, long outageMs)
+        {
+            long min = Math.Max(1, config_.ReconnectBackoffMinMs), max = Math.Max(min, config_.ReconnectBackoffMaxMs);
+            long next = previous == 0 ? min : previous * 2;
+            long cap = outageMs < 10000 ? Math.Max(100, min) : max;
+            return Math.Min(Math.Min(next, cap), max);
+        }
+
+        private void Reopen()
+        {
+            var opened = OpenSession();
+            link_.Rebind(UdpEndpoint(opened.U32("udp_port")), opened.U64("session_id"), KeyOf(opened));
+            lock (itemsGate_)
+            {
+                // Every item again, in the order made; one the new server refuses keeps its reason.
+                foreach (var item in items_.Values)
+                {
+                    if (item.Message == null) continue;
+                    try
+                    {
+                        var reply = item.IsObject ? Call("CreateObject", SessionRef().Add("object", item.Message))
+                                                  : Call("CreateField", SessionRef().Add("field", item.Message));
+                        item.ServerId = reply.U64("id");
+                    }
+                    catch (HapticException e)
+                    {
+                        item.ServerId = 0;
+                        item.LostReason = e.Message;
+                    }
+                }
+            }
+            if (decimation_ > 0)
+            {
+                try { Subscribe(decimation_); }
+                catch (HapticException) { }  // the stream stays off until Subscribe is called again
+            }
+            if (onEvent_ != null)
+            {
+                try { OnEvent(onEvent_); }
+                catch (HapticException) { }
+            }
+        }
     }
 
-    /// <summary>Between and beyond the samples: the tool's position at a server time a frame needs.</summary>
-    public static class Motion
+    /// <summary>A WatchEvents stream's reading thread: hands each event to `deliver`.</summary>
+    internal sealed class EventWatch
     {
-        /// <summary>The position at server time t between samples a and b (cubic Hermite).</summary>
-        public static Vec3 Interpolate(State a, State b, double t) { return Native.haptic_interpolate_position(ref a, ref b, t); }
-        /// <summary>The position at server time t after `latest`, with the acceleration the two newest imply.</summary>
-        public static Vec3 Predict(State previous, State latest, double t) { return Native.haptic_predict_position(ref previous, ref latest, t); }
+        private readonly WebSocketChannel ws_;
+        private readonly Thread thread_;
+
+        internal EventWatch(WebSocketChannel ws, Event first, Action<Event> deliver)
+        {
+            ws_ = ws;
+            thread_ = new Thread(() =>
+            {
+                deliver(first);
+                for (;;)
+                {
+                    string reason;
+                    var bytes = ws_.Receive(out reason);
+                    if (bytes == null) return;
+                    JsonObject message;
+                    try { message = Json.Parse(Encoding.UTF8.GetString(bytes)) as JsonObject; }
+                    catch (FormatException) { continue; }
+                    if (message != null && message.Has("event")) deliver(Conversions.EventOf(message.Object("event")));
+                }
+            }) { IsBackground = true, Name = "hapticd events" };
+            thread_.Start();
+        }
+
+        internal bool OnThread { get { return Thread.CurrentThread == thread_; } }
+
+        /// <summary>Closes the stream and waits for its thread (unless called from it).</summary>
+        internal void End()
+        {
+            ws_.Dispose();
+            if (Thread.CurrentThread != thread_) thread_.Join();
+        }
     }
 }

@@ -1,12 +1,10 @@
-// Value types of the hapticd C# binding: the C API's structs (haptic/haptic_c.h, version 1) laid
-// out field for field, so that they cross P/Invoke as they are. SI units; positions, velocities
-// and forces in the device's world frame W (docs/architecture.md).
+// Value types of the hapticd C# client: the C++ SDK's types (sdk/include/haptic/types.hpp) field
+// for field, with its defaults. SI units; positions, velocities and forces in the device's world
+// frame W (docs/architecture.md).
 using System;
-using System.Runtime.InteropServices;
 
 namespace Hapticd
 {
-    [StructLayout(LayoutKind.Sequential)]
     public struct Vec3
     {
         public double X, Y, Z;
@@ -15,7 +13,6 @@ namespace Hapticd
     }
 
     /// <summary>Unit quaternion (w, x, y, z).</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct Quaternion
     {
         public double W, X, Y, Z;
@@ -24,7 +21,6 @@ namespace Hapticd
     }
 
     /// <summary>Where an object is: its origin (m) and orientation in W.</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct Pose
     {
         public Vec3 Position;
@@ -37,7 +33,6 @@ namespace Hapticd
     public enum ImpedanceLaw : int { Velocity = 0, BackwardDifference = 1, ExactZoh = 2, Tustin = 3 }
 
     /// <summary>A virtual spring-damper with optional Coulomb friction.</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct Impedance
     {
         public double Stiffness;       // N/m, finite, >= 0
@@ -46,13 +41,12 @@ namespace Hapticd
         public double DynamicFriction;
         public double Mass;            // kg, of the discrete laws
         public ImpedanceLaw Law;
-        [MarshalAs(UnmanagedType.Bool)] public bool TransparencyOptimalDamping;
-        [MarshalAs(UnmanagedType.Bool)] public bool VirtualCoupling;
+        public bool TransparencyOptimalDamping;
+        public bool VirtualCoupling;
         public Impedance(double stiffness, double damping) : this() { Stiffness = stiffness; Damping = damping; }
     }
 
     /// <summary>Mass > 0 makes an object a body the tool can push (000 eq. 7.1).</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct Dynamics
     {
         public double Mass;     // kg; 0: fixed
@@ -63,83 +57,71 @@ namespace Hapticd
     public enum DistanceKind : int { Point = 0, Line = 1, Plane = 2, Sphere = 3 }
 
     /// <summary>The distance function the fields are built on.</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct Distance
     {
         public DistanceKind Kind;
         public Vec3 Origin;   // m
         public Vec3 Axis;     // Line: direction; Plane: normal
         public double Radius; // Sphere, m
+        /// <summary>A point distance about the origin, axis +z (the C++ SDK's default).</summary>
+        public static Distance Default { get { return new Distance { Axis = new Vec3(0, 0, 1) }; } }
     }
 
     // ---- object specs: each has Default (the C++ SDK's defaults, from the library) ----
 
     /// <summary>A plane the tool stays above: through Point, outward Normal.</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct WallSpec
     {
-        internal uint size;
         public Vec3 Point;
         public Vec3 Normal;
         public Impedance Impedance;
-        [MarshalAs(UnmanagedType.Bool)] public bool Shared;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static WallSpec Default { get { var s = new WallSpec(); Native.haptic_wall_spec_init(ref s); return s; } }
+        public bool Shared;
+        public bool AcrossSites;
+        public static WallSpec Default { get { return new WallSpec { Normal = new Vec3(0, 0, 1) }; } }
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct SphereSpec
     {
-        internal uint size;
         public Vec3 Center;
         public double Radius;
         public Impedance Impedance;
         public Dynamics Dynamics;
-        [MarshalAs(UnmanagedType.Bool)] public bool Shared;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static SphereSpec Default { get { var s = new SphereSpec(); Native.haptic_sphere_spec_init(ref s); return s; } }
+        public bool Shared;
+        public bool AcrossSites;
+        public static SphereSpec Default { get { return new SphereSpec(); } }
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct BoxSpec
     {
-        internal uint size;
         public Pose Pose;
         public Vec3 HalfExtents;
         public Impedance Impedance;
         public Dynamics Dynamics;
-        [MarshalAs(UnmanagedType.Bool)] public bool Shared;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static BoxSpec Default { get { var s = new BoxSpec(); Native.haptic_box_spec_init(ref s); return s; } }
+        public bool Shared;
+        public bool AcrossSites;
+        public static BoxSpec Default { get { return new BoxSpec { Pose = Pose.At(new Vec3()) }; } }
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct CapsuleSpec
     {
-        internal uint size;
         public Pose Pose;
         public double Radius;
         public double HalfLength;
         public Impedance Impedance;
         public Dynamics Dynamics;
-        [MarshalAs(UnmanagedType.Bool)] public bool Shared;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static CapsuleSpec Default { get { var s = new CapsuleSpec(); Native.haptic_capsule_spec_init(ref s); return s; } }
+        public bool Shared;
+        public bool AcrossSites;
+        public static CapsuleSpec Default { get { return new CapsuleSpec { Pose = Pose.At(new Vec3()) }; } }
     }
 
     /// <summary>Russo's tangent-plane local model.</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct TangentPlaneSpec
     {
-        internal uint size;
         public Pose Pose;
         public Vec3 Normal;
         public Vec3 Reference;
         public double TangentialStiffness;
         public double TangentialDamping;
         public Impedance Impedance;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static TangentPlaneSpec Default { get { var s = new TangentPlaneSpec(); Native.haptic_tangent_plane_spec_init(ref s); return s; } }
+        public bool AcrossSites;
+        public static TangentPlaneSpec Default { get { return new TangentPlaneSpec { Pose = Pose.At(new Vec3()), Normal = new Vec3(0, 0, 1) }; } }
     }
 
     /// <summary>A triangle mesh in its pose's frame: three indices per triangle.</summary>
@@ -154,37 +136,28 @@ namespace Hapticd
     }
 
     // ---- field specs ----
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct SpringFieldSpec
     {
-        internal uint size;
         public Vec3 Anchor;
         public double Stiffness;
         public double Damping;
         public double MaxForce;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static SpringFieldSpec Default { get { var s = new SpringFieldSpec(); Native.haptic_spring_field_spec_init(ref s); return s; } }
+        public bool AcrossSites;
+        public static SpringFieldSpec Default { get { return new SpringFieldSpec(); } }
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct DistanceSpringSpec
     {
-        internal uint size;
         public Distance Anchor;
         public double Stiffness;
         public double Damping;
         public double MaxForce;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static DistanceSpringSpec Default { get { var s = new DistanceSpringSpec(); Native.haptic_distance_spring_spec_init(ref s); return s; } }
+        public bool AcrossSites;
+        public static DistanceSpringSpec Default { get { return new DistanceSpringSpec { Anchor = Distance.Default }; } }
     }
 
     public enum PotentialKind : int { Polynomial = 0, Khatib = 1 }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct PotentialFieldSpec
     {
-        internal uint size;
         public Distance Distance;
         public PotentialKind Kind;
         public uint Order;
@@ -192,16 +165,14 @@ namespace Hapticd
         public double Offset;
         public double InfluenceDistance;
         public double MinDistance;
-        [MarshalAs(UnmanagedType.Bool)] public bool CentralDifferences;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static PotentialFieldSpec Default { get { var s = new PotentialFieldSpec(); Native.haptic_potential_field_spec_init(ref s); return s; } }
+        public bool CentralDifferences;
+        public bool AcrossSites;
+        public static PotentialFieldSpec Default { get { return new PotentialFieldSpec { Distance = Distance.Default, Order = 2 }; } }
     }
 
     /// <summary>F = F0 + K (p − origin) inside Radius; K's rows are JacobianRow0..2 (N/m).</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct LinearFieldSpec
     {
-        internal uint size;
         public Vec3 Origin;
         public Vec3 Force;
         public Vec3 JacobianRow0;
@@ -209,60 +180,48 @@ namespace Hapticd
         public Vec3 JacobianRow2;
         public double Radius;
         public double FadeWidth;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static LinearFieldSpec Default { get { var s = new LinearFieldSpec(); Native.haptic_linear_field_spec_init(ref s); return s; } }
+        public bool AcrossSites;
+        public static LinearFieldSpec Default { get { return new LinearFieldSpec(); } }
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct ViscousFieldSpec
     {
-        internal uint size;
         public double Damping;
         public Vec3 Center;
         public double Radius;
         public double FadeWidth;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static ViscousFieldSpec Default { get { var s = new ViscousFieldSpec(); Native.haptic_viscous_field_spec_init(ref s); return s; } }
+        public bool AcrossSites;
+        public static ViscousFieldSpec Default { get { return new ViscousFieldSpec(); } }
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct DetentFieldSpec
     {
-        internal uint size;
         public Distance Distance;
         public double Depth;
         public double Radius;
         public double RimHeight;
         public double RimWidth;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static DetentFieldSpec Default { get { var s = new DetentFieldSpec(); Native.haptic_detent_field_spec_init(ref s); return s; } }
+        public bool AcrossSites;
+        public static DetentFieldSpec Default { get { return new DetentFieldSpec { Distance = Distance.Default }; } }
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct OrientationSpringSpec
     {
-        internal uint size;
         public Quaternion Target;
         public double Stiffness;
         public double Damping;
         public double MaxTorque;
         public ImpedanceLaw Law;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static OrientationSpringSpec Default { get { var s = new OrientationSpringSpec(); Native.haptic_orientation_spring_spec_init(ref s); return s; } }
+        public bool AcrossSites;
+        public static OrientationSpringSpec Default { get { return new OrientationSpringSpec { Target = Quaternion.Identity }; } }
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct OrientationDetentSpec
     {
-        internal uint size;
         public Quaternion Target;
         public double Depth;
         public double Radius;
         public double RimHeight;
         public double RimWidth;
         public double Damping;
-        [MarshalAs(UnmanagedType.Bool)] public bool AcrossSites;
-        public static OrientationDetentSpec Default { get { var s = new OrientationDetentSpec(); Native.haptic_orientation_detent_spec_init(ref s); return s; } }
+        public bool AcrossSites;
+        public static OrientationDetentSpec Default { get { return new OrientationDetentSpec { Target = Quaternion.Identity }; } }
     }
 
     // ---- state and reports ----
@@ -271,10 +230,8 @@ namespace Hapticd
     public enum StateFlags : uint { None = 0, ForceSaturated = 1, ForceFault = 2, RampingOut = 4, DeviceFault = 8 }
 
     /// <summary>A sample of the tool. Local times are steady-clock nanoseconds (Client.SteadyClockNs).</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct State
     {
-        internal uint size;
         public ulong Tick;
         public ulong Sequence;         // 0 from a Step reply
         public double ServerTime;      // s
@@ -285,13 +242,13 @@ namespace Hapticd
         public uint ContactCount;
         public StateFlags Flags;
         public uint Buttons;           // bit i: button i
-        internal int hasOrientation;
         public Quaternion Orientation; // R_WT when HasOrientation
         public Vec3 Torque;            // tau_T_W commanded, N·m
         public long ReceivedAtNs;
         public long ArrivedAtNs;       // the kernel's receive stamp; 0: none
-        public long AgeNs;
-        public bool HasOrientation { get { return hasOrientation != 0; } }
+        public long AgeNs;             // how much longer than the quickest recent sample it took
+        /// <summary>A StateOriented sample: Orientation and Torque are the device's.</summary>
+        public bool HasOrientation { get; internal set; }
     }
 
     [Flags]
@@ -303,12 +260,10 @@ namespace Hapticd
     }
 
     /// <summary>The device, as reported when the session opened.</summary>
-    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
     public struct DeviceInfo
     {
-        internal uint size;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 128)] public string Name;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 64)] public string Model;
+        public string Name;
+        public string Model;
         public Capabilities Capabilities;
         public uint Dof;
         public Vec3 WorkspaceMin;
@@ -316,16 +271,14 @@ namespace Hapticd
         public double MaxForce;
         public double LoopRateHz;
         public double MaxTorque;
-        [MarshalAs(UnmanagedType.Bool)] public bool Simulated;
+        public bool Simulated;
         public uint Buttons;
     }
 
     /// <summary>The server's stability report for an impedance (docs/scene.md).</summary>
-    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
     public struct StabilityReport
     {
-        internal uint size;
-        [MarshalAs(UnmanagedType.Bool)] public bool Available;
+        public bool Available;
         public double ColgateMinDamping;
         public double DeviceMass;
         public double DeviceDamping;
@@ -333,32 +286,25 @@ namespace Hapticd
         public double MaxPoleMagnitude;
         public double ChosenDamping;
         public double ChosenStiffness;
-        [MarshalAs(UnmanagedType.Bool)] public bool Passive;
-        [MarshalAs(UnmanagedType.Bool)] public bool DeviceKnown;
-        [MarshalAs(UnmanagedType.Bool)] public bool Stable;
-        [MarshalAs(UnmanagedType.Bool)] public bool RobustlyStable;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 256)] public string Warning;
+        public bool Passive;
+        public bool DeviceKnown;
+        public bool Stable;
+        public bool RobustlyStable;
+        public string Warning;
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct ReceiveCounters
     {
-        internal uint size;
         public ulong Accepted, Rejected, Skipped, ChallengesAnswered, CallbackSkipped, Lost, Reordered,
             Duplicates, Reconnects;
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct ItemEnergy
     {
         public ulong Id;
         public ulong SessionId;
-        [MarshalAs(UnmanagedType.Bool)] public bool IsObject;
+        public bool IsObject;
         public double GivenToDevice;       // J
         public double AbsorbedFromDevice;  // J
     }
-
-    [StructLayout(LayoutKind.Sequential)]
     public struct ObjectState
     {
         public ulong Id;
@@ -367,26 +313,23 @@ namespace Hapticd
     }
 
     public enum Role : int { None = 0, Observer = 1, Controller = 2, Admin = 3 }
-
-    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
     public struct SessionSummary
     {
         public ulong SessionId;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 72)] public string ClientName;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 72)] public string Peer;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 72)] public string TokenName;
+        public string ClientName;
+        public string Peer;
+        public string TokenName;
         public uint DeviceIndex;
         public Role Role;
         public double OpenedTime;
     }
 
     /// <summary>One client's state stream in Stats.</summary>
-    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
     public struct StreamStats
     {
         public ulong SessionId;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 72)] public string ClientName;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 72)] public string Peer;
+        public string ClientName;
+        public string Peer;
         public uint DeviceIndex;
         public uint Decimation;
         public ulong DatagramsSent, Heartbeats, StatesReceived, StatesLost;
@@ -396,7 +339,6 @@ namespace Hapticd
     }
 
     /// <summary>One coupling of a federation (docs/federation.md). Unit: J.</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct CouplingStats
     {
         public int Kind;  // 0: tool, 1: shared mass
@@ -406,10 +348,8 @@ namespace Hapticd
     }
 
     /// <summary>The server's counters (GetStats), as haptic_stats lays them out.</summary>
-    [StructLayout(LayoutKind.Sequential)]
     public struct StatsCounters
     {
-        internal uint size;
         public uint Sessions;
         public ulong Ticks;
         public double AchievedRateHz, LatenessP50Us, LatenessP99Us, LatenessP999Us, LatenessMaxUs;
@@ -424,7 +364,7 @@ namespace Hapticd
             ConnectionsRefused, ConnectionsTimedOut, ConnectionsEvicted, TlsHandshakesFailed;
         public uint ConnectionsOpen;
         public uint ClientCount;
-        [MarshalAs(UnmanagedType.Bool)] public bool HasFederation;
+        public bool HasFederation;
         public uint CouplingCount;
         public ulong FederationSamplesPublished, FederationSamplesFailed, FederationItemsPublished,
             FederationItemsApplied, FederationItemsRefused, FederationWrenchesAccepted,
@@ -437,14 +377,11 @@ namespace Hapticd
         public StreamStats[] Clients = new StreamStats[0];
         public CouplingStats[] Couplings = new CouplingStats[0];
     }
-
-    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
     public struct RecordingStatus
     {
-        internal uint size;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 512)] public string Path;
+        public string Path;
         public ulong StartTick, Samples, SamplesMissed, Changes, RecordsNotWritten;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 256)] public string WriteError;
+        public string WriteError;
     }
 
     public enum EventKind : int
@@ -521,12 +458,10 @@ namespace Hapticd
     }
 
     /// <summary>A recorder's totals (haptic::RecorderStats).</summary>
-    [StructLayout(LayoutKind.Sequential, CharSet = CharSet.Ansi)]
     public struct RecorderStats
     {
-        internal uint size;
         public ulong SamplesReceived, SamplesWritten, Dropped, EventsWritten, EventsDropped, WriteErrors;
-        [MarshalAs(UnmanagedType.ByValTStr, SizeConst = 256)] public string FirstError;
+        public string FirstError;
     }
 
     /// <summary>The SDK's error kinds (haptic_status).</summary>
