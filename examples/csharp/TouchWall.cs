@@ -1,5 +1,6 @@
-// touch_wall in C#: what examples/touch_wall/main.cpp does, over the C# binding (Hapticd, the
-// Unity package's runtime), printing the same lines. It registers a wall (the half-space z < 0)
+// touch_wall in C#: what examples/touch_wall/main.cpp does, over the C# client (Hapticd, the
+// Unity package's runtime, which speaks to hapticd's HTTP face: host:port is that face's,
+// hapticd --http-api PORT), printing the same lines. It registers a wall (the half-space z < 0)
 // and a weak spring field, has the server's simulated hand push the tool into the wall, and prints
 // time, hand target, tool height and force at about 20 Hz. On a device with no simulated hand it
 // renders the same wall and prints what the tool does for --seconds.
@@ -70,7 +71,7 @@ static class TouchWall
 
     static int Run(string[] args)
     {
-        string address = "127.0.0.1:50051";
+        string address = "127.0.0.1:8081";  // hapticd --http-api 8081
         bool lockstep = false, hand = false;
         double seconds = 10.0;
         var config = new ClientConfig();

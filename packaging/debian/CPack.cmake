@@ -6,6 +6,7 @@
 #   libhaptic-c1     (c)       libhaptic_c.so.1, the C API's runtime (C, C#, MATLAB, ...)
 #   libhapticd-dev   (dev)     headers, the static SDK, the CMake package, libhaptic_c.so
 #   python3-hapticd  (python)  the Python SDK, for Debian's python3
+#   libhapticd-cil   (csharp)  the C# client (managed, over the HTTP face), for Mono
 # Made with prefix /usr whatever the build was configured with: the DEB generator installs each
 # component with CMAKE_INSTALL_PREFIX=/usr under a DESTDIR of its own, so the install rules that
 # decide at install time (the configuration's /etc, the unit's ExecStart, the Python package's
@@ -137,6 +138,24 @@ ${haptic_python_version}, with its type stubs. Examples in
   install(FILES ${PROJECT_SOURCE_DIR}/examples/python/touch_wall.py
           DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/doc/python3-hapticd/examples COMPONENT python)
   haptic_deb_docs(python python3-hapticd)
+endif()
+
+# C#: where Mono's compiler built the client (bindings/). Managed code alone: one package for every
+# architecture, needing Mono's runtime and the two assemblies it references.
+if(TARGET haptic_csharp)
+  list(APPEND CPACK_COMPONENTS_ALL csharp)
+  set(CPACK_DEBIAN_CSHARP_PACKAGE_NAME libhapticd-cil)
+  set(CPACK_DEBIAN_CSHARP_PACKAGE_SECTION cli-mono)
+  set(CPACK_DEBIAN_CSHARP_PACKAGE_ARCHITECTURE all)
+  set(CPACK_DEBIAN_CSHARP_PACKAGE_SHLIBDEPS OFF)
+  set(CPACK_DEBIAN_CSHARP_PACKAGE_DEPENDS "mono-runtime (>= 6.8), libmono-corlib4.5-cil, libmono-system4.0-cil")
+  set(CPACK_COMPONENT_CSHARP_DESCRIPTION "hapticd client SDK for C# (Mono)
+Hapticd.dll in /usr/lib/cli/hapticd: the hapticd client in managed code alone
+(.NET Standard 2.1 C#, no native library): the control plane over hapticd's
+HTTP face, the state stream over UDP, events over WebSocket. The same sources
+are the Unity package's runtime. The C# touch_wall in
+/usr/share/doc/libhapticd-cil/examples (MONO_PATH=/usr/lib/cli/hapticd).")
+  haptic_deb_docs(csharp libhapticd-cil)
 endif()
 
 include(CPack)

@@ -6,20 +6,25 @@
 # header and library) against it, builds tests/install/consumer with find_package(hapticd), then
 # purges the packages and checks that nothing of theirs is left; then installs hapticd again where
 # systemd is installed (not running), enables its unit and purges it.
-# Usage: deb_install_inside.sh [--python]
+# With --csharp, libhapticd-cil's touch_wall under Debian's Mono against a server's HTTP face too.
+# Usage: deb_install_inside.sh [--python] [--csharp]
 set -euo pipefail
 test_dir=/tmp/hapticd-test
 python=0
-case "${1:-}" in
-  --python) python=1 ;;
-  "") ;;
-  *) echo "deb_install_inside.sh: unknown argument '$1' (expected --python or nothing)"; exit 2 ;;
-esac
+csharp=0
+for option in "$@"; do
+  case "$option" in
+    --python) python=1 ;;
+    --csharp) csharp=1 ;;
+    *) echo "deb_install_inside.sh: unknown argument '$option' (expected --python, --csharp or nothing)"; exit 2 ;;
+  esac
+done
 export DEBIAN_FRONTEND=noninteractive
 fail() { echo "FAIL: $*"; exit 1; }
 step() { echo "== $*"; }
 packages=(hapticd hapticd-tools libhaptic-c1 libhapticd-dev)
 [ "$python" = 1 ] && packages+=(python3-hapticd)
+[ "$csharp" = 1 ] && packages+=(libhapticd-cil)
 started=$(date +%s)
 
 step "apt-get install ${packages[*]} (from the .deb files, --no-install-recommends)"
@@ -62,10 +67,10 @@ grep point_mass "$test_dir/devices.txt"
 # file; each example gets a fresh one (lockstep is exact from a fresh start).
 server_pid=""
 port=""
-start_server() {
+start_server() {  # [--http-api 0]: http_port is the HTTP face's then
   rm -f /run/hapticd/ready.json
   setpriv --reuid=hapticd --regid=hapticd --init-groups -- hapticd --lockstep \
-    --grpc-address 127.0.0.1:0 --udp-port 0 --ready-file /run/hapticd/ready.json \
+    --grpc-address 127.0.0.1:0 --udp-port 0 --ready-file /run/hapticd/ready.json "$@" \
     >"$test_dir/hapticd.log" 2>&1 &
   server_pid=$!
   for _ in $(seq 1 200); do
@@ -76,6 +81,7 @@ start_server() {
   [ -s /run/hapticd/ready.json ] || { cat "$test_dir/hapticd.log"; fail "hapticd did not become ready"; }
   port=$(sed -n 's/.*"grpc_port": *\([0-9]*\).*/\1/p' /run/hapticd/ready.json)
   [ -n "$port" ] || fail "no grpc_port in the ready file: $(cat /run/hapticd/ready.json)"
+  http_port=$(sed -n 's/.*"http_port": *\([0-9]*\).*/\1/p' /run/hapticd/ready.json)
 }
 stop_server() {
   kill -INT "$server_pid"
@@ -115,6 +121,18 @@ if [ "$python" = 1 ]; then
   diff <(rows "$test_dir/touch_wall.txt") <(rows "$test_dir/touch_wall_py.txt") ||
     fail "touch_wall.py does not print touch_wall's rows"
   echo "touch_wall.py: the same $(rows "$test_dir/touch_wall_py.txt" | wc -l) rows as touch_wall"
+fi
+
+if [ "$csharp" = 1 ]; then
+  step "the C# example under Debian's Mono, against the HTTP face"
+  start_server --http-api 0
+  [ -n "$http_port" ] || fail "no http_port in the ready file: $(cat /run/hapticd/ready.json)"
+  MONO_PATH=/usr/lib/cli/hapticd mono /usr/share/doc/libhapticd-cil/examples/touch_wall.exe \
+    "127.0.0.1:$http_port" --lockstep >"$test_dir/touch_wall_cs.txt" || fail "the C# touch_wall failed"
+  stop_server
+  diff <(rows "$test_dir/touch_wall.txt") <(rows "$test_dir/touch_wall_cs.txt") ||
+    fail "the C# touch_wall does not print touch_wall's rows"
+  echo "touch_wall.exe: the same $(rows "$test_dir/touch_wall_cs.txt" | wc -l) rows as touch_wall"
 fi
 
 step "against libhapticd-dev: the C example (cc -lhaptic_c) and find_package(hapticd)"

@@ -9,18 +9,24 @@
 #   --python: the build has the Python module, so python3-hapticd is made and tested too (an
 #   empty third argument: it has not).
 set -euo pipefail
-if [ $# -lt 2 ] || [ $# -gt 3 ]; then
-  echo "usage: deb_install_test.sh SOURCE_DIR BUILD_DIR [--python]"; exit 2
+if [ $# -lt 2 ] || [ $# -gt 4 ]; then
+  echo "usage: deb_install_test.sh SOURCE_DIR BUILD_DIR [--python] [--csharp]"; exit 2
 fi
-if [ $# -eq 3 ] && [ -n "$3" ] && [ "$3" != --python ]; then
-  echo "deb_install_test.sh: unknown argument '$3' (expected --python or nothing)"; exit 2
-fi
+python=""
+csharp=""
+for option in "${@:3}"; do
+  case "$option" in
+    --python) python=--python ;;
+    --csharp) csharp=--csharp ;;
+    "") ;;
+    *) echo "deb_install_test.sh: unknown argument '$option' (expected --python, --csharp or nothing)"; exit 2 ;;
+  esac
+done
 if [ ! -f "$2/CPackConfig.cmake" ]; then
   echo "deb_install_test.sh: '$2' is not a configured build of hapticd (no CPackConfig.cmake)"; exit 2
 fi
 source_dir="$1"
 build_dir="$2"
-python="${3:-}"
 started=$(date +%s)
 
 # podman_opts, run_opts and the Debian 12 base image $base (made once with debootstrap).
@@ -44,6 +50,7 @@ if ! (cd "$build_dir" && cpack -G DEB -B "$work/packages") >"$work/cpack.log" 2>
 fi
 packages=(hapticd hapticd-tools libhaptic-c1 libhapticd-dev)
 [ "$python" = --python ] && packages+=(python3-hapticd)
+[ "$csharp" = --csharp ] && packages+=(libhapticd-cil)
 mkdir -p "$work/test/debs"
 printf '%-16s %10s %14s  %s\n' package "file KiB" "installed KiB" depends
 for package in "${packages[@]}"; do
@@ -57,6 +64,8 @@ for package in "${packages[@]}"; do
   case "$package" in
     libhapticd-dev) grep -q 'libhaptic-c1 (= ' <<<"$depends" ||
                       { echo "FAIL: libhapticd-dev does not depend on its libhaptic-c1"; exit 1; } ;;
+    libhapticd-cil) grep -q 'mono-runtime' <<<"$depends" && [ "$(dpkg-deb -f "$deb" Architecture)" = all ] ||
+                      { echo "FAIL: libhapticd-cil is not Architecture: all depending on mono-runtime"; exit 1; } ;;
     *) grep -q 'libc6' <<<"$depends" ||
          { echo "FAIL: $package has no shared library dependencies (dpkg-shlibdeps)"; exit 1; } ;;
   esac
@@ -77,6 +86,6 @@ cp -r "$source_dir/tests/install/consumer" "$work/test/consumer"
 # Host networking: apt reaches Debian's mirror, and the servers inside bind ephemeral loopback ports.
 container=$(podman "${podman_opts[@]}" run -d "${run_opts[@]}" --network host "$base" sleep infinity)
 podman "${podman_opts[@]}" cp "$work/test" "$container:/tmp/hapticd-test"
-podman "${podman_opts[@]}" exec "$container" bash /tmp/hapticd-test/deb_install_inside.sh ${python:+--python}
+podman "${podman_opts[@]}" exec "$container" bash /tmp/hapticd-test/deb_install_inside.sh ${python:+--python} ${csharp:+--csharp}
 echo "PASS: the packages install with apt in a clean Debian 12, serve, build and purge cleanly \
 ($(( $(date +%s) - started )) s)"

@@ -4,7 +4,7 @@
 // between the samples (a little behind, always between two real samples) or predicted past the
 // newest (no added lag, a small error when the hand accelerates). docs/unity.md.
 //
-// A connection it cannot make (for any reason: refused, no server, no native library) is reported
+// A connection it cannot make (for any reason: refused, no server, no HTTP face, TLS) is reported
 // in the console and leaves the scene running without the tool; one lost, resumed or ended later
 // is reported from the next frame's Update, on Unity's main thread.
 //
@@ -21,7 +21,7 @@ namespace Hapticd.Unity
         public enum Smoothing { Interpolate, Predict }
 
         [Tooltip("hapticd's gRPC address, host:port")]
-        public string serverAddress = "127.0.0.1:50051";
+        public string serverAddress = "127.0.0.1:8081";  // hapticd's HTTP face (hapticd --http-api 8081)
         [Tooltip("Shown in the server's log")]
         public string clientName = "unity";
         [Tooltip("The server's device port (0: its configured device)")]
@@ -54,8 +54,8 @@ namespace Hapticd.Unity
             }
             catch (Exception e)
             {
-                // Not only HapticException: a missing native library (DllNotFoundException) or any
-                // other failure must not take the scene down with it.
+                // Not only HapticException: any failure (a certificate file unreadable, a socket
+                // the platform refuses) must not take the scene down with it.
                 Debug.LogError("hapticd: cannot connect to " + serverAddress + " (" + Describe(e) + "); the tool will not move");
                 if (client_ != null) client_.Dispose();
                 client_ = null;

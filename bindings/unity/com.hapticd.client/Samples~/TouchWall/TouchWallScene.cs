@@ -1,5 +1,7 @@
-// The tour's touch_wall as a Unity scene: put HapticToolFollower on a small sphere (the tool) and
-// this on any GameObject, pointing `follower` at it. Once the follower's session is open, this
+// The tour's touch_wall as a Unity scene (TouchWall.unity beside it: a camera, a light, the tool
+// as a small sphere with HapticToolFollower, a flat box for the wall's surface, and this on a
+// GameObject of its own): HapticToolFollower on a small sphere (the tool), this pointing
+// `follower` at it. Once the follower's session is open, this
 // registers the wall z < 0 (K = 1000 N/m, B = 1 N·s/m) and places a flat cube on it, so that what
 // the hand feels is what the eye sees. On a simulated device nothing moves the tool unless the
 // server's operator does (hapticctl, or the C++/Python touch_wall on the same server).
