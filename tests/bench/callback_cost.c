@@ -7,6 +7,7 @@
 #include <haptic/haptic_c.h>
 
 #include <pthread.h>
+#include <sys/resource.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
@@ -16,15 +17,31 @@
 typedef struct delays {
   pthread_mutex_t lock;
   size_t count;
+  unsigned long long calls;
   double us[MAX_SAMPLES];
 } delays;
+
+static double cpu_seconds(void) {
+  struct rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  return (double)(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         (double)(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) * 1e-6;
+}
+
+static unsigned long long calls_of(delays* d) {
+  unsigned long long calls;
+  pthread_mutex_lock(&d->lock);
+  calls = d->calls;
+  pthread_mutex_unlock(&d->lock);
+  return calls;
+}
 
 static void on_state(const haptic_state* state, void* user) {
   const int64_t now = haptic_steady_clock_ns();
   delays* d = (delays*)user;
-  if (state->arrived_at_ns == 0) return;
   pthread_mutex_lock(&d->lock);
-  if (d->count < MAX_SAMPLES) d->us[d->count++] = (double)(now - state->arrived_at_ns) * 1e-3;
+  ++d->calls;
+  if (state->arrived_at_ns != 0 && d->count < MAX_SAMPLES) d->us[d->count++] = (double)(now - state->arrived_at_ns) * 1e-3;
   pthread_mutex_unlock(&d->lock);
 }
 
@@ -33,8 +50,9 @@ int main(int argc, char** argv) {
   haptic_client_config config;
   haptic_client* client = NULL;
   haptic_error err;
-  struct timespec wait;
-  double seconds;
+  struct timespec wait, warm_up = {0, 500000000L};
+  double seconds, cpu;
+  unsigned long long calls;
   size_t i;
   if (argc < 3) {
     fprintf(stderr, "usage: callback_cost_c host:port seconds\n");
@@ -50,11 +68,17 @@ int main(int argc, char** argv) {
     return 1;
   }
   haptic_client_on_state(client, on_state, &d, &err);
+  nanosleep(&warm_up, NULL);
+  calls = calls_of(&d);
+  cpu = cpu_seconds();
   wait.tv_sec = (time_t)seconds;
   wait.tv_nsec = (long)((seconds - (double)wait.tv_sec) * 1e9);
   nanosleep(&wait, NULL);
+  cpu = cpu_seconds() - cpu;
+  calls = calls_of(&d) - calls;
   haptic_client_on_state(client, NULL, NULL, &err);
   haptic_client_close(client, &err);
+  printf("cpu_us_per_sample %.3f samples %llu\n", calls > 0 ? cpu * 1e6 / (double)calls : 0.0, calls);
   for (i = 0; i < d.count; ++i) printf("%.3f\n", d.us[i]);
   return 0;
 }

@@ -125,6 +125,7 @@ namespace Hapticd
             }
             catch (SocketException) { }
             socket_.Bind(new IPEndPoint(server.AddressFamily == AddressFamily.InterNetworkV6 ? IPAddress.IPv6Any : IPAddress.Any, 0));
+            socket_.Blocking = false;  // the receive thread waits in Poll; a read never blocks (Drain)
             receiver_ = new Thread(ReceiveLoop) { IsBackground = true, Name = "hapticd state" };
             heartbeats_ = new Thread(HeartbeatLoop) { IsBackground = true, Name = "hapticd heartbeats" };
             receiver_.Start();
@@ -323,7 +324,9 @@ namespace Hapticd
         private readonly byte[] datagram_ = new byte[2048];
 
         /// <summary>Reads every datagram queued now and takes each; hands the newest State to
-        /// the callback (from the receive thread only).</summary>
+        /// the callback (from the receive thread only). The socket does not block: a wake-up
+        /// costs poll, a recv per datagram and the recv that finds none; the source address is
+        /// not asked for (the tag says who sent it; asking cost .NET an allocation per datagram).</summary>
         private void Drain(bool deliver)
         {
             State? newest = null;
@@ -333,10 +336,11 @@ namespace Hapticd
                 long receivedAt = SteadyClock.Ns();
                 try
                 {
-                    EndPoint from = new IPEndPoint(socket_.AddressFamily == AddressFamily.InterNetworkV6 ? IPAddress.IPv6Any : IPAddress.Any, 0);
-                    while (!stopped_ && socket_.Available > 0)
+                    while (!stopped_)
                     {
-                        int n = socket_.ReceiveFrom(datagram_, ref from);
+                        SocketError error;
+                        int n = socket_.Receive(datagram_, 0, datagram_.Length, SocketFlags.None, out error);
+                        if (error != SocketError.Success) break;  // WouldBlock: all read
                         Take(datagram_, n, receivedAt, ref newest, ref accepted);
                     }
                 }
