@@ -91,6 +91,7 @@ export class SceneView {
     this.movable = new Map();            // object id -> its mesh, for the virtual masses
     this.springs = [];                   // spring_to_point anchors: a line to port 0's tool each frame
     this.extent = 0.1;                   // half the workspace's largest side, for the walls' size
+    this.dragging = false;               // an object is being dragged (enableDragging)
     this.resize();
     window.addEventListener('resize', () => this.resize());
   }
@@ -326,6 +327,69 @@ export class SceneView {
     for (const object of state.objects ?? []) {
       this.movable.get(object.id)?.position.copy(vec(object.position));
     }
+  }
+
+  /// Shift-drag moves an object for which canDrag(id) holds, in the plane through it that faces the
+  /// camera: onMove(id, position, done) with its new pose position (THREE.Vector3, m, in W) at each
+  /// step and done at the end. The orbit controls do not see such a drag. `dragging` is true
+  /// while one is under way.
+  enableDragging(canDrag, onMove) {
+    const raycaster = new THREE.Raycaster();
+    const ray = (event) => {
+      const rect = this.canvas.getBoundingClientRect();
+      raycaster.setFromCamera(new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1,
+                                                -((event.clientY - rect.top) / rect.height) * 2 + 1), this.camera);
+      return raycaster.ray;
+    };
+    let drag = null;
+    const end = (event) => {
+      if (!drag || event.pointerId !== drag.pointerId) return;
+      const { id, node } = drag;
+      drag = null;
+      this.dragging = false;
+      this.controls.enabled = true;
+      onMove(id, node.position.clone(), true);
+    };
+    // Capturing, on the canvas: before the orbit controls' own listeners there.
+    this.canvas.addEventListener('pointerdown', (event) => {
+      if (!event.shiftKey || event.button !== 0) return;
+      ray(event);
+      for (const hit of raycaster.intersectObjects(this.items.children, true)) {
+        let node = hit.object;
+        while (node && node.userData.id === undefined) node = node.parent;
+        if (!node || !canDrag(node.userData.id)) continue;
+        const facingCamera = this.camera.getWorldDirection(new THREE.Vector3());
+        drag = { id: node.userData.id, node, pointerId: event.pointerId,
+                 plane: new THREE.Plane().setFromNormalAndCoplanarPoint(facingCamera, hit.point),
+                 offset: node.position.clone().sub(hit.point) };
+        this.dragging = true;
+        this.controls.enabled = false;
+        this.canvas.setPointerCapture(event.pointerId);
+        event.stopImmediatePropagation();
+        event.preventDefault();
+        return;
+      }
+    }, { capture: true });
+    this.canvas.addEventListener('pointermove', (event) => {
+      if (!drag || event.pointerId !== drag.pointerId) return;
+      const point = ray(event).intersectPlane(drag.plane, new THREE.Vector3());
+      if (!point) return;
+      drag.node.position.copy(point.add(drag.offset));
+      this.dirty = true;
+      event.stopImmediatePropagation();
+      onMove(drag.id, drag.node.position.clone(), false);
+    }, { capture: true });
+    this.canvas.addEventListener('pointerup', end, { capture: true });
+    this.canvas.addEventListener('pointercancel', end, { capture: true });
+  }
+
+  /// Where object `id`'s origin is drawn on the page (client pixels), or null.
+  screenOf(id) {
+    const node = this.items.children.find((child) => child.userData.id === id);
+    if (!node) return null;
+    const p = node.getWorldPosition(new THREE.Vector3()).project(this.camera);
+    const rect = this.canvas.getBoundingClientRect();
+    return { x: rect.left + ((p.x + 1) / 2) * rect.width, y: rect.top + ((1 - p.y) / 2) * rect.height };
   }
 
   /// Draws the scene if anything changed since the last time; returns whether it drew.

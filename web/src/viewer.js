@@ -1,9 +1,13 @@
-// hapticd's read-only viewer: polls /api/state at display rate, /api/stats twice a second and
-// /api/scene whenever the scene's generation moves on (docs/viewer.md). Never writes anything.
+// hapticd's viewer: polls /api/state at display rate, /api/stats twice a second and /api/scene
+// whenever the scene's generation moves on (docs/viewer.md). Those are read-only; only when given
+// the server's HTTP API (Move objects) does the page change anything, through that API, as any
+// client of it would (control.js).
 import { SceneView, TOOL_COLORS, caseOf, OBJECT_KINDS, FIELD_KINDS, vec } from './scene_view.js';
 import { drawHistogram, drawSeries } from './plots.js';
+import { Control } from './control.js';
 
 const TOKEN_KEY = 'hapticd-viewer-token';
+const API_KEY = 'hapticd-viewer-api';
 const STATE_PERIOD_MS = 16;   // at most ~60 requests a second, one at a time
 const SCENE_MIN_PERIOD_MS = 500;  // the scene is fetched again at most this often
 const STATS_PERIOD_MS = 500;
@@ -27,17 +31,20 @@ const shown = {
   rateNowHz: null,      // the loop's rate over the last two statistics (the server's clock)
   error: null,          // the latest problem shown to the user
   webgl: true,
+  control: { session: null, moves: 0, error: null },  // Move objects: the page's session, moves taken
 };
 window.hapticViewer = shown;
 
-// A token from the URL's fragment (#token=…) goes to this tab's storage and out of the address bar.
-// Returns whether there was one.
+// A token from the URL's fragment (#token=…) goes to this tab's storage and out of the address bar,
+// and so does the HTTP API's address (#api=…, for Move objects). Returns whether there was a token.
 function takeTokenFromUrl() {
-  const match = /(?:^#|&)token=([^&]*)/.exec(window.location.hash);
-  if (!match) return false;
-  sessionStorage.setItem(TOKEN_KEY, decodeURIComponent(match[1]));
+  const token = /(?:^#|&)token=([^&]*)/.exec(window.location.hash);
+  const api = /(?:^#|&)api=([^&]*)/.exec(window.location.hash);
+  if (!token && !api) return false;
+  if (token) sessionStorage.setItem(TOKEN_KEY, decodeURIComponent(token[1]));
+  if (api) sessionStorage.setItem(API_KEY, decodeURIComponent(api[1]));
   history.replaceState(null, '', window.location.pathname + window.location.search);
-  return true;
+  return Boolean(token);
 }
 
 class Unauthorized extends Error {}
@@ -116,6 +123,7 @@ class Viewer {
     this.history = [];  // [t_s, rate_hz, p99_us]
     this.lastStats = null;
     this.started = performance.now();
+    this.control = new Control();
     try {
       this.view = new SceneView($('scene'));
     } catch (error) {
@@ -135,7 +143,22 @@ class Viewer {
     });
     window.addEventListener('hashchange', () => {
       if (takeTokenFromUrl()) this.useNewToken();
+      else if (sessionStorage.getItem(API_KEY)) this.connectControl();
     });
+    $('control-form').addEventListener('submit', (event) => {
+      event.preventDefault();
+      sessionStorage.setItem(API_KEY, $('control-api').value.trim());
+      this.connectControl();
+    });
+    $('move-id').addEventListener('change', () => this.fillMoveForm());
+    $('move-form').addEventListener('submit', (event) => {
+      event.preventDefault();
+      const mm = ['x', 'y', 'z'].map((axis) => Number($(`move-${axis}`).value) / 1000);
+      this.moveObject($('move-id').value, { x: mm[0], y: mm[1], z: mm[2] });
+    });
+    this.view?.enableDragging((id) => this.control.movable(id),
+                              (id, p, done) => this.moveObject(id, { x: p.x, y: p.y, z: p.z }, done));
+    if (sessionStorage.getItem(API_KEY)) this.connectControl();
     this.pollState();
     this.pollStats();
     this.frame();
@@ -147,6 +170,67 @@ class Viewer {
     this.generation = null;
     this.pollState();
     if (!this.statsPolling) this.pollStats();
+    if (sessionStorage.getItem(API_KEY)) this.connectControl();
+  }
+
+  /// Move objects: a session on the HTTP API (the stored address), with the tab's token.
+  async connectControl() {
+    const api = sessionStorage.getItem(API_KEY);
+    $('control-api').value = api;
+    $('control-status').textContent = `connecting to ${api}…`;
+    try {
+      const client = await this.control.connect(api, sessionStorage.getItem(TOKEN_KEY));
+      shown.control.session = client.sessionId;
+      $('control-status').textContent = `session ${sessionName(client.sessionId)}: shared objects move`;
+      this.showControlError(null);
+    } catch (error) {
+      shown.control.session = null;
+      $('control-status').textContent = 'off';
+      this.showControlError(error.message);
+    }
+    this.fillMoveForm();
+  }
+
+  showControlError(text) {
+    shown.control.error = text;
+    $('control-why').hidden = !text;
+    $('control-why').textContent = text ?? '';
+  }
+
+  /// The move form: the objects this page may move, the chosen one's position (mm).
+  fillMoveForm() {
+    const ids = this.control.movableIds();
+    $('move-form').hidden = ids.length === 0;
+    const select = $('move-id');
+    const chosen = ids.includes(select.value) ? select.value : ids[0];
+    if (select.options.length !== ids.length || [...select.options].some((o, i) => o.value !== ids[i])) {
+      select.replaceChildren(...ids.map((id) => {
+        const option = document.createElement('option');
+        option.value = id;
+        option.textContent = `${id} ${caseOf(this.control.objects.get(id).object, OBJECT_KINDS)}`;
+        return option;
+      }));
+    }
+    if (chosen === undefined) return;
+    select.value = chosen;
+    const p = vec(this.control.objects.get(chosen).object.pose?.position);
+    $('move-x').value = (1000 * p.x).toFixed(1);
+    $('move-y').value = (1000 * p.y).toFixed(1);
+    $('move-z').value = (1000 * p.z).toFixed(1);
+  }
+
+  /// Moves object `id` to `position` (m, in W) through the HTTP API; a drag's last step (done)
+  /// has the scene fetched again.
+  async moveObject(id, position, done = true) {
+    try {
+      await this.control.move(id, position);
+      shown.control.moves = this.control.moves;
+      this.showControlError(null);
+      if (done && $('move-id').value === id) this.fillMoveForm();
+    } catch (error) {
+      this.showControlError(`object ${id}: ${error.message}`);
+    }
+    if (done) this.generation = null;  // the scene again at the next poll, the view put right
   }
 
   /// Each display frame: draws the scene when the state, the scene or the camera changed.
@@ -171,6 +255,8 @@ class Viewer {
     }
     const contents = scene.contents ?? {};
     this.view?.setScene(contents);
+    this.control.setScene(contents);
+    if (document.activeElement?.closest?.('#move-form') == null) this.fillMoveForm();
     this.drawnKey = null;  // the rebuilt scene takes the next state, whatever its tick
     const objects = contents.scene?.objects ?? [];
     const fields = contents.scene?.fields ?? [];
@@ -191,7 +277,8 @@ class Viewer {
       // A changed scene is fetched again, at most twice a second: a client updating an object at
       // its own rate must not make the page rebuild the scene at every poll.
       const sinceLoad = performance.now() - (this.sceneLoadedAt ?? -Infinity);
-      if (state.scene_generation !== this.generation && sinceLoad >= SCENE_MIN_PERIOD_MS) {
+      // Not while an object is dragged: the rebuilt scene would take it from under the pointer.
+      if (state.scene_generation !== this.generation && sinceLoad >= SCENE_MIN_PERIOD_MS && !this.view?.dragging) {
         this.sceneLoadedAt = performance.now();
         await this.loadScene();
       }
@@ -295,4 +382,7 @@ class Viewer {
 }
 
 takeTokenFromUrl();
-new Viewer().start();
+const viewer = new Viewer();
+// Where object `id` is drawn (client pixels), for tests that drag it; null without WebGL.
+window.hapticViewerScreenOf = (id) => viewer.view?.screenOf(id) ?? null;
+viewer.start();

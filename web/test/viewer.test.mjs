@@ -2,12 +2,15 @@
 // environment): a lockstep hapticd with --http 0, a client registering one object of every shape
 // and one field of every kind (tests/browser/viewer_driver), the page loaded by playwright-core
 // driving Debian's chromium. Checks what the page shows against what was registered, that the
-// tool follows the simulated operator, and the token prompt; writes screenshots into $SCREENSHOTS.
+// tool follows the simulated operator, and the token prompt; that a CONTROLLER token and the HTTP
+// API's address let the page move a shared object (the form, and shift-drag in the view), and an
+// OBSERVER token does not; writes screenshots into $SCREENSHOTS.
 import { after, before, describe, test } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn } from 'node:child_process';
 import { once } from 'node:events';
 import fs from 'node:fs';
+import net from 'node:net';
 import os from 'node:os';
 import path from 'node:path';
 import readline from 'node:readline';
@@ -23,13 +26,14 @@ const CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--use-angle=swiftshader
 const WAIT_MS = 20000;  // for anything to show; the test's own bound (ctest's is 180 s)
 
 /// A hapticd on ephemeral loopback ports, started from `config` (a ServerConfig), ready once its
-/// ready file names its ports.
-async function startServer(config) {
+/// ready file names its ports; the viewer at `viewer` (a port; 0, any).
+async function startServer(config, { viewer = 0, httpApi = false } = {}) {
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'hapticd-viewer-'));
   fs.writeFileSync(path.join(dir, 'config.json'), JSON.stringify(config));
   const ready = path.join(dir, 'ready.json');
   const server = spawn(HAPTICD, ['--config', path.join(dir, 'config.json'), '--grpc-address', '127.0.0.1:0',
-    '--udp-port', '0', '--http', '0', '--ready-file', ready], { stdio: ['ignore', 'inherit', 'inherit'] });
+    '--udp-port', '0', '--http', String(viewer), '--ready-file', ready, ...(httpApi ? ['--http-api', '0'] : [])],
+  { stdio: ['ignore', 'inherit', 'inherit'] });
   const giveUp = Date.now() + WAIT_MS;
   while (!fs.existsSync(ready)) {
     if (server.exitCode !== null) throw new Error(`hapticd exited (${server.exitCode}) before it was ready`);
@@ -40,6 +44,7 @@ async function startServer(config) {
   return {
     ports,
     url: `http://127.0.0.1:${ports.viewer_port}/`,
+    api: `http://127.0.0.1:${ports.http_port}`,
     async stop() {
       server.kill('SIGTERM');
       if (server.exitCode === null) await once(server, 'exit');
@@ -67,6 +72,17 @@ async function startDriver(grpcAddress) {
 }
 
 const shown = (page) => page.evaluate(() => window.hapticViewer);
+
+/// A loopback port free a moment ago: the viewer's, which the HTTP API must allow as an origin
+/// before the server starts.
+async function freePort() {
+  const probe = net.createServer().listen(0, '127.0.0.1');
+  await once(probe, 'listening');
+  const { port } = probe.address();
+  probe.close();
+  await once(probe, 'close');
+  return port;
+}
 const byId = (a, b) => Number(a.id) - Number(b.id);
 
 describe('the viewer of a lockstep server', () => {
@@ -206,6 +222,111 @@ describe('the viewer of a server with tokens', () => {
     await page.locator('#token-form button').click();
     await page.waitForFunction(() => document.getElementById('loop-figures').textContent.includes('ticks'), null,
                                { timeout: WAIT_MS });
+    await page.close();
+  });
+});
+
+describe('the viewer moving objects through the HTTP API', () => {
+  let server;
+  let browser;
+  const tokens = [
+    { name: 'lab', token: 'controller-token-0123456789', role: 'CONTROLLER' },
+    { name: 'visitor', token: 'observer-token-0123456789', role: 'OBSERVER' },
+  ];
+  // The server's own objects: a shared sphere any CONTROLLER may move, and a box no one else may.
+  const scene = { objects: [
+    { sphere: { radius: 0.015 }, pose: { position: { x: 0.03, y: 0, z: 0.01 } }, impedance: { stiffness: 300 }, shared: true },
+    { box: { half_extents: { x: 0.01, y: 0.01, z: 0.01 } }, pose: { position: { x: -0.04, y: 0, z: 0.01 } },
+      impedance: { stiffness: 300 } },
+  ] };
+  /// The objects' positions as the server has them (m), by id.
+  const positions = async () => {
+    const response = await fetch(`${server.url}api/scene`, { headers: { Authorization: `Bearer ${tokens[0].token}` } });
+    const { contents } = await response.json();
+    return Object.fromEntries(contents.object_ids.map((id, i) => {
+      const p = contents.scene.objects[i].pose?.position ?? {};
+      return [id, [p.x ?? 0, p.y ?? 0, p.z ?? 0]];
+    }));
+  };
+
+  before(async () => {
+    const viewer = await freePort();
+    server = await startServer({ time_mode: 'LOCKSTEP', status_period_s: 0, real_time: { use_fifo: false },
+      security: { tokens }, initial_scene: scene, http_allowed_origins: [`http://127.0.0.1:${viewer}`] },
+    { viewer, httpApi: true });
+    browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', args: CHROMIUM_ARGS });
+  });
+
+  after(async () => {
+    await browser?.close();
+    await server?.stop();
+  });
+
+  test('a CONTROLLER token moves the shared sphere, by the form and by shift-drag, and not the box', async () => {
+    const page = await browser.newPage({ viewport: { width: 1400, height: 860 } });
+    const errors = [];
+    page.on('pageerror', (error) => errors.push(error.message));
+    await page.goto(`${server.url}#token=${tokens[0].token}&api=${server.api}`);
+    await page.waitForFunction(() => window.hapticViewer?.control.session !== null && window.hapticViewer.objects.length === 2,
+                               null, { timeout: WAIT_MS });
+    const [sphere, box] = (await shown(page)).objects.map((o) => o.id);
+    // Only the shared sphere is offered.
+    assert.deepEqual(await page.locator('#move-id option').evaluateAll((options) => options.map((o) => o.value)), [sphere]);
+    assert.equal(await page.locator('#move-x').inputValue(), '30.0');
+
+    await page.locator('#move-x').fill('10');
+    await page.locator('#move-y').fill('20');
+    await page.locator('#move-z').fill('30');
+    await page.locator('#move-form button').click();
+    await page.waitForFunction(() => window.hapticViewer.control.moves === 1, null, { timeout: WAIT_MS });
+    assert.deepEqual((await positions())[sphere], [0.01, 0.02, 0.03]);
+    // The page shows it where it is now.
+    await page.locator('#items tbody tr', { hasText: '10.0, 20.0, 30.0' }).waitFor({ timeout: WAIT_MS });
+
+    // Shift-drag it 100 px to the right in the view: it follows, in the plane facing the camera.
+    await page.waitForFunction(() => window.hapticViewer.frames > 0, null, { timeout: WAIT_MS });
+    const from = await page.evaluate((id) => window.hapticViewerScreenOf(id), sphere);
+    assert.ok(from, 'the sphere is drawn');
+    await page.keyboard.down('Shift');
+    await page.mouse.move(from.x, from.y);
+    await page.mouse.down();
+    await page.mouse.move(from.x + 100, from.y, { steps: 10 });
+    await page.mouse.up();
+    await page.keyboard.up('Shift');
+    await page.waitForFunction(() => window.hapticViewer.control.moves > 1 && !document.getElementById('control-why').textContent,
+                               null, { timeout: WAIT_MS });
+    const moved = await positions();
+    const distance = Math.hypot(...moved[sphere].map((v, axis) => v - [0.01, 0.02, 0.03][axis]));
+    assert.ok(distance > 0.005, `the sphere moved ${distance} m`);
+    assert.deepEqual(moved[box], [-0.04, 0, 0.01], 'the box stays where it was');
+    // Shift-drag on the box: the view pans instead, and nothing is sent.
+    const moves = (await shown(page)).control.moves;
+    const onBox = await page.evaluate((id) => window.hapticViewerScreenOf(id), box);
+    await page.keyboard.down('Shift');
+    await page.mouse.move(onBox.x, onBox.y);
+    await page.mouse.down();
+    await page.mouse.move(onBox.x + 60, onBox.y, { steps: 5 });
+    await page.mouse.up();
+    await page.keyboard.up('Shift');
+    assert.equal((await shown(page)).control.moves, moves);
+    assert.deepEqual((await positions())[box], [-0.04, 0, 0.01]);
+    await page.screenshot({ path: path.join(SCREENSHOTS, 'viewer-moved.png') });
+    assert.deepEqual(errors, []);
+    await page.close();
+  });
+
+  test('an OBSERVER token is refused the move, as the server says', async () => {
+    const page = await browser.newPage();
+    await page.goto(`${server.url}#token=${tokens[1].token}&api=${server.api}`);
+    await page.waitForFunction(() => window.hapticViewer?.control.session !== null && window.hapticViewer.objects.length === 2,
+                               null, { timeout: WAIT_MS });
+    const before = await positions();
+    await page.locator('#move-x').fill('0');
+    await page.locator('#move-form button').click();
+    await page.waitForFunction(() => window.hapticViewer.control.error !== null, null, { timeout: WAIT_MS });
+    assert.match(await page.locator('#control-why').textContent(),
+                 /^object \d+: needs role CONTROLLER or above; token 'visitor' has role OBSERVER$/);
+    assert.deepEqual(await positions(), before);
     await page.close();
   });
 });
