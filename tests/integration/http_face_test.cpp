@@ -518,9 +518,10 @@ TEST(HttpFace, ASlowlorisFromOneHostLeavesAnotherHostsCallsAnswered) {
 const std::string kCerts = TEST_CERTS_DIR;
 
 /// One call over HTTPS with Beast's client (the test CA trusted; with `client_cert`, the client's
-/// certificate offered): the reply's status, 0 when the handshake failed (`why` says).
+/// certificate offered), from loopback address `from`: the reply's status, 0 when the handshake
+/// failed (`why` says).
 int https_call(std::uint16_t port, const std::string& call, const std::string& body, bool client_cert,
-               std::string& why, std::string* reply_body = nullptr) {
+               std::string& why, std::string* reply_body = nullptr, const char* from = "127.0.0.1") {
   namespace ssl = boost::asio::ssl;
   namespace http = boost::beast::http;
   boost::asio::io_context io;
@@ -533,9 +534,19 @@ int https_call(std::uint16_t port, const std::string& call, const std::string& b
   }
   boost::beast::ssl_stream<boost::beast::tcp_stream> stream(io, context);
   SSL_set_tlsext_host_name(stream.native_handle(), "localhost");
-  boost::beast::get_lowest_layer(stream).connect(
-      boost::asio::ip::tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port));
+  auto& socket = boost::beast::get_lowest_layer(stream).socket();
   boost::beast::error_code error;
+  socket.open(boost::asio::ip::tcp::v4(), error);
+  if (!error) socket.bind(boost::asio::ip::tcp::endpoint(boost::asio::ip::make_address(from), 0), error);
+  if (!error) {
+    socket.connect(boost::asio::ip::tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port), error);
+  }
+  if (error) {
+    why = error.message();
+    return 0;
+  }
+  // A reply within 5 s or none: a server that never answers fails the call, not the test run.
+  boost::beast::get_lowest_layer(stream).expires_after(std::chrono::seconds(5));
   stream.handshake(ssl::stream_base::client, error);
   http::request<http::string_body> request{http::verb::post, "/haptic.v1.Haptic/" + call, 11};
   request.set(http::field::host, "localhost");
@@ -605,4 +616,72 @@ TEST(HttpFace, WithTheControlPlanesTlsTheFaceIsHttpsOnlyAndMutualTlsWantsTheClie
 }
 
 }  // namespace
+// The flood and the slowloris above, over TLS: a face that is HTTPS only must hold them off in its
+// handshake as it does in its header read. hapticd limited to 256 descriptors; six hosts (127.0.0.2
+// to .7) open 300 connections that never begin a handshake, and another (127.0.0.8) trickles a
+// TLS ClientHello's bytes over 32 connections, one byte each 20 ms, made anew every second. A
+// third host's HTTPS calls are answered meanwhile, and every flooding host over HTTPS within 1 s
+// of the flood's end. Bounded: 332 connections, 30 calls or 3 s, 2 s after.
+TEST(HttpFace, OverTlsAFloodFromSixHostsAndASlowlorisLeaveAnotherHostServed) {
+  test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0",
+      "max_sessions": 128, "max_sessions_per_peer": 128, "session_open_rate_per_peer": 1000,
+      "session_open_burst_per_peer": 128,
+      "security": {"tls": {"cert_file": ")" + kCerts + R"(/server.pem", "key_file": ")" + kCerts +
+      R"(/server.key"}})"), {}, 256);
+  const std::uint16_t port = server.http_port();
+  std::string why;
+  ASSERT_EQ(https_call(port, "OpenSession", open_body("before"), false, why), 200) << why;
+  const std::vector<std::string> flooders{"127.0.0.2", "127.0.0.3", "127.0.0.4",
+                                          "127.0.0.5", "127.0.0.6", "127.0.0.7"};
+  std::vector<std::unique_ptr<test::HttpConnection>> flood;
+  for (int i = 0; i < 300; ++i) {
+    flood.push_back(std::make_unique<test::HttpConnection>(
+        port, flooders[static_cast<std::size_t>(i) % flooders.size()].c_str()));
+  }
+  std::atomic<bool> stop{false};
+  std::thread slowloris([&] {
+    // A TLS 1.2 record header and the start of a ClientHello, then padding: never complete.
+    std::string hello = "\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03";
+    hello += std::string(500, '\x2a');
+    std::vector<std::unique_ptr<test::HttpConnection>> slow;
+    for (std::size_t sent = 0; !stop.load(); ++sent) {
+      if (sent % 50 == 0) {
+        slow.clear();
+        for (int i = 0; i < 32; ++i) slow.push_back(std::make_unique<test::HttpConnection>(port, "127.0.0.8"));
+      }
+      for (auto& connection : slow) connection->send(std::string(1, hello[sent % hello.size()]));
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  int calls = 0, answered = 0;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (std::chrono::steady_clock::now() < until && calls < 30) {
+    ++calls;
+    if (https_call(port, "OpenSession", open_body("during"), false, why, nullptr, "127.0.0.9") == 200) {
+      ++answered;
+    } else {
+      std::printf("  a call during the flood failed: %s\n", why.c_str());
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  std::printf("  over TLS, during a flood of 300 silent connections from 6 hosts and a slowloris of 32 "
+              "from another (256 fds): %d of %d HTTPS calls from a third answered\n", answered, calls);
+  EXPECT_EQ(answered, calls);
+  stop.store(true);
+  slowloris.join();
+  flood.clear();
+  const auto ended = std::chrono::steady_clock::now();
+  double slowest_s = 0.0;
+  for (const std::string& host : flooders) {
+    bool served = false;
+    while (!served && std::chrono::steady_clock::now() - ended < std::chrono::seconds(2)) {
+      served = https_call(port, "OpenSession", open_body("after"), false, why, nullptr, host.c_str()) == 200;
+    }
+    EXPECT_TRUE(served) << host << " was not served over HTTPS after the flood: " << why;
+    slowest_s = std::max(slowest_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - ended).count());
+  }
+  std::printf("  after it: every flooding host served over HTTPS within %.3f s\n", slowest_s);
+  EXPECT_LE(slowest_s, 1.0);
+}
+
 }  // namespace haptic
