@@ -460,10 +460,63 @@ static class ClientTests
         Check(e5.Code == ErrorCode.Connection, "plain HTTP: " + e5.Code + " " + e5.Message);
     }
 
+    // A server restarted on the same ports under a client (csharp_test.cpp restarts it once the
+    // ready file is written): the client says Lost, then Resumed with a new session holding its
+    // wall and field again, and its stream and calls work there.
+    static void AServerRestartIsSurvivedWithEveryItem(string address, string readyFile)
+    {
+        currentTest = "reconnect";
+        var changes = new List<ConnectionChange>();
+        var gate = new object();
+        using (var client = new Client(new ClientConfig { ServerAddress = address, ClientName = "csharp-survivor", RpcTimeoutMs = 1000 }))
+        {
+            client.OnConnection(c => { lock (gate) changes.Add(c); });
+            var spec = WallSpec.Default;
+            spec.Impedance = Stiff;
+            var wall = client.AddWall(spec);
+            var spring = SpringFieldSpec.Default;
+            spring.Anchor = new Vec3(0, 0, 0.05);
+            spring.Stiffness = 50.0;
+            var field = client.AddField(spring);
+            ulong oldSession = client.SessionId;
+            StepAndGet(client, 20);
+            System.IO.File.WriteAllText(readyFile, "ready\n");
+            ConnectionChange resumed = null;
+            for (int i = 0; i < 2000 && resumed == null; ++i)
+            {
+                lock (gate) resumed = changes.Find(c => c.State == ConnectionState.Resumed);
+                if (resumed == null) Thread.Sleep(10);
+            }
+            lock (gate)
+            {
+                Check(changes.Count >= 2 && changes[0].State == ConnectionState.Lost, "Lost first: " + changes.Count + " changes");
+                Check(resumed != null && resumed.NewSession && resumed.ItemsNotRestored == 0, "Resumed in a new session with every item");
+            }
+            if (resumed == null) return;
+            Check(client.SessionId != oldSession && resumed.SessionId == client.SessionId, "the new session's id");
+            var scene = client.Scene();
+            Check(scene.Objects.Count == 1 && scene.Fields.Count == 1 && scene.ObjectIds[0] == wall.Id && scene.FieldIds[0] == field.Id,
+                  "the wall and the field registered again, the handles on their new ids");
+            client.SetOperator(OperatorInput.Push(new Vec3(0, 0, -5.0)));
+            var state = StepAndGet(client, 3000);
+            Near(state.Force.Z, 5.0, 1e-3, "the wall holds the push on the new server, its stream resumed");
+            Check(client.ReceiveCounters.Reconnects == 1, "one reconnection counted");
+            wall.Dispose();
+            field.Dispose();
+            Check(client.Scene().Objects.Count == 0, "removed on the new server");
+        }
+    }
+
     static int Main(string[] args)
     {
-        if (args.Length < 1) { Console.Error.WriteLine("usage: ClientTests.exe host:port [recording-dir] | --tls host:port certs-dir"); return 2; }
+        if (args.Length < 1) { Console.Error.WriteLine("usage: ClientTests.exe host:port [recording-dir] | --tls host:port certs-dir | --reconnect host:port ready-file"); return 2; }
         TheAssemblyIsManagedAloneWithTheCppSdksDefaults();
+        if (args[0] == "--reconnect" && args.Length == 3)
+        {
+            AServerRestartIsSurvivedWithEveryItem(args[1], args[2]);
+            Console.WriteLine(failures == 0 ? "all C# checks passed" : failures + " C# checks failed");
+            return failures == 0 ? 0 : 1;
+        }
         if (args[0] == "--tls" && args.Length == 3)
         {
             TlsMutualTlsAndTokens(args[1], args[2]);

@@ -5,7 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <filesystem>
+#include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "integration/recording_files.hpp"
@@ -52,6 +56,34 @@ TEST(CSharp, TlsMutualTlsAndTokensHoldAndEachMissingPieceIsRefusedSayingWhich) {
               "client_ca_file": ")" + certs + R"(/ca.pem"},
       "tokens": [{"name": "operator", "token": "controller-token-0123456789", "role": "CONTROLLER"}]})"));
   const Outcome outcome = mono(CSHARP_TESTS, {"--tls", "localhost:" + std::to_string(server.http_port()), certs});
+  EXPECT_EQ(outcome.exit_code, 0) << outcome.output;
+  EXPECT_NE(outcome.output.find("all C# checks passed"), std::string::npos) << outcome.output;
+}
+
+TEST(CSharp, AfterAServerRestartTheClientHasANewSessionWithEveryItem) {
+  auto first = std::make_unique<ServerProcess>(http_lockstep_config());
+  const std::uint16_t grpc_port = first->grpc_port();
+  const std::uint16_t udp_port = first->udp_port();
+  const std::uint16_t http_port = first->http_port();
+  const TempDir dir;
+  const std::string ready = dir.file("ready");
+  Outcome outcome;
+  std::thread client([&] { outcome = mono(CSHARP_TESTS, {"--reconnect", http_address(*first), ready}); });
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!std::filesystem::exists(ready) && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const bool was_ready = std::filesystem::exists(ready);
+  first.reset();  // SIGTERM: the server ramps down and exits, every session with it
+  if (was_ready) {
+    // The same three ports again, as the systemd unit's Restart= brings the server back.
+    ServerProcess second(lockstep_config(R"("http_address": "127.0.0.1:)" + std::to_string(http_port) + "\""),
+                         {}, 0, grpc_port, udp_port);
+    client.join();
+  } else {
+    client.join();
+  }
+  EXPECT_TRUE(was_ready) << outcome.output;
   EXPECT_EQ(outcome.exit_code, 0) << outcome.output;
   EXPECT_NE(outcome.output.find("all C# checks passed"), std::string::npos) << outcome.output;
 }
