@@ -247,9 +247,27 @@ static class ClientTests
         var scene = client.Scene();
         for (int i = 0; i < 6; ++i) Check(scene.ObjectIds[i] == applied.Objects[i].Id && Json(scene.Objects[i]) == Json(items[i]), "scene object " + i);
         for (int i = 0; i < 8; ++i) Check(scene.FieldIds[i] == applied.Fields[i].Id && Json(scene.Fields[i]) == Json(items[6 + i]), "scene field " + i);
+        // The same as a scene file (SceneJson writes what ApplySceneFile and hapticd --scene read).
+        string file = System.IO.Path.GetTempFileName();
+        try
+        {
+            System.IO.File.WriteAllText(file, Client.SceneJson(items));
+            var fromFile = client.ApplySceneFile(file);
+            scene = client.Scene();
+            Check(fromFile.Objects.Count == 6 && fromFile.Fields.Count == 8 && scene.ObjectIds[0] == fromFile.Objects[0].Id &&
+                  Json(scene.Objects[5]) == Json(items[5]) && Json(scene.Fields[7]) == Json(items[13]), "the scene from its file");
+            System.IO.File.WriteAllText(file, "{\"objects\": [");
+            var e = Throws(() => client.ApplySceneFile(file), "a file that is not JSON");
+            Check(e.Code == ErrorCode.InvalidArgument && e.Message.StartsWith("ApplySceneFile: " + file + ": JSON"), e.Message);
+            Check(client.Scene().Objects.Count == 6, "the scene before stays");
+        }
+        finally
+        {
+            System.IO.File.Delete(file);
+        }
         client.ApplyScene(new List<object>());
         Check(client.Scene().Objects.Count == 0, "an empty scene clears it");
-        foreach (var o in applied.Objects) o.Dispose();  // stale: nothing to remove
+        foreach (var o in applied.Objects) o.Dispose();  // stale: nothing to remove (nor the file's)
         foreach (var f in applied.Fields) f.Dispose();
     }
 

@@ -458,13 +458,19 @@ namespace Hapticd
             }
         }
 
+        /// <summary>The stream's link of an open client; FailedPrecondition once closed.</summary>
         private StateLink Link
         {
             get
             {
-                if (closed_) throw new HapticException(ErrorCode.FailedPrecondition, "Client: closed");
+                RequireOpen();
                 return link_;
             }
+        }
+
+        private void RequireOpen()
+        {
+            if (closed_) throw new HapticException(ErrorCode.FailedPrecondition, "Client: closed");
         }
 
         /// <summary>Ends the session; its objects and fields go with it.</summary>
@@ -493,7 +499,7 @@ namespace Hapticd
 
         // ---- the session ----
 
-        public DeviceInfo DeviceInfo { get { Link.ToString(); return deviceInfo_; } }
+        public DeviceInfo DeviceInfo { get { RequireOpen(); return deviceInfo_; } }
         public ulong SessionId { get { lock (identity_) return sessionId_; } }
         public long LeaseTimeoutMs { get { return leaseTimeoutMs_; } }
         public ConnectionState ConnectionState { get { return (ConnectionState)Volatile.Read(ref connectionState_); } }
@@ -561,7 +567,7 @@ namespace Hapticd
         /// starting with WatchStarted (null stops it). The server's refusal is thrown here.</summary>
         public void OnEvent(Action<Event> callback)
         {
-            Link.ToString();
+            RequireOpen();
             EndEvents();
             onEvent_ = callback;
             if (callback == null) return;
@@ -639,7 +645,7 @@ namespace Hapticd
         /// <summary>CreateObject or CreateField (`call`, by the spec's kind), kept under a new key.</summary>
         private ItemHandle Create(object spec, string call)
         {
-            Link.ToString();
+            RequireOpen();
             bool isObject;
             var message = Conversions.ToProto(spec, out isObject, call, "spec");
             var reply = isObject ? Call("CreateObject", SessionRef().Add("object", message))
@@ -707,7 +713,7 @@ namespace Hapticd
         {
             string call = handle.IsObject ? "UpdateObject" : "UpdateField";
             ulong key = handle.Live(call);
-            Link.ToString();
+            RequireOpen();
             bool isObject;
             var message = Conversions.ToProto(spec, out isObject, call, "spec");
             ulong id = RequireServerId(key, handle.Generation, call);
@@ -780,7 +786,7 @@ namespace Hapticd
 
         private AppliedScene Apply(JsonObject scene)
         {
-            Link.ToString();
+            RequireOpen();
             var reply = Call("ApplyScene", SessionRef().Add("scene", scene));
             var result = new AppliedScene();
             var objectIds = reply.Array("object_ids");
@@ -820,7 +826,7 @@ namespace Hapticd
         /// <summary>This session's objects and fields as the server holds them; with allSessions, everyone's.</summary>
         public RegisteredScene Scene(bool allSessions = false)
         {
-            Link.ToString();
+            RequireOpen();
             var reply = Call("GetScene", SessionRef().Add("all_sessions", allSessions));
             var scene = reply.Object("scene");
             var result = new RegisteredScene();
