@@ -133,7 +133,7 @@ export async function touchWall(url, { lockstep = false, token, print }) {
         t = (tick - firstTick + ticksPerStep) / rate;
         if (tick >= nextRowTick) {
           // Nothing steps the server while this waits: the stream's newest sample is this tick's.
-          const state = await stream.waitFor((s) => s.tick >= tick, 2000);
+          const state = await stream.waitFor((s) => s.tick >= tick, 10000);
           print(row(t, target, state));
           nextRowTick = tick + ticksPerRow;
         }
