@@ -435,8 +435,9 @@ export class HapticClient {
   }
 
   /**
-   * The session's events over WebSocket (service.proto's Event, as JSON: kind, session_id,
-   * server_time_s, message, item_id), WATCH_STARTED first (stream.started resolves on it).
+   * The server's events over WebSocket, as WatchEvents gives them over gRPC: every session's
+   * (service.proto's Event, as JSON: kind, session_id, server_time_s (s), message, item_id),
+   * WATCH_STARTED first (stream.started resolves on it). The stream ends with this session.
    * @param {object} [options]
    * @param {(event: object) => void} [options.onEvent]
    * @param {(error: HapticError) => void} [options.onError]
@@ -478,6 +479,7 @@ class Stream {
     this._name = name;
     this._onError = onError;
     this._error = null;
+    this._closing = false;
     /** Resolves to {code, reason} of the WebSocket's close frame once the stream has ended. */
     this.closed = new Promise((resolve) => { this._resolveClosed = resolve; });
     const url = client.url.replace(/^http/, 'ws') + CALL_PREFIX + name;
@@ -494,13 +496,15 @@ class Stream {
       }
     });
     this._socket.addEventListener('close', (event) => {
-      if (event.code !== 1000 && event.code !== 1005 && !this._error) {
+      if (event.code !== 1000 && event.code !== 1005 && !this._error && !this._closing) {
         this._fail(event.code === 1006
           ? unreachable(client.url, name)
           : new HapticError(event.code === 1008 ? 'permission_denied' : 'unavailable',
                             `${name}: the server closed the stream (${event.code}${event.reason ? `: ${event.reason}` : ''})`,
                             { call: name }));
       }
+      // Whatever still waits on the stream learns that it has ended.
+      if (!this._error) this._failed(new HapticError('cancelled', `${name}: the stream has ended`, { call: name }));
       this._resolveClosed({ code: event.code, reason: event.reason });
     });
   }
@@ -515,8 +519,9 @@ class Stream {
     return this._error;
   }
 
-  /** Ends the stream. */
+  /** Ends the stream (no error follows, whatever the state it was in). */
   close() {
+    this._closing = true;
     if (this.isOpen) this._socket.close(1000);
   }
 
@@ -561,6 +566,9 @@ export class StateStream extends Stream {
   waitFor(test, timeoutMs = 10000) {
     if (this.latest && test(this.latest)) return Promise.resolve(this.latest);
     if (this.error) return Promise.reject(this.error);
+    if (!this.isOpen) {
+      return Promise.reject(new HapticError('cancelled', 'StreamState: the stream has ended', { call: 'StreamState' }));
+    }
     return new Promise((resolve, reject) => {
       const waiter = { test, resolve, reject };
       waiter.timer = setTimeout(() => {

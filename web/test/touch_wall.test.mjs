@@ -123,8 +123,15 @@ describe('the browser client against a lockstep server', () => {
         stepPosition: step.state.position, serverTimeS: sample.serverTimeS, stepTimeS: step.state.server_time_s,
         received: stream.received, rejected: stream.rejected };
 
+      // A stream closed while it opens says nothing; a wait on one that ends is told so.
+      const early = client.streamState({ rateHz: 10, onError: (error) => { out.earlyError = error.message; } });
+      early.close();
+      out.earlyClosed = (await early.closed).code;
+      const waiting = stream.waitFor(() => false, 60000).then(() => null, (error) => error.code);
       await client.close();
       out.streamAfterClose = await stream.closed;
+      out.waitingAfterClose = await waiting;
+      out.waitAfterEnd = await stream.waitFor(() => false).then(() => null, (error) => error.code);
       try {
         await client.step(1);
       } catch (error) {
@@ -159,6 +166,10 @@ describe('the browser client against a lockstep server', () => {
     assert.ok(seen.sample.received >= 1);
     assert.equal(seen.sample.rejected, 0);
     assert.equal(seen.streamAfterClose.code, 1000);
+    assert.equal(seen.earlyError, undefined);
+    assert.equal(typeof seen.earlyClosed, 'number');
+    assert.equal(seen.waitingAfterClose, 'cancelled');
+    assert.equal(seen.waitAfterEnd, 'cancelled');
     assert.equal(seen.afterClose.code, 'failed_precondition');
     const [watcherId, clientId] = seen.sessions;
     assert.deepEqual(seen.events.filter((e) => e.session === clientId && e.kind !== 'SESSION_OPENED'), [
