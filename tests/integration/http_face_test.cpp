@@ -481,6 +481,32 @@ TEST(HttpFace, SixHostsFloodingSilentConnectionsLeaveAnotherHostServedAndEachSer
   EXPECT_LE(slowest_s, 1.0);
 }
 
+/// A slowloris from one host: `count` connections each sent one byte of `text` every 20 ms, made
+/// anew every second, until destroyed (bounded by its owner's lifetime).
+class Slowloris {
+ public:
+  Slowloris(std::uint16_t port, const char* host, int count, std::string text)
+      : thread_([this, port, host, count, text = std::move(text)] {
+          std::vector<std::unique_ptr<test::HttpConnection>> slow;
+          for (std::size_t sent = 0; !stop_.load(); ++sent) {
+            if (sent % 50 == 0) {
+              slow.clear();
+              for (int i = 0; i < count; ++i) slow.push_back(std::make_unique<test::HttpConnection>(port, host));
+            }
+            for (auto& connection : slow) connection->send(std::string(1, text[sent % text.size()]));
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+          }
+        }) {}
+  ~Slowloris() {
+    stop_.store(true);
+    thread_.join();
+  }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 // One host's slowloris (64 connections trickling a call's head a byte at a time, made anew every
 // second) leaves another host's calls answered. Bounded: 100 calls, 30 s.
 TEST(HttpFace, ASlowlorisFromOneHostLeavesAnotherHostsCallsAnswered) {
@@ -488,27 +514,16 @@ TEST(HttpFace, ASlowlorisFromOneHostLeavesAnotherHostsCallsAnswered) {
       "max_sessions": 128, "max_sessions_per_peer": 128, "session_open_rate_per_peer": 1000,
       "session_open_burst_per_peer": 128)"));
   const std::uint16_t port = server.http_port();
-  std::atomic<bool> stop{false};
-  std::thread slowloris([&] {
-    std::vector<std::unique_ptr<test::HttpConnection>> slow;
-    const std::string head = "POST /haptic.v1.Haptic/OpenSession HTTP/1.1\r\nX-Slow: " + std::string(500, 'x');
-    for (std::size_t sent = 0; !stop.load(); ++sent) {
-      if (sent % 50 == 0) {
-        slow.clear();
-        for (int i = 0; i < 64; ++i) slow.push_back(std::make_unique<test::HttpConnection>(port, "127.0.0.2"));
-      }
-      for (auto& connection : slow) connection->send(std::string(1, head[sent % head.size()]));
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  });
+  std::optional<Slowloris> slowloris;
+  slowloris.emplace(port, "127.0.0.2", 64,
+                    "POST /haptic.v1.Haptic/OpenSession HTTP/1.1\r\nX-Slow: " + std::string(500, 'x'));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   int answered = 0, attempts = 0;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   for (; attempts < 100 && std::chrono::steady_clock::now() < give_up; ++attempts) {
     answered += open_from(port, "127.0.0.3") == 200 ? 1 : 0;
   }
-  stop.store(true);
-  slowloris.join();
+  slowloris.reset();
   std::printf("  during a slowloris of 64 connections from one host: %d of %d calls from another "
               "answered\n", answered, attempts);
   EXPECT_EQ(attempts, 100);
@@ -638,21 +653,10 @@ TEST(HttpFace, OverTlsAFloodFromSixHostsAndASlowlorisLeaveAnotherHostServed) {
     flood.push_back(std::make_unique<test::HttpConnection>(
         port, flooders[static_cast<std::size_t>(i) % flooders.size()].c_str()));
   }
-  std::atomic<bool> stop{false};
-  std::thread slowloris([&] {
-    // A TLS 1.2 record header and the start of a ClientHello, then padding: never complete.
-    std::string hello = "\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03";
-    hello += std::string(500, '\x2a');
-    std::vector<std::unique_ptr<test::HttpConnection>> slow;
-    for (std::size_t sent = 0; !stop.load(); ++sent) {
-      if (sent % 50 == 0) {
-        slow.clear();
-        for (int i = 0; i < 32; ++i) slow.push_back(std::make_unique<test::HttpConnection>(port, "127.0.0.8"));
-      }
-      for (auto& connection : slow) connection->send(std::string(1, hello[sent % hello.size()]));
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  });
+  // A TLS 1.2 record header and the start of a ClientHello, then padding: never complete.
+  std::optional<Slowloris> slowloris;
+  slowloris.emplace(port, "127.0.0.8", 32,
+                    std::string("\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03", 11) + std::string(500, '\x2a'));
   int calls = 0, answered = 0;
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
   while (std::chrono::steady_clock::now() < until && calls < 30) {
@@ -667,8 +671,7 @@ TEST(HttpFace, OverTlsAFloodFromSixHostsAndASlowlorisLeaveAnotherHostServed) {
   std::printf("  over TLS, during a flood of 300 silent connections from 6 hosts and a slowloris of 32 "
               "from another (256 fds): %d of %d HTTPS calls from a third answered\n", answered, calls);
   EXPECT_EQ(answered, calls);
-  stop.store(true);
-  slowloris.join();
+  slowloris.reset();
   flood.clear();
   const auto ended = std::chrono::steady_clock::now();
   double slowest_s = 0.0;
