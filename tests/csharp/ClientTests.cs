@@ -338,6 +338,20 @@ static class ClientTests
         Check(sessions.Length == 1 && sessions[0].SessionId == client.SessionId, "sessions");
         Check(client.ReceiveCounters.Accepted > 0, "counters");
         Check(client.ServerTimeNow().HasValue, "server time");
+        // Energy per item and a pushable body's state, read back over the HTTP face.
+        var ball = SphereSpec.Default;
+        ball.Center = new Vec3(0.3, 0, 0);
+        ball.Radius = 0.01;
+        ball.Impedance = Stiff;
+        ball.Dynamics = new Dynamics(0.1, 0.5);
+        using (var body = client.AddSphere(ball))
+        {
+            client.Step(10);
+            var energy = client.SceneEnergy();
+            Check(Array.Exists(energy, x => x.Id == body.Id && x.IsObject && x.SessionId == client.SessionId), "SceneEnergy lists the sphere");
+            var bodies = client.ObjectStates();
+            Check(Array.Exists(bodies, x => x.Id == body.Id && Math.Abs(x.Position.X - 0.3) < 1e-9), "ObjectStates has the body where it was put");
+        }
         var e = Throws(() => client.StartRecording("x.rec"), "no recording_dir");
         Check(e.Code == ErrorCode.FailedPrecondition, "recording refused: " + e.Code);
         // Motion on a path of constant acceleration is exact.
