@@ -58,7 +58,8 @@ JointState plant_joints(const runtime::SimulatedDevice* device) {
 
 }  // namespace
 
-RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, const TickCallback& on_tick) {
+RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, const TickCallback& on_tick,
+                          const PortsHook& adjust_ports) {
   if (!(std::isfinite(duration_s) && duration_s > 0.0 && duration_s <= 3600.0)) {
     throw std::invalid_argument("duration: must be in (0, 3600] s, got " + std::to_string(duration_s));
   }
@@ -106,8 +107,9 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   runtime::LoopCounters counters;
   runtime::TickConfig tick;
   tick.period_s = period_s;
-  runtime::TickRunner runner(config::tick_ports(config, devices, ring_pointers, period_s), scenes, counters,
-                             tick);
+  std::vector<runtime::TickPort> tick_ports = config::tick_ports(config, devices, ring_pointers, period_s);
+  if (adjust_ports) adjust_ports(tick_ports);
+  runtime::TickRunner runner(tick_ports, scenes, counters, tick);
 
   RunSummary summary;
   std::vector<double> last_power(ports, 0.0), given_j(ports, 0.0), taken_j(ports, 0.0);

@@ -9,8 +9,10 @@
 #include <functional>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "haptic/v1/config.pb.h"
+#include "runtime/tick_runner.hpp"
 #include "runtime/tick_sample.hpp"
 
 namespace haptic::lab {
@@ -53,13 +55,18 @@ struct TickRecord {
 /// Called once per tick and port, in order; returning false stops the run after this tick.
 using TickCallback = std::function<bool(const TickRecord&)>;
 
+/// Called once before the run with the loop's ports as the configuration made them, to add what
+/// no configuration holds (an identification's excitation stage).
+using PortsHook = std::function<void(std::vector<runtime::TickPort>& ports)>;
+
 /// Runs `config` (validated; its time mode is ignored: the run is always lockstep) for
 /// llround(duration_s · loop rate) ticks and reports every tick of every port to `on_tick`.
 /// Energy: trapezoidal on P = F_T_W · v_WT between ticks; positive work adds to the energy given
 /// to the device, negative to the energy taken from it.
 /// Throws std::invalid_argument naming what is wrong before any work starts; a run that goes
 /// unstable returns normally (summary.finite false, fault_ticks counted).
-RunSummary simulate_scene(const v1::ServerConfig& config, double duration_s, const TickCallback& on_tick);
+RunSummary simulate_scene(const v1::ServerConfig& config, double duration_s, const TickCallback& on_tick,
+                          const PortsHook& adjust_ports = {});
 
 /// simulate_scene with one CSV row per tick and port written to `trace`:
 ///   port, tick, time_s (s), x_m y_m z_m (p_WT, m), vx_m_s vy_m_s vz_m_s (v_WT, m/s),

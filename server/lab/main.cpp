@@ -22,6 +22,7 @@
 
 #include "config/server_config.hpp"
 #include "lab/device_model.hpp"
+#include "lab/identify.hpp"
 #include "lab/lab_run.hpp"
 #include "lab/progress_bar.hpp"
 #include "lab/study_command.hpp"
@@ -206,6 +207,57 @@ Subcommand add_zwidth(CLI::App& cli) {
           }};
 }
 
+Subcommand add_identify(CLI::App& cli) {
+  struct Options {
+    haptic::lab::IdentifyParams p;
+    std::string device_path, axis = "x", csv_path, markdown_path;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* app = cli.add_subcommand(
+      "identify", "a device axis's mass, damping, friction, delay, noise and quantization, from a multisine it plays "
+                  "(docs/identification.md)");
+  app->add_option("--device", o->device_path, "hapticd configuration (JSON) whose device is identified")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app->add_option("--port", o->p.port, "device port (default 0)");
+  app->add_option("--axis", o->axis, "x (default), y or z, of W");
+  app->add_option("--amplitude", o->p.signal.amplitude_n, "the force's peak, N (default 1)");
+  app->add_option("--f-min", o->p.signal.f_min_hz, "lowest excited frequency, Hz (default 2)");
+  app->add_option("--f-max", o->p.signal.f_max_hz, "highest, Hz (default 40)");
+  app->add_option("--harmonics", o->p.signal.max_harmonics, "excited harmonics, log-spaced (default 24)");
+  app->add_option("--period-ticks", o->p.signal.samples_per_period, "the multisine's period in ticks (default 2048)");
+  app->add_option("--periods", o->p.signal.periods, "periods fitted, >= 4 (default 8)");
+  app->add_option("--settle-periods", o->p.signal.settle_periods, "periods left out after the ramp (default 1)");
+  app->add_option("--ramp", o->p.signal.ramp_s, "ramp in and out, s (default 0.5)");
+  app->add_option("--box", o->p.limits.box_half_width_m,
+                  "the tool may go this far from its start along each axis, m, or it stops (default 0.05)");
+  app->add_option("--max-speed", o->p.limits.max_speed_m_s, "or faster than this, m/s (default 0.5)");
+  app->add_option("--csv", o->csv_path, "write the frequency response (measured and model) as CSV here");
+  app->add_option("--markdown", o->markdown_path, "write the report here; default: standard output");
+  return {app, [o] {
+            if (o->axis != "x" && o->axis != "y" && o->axis != "z") {
+              throw std::invalid_argument("--axis: must be x, y or z, got \"" + o->axis + "\"");
+            }
+            o->p.axis = o->axis == "x" ? 0 : o->axis == "y" ? 1 : 2;
+            const haptic::v1::ServerConfig config = haptic::config::load_config_file(o->device_path);
+            const haptic::lab::IdentifyResult result = haptic::lab::identify(config, o->p, o->device_path);
+            if (!o->csv_path.empty()) {
+              std::ofstream csv(o->csv_path);
+              if (!csv) throw std::invalid_argument(o->csv_path + ": cannot write");
+              csv << haptic::lab::identify_response_csv(result);
+            }
+            const std::string report = haptic::lab::identify_report(result, o->p, o->device_path);
+            if (o->markdown_path.empty()) {
+              std::cout << report;
+            } else {
+              std::ofstream md(o->markdown_path);
+              if (!md) throw std::invalid_argument(o->markdown_path + ": cannot write");
+              md << report;
+            }
+            return 0;
+          }};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -217,6 +269,7 @@ int main(int argc, char** argv) {
   commands.push_back(add_run(cli));
   commands.push_back(add_transparency(cli));
   commands.push_back(add_zwidth(cli));
+  commands.push_back(add_identify(cli));
   commands.push_back(from_functions<haptic::lab::StudyCommandOptions>(cli, haptic::lab::add_study_command,
                                                                      haptic::lab::run_study_command));
   try {

@@ -40,6 +40,7 @@ void TickRunner::make_ports(const std::vector<TickPort>& ports) {
       out.robot.emplace(*port.robot, port.robot_params, description, out.torque_guard.has_value(), config_.period_s,
                         config_.output_ramp_ticks, counters_.robot_wrenches_refused);
     }
+    out.excitation = port.excitation;
   }
 }
 
@@ -115,6 +116,9 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
     if (port.remote_tools) F_scene += port.remote_tools->force(reading);
     // A ROS 2 node's wrench (a robot's), through a layer of its own, before the guard too.
     if (port.robot) F_scene += port.robot->force(reading);
+    // An identification's excitation, before the guard as well: it reaches the device as a
+    // command does.
+    if (port.excitation != nullptr) F_scene += port.excitation->force(reading, tick);
     F_command = guarded(port.guard.apply(F_scene, config_.period_s, gain), sample);
     const engine::Vec3 tau_command = port_torque(scene, index, reading, tick, gain, sample);
     // Jᵀ: the joint command for that force (the torque goes to the handle as it is).

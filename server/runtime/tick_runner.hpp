@@ -27,6 +27,7 @@
 #include "runtime/remote_tool_stage.hpp"
 #include "runtime/remote_tools.hpp"
 #include "runtime/robot_wrench.hpp"
+#include "runtime/excitation_stage.hpp"
 #include "runtime/robot_wrench_stage.hpp"
 #include "runtime/shared_masses.hpp"
 
@@ -75,6 +76,10 @@ struct TickPort {
   /// Not owned.
   const LatestValue<RobotWrench>* robot = nullptr;
   RobotWrenchParams robot_params{};
+  /// An identification's excitation (haptic-lab identify): its force added before the guard, as
+  /// the robot's is. Null: none, and no excitation work. Not owned: its owner reads, after the
+  /// run, whether and why it stopped.
+  ExcitationStage* excitation = nullptr;
 };
 
 class TickRunner {
@@ -123,6 +128,7 @@ class TickRunner {
     /// Federation's stages, where configured: other sites' tools, a ROS 2 node's wrench.
     std::optional<RemoteToolStage> remote_tools{};
     std::optional<RobotWrenchStage> robot{};
+    ExcitationStage* excitation = nullptr;  // not owned (TickPort::excitation)
   };
 
   double output_gain(std::uint64_t tick) const;

@@ -1,0 +1,146 @@
+#include "lab/identify.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "config/server_config.hpp"
+#include "lab/lab_run.hpp"
+
+namespace haptic::lab {
+namespace {
+
+const char* axis_name(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"; }
+
+double along(const engine::Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
+
+}  // namespace
+
+IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& params, const std::string& source) {
+  if (params.axis < 0 || params.axis > 2) {
+    throw std::invalid_argument("axis: must be x, y or z (0, 1, 2), got " + std::to_string(params.axis));
+  }
+  if (!(params.limits.box_half_width_m > 0.0) || !(params.limits.max_speed_m_s > 0.0)) {
+    throw std::invalid_argument("box and max speed: must be > 0");
+  }
+  v1::ServerConfig config = given;
+  config::fill_defaults(config);
+  if (auto e = config::validate(config); !e.empty()) throw std::invalid_argument(source + ": " + e);
+  IdentifyResult result;
+  result.period_s = 1.0 / config.loop_rate_hz();
+  engine::MultisineParams signal = params.signal;
+  signal.sample_period_s = result.period_s;
+  std::string why;
+  const std::optional<engine::Multisine> multisine = engine::design_multisine(signal, why);
+  if (!multisine) throw std::invalid_argument(why);
+  engine::Vec3 axis_W{};
+  (params.axis == 0 ? axis_W.x : params.axis == 1 ? axis_W.y : axis_W.z) = 1.0;
+  runtime::ExcitationStage stage(*multisine, axis_W, params.limits);
+
+  // Whole ticks: the signal's, and one more so the last reading follows the last command.
+  const auto ticks = static_cast<std::uint64_t>(std::llround(multisine->duration_s() / result.period_s)) + 1;
+  result.duration_s = static_cast<double>(ticks) * result.period_s;
+  std::vector<double> force, position;
+  force.reserve(ticks);
+  position.reserve(ticks);
+  bool port_found = false;
+  simulate_scene(
+      config, static_cast<double>(ticks) / config.loop_rate_hz(),
+      [&](const TickRecord& record) {
+        if (record.port != params.port) return true;
+        force.push_back(along(record.sample.F_T_W, params.axis));
+        position.push_back(along(record.sample.p_WT, params.axis));
+        return stage.stop() == runtime::ExcitationStage::Stop::kNone;
+      },
+      [&](std::vector<runtime::TickPort>& ports) {
+        if (params.port >= ports.size()) return;
+        ports[params.port].excitation = &stage;
+        port_found = true;
+      });
+  if (!port_found) {
+    throw std::invalid_argument("port: " + std::to_string(params.port) + " is not one of the configuration's ports");
+  }
+  result.start_position = stage.start_position();
+  if (stage.stop() != runtime::ExcitationStage::Stop::kNone) {
+    std::ostringstream message;
+    message << "the excitation stopped at tick " << stage.stop_tick() << ": the tool "
+            << (stage.stop() == runtime::ExcitationStage::Stop::kLeftTheBox
+                    ? "left its box of ±" + std::to_string(params.limits.box_half_width_m * 1e3) + " mm"
+                    : "moved at " + std::to_string(stage.stop_speed()) + " m/s, faster than " +
+                          std::to_string(params.limits.max_speed_m_s))
+            << "; lower the amplitude (" << signal.amplitude_n << " N) or raise f_min (" << signal.f_min_hz
+            << " Hz), which sets how far the lowest harmonic carries it";
+    throw std::invalid_argument(message.str());
+  }
+  const std::optional<engine::AxisIdentification> fit = engine::identify_axis(*multisine, force, position, why);
+  if (!fit) throw std::invalid_argument(why);
+  result.fit = *fit;
+  try {
+    const DeviceModel model = device_model(config, source);
+    if (model.method == "jacobian") {
+      result.model_mass = model.axis_mass[static_cast<std::size_t>(params.axis)];
+      result.model_damping = model.axis_damping[static_cast<std::size_t>(params.axis)];
+    } else {
+      result.model_mass = model.mass;
+      result.model_damping = model.damping;
+    }
+    result.model_method = model.method;
+  } catch (const std::invalid_argument& error) {
+    result.model_method = std::string("none: ") + error.what();
+  }
+  return result;
+}
+
+std::string identify_report(const IdentifyResult& r, const IdentifyParams& params, const std::string& source) {
+  std::ostringstream out;
+  out << std::setprecision(4);
+  const engine::AxisIdentification& f = r.fit;
+  const engine::MultisineParams& s = params.signal;
+  out << "# Identification of " << source << ", port " << params.port << ", axis " << axis_name(params.axis) << "\n\n"
+      << "A multisine of " << f.response.size() << " harmonics from " << f.response.front().frequency_hz << " to "
+      << f.response.back().frequency_hz << " Hz, " << s.amplitude_n << " N peak, " << f.periods
+      << " periods fitted; " << r.duration_s << " s of lockstep ticks at " << 1.0 / r.period_s << " Hz. Intervals: 95 %, "
+      << "delete-one-period jackknife.\n\n"
+      << "| parameter | identified | 95 % interval | model | error |\n|---|---|---|---|---|\n";
+  const auto row = [&](const char* name, const engine::Estimate& e, std::optional<double> model, const char* unit) {
+    out << "| " << name << " (" << unit << ") | " << e.value << " | ± " << e.half_width_95 << " | ";
+    if (model) {
+      out << *model << " | " << std::showpos << 100.0 * (e.value - *model) / *model << std::noshowpos << " % |\n";
+    } else {
+      out << "- | - |\n";
+    }
+  };
+  row("mass", f.mass, r.model_mass, "kg");
+  row("damping", f.damping, r.model_damping, "N·s/m");
+  row("Coulomb friction", f.coulomb, std::nullopt, "N");
+  row("constant force", f.offset, std::nullopt, "N");
+  row("delay", f.delay, std::nullopt, "s");
+  out << "\nFriction to move +: " << f.coulomb_positive << " N, −: " << f.coulomb_negative
+      << " N. Delay beyond a perfect loop's (the hold's half tick): "
+      << (f.delay.value - r.period_s / 2.0) * 1e3 << " ms (" << (f.delay.value - r.period_s / 2.0) / r.period_s
+      << " ticks). Noise: " << f.noise_rms_m * 1e6 << " µm rms. Quantization: ";
+  if (f.quantization_m) {
+    out << *f.quantization_m * 1e6 << " µm";
+  } else {
+    out << "no lattice (the positions are not whole steps of one size)";
+  }
+  out << ". Residual: " << 100.0 * f.relative_residual << " % of the force's rms.\n\nThe model: " << r.model_method
+      << ".\n";
+  return out.str();
+}
+
+std::string identify_response_csv(const IdentifyResult& r) {
+  std::ostringstream out;
+  out << std::setprecision(std::numeric_limits<double>::max_digits10);
+  out << "frequency_hz,measured_m_per_n,measured_phase_deg,model_m_per_n,model_phase_deg\n";
+  for (const engine::FrequencyPoint& p : r.fit.response) {
+    out << p.frequency_hz << ',' << std::abs(p.measured) << ',' << std::arg(p.measured) * 180.0 / std::numbers::pi
+        << ',' << std::abs(p.model) << ',' << std::arg(p.model) * 180.0 / std::numbers::pi << '\n';
+  }
+  return out.str();
+}
+
+}  // namespace haptic::lab

@@ -1,0 +1,54 @@
+#pragma once
+// `haptic-lab identify`: a device port's axis identified from a run on the device itself
+// (docs/identification.md). The configuration's device runs in lockstep with a multisine force
+// along one axis of W, played through the loop as a command is (runtime/excitation_stage: before
+// the force guard), and the recorded command and position are fitted
+// (engine/analysis/system_identification): apparent mass, damping, Coulomb friction in each
+// direction, delay, the sensor's noise and quantization, each with its 95 % interval. Beside
+// them, where the configuration knows one, the device's own model (lab/device_model) to compare.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "engine/analysis/system_identification.hpp"
+#include "engine/core/vec3.hpp"
+#include "haptic/v1/config.pb.h"
+#include "lab/device_model.hpp"
+#include "runtime/excitation_stage.hpp"
+
+namespace haptic::lab {
+
+struct IdentifyParams {
+  std::uint32_t port = 0;  // the device port excited
+  int axis = 0;            // of W: 0 x, 1 y, 2 z
+  /// The multisine; its sample_period_s is the configuration's loop period (set by identify).
+  engine::MultisineParams signal;
+  runtime::ExcitationLimits limits;
+};
+
+struct IdentifyResult {
+  engine::AxisIdentification fit;
+  engine::Vec3 start_position;   // the tool's position at the first tick. Unit: m.
+  double duration_s = 0.0;       // the run. Unit: s.
+  double period_s = 0.0;         // the loop's. Unit: s.
+  /// The device's own mass-damper along the axis, where the configuration gives one (its
+  /// description, or the Jacobian at the initial pose): mass (kg), damping (N·s/m).
+  std::optional<double> model_mass, model_damping;
+  std::string model_method;      // "description", "jacobian" or why there is none
+};
+
+/// Runs the excitation on `config`'s device (`source` names the configuration in messages) and
+/// fits it. Throws std::invalid_argument naming what is wrong: a parameter, a stop (the tool left
+/// its box or went too fast: lower the amplitude or raise f_min), or a fit that failed.
+IdentifyResult identify(const v1::ServerConfig& config, const IdentifyParams& params, const std::string& source);
+
+/// The result as a markdown report: the estimates with their intervals, the model's figures and
+/// the errors against them, the delay beyond a perfect loop's, noise, quantization, residual.
+std::string identify_report(const IdentifyResult& result, const IdentifyParams& params, const std::string& source);
+
+/// The frequency response, one row per excited harmonic: frequency_hz, measured and model
+/// magnitude (m/N) and phase (deg), for plot_lab.py's Bode chart.
+std::string identify_response_csv(const IdentifyResult& result);
+
+}  // namespace haptic::lab

@@ -1,0 +1,71 @@
+// haptic-lab identify on the devices themselves, in lockstep: the point mass's mass and damping
+// come back as its configuration gives them, with the hold's half tick as its delay; a run that
+// carries the tool out of its box is stopped and refused saying how to change it.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
+
+#include "config/server_config.hpp"
+#include "lab/identify.hpp"
+
+namespace haptic::lab {
+namespace {
+
+IdentifyParams light_excitation(double amplitude_n) {
+  IdentifyParams p;
+  p.axis = 0;
+  p.signal.amplitude_n = amplitude_n;
+  p.signal.periods = 6;
+  return p;
+}
+
+TEST(LabIdentify, ThePointMassIsItsConfiguredMassAndDampingWithTheHoldsHalfTick) {
+  // Eom et al.'s device: 10 g, 0.022 N·s/m, at 1 kHz (the configuration's defaults).
+  const v1::ServerConfig config = config::parse_config(R"({"time_mode": "LOCKSTEP"})", "test");
+  const IdentifyParams params = light_excitation(0.02);
+  const IdentifyResult result = identify(config, params, "test");
+  ASSERT_TRUE(result.model_mass && result.model_damping) << result.model_method;
+  EXPECT_EQ(result.model_method, "description");
+  EXPECT_NEAR(result.fit.mass.value, 0.01, 0.01 * 0.01);
+  EXPECT_NEAR(result.fit.damping.value, 0.022, 0.05 * 0.022);
+  EXPECT_NEAR(result.fit.delay.value, 0.5e-3, 0.1e-3);
+  EXPECT_NEAR(result.fit.coulomb.value, 0.0, 1e-4);
+  EXPECT_LT(result.fit.relative_residual, 0.01);
+  const std::string report = identify_report(result, params, "test");
+  EXPECT_NE(report.find("| mass (kg) |"), std::string::npos) << report;
+  const std::string csv = identify_response_csv(result);
+  EXPECT_EQ(csv.rfind("frequency_hz,measured_m_per_n", 0), 0u);
+  std::printf("%s", report.c_str());
+}
+
+TEST(LabIdentify, AnExcitationThatCarriesTheToolOutOfItsBoxIsStoppedAndRefusedSayingWhatToChange) {
+  const v1::ServerConfig config = config::parse_config(R"({"time_mode": "LOCKSTEP"})", "test");
+  const auto refusal = [&](const IdentifyParams& params) {
+    try {
+      identify(config, params, "test");
+    } catch (const std::invalid_argument& error) {
+      return std::string(error.what());
+    }
+    return std::string("not refused");
+  };
+  // 2 N on 10 g: faster than 0.5 m/s within a quarter second.
+  std::string what = refusal(light_excitation(2.0));
+  EXPECT_NE(what.find("the excitation stopped at tick"), std::string::npos) << what;
+  EXPECT_NE(what.find("faster than"), std::string::npos) << what;
+  EXPECT_NE(what.find("lower the amplitude"), std::string::npos) << what;
+  // Allowed any speed, it leaves its ±50 mm box instead.
+  IdentifyParams fast = light_excitation(2.0);
+  fast.limits.max_speed_m_s = 100.0;
+  what = refusal(fast);
+  EXPECT_NE(what.find("left its box of ±50"), std::string::npos) << what;
+  IdentifyParams bad = light_excitation(0.02);
+  bad.axis = 3;
+  EXPECT_THROW(identify(config, bad, "test"), std::invalid_argument);
+  bad = light_excitation(0.02);
+  bad.port = 4;
+  EXPECT_THROW(identify(config, bad, "test"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace haptic::lab
