@@ -4,6 +4,7 @@
     scripts/plot_lab.py zwidth grid.csv out/zwidth        -> out/zwidth.png, out/zwidth.svg
     scripts/plot_lab.py transparency sweep.csv out/design -> out/design.png, out/design.svg
     scripts/plot_lab.py run trace.csv out/trace           -> out/trace.png, out/trace.svg
+    scripts/plot_lab.py identify response.csv out/bode    -> out/bode.png, out/bode.svg
 
 zwidth: the (K, B) grid, each cell marked by which tests call it stable (Colgate's bound,
 the sampled loop's eigenvalues, simulation). transparency: J(B_c) and ||L||inf(B_c) in dB against
@@ -11,6 +12,9 @@ B_c on a log axis, with the robust-stability line at 0 dB. run: `haptic-lab run`
 in three stacked panels: the tool's position (m), the force on it (N) and the energy the scene
 gave to the device and took from it (J), one line per port and axis that moves (columns are read
 by name; extra columns are ignored), with the ticks whose flags are set marked on the force panel.
+identify: `haptic-lab identify --csv`'s frequency response as a Bode chart, X/F's magnitude (m/N,
+log) and phase (degrees) against frequency (Hz, log): the measured harmonics as points, the
+identified model as a line through them.
 
 Runs with /usr/bin/python3 and Debian's python3-matplotlib (Agg backend).
 """
@@ -155,10 +159,45 @@ def transparency(rows, out):
     fig.savefig(out + ".svg", metadata={"Date": None})
 
 
+def identify(rows, out):
+    f = [float(r["frequency_hz"]) for r in rows]
+    fig, (mag, phase) = plt.subplots(2, 1, figsize=(7.0, 6.0), sharex=True)
+    mag.loglog(f, [float(r["model_m_per_n"]) for r in rows], color="#4c72b0", label="identified model")
+    mag.loglog(f, [float(r["measured_m_per_n"]) for r in rows], "o", color="#c44e52", ms=4,
+               label="measured (periods averaged)")
+    mag.set_ylabel("|X/F| [m/N]")
+    mag.grid(True, which="both", lw=0.3)
+    mag.legend(fontsize=8)
+    # Phases unwrapped from the lowest harmonic, so a delay reads as a straight fall.
+    def unwrapped(column):
+        values, offset, previous = [], 0.0, None
+        for r in rows:
+            v = float(r[column])
+            if previous is not None:
+                while v + offset - previous > 180.0:
+                    offset -= 360.0
+                while v + offset - previous < -180.0:
+                    offset += 360.0
+            previous = v + offset
+            values.append(previous)
+        return values
+    phase.semilogx(f, unwrapped("model_phase_deg"), color="#4c72b0")
+    phase.semilogx(f, unwrapped("measured_phase_deg"), "o", color="#c44e52", ms=4)
+    phase.set_ylabel("phase [deg]")
+    phase.set_xlabel("frequency [Hz]")
+    phase.grid(True, which="both", lw=0.3)
+    mag.set_title("Frequency response of the identified axis (haptic-lab identify)")
+    fig.tight_layout()
+    fig.savefig(out + ".png", dpi=120, metadata={"Software": None})
+    fig.savefig(out + ".svg", metadata={"Date": None})
+
+
 CHARTS = {
     "zwidth": (zwidth, ["stiffness_n_m", "damping_n_s_m", "passive", "eigen_stable", "simulation_stable"]),
     "transparency": (transparency, ["controller_damping_n_s_m", "transparency_index", "robust_norm_db"]),
     "run": (run, RUN_COLUMNS),
+    "identify": (identify, ["frequency_hz", "measured_m_per_n", "measured_phase_deg", "model_m_per_n",
+                            "model_phase_deg"]),
 }
 
 if __name__ == "__main__":
