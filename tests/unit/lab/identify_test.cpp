@@ -3,10 +3,15 @@
 // carries the tool out of its box is stopped and refused saying how to change it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
 #include "config/server_config.hpp"
+#include "engine/scene/impedance.hpp"
+#include "lab/device_zwidth.hpp"
 #include "lab/identify.hpp"
 
 namespace haptic::lab {
@@ -65,6 +70,28 @@ TEST(LabIdentify, AnExcitationThatCarriesTheToolOutOfItsBoxIsStoppedAndRefusedSa
   bad = light_excitation(0.02);
   bad.port = 4;
   EXPECT_THROW(identify(config, bad, "test"), std::invalid_argument);
+}
+
+/// The Z-width the identified model predicts (the sampled wall's analysis with the identified
+/// mass, damping and delay beyond the hold) against the device's own, walls of increasing K run on
+/// it in lockstep, at three dampings: within 10 %.
+TEST(LabIdentify, TheIdentifiedModelPredictsThePointMasssOwnZWidthWithin10Percent) {
+  const v1::ServerConfig config = config::parse_config(R"({"time_mode": "LOCKSTEP"})", "test");
+  const IdentifyResult id = identify(config, light_excitation(0.02), "test");
+  const engine::MassDamperDevice model{id.fit.mass.value, id.fit.damping.value};
+  const auto delay_ticks =
+      static_cast<std::uint32_t>(std::max(0L, std::lround((id.fit.delay.value - id.period_s / 2.0) / id.period_s)));
+  DeviceWallParams wall;
+  for (const double damping : {0.0, 0.1, 0.3}) {
+    const double predicted = engine::sampled_wall_margin({100.0, damping, 0.0}, engine::ImpedanceDiscretization::kBackwardDifference,
+                                                         model, id.period_s, delay_ticks)
+                                 .max_stable_stiffness;
+    // From a guess off by a factor 3, so the bracket is found, not given.
+    const double measured = device_zwidth_boundary(config, wall, damping, 3.0 * predicted);
+    std::printf("  B %.2f N·s/m: K_max predicted %.1f N/m, measured on the device %.1f N/m (%+.1f %%)\n", damping,
+                predicted, measured, 100.0 * (predicted - measured) / measured);
+    EXPECT_NEAR(predicted, measured, 0.10 * measured) << "B = " << damping;
+  }
 }
 
 }  // namespace

@@ -1,0 +1,109 @@
+#include "lab/device_zwidth.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "config/server_config.hpp"
+#include "engine/analysis/growth.hpp"
+#include "lab/lab_run.hpp"
+
+namespace haptic::lab {
+namespace {
+
+double along(const engine::Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
+
+v1::Vec3 unit(int axis, double length) {
+  v1::Vec3 v;
+  (axis == 0 ? v.set_x(length) : axis == 1 ? v.set_y(length) : v.set_z(length));
+  return v;
+}
+
+/// Where the tool starts on `port`: the first tick's reading.
+engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port) {
+  engine::Vec3 start{};
+  bool found = false;
+  simulate_scene(config, 1.0 / config.loop_rate_hz(), [&](const TickRecord& r) {
+    if (r.port == port) {
+      start = r.sample.p_WT;
+      found = true;
+    }
+    return true;
+  });
+  if (!found) throw std::invalid_argument("port: " + std::to_string(port) + " is not one of the configuration's ports");
+  return start;
+}
+
+}  // namespace
+
+bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& params, double stiffness,
+                         double damping) {
+  if (params.axis < 0 || params.axis > 2) throw std::invalid_argument("axis: must be 0, 1 or 2");
+  if (!(params.push_n > 0.0) || !(params.seconds > 4.0 * params.window_s) || !(params.window_s > 0.0)) {
+    throw std::invalid_argument("push_n > 0 and seconds > 4 windows > 0 are needed");
+  }
+  v1::ServerConfig config = given;
+  config::fill_defaults(config);
+  if (auto e = config::validate(config); !e.empty()) throw std::invalid_argument(e);
+  const engine::Vec3 start = start_position(config, params.port);
+  // The wall: the plane through the start, outward along +axis; its law the sampled analysis's.
+  config.mutable_initial_scene()->clear_objects();
+  config.mutable_initial_scene()->clear_fields();
+  v1::Object* wall = config.mutable_initial_scene()->add_objects();
+  wall->mutable_pose()->mutable_position()->set_x(start.x);
+  wall->mutable_pose()->mutable_position()->set_y(start.y);
+  wall->mutable_pose()->mutable_position()->set_z(start.z);
+  *wall->mutable_half_space()->mutable_normal() = unit(params.axis, 1.0);
+  wall->mutable_impedance()->set_stiffness(stiffness);
+  wall->mutable_impedance()->set_damping(damping);
+  wall->mutable_impedance()->set_law(v1::Impedance::BACKWARD_DIFFERENCE);
+  config.mutable_passivity()->set_enabled(false);
+  v1::OperatorInput* push = config.mutable_initial_operator();
+  push->Clear();
+  push->set_mode(v1::OperatorInput::APPLY_FORCE);
+  *push->mutable_force() = unit(params.axis, -params.push_n);
+
+  const double period = 1.0 / config.loop_rate_hz();
+  const double equilibrium = along(start, params.axis) - params.push_n / stiffness;
+  const auto window = static_cast<std::size_t>(std::llround(params.window_s / period));
+  std::vector<double> distance;  // from the equilibrium, along the axis. Unit: m.
+  bool finite = true;
+  simulate_scene(config, std::round(params.seconds / period) * period, [&](const TickRecord& r) {
+    if (r.port != params.port) return true;
+    const double x = along(r.sample.p_WT, params.axis);
+    finite = finite && std::isfinite(x);
+    distance.push_back(std::abs(x - equilibrium));
+    return finite;
+  });
+  if (!finite || distance.size() < 4 * window) return false;
+  // The envelope's growth from the first window on (engine/analysis/growth): a run near the
+  // boundary decays or grows slowly, and only its rate's sign tells which side it is on. A
+  // floor of 1e-12 m leaves out windows that have decayed into rounding.
+  const engine::GrowthFit growth = engine::envelope_growth(distance, period, params.window_s, params.window_s, 1e-12);
+  return growth.rate_per_s < 0.0;
+}
+
+double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallParams& params, double damping,
+                              double guess, double tolerance) {
+  if (!std::isfinite(guess) || guess <= 0.0) guess = 1000.0;
+  double lo = guess, hi = guess;
+  while (!device_wall_settles(config, params, lo, damping)) {
+    lo /= 2.0;
+    if (lo < guess * 1e-3) return 0.0;
+  }
+  hi = std::max(hi, lo * 2.0);
+  while (device_wall_settles(config, params, hi, damping)) {
+    lo = hi;
+    hi *= 2.0;
+    if (hi > guess * 1e3) return std::numeric_limits<double>::infinity();
+  }
+  while (hi / lo > 1.0 + tolerance) {
+    const double mid = std::sqrt(lo * hi);
+    (device_wall_settles(config, params, mid, damping) ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+}  // namespace haptic::lab

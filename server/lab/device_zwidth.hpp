@@ -1,0 +1,40 @@
+#pragma once
+// The Z-width of a device itself (docs/identification.md): walls of increasing stiffness run on
+// the configuration's own device in lockstep, through the server's own loop (lab/lab_run), and
+// the largest stiffness whose run settles found by bisection, at a given damping. The ground
+// truth an identified model's prediction (engine::sampled_wall_margin) is checked against.
+//
+// Each run: a half-space wall through where the tool starts, its outward normal along the axis,
+// the wall's law BACKWARD_DIFFERENCE (the sampled analysis's own), the passivity controller off
+// (it exists to hide this boundary), and the simulated operator pressing the tool into the wall
+// with a constant force. The tool starts at the surface, falls in towards its equilibrium
+// d = F/K, and rings: it settles if the envelope of its distance from the equilibrium decays
+// (engine::envelope_growth's rate < 0, fitted from the first window on: near the boundary a run
+// decays or grows slowly, and the rate's sign alone tells which side it is on).
+
+#include <cstdint>
+
+#include "haptic/v1/config.pb.h"
+
+namespace haptic::lab {
+
+struct DeviceWallParams {
+  std::uint32_t port = 0;
+  int axis = 0;            // of W: 0 x, 1 y, 2 z; the wall's normal, the push against it
+  double push_n = 0.5;     // the operator's force into the wall. Unit: N. > 0.
+  double seconds = 3.0;    // each run. Unit: s.
+  double window_s = 0.1;   // the envelope's windows (the first, the fall in, left out). Unit: s.
+};
+
+/// Whether a wall (K N/m, B N·s/m) on the device settles, as above. Throws std::invalid_argument
+/// for a configuration or parameters that cannot run.
+bool device_wall_settles(const v1::ServerConfig& config, const DeviceWallParams& params, double stiffness,
+                         double damping);
+
+/// The largest K that settles at damping B, to `tolerance` relative, by doubling or halving from
+/// `guess` to bracket it and then bisecting (in the logarithm); 0 when even guess / 1e3 does not
+/// settle, infinity when guess × 1e3 does.
+double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallParams& params, double damping,
+                              double guess, double tolerance = 0.005);
+
+}  // namespace haptic::lab
