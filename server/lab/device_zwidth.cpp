@@ -13,12 +13,12 @@
 namespace haptic::lab {
 namespace {
 
-double along(const engine::Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
-
-v1::Vec3 unit(int axis, double length) {
-  v1::Vec3 v;
-  (axis == 0 ? v.set_x(length) : axis == 1 ? v.set_y(length) : v.set_z(length));
-  return v;
+v1::Vec3 to_proto(const engine::Vec3& v) {
+  v1::Vec3 out;
+  out.set_x(v.x);
+  out.set_y(v.y);
+  out.set_z(v.z);
+  return out;
 }
 
 /// Where the tool starts on `port`: the first tick's reading.
@@ -40,7 +40,7 @@ engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port) 
 
 bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& params, double stiffness,
                          double damping) {
-  if (params.axis < 0 || params.axis > 2) throw std::invalid_argument("axis: must be 0, 1 or 2");
+  if (std::abs(engine::norm(params.direction) - 1.0) > 1e-9) throw std::invalid_argument("direction: must be a unit vector");
   if (!(params.push_n > 0.0) || !(params.seconds > 4.0 * params.window_s) || !(params.window_s > 0.0)) {
     throw std::invalid_argument("push_n > 0 and seconds > 4 windows > 0 are needed");
   }
@@ -55,7 +55,7 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
   wall->mutable_pose()->mutable_position()->set_x(start.x);
   wall->mutable_pose()->mutable_position()->set_y(start.y);
   wall->mutable_pose()->mutable_position()->set_z(start.z);
-  *wall->mutable_half_space()->mutable_normal() = unit(params.axis, 1.0);
+  *wall->mutable_half_space()->mutable_normal() = to_proto(params.direction);
   wall->mutable_impedance()->set_stiffness(stiffness);
   wall->mutable_impedance()->set_damping(damping);
   wall->mutable_impedance()->set_law(v1::Impedance::BACKWARD_DIFFERENCE);
@@ -63,16 +63,16 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
   v1::OperatorInput* push = config.mutable_initial_operator();
   push->Clear();
   push->set_mode(v1::OperatorInput::APPLY_FORCE);
-  *push->mutable_force() = unit(params.axis, -params.push_n);
+  *push->mutable_force() = to_proto(-params.push_n * params.direction);
 
   const double period = 1.0 / config.loop_rate_hz();
-  const double equilibrium = along(start, params.axis) - params.push_n / stiffness;
+  const double equilibrium = engine::dot(start, params.direction) - params.push_n / stiffness;
   const auto window = static_cast<std::size_t>(std::llround(params.window_s / period));
   std::vector<double> distance;  // from the equilibrium, along the axis. Unit: m.
   bool finite = true;
   simulate_scene(config, std::round(params.seconds / period) * period, [&](const TickRecord& r) {
     if (r.port != params.port) return true;
-    const double x = along(r.sample.p_WT, params.axis);
+    const double x = engine::dot(r.sample.p_WT, params.direction);
     finite = finite && std::isfinite(x);
     distance.push_back(std::abs(x - equilibrium));
     return finite;
@@ -82,7 +82,12 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
   // boundary decays or grows slowly, and only its rate's sign tells which side it is on. A
   // floor of 1e-12 m leaves out windows that have decayed into rounding.
   const engine::GrowthFit growth = engine::envelope_growth(distance, period, params.window_s, params.window_s, 1e-12);
-  return growth.rate_per_s < 0.0;
+  // A run that grew until the device's force limit held it (a limit cycle: its envelope flat, or
+  // falling a little as it settles into the cycle) has not settled either: its last window stands
+  // above its first, which holds the fall in from the surface.
+  const auto first = std::max_element(distance.begin(), distance.begin() + static_cast<std::ptrdiff_t>(window));
+  const auto last = std::max_element(distance.end() - static_cast<std::ptrdiff_t>(window), distance.end());
+  return growth.rate_per_s < 0.0 && *last < *first;
 }
 
 double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallParams& params, double damping,

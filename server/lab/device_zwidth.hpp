@@ -10,17 +10,22 @@
 // with a constant force. The tool starts at the surface, falls in towards its equilibrium
 // d = F/K, and rings: it settles if the envelope of its distance from the equilibrium decays
 // (engine::envelope_growth's rate < 0, fitted from the first window on: near the boundary a run
-// decays or grows slowly, and the rate's sign alone tells which side it is on).
+// decays or grows slowly, and the rate's sign tells which side it is on) and ends below where it
+// began (a run that grew into the device's force limit rings on in a cycle whose envelope is
+// flat).
 
 #include <cstdint>
 
+#include "engine/core/vec3.hpp"
 #include "haptic/v1/config.pb.h"
 
 namespace haptic::lab {
 
 struct DeviceWallParams {
   std::uint32_t port = 0;
-  int axis = 0;            // of W: 0 x, 1 y, 2 z; the wall's normal, the push against it
+  /// The wall's outward normal, the push against it and the distance measured along it: a unit
+  /// vector in W (an identification's direction).
+  engine::Vec3 direction{1.0, 0.0, 0.0};
   double push_n = 0.5;     // the operator's force into the wall. Unit: N. > 0.
   double seconds = 3.0;    // each run. Unit: s.
   double window_s = 0.1;   // the envelope's windows (the first, the fall in, left out). Unit: s.

@@ -15,7 +15,32 @@ namespace {
 
 const char* axis_name(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"; }
 
-double along(const engine::Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
+/// The direction the tool moves in when the simulated operator pushes it along `axis` for 50 ms
+/// with `force_n` from rest: the displacement's, normalised. Throws where it does not move.
+engine::Vec3 direction_of_motion(const v1::ServerConfig& config, std::uint32_t port, int axis, double force_n) {
+  v1::ServerConfig probe = config;
+  v1::OperatorInput* push = probe.mutable_initial_operator();
+  push->Clear();
+  push->set_mode(v1::OperatorInput::APPLY_FORCE);
+  (axis == 0 ? push->mutable_force()->set_x(force_n)
+             : axis == 1 ? push->mutable_force()->set_y(force_n) : push->mutable_force()->set_z(force_n));
+  const double period = 1.0 / probe.loop_rate_hz();
+  engine::Vec3 first{}, last{};
+  bool started = false;
+  simulate_scene(probe, std::round(0.05 / period) * period, [&](const TickRecord& r) {
+    if (r.port != port) return true;
+    if (!started) first = r.sample.p_WT;
+    started = true;
+    last = r.sample.p_WT;
+    return true;
+  });
+  const engine::Vec3 moved = last - first;
+  if (!(engine::norm(moved) > 0.0)) {
+    throw std::invalid_argument("along the motion: pushed along " + std::string(axis_name(axis)) + " with " +
+                                std::to_string(force_n) + " N for 50 ms, the tool did not move");
+  }
+  return moved * (1.0 / engine::norm(moved));
+}
 
 }  // namespace
 
@@ -38,6 +63,8 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
   if (!multisine) throw std::invalid_argument(why);
   engine::Vec3 axis_W{};
   (params.axis == 0 ? axis_W.x : params.axis == 1 ? axis_W.y : axis_W.z) = 1.0;
+  if (params.along_motion) axis_W = direction_of_motion(config, params.port, params.axis, signal.amplitude_n);
+  result.direction = axis_W;
   runtime::ExcitationStage stage(*multisine, axis_W, params.limits);
 
   // Whole ticks: the signal's, and one more so the last reading follows the last command.
@@ -51,8 +78,8 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
       config, static_cast<double>(ticks) / config.loop_rate_hz(),
       [&](const TickRecord& record) {
         if (record.port != params.port) return true;
-        force.push_back(along(record.sample.F_T_W, params.axis));
-        position.push_back(along(record.sample.p_WT, params.axis));
+        force.push_back(engine::dot(record.sample.F_T_W, axis_W));
+        position.push_back(engine::dot(record.sample.p_WT, axis_W));
         return stage.stop() == runtime::ExcitationStage::Stop::kNone;
       },
       [&](std::vector<runtime::TickPort>& ports) {
@@ -99,7 +126,10 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
   out << std::setprecision(4);
   const engine::AxisIdentification& f = r.fit;
   const engine::MultisineParams& s = params.signal;
-  out << "# Identification of " << source << ", port " << params.port << ", axis " << axis_name(params.axis) << "\n\n"
+  out << "# Identification of " << source << ", port " << params.port << ", along (" << r.direction.x << ", "
+      << r.direction.y << ", " << r.direction.z << ")"
+      << (params.along_motion ? std::string(" (the motion under a push along ") + axis_name(params.axis) + ")" : "")
+      << "\n\n"
       << "A multisine of " << f.response.size() << " harmonics from " << f.response.front().frequency_hz << " to "
       << f.response.back().frequency_hz << " Hz, " << s.amplitude_n << " N peak, " << f.periods
       << " periods fitted; " << r.duration_s << " s of lockstep ticks at " << 1.0 / r.period_s << " Hz. Intervals: 95 %, "

@@ -22,6 +22,11 @@ namespace haptic::lab {
 struct IdentifyParams {
   std::uint32_t port = 0;  // the device port excited
   int axis = 0;            // of W: 0 x, 1 y, 2 z
+  /// Excite and measure along the direction the tool moves when pushed along `axis` (a short
+  /// push by the simulated operator, before the run) instead of the axis itself: for a device
+  /// whose tool moves on a curve (000's DC motor: its link's tangent), where along an axis of W
+  /// the fit sees the mass divided by the direction's cosine squared.
+  bool along_motion = false;
   /// The multisine; its sample_period_s is the configuration's loop period (set by identify).
   engine::MultisineParams signal;
   runtime::ExcitationLimits limits;
@@ -30,6 +35,7 @@ struct IdentifyParams {
 struct IdentifyResult {
   engine::AxisIdentification fit;
   engine::Vec3 start_position;   // the tool's position at the first tick. Unit: m.
+  engine::Vec3 direction;        // excited and measured along, a unit vector in W
   double duration_s = 0.0;       // the run. Unit: s.
   double period_s = 0.0;         // the loop's. Unit: s.
   /// The device's own mass-damper along the axis, where the configuration gives one (its

@@ -221,6 +221,9 @@ Subcommand add_identify(CLI::App& cli) {
       ->check(CLI::ExistingFile);
   app->add_option("--port", o->p.port, "device port (default 0)");
   app->add_option("--axis", o->axis, "x (default), y or z, of W");
+  app->add_flag("--along-motion", o->p.along_motion,
+                "excite along the direction the tool moves when pushed along --axis (a device whose tool moves "
+                "on a curve, 000's DC motor)");
   app->add_option("--amplitude", o->p.signal.amplitude_n, "the force's peak, N (default 1)");
   app->add_option("--f-min", o->p.signal.f_min_hz, "lowest excited frequency, Hz (default 2)");
   app->add_option("--f-max", o->p.signal.f_max_hz, "highest, Hz (default 40)");
