@@ -263,7 +263,7 @@ bool schur_stable(const Polynomial& input) {
 // --- Sampled wall -----------------------------------------------------------------------------
 
 Polynomial wall_characteristic_polynomial(const ImpedanceWeights& wall,
-                                          const MassDamperDevice& device, std::uint32_t delay_ticks) {
+                                          const MassDamperDevice& device, double delay_ticks) {
   const double T = wall.period;
   const double m = device.mass;
   const double x = device.damping * T / m;
@@ -291,12 +291,26 @@ Polynomial wall_characteristic_polynomial(const ImpedanceWeights& wall,
   const Polynomial D = make_polynomial({e, -(1.0 + e), 1.0});
   Polynomial Nc, Dc;
   wall_transfer_function(wall, Nc, Dc);
-  // The delay: z^d on the wall's denominator side (F(z) = −z^{−d} W(z) X(z)).
+  // The delay: z^d on the wall's denominator side (F(z) = −z^{−d} W(z) X(z)). A fractional one,
+  // d = n + f, as n ticks and Thiran's first-order all-pass for the rest (Laakso et al. 1996,
+  // "Splitting the unit delay", §III.B): A(z) = (η + z^{−1}) / (1 + η z^{−1}), η = (1 − f)/(1 + f),
+  // whose magnitude is 1 and whose delay is f at low frequencies; so
+  // z^n (z + η) D Dc + (η z + 1) N Nc = 0.
+  const double clamped = std::clamp(delay_ticks, 0.0, static_cast<double>(Polynomial::kMaxDelayTicks - 1));
+  const int n = static_cast<int>(std::floor(clamped));
+  const double f = clamped - static_cast<double>(n);
   Polynomial delay;
-  const int d = static_cast<int>(std::min<std::uint32_t>(delay_ticks, Polynomial::kMaxDelayTicks));
-  delay.degree = d;
-  delay.c[static_cast<std::size_t>(d)] = 1.0;
-  return trimmed(add(multiply(multiply(D, Dc), delay), multiply(N, Nc)));
+  if (f < 1e-12) {
+    delay.degree = n;
+    delay.c[static_cast<std::size_t>(n)] = 1.0;
+    return trimmed(add(multiply(multiply(D, Dc), delay), multiply(N, Nc)));
+  }
+  const double eta = (1.0 - f) / (1.0 + f);
+  delay.degree = n;
+  delay.c[static_cast<std::size_t>(n)] = 1.0;
+  const Polynomial denominator = make_polynomial({eta, 1.0});  // z + η
+  const Polynomial numerator = make_polynomial({1.0, eta});    // η z + 1
+  return trimmed(add(multiply(multiply(multiply(D, Dc), delay), denominator), multiply(multiply(numerator, N), Nc)));
 }
 
 namespace {
@@ -311,7 +325,7 @@ double max_root_magnitude(const Polynomial& p) {
 }
 
 bool wall_stable(ImpedanceParams wall, double K, ImpedanceDiscretization discretization,
-                 const MassDamperDevice& device, double T, std::uint32_t delay_ticks) {
+                 const MassDamperDevice& device, double T, double delay_ticks) {
   wall.stiffness = K;
   return schur_stable(
       wall_characteristic_polynomial(impedance_weights(wall, discretization, T), device, delay_ticks));
@@ -322,7 +336,7 @@ bool wall_stable(ImpedanceParams wall, double K, ImpedanceDiscretization discret
 SampledWallMargin sampled_wall_margin(const ImpedanceParams& wall,
                                       ImpedanceDiscretization discretization,
                                       const MassDamperDevice& device, double T,
-                                      std::uint32_t delay_ticks) {
+                                      double delay_ticks) {
   SampledWallMargin margin;
   const Polynomial p = wall_characteristic_polynomial(impedance_weights(wall, discretization, T),
                                                       device, delay_ticks);

@@ -200,10 +200,12 @@ struct MassDamperDevice {
 ///   N(z) = (T²/m) (g z + φ² − e g),   D(z) = (z − 1)(z − e).
 /// Linear: the wall is taken to stay in contact (it may pull). With `delay_ticks` = d the force
 /// reaches the device d ticks after the reading it answers, W(z) z^{−d}, so the polynomial is
-/// z^d D(z) Dc(z) + N(z) Nc(z) (d ≤ Polynomial::kMaxDelayTicks).
+/// z^d D(z) Dc(z) + N(z) Nc(z) (d ≤ Polynomial::kMaxDelayTicks). A fractional d = n + f (an
+/// identified delay, docs/identification.md) is n ticks and Thiran's first-order all-pass with
+/// η = (1 − f)/(1 + f): z^n (z + η) D Dc + (η z + 1) N Nc.
 Polynomial wall_characteristic_polynomial(const ImpedanceWeights& wall,
                                           const MassDamperDevice& device,
-                                          std::uint32_t delay_ticks = 0);
+                                          double delay_ticks = 0.0);
 
 /// What sampled_wall_margin reports.
 struct SampledWallMargin {
@@ -224,7 +226,7 @@ struct SampledWallMargin {
 SampledWallMargin sampled_wall_margin(const ImpedanceParams& wall,
                                       ImpedanceDiscretization discretization,
                                       const MassDamperDevice& device, double T,
-                                      std::uint32_t delay_ticks = 0);
+                                      double delay_ticks = 0.0);
 
 // ---------------------------------------------------------------------------------------------
 // Virtual coupling (Colgate, Stanley & Brown 1995).

@@ -240,6 +240,23 @@ TEST(Impedance, SampledMarginOfASpringMatchesTheClosedForm) {
             margin.max_stable_stiffness);
 }
 
+TEST(Impedance, AFractionalDelayLiesBetweenItsWholeTicksAndMeetsThemAtTheEnds) {
+  // An identified delay is fractional (docs/identification.md): Thiran's all-pass carries it, so
+  // the stiffness limit falls monotonically from 1 tick to 2 and equals theirs at the ends.
+  const double T = 1e-3;
+  const ImpedanceParams wall{100.0, 0.1, 0.0};
+  double previous = sampled_wall_margin(wall, D::kBackwardDifference, kDevice001, T, 1.0).max_stable_stiffness;
+  const double two = sampled_wall_margin(wall, D::kBackwardDifference, kDevice001, T, 2.0).max_stable_stiffness;
+  EXPECT_EQ(previous, sampled_wall_margin(wall, D::kBackwardDifference, kDevice001, T, 1u).max_stable_stiffness);
+  for (const double d : {1.25, 1.5, 1.75, 1.999999}) {
+    const double k = sampled_wall_margin(wall, D::kBackwardDifference, kDevice001, T, d).max_stable_stiffness;
+    EXPECT_LT(k, previous) << d;
+    EXPECT_GT(k, two * (1.0 - 1e-4)) << d;
+    previous = k;
+  }
+  EXPECT_NEAR(previous / two, 1.0, 1e-3);
+}
+
 /// Simulates the wall (linear: it may pull, as in the analysis) on the device with the project's
 /// exact ZOH plant, from 1 mm penetration at rest (the filter told the rate rate_previous);
 /// returns the peak |d| of each 500-tick window.

@@ -81,8 +81,8 @@ double predicted_against_measured(const v1::ServerConfig& config, const Identify
                                   std::initializer_list<double> dampings) {
   const IdentifyResult id = identify(config, params, "test");
   const engine::MassDamperDevice model{id.fit.mass.value, id.fit.damping.value};
-  const auto delay_ticks =
-      static_cast<std::uint32_t>(std::max(0L, std::lround((id.fit.delay.value - id.period_s / 2.0) / id.period_s)));
+  // The delay beyond the hold's half tick, in ticks, fractional (the analysis interpolates).
+  const double delay_ticks = std::max(0.0, (id.fit.delay.value - id.period_s / 2.0) / id.period_s);
   DeviceWallParams wall;
   wall.direction = id.direction;
   double worst = 0.0;
