@@ -1,5 +1,6 @@
 #include "lab/identify.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <numbers>
@@ -8,6 +9,8 @@
 #include <vector>
 
 #include "config/server_config.hpp"
+#include "engine/scene/impedance.hpp"
+#include "lab/device_zwidth.hpp"
 #include "lab/lab_run.hpp"
 
 namespace haptic::lab {
@@ -93,12 +96,13 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
   result.start_position = stage.start_position();
   if (stage.stop() != runtime::ExcitationStage::Stop::kNone) {
     std::ostringstream message;
-    message << "the excitation stopped at tick " << stage.stop_tick() << ": the tool "
-            << (stage.stop() == runtime::ExcitationStage::Stop::kLeftTheBox
-                    ? "left its box of ±" + std::to_string(params.limits.box_half_width_m * 1e3) + " mm"
-                    : "moved at " + std::to_string(stage.stop_speed()) + " m/s, faster than " +
-                          std::to_string(params.limits.max_speed_m_s))
-            << "; lower the amplitude (" << signal.amplitude_n << " N) or raise f_min (" << signal.f_min_hz
+    message << "the excitation stopped at tick " << stage.stop_tick() << ": the tool ";
+    if (stage.stop() == runtime::ExcitationStage::Stop::kLeftTheBox) {
+      message << "left its box of ±" << params.limits.box_half_width_m * 1e3 << " mm";
+    } else {
+      message << "moved at " << stage.stop_speed() << " m/s, faster than " << params.limits.max_speed_m_s << " m/s";
+    }
+    message << "; lower the amplitude (" << signal.amplitude_n << " N) or raise f_min (" << signal.f_min_hz
             << " Hz), which sets how far the lowest harmonic carries it";
     throw std::invalid_argument(message.str());
   }
@@ -137,8 +141,10 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
       << "| parameter | identified | 95 % interval | model | error |\n|---|---|---|---|---|\n";
   const auto row = [&](const char* name, const engine::Estimate& e, std::optional<double> model, const char* unit) {
     out << "| " << name << " (" << unit << ") | " << e.value << " | ± " << e.half_width_95 << " | ";
-    if (model) {
+    if (model && *model != 0.0) {
       out << *model << " | " << std::showpos << 100.0 * (e.value - *model) / *model << std::noshowpos << " % |\n";
+    } else if (model) {
+      out << *model << " | - |\n";
     } else {
       out << "- | - |\n";
     }
@@ -159,6 +165,68 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
   }
   out << ". Residual: " << 100.0 * f.relative_residual << " % of the force's rms.\n\nThe model: " << r.model_method
       << ".\n";
+  // A fit that is not a mass-damper's says so rather than leaving its figures to be used.
+  if (!(f.mass.value > 0.0) || f.damping.value < 0.0 || f.relative_residual > 0.2) {
+    out << "\n**Not a mass-damper along this direction**: "
+        << (!(f.mass.value > 0.0) ? "the mass came out not positive"
+            : f.damping.value < 0.0 ? "the damping came out negative"
+                                    : "the residual is over 20 %")
+        << ". The axis is coupled to others, held by friction, or not rigid over the band: do not use these figures; "
+           "try --along-motion, another amplitude or band.\n";
+  }
+  return out.str();
+}
+
+std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const IdentifyParams& params,
+                                      const IdentifyResult& result, const std::vector<double>& dampings) {
+  const engine::MassDamperDevice model{result.fit.mass.value, result.fit.damping.value};
+  if (!(model.mass > 0.0) || model.damping < 0.0) {
+    throw std::invalid_argument("zwidth: the identified model is not a mass-damper (mass " +
+                                std::to_string(model.mass) + " kg, damping " + std::to_string(model.damping) +
+                                " N·s/m): no prediction from it");
+  }
+  // The delay beyond the hold's half tick, in ticks, fractional (the analysis interpolates).
+  const double delay_ticks = std::max(0.0, (result.fit.delay.value - result.period_s / 2.0) / result.period_s);
+  DeviceWallParams wall;
+  wall.port = params.port;
+  wall.direction = result.direction;
+  std::vector<ZWidthCheck> checks;
+  for (const double damping : dampings) {
+    ZWidthCheck check;
+    check.damping = damping;
+    const engine::ImpedanceParams law{100.0, damping, 0.0};
+    const auto discretization = engine::ImpedanceDiscretization::kBackwardDifference;
+    check.predicted =
+        engine::sampled_wall_margin(law, discretization, model, result.period_s, delay_ticks).max_stable_stiffness;
+    check.measured = device_zwidth_boundary(config, wall, damping, 3.0 * check.predicted);
+    if (result.model_mass && result.model_damping && *result.model_mass > 0.0) {
+      check.described = engine::sampled_wall_margin(law, discretization, {*result.model_mass, *result.model_damping},
+                                                    result.period_s, 0.0)
+                            .max_stable_stiffness;
+    }
+    checks.push_back(check);
+  }
+  return checks;
+}
+
+std::string zwidth_report(const std::vector<ZWidthCheck>& checks) {
+  std::ostringstream out;
+  out << std::setprecision(4);
+  out << "\n## Z-width: predicted against the device's own\n\n"
+      << "| B (N·s/m) | K_max measured (N/m) | predicted from the identified model | error | from the description | "
+         "error |\n|---|---|---|---|---|---|\n";
+  for (const ZWidthCheck& c : checks) {
+    const auto error = [&](double predicted) {
+      return c.measured > 0.0 && std::isfinite(c.measured) ? 100.0 * (predicted - c.measured) / c.measured : 0.0;
+    };
+    out << "| " << c.damping << " | " << c.measured << " | " << c.predicted << " | " << std::showpos << error(c.predicted)
+        << std::noshowpos << " % | ";
+    if (c.described) {
+      out << *c.described << " | " << std::showpos << error(*c.described) << std::noshowpos << " % |\n";
+    } else {
+      out << "- | - |\n";
+    }
+  }
   return out.str();
 }
 

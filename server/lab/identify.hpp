@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "engine/analysis/system_identification.hpp"
 #include "engine/core/vec3.hpp"
@@ -52,6 +53,24 @@ IdentifyResult identify(const v1::ServerConfig& config, const IdentifyParams& pa
 /// The result as a markdown report: the estimates with their intervals, the model's figures and
 /// the errors against them, the delay beyond a perfect loop's, noise, quantization, residual.
 std::string identify_report(const IdentifyResult& result, const IdentifyParams& params, const std::string& source);
+
+/// One damping's Z-width, three ways (N/m): predicted by the sampled wall's analysis
+/// (engine::sampled_wall_margin, BACKWARD_DIFFERENCE) from the identified mass, damping and delay
+/// beyond the hold (fractional ticks); measured on the device itself along the identified
+/// direction (lab/device_zwidth); and predicted from the device's own description, where it has one.
+struct ZWidthCheck {
+  double damping = 0.0;  // B. Unit: N·s/m.
+  double predicted = 0.0, measured = 0.0;
+  std::optional<double> described;
+};
+
+/// The check at each of `dampings` (the device's own boundary bisected from a guess of three
+/// times the prediction, so that its bracket is found rather than given).
+std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const IdentifyParams& params,
+                                      const IdentifyResult& result, const std::vector<double>& dampings);
+
+/// The checks as a markdown table, with each prediction's error against the measurement.
+std::string zwidth_report(const std::vector<ZWidthCheck>& checks);
 
 /// The frequency response, one row per excited harmonic: frequency_hz, measured and model
 /// magnitude (m/N) and phase (deg), for plot_lab.py's Bode chart.

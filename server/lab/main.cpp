@@ -211,6 +211,7 @@ Subcommand add_identify(CLI::App& cli) {
   struct Options {
     haptic::lab::IdentifyParams p;
     std::string device_path, axis = "x", csv_path, markdown_path;
+    std::vector<double> zwidth_dampings;
   };
   auto o = std::make_shared<Options>();
   CLI::App* app = cli.add_subcommand(
@@ -237,6 +238,10 @@ Subcommand add_identify(CLI::App& cli) {
   app->add_option("--max-speed", o->p.limits.max_speed_m_s, "or faster than this, m/s (default 0.5)");
   app->add_option("--csv", o->csv_path, "write the frequency response (measured and model) as CSV here");
   app->add_option("--markdown", o->markdown_path, "write the report here; default: standard output");
+  app->add_option("--zwidth", o->zwidth_dampings,
+                  "also the Z-width at these wall dampings, N*s/m (comma-separated): predicted from the identified "
+                  "model against walls of increasing stiffness run on the device itself")
+      ->delimiter(',');
   return {app, [o] {
             if (o->axis != "x" && o->axis != "y" && o->axis != "z") {
               throw std::invalid_argument("--axis: must be x, y or z, got \"" + o->axis + "\"");
@@ -249,7 +254,10 @@ Subcommand add_identify(CLI::App& cli) {
               if (!csv) throw std::invalid_argument(o->csv_path + ": cannot write");
               csv << haptic::lab::identify_response_csv(result);
             }
-            const std::string report = haptic::lab::identify_report(result, o->p, o->device_path);
+            std::string report = haptic::lab::identify_report(result, o->p, o->device_path);
+            if (!o->zwidth_dampings.empty()) {
+              report += haptic::lab::zwidth_report(haptic::lab::check_zwidth(config, o->p, result, o->zwidth_dampings));
+            }
             if (o->markdown_path.empty()) {
               std::cout << report;
             } else {
