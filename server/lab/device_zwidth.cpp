@@ -9,17 +9,10 @@
 #include "config/server_config.hpp"
 #include "engine/analysis/growth.hpp"
 #include "lab/lab_run.hpp"
+#include "schema/scene_specs.hpp"
 
 namespace haptic::lab {
 namespace {
-
-v1::Vec3 to_proto(const engine::Vec3& v) {
-  v1::Vec3 out;
-  out.set_x(v.x);
-  out.set_y(v.y);
-  out.set_z(v.z);
-  return out;
-}
 
 /// Where the tool starts on `port`: the first tick's reading.
 engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port) {
@@ -55,7 +48,7 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
   wall->mutable_pose()->mutable_position()->set_x(start.x);
   wall->mutable_pose()->mutable_position()->set_y(start.y);
   wall->mutable_pose()->mutable_position()->set_z(start.z);
-  *wall->mutable_half_space()->mutable_normal() = to_proto(params.direction);
+  *wall->mutable_half_space()->mutable_normal() = schema::to_proto(params.direction);
   wall->mutable_impedance()->set_stiffness(stiffness);
   wall->mutable_impedance()->set_damping(damping);
   wall->mutable_impedance()->set_law(v1::Impedance::BACKWARD_DIFFERENCE);
@@ -63,7 +56,7 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
   v1::OperatorInput* push = config.mutable_initial_operator();
   push->Clear();
   push->set_mode(v1::OperatorInput::APPLY_FORCE);
-  *push->mutable_force() = to_proto(-params.push_n * params.direction);
+  *push->mutable_force() = schema::to_proto(-params.push_n * params.direction);
 
   const double period = 1.0 / config.loop_rate_hz();
   const double equilibrium = engine::dot(start, params.direction) - params.push_n / stiffness;

@@ -12,6 +12,7 @@
 #include "engine/scene/impedance.hpp"
 #include "lab/device_zwidth.hpp"
 #include "lab/lab_run.hpp"
+#include "schema/scene_specs.hpp"
 
 namespace haptic::lab {
 namespace {
@@ -25,8 +26,9 @@ engine::Vec3 direction_of_motion(const v1::ServerConfig& config, std::uint32_t p
   v1::OperatorInput* push = probe.mutable_initial_operator();
   push->Clear();
   push->set_mode(v1::OperatorInput::APPLY_FORCE);
-  (axis == 0 ? push->mutable_force()->set_x(force_n)
-             : axis == 1 ? push->mutable_force()->set_y(force_n) : push->mutable_force()->set_z(force_n));
+  engine::Vec3 force{};
+  (axis == 0 ? force.x : axis == 1 ? force.y : force.z) = force_n;
+  *push->mutable_force() = schema::to_proto(force);
   const double period = 1.0 / probe.loop_rate_hz();
   engine::Vec3 first{}, last{};
   bool started = false;
