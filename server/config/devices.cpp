@@ -263,6 +263,15 @@ void fill_point_mass_defaults(v1::SimulatedPointMassConfig& mass) {
 }
 
 std::string validate_point_mass(const v1::SimulatedPointMassConfig& device) {
+  if (device.has_sensor()) {
+    for (const auto& [value, name] : {std::pair{device.sensor().noise_m(), "noise_m"},
+                                      std::pair{device.sensor().quantization_m(), "quantization_m"}}) {
+      if (!std::isfinite(value) || value < 0.0 || value > 0.01) {
+        return std::string("simulated_point_mass.sensor.") + name + ": must be finite and in [0, 0.01] m, got " +
+               std::to_string(value);
+      }
+    }
+  }
   if (auto e = check_positive(device.mass(), 1e3, "simulated_point_mass.mass"); !e.empty()) return e;
   if (!std::isfinite(device.damping()) || device.damping() < 0.0) {
     return "simulated_point_mass.damping: must be finite and >= 0";
@@ -454,9 +463,13 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
       rotation->initial.R_WT = engine::normalized(engine::Quat{q.w(), q.x(), q.y(), q.z()});
     }
   }
+  std::optional<engine::PositionSensorParams> sensor;
+  if (mass.has_sensor()) {
+    sensor = engine::PositionSensorParams{mass.sensor().noise_m(), mass.sensor().quantization_m(), mass.sensor().seed()};
+  }
   return simulated(std::make_unique<runtime::SimulatedPointMassDevice>(
                        params, engine::PointMassState{schema::to_engine(mass.initial_position()), {}},
-                       mass.max_force(), rotation),
+                       mass.max_force(), rotation, sensor),
                    std::make_unique<runtime::CartesianModel>());
 }
 

@@ -5,8 +5,10 @@ namespace haptic::runtime {
 SimulatedPointMassDevice::SimulatedPointMassDevice(const engine::PointMassParams& params,
                                                    const engine::PointMassState& initial,
                                                    double max_force,
-                                                   const std::optional<SimulatedRotation>& rotation)
+                                                   const std::optional<SimulatedRotation>& rotation,
+                                                   const std::optional<engine::PositionSensorParams>& sensor)
     : plant_(params, initial) {
+  if (sensor) sensor_.emplace(*sensor);
   description_.name = "simulated point mass (3-DOF mass-damper)";
   description_.model = "point_mass";
   description_.capabilities.measured_rates = true;
@@ -34,6 +36,12 @@ DeviceStatus SimulatedPointMassDevice::read(DeviceReading& reading) {
   const engine::PointMassState& s = plant_.state();
   reading.q = {s.p_WT.x, s.p_WT.y, s.p_WT.z};
   reading.q_dot = {s.v_WT.x, s.v_WT.y, s.v_WT.z};
+  if (sensor_ && engine::is_finite(s.p_WT)) {
+    engine::Vec3 measured, velocity;
+    sensor_->read(s.p_WT, last_period_s_, measured, velocity);
+    reading.q = {measured.x, measured.y, measured.z};
+    reading.q_dot = {velocity.x, velocity.y, velocity.z};
+  }
   if (rotation_) {
     reading.R_WT = rotation_->state().R_WT;
     reading.w_WT = rotation_->state().w_WT;
@@ -50,6 +58,7 @@ std::uint32_t SimulatedPointMassDevice::plant_joints(JointVector& q, JointVector
 }
 
 DeviceStatus SimulatedPointMassDevice::write(const DeviceCommand& command, double dt) {
+  last_period_s_ = dt;
   // A non-finite command is a fault: this tick runs with no device force.
   const engine::Vec3 F_command{command.tau[0], command.tau[1], command.tau[2]};
   const bool command_ok = engine::is_finite(F_command);

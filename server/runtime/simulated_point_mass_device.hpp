@@ -13,6 +13,7 @@
 #include <optional>
 
 #include "engine/device/point_mass_plant.hpp"
+#include "engine/device/position_sensor.hpp"
 #include "engine/device/rigid_body_rotation.hpp"
 #include "engine/operator/simulated_hand.hpp"
 #include "runtime/simulated_device.hpp"
@@ -28,9 +29,12 @@ struct SimulatedRotation {
 
 class SimulatedPointMassDevice final : public SimulatedDevice {
  public:
+  /// sensor: the position measured with noise and quantization, the velocity its backward
+  /// difference (docs/identification.md); none: both exactly.
   SimulatedPointMassDevice(const engine::PointMassParams& params,
                            const engine::PointMassState& initial, double max_force,
-                           const std::optional<SimulatedRotation>& rotation = std::nullopt);
+                           const std::optional<SimulatedRotation>& rotation = std::nullopt,
+                           const std::optional<engine::PositionSensorParams>& sensor = std::nullopt);
 
   DeviceStatus read(DeviceReading& reading) override;
   /// tau[0..2]: the force on the tool along x, y, z of W (N); tau_W the torque on the handle
@@ -46,6 +50,8 @@ class SimulatedPointMassDevice final : public SimulatedDevice {
  private:
   engine::PointMassPlant plant_;
   std::optional<engine::RigidBodyRotation> rotation_;
+  std::optional<engine::PositionSensor> sensor_;
+  double last_period_s_ = 0.0;  // the last write's tick: the sensor's difference quotient's
 };
 
 }  // namespace haptic::runtime

@@ -111,6 +111,14 @@ TEST(Config, BadValuesAreRejectedNamingTheField) {
   EXPECT_NE(error_of(R"({"loop_rate_hz": 20000})").find("loop_rate_hz"), std::string::npos);
   EXPECT_NE(error_of(R"({"simulated_point_mass": {"mass": -1}})").find("simulated_point_mass.mass"),
             std::string::npos);
+  // A simulated sensor's noise and step: finite, >= 0 and at most 10 mm.
+  EXPECT_NE(error_of(R"({"simulated_point_mass": {"sensor": {"noise_m": -1e-6}}})")
+                .find("simulated_point_mass.sensor.noise_m: must be finite and in [0, 0.01] m"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_point_mass": {"sensor": {"quantization_m": 0.5}}})")
+                .find("simulated_point_mass.sensor.quantization_m"),
+            std::string::npos);
+  EXPECT_EQ(error_of(R"({"simulated_point_mass": {"sensor": {"noise_m": 1e-6, "quantization_m": 1e-6}}})"), "");
   EXPECT_NE(error_of(R"({"simulated_point_mass": {"initial_position": {"z": 5}}})")
                 .find("simulated_point_mass.initial_position"),
             std::string::npos);

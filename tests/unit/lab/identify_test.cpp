@@ -94,6 +94,22 @@ TEST(LabIdentify, TheIdentifiedModelPredictsThePointMasssOwnZWidthWithin10Percen
   EXPECT_LT(predicted_against_measured(config, light_excitation(0.02), {0.0, 0.1, 0.3}), 0.01);
 }
 
+TEST(LabIdentify, ThePointMassWithANoisyQuantizedSensorIsStillItsMassAndPredictsItsZWidth) {
+  // The same device measured as a real one is: 2 µm of noise, a 5 µm step, the velocity the
+  // difference of what is measured.
+  const v1::ServerConfig config = config::parse_config(R"({"time_mode": "LOCKSTEP",
+      "simulated_point_mass": {"sensor": {"noise_m": 2e-6, "quantization_m": 5e-6, "seed": 3}}})", "test");
+  const IdentifyParams params = light_excitation(0.02);
+  const IdentifyResult id = identify(config, params, "test");
+  EXPECT_NEAR(id.fit.mass.value, 0.01, 0.05 * 0.01);
+  EXPECT_NEAR(id.fit.damping.value, 0.022, 0.05 * 0.022);
+  ASSERT_TRUE(id.fit.quantization_m) << identify_report(id, params, "test");
+  EXPECT_NEAR(*id.fit.quantization_m, 5e-6, 1e-12);
+  EXPECT_NEAR(id.fit.noise_rms_m, std::sqrt(4e-12 + 25e-12 / 12.0), 0.5e-6);
+  std::printf("%s", identify_report(id, params, "test").c_str());
+  EXPECT_LT(predicted_against_measured(config, params, {0.0, 0.1, 0.3}), 0.10);
+}
+
 TEST(LabIdentify, TheDcMotorAlongItsLinksTangentIsWhatItsLoopSeesAndPredictsItsZWidth) {
   // 000's DC motor, its gearbox and link: the tool moves on a circle, so it is excited along the
   // motion a push along y gives (the link's tangent).
