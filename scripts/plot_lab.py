@@ -5,6 +5,7 @@
     scripts/plot_lab.py transparency sweep.csv out/design -> out/design.png, out/design.svg
     scripts/plot_lab.py run trace.csv out/trace           -> out/trace.png, out/trace.svg
     scripts/plot_lab.py identify response.csv out/bode    -> out/bode.png, out/bode.svg
+    scripts/plot_lab.py identify-sweep sweep.csv out/sweep -> out/sweep.png, out/sweep.svg
 
 zwidth: the (K, B) grid, each cell marked by which tests call it stable (Colgate's bound,
 the sampled loop's eigenvalues, simulation). transparency: J(B_c) and ||L||inf(B_c) in dB against
@@ -14,7 +15,9 @@ gave to the device and took from it (J), one line per port and axis that moves (
 by name; extra columns are ignored), with the ticks whose flags are set marked on the force panel.
 identify: `haptic-lab identify --csv`'s frequency response as a Bode chart, X/F's magnitude (m/N,
 log) and phase (degrees) against frequency (Hz, log): the measured harmonics as points, the
-identified model as a line through them.
+identified model as a line through them. identify-sweep: `haptic-lab identify --sweep-csv`'s runs,
+the mass's and the damping's relative error (points, solid) and 95 % interval (dashed) against
+the excitation's length (s, log), one colour per amplitude.
 
 Runs with /usr/bin/python3 and Debian's python3-matplotlib (Agg backend).
 """
@@ -192,10 +195,37 @@ def identify(rows, out):
     fig.savefig(out + ".svg", metadata={"Date": None})
 
 
+def identify_sweep(rows, out):
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.2), sharey=True)
+    amplitudes = sorted({float(r["amplitude_n"]) for r in rows})
+    colours = ["#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3"]
+    for ax, name in zip(axes, ["mass", "damping"]):
+        for i, a in enumerate(amplitudes):
+            mine = sorted((r for r in rows if float(r["amplitude_n"]) == a), key=lambda r: float(r["excitation_s"]))
+            t = [float(r["excitation_s"]) for r in mine]
+            colour = colours[i % len(colours)]
+            # An error of exactly 0 cannot be drawn on a log axis: floored at 1e-6.
+            ax.loglog(t, [max(1e-6, float(r[name + "_error"])) for r in mine], "o-", color=colour, ms=4,
+                      label=f"{a:g} N: error")
+            ax.loglog(t, [float(r[name + "_half_width"]) for r in mine], "--", color=colour, lw=1,
+                      label=f"{a:g} N: 95 % interval")
+        ax.set_title(f"{name}: relative to the device's own")
+        ax.set_xlabel("excitation [s] (ramps, settling and the fitted periods)")
+        ax.grid(True, which="both", lw=0.3)
+    axes[0].set_ylabel("|identified − model| / model, and the interval's half")
+    axes[1].legend(fontsize=7, ncol=2)
+    fig.suptitle("Identification's error against the excitation's length (haptic-lab identify --sweep-csv)")
+    fig.tight_layout()
+    fig.savefig(out + ".png", dpi=120, metadata={"Software": None})
+    fig.savefig(out + ".svg", metadata={"Date": None})
+
+
 CHARTS = {
     "zwidth": (zwidth, ["stiffness_n_m", "damping_n_s_m", "passive", "eigen_stable", "simulation_stable"]),
     "transparency": (transparency, ["controller_damping_n_s_m", "transparency_index", "robust_norm_db"]),
     "run": (run, RUN_COLUMNS),
+    "identify-sweep": (identify_sweep, ["amplitude_n", "excitation_s", "mass_error", "damping_error",
+                                        "mass_half_width", "damping_half_width"]),
     "identify": (identify, ["frequency_hz", "measured_m_per_n", "measured_phase_deg", "model_m_per_n",
                             "model_phase_deg"]),
 }

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
+#include <limits>
 #include <iomanip>
 #include <numbers>
 #include <sstream>
@@ -228,6 +230,52 @@ std::string zwidth_report(const std::vector<ZWidthCheck>& checks) {
     } else {
       out << "- | - |\n";
     }
+  }
+  return out.str();
+}
+
+std::vector<IdentifySweepRow> identify_sweep(const v1::ServerConfig& config, const IdentifyParams& params,
+                                             const std::vector<std::size_t>& periods,
+                                             const std::vector<double>& amplitudes_n, const std::string& source,
+                                             const std::function<void(std::size_t done, std::size_t total)>& progress) {
+  std::vector<IdentifySweepRow> rows;
+  const std::size_t total = periods.size() * amplitudes_n.size();
+  for (const double amplitude : amplitudes_n) {
+    for (const std::size_t count : periods) {
+      IdentifyParams p = params;
+      p.signal.amplitude_n = amplitude;
+      p.signal.periods = count;
+      const std::clock_t started = std::clock();
+      const IdentifyResult r = identify(config, p, source);
+      IdentifySweepRow row;
+      row.cpu_s = static_cast<double>(std::clock() - started) / CLOCKS_PER_SEC;
+      if (!r.model_mass || !r.model_damping || !(*r.model_mass > 0.0) || !(*r.model_damping > 0.0)) {
+        throw std::invalid_argument("sweep: " + source + "'s device gives no mass and damping to measure the errors against");
+      }
+      row.amplitude_n = amplitude;
+      row.periods = count;
+      row.excitation_s = r.duration_s;
+      row.mass_error = std::abs(r.fit.mass.value - *r.model_mass) / *r.model_mass;
+      row.damping_error = std::abs(r.fit.damping.value - *r.model_damping) / *r.model_damping;
+      row.mass_half_width = r.fit.mass.half_width_95 / *r.model_mass;
+      row.damping_half_width = r.fit.damping.half_width_95 / *r.model_damping;
+      row.delay_half_width_s = r.fit.delay.half_width_95;
+      rows.push_back(row);
+      if (progress) progress(rows.size(), total);
+    }
+  }
+  return rows;
+}
+
+std::string identify_sweep_csv(const std::vector<IdentifySweepRow>& rows) {
+  std::ostringstream out;
+  out << std::setprecision(std::numeric_limits<double>::max_digits10);
+  out << "amplitude_n,periods,excitation_s,cpu_s,mass_error,damping_error,mass_half_width,damping_half_width,"
+         "delay_half_width_s\n";
+  for (const IdentifySweepRow& r : rows) {
+    out << r.amplitude_n << ',' << r.periods << ',' << r.excitation_s << ',' << r.cpu_s << ',' << r.mass_error << ','
+        << r.damping_error << ',' << r.mass_half_width << ',' << r.damping_half_width << ',' << r.delay_half_width_s
+        << '\n';
   }
   return out.str();
 }

@@ -8,6 +8,7 @@
 // them, where the configuration knows one, the device's own model (lab/device_model) to compare.
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -71,6 +72,29 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
 
 /// The checks as a markdown table, with each prediction's error against the measurement.
 std::string zwidth_report(const std::vector<ZWidthCheck>& checks);
+
+/// One identification of a sweep over the excitation's length and amplitude (docs/numerics.md,
+/// "Identification"): its errors against the device's own model and its intervals, relative.
+struct IdentifySweepRow {
+  double amplitude_n = 0.0;
+  std::size_t periods = 0;
+  double excitation_s = 0.0;   // the whole run: ramps, settling and fitted periods. Unit: s.
+  double cpu_s = 0.0;          // the run's simulation and the fit, on this machine. Unit: s.
+  double mass_error = 0.0, damping_error = 0.0;            // |identified − model| / model
+  double mass_half_width = 0.0, damping_half_width = 0.0;  // the 95 % intervals' halves / model
+  double delay_half_width_s = 0.0;                         // Unit: s.
+};
+
+/// identify at every pair of `periods` and `amplitudes_n` (the rest of `params` as given), on a
+/// device whose configuration gives its own model. Throws what identify throws, or
+/// std::invalid_argument when the device gives no model to measure the errors against.
+std::vector<IdentifySweepRow> identify_sweep(const v1::ServerConfig& config, const IdentifyParams& params,
+                                             const std::vector<std::size_t>& periods,
+                                             const std::vector<double>& amplitudes_n, const std::string& source,
+                                             const std::function<void(std::size_t done, std::size_t total)>& progress = {});
+
+/// The sweep as CSV, one row per run, for plot_lab.py's identify-sweep chart.
+std::string identify_sweep_csv(const std::vector<IdentifySweepRow>& rows);
 
 /// The frequency response, one row per excited harmonic: frequency_hz, measured and model
 /// magnitude (m/N) and phase (deg), for plot_lab.py's Bode chart.

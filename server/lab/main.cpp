@@ -212,6 +212,9 @@ Subcommand add_identify(CLI::App& cli) {
     haptic::lab::IdentifyParams p;
     std::string device_path, axis = "x", csv_path, markdown_path;
     std::vector<double> zwidth_dampings;
+    std::string sweep_csv;
+    std::vector<std::size_t> sweep_periods{4, 8, 16, 32};
+    std::vector<double> sweep_amplitudes;
   };
   auto o = std::make_shared<Options>();
   CLI::App* app = cli.add_subcommand(
@@ -242,12 +245,29 @@ Subcommand add_identify(CLI::App& cli) {
                   "also the Z-width at these wall dampings, N*s/m (comma-separated): predicted from the identified "
                   "model against walls of increasing stiffness run on the device itself")
       ->delimiter(',');
+  app->add_option("--sweep-csv", o->sweep_csv,
+                  "instead of one run: identify at every pair of --sweep-periods and --sweep-amplitudes and write "
+                  "each run's errors against the device's model and its intervals here (docs/numerics.md)");
+  app->add_option("--sweep-periods", o->sweep_periods, "periods fitted (default 4,8,16,32)")->delimiter(',');
+  app->add_option("--sweep-amplitudes", o->sweep_amplitudes, "peaks, N (default: --amplitude alone)")->delimiter(',');
   return {app, [o] {
             if (o->axis != "x" && o->axis != "y" && o->axis != "z") {
               throw std::invalid_argument("--axis: must be x, y or z, got \"" + o->axis + "\"");
             }
             o->p.axis = o->axis == "x" ? 0 : o->axis == "y" ? 1 : 2;
             const haptic::v1::ServerConfig config = haptic::config::load_config_file(o->device_path);
+            if (!o->sweep_csv.empty()) {
+              if (o->sweep_amplitudes.empty()) o->sweep_amplitudes.push_back(o->p.signal.amplitude_n);
+              haptic::lab::ProgressBar bar("haptic-lab identify --sweep", true);
+              const auto rows = haptic::lab::identify_sweep(
+                  config, o->p, o->sweep_periods, o->sweep_amplitudes, o->device_path,
+                  [&bar](std::size_t done, std::size_t total) { bar.update(done, total); });
+              std::ofstream csv(o->sweep_csv);
+              if (!csv) throw std::invalid_argument(o->sweep_csv + ": cannot write");
+              csv << haptic::lab::identify_sweep_csv(rows);
+              std::cerr << "haptic-lab identify: " << rows.size() << " runs written to " << o->sweep_csv << "\n";
+              return 0;
+            }
             const haptic::lab::IdentifyResult result = haptic::lab::identify(config, o->p, o->device_path);
             if (!o->csv_path.empty()) {
               std::ofstream csv(o->csv_path);

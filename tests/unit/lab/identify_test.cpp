@@ -110,6 +110,23 @@ TEST(LabIdentify, ThePointMassWithANoisyQuantizedSensorIsStillItsMassAndPredicts
   EXPECT_LT(predicted_against_measured(config, params, {0.0, 0.1, 0.3}), 0.10);
 }
 
+TEST(LabIdentify, ASweepsIntervalsNarrowWithTheExcitationsLengthAndAmplitude) {
+  const v1::ServerConfig config = config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/point_mass_sensor.json");
+  const std::vector<IdentifySweepRow> rows =
+      identify_sweep(config, light_excitation(0.01), {4, 16}, {0.005, 0.02}, "point_mass_sensor");
+  ASSERT_EQ(rows.size(), 4u);
+  // Per amplitude, four times the periods: a narrower interval, and a longer run.
+  for (std::size_t a = 0; a < 2; ++a) {
+    EXPECT_LT(rows[2 * a + 1].mass_half_width, rows[2 * a].mass_half_width);
+    EXPECT_LT(rows[2 * a + 1].damping_half_width, rows[2 * a].damping_half_width);
+    EXPECT_GT(rows[2 * a + 1].excitation_s, rows[2 * a].excitation_s);
+  }
+  // Four times the amplitude: narrower still, at the same length.
+  EXPECT_LT(rows[2].damping_half_width, rows[0].damping_half_width);
+  for (const IdentifySweepRow& r : rows) EXPECT_LT(r.mass_error, 0.01);
+  EXPECT_EQ(identify_sweep_csv(rows).rfind("amplitude_n,periods,excitation_s,cpu_s,mass_error", 0), 0u);
+}
+
 TEST(LabIdentify, TheDcMotorAlongItsLinksTangentIsWhatItsLoopSeesAndPredictsItsZWidth) {
   // 000's DC motor, its gearbox and link: the tool moves on a circle, so it is excited along the
   // motion a push along y gives (the link's tangent).
