@@ -212,6 +212,29 @@ std::string validate_driver(const v1::DriverConfig& driver) {
   if (driver.stale_after() > 100'000) {
     return "driver.stale_after: must be 0 ... 100000, got " + std::to_string(driver.stale_after());
   }
+  if (driver.has_profile()) {
+    const v1::DeviceProfile& p = driver.profile();
+    const std::array<std::pair<double, const char*>, 3> masses = {
+        std::pair{p.apparent_mass().x(), "x"}, std::pair{p.apparent_mass().y(), "y"}, std::pair{p.apparent_mass().z(), "z"}};
+    for (const auto& [value, axis] : masses) {
+      if (!std::isfinite(value) || value <= 0.0 || value > 1000.0) {
+        return std::string("driver.profile.apparent_mass.") + axis + ": must be finite and in (0, 1000] kg, got " +
+               std::to_string(value);
+      }
+    }
+    const std::array<std::pair<double, const char*>, 3> dampings = {std::pair{p.apparent_damping().x(), "x"},
+                                                                    std::pair{p.apparent_damping().y(), "y"},
+                                                                    std::pair{p.apparent_damping().z(), "z"}};
+    for (const auto& [value, axis] : dampings) {
+      if (!std::isfinite(value) || value < 0.0 || value > 1e5) {
+        return std::string("driver.profile.apparent_damping.") + axis + ": must be finite and in [0, 1e5] N*s/m, got " +
+               std::to_string(value);
+      }
+    }
+    if (!std::isfinite(p.delay_s()) || p.delay_s() < 0.0 || p.delay_s() > 0.1) {
+      return "driver.profile.delay_s: must be finite and in [0, 0.1] s, got " + std::to_string(p.delay_s());
+    }
+  }
   return {};
 }
 
@@ -374,6 +397,13 @@ PortDevice driver_device(const v1::DriverConfig& config) {
   options.call_timeout_s = (config.has_call_timeout_ms() ? config.call_timeout_ms() : 20) * 1e-3;
   options.stale_after = config.has_stale_after() ? config.stale_after() : 3;
   options.device_clocked = config.clock() == v1::DriverConfig::DEVICE;
+  if (config.has_profile()) {
+    const v1::DeviceProfile& p = config.profile();
+    options.profile = runtime::DriverOptions::Profile{
+        {p.apparent_mass().x(), p.apparent_mass().y(), p.apparent_mass().z()},
+        {p.apparent_damping().x(), p.apparent_damping().y(), p.apparent_damping().z()},
+        p.delay_s()};
+  }
   options.log = [library = config.library()](int level, const std::string& message) {
     const auto severity = level >= HAPTIC_DRIVER_LOG_ERROR     ? spdlog::level::err
                           : level == HAPTIC_DRIVER_LOG_WARNING ? spdlog::level::warn

@@ -181,6 +181,30 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
   return out.str();
 }
 
+v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const IdentifyParams& params, const std::string& source) {
+  v1::DeviceProfile profile;
+  double delay_s = 0.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    IdentifyParams p = params;
+    p.axis = axis;
+    p.along_motion = false;
+    const IdentifyResult r = identify(config, p, source);
+    if (!(r.fit.mass.value > 0.0) || r.fit.damping.value < 0.0) {
+      throw std::invalid_argument(std::string("profile: along ") + axis_name(axis) + " the fit is no mass-damper (mass " +
+                                  std::to_string(r.fit.mass.value) + " kg, damping " +
+                                  std::to_string(r.fit.damping.value) + " N·s/m)");
+    }
+    v1::Vec3* mass = profile.mutable_apparent_mass();
+    v1::Vec3* damping = profile.mutable_apparent_damping();
+    (axis == 0 ? mass->set_x(r.fit.mass.value) : axis == 1 ? mass->set_y(r.fit.mass.value) : mass->set_z(r.fit.mass.value));
+    (axis == 0 ? damping->set_x(r.fit.damping.value)
+               : axis == 1 ? damping->set_y(r.fit.damping.value) : damping->set_z(r.fit.damping.value));
+    delay_s = std::max(delay_s, r.fit.delay.value - r.period_s / 2.0);
+  }
+  profile.set_delay_s(std::max(0.0, delay_s));
+  return profile;
+}
+
 std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const IdentifyParams& params,
                                       const IdentifyResult& result, const std::vector<double>& dampings) {
   const engine::MassDamperDevice model{result.fit.mass.value, result.fit.damping.value};

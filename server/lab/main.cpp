@@ -21,6 +21,8 @@
 #include <vector>
 
 #include "config/server_config.hpp"
+#include <google/protobuf/util/json_util.h>
+
 #include "lab/device_model.hpp"
 #include "lab/identify.hpp"
 #include "lab/lab_run.hpp"
@@ -212,7 +214,7 @@ Subcommand add_identify(CLI::App& cli) {
     haptic::lab::IdentifyParams p;
     std::string device_path, axis = "x", csv_path, markdown_path;
     std::vector<double> zwidth_dampings;
-    std::string sweep_csv;
+    std::string sweep_csv, profile_path;
     std::vector<std::size_t> sweep_periods{4, 8, 16, 32};
     std::vector<double> sweep_amplitudes;
   };
@@ -245,6 +247,9 @@ Subcommand add_identify(CLI::App& cli) {
                   "also the Z-width at these wall dampings, N*s/m (comma-separated): predicted from the identified "
                   "model against walls of increasing stiffness run on the device itself")
       ->delimiter(',');
+  app->add_option("--profile-out", o->profile_path,
+                  "instead of one run: identify along x, y and z and write the port's profile (JSON) here, for "
+                  "a driver port's configuration (driver.profile)");
   app->add_option("--sweep-csv", o->sweep_csv,
                   "instead of one run: identify at every pair of --sweep-periods and --sweep-amplitudes and write "
                   "each run's errors against the device's model and its intervals here (docs/numerics.md)");
@@ -256,6 +261,22 @@ Subcommand add_identify(CLI::App& cli) {
             }
             o->p.axis = o->axis == "x" ? 0 : o->axis == "y" ? 1 : 2;
             const haptic::v1::ServerConfig config = haptic::config::load_config_file(o->device_path);
+            if (!o->profile_path.empty()) {
+              const haptic::v1::DeviceProfile profile = haptic::lab::identify_profile(config, o->p, o->device_path);
+              google::protobuf::util::JsonPrintOptions json;
+              json.add_whitespace = true;
+              json.preserve_proto_field_names = true;
+              json.always_print_primitive_fields = true;
+              std::string text;
+              if (!google::protobuf::util::MessageToJsonString(profile, &text, json).ok()) {
+                throw std::invalid_argument("profile: cannot be written as JSON");
+              }
+              std::ofstream out(o->profile_path);
+              if (!out) throw std::invalid_argument(o->profile_path + ": cannot write");
+              out << text << "\n";
+              std::cerr << "haptic-lab identify: the profile (driver.profile) written to " << o->profile_path << "\n";
+              return 0;
+            }
             if (!o->sweep_csv.empty()) {
               if (o->sweep_amplitudes.empty()) o->sweep_amplitudes.push_back(o->p.signal.amplitude_n);
               haptic::lab::ProgressBar bar("haptic-lab identify --sweep", true);

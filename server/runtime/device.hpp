@@ -109,6 +109,10 @@ struct DeviceDescription {
   /// 0 when the device gives no such model. Units: kg, N·s/m.
   double apparent_mass = 0.0;
   double apparent_damping = 0.0;
+  /// The delay between a command and its effect beyond a perfect loop's half tick, where it is
+  /// known (a driver port's measured profile, docs/identification.md); the stability report counts
+  /// it. Unit: s. 0: none known.
+  double delay_s = 0.0;
   /// The same for the handle's rotation (an inertia-damper per axis; capabilities.torque), for
   /// the stability report of an orientation spring; 0 when unknown. Units: kg·m², N·m·s/rad.
   double apparent_inertia = 0.0;

@@ -306,6 +306,13 @@ DriverDevice::DriverDevice(const DriverOptions& options) : options_(options) {
     description_.apparent_mass = std::min({mass[0], mass[1], mass[2]});
     description_.apparent_damping = std::min({damping[0], damping[1], damping[2]});
   }
+  // Figures measured on the bench take the place of the driver's (docs/identification.md).
+  if (options_.profile) {
+    const auto& p = *options_.profile;
+    description_.apparent_mass = std::min({p.apparent_mass[0], p.apparent_mass[1], p.apparent_mass[2]});
+    description_.apparent_damping = std::min({p.apparent_damping[0], p.apparent_damping[1], p.apparent_damping[2]});
+    description_.delay_s = p.delay_s;
+  }
 }
 
 DriverDevice::~DriverDevice() {

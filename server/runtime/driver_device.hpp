@@ -14,10 +14,12 @@
 // Device-clocked (the driver's run_servo() owns the servo loop), the loop's ticks run inside the
 // driver's callback (ServoClock) and read() and write() call the driver directly.
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -36,6 +38,14 @@ struct DriverOptions {
   /// Ticks a reading's sequence may stay still before it is a fault; 0: not checked.
   std::uint32_t stale_after = 3;
   bool device_clocked = false;     // the driver's run_servo() paces the loop
+  /// The device's figures measured on the bench, in place of the driver's (DriverConfig.profile):
+  /// per axis of W the apparent mass (kg) and damping (N·s/m), and the delay beyond a perfect
+  /// loop's (s). Unset: the driver's own.
+  struct Profile {
+    std::array<double, 3> apparent_mass{}, apparent_damping{};
+    double delay_s = 0.0;
+  };
+  std::optional<Profile> profile;
   /// Where the driver's own messages go (ABI 2's set_log): level HAPTIC_DRIVER_LOG_*, the text.
   /// Unset: dropped.
   std::function<void(int level, const std::string& message)> log;

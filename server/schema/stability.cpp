@@ -34,7 +34,7 @@ void add_margin(v1::StabilityReport& report, const engine::ImpedanceParams& law_
   if (!report.device_known() || law_params.stiffness <= 0.0) return;
   const engine::SampledWallMargin margin = engine::sampled_wall_margin(
       law_params, engine::discretization_of(law), engine::MassDamperDevice{device.mass, device.damping},
-      period_s);
+      period_s, device.delay_s > 0.0 ? device.delay_s / period_s : 0.0);
   report.set_stable(margin.stable);
   report.set_max_stable_stiffness(margin.max_stable_stiffness);
   report.set_max_pole_magnitude(margin.max_pole_magnitude);

@@ -14,6 +14,9 @@ namespace haptic::schema {
 struct DeviceMassDamper {
   double mass = 0.0;     // Unit: kg.
   double damping = 0.0;  // Unit: N*s/m.
+  /// The delay between a command and its effect beyond a perfect loop's half tick, where known
+  /// (a measured profile): the margin counts it. Unit: s.
+  double delay_s = 0.0;
 };
 
 /// The report for `spec` (already converted: its damping or gains are the chosen ones) at loop

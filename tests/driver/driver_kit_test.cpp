@@ -274,6 +274,21 @@ TEST(DriverAbi, AVersion2DriverGivesItsMassDamperAndSpeaksInTheLog) {
   EXPECT_EQ(said[0], "0 started: 0.05 kg, 0.5 N*s/m per axis");
 }
 
+// A profile measured on the bench (haptic-lab identify --profile-out) takes the place of what the
+// driver reports: the weakest axis's mass and damping, and the delay the stability report counts.
+TEST(DriverAbi, AMeasuredProfileTakesThePlaceOfTheDriversFigures) {
+  DriverOptions options = example(R"({"mass": 0.05, "damping": 0.5})");
+  options.profile = DriverOptions::Profile{{0.12, 0.09, 0.11}, {2.0, 3.0, 1.5}, 0.0025};
+  DriverDevice device(options);
+  EXPECT_EQ(device.description().apparent_mass, 0.09);
+  EXPECT_EQ(device.description().apparent_damping, 1.5);
+  EXPECT_EQ(device.description().delay_s, 0.0025);
+  // Without one, the driver's own, and no delay known.
+  DriverDevice plain(example(R"({"mass": 0.05, "damping": 0.5})"));
+  EXPECT_EQ(plain.description().apparent_mass, 0.05);
+  EXPECT_EQ(plain.description().delay_s, 0.0);
+}
+
 // What version 2 adds is checked like the rest (a negative or NaN mass is refused naming the
 // fields), and a port whose axes differ is modelled by its weakest.
 TEST(DriverAbi, Version2FieldsAreCheckedAndTheWeakestAxisModelsThePort) {

@@ -88,6 +88,30 @@ TEST(DriverDevice, AVersion2DriverPortGetsAStabilityReportFromItsMassDamper) {
   EXPECT_FALSE(stiff.stability().warning.empty());
 }
 
+// A driver port configured with a profile measured on the bench (docs/identification.md) reports
+// the profile's mass-damper, and its delay lowers the largest stable stiffness the report gives.
+TEST(DriverDevice, AMeasuredProfilesFiguresAndDelayAreWhatTheStabilityReportUses) {
+  const auto limit = [](double delay_s, double* mass = nullptr, double* damping = nullptr) {
+    test::ServerProcess server(driver_config(R"("mass": 0.05, "damping": 0.5)",
+                                             R"("profile": {"apparent_mass": {"x": 0.08, "y": 0.07, "z": 0.09},
+                                                            "apparent_damping": {"x": 0.6, "y": 0.6, "z": 0.6},
+                                                            "delay_s": )" + std::to_string(delay_s) + "}"));
+    Client client(config_for(server));
+    const StabilityReport report =
+        client.add_wall({.point = {0, 0, -0.05}, .normal = {0, 0, 1}, .impedance = {500.0, 2.0}}).stability();
+    if (mass != nullptr) *mass = report.device_mass;
+    if (damping != nullptr) *damping = report.device_damping;
+    return report.max_stable_stiffness;
+  };
+  double mass = 0.0, damping = 0.0;
+  const double undelayed = limit(0.0, &mass, &damping);
+  EXPECT_EQ(mass, 0.07);  // the profile's weakest axis, not the driver's 0.05
+  EXPECT_EQ(damping, 0.6);
+  const double delayed = limit(0.002);
+  EXPECT_LT(delayed, 0.8 * undelayed) << "two ticks of delay must lower the limit";
+  std::printf("  the largest stable stiffness: %.0f N/m without delay, %.0f N/m with 2 ms\n", undelayed, delayed);
+}
+
 // A Force Dimension device through its vendor's runtime (the driver in driver/vendors against the
 // stand-in of libdrd, tests/driver/standins), the whole server around it in lockstep: the
 // stand-in's 1 N hand rests on a 500 N/m wall 2 mm deep; unplugged the device faults (zero force,

@@ -119,6 +119,17 @@ TEST(Config, BadValuesAreRejectedNamingTheField) {
                 .find("simulated_point_mass.sensor.quantization_m"),
             std::string::npos);
   EXPECT_EQ(error_of(R"({"simulated_point_mass": {"sensor": {"noise_m": 1e-6, "quantization_m": 1e-6}}})"), "");
+  // A driver port's measured profile: each axis's mass > 0, damping >= 0, the delay in [0, 0.1] s.
+  const std::string driver = R"({"driver": {"library": "x.so", "profile": )";
+  EXPECT_NE(error_of(driver + R"({"apparent_mass": {"x": 0.1, "y": 0, "z": 0.1}}}})")
+                .find("driver.profile.apparent_mass.y: must be finite and in (0, 1000] kg"),
+            std::string::npos);
+  EXPECT_NE(error_of(driver + R"({"apparent_mass": {"x": 0.1, "y": 0.1, "z": 0.1}, "apparent_damping": {"z": -1}}}})")
+                .find("driver.profile.apparent_damping.z"),
+            std::string::npos);
+  EXPECT_NE(error_of(driver + R"({"apparent_mass": {"x": 0.1, "y": 0.1, "z": 0.1}, "delay_s": 0.5}}})")
+                .find("driver.profile.delay_s: must be finite and in [0, 0.1] s"),
+            std::string::npos);
   EXPECT_NE(error_of(R"({"simulated_point_mass": {"initial_position": {"z": 5}}})")
                 .find("simulated_point_mass.initial_position"),
             std::string::npos);

@@ -127,6 +127,25 @@ TEST(LabIdentify, ASweepsIntervalsNarrowWithTheExcitationsLengthAndAmplitude) {
   EXPECT_EQ(identify_sweep_csv(rows).rfind("amplitude_n,periods,excitation_s,cpu_s,mass_error", 0), 0u);
 }
 
+TEST(LabIdentify, AProfileIsEachAxissMassAndDampingAndADriverPortTakesIt) {
+  const v1::ServerConfig config = config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/point_mass_sensor.json");
+  const v1::DeviceProfile profile = identify_profile(config, light_excitation(0.02), "point_mass_sensor");
+  for (const double mass : {profile.apparent_mass().x(), profile.apparent_mass().y(), profile.apparent_mass().z()}) {
+    EXPECT_NEAR(mass, 0.01, 0.01 * 0.01);
+  }
+  for (const double b : {profile.apparent_damping().x(), profile.apparent_damping().y(), profile.apparent_damping().z()}) {
+    EXPECT_NEAR(b, 0.022, 0.05 * 0.022);
+  }
+  EXPECT_LT(profile.delay_s(), 1e-4);  // the point mass adds none to the hold's half tick
+  // A driver port's configuration takes it as it is.
+  v1::ServerConfig driver;
+  driver.set_time_mode(v1::LOCKSTEP);
+  driver.mutable_driver()->set_library("x.so");
+  *driver.mutable_driver()->mutable_profile() = profile;
+  config::fill_defaults(driver);
+  EXPECT_EQ(config::validate(driver), "");
+}
+
 TEST(LabIdentify, TheDcMotorAlongItsLinksTangentIsWhatItsLoopSeesAndPredictsItsZWidth) {
   // 000's DC motor, its gearbox and link: the tool moves on a circle, so it is excited along the
   // motion a push along y gives (the link's tangent).
