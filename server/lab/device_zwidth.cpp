@@ -53,10 +53,16 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
   wall->mutable_impedance()->set_damping(damping);
   wall->mutable_impedance()->set_law(v1::Impedance::BACKWARD_DIFFERENCE);
   config.mutable_passivity()->set_enabled(false);
-  v1::OperatorInput* push = config.mutable_initial_operator();
-  push->Clear();
-  push->set_mode(v1::OperatorInput::APPLY_FORCE);
+  // The push into the wall: a constant force field about the start (a linear field without a
+  // gradient), so that it reaches every port as a command does, a driver's too (the simulated
+  // operator pushes simulated devices only).
+  config.clear_initial_operator();
+  v1::LinearField* push = config.mutable_initial_scene()->add_fields()->mutable_linear();
+  *push->mutable_origin() = schema::to_proto(start);
   *push->mutable_force() = schema::to_proto(-params.push_n * params.direction);
+  for (int row = 0; row < 3; ++row) push->add_jacobian();
+  push->set_radius(1.0);
+  push->set_fade_width(0.5);
 
   const double period = 1.0 / config.loop_rate_hz();
   const double equilibrium = engine::dot(start, params.direction) - params.push_n / stiffness;

@@ -6,8 +6,8 @@
 //
 // Each run: a half-space wall through where the tool starts, its outward normal along the axis,
 // the wall's law BACKWARD_DIFFERENCE (the sampled analysis's own), the passivity controller off
-// (it exists to hide this boundary), and the simulated operator pressing the tool into the wall
-// with a constant force. The tool starts at the surface, falls in towards its equilibrium
+// (it exists to hide this boundary), and a constant force field pressing the tool into the wall
+// (through the command, as on any port: a driver's has no simulated operator). The tool starts at the surface, falls in towards its equilibrium
 // d = F/K, and rings: it settles if the envelope of its distance from the equilibrium decays
 // (engine::envelope_growth's rate < 0, fitted from the first window on: near the boundary a run
 // decays or grows slowly, and the rate's sign tells which side it is on) and ends below where it
@@ -26,7 +26,7 @@ struct DeviceWallParams {
   /// The wall's outward normal, the push against it and the distance measured along it: a unit
   /// vector in W (an identification's direction).
   engine::Vec3 direction{1.0, 0.0, 0.0};
-  double push_n = 0.5;     // the operator's force into the wall. Unit: N. > 0.
+  double push_n = 0.5;     // the force pressing into the wall. Unit: N. > 0.
   double seconds = 3.0;    // each run. Unit: s.
   double window_s = 0.1;   // the envelope's windows (the first, the fall in, left out). Unit: s.
 };

@@ -102,6 +102,21 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   for (auto& device : devices) {
     if (device.simulated != nullptr) device.simulated->set_hand(hand);
   }
+  // Every device opened before the first tick and closed after the last, as hapticd does: a driver
+  // port (a vendor's runtime, its stand-in) reads nothing until it is started.
+  for (std::uint32_t p = 0; p < ports; ++p) {
+    if (devices[p].device->start() != runtime::DeviceStatus::kOk) {
+      for (std::uint32_t q = 0; q < p; ++q) devices[q].device->stop();
+      throw std::invalid_argument("port " + std::to_string(p) + ": the device (" +
+                                  devices[p].device->description().name + ") did not start");
+    }
+  }
+  struct StopDevices {
+    std::vector<config::PortDevice>& devices;
+    ~StopDevices() {
+      for (auto& d : devices) d.device->stop();
+    }
+  } stop_devices{devices};
   runtime::SceneExchange scenes(std::make_unique<const engine::CompiledScene>(engine::compile_scene(
       description, 50, 1, period_s, config.session_force_budget(), ports)));
   runtime::LoopCounters counters;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 #include <initializer_list>
 #include <string>
@@ -158,6 +159,25 @@ TEST(LabIdentify, TheDcMotorAlongItsLinksTangentIsWhatItsLoopSeesAndPredictsItsZ
   EXPECT_NEAR(std::abs(id.direction.y), 0.8765, 1e-3);
   predicted_against_measured(config, params, {1.0, 5.0, 20.0});
 }
+
+#ifdef FORCEDIMENSION_DRIVER
+TEST(LabIdentify, TheForceDimensionStandInIsItsPlantAndPredictsItsZWidth) {
+  // An omega.3 through the Force Dimension driver and its runtime's stand-in, whose plant (0.2 kg,
+  // 2 N·s/m per axis, tests/driver/standins/fake_forcedimension.cpp) is the truth: a driver port
+  // in the lab, started and stopped as hapticd does.
+  setenv("FAKE_DHD_DEVICES", "omega.3", 1);
+  const v1::ServerConfig config = config::parse_config(R"({"time_mode": "LOCKSTEP",
+      "driver": {"library": ")" FORCEDIMENSION_DRIVER R"(", "call_timeout_ms": 0,
+                 "params": {"library": ")" FAKE_FORCEDIMENSION_LIBRARY R"("}}})", "test");
+  const IdentifyParams params = light_excitation(0.2);
+  const IdentifyResult id = identify(config, params, "test");
+  EXPECT_NEAR(id.fit.mass.value, 0.2, 0.01 * 0.2);
+  EXPECT_NEAR(id.fit.damping.value, 2.0, 0.01 * 2.0);
+  EXPECT_FALSE(id.model_mass) << "the driver reports no mass: " << id.model_method;
+  EXPECT_LT(predicted_against_measured(config, params, {1.0, 5.0, 20.0}), 0.10);
+  unsetenv("FAKE_DHD_DEVICES");
+}
+#endif
 
 TEST(LabIdentify, AnAxisThatIsNoMassDamperIsSaidToBeOneNotToUse) {
   // 004's joystick along z at 2 N: its shaft's sleeve friction (5.66 N) holds it through most of
