@@ -214,22 +214,23 @@ std::string validate_driver(const v1::DriverConfig& driver) {
   }
   if (driver.has_profile()) {
     const v1::DeviceProfile& p = driver.profile();
-    const std::array<std::pair<double, const char*>, 3> masses = {
-        std::pair{p.apparent_mass().x(), "x"}, std::pair{p.apparent_mass().y(), "y"}, std::pair{p.apparent_mass().z(), "z"}};
-    for (const auto& [value, axis] : masses) {
-      if (!std::isfinite(value) || value <= 0.0 || value > 1000.0) {
-        return std::string("driver.profile.apparent_mass.") + axis + ": must be finite and in (0, 1000] kg, got " +
-               std::to_string(value);
+    // Each axis of `v` in range (`low` itself allowed or not), or the first that is not, named.
+    const auto check_axes = [](const v1::Vec3& v, const std::string& field, double low, bool low_allowed,
+                               double high, const std::string& range) -> std::string {
+      for (const auto& [value, axis] : {std::pair{v.x(), "x"}, std::pair{v.y(), "y"}, std::pair{v.z(), "z"}}) {
+        if (!std::isfinite(value) || value < low || (!low_allowed && value <= low) || value > high) {
+          return field + "." + axis + ": must be finite and in " + range + ", got " + std::to_string(value);
+        }
       }
+      return {};
+    };
+    if (auto e = check_axes(p.apparent_mass(), "driver.profile.apparent_mass", 0.0, false, 1000.0, "(0, 1000] kg");
+        !e.empty()) {
+      return e;
     }
-    const std::array<std::pair<double, const char*>, 3> dampings = {std::pair{p.apparent_damping().x(), "x"},
-                                                                    std::pair{p.apparent_damping().y(), "y"},
-                                                                    std::pair{p.apparent_damping().z(), "z"}};
-    for (const auto& [value, axis] : dampings) {
-      if (!std::isfinite(value) || value < 0.0 || value > 1e5) {
-        return std::string("driver.profile.apparent_damping.") + axis + ": must be finite and in [0, 1e5] N*s/m, got " +
-               std::to_string(value);
-      }
+    if (auto e = check_axes(p.apparent_damping(), "driver.profile.apparent_damping", 0.0, true, 1e5, "[0, 1e5] N*s/m");
+        !e.empty()) {
+      return e;
     }
     if (!std::isfinite(p.delay_s()) || p.delay_s() < 0.0 || p.delay_s() > 0.1) {
       return "driver.profile.delay_s: must be finite and in [0, 0.1] s, got " + std::to_string(p.delay_s());

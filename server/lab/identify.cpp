@@ -182,7 +182,7 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
 }
 
 v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const IdentifyParams& params, const std::string& source) {
-  v1::DeviceProfile profile;
+  engine::Vec3 mass{}, damping{};
   double delay_s = 0.0;
   for (int axis = 0; axis < 3; ++axis) {
     IdentifyParams p = params;
@@ -194,13 +194,13 @@ v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const Identif
                                   std::to_string(r.fit.mass.value) + " kg, damping " +
                                   std::to_string(r.fit.damping.value) + " N·s/m)");
     }
-    v1::Vec3* mass = profile.mutable_apparent_mass();
-    v1::Vec3* damping = profile.mutable_apparent_damping();
-    (axis == 0 ? mass->set_x(r.fit.mass.value) : axis == 1 ? mass->set_y(r.fit.mass.value) : mass->set_z(r.fit.mass.value));
-    (axis == 0 ? damping->set_x(r.fit.damping.value)
-               : axis == 1 ? damping->set_y(r.fit.damping.value) : damping->set_z(r.fit.damping.value));
+    (axis == 0 ? mass.x : axis == 1 ? mass.y : mass.z) = r.fit.mass.value;
+    (axis == 0 ? damping.x : axis == 1 ? damping.y : damping.z) = r.fit.damping.value;
     delay_s = std::max(delay_s, r.fit.delay.value - r.period_s / 2.0);
   }
+  v1::DeviceProfile profile;
+  *profile.mutable_apparent_mass() = schema::to_proto(mass);
+  *profile.mutable_apparent_damping() = schema::to_proto(damping);
   profile.set_delay_s(std::max(0.0, delay_s));
   return profile;
 }

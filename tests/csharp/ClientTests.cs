@@ -511,6 +511,9 @@ static class ClientTests
             spring.Stiffness = 50.0;
             var field = client.AddField(spring);
             ulong oldSession = client.SessionId;
+            // Its recorder's events file takes the connection's changes (this client's own).
+            string events = System.IO.Path.GetDirectoryName(readyFile) + "/reconnect.csv";
+            var recorder = client.Record(new RecorderOptions { Path = events });
             StepAndGet(client, 20);
             System.IO.File.WriteAllText(readyFile, "ready\n");
             ConnectionChange resumed = null;
@@ -533,6 +536,10 @@ static class ClientTests
             var state = StepAndGet(client, 3000);
             Near(state.Force.Z, 5.0, 1e-3, "the wall holds the push on the new server, its stream resumed");
             Check(client.ReceiveCounters.Reconnects == 1, "one reconnection counted");
+            recorder.Close();
+            string rows = System.IO.File.ReadAllText(recorder.EventsPath);
+            Check(rows.Contains(",101,connection_lost,") && rows.Contains(",102,connection_resumed,"),
+                  "the recorder's events hold the loss and the resumption: " + rows);
             wall.Dispose();
             field.Dispose();
             Check(client.Scene().Objects.Count == 0, "removed on the new server");

@@ -31,7 +31,8 @@ const shown = {
   rateNowHz: null,      // the loop's rate over the last two statistics (the server's clock)
   error: null,          // the latest problem shown to the user
   webgl: true,
-  control: { session: null, moves: 0, error: null },  // Move objects: the page's session, moves taken
+  // Move objects: the page's session, moves taken, and moves asked for and not yet answered
+  control: { session: null, moves: 0, error: null, underway: 0 },
 };
 window.hapticViewer = shown;
 
@@ -222,6 +223,7 @@ class Viewer {
   /// Moves object `id` to `position` (m, in W) through the HTTP API; a drag's last step (done)
   /// has the scene fetched again.
   async moveObject(id, position, done = true) {
+    shown.control.underway += 1;
     try {
       await this.control.move(id, position);
       shown.control.moves = this.control.moves;
@@ -229,6 +231,8 @@ class Viewer {
       if (done && $('move-id').value === id) this.fillMoveForm();
     } catch (error) {
       this.showControlError(`object ${id}: ${error.message}`);
+    } finally {
+      shown.control.underway -= 1;
     }
     if (done) this.generation = null;  // the scene again at the next poll, the view put right
   }

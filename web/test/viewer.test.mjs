@@ -15,42 +15,16 @@ import os from 'node:os';
 import path from 'node:path';
 import readline from 'node:readline';
 import { chromium } from 'playwright-core';
+import { CHROMIUM, CHROMIUM_ARGS, WAIT_MS, startServer as startHapticd } from './support.mjs';
 
-const HAPTICD = process.env.HAPTICD;
 const DRIVER = process.env.VIEWER_DRIVER;
 const SCREENSHOTS = process.env.SCREENSHOTS ?? path.join(os.tmpdir(), 'viewer-screenshots');
-// Chromium as root in a sandbox-less container, on a closed network, drawing WebGL in software.
-const CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-  '--disable-quic', '--no-first-run', '--disable-background-networking', '--disable-component-update',
-  '--disable-sync'];
-const WAIT_MS = 20000;  // for anything to show; the test's own bound (ctest's is 180 s)
 
-/// A hapticd on ephemeral loopback ports, started from `config` (a ServerConfig), ready once its
-/// ready file names its ports; the viewer at `viewer` (a port; 0, any).
+/// A hapticd on ephemeral loopback ports (support.mjs), the viewer at `viewer` (a port; 0, any)
+/// and, with httpApi, the HTTP API on any port; `url` is the viewer's page.
 async function startServer(config, { viewer = 0, httpApi = false } = {}) {
-  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'hapticd-viewer-'));
-  fs.writeFileSync(path.join(dir, 'config.json'), JSON.stringify(config));
-  const ready = path.join(dir, 'ready.json');
-  const server = spawn(HAPTICD, ['--config', path.join(dir, 'config.json'), '--grpc-address', '127.0.0.1:0',
-    '--udp-port', '0', '--http', String(viewer), '--ready-file', ready, ...(httpApi ? ['--http-api', '0'] : [])],
-  { stdio: ['ignore', 'inherit', 'inherit'] });
-  const giveUp = Date.now() + WAIT_MS;
-  while (!fs.existsSync(ready)) {
-    if (server.exitCode !== null) throw new Error(`hapticd exited (${server.exitCode}) before it was ready`);
-    if (Date.now() > giveUp) throw new Error('hapticd not ready');
-    await new Promise((resolve) => setTimeout(resolve, 20));
-  }
-  const ports = JSON.parse(fs.readFileSync(ready, 'utf8'));
-  return {
-    ports,
-    url: `http://127.0.0.1:${ports.viewer_port}/`,
-    api: `http://127.0.0.1:${ports.http_port}`,
-    async stop() {
-      server.kill('SIGTERM');
-      if (server.exitCode === null) await once(server, 'exit');
-      fs.rmSync(dir, { recursive: true, force: true });
-    },
-  };
+  const server = await startHapticd(config, ['--http', String(viewer), ...(httpApi ? ['--http-api', '0'] : [])]);
+  return { ...server, url: `http://127.0.0.1:${server.ports.viewer_port}/` };
 }
 
 /// The SDK client: registers every kind at start (its first line says what), then takes commands.
@@ -97,7 +71,7 @@ describe('the viewer of a lockstep server', () => {
     server = await startServer({ time_mode: 'LOCKSTEP', status_period_s: 0, real_time: { use_fifo: false } });
     driver = await startDriver(server.ports.grpc_address);
     await driver.command('move 0 0 0.02 50');  // let the new items ramp in
-    browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', args: CHROMIUM_ARGS });
+    browser = await chromium.launch({ executablePath: CHROMIUM, args: CHROMIUM_ARGS });
     page = await browser.newPage({ viewport: { width: 1400, height: 860 } });
     page.on('console', (message) => { if (message.type() === 'error') consoleErrors.push(message.text()); });
     page.on('pageerror', (error) => consoleErrors.push(error.message));
@@ -153,7 +127,7 @@ describe('the viewer of a real-time server', () => {
     server = await startServer({ status_period_s: 0, real_time: { use_fifo: false } });
     driver = await startDriver(server.ports.grpc_address);
     await driver.command('sway');
-    browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', args: CHROMIUM_ARGS });
+    browser = await chromium.launch({ executablePath: CHROMIUM, args: CHROMIUM_ARGS });
   });
 
   after(async () => {
@@ -195,7 +169,7 @@ describe('the viewer of a server with tokens', () => {
   before(async () => {
     server = await startServer({ time_mode: 'LOCKSTEP', status_period_s: 0, real_time: { use_fifo: false },
       security: { tokens } });
-    browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', args: CHROMIUM_ARGS });
+    browser = await chromium.launch({ executablePath: CHROMIUM, args: CHROMIUM_ARGS });
   });
 
   after(async () => {
@@ -254,7 +228,7 @@ describe('the viewer moving objects through the HTTP API', () => {
     server = await startServer({ time_mode: 'LOCKSTEP', status_period_s: 0, real_time: { use_fifo: false },
       security: { tokens }, initial_scene: scene, http_allowed_origins: [`http://127.0.0.1:${viewer}`] },
     { viewer, httpApi: true });
-    browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', args: CHROMIUM_ARGS });
+    browser = await chromium.launch({ executablePath: CHROMIUM, args: CHROMIUM_ARGS });
   });
 
   after(async () => {
@@ -293,8 +267,12 @@ describe('the viewer moving objects through the HTTP API', () => {
     await page.mouse.move(from.x + 100, from.y, { steps: 10 });
     await page.mouse.up();
     await page.keyboard.up('Shift');
-    await page.waitForFunction(() => window.hapticViewer.control.moves > 1 && !document.getElementById('control-why').textContent,
-                               null, { timeout: WAIT_MS });
+    // Every move the drag asked for answered (none in flight, none waiting): a later answer would
+    // count against the pan on the box below.
+    await page.waitForFunction(() => {
+      const control = window.hapticViewer.control;
+      return control.moves > 1 && control.underway === 0 && !document.getElementById('control-why').textContent;
+    }, null, { timeout: WAIT_MS });
     const moved = await positions();
     const distance = Math.hypot(...moved[sphere].map((v, axis) => v - [0.01, 0.02, 0.03][axis]));
     assert.ok(distance > 0.005, `the sphere moved ${distance} m`);

@@ -350,12 +350,7 @@ double Multisine::force_at_tick(std::size_t tick) const {
   } else if (tick >= steady_end) {
     envelope = 0.5 * (1.0 + std::cos(kPi * static_cast<double>(tick - steady_end) / static_cast<double>(ramp)));
   }
-  const std::size_t n = params.samples_per_period;
-  double sum = 0.0;
-  for (std::size_t i = 0; i < harmonics.size(); ++i) {
-    sum += std::cos(2.0 * kPi * static_cast<double>(harmonics[i] * (tick % n) % n) / static_cast<double>(n) + phases[i]);
-  }
-  return envelope * scale * sum;
+  return envelope * scale * period[tick % params.samples_per_period];
 }
 
 std::optional<Multisine> design_multisine(const MultisineParams& params, std::string& why) {
@@ -391,11 +386,13 @@ std::optional<Multisine> design_multisine(const MultisineParams& params, std::st
   }
   double peak = 0.0;
   const std::size_t n = params.samples_per_period;
+  m.period.resize(n);
   for (std::size_t t = 0; t < n; ++t) {
     double sum = 0.0;
     for (std::size_t i = 0; i < m.harmonics.size(); ++i) {
       sum += std::cos(2.0 * kPi * static_cast<double>(m.harmonics[i] * t % n) / static_cast<double>(n) + m.phases[i]);
     }
+    m.period[t] = sum;
     peak = std::max(peak, std::abs(sum));
   }
   m.scale = params.amplitude_n / peak;

@@ -51,6 +51,8 @@ struct Multisine {
   std::vector<std::size_t> harmonics;  // k: frequency k / (N T)
   std::vector<double> phases;          // rad
   double scale = 0.0;                  // N per unit cosine
+  /// One period's sum of the harmonics' cosines, sample by sample (made once: a tick looks it up).
+  std::vector<double> period;
   /// Duration of the whole run: ramp, settle and fitted periods, ramp. Unit: s.
   double duration_s() const;
   /// Ticks from the start to the first fitted sample, and the number fitted (periods × N).

@@ -199,6 +199,7 @@ namespace Hapticd
         private readonly object eventsGate_ = new object();
         private EventWatch events_;        // guarded by eventsGate_
         private long callbackExceptions_;
+        private readonly List<Recorder> recorders_ = new List<Recorder>();  // open ones, for connection changes
 
         private int connectionState_ = (int)ConnectionState.Connected;
         private volatile bool heartbeatsEnabled_ = true;
@@ -955,7 +956,7 @@ namespace Hapticd
                 recorder.Close();
                 throw;
             }
-            recorder.Attach(link);
+            recorder.Attach(link, recorders_);
             return recorder;
         }
 
@@ -964,7 +965,9 @@ namespace Hapticd
         private void Announce(ConnectionChange change)
         {
             Volatile.Write(ref connectionState_, (int)change.State);
-            Recorder.AnnounceAll(change);
+            Recorder[] recorders;
+            lock (recorders_) recorders = recorders_.ToArray();
+            foreach (var recorder in recorders) recorder.AddConnectionChange(change);
             try { var cb = onConnection_; if (cb != null) cb(change); }
             catch (Exception e) { CallbackFailed(e); }
         }

@@ -33,7 +33,7 @@ namespace Hapticd
         private StateLink link_;
         private Action<State> tap_;
         internal EventWatch Watch;
-        private static readonly List<Recorder> Open = new List<Recorder>();   // for connection changes
+        private List<Recorder> owner_;  // the client's recorders, which its connection changes reach
 
         public string Path { get; private set; }
         public string EventsPath { get; private set; }
@@ -115,13 +115,15 @@ namespace Hapticd
 
         ~Recorder() { Close(); }
 
-        /// <summary>Starts taking every State the link accepts (on its receive thread: queued only).</summary>
-        internal void Attach(StateLink link)
+        /// <summary>Starts taking every State the link accepts (on its receive thread: queued only),
+        /// and joins `recorders`, the client's, to be told its connection changes.</summary>
+        internal void Attach(StateLink link, List<Recorder> recorders)
         {
             link_ = link;
             tap_ = Enqueue;
             link.AddTap(tap_);
-            lock (Open) Open.Add(this);
+            owner_ = recorders;
+            lock (recorders) recorders.Add(this);
         }
 
         private void Enqueue(State state)
@@ -153,17 +155,13 @@ namespace Hapticd
                          e.SessionId + "," + D(e.ServerTime) + "," + e.ItemId + "," + Quoted(e.Message));
         }
 
-        internal static void AnnounceAll(ConnectionChange change)
+        /// <summary>A change of its client's connection, as a row of the events file.</summary>
+        internal void AddConnectionChange(ConnectionChange change)
         {
-            Recorder[] open;
-            lock (Open) open = Open.ToArray();
             int state = (int)change.State;
-            foreach (var r in open)
-            {
-                r.EnqueueEvent(SteadyClock.Ns() + "," + (ConnectionKindBase + state) + "," +
-                               (state >= 0 && state < ConnectionNames.Length ? ConnectionNames[state] : "unknown") + "," +
-                               change.SessionId + ",NaN,0," + Quoted(change.Reason ?? ""));
-            }
+            EnqueueEvent(SteadyClock.Ns() + "," + (ConnectionKindBase + state) + "," +
+                         (state >= 0 && state < ConnectionNames.Length ? ConnectionNames[state] : "unknown") + "," +
+                         change.SessionId + ",NaN,0," + Quoted(change.Reason ?? ""));
         }
 
         private static string D(double v) { return double.IsNaN(v) ? "NaN" : v.ToString("G17", CultureInfo.InvariantCulture); }
@@ -252,7 +250,7 @@ namespace Hapticd
                 stopping_ = true;
                 Monitor.Pulse(gate_);
             }
-            lock (Open) Open.Remove(this);
+            if (owner_ != null) lock (owner_) owner_.Remove(this);
             if (link_ != null) link_.RemoveTap(tap_);
             if (Watch != null) Watch.End();
             if (writer_ != null && Thread.CurrentThread != writer_) writer_.Join();
