@@ -14,6 +14,7 @@
 #include "runtime/cartesian_model.hpp"
 #include "runtime/dc_motor_model.hpp"
 #include "runtime/driver_device.hpp"
+#include "runtime/encoder_device.hpp"
 #include "runtime/five_bar_estimator.hpp"
 #include "runtime/five_bar_model.hpp"
 #include "runtime/joystick_model.hpp"
@@ -64,6 +65,26 @@ std::string check_substeps(const std::string& device, const DeviceConfig& config
   return {};
 }
 
+/// A device's encoders (`path`: "simulated_dc_motor.encoders"): noise and step lists of one value
+/// or one per joint (`joints`), each finite in [0, 0.1] in the joint's unit.
+std::string validate_encoders(const v1::SimulatedEncoderConfig& encoders, std::size_t joints, const std::string& path) {
+  for (const auto& [values, name] : {std::pair{&encoders.noise(), "noise"}, std::pair{&encoders.quantization(), "quantization"}}) {
+    if (values->size() > 1 && static_cast<std::size_t>(values->size()) != joints) {
+      return path + "." + name + ": give one value for every joint or one per joint (" + std::to_string(joints) +
+             "), got " + std::to_string(values->size());
+    }
+    for (int i = 0; i < values->size(); ++i) {
+      const double value = values->Get(i);
+      if (!std::isfinite(value) || value < 0.0 || value > 0.1) {
+        std::ostringstream out;
+        out << path << "." << name << "[" << i << "]: must be finite and in [0, 0.1] (rad or m), got " << value;
+        return out.str();
+      }
+    }
+  }
+  return {};
+}
+
 std::string validate_dc_motor(const v1::SimulatedDcMotorConfig& motor) {
   if (auto error = dc_motor_params(motor).validate(); !error.empty()) {
     // Name the configuration's field rather than the model's symbol.
@@ -85,6 +106,7 @@ std::string validate_dc_motor(const v1::SimulatedDcMotorConfig& motor) {
   if (!std::isfinite(motor.max_force()) || motor.max_force() < 0.0 || motor.max_force() > 1e3) {
     return "simulated_dc_motor.max_force: must be 0 (default) to 1000";
   }
+  if (motor.has_encoders()) return validate_encoders(motor.encoders(), 1, "simulated_dc_motor.encoders");
   return {};
 }
 
@@ -171,6 +193,9 @@ std::string validate_joystick(const v1::SimulatedJoystickConfig& joystick) {
       !error.empty()) {
     return error;
   }
+  if (joystick.has_encoders()) {
+    if (auto error = validate_encoders(joystick.encoders(), 3, "simulated_joystick.encoders"); !error.empty()) return error;
+  }
   if (joystick.has_rearm_after_s() && !std::isfinite(joystick.rearm_after_s())) {
     return "simulated_joystick.rearm_after_s: must be finite";
   }
@@ -187,6 +212,9 @@ std::string validate_parallel_dob(const v1::SimulatedParallelDobConfig& dob, dou
   if (auto error = validate_common("simulated_parallel_dob", dob);
       !error.empty()) {
     return error;
+  }
+  if (dob.has_encoders()) {
+    if (auto error = validate_encoders(dob.encoders(), 2, "simulated_parallel_dob.encoders"); !error.empty()) return error;
   }
   if (!std::isfinite(dob.cutoff_hz()) || dob.cutoff_hz() < 0.0 || dob.cutoff_hz() >= rate / 2.0) {
     return "simulated_parallel_dob.cutoff_hz: must be 0 (default) or below half the loop rate (" +
@@ -389,6 +417,27 @@ PortDevice simulated(std::unique_ptr<runtime::SimulatedDevice> device,
   return {std::move(device), std::move(model), raw, nullptr};
 }
 
+/// `port`'s device read through `encoders` (validated) where the configuration sets them; the
+/// simulated device's plant and operator stay reachable through port.simulated.
+PortDevice through_encoders(PortDevice port, bool has_encoders, const v1::SimulatedEncoderConfig& encoders,
+                            double loop_rate_hz) {
+  if (!has_encoders) return port;
+  runtime::EncoderOptions options;
+  for (std::size_t i = 0; i < runtime::kMaxJoints; ++i) {
+    const auto value = [i](const google::protobuf::RepeatedField<double>& values) {
+      if (values.size() == 1) return values.Get(0);  // one value for every joint
+      return static_cast<int>(i) < values.size() ? values.Get(static_cast<int>(i)) : 0.0;
+    };
+    options.encoder.noise[i] = value(encoders.noise());
+    options.encoder.quantization[i] = value(encoders.quantization());
+  }
+  options.encoder.seed = encoders.seed();
+  options.tachometers = encoders.tachometers();
+  options.period_s = 1.0 / loop_rate_hz;
+  port.device = std::make_unique<runtime::EncoderDevice>(std::move(port.device), options);
+  return port;
+}
+
 PortDevice driver_device(const v1::DriverConfig& config) {
   runtime::DriverOptions options;
   options.library = config.library();
@@ -432,7 +481,8 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
           motor.initial_angle(), motor.max_force() > 0.0 ? motor.max_force() : 5.0,
           integration_settings(motor.integrator(), motor.substeps(), 10));
       const bool gravity = device->description().capabilities.gravity;
-      return simulated(std::move(device), std::make_unique<runtime::DcMotorModel>(params, gravity));
+      return through_encoders(simulated(std::move(device), std::make_unique<runtime::DcMotorModel>(params, gravity)),
+                              motor.has_encoders(), motor.encoders(), loop_rate_hz);
     }
     case v1::DeviceConfig::kSimulatedFiveBar: {
       const auto& five_bar = config.simulated_five_bar();
@@ -454,8 +504,10 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
     }
     case v1::DeviceConfig::kSimulatedJoystick: {
       const runtime::SimulatedJoystickConfig joystick = joystick_config(config.simulated_joystick());
-      return simulated(std::make_unique<runtime::SimulatedJoystickDevice>(joystick),
-                       std::make_unique<runtime::JoystickModel>(joystick.model()));
+      return through_encoders(simulated(std::make_unique<runtime::SimulatedJoystickDevice>(joystick),
+                                        std::make_unique<runtime::JoystickModel>(joystick.model())),
+                              config.simulated_joystick().has_encoders(), config.simulated_joystick().encoders(),
+                              loop_rate_hz);
     }
     case v1::DeviceConfig::kSimulatedParallelDob: {
       const auto& dob = config.simulated_parallel_dob();
@@ -463,11 +515,12 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
       const engine::DisturbanceObserverParams observer = observer_params(dob, loop_rate_hz);
       const engine::Vec3 initial{0.0, 0.25, 0.0};
       const bool observer_enabled = !dob.has_disturbance_observer() || dob.disturbance_observer();
-      return simulated(std::make_unique<runtime::SimulatedDobDevice>(
-                           plant, initial, dob.max_force() > 0.0 ? dob.max_force() : 10.0,
-                           observer_enabled, observer.nominal_mass, observer.nominal_damping),
-                       std::make_unique<runtime::ParallelDobModel>(plant, observer, initial,
-                                                                   observer_enabled));
+      return through_encoders(
+          simulated(std::make_unique<runtime::SimulatedDobDevice>(
+                        plant, initial, dob.max_force() > 0.0 ? dob.max_force() : 10.0, observer_enabled,
+                        observer.nominal_mass, observer.nominal_damping),
+                    std::make_unique<runtime::ParallelDobModel>(plant, observer, initial, observer_enabled)),
+          dob.has_encoders(), dob.encoders(), loop_rate_hz);
     }
     case v1::DeviceConfig::kSimulatedPointMass:
     case v1::DeviceConfig::DEVICE_NOT_SET:

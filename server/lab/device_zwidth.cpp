@@ -34,9 +34,11 @@ engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port) 
 bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& params, double stiffness,
                          double damping) {
   if (std::abs(engine::norm(params.direction) - 1.0) > 1e-9) throw std::invalid_argument("direction: must be a unit vector");
-  if (!(params.push_n > 0.0) || !(params.seconds > 4.0 * params.window_s) || !(params.window_s > 0.0)) {
-    throw std::invalid_argument("push_n > 0 and seconds > 4 windows > 0 are needed");
+  if (!(params.push_n > 0.0) || !(params.seconds > 4.0 * params.window_s) || !(params.window_s > 0.0) ||
+      !(params.noise_floor_m >= 0.0) || !(params.penetration_m >= 0.0)) {
+    throw std::invalid_argument("push_n > 0, seconds > 4 windows > 0, noise_floor_m >= 0 and penetration_m >= 0 are needed");
   }
+  const double push_n = params.penetration_m > 0.0 ? std::min(params.push_n, stiffness * params.penetration_m) : params.push_n;
   v1::ServerConfig config = given;
   config::fill_defaults(config);
   if (auto e = config::validate(config); !e.empty()) throw std::invalid_argument(e);
@@ -59,13 +61,13 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
   config.clear_initial_operator();
   v1::LinearField* push = config.mutable_initial_scene()->add_fields()->mutable_linear();
   *push->mutable_origin() = schema::to_proto(start);
-  *push->mutable_force() = schema::to_proto(-params.push_n * params.direction);
+  *push->mutable_force() = schema::to_proto(-push_n * params.direction);
   for (int row = 0; row < 3; ++row) push->add_jacobian();
   push->set_radius(1.0);
   push->set_fade_width(0.5);
 
   const double period = 1.0 / config.loop_rate_hz();
-  const double equilibrium = engine::dot(start, params.direction) - params.push_n / stiffness;
+  const double equilibrium = engine::dot(start, params.direction) - push_n / stiffness;
   const auto window = static_cast<std::size_t>(std::llround(params.window_s / period));
   std::vector<double> distance;  // from the equilibrium, along the axis. Unit: m.
   bool finite = true;
@@ -79,13 +81,25 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
   if (!finite || distance.size() < 4 * window) return false;
   // The envelope's growth from the first window on (engine/analysis/growth): a run near the
   // boundary decays or grows slowly, and only its rate's sign tells which side it is on. A
-  // floor of 1e-12 m leaves out windows that have decayed into rounding.
-  const engine::GrowthFit growth = engine::envelope_growth(distance, period, params.window_s, params.window_s, 1e-12);
+  // floor of 1e-12 m, or the sensor's noise floor, leaves out windows that have decayed into
+  // rounding or into what the sensor adds.
+  const double floor = std::max(1e-12, params.noise_floor_m);
+  const engine::GrowthFit growth = engine::envelope_growth(distance, period, params.window_s, params.window_s, floor);
   // A run that grew until the device's force limit held it (a limit cycle: its envelope flat, or
   // falling a little as it settles into the cycle) has not settled either: its last window stands
   // above its first, which holds the fall in from the surface.
   const auto first = std::max_element(distance.begin(), distance.begin() + static_cast<std::ptrdiff_t>(window));
   const auto last = std::max_element(distance.end() - static_cast<std::ptrdiff_t>(window), distance.end());
+  if (params.noise_floor_m > 0.0) {
+    // Measured through noise or a step, a run past the boundary grows into a limit cycle that the
+    // force limit holds, flat but for the sensor's jitter, and a fit's slope over it proves
+    // nothing; but it has grown: a wall that settles, starting at rest off its equilibrium,
+    // never strays farther than it started (and the sensor's floor). A run that ends inside the
+    // floor has settled, whatever its slope.
+    const double reach = *std::max_element(distance.begin() + static_cast<std::ptrdiff_t>(window), distance.end());
+    if (reach > 1.5 * distance.front() + params.noise_floor_m) return false;
+    if (*last <= params.noise_floor_m) return true;
+  }
   return growth.rate_per_s < 0.0 && *last < *first;
 }
 

@@ -27,6 +27,13 @@ struct DeviceWallParams {
   /// vector in W (an identification's direction).
   engine::Vec3 direction{1.0, 0.0, 0.0};
   double push_n = 0.5;     // the force pressing into the wall. Unit: N. > 0.
+  /// A device measured with noise or quantization: distances from the equilibrium at or under
+  /// this are the sensor's, not the wall's, and count as settled. Unit: m. >= 0.
+  double noise_floor_m = 0.0;
+  /// When > 0, the push is K times this instead (at most push_n): the equilibrium this far
+  /// inside the wall at every K, so that the fall in stands above the noise floor however stiff
+  /// the wall. Unit: m.
+  double penetration_m = 0.0;
   double seconds = 3.0;    // each run. Unit: s.
   double window_s = 0.1;   // the envelope's windows (the first, the fall in, left out). Unit: s.
 };

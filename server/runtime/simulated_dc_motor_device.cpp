@@ -21,11 +21,15 @@ SimulatedDcMotorDevice::SimulatedDcMotorDevice(const engine::DcMotorParams& para
   description_.workspace_min = {-params.l, -params.l, 0.0};
   description_.workspace_max = {params.l, params.l, 0.0};
   description_.max_force = max_force;
-  // Along the link's tangent: the tool speed is l r θ̇_m, so J_eff θ̇_m² / 2 = m v² / 2 gives
-  // m = J_eff / (l r)², and the motor's damping B (with the back-EMF) reflects the same way.
+  // Along the link's tangent: the tool speed is l r θ̇_m, and a force F there reaches the motor
+  // through the gearbox as (r / η) l F (eq. 3.8's load, and DcMotorModel's command the same way),
+  // so J_eff θ̈_m = (r / η) l F gives the tool's acceleration (l r)² F / (η J_eff):
+  // m = η J_eff / (l r)², and the motor's damping B (with the back-EMF) reflects the same way.
+  // (The energy argument J_eff θ̇_m² / 2 = m v² / 2 would give J_eff / (l r)², 1/η too much: the
+  // gearbox's loss is no inertia, but it scales every force that crosses it.)
   const double arm = params.l * params.r;
-  description_.apparent_mass = params.J_eff() / (arm * arm);
-  description_.apparent_damping = params.B() / (arm * arm);
+  description_.apparent_mass = params.eta * params.J_eff() / (arm * arm);
+  description_.apparent_damping = params.eta * params.B() / (arm * arm);
   description_.simulated = true;
 }
 

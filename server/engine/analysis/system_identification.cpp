@@ -93,17 +93,23 @@ class Fitter {
   std::size_t periods() const { return periods_; }
   const std::vector<double>& raw_window() const { return raw_; }
 
-  /// What the periods disagree on, after the trend: the noise's rms. Unit: m.
+  /// The noise's rms: what consecutive periods disagree on, d[n] = x_p[n] − x_(p−1)[n], with its
+  /// smooth part taken out by the second difference in time. On white noise of rms σ, d has
+  /// variance 2σ² and d[n+1] − 2d[n] + d[n−1] six times that, 12σ²; a transient still decaying
+  /// (a light device's, m/b of a second) or a drift changes d slowly and leaves it almost nothing,
+  /// where the plain disagreement between periods would count it as noise. Unit: m.
   double noise_rms() const {
-    const std::vector<double> mean = average(position_, std::nullopt);
     double sum = 0.0;
-    for (std::size_t p = 0; p < periods_; ++p) {
-      for (std::size_t n = 0; n < n_; ++n) {
-        const double d = position_[p * n_ + n] - mean[n];
-        sum += d * d;
+    std::size_t count = 0;
+    for (std::size_t p = 1; p < periods_; ++p) {
+      const auto d = [&](std::size_t n) { return position_[p * n_ + n] - position_[(p - 1) * n_ + n]; };
+      for (std::size_t n = 1; n + 1 < n_; ++n) {
+        const double second = d(n + 1) - 2.0 * d(n) + d(n - 1);
+        sum += second * second;
+        ++count;
       }
     }
-    return std::sqrt(sum / (static_cast<double>(periods_ - 1) * static_cast<double>(n_)));
+    return count > 0 ? std::sqrt(sum / (12.0 * static_cast<double>(count))) : 0.0;
   }
 
   /// The fit of (1) to the average of every period but `left_out` (none: all of them).

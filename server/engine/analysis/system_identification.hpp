@@ -92,7 +92,8 @@ struct AxisIdentification {
   Estimate delay;
   double coulomb_positive = 0.0;  // c + f0: the force to move the axis +. Unit: N.
   double coulomb_negative = 0.0;  // c − f0: the force to move it −. Unit: N.
-  /// The measurement's noise: the rms of what the periods disagree on. Unit: m.
+  /// The measurement's noise: the rms of what consecutive periods disagree on, its smooth part
+  /// (a transient, a drift) left out by a second difference in time. Unit: m.
   double noise_rms_m = 0.0;
   /// The positions' quantization step where they lie on a lattice (an encoder along the axis);
   /// none where they do not (a nonlinear map from quantized joints, or noise). Unit: m.

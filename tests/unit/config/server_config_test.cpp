@@ -119,6 +119,17 @@ TEST(Config, BadValuesAreRejectedNamingTheField) {
                 .find("simulated_point_mass.sensor.quantization_m"),
             std::string::npos);
   EXPECT_EQ(error_of(R"({"simulated_point_mass": {"sensor": {"noise_m": 1e-6, "quantization_m": 1e-6}}})"), "");
+  // A simulated device's encoders: one value or one per joint, each finite in [0, 0.1].
+  EXPECT_NE(error_of(R"({"simulated_joystick": {"encoders": {"quantization": [1e-4, 1e-4]}}})")
+                .find("simulated_joystick.encoders.quantization: give one value for every joint or one per joint (3), got 2"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_parallel_dob": {"encoders": {"noise": [1e-5, -1e-5]}}})")
+                .find("simulated_parallel_dob.encoders.noise[1]: must be finite and in [0, 0.1]"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_dc_motor": {"encoders": {"quantization": [0.5]}}})")
+                .find("simulated_dc_motor.encoders.quantization[0]"),
+            std::string::npos);
+  EXPECT_EQ(error_of(R"({"simulated_joystick": {"encoders": {"quantization": [3.835e-4, 3.835e-4, 1e-3], "noise": [1e-5]}}})"), "");
   // A driver port's measured profile: each axis's mass > 0, damping >= 0, the delay in [0, 0.1] s.
   const std::string driver = R"({"driver": {"library": "x.so", "profile": )";
   EXPECT_NE(error_of(driver + R"({"apparent_mass": {"x": 0.1, "y": 0, "z": 0.1}}}})")

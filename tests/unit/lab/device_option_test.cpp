@@ -68,8 +68,10 @@ TEST(LabDeviceModel, TheJoysticksLightestUndampedAxisIsAGimbalAxis) {
 TEST(LabDeviceModel, TheDcMotorGivesItsReflectedInertia_Eq3_10) {
   const DeviceModel m = model_of(R"({"simulated_dc_motor": {}})");
   EXPECT_EQ(m.method, "description");
-  EXPECT_NEAR(m.mass, 0.107574, 1e-6);
-  EXPECT_NEAR(m.damping, 7.8675, 1e-4);
+  // η J_eff / (l r)²: J_eff of eq. 3.10 alone gives 0.107574 kg; a force crossing the gearbox
+  // reaches the motor as (r / η) l F (eq. 3.8), so the tool feels η of it.
+  EXPECT_NEAR(m.mass, 0.9 * 0.107574, 1e-6);
+  EXPECT_NEAR(m.damping, 0.9 * 7.8675, 1e-4);
 }
 
 TEST(LabDeviceModel, AnInvalidConfigurationIsRefusedNamingTheFileAndField) {
