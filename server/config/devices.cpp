@@ -65,10 +65,14 @@ std::string check_substeps(const std::string& device, const DeviceConfig& config
   return {};
 }
 
-/// A device's encoders (`path`: "simulated_dc_motor.encoders"): noise and step lists of one value
-/// or one per joint (`joints`), each finite in [0, 0.1] in the joint's unit.
-std::string validate_encoders(const v1::SimulatedEncoderConfig& encoders, std::size_t joints, const std::string& path) {
-  for (const auto& [values, name] : {std::pair{&encoders.noise(), "noise"}, std::pair{&encoders.quantization(), "quantization"}}) {
+/// `config`'s encoders, where it sets them (`device`: "simulated_dc_motor"): noise and step lists of
+/// one value or one per joint (`joints`), each finite in [0, 0.1] in the joint's unit.
+template <typename DeviceConfig>
+std::string validate_encoders(const DeviceConfig& config, std::size_t joints, const std::string& device) {
+  if (!config.has_encoders()) return {};
+  const std::string path = device + ".encoders";
+  for (const auto& [values, name] : {std::pair{&config.encoders().noise(), "noise"},
+                                     std::pair{&config.encoders().quantization(), "quantization"}}) {
     if (values->size() > 1 && static_cast<std::size_t>(values->size()) != joints) {
       return path + "." + name + ": give one value for every joint or one per joint (" + std::to_string(joints) +
              "), got " + std::to_string(values->size());
@@ -106,8 +110,7 @@ std::string validate_dc_motor(const v1::SimulatedDcMotorConfig& motor) {
   if (!std::isfinite(motor.max_force()) || motor.max_force() < 0.0 || motor.max_force() > 1e3) {
     return "simulated_dc_motor.max_force: must be 0 (default) to 1000";
   }
-  if (motor.has_encoders()) return validate_encoders(motor.encoders(), 1, "simulated_dc_motor.encoders");
-  return {};
+  return validate_encoders(motor, 1, "simulated_dc_motor");
 }
 
 /// The checks every simulated device's integrator and force limit share.
@@ -193,9 +196,7 @@ std::string validate_joystick(const v1::SimulatedJoystickConfig& joystick) {
       !error.empty()) {
     return error;
   }
-  if (joystick.has_encoders()) {
-    if (auto error = validate_encoders(joystick.encoders(), 3, "simulated_joystick.encoders"); !error.empty()) return error;
-  }
+  if (auto error = validate_encoders(joystick, 3, "simulated_joystick"); !error.empty()) return error;
   if (joystick.has_rearm_after_s() && !std::isfinite(joystick.rearm_after_s())) {
     return "simulated_joystick.rearm_after_s: must be finite";
   }
@@ -213,9 +214,7 @@ std::string validate_parallel_dob(const v1::SimulatedParallelDobConfig& dob, dou
       !error.empty()) {
     return error;
   }
-  if (dob.has_encoders()) {
-    if (auto error = validate_encoders(dob.encoders(), 2, "simulated_parallel_dob.encoders"); !error.empty()) return error;
-  }
+  if (auto error = validate_encoders(dob, 2, "simulated_parallel_dob"); !error.empty()) return error;
   if (!std::isfinite(dob.cutoff_hz()) || dob.cutoff_hz() < 0.0 || dob.cutoff_hz() >= rate / 2.0) {
     return "simulated_parallel_dob.cutoff_hz: must be 0 (default) or below half the loop rate (" +
            std::to_string(rate / 2.0) + " Hz), got " + std::to_string(dob.cutoff_hz());
@@ -417,11 +416,12 @@ PortDevice simulated(std::unique_ptr<runtime::SimulatedDevice> device,
   return {std::move(device), std::move(model), raw, nullptr};
 }
 
-/// `port`'s device read through `encoders` (validated) where the configuration sets them; the
-/// simulated device's plant and operator stay reachable through port.simulated.
-PortDevice through_encoders(PortDevice port, bool has_encoders, const v1::SimulatedEncoderConfig& encoders,
-                            double loop_rate_hz) {
-  if (!has_encoders) return port;
+/// `port`'s device read through `config`'s encoders (validated) where it sets them; the simulated
+/// device's plant and operator stay reachable through port.simulated.
+template <typename DeviceConfig>
+PortDevice through_encoders(PortDevice port, const DeviceConfig& config, double loop_rate_hz) {
+  if (!config.has_encoders()) return port;
+  const v1::SimulatedEncoderConfig& encoders = config.encoders();
   runtime::EncoderOptions options;
   for (std::size_t i = 0; i < runtime::kMaxJoints; ++i) {
     const auto value = [i](const google::protobuf::RepeatedField<double>& values) {
@@ -482,7 +482,7 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
           integration_settings(motor.integrator(), motor.substeps(), 10));
       const bool gravity = device->description().capabilities.gravity;
       return through_encoders(simulated(std::move(device), std::make_unique<runtime::DcMotorModel>(params, gravity)),
-                              motor.has_encoders(), motor.encoders(), loop_rate_hz);
+                              motor, loop_rate_hz);
     }
     case v1::DeviceConfig::kSimulatedFiveBar: {
       const auto& five_bar = config.simulated_five_bar();
@@ -506,8 +506,7 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
       const runtime::SimulatedJoystickConfig joystick = joystick_config(config.simulated_joystick());
       return through_encoders(simulated(std::make_unique<runtime::SimulatedJoystickDevice>(joystick),
                                         std::make_unique<runtime::JoystickModel>(joystick.model())),
-                              config.simulated_joystick().has_encoders(), config.simulated_joystick().encoders(),
-                              loop_rate_hz);
+                              config.simulated_joystick(), loop_rate_hz);
     }
     case v1::DeviceConfig::kSimulatedParallelDob: {
       const auto& dob = config.simulated_parallel_dob();
@@ -520,7 +519,7 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
                         plant, initial, dob.max_force() > 0.0 ? dob.max_force() : 10.0, observer_enabled,
                         observer.nominal_mass, observer.nominal_damping),
                     std::make_unique<runtime::ParallelDobModel>(plant, observer, initial, observer_enabled)),
-          dob.has_encoders(), dob.encoders(), loop_rate_hz);
+          dob, loop_rate_hz);
     }
     case v1::DeviceConfig::kSimulatedPointMass:
     case v1::DeviceConfig::DEVICE_NOT_SET:

@@ -221,13 +221,13 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
   // A sensor with noise or a step: a run that ends within five steps of the equilibrium has
   // settled. With quantization a stable wall still rocks by a step or two about its equilibrium
   // (Diolaiti et al. 2006's limit cycles), while a wall past its Z-width grows to tens of steps.
-  // The step is the lattice's where one was found, else √12 times the noise's rms (what a step q
-  // alone gives: q/√12; on Gaussian noise, 17σ, above any window's largest draw). The push holds
+  // The step is the lattice's where one was found, or √12 times the noise's rms where that is
+  // more (what a step q alone gives: q/√12; on Gaussian noise, 17σ, above any window's largest
+  // draw). Noise under a nanometre is the simulation's rounding, not a sensor's. The push holds
   // the equilibrium four floors inside the wall at every K, up to twice the excitation's peak (a
   // force the device took in free motion).
   if (result.fit.noise_rms_m > 1e-9 || result.fit.quantization_m) {
-    const double step = result.fit.quantization_m.value_or(std::sqrt(12.0) * result.fit.noise_rms_m);
-    wall.noise_floor_m = 5.0 * std::max(step, std::sqrt(12.0) * result.fit.noise_rms_m);
+    wall.noise_floor_m = 5.0 * std::max(result.fit.quantization_m.value_or(0.0), std::sqrt(12.0) * result.fit.noise_rms_m);
     wall.penetration_m = 4.0 * wall.noise_floor_m;
     wall.push_n = std::max(wall.push_n, 2.0 * params.signal.amplitude_n);
   }

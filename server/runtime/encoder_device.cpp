@@ -12,9 +12,9 @@ EncoderDevice::EncoderDevice(std::unique_ptr<Device> inner, const EncoderOptions
 DeviceStatus EncoderDevice::read(DeviceReading& reading) {
   const DeviceStatus status = inner_->read(reading);
   if (status != DeviceStatus::kOk) return status;
-  const JointVector rates = reading.q_dot;
-  encoder_.read(reading.q, reading.q_dot, description_.joints, options_.period_s);
-  if (options_.tachometers) reading.q_dot = rates;
+  // With tachometers the device's own rates stay; the difference goes nowhere.
+  JointVector differenced;
+  encoder_.read(reading.q, options_.tachometers ? differenced : reading.q_dot, description_.joints, options_.period_s);
   return status;
 }
 

@@ -432,6 +432,20 @@ int open_from(std::uint16_t port, const char* source) {
   return connection.read_reply().status;
 }
 
+/// The six flooding hosts, 127.0.0.2 to .7.
+const std::vector<std::string> kFlooders{"127.0.0.2", "127.0.0.3", "127.0.0.4",
+                                        "127.0.0.5", "127.0.0.6", "127.0.0.7"};
+
+/// 300 connections to `port` from the flooding hosts in turn that never say a word.
+std::vector<std::unique_ptr<test::HttpConnection>> silent_flood(std::uint16_t port) {
+  std::vector<std::unique_ptr<test::HttpConnection>> flood;
+  for (int i = 0; i < 300; ++i) {
+    flood.push_back(std::make_unique<test::HttpConnection>(
+        port, kFlooders[static_cast<std::size_t>(i) % kFlooders.size()].c_str()));
+  }
+  return flood;
+}
+
 /// From now, each of `hosts` in turn asked with `served` until it is served or 2 s have passed
 /// since the start (a host never served fails the test, naming it); the seconds until the last
 /// was served.
@@ -456,13 +470,7 @@ TEST(HttpFace, SixHostsFloodingSilentConnectionsLeaveAnotherHostServedAndEachSer
   test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0",
       "max_sessions": 64, "max_sessions_per_peer": 64, "session_open_burst_per_peer": 64)"), {}, 256);
   const std::uint16_t port = server.http_port();
-  const std::vector<std::string> flooders{"127.0.0.2", "127.0.0.3", "127.0.0.4",
-                                          "127.0.0.5", "127.0.0.6", "127.0.0.7"};
-  std::vector<std::unique_ptr<test::HttpConnection>> flood;
-  for (int i = 0; i < 300; ++i) {
-    flood.push_back(std::make_unique<test::HttpConnection>(
-        port, flooders[static_cast<std::size_t>(i) % flooders.size()].c_str()));
-  }
+  std::vector<std::unique_ptr<test::HttpConnection>> flood = silent_flood(port);
   auto stub = v1::Haptic::NewStub(grpc::CreateChannel(server.address(), grpc::InsecureChannelCredentials()));
   int calls = 0, answered = 0, grpc_calls = 0, grpc_answered = 0;
   const auto flood_until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
@@ -485,7 +493,7 @@ TEST(HttpFace, SixHostsFloodingSilentConnectionsLeaveAnotherHostServedAndEachSer
   EXPECT_EQ(grpc_answered, grpc_calls);
   flood.clear();
   const double slowest_s =
-      seconds_until_each_is_served(flooders, [&](const std::string& host) { return open_from(port, host.c_str()) == 200; });
+      seconds_until_each_is_served(kFlooders, [&](const std::string& host) { return open_from(port, host.c_str()) == 200; });
   std::printf("  after it: every flooding host served within %.3f s\n", slowest_s);
   EXPECT_LE(slowest_s, 1.0);
 }
@@ -655,13 +663,7 @@ TEST(HttpFace, OverTlsAFloodFromSixHostsAndASlowlorisLeaveAnotherHostServed) {
   const std::uint16_t port = server.http_port();
   std::string why;
   ASSERT_EQ(https_call(port, "OpenSession", open_body("before"), false, why), 200) << why;
-  const std::vector<std::string> flooders{"127.0.0.2", "127.0.0.3", "127.0.0.4",
-                                          "127.0.0.5", "127.0.0.6", "127.0.0.7"};
-  std::vector<std::unique_ptr<test::HttpConnection>> flood;
-  for (int i = 0; i < 300; ++i) {
-    flood.push_back(std::make_unique<test::HttpConnection>(
-        port, flooders[static_cast<std::size_t>(i) % flooders.size()].c_str()));
-  }
+  std::vector<std::unique_ptr<test::HttpConnection>> flood = silent_flood(port);
   // A TLS 1.2 record header and the start of a ClientHello, then padding: never complete.
   std::optional<Slowloris> slowloris;
   slowloris.emplace(port, "127.0.0.8", 32,
@@ -682,7 +684,7 @@ TEST(HttpFace, OverTlsAFloodFromSixHostsAndASlowlorisLeaveAnotherHostServed) {
   EXPECT_EQ(answered, calls);
   slowloris.reset();
   flood.clear();
-  const double slowest_s = seconds_until_each_is_served(flooders, [&](const std::string& host) {
+  const double slowest_s = seconds_until_each_is_served(kFlooders, [&](const std::string& host) {
     return https_call(port, "OpenSession", open_body("after"), false, why, nullptr, host.c_str()) == 200;
   });
   std::printf("  after it: every flooding host served over HTTPS within %.3f s\n", slowest_s);

@@ -56,10 +56,6 @@ class PositionSensor {
   bool have_last_ = false;
 };
 
-}  // namespace haptic::engine
-
-namespace haptic::engine {
-
 /// The same sensor on a device's joints (docs/identification.md): per joint, noise and a step in
 /// the joint's own unit (rad for a revolute joint, m for a prismatic one), for a device that
 /// reports joint angles rather than a position in W. N is the largest joint count.
