@@ -23,7 +23,8 @@ const char* axis_name(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"
 
 /// The direction the tool moves in when the simulated operator pushes it along `axis` for 50 ms
 /// with `force_n` from rest: the displacement's, normalised. Throws where it does not move.
-engine::Vec3 direction_of_motion(const v1::ServerConfig& config, std::uint32_t port, int axis, double force_n) {
+engine::Vec3 direction_of_motion(const v1::ServerConfig& config, std::uint32_t port, int axis, double force_n,
+                                 const DeviceClock& step_device) {
   v1::ServerConfig probe = config;
   v1::OperatorInput* push = probe.mutable_initial_operator();
   push->Clear();
@@ -40,7 +41,7 @@ engine::Vec3 direction_of_motion(const v1::ServerConfig& config, std::uint32_t p
     started = true;
     last = r.sample.p_WT;
     return true;
-  });
+  }, {}, step_device);
   const engine::Vec3 moved = last - first;
   if (!(engine::norm(moved) > 0.0)) {
     throw std::invalid_argument("along the motion: pushed along " + std::string(axis_name(axis)) + " with " +
@@ -70,7 +71,7 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
   if (!multisine) throw std::invalid_argument(why);
   engine::Vec3 axis_W{};
   (params.axis == 0 ? axis_W.x : params.axis == 1 ? axis_W.y : axis_W.z) = 1.0;
-  if (params.along_motion) axis_W = direction_of_motion(config, params.port, params.axis, signal.amplitude_n);
+  if (params.along_motion) axis_W = direction_of_motion(config, params.port, params.axis, signal.amplitude_n, params.step_device);
   result.direction = axis_W;
   runtime::ExcitationStage stage(*multisine, axis_W, params.limits);
 
@@ -93,7 +94,8 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
         if (params.port >= ports.size()) return;
         ports[params.port].excitation = &stage;
         port_found = true;
-      });
+      },
+      params.step_device);
   if (!port_found) {
     throw std::invalid_argument("port: " + std::to_string(params.port) + " is not one of the configuration's ports");
   }
@@ -218,6 +220,7 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
   DeviceWallParams wall;
   wall.port = params.port;
   wall.direction = result.direction;
+  wall.step_device = params.step_device;
   // A sensor with noise or a step: a run that ends within five steps of the equilibrium has
   // settled. With quantization a stable wall still rocks by a step or two about its equilibrium
   // (Diolaiti et al. 2006's limit cycles), while a wall past its Z-width grows to tens of steps.

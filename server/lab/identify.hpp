@@ -17,6 +17,7 @@
 #include "engine/core/vec3.hpp"
 #include "haptic/v1/config.pb.h"
 #include "lab/device_model.hpp"
+#include "lab/lab_run.hpp"
 #include "runtime/excitation_stage.hpp"
 
 namespace haptic::lab {
@@ -32,6 +33,9 @@ struct IdentifyParams {
   /// The multisine; its sample_period_s is the configuration's loop period (set by identify).
   engine::MultisineParams signal;
   runtime::ExcitationLimits limits;
+  /// A device that keeps its own clock, stepped once a tick (lab_run's DeviceClock): every run
+  /// of the identification and of its Z-width check passes it on.
+  DeviceClock step_device;
 };
 
 struct IdentifyResult {

@@ -59,7 +59,7 @@ JointState plant_joints(const runtime::SimulatedDevice* device) {
 }  // namespace
 
 RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, const TickCallback& on_tick,
-                          const PortsHook& adjust_ports) {
+                          const PortsHook& adjust_ports, const DeviceClock& step_device) {
   if (!(std::isfinite(duration_s) && duration_s > 0.0 && duration_s <= 3600.0)) {
     throw std::invalid_argument("duration: must be in (0, 3600] s, got " + std::to_string(duration_s));
   }
@@ -135,6 +135,7 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
     // The plants' state now is what this tick's reading sees (the tick advances them after).
     for (std::uint32_t p = 0; p < ports; ++p) joints[p] = plant_joints(devices[p].simulated);
     const auto time_ns = static_cast<std::int64_t>(std::llround(static_cast<double>(k - 1) * period_s * 1e9));
+    if (step_device) step_device();
     runner.run(k, time_ns);
     summary.ticks = k;
     for (std::uint32_t p = 0; p < ports; ++p) {

@@ -59,6 +59,12 @@ using TickCallback = std::function<bool(const TickRecord&)>;
 /// no configuration holds (an identification's excitation stage).
 using PortsHook = std::function<void(std::vector<runtime::TickPort>& ports)>;
 
+/// Steps the clock of a device that keeps its own (a vendor runtime whose servo thread a stand-in
+/// runs on a manual clock): called once before each tick's reading, so that one servo tick passes
+/// per loop tick, as on the bench where both run at the loop's rate. Empty: every device's time is
+/// the loop's (simulated devices, drivers whose runtime steps per command).
+using DeviceClock = std::function<void()>;
+
 /// Runs `config` (validated; its time mode is ignored: the run is always lockstep) for
 /// llround(duration_s · loop rate) ticks and reports every tick of every port to `on_tick`.
 /// Energy: trapezoidal on P = F_T_W · v_WT between ticks; positive work adds to the energy given
@@ -66,7 +72,7 @@ using PortsHook = std::function<void(std::vector<runtime::TickPort>& ports)>;
 /// Throws std::invalid_argument naming what is wrong before any work starts; a run that goes
 /// unstable returns normally (summary.finite false, fault_ticks counted).
 RunSummary simulate_scene(const v1::ServerConfig& config, double duration_s, const TickCallback& on_tick,
-                          const PortsHook& adjust_ports = {});
+                          const PortsHook& adjust_ports = {}, const DeviceClock& step_device = {});
 
 /// simulate_scene with one CSV row per tick and port written to `trace`:
 ///   port, tick, time_s (s), x_m y_m z_m (p_WT, m), vx_m_s vy_m_s vz_m_s (v_WT, m/s),

@@ -18,6 +18,9 @@
 #ifdef HAPLY_DRIVER
 #include "driver/standins/fake_haply_service.hpp"
 #endif
+#ifdef OPENHAPTICS_DRIVER
+#include "driver/driver_test_support.hpp"
+#endif
 
 namespace haptic::lab {
 namespace {
@@ -246,6 +249,34 @@ TEST(LabIdentify, TheForceDimensionStandInIsItsPlantAndPredictsItsZWidth) {
   EXPECT_FALSE(id.model_mass) << "the driver reports no mass: " << id.model_method;
   EXPECT_LT(predicted_against_measured(config, params, {1.0, 5.0, 20.0}), 0.10);
   unsetenv("FAKE_DHD_DEVICES");
+}
+#endif
+
+#ifdef OPENHAPTICS_DRIVER
+TEST(LabIdentify, TheOpenHapticsStandInIsItsPlantWithItsServoTicksDelayAndPredictsItsZWidth) {
+  // A Touch through the OpenHaptics driver, server-clocked, and the HD runtime's stand-in on its
+  // manual clock, stepped one servo tick before each loop tick as the two run side by side at
+  // 1 kHz on the bench. Its plant (0.05 kg, 0.5 N·s/m, tests/driver/standins/README.md) is the
+  // truth; the servo frame takes the state before the force hapticd just wrote goes out, so the
+  // device's delay is one tick more than a driver that steps per command (the identification
+  // must find it, and the Z-width depends on it).
+  setenv("FAKE_HD_DEVICES", "Default Device=Touch", 1);
+  setenv("FAKE_HD_CLOCK", "manual", 1);
+  const runtime::test::StandinLibrary standin(FAKE_OPENHAPTICS_LIBRARY, "fake_hd");
+  const v1::ServerConfig config = config::parse_config(R"({"time_mode": "LOCKSTEP",
+      "driver": {"library": ")" OPENHAPTICS_DRIVER R"(", "call_timeout_ms": 0,
+                 "params": {"library": ")" FAKE_OPENHAPTICS_LIBRARY R"("}}})", "test");
+  IdentifyParams params = light_excitation(0.05);
+  params.axis = 2;  // W's z, the HD frame's y (up)
+  params.step_device = [&standin] { standin.control("tick 1"); };
+  const IdentifyResult id = identify(config, params, "test");
+  std::printf("%s", identify_report(id, params, "test").c_str());
+  EXPECT_NEAR(id.fit.mass.value, 0.05, 0.01 * 0.05);
+  EXPECT_NEAR(id.fit.damping.value, 0.5, 0.01 * 0.5);
+  EXPECT_NEAR(id.fit.delay.value, 1.5e-3, 0.05e-3) << "the hold's half tick and the servo frame's whole one";
+  EXPECT_LT(predicted_against_measured(config, params, id, {0.5, 2.0, 5.0}), 0.10);
+  unsetenv("FAKE_HD_CLOCK");
+  unsetenv("FAKE_HD_DEVICES");
 }
 #endif
 
