@@ -15,7 +15,7 @@ namespace haptic::lab {
 namespace {
 
 /// Where the tool starts on `port`: the first tick's reading.
-engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port, const DeviceClock& step_device) {
+engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port, const DeviceTime& device_time) {
   engine::Vec3 start{};
   bool found = false;
   simulate_scene(config, 1.0 / config.loop_rate_hz(), [&](const TickRecord& r) {
@@ -24,7 +24,7 @@ engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port, 
       found = true;
     }
     return true;
-  }, {}, step_device);
+  }, {}, device_time);
   if (!found) throw std::invalid_argument("port: " + std::to_string(port) + " is not one of the configuration's ports");
   return start;
 }
@@ -42,7 +42,7 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
   v1::ServerConfig config = given;
   config::fill_defaults(config);
   if (auto e = config::validate(config); !e.empty()) throw std::invalid_argument(e);
-  const engine::Vec3 start = start_position(config, params.port, params.step_device);
+  const engine::Vec3 start = start_position(config, params.port, params.device_time);
   // The wall: the plane through the start, outward along +axis; its law the sampled analysis's.
   config.mutable_initial_scene()->clear_objects();
   config.mutable_initial_scene()->clear_fields();
@@ -77,7 +77,7 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
     finite = finite && std::isfinite(x);
     distance.push_back(std::abs(x - equilibrium));
     return finite;
-  }, {}, params.step_device);
+  }, {}, params.device_time);
   if (!finite || distance.size() < 4 * window) return false;
   // The envelope's growth from the first window on (engine/analysis/growth): a run near the
   // boundary decays or grows slowly, and only its rate's sign tells which side it is on. A

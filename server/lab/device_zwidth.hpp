@@ -37,7 +37,7 @@ struct DeviceWallParams {
   double penetration_m = 0.0;
   double seconds = 3.0;    // each run. Unit: s.
   double window_s = 0.1;   // the envelope's windows (the first, the fall in, left out). Unit: s.
-  DeviceClock step_device;  // a device that keeps its own clock, stepped once a tick (lab_run)
+  DeviceTime device_time;  // how the device's time passes (lab_run)
 };
 
 /// Whether a wall (K N/m, B N·s/m) on the device settles, as above. Throws std::invalid_argument

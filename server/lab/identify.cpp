@@ -24,7 +24,7 @@ const char* axis_name(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"
 /// The direction the tool moves in when the simulated operator pushes it along `axis` for 50 ms
 /// with `force_n` from rest: the displacement's, normalised. Throws where it does not move.
 engine::Vec3 direction_of_motion(const v1::ServerConfig& config, std::uint32_t port, int axis, double force_n,
-                                 const DeviceClock& step_device) {
+                                 const DeviceTime& device_time) {
   v1::ServerConfig probe = config;
   v1::OperatorInput* push = probe.mutable_initial_operator();
   push->Clear();
@@ -41,7 +41,7 @@ engine::Vec3 direction_of_motion(const v1::ServerConfig& config, std::uint32_t p
     started = true;
     last = r.sample.p_WT;
     return true;
-  }, {}, step_device);
+  }, {}, device_time);
   const engine::Vec3 moved = last - first;
   if (!(engine::norm(moved) > 0.0)) {
     throw std::invalid_argument("along the motion: pushed along " + std::string(axis_name(axis)) + " with " +
@@ -71,7 +71,7 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
   if (!multisine) throw std::invalid_argument(why);
   engine::Vec3 axis_W{};
   (params.axis == 0 ? axis_W.x : params.axis == 1 ? axis_W.y : axis_W.z) = 1.0;
-  if (params.along_motion) axis_W = direction_of_motion(config, params.port, params.axis, signal.amplitude_n, params.step_device);
+  if (params.along_motion) axis_W = direction_of_motion(config, params.port, params.axis, signal.amplitude_n, params.device_time);
   result.direction = axis_W;
   runtime::ExcitationStage stage(*multisine, axis_W, params.limits);
 
@@ -82,7 +82,7 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
   force.reserve(ticks);
   position.reserve(ticks);
   bool port_found = false;
-  simulate_scene(
+  const RunSummary run = simulate_scene(
       config, static_cast<double>(ticks) / config.loop_rate_hz(),
       [&](const TickRecord& record) {
         if (record.port != params.port) return true;
@@ -95,11 +95,12 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
         ports[params.port].excitation = &stage;
         port_found = true;
       },
-      params.step_device);
+      params.device_time);
   if (!port_found) {
     throw std::invalid_argument("port: " + std::to_string(params.port) + " is not one of the configuration's ports");
   }
   result.start_position = stage.start_position();
+  result.late_ticks = run.late_ticks;
   if (stage.stop() != runtime::ExcitationStage::Stop::kNone) {
     std::ostringstream message;
     message << "the excitation stopped at tick " << stage.stop_tick() << ": the tool ";
@@ -142,8 +143,15 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
       << "\n\n"
       << "A multisine of " << f.response.size() << " harmonics from " << f.response.front().frequency_hz << " to "
       << f.response.back().frequency_hz << " Hz, " << s.amplitude_n << " N peak, " << f.periods
-      << " periods fitted; " << r.duration_s << " s of lockstep ticks at " << 1.0 / r.period_s << " Hz. Intervals: 95 %, "
-      << "delete-one-period jackknife.\n\n"
+      << " periods fitted; " << r.duration_s << " s of " << (params.device_time.real_time ? "real-time" : "lockstep")
+      << " ticks at " << 1.0 / r.period_s << " Hz. Intervals: 95 %, delete-one-period jackknife.\n\n";
+  if (r.late_ticks > 0) {
+    // A late tick held its force longer than the fit assumes: said first, where it is read.
+    out << "**" << r.late_ticks << " of " << std::llround(r.duration_s / r.period_s)
+        << " ticks started more than half a period late**: each held its force longer than the fit assumes. "
+           "Close other programs, give haptic-lab real-time priority (chrt -f 80), or lower the loop's rate.\n\n";
+  }
+  out
       << "| parameter | identified | 95 % interval | model | error |\n|---|---|---|---|---|\n";
   const auto row = [&](const char* name, const engine::Estimate& e, std::optional<double> model, const char* unit) {
     out << "| " << name << " (" << unit << ") | " << e.value << " | ± " << e.half_width_95 << " | ";
@@ -208,7 +216,8 @@ v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const Identif
 }
 
 std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const IdentifyParams& params,
-                                      const IdentifyResult& result, const std::vector<double>& dampings) {
+                                      const IdentifyResult& result, const std::vector<double>& dampings,
+                                      const std::function<void(std::size_t done, std::size_t total)>& progress) {
   const engine::MassDamperDevice model{result.fit.mass.value, result.fit.damping.value};
   if (!(model.mass > 0.0) || model.damping < 0.0) {
     throw std::invalid_argument("zwidth: the identified model is not a mass-damper (mass " +
@@ -220,7 +229,7 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
   DeviceWallParams wall;
   wall.port = params.port;
   wall.direction = result.direction;
-  wall.step_device = params.step_device;
+  wall.device_time = params.device_time;
   // A sensor with noise or a step: a run that ends within five steps of the equilibrium has
   // settled. With quantization a stable wall still rocks by a step or two about its equilibrium
   // (Diolaiti et al. 2006's limit cycles), while a wall past its Z-width grows to tens of steps.
@@ -249,6 +258,7 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
                             .max_stable_stiffness;
     }
     checks.push_back(check);
+    if (progress) progress(checks.size(), dampings.size());
   }
   return checks;
 }

@@ -33,9 +33,10 @@ struct IdentifyParams {
   /// The multisine; its sample_period_s is the configuration's loop period (set by identify).
   engine::MultisineParams signal;
   runtime::ExcitationLimits limits;
-  /// A device that keeps its own clock, stepped once a tick (lab_run's DeviceClock): every run
-  /// of the identification and of its Z-width check passes it on.
-  DeviceClock step_device;
+  /// How the device's time passes (lab_run's DeviceTime: its own clock stepped once a tick, or
+  /// the ticks paced in real time for hardware): every run of the identification and of its
+  /// Z-width check passes it on.
+  DeviceTime device_time;
 };
 
 struct IdentifyResult {
@@ -48,6 +49,9 @@ struct IdentifyResult {
   /// description, or the Jacobian at the initial pose): mass (kg), damping (N·s/m).
   std::optional<double> model_mass, model_damping;
   std::string model_method;      // "description", "jacobian" or why there is none
+  /// Paced in real time: the excitation's ticks that started more than half a period late (a
+  /// late tick holds its force longer than the fit assumes).
+  std::uint64_t late_ticks = 0;
 };
 
 /// Runs the excitation on `config`'s device (`source` names the configuration in messages) and
@@ -76,9 +80,11 @@ struct ZWidthCheck {
 };
 
 /// The check at each of `dampings` (the device's own boundary bisected from a guess of three
-/// times the prediction, so that its bracket is found rather than given).
+/// times the prediction, so that its bracket is found rather than given). `progress` after each
+/// damping's boundary: paced in real time each takes a minute or so (a dozen walls of 3 s).
 std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const IdentifyParams& params,
-                                      const IdentifyResult& result, const std::vector<double>& dampings);
+                                      const IdentifyResult& result, const std::vector<double>& dampings,
+                                      const std::function<void(std::size_t done, std::size_t total)>& progress = {});
 
 /// The checks as a markdown table, with each prediction's error against the measurement.
 std::string zwidth_report(const std::vector<ZWidthCheck>& checks);

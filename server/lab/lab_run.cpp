@@ -13,6 +13,7 @@
 #include "haptic/wire/datagram.hpp"
 #include "schema/scene_specs.hpp"
 #include "runtime/loop_stats.hpp"
+#include "runtime/realtime.hpp"
 #include "runtime/tick_runner.hpp"
 
 namespace haptic::lab {
@@ -59,7 +60,7 @@ JointState plant_joints(const runtime::SimulatedDevice* device) {
 }  // namespace
 
 RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, const TickCallback& on_tick,
-                          const PortsHook& adjust_ports, const DeviceClock& step_device) {
+                          const PortsHook& adjust_ports, const DeviceTime& device_time) {
   if (!(std::isfinite(duration_s) && duration_s > 0.0 && duration_s <= 3600.0)) {
     throw std::invalid_argument("duration: must be in (0, 3600] s, got " + std::to_string(duration_s));
   }
@@ -131,11 +132,20 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   std::vector<JointState> joints(ports);
   const auto ticks = static_cast<std::uint64_t>(std::llround(duration_s / period_s));
   bool go_on = true;
+  const auto period_ns = static_cast<std::int64_t>(std::llround(period_s * 1e9));
+  constexpr std::int64_t kSpinNs = 200'000;  // hapticd's default spin (RealTimeConfig.spin_us)
+  const std::int64_t start_ns = device_time.real_time ? runtime::monotonic_now_ns() + period_ns : 0;
   for (std::uint64_t k = 1; k <= ticks && go_on; ++k) {
+    if (device_time.real_time) {
+      const std::int64_t deadline = start_ns + static_cast<std::int64_t>(k - 1) * period_ns;
+      if (runtime::sleep_then_spin_until(deadline, std::min(kSpinNs, period_ns / 5)) > deadline + period_ns / 2) {
+        ++summary.late_ticks;
+      }
+    }
     // The plants' state now is what this tick's reading sees (the tick advances them after).
     for (std::uint32_t p = 0; p < ports; ++p) joints[p] = plant_joints(devices[p].simulated);
     const auto time_ns = static_cast<std::int64_t>(std::llround(static_cast<double>(k - 1) * period_s * 1e9));
-    if (step_device) step_device();
+    if (device_time.step_device) device_time.step_device();
     runner.run(k, time_ns);
     summary.ticks = k;
     for (std::uint32_t p = 0; p < ports; ++p) {

@@ -25,6 +25,8 @@ struct RunSummary {
   /// Every published state, and every device's joint state, was finite (the loop publishes the
   /// last good reading when a plant's state has become non-finite; its joints show it).
   bool finite = true;
+  /// Paced in real time (DeviceTime::real_time): ticks that started more than half a period late.
+  std::uint64_t late_ticks = 0;
 };
 
 /// A simulated device's joint state: the plant's true state (not what its sensors measure), at
@@ -59,11 +61,20 @@ using TickCallback = std::function<bool(const TickRecord&)>;
 /// no configuration holds (an identification's excitation stage).
 using PortsHook = std::function<void(std::vector<runtime::TickPort>& ports)>;
 
-/// Steps the clock of a device that keeps its own (a vendor runtime whose servo thread a stand-in
-/// runs on a manual clock): called once before each tick's reading, so that one servo tick passes
-/// per loop tick, as on the bench where both run at the loop's rate. Empty: every device's time is
-/// the loop's (simulated devices, drivers whose runtime steps per command).
-using DeviceClock = std::function<void()>;
+/// How the devices' time passes against the run's ticks. By default a tick runs as soon as the
+/// last has computed, and every device's time is the loop's: simulated devices, and drivers whose
+/// runtime steps per command (the Force Dimension and Haply stand-ins).
+struct DeviceTime {
+  /// Steps the clock of a device that keeps its own (a vendor runtime whose servo thread a
+  /// stand-in runs on a manual clock): called once before each tick's reading, so that one servo
+  /// tick passes per loop tick, as on the bench where both run at the loop's rate.
+  std::function<void()> step_device;
+  /// Paces the ticks at the loop's rate on CLOCK_MONOTONIC (absolute deadlines, sleep then spin,
+  /// as hapticd's loop does, without its real-time priority): for a device that lives in real
+  /// time, hardware behind a driver. A tick that starts more than half a period after its
+  /// deadline is counted (RunSummary::late_ticks), never skipped: the run's ticks stay whole.
+  bool real_time = false;
+};
 
 /// Runs `config` (validated; its time mode is ignored: the run is always lockstep) for
 /// llround(duration_s · loop rate) ticks and reports every tick of every port to `on_tick`.
@@ -72,7 +83,7 @@ using DeviceClock = std::function<void()>;
 /// Throws std::invalid_argument naming what is wrong before any work starts; a run that goes
 /// unstable returns normally (summary.finite false, fault_ticks counted).
 RunSummary simulate_scene(const v1::ServerConfig& config, double duration_s, const TickCallback& on_tick,
-                          const PortsHook& adjust_ports = {}, const DeviceClock& step_device = {});
+                          const PortsHook& adjust_ports = {}, const DeviceTime& device_time = {});
 
 /// simulate_scene with one CSV row per tick and port written to `trace`:
 ///   port, tick, time_s (s), x_m y_m z_m (p_WT, m), vx_m_s vy_m_s vz_m_s (v_WT, m/s),

@@ -230,6 +230,9 @@ Subcommand add_identify(CLI::App& cli) {
   app->add_flag("--along-motion", o->p.along_motion,
                 "excite along the direction the tool moves when pushed along --axis (a device whose tool moves "
                 "on a curve, 000's DC motor)");
+  app->add_flag("--real-time", o->p.device_time.real_time,
+                "pace the ticks at the loop's rate on the monotonic clock, for hardware behind a driver (the "
+                "default runs them as fast as they compute: simulated devices and stand-ins that step per command)");
   app->add_option("--amplitude", o->p.signal.amplitude_n, "the force's peak, N (default 1)");
   app->add_option("--f-min", o->p.signal.f_min_hz, "lowest excited frequency, Hz (default 2)");
   app->add_option("--f-max", o->p.signal.f_max_hz, "highest, Hz (default 40)");
@@ -297,7 +300,10 @@ Subcommand add_identify(CLI::App& cli) {
             }
             std::string report = haptic::lab::identify_report(result, o->p, o->device_path);
             if (!o->zwidth_dampings.empty()) {
-              report += haptic::lab::zwidth_report(haptic::lab::check_zwidth(config, o->p, result, o->zwidth_dampings));
+              haptic::lab::ProgressBar bar("haptic-lab identify --zwidth", true);
+              report += haptic::lab::zwidth_report(
+                  haptic::lab::check_zwidth(config, o->p, result, o->zwidth_dampings,
+                                            [&bar](std::size_t done, std::size_t total) { bar.update(done, total); }));
             }
             if (o->markdown_path.empty()) {
               std::cout << report;

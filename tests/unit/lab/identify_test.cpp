@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -284,6 +285,32 @@ TEST(LabIdentify, TheForceDimensionStandInIsItsPlantAndPredictsItsZWidth) {
   EXPECT_LT(predicted_against_measured(config, params, {1.0, 5.0, 20.0}), 0.10);
   unsetenv("FAKE_DHD_DEVICES");
 }
+
+TEST(LabIdentify, PacedInRealTimeTheRunTakesItsDurationAndTheStandInIsStillItsPlant) {
+  // --real-time, for hardware: the ticks wait for their deadlines on the monotonic clock. The
+  // stand-in steps its plant per command, so its figures do not depend on when the ticks ran and
+  // the run can be checked exactly on a loaded machine; what pacing adds is the run's wall time,
+  // never less than its ticks' (a sleep cannot end early), and the late ticks it counts.
+  setenv("FAKE_DHD_DEVICES", "omega.3", 1);
+  const v1::ServerConfig config = config::parse_config(R"({"time_mode": "LOCKSTEP",
+      "driver": {"library": ")" FORCEDIMENSION_DRIVER R"(", "call_timeout_ms": 0,
+                 "params": {"library": ")" FAKE_FORCEDIMENSION_LIBRARY R"("}}})", "test");
+  IdentifyParams params = light_excitation(0.2);
+  params.signal.periods = 4;
+  params.signal.samples_per_period = 512;
+  params.signal.f_min_hz = 4.0;
+  params.device_time.real_time = true;
+  const auto start = std::chrono::steady_clock::now();
+  const IdentifyResult id = identify(config, params, "test");
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_GE(wall_s, id.duration_s);
+  EXPECT_NEAR(id.fit.mass.value, 0.2, 0.01 * 0.2);
+  EXPECT_NEAR(id.fit.damping.value, 2.0, 0.01 * 2.0);
+  const std::string report = identify_report(id, params, "test");
+  EXPECT_NE(report.find("s of real-time ticks"), std::string::npos) << report;
+  EXPECT_EQ(report.find("ticks started more than half a period late") != std::string::npos, id.late_ticks > 0) << report;
+  unsetenv("FAKE_DHD_DEVICES");
+}
 #endif
 
 #ifdef OPENHAPTICS_DRIVER
@@ -302,7 +329,7 @@ TEST(LabIdentify, TheOpenHapticsStandInIsItsPlantWithItsServoTicksDelayAndPredic
                  "params": {"library": ")" FAKE_OPENHAPTICS_LIBRARY R"("}}})", "test");
   IdentifyParams params = light_excitation(0.05);
   params.axis = 2;  // W's z, the HD frame's y (up)
-  params.step_device = [&standin] { standin.control("tick 1"); };
+  params.device_time.step_device = [&standin] { standin.control("tick 1"); };
   const IdentifyResult id = identify(config, params, "test");
   std::printf("%s", identify_report(id, params, "test").c_str());
   EXPECT_NEAR(id.fit.mass.value, 0.05, 0.01 * 0.05);
