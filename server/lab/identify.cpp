@@ -113,7 +113,7 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
             << " Hz), which sets how far the lowest harmonic carries it";
     throw std::invalid_argument(message.str());
   }
-  const std::optional<engine::AxisIdentification> fit = engine::identify_axis(*multisine, force, position, why);
+  const std::optional<engine::AxisIdentification> fit = engine::identify_axis(*multisine, force, position, why, -1.0, params.max_lag_s);
   if (!fit) throw std::invalid_argument(why);
   result.fit = *fit;
   try {
@@ -168,6 +168,7 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
   row("Coulomb friction", f.coulomb, std::nullopt, "N");
   row("constant force", f.offset, std::nullopt, "N");
   row("delay", f.delay, std::nullopt, "s");
+  if (params.max_lag_s > 0.0) row("lag", f.lag, std::nullopt, "s");
   out << "\nFriction to move +: " << f.coulomb_positive << " N, −: " << f.coulomb_negative
       << " N. Delay beyond a perfect loop's (the hold's half tick): "
       << (f.delay.value - r.period_s / 2.0) * 1e3 << " ms (" << (f.delay.value - r.period_s / 2.0) / r.period_s
@@ -218,7 +219,8 @@ v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const Identif
 std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const IdentifyParams& params,
                                       const IdentifyResult& result, const std::vector<double>& dampings,
                                       const std::function<void(std::size_t done, std::size_t total)>& progress) {
-  const engine::MassDamperDevice model{result.fit.mass.value, result.fit.damping.value};
+  // The lag where one was fitted (0 otherwise): the analysis samples it exactly.
+  const engine::MassDamperDevice model{result.fit.mass.value, result.fit.damping.value, std::max(0.0, result.fit.lag.value)};
   if (!(model.mass > 0.0) || model.damping < 0.0) {
     throw std::invalid_argument("zwidth: the identified model is not a mass-damper (mass " +
                                 std::to_string(model.mass) + " kg, damping " + std::to_string(model.damping) +

@@ -32,6 +32,9 @@ struct IdentifyParams {
   bool along_motion = false;
   /// The multisine; its sample_period_s is the configuration's loop period (set by identify).
   engine::MultisineParams signal;
+  /// Also fit a first-order lag between the command and the force, up to this (an amplifier's
+  /// or a motor's time constant: 004's motors, 8.8 ms). Unit: s. 0: none (a pure delay only).
+  double max_lag_s = 0.0;
   runtime::ExcitationLimits limits;
   /// How the device's time passes (lab_run's DeviceTime: its own clock stepped once a tick, or
   /// the ticks paced in real time for hardware): every run of the identification and of its

@@ -234,6 +234,9 @@ Subcommand add_identify(CLI::App& cli) {
                 "pace the ticks at the loop's rate on the monotonic clock, for hardware behind a driver (the "
                 "default runs them as fast as they compute: simulated devices and stand-ins that step per command)");
   app->add_option("--amplitude", o->p.signal.amplitude_n, "the force's peak, N (default 1)");
+  app->add_option("--lag", o->p.max_lag_s,
+                  "also fit a first-order lag between the command and the force, up to this many s (a motor's "
+                  "or an amplifier's time constant; default 0: none)");
   app->add_option("--f-min", o->p.signal.f_min_hz, "lowest excited frequency, Hz (default 2)");
   app->add_option("--f-max", o->p.signal.f_max_hz, "highest, Hz (default 40)");
   app->add_option("--harmonics", o->p.signal.max_harmonics, "excited harmonics, log-spaced (default 24)");

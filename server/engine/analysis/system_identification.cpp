@@ -39,8 +39,8 @@ struct Spectrum {
 };
 
 struct Parameters {
-  double mass = 0, damping = 0, coulomb = 0, offset = 0, delay = 0;
-  double residual = 0;      // Σ_k |F_k e^{−jωτ} − model_k|²
+  double mass = 0, damping = 0, coulomb = 0, offset = 0, delay = 0, lag = 0;
+  double residual = 0;      // Σ_k |F_k e^{−jωτ} / (1 + jωτ_a) − model_k|²
   double force_power = 0;   // Σ_k |F_k|²
 };
 
@@ -112,8 +112,10 @@ class Fitter {
     return count > 0 ? std::sqrt(sum / (12.0 * static_cast<double>(count))) : 0.0;
   }
 
-  /// The fit of (1) to the average of every period but `left_out` (none: all of them).
-  std::optional<Parameters> fit(std::optional<std::size_t> left_out, double max_delay, std::string& why) const {
+  /// The fit of (1) to the average of every period but `left_out` (none: all of them), with a
+  /// lag τ_a searched over [0, max_lag] when max_lag > 0 (else none).
+  std::optional<Parameters> fit(std::optional<std::size_t> left_out, double max_delay, double max_lag,
+                                std::string& why) const {
     const Spectrum spectrum = spectrum_of(left_out);
     double motion = 0.0;
     for (const auto& x : spectrum.x) motion += std::norm(x);
@@ -122,43 +124,63 @@ class Fitter {
       why = "the axis did not move at the excited frequencies";
       return std::nullopt;
     }
-    // τ: a grid over [0, max_delay] (the residual has local minima a period of the highest
-    // harmonic apart), then golden-section search around the best point.
-    const std::size_t grid = 400;
-    double best_tau = 0.0, best = std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i <= grid; ++i) {
-      const double tau = max_delay * static_cast<double>(i) / static_cast<double>(grid);
-      const double r = solve(spectrum, tau).residual;
-      if (r < best) {
-        best = r;
-        best_tau = tau;
-      }
+    double lag = 0.0;
+    if (max_lag > 0.0) {
+      // τ_a: a grid over [0, max_lag], each point with its best τ (a lag and a delay trade
+      // against each other at low ωτ, so each lag is given its own), then the same search.
+      const auto at_lag = [&](double l) { return best_delay(spectrum, l, max_delay, 100); };
+      lag = minimise(at_lag, 0.0, max_lag, 40, 40).lag;
     }
-    double lo = std::max(0.0, best_tau - max_delay / grid), hi = std::min(max_delay, best_tau + max_delay / grid);
-    const double golden = (std::sqrt(5.0) - 1.0) / 2.0;
-    double a = hi - golden * (hi - lo), b = lo + golden * (hi - lo);
-    double ra = solve(spectrum, a).residual, rb = solve(spectrum, b).residual;
-    for (int i = 0; i < 60; ++i) {
-      if (ra < rb) {
-        hi = b;
-        b = a;
-        rb = ra;
-        a = hi - golden * (hi - lo);
-        ra = solve(spectrum, a).residual;
-      } else {
-        lo = a;
-        a = b;
-        ra = rb;
-        b = lo + golden * (hi - lo);
-        rb = solve(spectrum, b).residual;
-      }
-    }
-    Parameters result = solve(spectrum, 0.5 * (lo + hi));
+    Parameters result = best_delay(spectrum, lag, max_delay, 400);
     if (!std::isfinite(result.mass) || !std::isfinite(result.damping)) {
       why = "the fit is singular (an excitation too narrow to tell mass from damping?)";
       return std::nullopt;
     }
     return result;
+  }
+
+  /// The parameters minimising the residual of `at(v)` over v in [lo, hi]: a grid of `grid`
+  /// steps (the residual has local minima, for τ a period of the highest harmonic apart), then a
+  /// golden-section search of `refine` steps between the best point's neighbours.
+  template <typename At>
+  static Parameters minimise(const At& at, double lo_limit, double hi_limit, std::size_t grid, int refine) {
+    const double step = (hi_limit - lo_limit) / static_cast<double>(grid);
+    double best_v = lo_limit;
+    Parameters best = at(lo_limit);
+    for (std::size_t i = 1; i <= grid; ++i) {
+      const double v = lo_limit + step * static_cast<double>(i);
+      const Parameters p = at(v);
+      if (p.residual < best.residual) {
+        best = p;
+        best_v = v;
+      }
+    }
+    double lo = std::max(lo_limit, best_v - step), hi = std::min(hi_limit, best_v + step);
+    const double golden = (std::sqrt(5.0) - 1.0) / 2.0;
+    double a = hi - golden * (hi - lo), b = lo + golden * (hi - lo);
+    Parameters pa = at(a), pb = at(b);
+    for (int i = 0; i < refine; ++i) {
+      if (pa.residual < pb.residual) {
+        hi = b;
+        b = a;
+        pb = pa;
+        a = hi - golden * (hi - lo);
+        pa = at(a);
+      } else {
+        lo = a;
+        a = b;
+        pa = pb;
+        b = lo + golden * (hi - lo);
+        pb = at(b);
+      }
+    }
+    const Parameters middle = at(0.5 * (lo + hi));
+    return middle.residual <= best.residual ? middle : best;
+  }
+
+  /// τ in [0, max_delay] for a given lag.
+  static Parameters best_delay(const Spectrum& spectrum, double lag, double max_delay, std::size_t grid) {
+    return minimise([&](double tau) { return solve(spectrum, tau, lag); }, 0.0, max_delay, grid, 60);
   }
 
   /// The measured X/F at each harmonic of the full average.
@@ -253,15 +275,16 @@ class Fitter {
     return s;
   }
 
-  /// (m, b, c) by least squares at the harmonics for a given τ: H(ω) F_k e^{−jωτ} = (−mω² +
-  /// jbω) X_k + c S_k, real and imaginary parts stacked; f0 from the means. H(ω) = sin(ωT/2) /
-  /// (ωT/2) is the magnitude of the loop's zero-order hold (its phase, ωT/2, is part of τ).
-  static Parameters solve(const Spectrum& s, double tau) {
+  /// (m, b, c) by least squares at the harmonics for a given τ and τ_a: H(ω) F_k e^{−jωτ} /
+  /// (1 + jωτ_a) = (−mω² + jbω) X_k + c S_k, real and imaginary parts stacked; f0 from the means.
+  /// H(ω) = sin(ωT/2) / (ωT/2) is the magnitude of the loop's zero-order hold (its phase, ωT/2,
+  /// is part of τ).
+  static Parameters solve(const Spectrum& s, double tau, double lag) {
     double ata[3][3] = {}, atb[3] = {};
     double force_power = 0.0;
     for (std::size_t i = 0; i < s.x.size(); ++i) {
       const double w = s.omega[i];
-      const std::complex<double> target = s.f[i] * std::polar(s.hold[i], -w * tau);
+      const std::complex<double> target = s.f[i] * std::polar(s.hold[i], -w * tau) / std::complex<double>(1.0, w * lag);
       const std::array<std::complex<double>, 3> column = {-w * w * s.x[i], std::complex<double>(0.0, w) * s.x[i],
                                                           s.sign[i]};
       for (int part = 0; part < 2; ++part) {
@@ -310,12 +333,13 @@ class Fitter {
     p.coulomb = solution[2];
     p.offset = s.force_mean - p.damping * s.drift_velocity - p.coulomb * s.sign_mean;
     p.delay = tau;
+    p.lag = lag;
     p.force_power = force_power;
     for (std::size_t i = 0; i < s.x.size(); ++i) {
       const double w = s.omega[i];
       const std::complex<double> model =
           std::complex<double>(-p.mass * w * w, p.damping * w) * s.x[i] + p.coulomb * s.sign[i];
-      p.residual += std::norm(s.f[i] * std::polar(s.hold[i], -w * tau) - model);
+      p.residual += std::norm(s.f[i] * std::polar(s.hold[i], -w * tau) / std::complex<double>(1.0, w * lag) - model);
     }
     return p;
   }
@@ -422,7 +446,7 @@ std::optional<double> lattice_step(std::span<const double> values) {
 
 std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std::span<const double> force,
                                                 std::span<const double> position, std::string& why,
-                                                double max_delay_s) {
+                                                double max_delay_s, double max_lag_s) {
   const std::size_t needed = excitation.fit_begin_tick() + excitation.fit_ticks();
   if (force.size() < needed || position.size() < needed) {
     why = "identify: " + std::to_string(std::min(force.size(), position.size())) + " ticks recorded, the excitation's fit "
@@ -437,7 +461,11 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
   }
   const double max_delay = max_delay_s >= 0.0 ? max_delay_s : 20.0 * excitation.params.sample_period_s;
   const Fitter fitter(excitation, force, position);
-  const auto all = fitter.fit(std::nullopt, max_delay, why);
+  if (!(max_lag_s >= 0.0) || !std::isfinite(max_lag_s)) {
+    why = "identify: the lag's bound must be finite and >= 0 (0: no lag), got " + std::to_string(max_lag_s);
+    return std::nullopt;
+  }
+  const auto all = fitter.fit(std::nullopt, max_delay, max_lag_s, why);
   if (!all) return std::nullopt;
   // The delete-one-period jackknife (Efron & Tibshirani 1993, §11.2): each parameter refitted
   // with one period left out; its spread, times (P − 1)/P, is the estimate's variance.
@@ -445,7 +473,7 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
   std::vector<Parameters> leave_one_out;
   for (std::size_t i = 0; i < p; ++i) {
     std::string ignored;
-    const auto fit = fitter.fit(i, max_delay, ignored);
+    const auto fit = fitter.fit(i, max_delay, max_lag_s, ignored);
     if (!fit) {
       why = "identify: the fit without period " + std::to_string(i) + " failed: " + ignored;
       return std::nullopt;
@@ -470,6 +498,7 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
   out.coulomb = estimate(&Parameters::coulomb);
   out.offset = estimate(&Parameters::offset);
   out.delay = estimate(&Parameters::delay);
+  out.lag = estimate(&Parameters::lag);
   out.coulomb_positive = out.coulomb.value + out.offset.value;
   out.coulomb_negative = out.coulomb.value - out.offset.value;
   out.noise_rms_m = fitter.noise_rms();
@@ -484,7 +513,8 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
     point.frequency_hz = static_cast<double>(excitation.harmonics[i]) * f0;
     point.measured = measured[i];
     const double half = w * excitation.params.sample_period_s / 2.0;
-    point.model = std::polar(std::sin(half) / half, -w * all->delay) / std::complex<double>(-all->mass * w * w, all->damping * w);
+    point.model = std::polar(std::sin(half) / half, -w * all->delay) / std::complex<double>(1.0, w * all->lag) /
+                  std::complex<double>(-all->mass * w * w, all->damping * w);
     out.response.push_back(point);
   }
   return out;

@@ -7,7 +7,9 @@
 // m the apparent mass (kg), b the viscous damping (N·s/m), c the Coulomb friction (N), f0 a
 // constant force (N: a load such as uncompensated gravity; with c it gives the force friction
 // resists in each direction, c + f0 moving +, c − f0 moving −), τ the pure delay between the
-// command and the measurement (s).
+// command and the measurement (s). Where asked, the force the device applies is the command
+// through a first-order lag, F/(1 + sτ_a) (an amplifier's or a motor's time constant, 004's
+// 8.8 ms), and τ_a is fitted beside τ.
 //
 // Why a multisine and averaging (Pintelon & Schoukens, "System Identification: A Frequency Domain
 // Approach", 2nd ed. 2012, ch. 2–3): the excitation is periodic, so the response in steady state
@@ -77,8 +79,8 @@ struct Estimate {
 struct FrequencyPoint {
   double frequency_hz = 0.0;
   std::complex<double> measured;  // X_k / F_k. Unit: m/N.
-  /// H(ω) e^{−jωτ} / (−m ω² + j b ω): the linear part of (1) behind the loop's hold, whose
-  /// magnitude is H(ω) = sin(ωT/2)/(ωT/2). Unit: m/N.
+  /// H(ω) e^{−jωτ} / ((1 + jωτ_a)(−m ω² + j b ω)): the linear part of (1) behind the loop's
+  /// hold, whose magnitude is H(ω) = sin(ωT/2)/(ωT/2), and the lag where one was fitted. Unit: m/N.
   std::complex<double> model;
 };
 
@@ -90,6 +92,10 @@ struct AxisIdentification {
   /// τ, from the command's tick to its effect on the readings: the hold's T/2 (a perfect loop's:
   /// a command acts over the tick after it is written) and whatever the device adds. Unit: s.
   Estimate delay;
+  /// τ_a, a first-order lag between the command and the force the device applies (an
+  /// amplifier's or a motor's time constant), where the fit was asked to look for one (else 0):
+  /// F_applied = F / (1 + s τ_a) in (1). Unit: s.
+  Estimate lag;
   double coulomb_positive = 0.0;  // c + f0: the force to move the axis +. Unit: N.
   double coulomb_negative = 0.0;  // c − f0: the force to move it −. Unit: N.
   /// The measurement's noise: the rms of what consecutive periods disagree on, its smooth part
@@ -106,11 +112,13 @@ struct AxisIdentification {
 
 /// Fits (1) to one axis: `force` and `position` one value per tick (force the command written in
 /// that tick, position the reading of that tick) from the excitation's first tick, at least
-/// fit_begin_tick() + fit_ticks() long. `max_delay_s` bounds τ's search (default 20 ticks).
+/// fit_begin_tick() + fit_ticks() long. `max_delay_s` bounds τ's search (default 20 ticks);
+/// `max_lag_s` > 0 fits a first-order lag τ_a in [0, max_lag_s] beside it (FrequencyPoint's
+/// model and the residual then carry 1/(1 + jωτ_a)).
 /// An empty optional and `why` when the data cannot be fitted (too short, not finite, no motion).
 std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std::span<const double> force,
                                                 std::span<const double> position, std::string& why,
-                                                double max_delay_s = -1.0);
+                                                double max_delay_s = -1.0, double max_lag_s = 0.0);
 
 /// The quantization step of `values` if they lie on a lattice q·n + offset (to 1e-6 of q), the
 /// smallest step seen; none otherwise or with fewer than three distinct values.

@@ -190,6 +190,9 @@ bool schur_stable(const Polynomial& p);
 struct MassDamperDevice {
   double mass = 0.01;      // m. Unit: kg. > 0.
   double damping = 0.022;  // b. Unit: N·s/m. >= 0.
+  /// τ_a: the force the device applies follows the command through 1/(1 + s τ_a) (an amplifier's
+  /// or a motor's time constant, an identification's lag). Unit: s. >= 0; 0: none.
+  double actuator_lag = 0.0;
 };
 
 /// The closed loop of a wall in contact on the device: the device sampled with a ZOH
@@ -202,7 +205,9 @@ struct MassDamperDevice {
 /// reaches the device d ticks after the reading it answers, W(z) z^{−d}, so the polynomial is
 /// z^d D(z) Dc(z) + N(z) Nc(z) (d ≤ Polynomial::kMaxDelayTicks). A fractional d = n + f (an
 /// identified delay, docs/identification.md) is n ticks and Thiran's first-order all-pass with
-/// η = (1 − f)/(1 + f): z^n (z + η) D Dc + (η z + 1) N Nc.
+/// η = (1 − f)/(1 + f): z^n (z + η) D Dc + (η z + 1) N Nc. A device with an actuator lag τ_a is
+/// sampled exactly too, from its state space (x, v, f) with ḟ = (F − f)/τ_a: Φ = e^{AT} and
+/// Γ = ∫₀ᵀ e^{As} ds B, so D(z) = det(zI − Φ) (cubic) and N(z) = C adj(zI − Φ) Γ (quadratic).
 Polynomial wall_characteristic_polynomial(const ImpedanceWeights& wall,
                                           const MassDamperDevice& device,
                                           double delay_ticks = 0.0);

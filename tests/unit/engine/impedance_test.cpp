@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "engine/control/dc_motor_control.hpp"
+#include "engine/device/exact_step.hpp"
 #include "engine/device/point_mass_plant.hpp"
 #include "engine/scene/impedance.hpp"
 #include "support/allocation_counter.hpp"
@@ -322,6 +323,52 @@ TEST(Impedance, SampledMarginMatchesTimeDomainSimulation_Device001) {
     const double per_tick = growth_per_tick(simulate_wall(far, c.discretization, T, 2000), 1);
     EXPECT_NEAR(per_tick, r, 2e-4 * r) << static_cast<int>(c.discretization);
   }
+}
+
+/// A wall on a device whose force lags its command by τ_a (the force f follows the held command
+/// F through ḟ = (F − f)/τ_a, the mass-damper under f): 200 sub-steps a tick, f's step exact and
+/// the mass-damper's exact under f held over each; from 1 mm penetration at rest. Peak |d| of the
+/// first and the last 500-tick window, their ratio.
+double lagged_wall_growth(const ImpedanceParams& wall, const MassDamperDevice& device, double T, int ticks) {
+  ImpedanceFilter filter(wall, D::kBackwardDifference, T);
+  filter.reset(1e-3, 0.0);
+  double x = -1e-3, v = 0.0, f = 0.0;
+  double first = 0.0, last = 0.0;
+  const int substeps = 200;
+  const double h = T / substeps;
+  const ExactMassDamperStep step = ExactMassDamperStep::of(device.mass, device.damping, h);
+  for (int k = 0; k < ticks; ++k) {
+    const double d = -x;
+    if (k < 500) first = std::max(first, std::abs(d));
+    if (k >= ticks - 500) last = std::max(last, std::abs(d));
+    const double command = filter.update(d);
+    for (int s = 0; s < substeps; ++s) {
+      f = command + (f - command) * std::exp(-h / device.actuator_lag);
+      step.advance(x, v, f / device.mass);
+    }
+  }
+  return last / first;
+}
+
+TEST(Impedance, AnActuatorsLagIsSampledExactlyAndItsMarginMatchesTheSimulation) {
+  // 004's motor time constant on a light device: the lag takes most of the margin a damper gives.
+  const double T = 1e-3;
+  const MassDamperDevice lagged{0.05, 0.5, 8.8e-3};
+  const ImpedanceParams wall{100.0, 1.0, 0.0};
+  const double k_lag = sampled_wall_margin(wall, D::kBackwardDifference, lagged, T).max_stable_stiffness;
+  const double k_none =
+      sampled_wall_margin(wall, D::kBackwardDifference, {lagged.mass, lagged.damping}, T).max_stable_stiffness;
+  ASSERT_TRUE(std::isfinite(k_lag) && k_lag > 0.0);
+  EXPECT_LT(k_lag, 0.5 * k_none) << "a lag costs margin";
+  ImpedanceParams below = wall, above = wall;
+  below.stiffness = 0.97 * k_lag;
+  above.stiffness = 1.03 * k_lag;
+  EXPECT_LT(lagged_wall_growth(below, lagged, T, 20000), 0.8) << "K' = " << k_lag;
+  EXPECT_GT(lagged_wall_growth(above, lagged, T, 20000), 1.25) << "K' = " << k_lag;
+  // A vanishing lag is the device without one.
+  const double k_tiny =
+      sampled_wall_margin(wall, D::kBackwardDifference, {lagged.mass, lagged.damping, 1e-8}, T).max_stable_stiffness;
+  EXPECT_NEAR(k_tiny, k_none, 1e-3 * k_none);
 }
 
 /// The bilinear damper has its pole at z = −1; in the loop the device's ZOH pushes it just
