@@ -188,6 +188,16 @@ std::string validate_five_bar(const v1::SimulatedFiveBarConfig& five_bar) {
     return "simulated_five_bar.inertias: must be \"identified\" or \"theoretical\", got \"" +
            five_bar.inertias() + "\"";
   }
+  if (auto error = validate_encoders(five_bar, 3, "simulated_five_bar"); !error.empty()) return error;
+  // Its counts are its own (quantized_encoders: π/6000 on q0 and q1, π/4000 on q2), and
+  // it has no rate sensors: only the noise before the counts is the configuration's.
+  if (five_bar.has_encoders() && !five_bar.encoders().quantization().empty()) {
+    return "simulated_five_bar.encoders.quantization: must be empty (the five-bar's encoders count in their own "
+           "steps: quantized_encoders); give noise only";
+  }
+  if (five_bar.has_encoders() && five_bar.encoders().tachometers()) {
+    return "simulated_five_bar.encoders.tachometers: must be false (the five-bar has no rate sensors)";
+  }
   return validate_common("simulated_five_bar", five_bar);
 }
 
@@ -493,6 +503,11 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
       options.quantized = !five_bar.has_quantized_encoders() || five_bar.quantized_encoders();
       if (five_bar.max_force() > 0.0) options.max_force = five_bar.max_force();
       options.state_estimator = five_bar.velocity() == "estimator";
+      if (five_bar.has_encoders()) {
+        const auto& noise = five_bar.encoders().noise();
+        for (int i = 0; i < 3 && !noise.empty(); ++i) options.encoder_noise[static_cast<std::size_t>(i)] = noise.Get(noise.size() == 1 ? 0 : i);
+        options.noise_seed = five_bar.encoders().seed();
+      }
       const engine::FiveBarParams params = five_bar_params(five_bar);
       auto model = std::make_unique<runtime::FiveBarModel>(params, options.velocity_cutoff);
       if (options.state_estimator) {

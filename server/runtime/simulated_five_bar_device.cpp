@@ -16,7 +16,7 @@ bool finite(const engine::FiveBarJoints& v) {
 SimulatedFiveBarDevice::SimulatedFiveBarDevice(const engine::FiveBarParams& params,
                                                const engine::FiveBarState& initial,
                                                const SimulatedFiveBarOptions& options)
-    : options_(options), plant_(params, initial, options.plant) {
+    : options_(options), plant_(params, initial, options.plant), noise_random_(options.noise_seed) {
   description_.joints = 3;
   description_.name = "simulated five-bar haptic device (003, Madill 1998, balanced, decoupled)";
   description_.model = "five_bar_003";
@@ -47,8 +47,12 @@ SimulatedFiveBarDevice::SimulatedFiveBarDevice(const engine::FiveBarParams& para
   set_plant_state(initial);
 }
 
-engine::FiveBarJoints SimulatedFiveBarDevice::measure(const engine::FiveBarJoints& q) const {
-  return options_.quantized ? engine::five_bar_encoder_reading(plant_.params(), q) : q;
+engine::FiveBarJoints SimulatedFiveBarDevice::measure(const engine::FiveBarJoints& q) {
+  engine::FiveBarJoints sensed = q;
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (options_.encoder_noise[i] > 0.0) sensed[i] += options_.encoder_noise[i] * unit_noise_(noise_random_);
+  }
+  return options_.quantized ? engine::five_bar_encoder_reading(plant_.params(), sensed) : sensed;
 }
 
 void SimulatedFiveBarDevice::set_plant_state(const engine::FiveBarState& state) {

@@ -16,7 +16,9 @@
 // thesis' strain gauge at the clamp, eq. 3.115, would; it is not simulated).
 // plant().physical_tip_state() gives the deflected tip.
 
+#include <array>
 #include <cstdint>
+#include <random>
 
 #include "engine/device/five_bar.hpp"
 #include "runtime/simulated_device.hpp"
@@ -32,6 +34,10 @@ struct SimulatedFiveBarOptions {
   double max_force = 12.0;
   /// The model runs a state estimator (capabilities.state_estimator).
   bool state_estimator = false;
+  /// Gaussian noise on each joint's angle before the encoders count it (rms; 0: none), drawn
+  /// from `noise_seed`: an encoder's count flickers where the angle sits near a step. Unit: rad.
+  std::array<double, 3> encoder_noise{};
+  std::uint64_t noise_seed = 0;
 };
 
 class SimulatedFiveBarDevice final : public SimulatedDevice {
@@ -57,12 +63,14 @@ class SimulatedFiveBarDevice final : public SimulatedDevice {
   const engine::FiveBarJoints& measured_joints() const { return q_measured_; }
 
  private:
-  engine::FiveBarJoints measure(const engine::FiveBarJoints& q) const;
+  engine::FiveBarJoints measure(const engine::FiveBarJoints& q);
   bool state_finite() const;
 
   SimulatedFiveBarOptions options_;
   engine::FiveBarPlant plant_;
   engine::FiveBarJoints q_measured_{};  // Unit: rad.
+  std::mt19937_64 noise_random_;
+  std::normal_distribution<double> unit_noise_{0.0, 1.0};
 };
 
 }  // namespace haptic::runtime

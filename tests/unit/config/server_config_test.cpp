@@ -130,6 +130,17 @@ TEST(Config, BadValuesAreRejectedNamingTheField) {
                 .find("simulated_dc_motor.encoders.quantization[0]"),
             std::string::npos);
   EXPECT_EQ(error_of(R"({"simulated_joystick": {"encoders": {"quantization": [3.835e-4, 3.835e-4, 1e-3], "noise": [1e-5]}}})"), "");
+  // The five-bar's counts are its own: noise only.
+  EXPECT_NE(error_of(R"({"simulated_five_bar": {"encoders": {"quantization": [1e-4]}}})")
+                .find("simulated_five_bar.encoders.quantization: must be empty"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_five_bar": {"encoders": {"noise": [1e-5], "tachometers": true}}})")
+                .find("simulated_five_bar.encoders.tachometers: must be false"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_five_bar": {"encoders": {"noise": [1e-5, 1e-5]}}})")
+                .find("simulated_five_bar.encoders.noise: give one value for every joint or one per joint (3)"),
+            std::string::npos);
+  EXPECT_EQ(error_of(R"({"simulated_five_bar": {"encoders": {"noise": [5e-5], "seed": 3}}})"), "");
   // A driver port's measured profile: each axis's mass > 0, damping >= 0, the delay in [0, 0.1] s.
   const std::string driver = R"({"driver": {"library": "x.so", "profile": )";
   EXPECT_NE(error_of(driver + R"({"apparent_mass": {"x": 0.1, "y": 0, "z": 0.1}}}})")

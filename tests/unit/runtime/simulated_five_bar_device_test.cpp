@@ -7,6 +7,8 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <set>
+#include <vector>
 
 #include "runtime/five_bar_model.hpp"
 #include "runtime/simulated_five_bar_device.hpp"
@@ -134,6 +136,35 @@ TEST(SimulatedFiveBarDevice, ReadsThroughTheEncodersWhenQuantized_Table5_2) {
   EXPECT_NEAR(quantized->measured_joints()[1] - engine::five_bar_home()[1], kPi / 6000.0, 1e-12);
   ASSERT_EQ(quantized.read(a), DeviceStatus::kOk);
   EXPECT_NEAR(a.p_WT.x - 0.6, -0.3 * std::sin(kPi / 6000.0), 1e-12);
+}
+
+TEST(SimulatedFiveBarDevice, NoiseBeforeTheCountsMakesACountFlickerOnlyNearItsStep) {
+  // At rest a tenth of a count from a step, with noise of a tenth of a count: the reading is
+  // always a whole count, and it flickers between the two counts either side of the step. Half a
+  // count from it, the same noise never reaches the step. The same seed, the same readings.
+  const double count = kPi / 6000.0;
+  SimulatedFiveBarOptions options;
+  options.encoder_noise = {0.0, 0.1 * count, 0.0};
+  options.noise_seed = 5;
+  const auto readings = [&](double offset_counts) {
+    engine::FiveBarState at;
+    at.q[1] = engine::five_bar_home()[1] - offset_counts * count;  // the axial scale is negative
+    FiveBar device(engine::FiveBarParams{}, at, options);
+    std::vector<double> seen;
+    for (int k = 0; k < 400; ++k) {
+      EXPECT_EQ(device->write(DeviceCommand{}, kT), DeviceStatus::kOk);
+      seen.push_back((device->measured_joints()[1] - engine::five_bar_home()[1]) / count);
+    }
+    return seen;
+  };
+  const std::vector<double> near = readings(0.05), far = readings(0.5);
+  for (const double c : near) EXPECT_NEAR(c, std::round(c), 1e-9) << "a whole count";
+  std::set<long> near_counts, far_counts;
+  for (const double c : near) near_counts.insert(std::lround(c));
+  for (const double c : far) far_counts.insert(std::lround(c));
+  EXPECT_EQ(near_counts.size(), 2u) << "the count flickers across the step";
+  EXPECT_EQ(far_counts.size(), 1u) << "five sigma from the step it does not";
+  EXPECT_EQ(readings(0.05), near);
 }
 
 // The flexible mode is declared, and the reading stays the encoders' rigid tip while the hand
