@@ -143,11 +143,17 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
   if (!command_ok) {
     F_command = {};
     device.enter_safe_state();
+    sample.flags |= wire::kFlagDeviceFault;  // a reading that failed, or a command the model refused
   }
 
   if (device.write_device(config_.period_s) != DeviceStatus::kOk) {
     counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
     device.enter_safe_state();
+    // The command did not reach the device: the sample says so, and shows no force as applied
+    // (the safe state holds zero), so that no client takes a force for delivered that was not.
+    sample.flags |= wire::kFlagDeviceFault;  // not written
+    F_command = {};
+    sample.tau_T_W = {};
   }
 
   sample.p_WT = reading.p_WT;

@@ -172,6 +172,51 @@ TEST(TickRunner, NonFiniteReadingFaultsToZeroForceAndShowsTheLastGoodState) {
   EXPECT_EQ(s.F_T_W, engine::Vec3{});
 }
 
+/// A device that reads well and whose writes fail from a given write on (a cable pulled between
+/// the reading and the command).
+class WriteFailingDevice final : public Device {
+ public:
+  explicit WriteFailingDevice(int fail_from) : fail_from_(fail_from) {}
+  const DeviceDescription& description() const override { return description_; }
+  DeviceStatus start() override { return DeviceStatus::kOk; }
+  void stop() override {}
+  DeviceStatus read(DeviceReading& reading) override {
+    reading.q = {0.0, 0.0, -0.001};
+    return DeviceStatus::kOk;
+  }
+  DeviceStatus write(const DeviceCommand&, double) override {
+    return ++writes_ >= fail_from_ ? DeviceStatus::kError : DeviceStatus::kOk;
+  }
+  void enter_safe_state() override { ++safe_state_entries; }
+  int safe_state_entries = 0;
+
+ private:
+  DeviceDescription description_;
+  int fail_from_;
+  int writes_ = 0;
+};
+
+TEST(TickRunner, ACommandThatCouldNotBeWrittenIsAFaultAndNoForceIsShownAsApplied) {
+  WriteFailingDevice device(2);
+  SceneExchange scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0)));
+  SampleRing samples;
+  LoopCounters counters;
+  CartesianModel model;
+  TickRunner runner(device, model, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}});
+  runner.run(1, 0);
+  TickSample s;
+  ASSERT_TRUE(samples.read(1, s));
+  EXPECT_FALSE(s.flags & wire::kFlagDeviceFault);
+  EXPECT_NEAR(s.F_T_W.z, 1.0, 1e-12);  // 1 mm into a 1000 N/m wall, written
+  runner.run(2, 1'000'000);
+  ASSERT_TRUE(samples.read(2, s));
+  EXPECT_TRUE(s.flags & wire::kFlagDeviceFault) << "the write failed";
+  EXPECT_EQ(s.F_T_W, engine::Vec3{}) << "the wall's force never reached the device";
+  EXPECT_EQ(s.p_WT.z, -0.001);  // the reading was good: it is shown
+  EXPECT_EQ(counters.device_errors.load(), 1u);
+  EXPECT_EQ(device.safe_state_entries, 1);
+}
+
 /// A device that holds its safe state (a tripped watchdog) from a given tick on, reading well.
 class LatchedDevice final : public Device {
  public:
