@@ -179,8 +179,9 @@ TEST(GateWithTls, TheControlPlaneAcceptsAgainAfterRunningOutOfDescriptors) {
   EXPECT_EQ(during.connections_open() + during.connections_refused(), 401u);
   EXPECT_GE(during.connections_refused(), 400u - 128u);
   for (const int fd : flood) ::close(fd);
-  // A new client is served within a second of the flood's end.
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+  // A new client is served after the flood's end: what fails is a lockout (gRPC's own TLS
+  // listener stopped accepting for good), not a loaded machine's slower second.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   bool served = false;
   while (!served && std::chrono::steady_clock::now() < give_up) {
     RawClient fresh(server.address(), client_tls(true));
