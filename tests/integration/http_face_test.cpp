@@ -469,8 +469,8 @@ double seconds_until_each_is_served(const std::vector<std::string>& hosts,
 // The descriptor flood of the gRPC probes, on the HTTP face and on loopback: hapticd limited to
 // 256 descriptors; six hosts (127.0.0.2 to .7) open 300 connections that never say a word. Another
 // host's calls are answered during it, over HTTP and gRPC, and every flooding host is served after
-// its end (how soon is printed: 2 ms on this machine idle). Bounded: 300 connections, 3 s of flood, at
-// most 10 s after.
+// its end (how soon is printed: 2 ms on this machine idle). Bounded: 300 connections, 3 s of
+// flood, at most 10 s after.
 TEST(HttpFace, SixHostsFloodingSilentConnectionsLeaveAnotherHostServedAndEachServedAfter) {
   test::ServerProcess server(test::lockstep_config(R"("http_address": "127.0.0.1:0",
       "max_sessions": 64, "max_sessions_per_peer": 64, "session_open_burst_per_peer": 64)"), {}, 256);
