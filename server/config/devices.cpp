@@ -272,6 +272,10 @@ std::string validate_driver(const v1::DriverConfig& driver) {
     if (!std::isfinite(p.delay_s()) || p.delay_s() < 0.0 || p.delay_s() > 0.1) {
       return "driver.profile.delay_s: must be finite and in [0, 0.1] s, got " + std::to_string(p.delay_s());
     }
+    if (!std::isfinite(p.actuator_lag_s()) || p.actuator_lag_s() < 0.0 || p.actuator_lag_s() > 0.1) {
+      return "driver.profile.actuator_lag_s: must be finite and in [0, 0.1] s, got " +
+             std::to_string(p.actuator_lag_s());
+    }
   }
   return {};
 }
@@ -462,7 +466,7 @@ PortDevice driver_device(const v1::DriverConfig& config) {
     options.profile = runtime::DriverOptions::Profile{
         {p.apparent_mass().x(), p.apparent_mass().y(), p.apparent_mass().z()},
         {p.apparent_damping().x(), p.apparent_damping().y(), p.apparent_damping().z()},
-        p.delay_s()};
+        p.delay_s(), p.actuator_lag_s()};
   }
   options.log = [library = config.library()](int level, const std::string& message) {
     const auto severity = level >= HAPTIC_DRIVER_LOG_ERROR     ? spdlog::level::err

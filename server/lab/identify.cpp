@@ -194,7 +194,7 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
 
 v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const IdentifyParams& params, const std::string& source) {
   engine::Vec3 mass{}, damping{};
-  double delay_s = 0.0;
+  double delay_s = 0.0, lag_s = 0.0;
   for (int axis = 0; axis < 3; ++axis) {
     IdentifyParams p = params;
     p.axis = axis;
@@ -208,11 +208,13 @@ v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const Identif
     (axis == 0 ? mass.x : axis == 1 ? mass.y : mass.z) = r.fit.mass.value;
     (axis == 0 ? damping.x : axis == 1 ? damping.y : damping.z) = r.fit.damping.value;
     delay_s = std::max(delay_s, r.fit.delay.value - r.period_s / 2.0);
+    lag_s = std::max(lag_s, r.fit.lag.value);  // 0 unless --lag
   }
   v1::DeviceProfile profile;
   *profile.mutable_apparent_mass() = schema::to_proto(mass);
   *profile.mutable_apparent_damping() = schema::to_proto(damping);
   profile.set_delay_s(std::max(0.0, delay_s));
+  profile.set_actuator_lag_s(lag_s);
   return profile;
 }
 

@@ -68,8 +68,9 @@ std::string identify_report(const IdentifyResult& result, const IdentifyParams& 
 
 /// A driver port's profile (DriverConfig.profile) from identifications along x, y and z in turn
 /// (`params` as given but for the axis): each axis's mass and damping, and the largest of the
-/// three delays beyond the hold. Throws what identify throws, or std::invalid_argument when an
-/// axis is no mass-damper (a mass not positive, a negative damping).
+/// three delays beyond the hold and of the three lags (0 unless max_lag_s). Throws what identify
+/// throws, or std::invalid_argument when an axis is no mass-damper (a mass not positive, a
+/// negative damping).
 v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const IdentifyParams& params, const std::string& source);
 
 /// One damping's Z-width, three ways (N/m): predicted by the sampled wall's analysis

@@ -19,7 +19,7 @@ namespace {
 
 /// The device as the stability report models it: its tool point as a mass-damper.
 schema::DeviceMassDamper mass_damper(const runtime::DeviceDescription& device) {
-  return {device.apparent_mass, device.apparent_damping, device.delay_s};
+  return {device.apparent_mass, device.apparent_damping, device.delay_s, device.actuator_lag_s};
 }
 
 /// The device's handle about each axis as an inertia-damper, for an orientation spring's report.

@@ -113,6 +113,9 @@ struct DeviceDescription {
   /// known (a driver port's measured profile, docs/identification.md); the stability report counts
   /// it. Unit: s. 0: none known.
   double delay_s = 0.0;
+  /// The force's first-order lag behind the command, where known (the same profile): the
+  /// stability report samples it exactly. Unit: s. 0: none known.
+  double actuator_lag_s = 0.0;
   /// The same for the handle's rotation (an inertia-damper per axis; capabilities.torque), for
   /// the stability report of an orientation spring; 0 when unknown. Units: kg·m², N·m·s/rad.
   double apparent_inertia = 0.0;

@@ -312,6 +312,7 @@ DriverDevice::DriverDevice(const DriverOptions& options) : options_(options) {
     description_.apparent_mass = std::min({p.apparent_mass[0], p.apparent_mass[1], p.apparent_mass[2]});
     description_.apparent_damping = std::min({p.apparent_damping[0], p.apparent_damping[1], p.apparent_damping[2]});
     description_.delay_s = p.delay_s;
+    description_.actuator_lag_s = p.actuator_lag_s;
   }
 }
 

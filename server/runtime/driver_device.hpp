@@ -44,6 +44,7 @@ struct DriverOptions {
   struct Profile {
     std::array<double, 3> apparent_mass{}, apparent_damping{};
     double delay_s = 0.0;
+    double actuator_lag_s = 0.0;
   };
   std::optional<Profile> profile;
   /// Where the driver's own messages go (ABI 2's set_log): level HAPTIC_DRIVER_LOG_*, the text.

@@ -33,7 +33,8 @@ void add_margin(v1::StabilityReport& report, const engine::ImpedanceParams& law_
   report.set_device_known(device.mass > 0.0);
   if (!report.device_known() || law_params.stiffness <= 0.0) return;
   const engine::SampledWallMargin margin = engine::sampled_wall_margin(
-      law_params, engine::discretization_of(law), engine::MassDamperDevice{device.mass, device.damping},
+      law_params, engine::discretization_of(law),
+      engine::MassDamperDevice{device.mass, device.damping, device.actuator_lag_s},
       period_s, device.delay_s > 0.0 ? device.delay_s / period_s : 0.0);
   report.set_stable(margin.stable);
   report.set_max_stable_stiffness(margin.max_stable_stiffness);

@@ -17,6 +17,8 @@ struct DeviceMassDamper {
   /// The delay between a command and its effect beyond a perfect loop's half tick, where known
   /// (a measured profile): the margin counts it. Unit: s.
   double delay_s = 0.0;
+  /// The force's first-order lag behind the command, where known: the margin samples it. Unit: s.
+  double actuator_lag_s = 0.0;
 };
 
 /// The report for `spec` (already converted: its damping or gains are the chosen ones) at loop

@@ -89,12 +89,14 @@ TEST(DriverDevice, AVersion2DriverPortGetsAStabilityReportFromItsMassDamper) {
 }
 
 // A driver port configured with a profile measured on the bench (docs/identification.md) reports
-// the profile's mass-damper, and its delay lowers the largest stable stiffness the report gives.
+// the profile's mass-damper, and its delay, and its actuator's lag, lower the largest stable
+// stiffness the report gives.
 TEST(DriverDevice, AMeasuredProfilesFiguresAndDelayAreWhatTheStabilityReportUses) {
-  const auto limit = [](double delay_s, double* mass = nullptr, double* damping = nullptr) {
+  const auto limit = [](double delay_s, double* mass = nullptr, double* damping = nullptr, double lag_s = 0.0) {
     test::ServerProcess server(driver_config(R"("mass": 0.05, "damping": 0.5)",
                                              R"("profile": {"apparent_mass": {"x": 0.08, "y": 0.07, "z": 0.09},
                                                             "apparent_damping": {"x": 0.6, "y": 0.6, "z": 0.6},
+                                                            "actuator_lag_s": )" + std::to_string(lag_s) + R"(,
                                                             "delay_s": )" + std::to_string(delay_s) + "}"));
     Client client(config_for(server));
     const StabilityReport report =
@@ -109,7 +111,10 @@ TEST(DriverDevice, AMeasuredProfilesFiguresAndDelayAreWhatTheStabilityReportUses
   EXPECT_EQ(damping, 0.6);
   const double delayed = limit(0.002);
   EXPECT_LT(delayed, 0.8 * undelayed) << "two ticks of delay must lower the limit";
-  std::printf("  the largest stable stiffness: %.0f N/m without delay, %.0f N/m with 2 ms\n", undelayed, delayed);
+  const double lagged = limit(0.0, nullptr, nullptr, 0.005);
+  EXPECT_LT(lagged, 0.5 * undelayed) << "5 ms of an amplifier's lag must lower it too";
+  std::printf("  the largest stable stiffness: %.0f N/m without delay, %.0f N/m with 2 ms, %.0f N/m behind 5 ms of lag\n",
+              undelayed, delayed, lagged);
 }
 
 // A Force Dimension device through its vendor's runtime (the driver in driver/vendors against the

@@ -149,6 +149,9 @@ TEST(Config, BadValuesAreRejectedNamingTheField) {
   EXPECT_NE(error_of(driver + R"({"apparent_mass": {"x": 0.1, "y": 0.1, "z": 0.1}, "apparent_damping": {"z": -1}}}})")
                 .find("driver.profile.apparent_damping.z"),
             std::string::npos);
+  EXPECT_NE(error_of(driver + R"({"apparent_mass": {"x": 0.1, "y": 0.1, "z": 0.1}, "actuator_lag_s": -0.001}}})")
+                .find("driver.profile.actuator_lag_s: must be finite and in [0, 0.1] s"),
+            std::string::npos);
   EXPECT_NE(error_of(driver + R"({"apparent_mass": {"x": 0.1, "y": 0.1, "z": 0.1}, "delay_s": 0.5}}})")
                 .find("driver.profile.delay_s: must be finite and in [0, 0.1] s"),
             std::string::npos);

@@ -118,6 +118,18 @@ TEST(TickRunner, NonFiniteSceneForceNeverReachesTheDevice) {
 }
 
 /// A device whose plant "blows up" from a given tick on: its reading becomes NaN.
+/// A runner around `device` against a 1000 N/m wall through z = 0, wired as the server wires it.
+struct WallRig {
+  explicit WallRig(Device& device)
+      : scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0))),
+        runner(device, model, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}}) {}
+  CartesianModel model;
+  SceneExchange scenes;
+  SampleRing samples;
+  LoopCounters counters;
+  TickRunner runner;
+};
+
 class FailingDevice final : public Device {
  public:
   explicit FailingDevice(std::uint64_t fail_from) : fail_from_(fail_from) {
@@ -150,23 +162,19 @@ class FailingDevice final : public Device {
 
 TEST(TickRunner, NonFiniteReadingFaultsToZeroForceAndShowsTheLastGoodState) {
   FailingDevice device(3);
-  SceneExchange scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0)));
-  SampleRing samples;
-  LoopCounters counters;
-  CartesianModel model;
-  TickRunner runner(device, model, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}});
-  runner.run(1, 0);
-  runner.run(2, 1'000'000);
+  WallRig rig(device);
+  rig.runner.run(1, 0);
+  rig.runner.run(2, 1'000'000);
   EXPECT_NEAR(device.last_command.z, 1.0, 1e-12);  // 1 mm into a 1000 N/m wall
   EXPECT_EQ(device.safe_state_entries, 0);
-  runner.run(3, 2'000'000);
-  runner.run(4, 3'000'000);
+  rig.runner.run(3, 2'000'000);
+  rig.runner.run(4, 3'000'000);
   EXPECT_EQ(device.last_command, engine::Vec3{});  // at once, not ramped
   EXPECT_EQ(device.writes, 4);
   EXPECT_EQ(device.safe_state_entries, 2);  // motors off, brakes on, on every faulted tick
-  EXPECT_EQ(counters.device_errors.load(), 2u);
+  EXPECT_EQ(rig.counters.device_errors.load(), 2u);
   TickSample s;
-  ASSERT_TRUE(samples.read(4, s));
+  ASSERT_TRUE(rig.samples.read(4, s));
   EXPECT_TRUE(s.flags & wire::kFlagDeviceFault);
   EXPECT_EQ(s.p_WT.z, -0.001);  // the last good reading, never NaN
   EXPECT_EQ(s.F_T_W, engine::Vec3{});
@@ -198,22 +206,18 @@ class WriteFailingDevice final : public Device {
 
 TEST(TickRunner, ACommandThatCouldNotBeWrittenIsAFaultAndNoForceIsShownAsApplied) {
   WriteFailingDevice device(2);
-  SceneExchange scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0)));
-  SampleRing samples;
-  LoopCounters counters;
-  CartesianModel model;
-  TickRunner runner(device, model, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}});
-  runner.run(1, 0);
+  WallRig rig(device);
+  rig.runner.run(1, 0);
   TickSample s;
-  ASSERT_TRUE(samples.read(1, s));
+  ASSERT_TRUE(rig.samples.read(1, s));
   EXPECT_FALSE(s.flags & wire::kFlagDeviceFault);
   EXPECT_NEAR(s.F_T_W.z, 1.0, 1e-12);  // 1 mm into a 1000 N/m wall, written
-  runner.run(2, 1'000'000);
-  ASSERT_TRUE(samples.read(2, s));
+  rig.runner.run(2, 1'000'000);
+  ASSERT_TRUE(rig.samples.read(2, s));
   EXPECT_TRUE(s.flags & wire::kFlagDeviceFault) << "the write failed";
   EXPECT_EQ(s.F_T_W, engine::Vec3{}) << "the wall's force never reached the device";
   EXPECT_EQ(s.p_WT.z, -0.001);  // the reading was good: it is shown
-  EXPECT_EQ(counters.device_errors.load(), 1u);
+  EXPECT_EQ(rig.counters.device_errors.load(), 1u);
   EXPECT_EQ(device.safe_state_entries, 1);
 }
 
@@ -244,18 +248,14 @@ class LatchedDevice final : public Device {
 
 TEST(TickRunner, ADeviceInItsSafeStateIsAFaultThatStillShowsWhereItIs) {
   LatchedDevice device(2);
-  SceneExchange scenes(std::make_unique<const engine::CompiledScene>(wall_scene(1000.0, 0.0)));
-  SampleRing samples;
-  LoopCounters counters;
-  CartesianModel model;
-  TickRunner runner(device, model, scenes, samples, counters, TickConfig{kPeriod, {}, 50, {}});
-  runner.run(1, 0);
+  WallRig rig(device);
+  rig.runner.run(1, 0);
   EXPECT_GT(device.last_command.z, 0.0);
-  runner.run(2, 1'000'000);
+  rig.runner.run(2, 1'000'000);
   EXPECT_EQ(device.last_command, engine::Vec3{});
-  EXPECT_EQ(counters.device_errors.load(), 1u);
+  EXPECT_EQ(rig.counters.device_errors.load(), 1u);
   TickSample s;
-  ASSERT_TRUE(samples.read(2, s));
+  ASSERT_TRUE(rig.samples.read(2, s));
   EXPECT_TRUE(s.flags & wire::kFlagDeviceFault);
   EXPECT_EQ(s.p_WT.z, -0.002);  // this tick's reading, not the last one before the fault
 }
