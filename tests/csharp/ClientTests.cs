@@ -540,6 +540,9 @@ static class ClientTests
             string rows = System.IO.File.ReadAllText(recorder.EventsPath);
             Check(rows.Contains(",101,connection_lost,") && rows.Contains(",102,connection_resumed,"),
                   "the recorder's events hold the loss and the resumption: " + rows);
+            // And the new server's events: its stream opened again there, in the new session.
+            Check(rows.Contains(",6,watch_started," + client.SessionId + ","),
+                  "the recorder watches the new session's events: " + rows);
             wall.Dispose();
             field.Dispose();
             Check(client.Scene().Objects.Count == 0, "removed on the new server");

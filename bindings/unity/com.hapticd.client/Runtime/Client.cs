@@ -947,8 +947,7 @@ namespace Hapticd
             {
                 if (options.Events)
                 {
-                    var watch = OpenWatch(recorder.AddEvent);
-                    recorder.Watch = watch;
+                    recorder.WatchEvents(OpenWatch(recorder.AddEvent));
                 }
             }
             catch
@@ -1109,6 +1108,10 @@ namespace Hapticd
                 try { OnEvent(onEvent_); }
                 catch (HapticException) { }
             }
+            // And every recorder's events (the C++ SDK's resume_observer_watches).
+            Recorder[] recorders;
+            lock (recorders_) recorders = recorders_.ToArray();
+            foreach (var recorder in recorders) recorder.WatchEventsAgain(OpenWatch);
         }
     }
 

@@ -32,7 +32,7 @@ namespace Hapticd
         private bool stopping_;                                                // guarded by gate_
         private StateLink link_;
         private Action<State> tap_;
-        internal EventWatch Watch;
+        private EventWatch watch_;                                             // guarded by gate_
         private List<Recorder> owner_;  // the client's recorders, which its connection changes reach
 
         public string Path { get; private set; }
@@ -114,6 +114,38 @@ namespace Hapticd
         }
 
         ~Recorder() { Close(); }
+
+        /// <summary>The server's events from now on, through `watch` (opened by the client).</summary>
+        internal void WatchEvents(EventWatch watch)
+        {
+            lock (gate_) watch_ = watch;
+        }
+
+        /// <summary>After its client reopened a session (the server restarted): the old stream
+        /// ended with the old server, so the events are watched again on the new one, as the C++
+        /// SDK's observers are. Where the new server refuses, the events stay off, and the
+        /// connection's changes still say why.</summary>
+        internal void WatchEventsAgain(Func<Action<Event>, EventWatch> open)
+        {
+            if (EventsPath.Length == 0) return;
+            EventWatch fresh = null;
+            try { fresh = open(AddEvent); }
+            catch (HapticException) { }
+            EventWatch old;
+            lock (gate_)
+            {
+                if (stopping_)
+                {
+                    old = fresh;  // closed meanwhile: the new stream goes too
+                }
+                else
+                {
+                    old = watch_;
+                    watch_ = fresh;
+                }
+            }
+            if (old != null) old.End();
+        }
 
         /// <summary>Starts taking every State the link accepts (on its receive thread: queued only),
         /// and joins `recorders`, the client's, to be told its connection changes.</summary>
@@ -244,15 +276,18 @@ namespace Hapticd
         /// totals (again on later calls). A failed write is in the totals.</summary>
         public RecorderStats Close()
         {
+            EventWatch watch;
             lock (gate_)
             {
                 if (stopping_) return stats_;
                 stopping_ = true;
+                watch = watch_;
+                watch_ = null;
                 Monitor.Pulse(gate_);
             }
             if (owner_ != null) lock (owner_) owner_.Remove(this);
             if (link_ != null) link_.RemoveTap(tap_);
-            if (Watch != null) Watch.End();
+            if (watch != null) watch.End();
             if (writer_ != null && Thread.CurrentThread != writer_) writer_.Join();
             CloseFiles();
             GC.SuppressFinalize(this);
