@@ -139,6 +139,7 @@ runtime::SimulatedJoystickConfig joystick_config(const v1::SimulatedJoystickConf
   // Negative: never re-arm on its own (the device's 0).
   if (config.has_rearm_after_s()) out.rearm_after_s = std::max(0.0, config.rearm_after_s());
   if (config.initial_shaft_length() != 0.0) out.initial.R = config.initial_shaft_length();
+  out.brakes_released = config.brakes_released();
   return out;
 }
 
@@ -452,8 +453,9 @@ PortDevice through_encoders(PortDevice port, const DeviceConfig& config, double 
   return port;
 }
 
-PortDevice driver_device(const v1::DriverConfig& config) {
+PortDevice driver_device(const v1::DriverConfig& config, int thread_priority) {
   runtime::DriverOptions options;
+  options.thread_priority = thread_priority;
   options.library = config.library();
   std::string params;
   if (!google::protobuf::util::MessageToJsonString(config.params(), &params).ok()) params = "{}";
@@ -481,10 +483,10 @@ PortDevice driver_device(const v1::DriverConfig& config) {
 
 }  // namespace
 
-PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
+PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz, int driver_thread_priority) {
   switch (config.device_case()) {
     case v1::DeviceConfig::kDriver:
-      return driver_device(config.driver());
+      return driver_device(config.driver(), driver_thread_priority);
     case v1::DeviceConfig::kSimulatedDcMotor: {
       const auto& motor = config.simulated_dc_motor();
       const engine::DcMotorParams params = dc_motor_params(motor);
@@ -575,15 +577,20 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz) {
                    std::make_unique<runtime::CartesianModel>());
 }
 
+int driver_thread_priority(const v1::ServerConfig& config) {
+  const bool fifo = config.time_mode() != v1::LOCKSTEP && config.real_time().use_fifo();
+  return fifo ? config.real_time().fifo_priority() : 0;
+}
+
 PortDevice make_device(const v1::ServerConfig& config) {
-  return make_device(primary_device(config), loop_rate_of(config));
+  return make_device(primary_device(config), loop_rate_of(config), driver_thread_priority(config));
 }
 
 std::vector<PortDevice> make_devices(const v1::ServerConfig& config) {
   std::vector<PortDevice> out;
   out.push_back(make_device(config));
   for (const v1::DeviceConfig& extra : config.extra_devices()) {
-    out.push_back(make_device(extra, loop_rate_of(config)));
+    out.push_back(make_device(extra, loop_rate_of(config), driver_thread_priority(config)));
   }
   return out;
 }

@@ -56,8 +56,13 @@ struct PortDevice {
   runtime::ServoClock* servo = nullptr;
 };
 
-/// The device `config` names (one must be set), for a loop at `loop_rate_hz` (Hz).
-PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz);
+/// The device `config` names (one must be set), for a loop at `loop_rate_hz` (Hz); a driver's
+/// call thread asks for SCHED_FIFO at `driver_thread_priority` where > 0.
+PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz, int driver_thread_priority = 0);
+
+/// The priority a driver port's call thread asks for: the loop's (real_time.fifo_priority) in
+/// real time with use_fifo, else 0 (normal scheduling: in lockstep, or with FIFO turned off).
+int driver_thread_priority(const v1::ServerConfig& config);
 
 /// Port 0's device: make_device(primary_device(config), loop rate).
 PortDevice make_device(const v1::ServerConfig& config);

@@ -334,7 +334,7 @@ DeviceStatus DriverDevice::start() {
   started_ = true;
   if (!options_.device_clocked && options_.call_timeout_s > 0.0 && !thread_.joinable()) {
     calls_->request.store(kNone, std::memory_order_relaxed);
-    thread_ = std::thread([state = calls_.get()] { state->serve(); });
+    thread_ = std::thread([state = calls_.get(), priority = options_.thread_priority] { state->serve(priority); });
   }
   return DeviceStatus::kOk;
 }
@@ -359,8 +359,8 @@ void DriverDevice::stop() {
   thread_.join();
 }
 
-void DriverDevice::CallState::serve() {
-  apply_realtime(80);  // as the loop, where permitted: the loop waits on this thread
+void DriverDevice::CallState::serve(int priority) {
+  if (priority > 0) apply_realtime(priority);  // as the loop, where permitted: the loop waits on this thread
   std::int64_t spin_until = 0;  // after a call, the next (a tick's write follows its read) comes soon
   for (;;) {
     const std::uint32_t what = request.load(std::memory_order_acquire);

@@ -38,6 +38,9 @@ struct DriverOptions {
   /// Ticks a reading's sequence may stay still before it is a fault; 0: not checked.
   std::uint32_t stale_after = 3;
   bool device_clocked = false;     // the driver's run_servo() paces the loop
+  /// The SCHED_FIFO priority the driver thread asks for (and memory locked), as the loop's: the
+  /// loop waits on that thread every tick. 0: normal scheduling (lockstep, or FIFO turned off).
+  int thread_priority = 0;
   /// The device's figures measured on the bench, in place of the driver's (DriverConfig.profile):
   /// per axis of W the apparent mass (kg) and damping (N·s/m), and the delay beyond a perfect
   /// loop's (s). Unset: the driver's own.
@@ -139,7 +142,7 @@ class DriverDevice final : public Device, public ServoClock {
     static void log_trampoline(void* self, int level, const char* message);
 
     int call_driver(Call what);
-    void serve();  // the driver thread
+    void serve(int priority);  // the driver thread, at SCHED_FIFO `priority` where > 0
   };
 
   /// Runs `what` on the driver thread (or here, without a timeout or device-clocked); false when

@@ -3,6 +3,7 @@
 
 #include <fstream>
 
+#include "config/devices.hpp"
 #include "config/federation_options.hpp"
 #include "config/server_config.hpp"
 #include "parse_error.hpp"
@@ -105,6 +106,21 @@ TEST(Config, TheSharesOfTheBudgetsDefaultToHalfAndNeverExceedTheWhole) {
             std::string::npos);
   EXPECT_NE(error_of(R"({"handshake_timeout_ms": 50})").find("handshake_timeout_ms: must be 100 to 60000, got 50"),
             std::string::npos);
+}
+
+TEST(Config, ADriversCallThreadRunsAtTheLoopsPriorityOnlyWhereTheLoopIsRealTimeWithFifo) {
+  // The loop waits on a driver port's call thread every tick, so it asks for what the loop asks
+  // for: real_time.fifo_priority in real time with use_fifo (the default, 80), and normal
+  // scheduling in lockstep or with FIFO turned off.
+  const auto priority = [](const std::string& json) {
+    v1::ServerConfig config = config::parse_config(json, "test");
+    config::fill_defaults(config);
+    return config::driver_thread_priority(config);
+  };
+  EXPECT_EQ(priority("{}"), 80);
+  EXPECT_EQ(priority(R"({"real_time": {"fifo_priority": 50}})"), 50);
+  EXPECT_EQ(priority(R"({"real_time": {"use_fifo": false}})"), 0);
+  EXPECT_EQ(priority(R"({"time_mode": "LOCKSTEP"})"), 0);
 }
 
 TEST(Config, BadValuesAreRejectedNamingTheField) {
