@@ -1,5 +1,7 @@
 #include "engine/analysis/system_identification.hpp"
 
+#include "engine/analysis/moving_stretch_fit.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -9,6 +11,10 @@
 
 namespace haptic::engine {
 namespace {
+
+using identification::Parameters;
+using identification::least_squares;
+using identification::minimise;
 
 constexpr double kPi = std::numbers::pi;
 
@@ -38,11 +44,6 @@ struct Spectrum {
   double drift_velocity = 0.0;                   // ẋ's mean. Unit: m/s.
 };
 
-struct Parameters {
-  double mass = 0, damping = 0, coulomb = 0, offset = 0, delay = 0, lag = 0;
-  double residual = 0;      // Σ_k |F_k e^{−jωτ} / (1 + jωτ_a) − model_k|²
-  double force_power = 0;   // Σ_k |F_k|²
-};
 
 /// cos and sin of 2π j / N for j < N: every harmonic's phase at sample n is (k n mod N).
 struct PhaseTable {
@@ -137,45 +138,6 @@ class Fitter {
       return std::nullopt;
     }
     return result;
-  }
-
-  /// The parameters minimising the residual of `at(v)` over v in [lo, hi]: a grid of `grid`
-  /// steps (the residual has local minima, for τ a period of the highest harmonic apart), then a
-  /// golden-section search of `refine` steps between the best point's neighbours.
-  template <typename At>
-  static Parameters minimise(const At& at, double lo_limit, double hi_limit, std::size_t grid, int refine) {
-    const double step = (hi_limit - lo_limit) / static_cast<double>(grid);
-    double best_v = lo_limit;
-    Parameters best = at(lo_limit);
-    for (std::size_t i = 1; i <= grid; ++i) {
-      const double v = lo_limit + step * static_cast<double>(i);
-      const Parameters p = at(v);
-      if (p.residual < best.residual) {
-        best = p;
-        best_v = v;
-      }
-    }
-    double lo = std::max(lo_limit, best_v - step), hi = std::min(hi_limit, best_v + step);
-    const double golden = (std::sqrt(5.0) - 1.0) / 2.0;
-    double a = hi - golden * (hi - lo), b = lo + golden * (hi - lo);
-    Parameters pa = at(a), pb = at(b);
-    for (int i = 0; i < refine; ++i) {
-      if (pa.residual < pb.residual) {
-        hi = b;
-        b = a;
-        pb = pa;
-        a = hi - golden * (hi - lo);
-        pa = at(a);
-      } else {
-        lo = a;
-        a = b;
-        pa = pb;
-        b = lo + golden * (hi - lo);
-        pb = at(b);
-      }
-    }
-    const Parameters middle = at(0.5 * (lo + hi));
-    return middle.residual <= best.residual ? middle : best;
   }
 
   /// τ in [0, max_delay] for a given lag.
@@ -299,34 +261,10 @@ class Fitter {
       }
       force_power += std::norm(s.f[i]);
     }
-    // Columns scaled to unit norm before solving: m's column is ω² larger than b's.
-    std::array<double, 3> scale{};
-    for (int r = 0; r < 3; ++r) scale[static_cast<std::size_t>(r)] = ata[r][r] > 0.0 ? 1.0 / std::sqrt(ata[r][r]) : 0.0;
-    double m[3][4];
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) m[r][c] = ata[r][c] * scale[static_cast<std::size_t>(r)] * scale[static_cast<std::size_t>(c)];
-      m[r][3] = atb[r] * scale[static_cast<std::size_t>(r)];
-    }
-    // A friction column of zeros (no reversal seen): c = 0, the 2×2 for (m, b).
-    const int unknowns = scale[2] > 0.0 ? 3 : 2;
-    for (int col = 0; col < unknowns; ++col) {
-      int pivot = col;
-      for (int r = col + 1; r < unknowns; ++r) {
-        if (std::abs(m[r][col]) > std::abs(m[pivot][col])) pivot = r;
-      }
-      for (int c = 0; c < 4; ++c) std::swap(m[col][c], m[pivot][c]);
-      const double d = m[col][col];
-      for (int r = 0; r < unknowns; ++r) {
-        if (r == col || d == 0.0) continue;
-        const double factor = m[r][col] / d;
-        for (int c = col; c < 4; ++c) m[r][c] -= factor * m[col][c];
-      }
-    }
-    std::array<double, 3> solution{};
-    for (int r = 0; r < unknowns; ++r) {
-      solution[static_cast<std::size_t>(r)] = m[r][r] != 0.0 ? m[r][3] / m[r][r] * scale[static_cast<std::size_t>(r)]
-                                                             : std::numeric_limits<double>::quiet_NaN();
-    }
+    // A friction column of zeros (no reversal seen) is left out: c = 0.
+    std::array<bool, 3> used{};
+    std::array<double, 3> solution = least_squares(ata, atb, used);
+    if (!used[0] || !used[1]) solution[0] = solution[1] = std::numeric_limits<double>::quiet_NaN();
     Parameters p;
     p.mass = solution[0];
     p.damping = solution[1];
@@ -446,7 +384,7 @@ std::optional<double> lattice_step(std::span<const double> values) {
 
 std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std::span<const double> force,
                                                 std::span<const double> position, std::string& why,
-                                                double max_delay_s, double max_lag_s) {
+                                                double max_delay_s, double max_lag_s, FitMethod method) {
   const std::size_t needed = excitation.fit_begin_tick() + excitation.fit_ticks();
   if (force.size() < needed || position.size() < needed) {
     why = "identify: " + std::to_string(std::min(force.size(), position.size())) + " ticks recorded, the excitation's fit "
@@ -465,7 +403,19 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
     why = "identify: the lag's bound must be finite and >= 0 (0: no lag), got " + std::to_string(max_lag_s);
     return std::nullopt;
   }
-  const auto all = fitter.fit(std::nullopt, max_delay, max_lag_s, why);
+  // In time, over where the axis moved: its still speed from the noise and the step the
+  // harmonics' fitter measures.
+  std::optional<identification::MovingStretchFit> in_time;
+  if (method == FitMethod::kMovingStretches) {
+    in_time.emplace(force, position, excitation.params.sample_period_s, excitation.fit_begin_tick(),
+                    excitation.params.samples_per_period, excitation.params.periods, fitter.noise_rms(),
+                    lattice_step(fitter.raw_window()));
+  }
+  const auto fit_without = [&](std::optional<std::size_t> left_out, std::string& reason) {
+    return in_time ? in_time->fit(left_out, max_delay, max_lag_s, reason)
+                   : fitter.fit(left_out, max_delay, max_lag_s, reason);
+  };
+  const auto all = fit_without(std::nullopt, why);
   if (!all) return std::nullopt;
   // The delete-one-period jackknife (Efron & Tibshirani 1993, §11.2): each parameter refitted
   // with one period left out; its spread, times (P − 1)/P, is the estimate's variance.
@@ -473,7 +423,7 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
   std::vector<Parameters> leave_one_out;
   for (std::size_t i = 0; i < p; ++i) {
     std::string ignored;
-    const auto fit = fitter.fit(i, max_delay, max_lag_s, ignored);
+    const auto fit = fit_without(i, ignored);
     if (!fit) {
       why = "identify: the fit without period " + std::to_string(i) + " failed: " + ignored;
       return std::nullopt;
@@ -505,6 +455,8 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
   out.quantization_m = lattice_step(fitter.raw_window());
   out.relative_residual = all->force_power > 0.0 ? std::sqrt(all->residual / all->force_power) : 0.0;
   out.periods = p;
+  out.method = method;
+  if (in_time) out.moving_fraction = in_time->moving_fraction();
   const std::vector<std::complex<double>> measured = fitter.measured_response();
   const double f0 = 1.0 / (static_cast<double>(excitation.params.samples_per_period) * excitation.params.sample_period_s);
   for (std::size_t i = 0; i < measured.size(); ++i) {

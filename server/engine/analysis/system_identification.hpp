@@ -22,6 +22,10 @@
 // Each estimate's 95 % interval is a delete-one-period jackknife (the fit repeated with each period
 // left out): it holds whatever the noise's colour, and it widens honestly with too few periods.
 //
+// An axis that friction holds still through part of each period breaks (1) there; for it (1) is
+// fitted in time instead, over the stretches where it moved (FitMethod::kMovingStretches,
+// engine/analysis/moving_stretch_fit), with the same search for τ and τ_a and the same jackknife.
+//
 // Off the loop: nothing here runs in a tick.
 
 #include <complex>
@@ -67,6 +71,16 @@ struct Multisine {
 /// Designs the multisine; an empty optional and `why` for parameters out of range.
 std::optional<Multisine> design_multisine(const MultisineParams& params, std::string& why);
 
+/// How (1) is fitted.
+enum class FitMethod {
+  /// At the excited harmonics of the averaged period (above): every tick, the friction as
+  /// c sgn(ẋ) throughout. The default.
+  kHarmonics,
+  /// In time, over the samples where the axis moved one way (engine/analysis/moving_stretch_fit):
+  /// for an axis that friction holds still through part of each period, where (1) does not hold.
+  kMovingStretches,
+};
+
 /// One identified parameter: the estimate, its 95 % interval's half-width, and the jackknife's
 /// standard error.
 struct Estimate {
@@ -107,6 +121,10 @@ struct AxisIdentification {
   /// The rms of (1)'s residual over the averaged period, relative to the force's rms.
   double relative_residual = 0.0;
   std::size_t periods = 0;
+  FitMethod method = FitMethod::kHarmonics;
+  /// The share of the fitted ticks the fit used: 1 at the harmonics; in time, those where the
+  /// axis moved (the rest friction held, or too slow to tell).
+  double moving_fraction = 1.0;
   std::vector<FrequencyPoint> response;
 };
 
@@ -114,11 +132,13 @@ struct AxisIdentification {
 /// that tick, position the reading of that tick) from the excitation's first tick, at least
 /// fit_begin_tick() + fit_ticks() long. `max_delay_s` bounds τ's search (default 20 ticks);
 /// `max_lag_s` > 0 fits a first-order lag τ_a in [0, max_lag_s] beside it (FrequencyPoint's
-/// model and the residual then carry 1/(1 + jωτ_a)).
+/// model and the residual then carry 1/(1 + jωτ_a)). `method`: at the harmonics, or in time where
+/// the axis moved (the response's measured points are the harmonics' either way).
 /// An empty optional and `why` when the data cannot be fitted (too short, not finite, no motion).
 std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std::span<const double> force,
                                                 std::span<const double> position, std::string& why,
-                                                double max_delay_s = -1.0, double max_lag_s = 0.0);
+                                                double max_delay_s = -1.0, double max_lag_s = 0.0,
+                                                FitMethod method = FitMethod::kHarmonics);
 
 /// The quantization step of `values` if they lie on a lattice q·n + offset (to 1e-6 of q), the
 /// smallest step seen; none otherwise or with fewer than three distinct values.
