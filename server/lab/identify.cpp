@@ -21,6 +21,15 @@ namespace {
 
 const char* axis_name(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"; }
 
+/// A damping below zero by more than its 95 % interval: the axis gains energy, no mass-damper.
+/// Within its interval of zero (a device with no viscous friction, 004's joystick), it is zero.
+bool negative_damping(const engine::AxisIdentification& fit) {
+  return fit.damping.value + fit.damping.half_width_95 < 0.0;
+}
+
+/// The damping a model takes from the fit: the estimate, or 0 where it is below 0 within its interval.
+double model_damping(const engine::AxisIdentification& fit) { return std::max(0.0, fit.damping.value); }
+
 /// The direction the tool moves in when the simulated operator pushes it along `axis` for 50 ms
 /// with `force_n` from rest: the displacement's, normalised. Throws where it does not move.
 engine::Vec3 direction_of_motion(const v1::ServerConfig& config, std::uint32_t port, int axis, double force_n,
@@ -59,6 +68,13 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
   if (!(params.limits.box_half_width_m > 0.0) || !(params.limits.max_speed_m_s > 0.0)) {
     throw std::invalid_argument("box and max speed: must be > 0");
   }
+  const runtime::ExcitationCentering& centering = params.centering;
+  if (!(centering.stiffness >= 0.0) || !std::isfinite(centering.stiffness) || !(centering.damping >= 0.0) ||
+      !std::isfinite(centering.damping)) {
+    throw std::invalid_argument("centering: stiffness and damping must be finite and >= 0, got " +
+                                std::to_string(centering.stiffness) + " N/m and " +
+                                std::to_string(centering.damping) + " N·s/m");
+  }
   v1::ServerConfig config = given;
   config::fill_defaults(config);
   if (auto e = config::validate(config); !e.empty()) throw std::invalid_argument(source + ": " + e);
@@ -73,7 +89,7 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
   (params.axis == 0 ? axis_W.x : params.axis == 1 ? axis_W.y : axis_W.z) = 1.0;
   if (params.along_motion) axis_W = direction_of_motion(config, params.port, params.axis, signal.amplitude_n, params.device_time);
   result.direction = axis_W;
-  runtime::ExcitationStage stage(*multisine, axis_W, params.limits);
+  runtime::ExcitationStage stage(*multisine, axis_W, params.limits, params.centering);
 
   // Whole ticks: the signal's, and one more so the last reading follows the last command.
   const auto ticks = static_cast<std::uint64_t>(std::llround(multisine->duration_s() / result.period_s)) + 1;
@@ -113,7 +129,8 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
             << " Hz), which sets how far the lowest harmonic carries it";
     throw std::invalid_argument(message.str());
   }
-  const std::optional<engine::AxisIdentification> fit = engine::identify_axis(*multisine, force, position, why, -1.0, params.max_lag_s);
+  const std::optional<engine::AxisIdentification> fit = engine::identify_axis(*multisine, force, position, why, -1.0,
+                                                                                     params.max_lag_s, params.fit_method);
   if (!fit) throw std::invalid_argument(why);
   result.fit = *fit;
   try {
@@ -144,7 +161,13 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
       << "A multisine of " << f.response.size() << " harmonics from " << f.response.front().frequency_hz << " to "
       << f.response.back().frequency_hz << " Hz, " << s.amplitude_n << " N peak, " << f.periods
       << " periods fitted; " << r.duration_s << " s of " << (params.device_time.real_time ? "real-time" : "lockstep")
-      << " ticks at " << 1.0 / r.period_s << " Hz. Intervals: 95 %, delete-one-period jackknife.\n\n";
+      << " ticks at " << 1.0 / r.period_s << " Hz. Intervals: 95 %, delete-one-period jackknife.";
+  const bool in_time = f.method == engine::FitMethod::kMovingStretches;
+  if (in_time) {
+    out << " Fitted in time over the stretches where the axis moved one way: " << 100.0 * f.moving_fraction
+        << " % of the fitted ticks (the rest friction held, or too slow to tell).";
+  }
+  out << "\n\n";
   if (r.late_ticks > 0) {
     // A late tick held its force longer than the fit assumes: said first, where it is read.
     out << "**" << r.late_ticks << " of " << std::llround(r.duration_s / r.period_s)
@@ -178,13 +201,14 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
   } else {
     out << "no lattice (the positions are not whole steps of one size)";
   }
-  out << ". Residual: " << 100.0 * f.relative_residual << " % of the force's rms.\n\nThe model: " << r.model_method
+  out << ". Residual: " << 100.0 * f.relative_residual << (in_time ? " % of the motion's rms" : " % of the force's rms")
+      << ".\n\nThe model: " << r.model_method
       << ".\n";
   // A fit that is not a mass-damper's says so rather than leaving its figures to be used.
-  if (!(f.mass.value > 0.0) || f.damping.value < 0.0 || f.relative_residual > 0.2) {
+  if (!(f.mass.value > 0.0) || negative_damping(f) || f.relative_residual > 0.2) {
     out << "\n**Not a mass-damper along this direction**: "
         << (!(f.mass.value > 0.0) ? "the mass came out not positive"
-            : f.damping.value < 0.0 ? "the damping came out negative"
+            : negative_damping(f) ? "the damping came out negative, beyond its interval"
                                     : "the residual is over 20 %")
         << ". The axis is coupled to others, held by friction, or not rigid over the band: do not use these figures; "
            "try --along-motion, another amplitude or band.\n";
@@ -200,13 +224,13 @@ v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const Identif
     p.axis = axis;
     p.along_motion = false;
     const IdentifyResult r = identify(config, p, source);
-    if (!(r.fit.mass.value > 0.0) || r.fit.damping.value < 0.0) {
+    if (!(r.fit.mass.value > 0.0) || negative_damping(r.fit)) {
       throw std::invalid_argument(std::string("profile: along ") + axis_name(axis) + " the fit is no mass-damper (mass " +
                                   std::to_string(r.fit.mass.value) + " kg, damping " +
                                   std::to_string(r.fit.damping.value) + " N·s/m)");
     }
     (axis == 0 ? mass.x : axis == 1 ? mass.y : mass.z) = r.fit.mass.value;
-    (axis == 0 ? damping.x : axis == 1 ? damping.y : damping.z) = r.fit.damping.value;
+    (axis == 0 ? damping.x : axis == 1 ? damping.y : damping.z) = model_damping(r.fit);
     delay_s = std::max(delay_s, r.fit.delay.value - r.period_s / 2.0);
     lag_s = std::max(lag_s, r.fit.lag.value);  // 0 unless --lag
   }
@@ -222,8 +246,8 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
                                       const IdentifyResult& result, const std::vector<double>& dampings,
                                       const std::function<void(std::size_t done, std::size_t total)>& progress) {
   // The lag where one was fitted (0 otherwise): the analysis samples it exactly.
-  const engine::MassDamperDevice model{result.fit.mass.value, result.fit.damping.value, std::max(0.0, result.fit.lag.value)};
-  if (!(model.mass > 0.0) || model.damping < 0.0) {
+  const engine::MassDamperDevice model{result.fit.mass.value, model_damping(result.fit), std::max(0.0, result.fit.lag.value)};
+  if (!(model.mass > 0.0) || negative_damping(result.fit)) {
     throw std::invalid_argument("zwidth: the identified model is not a mass-damper (mass " +
                                 std::to_string(model.mass) + " kg, damping " + std::to_string(model.damping) +
                                 " N·s/m): no prediction from it");

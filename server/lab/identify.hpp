@@ -35,7 +35,13 @@ struct IdentifyParams {
   /// Also fit a first-order lag between the command and the force, up to this (an amplifier's
   /// or a motor's time constant: 004's motors, 8.8 ms). Unit: s. 0: none (a pure delay only).
   double max_lag_s = 0.0;
+  /// At the excited harmonics (the default), or in time over the stretches where the axis moved:
+  /// for a device that friction holds still through part of each period (004's joystick).
+  engine::FitMethod fit_method = engine::FitMethod::kHarmonics;
   runtime::ExcitationLimits limits;
+  /// A spring and damper about the start added to the excitation (none by default): for a device
+  /// that stick and slip walks away from where it started (runtime/excitation_stage).
+  runtime::ExcitationCentering centering;
   /// How the device's time passes (lab_run's DeviceTime: its own clock stepped once a tick, or
   /// the ticks paced in real time for hardware): every run of the identification and of its
   /// Z-width check passes it on.

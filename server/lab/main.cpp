@@ -212,8 +212,8 @@ Subcommand add_zwidth(CLI::App& cli) {
 Subcommand add_identify(CLI::App& cli) {
   struct Options {
     haptic::lab::IdentifyParams p;
-    std::string device_path, axis = "x", csv_path, markdown_path;
-    std::vector<double> zwidth_dampings;
+    std::string device_path, axis = "x", fit = "harmonics", csv_path, markdown_path;
+    std::vector<double> zwidth_dampings, centering;
     std::string sweep_csv, profile_path;
     std::vector<std::size_t> sweep_periods{4, 8, 16, 32};
     std::vector<double> sweep_amplitudes;
@@ -237,6 +237,14 @@ Subcommand add_identify(CLI::App& cli) {
   app->add_option("--lag", o->p.max_lag_s,
                   "also fit a first-order lag between the command and the force, up to this many s (a motor's "
                   "or an amplifier's time constant; default 0: none)");
+  app->add_option("--fit", o->fit,
+                  "harmonics (default): at the excited harmonics; moving: in time, over the stretches where the "
+                  "axis moved, for a device that friction holds still through part of each period");
+  app->add_option("--centering", o->centering,
+                  "K,B: a spring (N/m) and damper (N*s/m) about the start added to the excitation, for a device "
+                  "that stick and slip walks away (default none)")
+      ->delimiter(',')
+      ->expected(2);
   app->add_option("--f-min", o->p.signal.f_min_hz, "lowest excited frequency, Hz (default 2)");
   app->add_option("--f-max", o->p.signal.f_max_hz, "highest, Hz (default 40)");
   app->add_option("--harmonics", o->p.signal.max_harmonics, "excited harmonics, log-spaced (default 24)");
@@ -266,6 +274,12 @@ Subcommand add_identify(CLI::App& cli) {
               throw std::invalid_argument("--axis: must be x, y or z, got \"" + o->axis + "\"");
             }
             o->p.axis = o->axis == "x" ? 0 : o->axis == "y" ? 1 : 2;
+            if (o->fit != "harmonics" && o->fit != "moving") {
+              throw std::invalid_argument("--fit: must be harmonics or moving, got \"" + o->fit + "\"");
+            }
+            if (o->centering.size() == 2) o->p.centering = {o->centering[0], o->centering[1]};
+            o->p.fit_method =
+                o->fit == "moving" ? haptic::engine::FitMethod::kMovingStretches : haptic::engine::FitMethod::kHarmonics;
             const haptic::v1::ServerConfig config = haptic::config::load_config_file(o->device_path);
             if (!o->profile_path.empty()) {
               const haptic::v1::DeviceProfile profile = haptic::lab::identify_profile(config, o->p, o->device_path);

@@ -5,8 +5,9 @@
 
 namespace haptic::runtime {
 
-ExcitationStage::ExcitationStage(engine::Multisine signal, engine::Vec3 axis_W, ExcitationLimits limits)
-    : signal_(std::move(signal)), axis_(axis_W), limits_(limits) {}
+ExcitationStage::ExcitationStage(engine::Multisine signal, engine::Vec3 axis_W, ExcitationLimits limits,
+                                 ExcitationCentering centering)
+    : signal_(std::move(signal)), axis_(axis_W), limits_(limits), centering_(centering) {}
 
 engine::Vec3 ExcitationStage::force(const ToolReading& reading, std::uint64_t tick) {
   if (stop_ != Stop::kNone || tick == 0) return {};
@@ -25,7 +26,9 @@ engine::Vec3 ExcitationStage::force(const ToolReading& reading, std::uint64_t ti
     stop_speed_ = speed;
     return {};
   }
-  return signal_.force_at_tick(static_cast<std::size_t>(tick - 1)) * axis_;
+  const double centering = -centering_.stiffness * engine::dot(p - start_, axis_) -
+                           centering_.damping * engine::dot(reading.v_WT, axis_);
+  return (signal_.force_at_tick(static_cast<std::size_t>(tick - 1)) + centering) * axis_;
 }
 
 }  // namespace haptic::runtime

@@ -20,15 +20,27 @@ struct ExcitationLimits {
   double max_speed_m_s = 0.5;  // |v_WT| beyond which it stops. Unit: m/s. > 0.
 };
 
+/// A spring and a damper about the start, along the axis, added to the multisine: they keep a
+/// device that friction lets wander (stick and slip walks it off) near where its mass is
+/// measured. They are part of the command, and the fit takes the command as it was written,
+/// whatever it is made of. Keep K below what the device's lag makes unstable (with a lag τ_a and
+/// no damping of its own, B > τ_a K), and the multisine's peak plus their force within its limit.
+struct ExcitationCentering {
+  double stiffness = 0.0;  // K. Unit: N/m. >= 0; 0: none.
+  double damping = 0.0;    // B. Unit: N·s/m. >= 0.
+};
+
 class ExcitationStage {
  public:
   enum class Stop { kNone, kLeftTheBox, kTooFast };
 
   /// axis_W: the direction of the force, a unit vector in W.
-  ExcitationStage(engine::Multisine signal, engine::Vec3 axis_W, ExcitationLimits limits);
+  ExcitationStage(engine::Multisine signal, engine::Vec3 axis_W, ExcitationLimits limits,
+                  ExcitationCentering centering = {});
 
   /// On the loop, once a tick with a good reading: the force for run tick `tick` (1, 2, ...; the
-  /// multisine's tick is tick − 1). Zero once stopped or past the signal's end. Unit: N, in W.
+  /// multisine's tick is tick − 1), with the centering's. Zero once stopped; past the signal's end,
+  /// the centering's alone. Unit: N, in W.
   engine::Vec3 force(const ToolReading& reading, std::uint64_t tick);
 
   Stop stop() const { return stop_; }
@@ -45,6 +57,7 @@ class ExcitationStage {
   engine::Multisine signal_;
   engine::Vec3 axis_;
   ExcitationLimits limits_;
+  ExcitationCentering centering_;
   Stop stop_ = Stop::kNone;
   std::uint64_t stop_tick_ = 0;
   engine::Vec3 stop_position_{};

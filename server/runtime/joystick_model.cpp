@@ -74,6 +74,10 @@ DeviceStatus JoystickModel::joint_command(const ToolCommand& command, const Devi
   const double users[3] = {tau_user.x, tau_user.y, tau_user.z};
   out = {};
   for (std::size_t i = 0; i < 3; ++i) {
+    if (params_.brakes_released) {
+      out.tau[i] = engine::saturate(taus[i], p.motor_limit(i));
+      continue;
+    }
     const engine::HybridRuleParams rule{p.brake_limit(i), params_.rule_stick_velocity};
     const engine::HybridSplit split = engine::split_hybrid(taus[i], joints.q_dot[i], users[i], rule);
     out.tau[i] = engine::saturate(split.motor, p.motor_limit(i));

@@ -32,6 +32,11 @@ struct JoystickModelParams {
   /// long — the simulated operator's press of the re-arm button (L1955). 0: never (rearm()
   /// only). Unit: s.
   double rearm_after_s = 1.0;
+  /// The brakes stay released (at their residual) and the motors take the whole command, as far
+  /// as they can: the mechanism alone, as it is identified on the bench, where a brake that takes
+  /// the dissipating part of the excitation would hide its mass. The watchdog and the safe state
+  /// still brake.
+  bool brakes_released = false;
 };
 
 class JoystickModel final : public DeviceModel {

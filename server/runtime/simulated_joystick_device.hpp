@@ -33,12 +33,14 @@ struct SimulatedJoystickConfig {
   double max_force = 7.0;
   /// See JoystickModelParams. Unit: s.
   double rearm_after_s = 1.0;
+  /// See JoystickModelParams.
+  bool brakes_released = false;
 
   /// Empty when usable; otherwise one message naming the bad field ("params.M_s: …").
   std::string validate() const;
   /// The model's part.
   JoystickModelParams model() const {
-    return {params, watchdog, rule_stick_velocity, rearm_after_s};
+    return {params, watchdog, rule_stick_velocity, rearm_after_s, brakes_released};
   }
 };
 

@@ -79,6 +79,12 @@ TEST(LabIdentify, AnExcitationThatCarriesTheToolOutOfItsBoxIsStoppedAndRefusedSa
   bad = light_excitation(0.02);
   bad.port = 4;
   EXPECT_THROW(identify(config, bad, "test"), std::invalid_argument);
+  bad = light_excitation(0.02);
+  bad.centering = {-5.0, 0.0};
+  what = refusal(bad);
+  EXPECT_NE(what.find("centering: stiffness and damping must be finite and >= 0"), std::string::npos) << what;
+  bad.centering = {5.0, std::nan("")};
+  EXPECT_NE(refusal(bad).find("centering:"), std::string::npos);
 }
 
 /// The Z-width the identified model predicts against the device's own, walls of increasing K run
@@ -278,6 +284,56 @@ TEST(LabIdentify, TheFiveBarThroughItsEncodersIsItsMassAndJointFrictionButItsDam
     EXPECT_NEAR(id.fit.damping.value, *id.model_damping, id.fit.damping.half_width_95) << "axis " << axis;
     EXPECT_GT(id.fit.damping.half_width_95, *id.model_damping) << "axis " << axis;
   }
+}
+
+TEST(LabIdentify, TheJoysticksGimbalWithItsBrakesReleasedIsItsMassFrictionAndMotorLagFittedWhereItMoves) {
+  // 004's joystick along x, its θ gimbal at mid-stroke (R = 0.24 m), brakes released (the
+  // mechanism alone: the hybrid rule's brakes would take the excitation's dissipating half),
+  // read through its encoders (0.0003835 rad a count, the code's angle tables, L1825: 92 µm at
+  // the handle) with 20 µrad of noise, and its tachometers. Its truth, the Jacobian's: I_θ/R² =
+  // 0.0434 kg, no viscous damping, the gimbal's 0.2 N·m of friction and the brake's 0.0778 N·m
+  // of residual magnetism over R, 1.157 N, and the motor's 8.8 ms (L378). Friction holds it
+  // through much of each period, and a spring and damper about the start (100 N/m, 1 N·s/m, part
+  // of the command) keep stick and slip from walking it off to where its mass along x is
+  // another (I_θ/(R cos θ)²).
+  v1::ServerConfig config =
+      config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/joystick_004.json");
+  config.set_time_mode(v1::LOCKSTEP);
+  v1::SimulatedJoystickConfig& joystick = *config.mutable_simulated_joystick();
+  joystick.set_brakes_released(true);
+  joystick.mutable_encoders()->add_quantization(0.0003835);
+  joystick.mutable_encoders()->add_noise(2e-5);
+  joystick.mutable_encoders()->set_seed(5);
+  joystick.mutable_encoders()->set_tachometers(true);
+  IdentifyParams params = light_excitation(7.0);
+  params.signal.f_min_hz = 10.0;
+  params.signal.f_max_hz = 40.0;
+  params.signal.max_harmonics = 12;
+  params.max_lag_s = 0.02;
+  params.limits.box_half_width_m = 0.1;
+  params.limits.max_speed_m_s = 1.8;  // under the watchdog's 8 rad/s (1.92 m/s at the handle)
+  params.centering = {100.0, 1.0};
+  const double mass = 2.5e-3 / (0.24 * 0.24), coulomb = (0.2 + 0.0778) / 0.24;
+
+  // At the harmonics the stuck stretches read as mass and damping that are not there.
+  const IdentifyResult harmonics = identify(config, params, "test");
+  std::printf("%s", identify_report(harmonics, params, "test").c_str());
+  EXPECT_GT(std::abs(harmonics.fit.mass.value / mass - 1.0), 0.2);
+
+  params.fit_method = engine::FitMethod::kMovingStretches;
+  const IdentifyResult id = identify(config, params, "test");
+  const std::string report = identify_report(id, params, "test");
+  std::printf("%s", report.c_str());
+  ASSERT_TRUE(id.model_mass && id.model_damping) << id.model_method;
+  EXPECT_NEAR(*id.model_mass, mass, 1e-9);
+  EXPECT_LT(id.fit.moving_fraction, 0.8);
+  EXPECT_NEAR(id.fit.mass.value, mass, 0.05 * mass);
+  EXPECT_NEAR(id.fit.damping.value, 0.0, std::max(0.02, id.fit.damping.half_width_95));
+  EXPECT_NEAR(id.fit.coulomb.value, coulomb, 0.02 * coulomb);
+  EXPECT_NEAR(id.fit.lag.value, 8.8e-3, 0.05 * 8.8e-3);
+  EXPECT_NEAR(id.fit.delay.value, 0.5e-3, 0.1e-3);  // the hold's half tick: no delay of its own
+  EXPECT_NE(report.find("Fitted in time over the stretches where the axis moved"), std::string::npos);
+  EXPECT_EQ(report.find("Not a mass-damper"), std::string::npos) << report;
 }
 
 #ifdef FORCEDIMENSION_DRIVER

@@ -123,11 +123,8 @@ TEST(SimulatedJoystickDevice, FreeSpaceForceGoesToTheMotorsAsJtF_Eq3_18) {
   EXPECT_NEAR(tau.z, p.r * engine::dot(F, engine::joystick_shaft_direction(0.2, 0.1)), 1e-15);
 }
 
-// A damper scene (F = −B v) while the hand swings the handle: every axis that moves is braked
-// and its motor is idle (eq. 4.7 through L1011's rule); the brakes only take power in.
-TEST(SimulatedJoystickDevice, ADamperSceneIsRenderedByTheBrakes_Eq4_7) {
-  SimulatedJoystickConfig config;
-  Joystick device(JoystickModel(config.model()), config);
+/// The hand swinging the handle ±30 mm along x at 1 Hz about where it starts.
+engine::HandInput swinging_hand(const SimulatedJoystickConfig& config) {
   engine::HandInput hand;
   hand.mode = engine::HandInput::Mode::kFollowTarget;
   hand.target = engine::joystick_forward(config.initial);
@@ -137,7 +134,15 @@ TEST(SimulatedJoystickDevice, ADamperSceneIsRenderedByTheBrakes_Eq4_7) {
   hand.trajectory.shape = engine::TargetTrajectory::Shape::kSine;
   hand.trajectory.amplitude = {0.03, 0.0, 0.0};
   hand.trajectory.frequency_hz = 1.0;
-  device->set_hand(hand);
+  return hand;
+}
+
+// A damper scene (F = −B v) while the hand swings the handle: every axis that moves is braked
+// and its motor is idle (eq. 4.7 through L1011's rule); the brakes only take power in.
+TEST(SimulatedJoystickDevice, ADamperSceneIsRenderedByTheBrakes_Eq4_7) {
+  SimulatedJoystickConfig config;
+  Joystick device(JoystickModel(config.model()), config);
+  device->set_hand(swinging_hand(config));
   const double B = 5.0;  // N·s/m
   int moving = 0, braked = 0;
   double min_brake_power = 0.0;
@@ -157,6 +162,36 @@ TEST(SimulatedJoystickDevice, ADamperSceneIsRenderedByTheBrakes_Eq4_7) {
   EXPECT_GT(moving, 1500);
   EXPECT_EQ(braked, moving);
   EXPECT_GE(min_brake_power, 0.0);
+  EXPECT_FALSE(device.model.watchdog_tripped());
+}
+
+// With its brakes released (the bench's identification), the same damper scene goes to the motors
+// as Jᵀ F, dissipating part and all, and no brake is applied.
+TEST(SimulatedJoystickDevice, WithItsBrakesReleasedTheMotorsTakeEveryCommand) {
+  SimulatedJoystickConfig config;
+  config.brakes_released = true;
+  Joystick device(JoystickModel(config.model()), config);
+  device->set_hand(swinging_hand(config));
+  const double B = 5.0;  // N·s/m
+  int dissipating = 0;
+  for (int k = 0; k < 2000; ++k) {
+    ToolReading r;
+    ASSERT_EQ(device.read(r), DeviceStatus::kOk);
+    const double theta_dot = device->plant().measured_joint_rates().x;
+    const engine::Vec3 F = -B * r.v_WT;
+    ASSERT_EQ(device.write({F}, kT), DeviceStatus::kOk);
+    const engine::JoystickActuatorCommand& c = device->last_command();
+    const engine::GimbalJoystickParams& p = config.params;
+    const engine::JoystickPose q = engine::joystick_inverse(r.p_WT);
+    const double tau = engine::joystick_multiply_transposed(
+        engine::joystick_jacobian(q.theta, q.phi, q.R / p.r, p.r), F).x;
+    EXPECT_NEAR(c.motor[0], tau, 1e-3 * std::abs(tau) + 1e-9) << k;
+    EXPECT_EQ(c.brake[0], 0.0);
+    EXPECT_EQ(c.brake[1], 0.0);
+    EXPECT_EQ(c.brake[2], 0.0);
+    dissipating += c.motor[0] * theta_dot < 0.0;
+  }
+  EXPECT_GT(dissipating, 1500);  // the motors, not the brakes, take the power in
   EXPECT_FALSE(device.model.watchdog_tripped());
 }
 
