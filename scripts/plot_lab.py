@@ -17,7 +17,8 @@ identify: `haptic-lab identify --csv`'s frequency response as a Bode chart, X/F'
 log) and phase (degrees) against frequency (Hz, log): the measured harmonics as points, the
 identified model as a line through them. identify-sweep: `haptic-lab identify --sweep-csv`'s runs,
 the mass's and the damping's relative error (points, solid) and 95 % interval (dashed) against
-the excitation's length (s, log), one colour per amplitude.
+the excitation's length (s, log), one colour per amplitude (for a device without damping, the
+damping panel shows the identified damping's magnitude and interval in N·s/m).
 
 Runs with /usr/bin/python3 and Debian's python3-matplotlib (Agg backend).
 """
@@ -196,20 +197,30 @@ def identify(rows, out):
 
 
 def identify_sweep(rows, out):
-    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.2), sharey=True)
+    # A device without damping of its own (004's joystick) has no relative damping error: that
+    # panel shows the identified damping's magnitude and interval in N·s/m instead (the newer
+    # columns; a sweep written before them has a damped device and needs neither).
+    absolute = all(math.isnan(float(r["damping_error"])) for r in rows)
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.2), sharey=not absolute)
     amplitudes = sorted({float(r["amplitude_n"]) for r in rows})
     colours = ["#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3"]
     for ax, name in zip(axes, ["mass", "damping"]):
+        error, half = (name + "_error", name + "_half_width")
+        if name == "damping" and absolute:
+            error, half = ("damping_n_s_m", "damping_half_width_n_s_m")
         for i, a in enumerate(amplitudes):
             mine = sorted((r for r in rows if float(r["amplitude_n"]) == a), key=lambda r: float(r["excitation_s"]))
             t = [float(r["excitation_s"]) for r in mine]
             colour = colours[i % len(colours)]
             # An error of exactly 0 cannot be drawn on a log axis: floored at 1e-6.
-            ax.loglog(t, [max(1e-6, float(r[name + "_error"])) for r in mine], "o-", color=colour, ms=4,
+            ax.loglog(t, [max(1e-6, abs(float(r[error]))) for r in mine], "o-", color=colour, ms=4,
                       label=f"{a:g} N: error")
-            ax.loglog(t, [float(r[name + "_half_width"]) for r in mine], "--", color=colour, lw=1,
+            ax.loglog(t, [float(r[half]) for r in mine], "--", color=colour, lw=1,
                       label=f"{a:g} N: 95 % interval")
-        ax.set_title(f"{name}: relative to the device's own")
+        if name == "damping" and absolute:
+            ax.set_title("damping: the device has none; |identified| [N·s/m]")
+        else:
+            ax.set_title(f"{name}: relative to the device's own")
         ax.set_xlabel("excitation [s] (ramps, settling and the fitted periods)")
         ax.grid(True, which="both", lw=0.3)
     axes[0].set_ylabel("|identified − model| / model, and the interval's half")

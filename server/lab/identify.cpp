@@ -327,16 +327,20 @@ std::vector<IdentifySweepRow> identify_sweep(const v1::ServerConfig& config, con
       const IdentifyResult r = identify(config, p, source);
       IdentifySweepRow row;
       row.cpu_s = static_cast<double>(std::clock() - started) / CLOCKS_PER_SEC;
-      if (!r.model_mass || !r.model_damping || !(*r.model_mass > 0.0) || !(*r.model_damping > 0.0)) {
+      if (!r.model_mass || !r.model_damping || !(*r.model_mass > 0.0) || !(*r.model_damping >= 0.0)) {
         throw std::invalid_argument("sweep: " + source + "'s device gives no mass and damping to measure the errors against");
       }
       row.amplitude_n = amplitude;
       row.periods = count;
       row.excitation_s = r.duration_s;
       row.mass_error = std::abs(r.fit.mass.value - *r.model_mass) / *r.model_mass;
-      row.damping_error = std::abs(r.fit.damping.value - *r.model_damping) / *r.model_damping;
+      const double no_relative = std::numeric_limits<double>::quiet_NaN();  // a model without damping
+      const bool damped = *r.model_damping > 0.0;
+      row.damping_error = damped ? std::abs(r.fit.damping.value - *r.model_damping) / *r.model_damping : no_relative;
       row.mass_half_width = r.fit.mass.half_width_95 / *r.model_mass;
-      row.damping_half_width = r.fit.damping.half_width_95 / *r.model_damping;
+      row.damping_half_width = damped ? r.fit.damping.half_width_95 / *r.model_damping : no_relative;
+      row.damping = r.fit.damping.value;
+      row.damping_half_width_abs = r.fit.damping.half_width_95;
       row.delay_half_width_s = r.fit.delay.half_width_95;
       rows.push_back(row);
       if (progress) progress(rows.size(), total);
@@ -349,11 +353,11 @@ std::string identify_sweep_csv(const std::vector<IdentifySweepRow>& rows) {
   std::ostringstream out;
   out << std::setprecision(std::numeric_limits<double>::max_digits10);
   out << "amplitude_n,periods,excitation_s,cpu_s,mass_error,damping_error,mass_half_width,damping_half_width,"
-         "delay_half_width_s\n";
+         "delay_half_width_s,damping_n_s_m,damping_half_width_n_s_m\n";
   for (const IdentifySweepRow& r : rows) {
     out << r.amplitude_n << ',' << r.periods << ',' << r.excitation_s << ',' << r.cpu_s << ',' << r.mass_error << ','
         << r.damping_error << ',' << r.mass_half_width << ',' << r.damping_half_width << ',' << r.delay_half_width_s
-        << '\n';
+        << ',' << r.damping << ',' << r.damping_half_width_abs << '\n';
   }
   return out.str();
 }

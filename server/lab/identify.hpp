@@ -106,14 +106,18 @@ struct IdentifySweepRow {
   std::size_t periods = 0;
   double excitation_s = 0.0;   // the whole run: ramps, settling and fitted periods. Unit: s.
   double cpu_s = 0.0;          // the run's simulation and the fit, on this machine. Unit: s.
-  double mass_error = 0.0, damping_error = 0.0;            // |identified − model| / model
-  double mass_half_width = 0.0, damping_half_width = 0.0;  // the 95 % intervals' halves / model
-  double delay_half_width_s = 0.0;                         // Unit: s.
+  /// |identified − model| / model, and the 95 % intervals' halves over the model; the damping's
+  /// NaN where the model has none (004's joystick: its figures below are then the measure).
+  double mass_error = 0.0, damping_error = 0.0;
+  double mass_half_width = 0.0, damping_half_width = 0.0;
+  double damping = 0.0, damping_half_width_abs = 0.0;  // the estimate and its interval. Unit: N·s/m.
+  double delay_half_width_s = 0.0;                     // Unit: s.
 };
 
 /// identify at every pair of `periods` and `amplitudes_n` (the rest of `params` as given), on a
 /// device whose configuration gives its own model. Throws what identify throws, or
-/// std::invalid_argument when the device gives no model to measure the errors against.
+/// std::invalid_argument when the device gives no model to measure the errors against (no mass,
+/// or no damping figure).
 std::vector<IdentifySweepRow> identify_sweep(const v1::ServerConfig& config, const IdentifyParams& params,
                                              const std::vector<std::size_t>& periods,
                                              const std::vector<double>& amplitudes_n, const std::string& source,

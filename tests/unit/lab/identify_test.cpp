@@ -296,15 +296,13 @@ TEST(LabIdentify, TheJoysticksGimbalWithItsBrakesReleasedIsItsMassFrictionAndMot
   // through much of each period, and a spring and damper about the start (100 N/m, 1 N·s/m, part
   // of the command) keep stick and slip from walking it off to where its mass along x is
   // another (I_θ/(R cos θ)²).
+  // config/joystick_bench_004.json is that joystick.
   v1::ServerConfig config =
-      config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/joystick_004.json");
+      config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/joystick_bench_004.json");
   config.set_time_mode(v1::LOCKSTEP);
-  v1::SimulatedJoystickConfig& joystick = *config.mutable_simulated_joystick();
-  joystick.set_brakes_released(true);
-  joystick.mutable_encoders()->add_quantization(0.0003835);
-  joystick.mutable_encoders()->add_noise(2e-5);
-  joystick.mutable_encoders()->set_seed(5);
-  joystick.mutable_encoders()->set_tachometers(true);
+  ASSERT_TRUE(config.simulated_joystick().brakes_released());
+  ASSERT_EQ(config.simulated_joystick().encoders().quantization_size(), 1);
+  EXPECT_EQ(config.simulated_joystick().encoders().quantization(0), 0.0003835);
   IdentifyParams params = light_excitation(7.0);
   params.signal.f_min_hz = 10.0;
   params.signal.f_max_hz = 40.0;
