@@ -193,7 +193,7 @@ Parameters MovingStretchFit::solve(std::span<const double> force_integral, doubl
 }
 
 std::optional<Parameters> MovingStretchFit::fit(std::optional<std::size_t> left_out, double max_delay, double max_lag,
-                                                std::string& why) const {
+                                                std::string& why, const Parameters* near) const {
   std::size_t count = 0;
   for (const Stretch& stretch : stretches_) count += !(left_out && stretch.period == *left_out) ? stretch.length : 0;
   if (count < kMinimumSamples) {
@@ -202,13 +202,25 @@ std::optional<Parameters> MovingStretchFit::fit(std::optional<std::size_t> left_
           std::to_string(kMinimumSamples) + " are needed): friction held it; raise the amplitude or the band";
     return std::nullopt;
   }
+  // The whole range on a grid, then a golden section about the best point; near a given fit, only
+  // one step of the whole range's grids either side of it.
+  constexpr std::size_t kLagGrid = 12, kDelayGrid = 24, kFinalDelayGrid = 80;
+  const auto range = [&](double value, double limit, std::size_t grid) {
+    if (!near) return std::pair{0.0, limit};
+    const double step = limit / static_cast<double>(grid);
+    return std::pair{std::max(0.0, value - step), std::min(limit, value + step)};
+  };
   const auto best_delay = [&](double lag, std::size_t grid, int refine) {
     const std::vector<double> integral = double_integral(lag);
-    return minimise([&](double tau) { return solve(integral, tau, lag, left_out); }, 0.0, max_delay, grid, refine);
+    const auto [lo, hi] = range(near ? near->delay : 0.0, max_delay, kDelayGrid);
+    return minimise([&](double tau) { return solve(integral, tau, lag, left_out); }, lo, hi, near ? 2 : grid, refine);
   };
   double lag = 0.0;
-  if (max_lag > 0.0) lag = minimise([&](double l) { return best_delay(l, 24, 20); }, 0.0, max_lag, 12, 16).lag;
-  Parameters result = best_delay(lag, 80, 40);
+  if (max_lag > 0.0) {
+    const auto [lo, hi] = range(near ? near->lag : 0.0, max_lag, kLagGrid);
+    lag = minimise([&](double l) { return best_delay(l, kDelayGrid, 20); }, lo, hi, near ? 2 : kLagGrid, 16).lag;
+  }
+  Parameters result = best_delay(lag, kFinalDelayGrid, 40);
   if (!std::isfinite(result.mass) || !std::isfinite(result.damping)) {
     why = "the fit is singular (the moving stretches do not tell mass from damping)";
     return std::nullopt;

@@ -50,9 +50,12 @@ class MovingStretchFit {
   /// The fit of (2) over every stretch but those starting in period `left_out` (none: all of
   /// them), τ in [0, max_delay] and τ_a in [0, max_lag] (none where max_lag is 0). Its residual
   /// and force_power are the positions' (m²): the relative residual is of the motion's rms.
+  /// `near`: a fit of all the periods, about whose τ and τ_a a jackknife's refit searches (one
+  /// grid step of the whole range either side), as its own optimum lies there: each refit then
+  /// evaluates a fifth as many (τ, τ_a).
   /// Empty, with `why`, where too few samples moved.
   std::optional<Parameters> fit(std::optional<std::size_t> left_out, double max_delay, double max_lag,
-                                std::string& why) const;
+                                std::string& why, const Parameters* near = nullptr) const;
 
   /// The samples in the stretches, and their share of the fitted ticks.
   std::size_t moving_samples() const;

@@ -411,8 +411,9 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
                     excitation.params.samples_per_period, excitation.params.periods, fitter.noise_rms(),
                     lattice_step(fitter.raw_window()));
   }
-  const auto fit_without = [&](std::optional<std::size_t> left_out, std::string& reason) {
-    return in_time ? in_time->fit(left_out, max_delay, max_lag_s, reason)
+  const auto fit_without = [&](std::optional<std::size_t> left_out, std::string& reason,
+                               const Parameters* near = nullptr) {
+    return in_time ? in_time->fit(left_out, max_delay, max_lag_s, reason, near)
                    : fitter.fit(left_out, max_delay, max_lag_s, reason);
   };
   const auto all = fit_without(std::nullopt, why);
@@ -423,7 +424,7 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
   std::vector<Parameters> leave_one_out;
   for (std::size_t i = 0; i < p; ++i) {
     std::string ignored;
-    const auto fit = fit_without(i, ignored);
+    const auto fit = fit_without(i, ignored, &*all);
     if (!fit) {
       why = "identify: the fit without period " + std::to_string(i) + " failed: " + ignored;
       return std::nullopt;
