@@ -346,6 +346,13 @@ std::string validate_point_mass(const v1::SimulatedPointMassConfig& device) {
   if (auto e = check_positive(device.max_force(), 1e4, "simulated_point_mass.max_force"); !e.empty()) {
     return e;
   }
+  if (!std::isfinite(device.coulomb()) || device.coulomb() < 0.0 || device.coulomb() > device.max_force()) {
+    return "simulated_point_mass.coulomb: must be finite and in [0, max_force], got " + std::to_string(device.coulomb());
+  }
+  if (!std::isfinite(device.actuator_lag()) || device.actuator_lag() < 0.0 || device.actuator_lag() > 0.1) {
+    return "simulated_point_mass.actuator_lag: must be finite and in [0, 0.1] s, got " +
+           std::to_string(device.actuator_lag());
+  }
   const auto& lo = device.workspace_min();
   const auto& hi = device.workspace_max();
   if (!(lo.x() < hi.x() && lo.y() < hi.y() && lo.z() < hi.z())) {
@@ -552,6 +559,8 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz, int 
   params.mass = mass.mass();
   params.damping = mass.damping();
   params.substeps = mass.substeps();
+  params.coulomb = mass.coulomb();
+  params.actuator_lag = mass.actuator_lag();
   params.workspace_min = schema::to_engine(mass.workspace_min());
   params.workspace_max = schema::to_engine(mass.workspace_max());
   std::optional<runtime::SimulatedRotation> rotation;

@@ -35,10 +35,13 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
                          double damping) {
   if (std::abs(engine::norm(params.direction) - 1.0) > 1e-9) throw std::invalid_argument("direction: must be a unit vector");
   if (!(params.push_n > 0.0) || !(params.seconds > 4.0 * params.window_s) || !(params.window_s > 0.0) ||
-      !(params.noise_floor_m >= 0.0) || !(params.penetration_m >= 0.0)) {
-    throw std::invalid_argument("push_n > 0, seconds > 4 windows > 0, noise_floor_m >= 0 and penetration_m >= 0 are needed");
+      !(params.noise_floor_m >= 0.0) || !(params.penetration_m >= 0.0) || !(params.min_push_n >= 0.0)) {
+    throw std::invalid_argument(
+        "push_n > 0, seconds > 4 windows > 0, noise_floor_m >= 0, penetration_m >= 0 and min_push_n >= 0 are needed");
   }
-  const double push_n = params.penetration_m > 0.0 ? std::min(params.push_n, stiffness * params.penetration_m) : params.push_n;
+  const double push_n = std::max(
+      params.min_push_n,
+      params.penetration_m > 0.0 ? std::min(params.push_n, stiffness * params.penetration_m) : params.push_n);
   v1::ServerConfig config = given;
   config::fill_defaults(config);
   if (auto e = config::validate(config); !e.empty()) throw std::invalid_argument(e);
@@ -70,11 +73,13 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
   const double equilibrium = engine::dot(start, params.direction) - push_n / stiffness;
   const auto window = static_cast<std::size_t>(std::llround(params.window_s / period));
   std::vector<double> distance;  // from the equilibrium, along the axis. Unit: m.
+  std::vector<double> along;     // the reading along the axis. Unit: m.
   bool finite = true;
   simulate_scene(config, std::round(params.seconds / period) * period, [&](const TickRecord& r) {
     if (r.port != params.port) return true;
     const double x = engine::dot(r.sample.p_WT, params.direction);
     finite = finite && std::isfinite(x);
+    along.push_back(x);
     distance.push_back(std::abs(x - equilibrium));
     return finite;
   }, {}, params.device_time);
@@ -99,6 +104,11 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
     const double reach = *std::max_element(distance.begin() + static_cast<std::ptrdiff_t>(window), distance.end());
     if (reach > 1.5 * distance.front() + params.noise_floor_m) return false;
     if (*last <= params.noise_floor_m) return true;
+  }
+  if (params.still_settles) {
+    // Held by friction off its equilibrium: still, it has settled; a ring that grows is never still.
+    const auto [low, high] = std::minmax_element(along.end() - static_cast<std::ptrdiff_t>(window), along.end());
+    if (*high - *low <= params.noise_floor_m) return true;
   }
   return growth.rate_per_s < 0.0 && *last < *first;
 }

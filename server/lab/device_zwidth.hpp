@@ -35,6 +35,12 @@ struct DeviceWallParams {
   /// inside the wall at every K, so that the fall in stands above the noise floor however stiff
   /// the wall. Unit: m.
   double penetration_m = 0.0;
+  /// A device that friction holds: the push is at least this, so that the tool moves into the
+  /// wall at every K (under its friction it would not move at all). Unit: N. >= 0.
+  double min_push_n = 0.0;
+  /// A device that friction holds: a run that ends still (its last window's motion within the
+  /// noise floor) has settled, wherever the friction stopped it (within c/K of the equilibrium).
+  bool still_settles = false;
   double seconds = 3.0;    // each run. Unit: s.
   double window_s = 0.1;   // the envelope's windows (the first, the fall in, left out). Unit: s.
   DeviceTime device_time;  // how the device's time passes (lab_run)

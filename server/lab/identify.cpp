@@ -30,6 +30,27 @@ bool negative_damping(const engine::AxisIdentification& fit) {
 /// The damping a model takes from the fit: the estimate, or 0 where it is below 0 within its interval.
 double model_damping(const engine::AxisIdentification& fit) { return std::max(0.0, fit.damping.value); }
 
+/// The identified model as a device (in lockstep): a point mass with the identified mass,
+/// damping, friction and lag on every axis, its sensor the identified noise and step, 100
+/// sub-steps a tick (the lag's and the stops' error under 1 %), and a force limit of `max_force_n`.
+v1::ServerConfig identified_model_config(const IdentifyResult& result, double loop_rate_hz, double max_force_n) {
+  const engine::AxisIdentification& f = result.fit;
+  v1::ServerConfig config;
+  config.set_loop_rate_hz(loop_rate_hz);
+  config.set_time_mode(v1::LOCKSTEP);
+  v1::SimulatedPointMassConfig& mass = *config.mutable_simulated_point_mass();
+  mass.set_mass(f.mass.value);
+  mass.set_damping(model_damping(f));
+  mass.set_coulomb(std::max(0.0, f.coulomb.value));
+  mass.set_actuator_lag(std::clamp(f.lag.value, 0.0, 0.1));
+  mass.set_substeps(100);
+  mass.set_max_force(std::max(max_force_n, 2.0 * std::max(0.0, f.coulomb.value)));
+  mass.mutable_sensor()->set_noise_m(std::min(0.01, f.noise_rms_m));
+  mass.mutable_sensor()->set_quantization_m(std::min(0.01, f.quantization_m.value_or(0.0)));
+  mass.mutable_sensor()->set_seed(1);
+  return config;
+}
+
 /// The direction the tool moves in when the simulated operator pushes it along `axis` for 50 ms
 /// with `force_n` from rest: the displacement's, normalised. Throws where it does not move.
 engine::Vec3 direction_of_motion(const v1::ServerConfig& config, std::uint32_t port, int axis, double force_n,
@@ -271,14 +292,33 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
     wall.penetration_m = 4.0 * wall.noise_floor_m;
     wall.push_n = std::max(wall.push_n, 2.0 * params.signal.amplitude_n);
   }
+  // Held by friction (see ZWidthCheck): pressed past it, still is settled, and the prediction is
+  // the identified model's own walls.
+  const engine::Estimate& coulomb = result.fit.coulomb;
+  const bool friction_held = coulomb.value - coulomb.half_width_95 > 0.05 * params.signal.amplitude_n;
+  std::optional<v1::ServerConfig> friction_model;
+  DeviceWallParams model_wall = wall;
+  if (friction_held) {
+    wall.min_push_n = 2.5 * coulomb.value;
+    wall.still_settles = true;
+    friction_model = identified_model_config(result, config.loop_rate_hz(), 2.0 * params.signal.amplitude_n + wall.min_push_n);
+    model_wall = wall;
+    model_wall.port = 0;
+    model_wall.device_time = {};
+  }
   std::vector<ZWidthCheck> checks;
   for (const double damping : dampings) {
     ZWidthCheck check;
     check.damping = damping;
     const engine::ImpedanceParams law{100.0, damping, 0.0};
     const auto discretization = engine::ImpedanceDiscretization::kBackwardDifference;
-    check.predicted =
+    check.linear =
         engine::sampled_wall_margin(law, discretization, model, result.period_s, delay_ticks).max_stable_stiffness;
+    check.predicted = check.linear;
+    if (friction_model) {
+      check.friction_model = true;
+      check.predicted = device_zwidth_boundary(*friction_model, model_wall, damping, 3.0 * check.linear);
+    }
     check.measured = device_zwidth_boundary(config, wall, damping, 3.0 * check.predicted);
     if (result.model_mass && result.model_damping && *result.model_mass > 0.0) {
       check.described = engine::sampled_wall_margin(law, discretization, {*result.model_mass, *result.model_damping},
@@ -294,7 +334,15 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
 std::string zwidth_report(const std::vector<ZWidthCheck>& checks) {
   std::ostringstream out;
   out << std::setprecision(4);
-  out << "\n## Z-width: predicted against the device's own\n\n"
+  out << "\n## Z-width: predicted against the device's own\n\n";
+  if (!checks.empty() && checks.front().friction_model) {
+    out << "Held by friction: the walls are pressed with 2.5 times the identified friction, a run that ends still "
+           "has settled, and the prediction is the same walls on the identified model (mass, damping, friction and "
+           "lag, simulated). Without the friction, the sampled analysis gives";
+    for (const ZWidthCheck& c : checks) out << " " << c.linear;
+    out << " N/m.\n\n";
+  }
+  out
       << "| B (N·s/m) | K_max measured (N/m) | predicted from the identified model | error | from the description | "
          "error |\n|---|---|---|---|---|---|\n";
   for (const ZWidthCheck& c : checks) {

@@ -83,10 +83,20 @@ v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const Identif
 /// (engine::sampled_wall_margin, BACKWARD_DIFFERENCE) from the identified mass, damping and delay
 /// beyond the hold (fractional ticks); measured on the device itself along the identified
 /// direction (lab/device_zwidth); and predicted from the device's own description, where it has one.
+///
+/// A device that friction holds (the identified friction beyond its interval is a twentieth of
+/// the excitation's peak or more) has no linear Z-width: its friction stops small rings and lets
+/// large ones grow, so its boundary depends on how hard the wall is pressed. Its walls are pressed
+/// with 2.5 times the identified friction, a run that ends still has settled, and the prediction
+/// is the same walls run on the identified model itself: a simulated point mass with the
+/// identified mass, damping, friction and lag and a sensor of the identified noise and step
+/// (`friction_model`; the linear analysis's figure is kept in `linear`).
 struct ZWidthCheck {
   double damping = 0.0;  // B. Unit: N·s/m.
   double predicted = 0.0, measured = 0.0;
   std::optional<double> described;
+  bool friction_model = false;  // predicted by walls on the identified model with its friction
+  double linear = 0.0;          // the sampled analysis's figure, without the friction. Unit: N/m.
 };
 
 /// The check at each of `dampings` (the device's own boundary bisected from a guess of three

@@ -15,6 +15,13 @@ struct PointMassParams {
   double mass = 0.01;        // Unit: kg. > 0.
   double damping = 0.022;    // Unit: N*s/m. >= 0.
   std::uint32_t substeps = 10;  // Sub-steps per tick, >= 1.
+  /// Coulomb friction on each axis of W, with stick: an axis at rest stays so while the force on
+  /// it is within c, and one whose velocity would cross zero within a sub-step stops there (the
+  /// model an identification fits where friction holds a device still). Unit: N. >= 0; 0: none.
+  double coulomb = 0.0;
+  /// τ_a: the device force reaches the mass through 1/(1 + s τ_a) (an actuator's lag). Unit: s.
+  /// >= 0; 0: none.
+  double actuator_lag = 0.0;
   Vec3 workspace_min{-0.1, -0.1, -0.1};  // Unit: m. The plant stops at the box (inelastic).
   Vec3 workspace_max{0.1, 0.1, 0.1};
 };
@@ -32,7 +39,8 @@ struct PointMassState {
 /// mass-damper exactly: v' = v e^{-h b/m} + (F/b)(1 - e^{-h b/m}), and x' from the integral of v
 /// (with b = 0 handled as the limit). The scheme is therefore exact for a constant force and
 /// unconditionally stable in the plant's own dynamics; its only error comes from the operator
-/// force being sampled per sub-step.
+/// force being sampled per sub-step. With a lag, the device force over a sub-step is the lag's
+/// exact mean over it; with friction, a stop within a sub-step is exact (its time solved).
 class PointMassPlant {
  public:
   explicit PointMassPlant(const PointMassParams& params, const PointMassState& initial = {});
@@ -46,7 +54,7 @@ class PointMassPlant {
       coefficients_ = ExactMassDamperStep::of(params_.mass + added_mass_, params_.damping, h);
     }
     for (std::uint32_t i = 0; i < params_.substeps; ++i) {
-      const Vec3 F_total = F_device + external_force(state_.p_WT, state_.v_WT);
+      const Vec3 F_total = through_lag(F_device, h) + external_force(state_.p_WT, state_.v_WT);
       advance_exact(F_total);
     }
   }
@@ -65,8 +73,14 @@ class PointMassPlant {
 
  private:
   void advance_exact(const Vec3& F);
+  /// One axis over a sub-step under F (N), with Coulomb friction and stick.
+  void advance_with_friction(double& x, double& v, double F, double m) const;
+  /// The device force's mean over the next sub-step h through the lag (F itself without one),
+  /// and the lag's state advanced to the sub-step's end.
+  Vec3 through_lag(const Vec3& F_device, double h);
 
   PointMassParams params_;
+  Vec3 lagged_force_{};  // the lag's output at the sub-step's start. Unit: N.
   PointMassState state_;
   ExactMassDamperStep coefficients_;  // for the sub-step h while dt is constant
   double added_mass_ = 0.0;

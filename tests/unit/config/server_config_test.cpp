@@ -125,6 +125,12 @@ TEST(Config, ADriversCallThreadRunsAtTheLoopsPriorityOnlyWhereTheLoopIsRealTimeW
 
 TEST(Config, BadValuesAreRejectedNamingTheField) {
   EXPECT_NE(error_of(R"({"loop_rate_hz": 20000})").find("loop_rate_hz"), std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_point_mass": {"coulomb": -0.1}})").find("simulated_point_mass.coulomb"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"simulated_point_mass": {"coulomb": 100}})").find("simulated_point_mass.coulomb"),
+            std::string::npos);  // above the default max_force
+  EXPECT_NE(error_of(R"({"simulated_point_mass": {"actuator_lag": 0.5}})").find("simulated_point_mass.actuator_lag"),
+            std::string::npos);
   EXPECT_NE(error_of(R"({"simulated_point_mass": {"mass": -1}})").find("simulated_point_mass.mass"),
             std::string::npos);
   // A simulated sensor's noise and step: finite, >= 0 and at most 10 mm.

@@ -126,6 +126,46 @@ TEST(PointMassPlant, StopsInelasticallyAtEveryFaceOfTheWorkspaceBox) {
   EXPECT_GT(plant.state().v_WT.y, 0.0);
 }
 
+TEST(PointMassPlant, CoulombFrictionHoldsItUnderItsForceAndStopsItExactlyWhereItsVelocityVanishes) {
+  PointMassParams p = params(10);
+  p.coulomb = 0.5;
+  PointMassPlant plant(p);
+  // Under the friction's force, it never moves; above it, it moves as a mass-damper under F − c.
+  for (int k = 0; k < 100; ++k) plant.step({0.5, -0.4, 0.0}, kDt, kNoHand);
+  EXPECT_EQ(plant.state().p_WT.x, 0.0);
+  EXPECT_EQ(plant.state().p_WT.y, 0.0);
+  for (int k = 0; k < 100; ++k) plant.step({0.8, 0.0, 0.0}, kDt, kNoHand);
+  EXPECT_NEAR(plant.state().p_WT.x, static_cast<double>(exact_position(0.3L, 0.1L)), 1e-12);
+  // Let go at v0, friction alone brings it to rest: without damping at v0²/(2c/m), exactly, and
+  // it stays there.
+  p.damping = 0.0;
+  PointMassPlant coasting(p, {{}, {0.2, 0.0, 0.0}});
+  for (int k = 0; k < 20; ++k) coasting.step({}, kDt, kNoHand);
+  EXPECT_NEAR(coasting.state().p_WT.x, 0.2 * 0.2 / (2.0 * 0.5 / kMass), 1e-15);
+  EXPECT_EQ(coasting.state().v_WT.x, 0.0);
+  // With damping: at v∞ t* + (m/b) v0, v∞ = −c/b, e^{−bt*/m} = −v∞/(v0 − v∞).
+  p.damping = kDamping;
+  PointMassPlant damped(p, {{}, {0.2, 0.0, 0.0}});
+  for (int k = 0; k < 20; ++k) damped.step({}, kDt, kNoHand);
+  const double terminal = -0.5 / kDamping;
+  const double stop = kMass / kDamping * std::log((0.2 - terminal) / -terminal);
+  EXPECT_NEAR(damped.state().p_WT.x, terminal * stop + kMass / kDamping * 0.2, 1e-13);
+  EXPECT_EQ(damped.state().v_WT.x, 0.0);
+}
+
+TEST(PointMassPlant, AnActuatorsLagDelaysTheForceAsAFirstOrderFilter) {
+  // A step F through 1/(1 + sτ) on an undamped mass: x(t) = (F/m) (t²/2 − τ t + τ² (1 − e^{−t/τ})).
+  PointMassParams p = params(10, 0.0);
+  p.actuator_lag = 8.8e-3;
+  PointMassPlant plant(p);
+  for (int k = 0; k < 50; ++k) plant.step({1.0, 0.0, 0.0}, kDt, kNoHand);
+  const double t = 0.05, tau = 8.8e-3;
+  const double exact = 1.0 / kMass * (t * t / 2.0 - tau * t + tau * tau * (1.0 - std::exp(-t / tau)));
+  // The lag's mean over each sub-step drives the mass as a held force: second order in the sub-step.
+  EXPECT_NEAR(plant.state().p_WT.x, exact, 1e-4 * exact);
+  EXPECT_LT(plant.state().p_WT.x, 1.0 / kMass * t * t / 2.0 * 0.8);  // well behind the unlagged
+}
+
 TEST(SimulatedHand, ForceLawPerMode) {
   HandInput hand;
   EXPECT_EQ(hand_force(hand, {1, 2, 3}, {4, 5, 6}), Vec3{});  // kNone lets go

@@ -332,6 +332,42 @@ TEST(LabIdentify, TheJoysticksGimbalWithItsBrakesReleasedIsItsMassFrictionAndMot
   EXPECT_NEAR(id.fit.delay.value, 0.5e-3, 0.1e-3);  // the hold's half tick: no delay of its own
   EXPECT_NE(report.find("Fitted in time over the stretches where the axis moved"), std::string::npos);
   EXPECT_EQ(report.find("Not a mass-damper"), std::string::npos) << report;
+
+  // Its walls are held by its friction: the frictionless model's linear boundary (54 to 477 N/m)
+  // is 5 to 15 times too low. Pressed with 2.5 times the friction, the same walls on the
+  // identified model (mass, friction and lag, simulated) predict the device's own within 10 %.
+  const std::vector<ZWidthCheck> checks = check_zwidth(config, params, id, {0.5, 2.0, 5.0});
+  std::printf("%s", zwidth_report(checks).c_str());
+  for (const ZWidthCheck& check : checks) {
+    EXPECT_TRUE(check.friction_model) << "B = " << check.damping;
+    EXPECT_NEAR(check.predicted, check.measured, 0.10 * check.measured) << "B = " << check.damping;
+    EXPECT_GT(check.measured, 3.0 * check.linear) << "B = " << check.damping;
+  }
+}
+
+TEST(LabIdentify, AWallOnADeviceThatFrictionHoldsIsPressedPastItsFrictionAndSettledWhereItStops) {
+  // A 50 g point mass with 0.5 N of friction behind an 8 ms lag (simulated_point_mass.coulomb
+  // and .actuator_lag), through a sensor.
+  const v1::ServerConfig config = config::parse_config(R"({"time_mode": "LOCKSTEP",
+      "simulated_point_mass": {"mass": 0.05, "damping": 0, "coulomb": 0.5, "actuator_lag": 0.008,
+                               "substeps": 100, "sensor": {"noise_m": 1e-6, "seed": 2}}})", "test");
+  DeviceWallParams wall;
+  wall.noise_floor_m = 2e-5;
+  wall.still_settles = true;
+  // Pressed with less than its friction it never moves, and stands still at any K: that proves
+  // nothing.
+  wall.push_n = 0.3;
+  EXPECT_TRUE(device_wall_settles(config, wall, 3000.0, 0.0));
+  // Pressed past it, it falls in and stops within c/K of its equilibrium up to a few hundred N/m
+  // (where the frictionless mass behind its lag rings at any K), and stiffer walls ring up.
+  wall.min_push_n = 1.25;
+  EXPECT_TRUE(device_wall_settles(config, wall, 300.0, 0.0));
+  EXPECT_FALSE(device_wall_settles(config, wall, 1000.0, 0.0));
+  EXPECT_FALSE(device_wall_settles(config, wall, 3000.0, 0.0));
+  const double linear = engine::sampled_wall_margin({1.0, 0.0, 0.0}, engine::ImpedanceDiscretization::kBackwardDifference,
+                                                    {0.05, 0.0, 0.008}, 1e-3)
+                            .max_stable_stiffness;
+  EXPECT_LT(linear, 30.0);
 }
 
 #ifdef FORCEDIMENSION_DRIVER
