@@ -128,6 +128,21 @@ TEST(LabIdentify, ThePointMassWithANoisyQuantizedSensorIsStillItsMassAndPredicts
   EXPECT_LT(predicted_against_measured(config, params, {0.0, 0.1, 0.3}), 0.10);
 }
 
+TEST(LabIdentify, OnADeviceThatNeverSticksTheFitInTimeAgreesWithTheHarmonics) {
+  // The point mass through its noisy, quantized sensor: no friction holds it, so every stretch
+  // between reversals is fitted, and the fit in time finds what the harmonics find.
+  const v1::ServerConfig config = config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/point_mass_sensor.json");
+  IdentifyParams params = light_excitation(0.02);
+  params.fit_method = engine::FitMethod::kMovingStretches;
+  const IdentifyResult id = identify(config, params, "test");
+  std::printf("%s", identify_report(id, params, "test").c_str());
+  EXPECT_GT(id.fit.moving_fraction, 0.5);
+  EXPECT_NEAR(id.fit.mass.value, 0.01, 0.01 * 0.01);
+  EXPECT_NEAR(id.fit.damping.value, 0.022, 0.05 * 0.022);
+  EXPECT_NEAR(id.fit.delay.value, 0.5e-3, 0.1e-3);
+  EXPECT_NEAR(id.fit.coulomb.value, 0.0, 2e-4);
+}
+
 TEST(LabIdentify, ASweepsIntervalsNarrowWithTheExcitationsLengthAndAmplitude) {
   const v1::ServerConfig config = config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/point_mass_sensor.json");
   const std::vector<IdentifySweepRow> rows =
