@@ -40,9 +40,10 @@ class MovingStretchFit {
   /// `force` the command written in each tick and `position` the reading of that tick, from the
   /// run's first tick (the lag's filter starts there, at rest); fitted over the ticks
   /// [begin, begin + periods × samples_per_period). `noise_rms_m` and `quantization_m` set the
-  /// speed below which a sample is taken for still: four times the central difference's noise
-  /// plus one step over two ticks, and at least 2 % of the rms speed (slower, the friction's
-  /// band, not (1), holds). Period T in s.
+  /// speed below which a sample is taken for still: the velocity is the difference over ±k ticks
+  /// (k of 1, 2, 4, 8: the smallest whose threshold is under a fifth of the rms speed), the
+  /// threshold four times its noise plus one step over the span, and at least 2 % of the rms
+  /// speed (slower, the friction's band, not (1), holds). Period T in s.
   MovingStretchFit(std::span<const double> force, std::span<const double> position, double period_s,
                    std::size_t begin, std::size_t samples_per_period, std::size_t periods, double noise_rms_m,
                    std::optional<double> quantization_m);
