@@ -234,6 +234,16 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
         << ". The axis is coupled to others, held by friction, or not rigid over the band: do not use these figures; "
            "try --along-motion, another amplitude or band.\n";
   }
+  // Much friction beside the excitation: it may hold the axis still through part of each period,
+  // where the harmonics' equation does not hold (004's joystick: its mass −51 % at a residual of
+  // 4 %), so the fit in time is worth comparing.
+  const double friction_share = (f.coulomb.value - f.coulomb.half_width_95) / params.signal.amplitude_n;
+  if (f.method == engine::FitMethod::kHarmonics && friction_share > 0.05) {
+    out << "\n**The friction is " << 100.0 * f.coulomb.value / params.signal.amplitude_n
+        << " % of the excitation's peak**: where it holds the axis still through part of each period, the fit at "
+           "the harmonics is biased however small its residual; compare --fit moving (docs/identification.md, "
+           "\"Stick and slip\").\n";
+  }
   return out.str();
 }
 

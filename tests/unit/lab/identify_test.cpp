@@ -48,6 +48,7 @@ TEST(LabIdentify, ThePointMassIsItsConfiguredMassAndDampingWithTheHoldsHalfTick)
   EXPECT_LT(result.fit.relative_residual, 0.01);
   const std::string report = identify_report(result, params, "test");
   EXPECT_NE(report.find("| mass (kg) |"), std::string::npos) << report;
+  EXPECT_EQ(report.find("compare --fit moving"), std::string::npos) << report;  // no friction to speak of
   const std::string csv = identify_response_csv(result);
   EXPECT_EQ(csv.rfind("frequency_hz,measured_m_per_n", 0), 0u);
   std::printf("%s", report.c_str());
@@ -331,8 +332,11 @@ TEST(LabIdentify, TheJoysticksGimbalWithItsBrakesReleasedIsItsMassFrictionAndMot
 
   // At the harmonics the stuck stretches read as mass and damping that are not there.
   const IdentifyResult harmonics = identify(config, params, "test");
-  std::printf("%s", identify_report(harmonics, params, "test").c_str());
+  const std::string harmonics_report = identify_report(harmonics, params, "test");
+  std::printf("%s", harmonics_report.c_str());
   EXPECT_GT(std::abs(harmonics.fit.mass.value / mass - 1.0), 0.2);
+  EXPECT_LT(harmonics.fit.relative_residual, 0.2);  // nothing in the residual says so, but:
+  EXPECT_NE(harmonics_report.find("compare --fit moving"), std::string::npos) << harmonics_report;
 
   params.fit_method = engine::FitMethod::kMovingStretches;
   const IdentifyResult id = identify(config, params, "test");
