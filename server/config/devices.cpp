@@ -438,6 +438,12 @@ PortDevice simulated(std::unique_ptr<runtime::SimulatedDevice> device,
   return {std::move(device), std::move(model), raw, nullptr};
 }
 
+/// Joint `i`'s value of an encoder list: its one value for every joint, its i-th, or 0 past its end.
+double joint_value(const google::protobuf::RepeatedField<double>& values, std::size_t i) {
+  if (values.size() == 1) return values.Get(0);
+  return static_cast<int>(i) < values.size() ? values.Get(static_cast<int>(i)) : 0.0;
+}
+
 /// `port`'s device read through `config`'s encoders (validated) where it sets them; the simulated
 /// device's plant and operator stay reachable through port.simulated.
 template <typename DeviceConfig>
@@ -446,12 +452,8 @@ PortDevice through_encoders(PortDevice port, const DeviceConfig& config, double 
   const v1::SimulatedEncoderConfig& encoders = config.encoders();
   runtime::EncoderOptions options;
   for (std::size_t i = 0; i < runtime::kMaxJoints; ++i) {
-    const auto value = [i](const google::protobuf::RepeatedField<double>& values) {
-      if (values.size() == 1) return values.Get(0);  // one value for every joint
-      return static_cast<int>(i) < values.size() ? values.Get(static_cast<int>(i)) : 0.0;
-    };
-    options.encoder.noise[i] = value(encoders.noise());
-    options.encoder.quantization[i] = value(encoders.quantization());
+    options.encoder.noise[i] = joint_value(encoders.noise(), i);
+    options.encoder.quantization[i] = joint_value(encoders.quantization(), i);
   }
   options.encoder.seed = encoders.seed();
   options.tachometers = encoders.tachometers();
@@ -517,8 +519,7 @@ PortDevice make_device(const v1::DeviceConfig& config, double loop_rate_hz, int 
       if (five_bar.max_force() > 0.0) options.max_force = five_bar.max_force();
       options.state_estimator = five_bar.velocity() == "estimator";
       if (five_bar.has_encoders()) {
-        const auto& noise = five_bar.encoders().noise();
-        for (int i = 0; i < 3 && !noise.empty(); ++i) options.encoder_noise[static_cast<std::size_t>(i)] = noise.Get(noise.size() == 1 ? 0 : i);
+        for (std::size_t i = 0; i < 3; ++i) options.encoder_noise[i] = joint_value(five_bar.encoders().noise(), i);
         options.noise_seed = five_bar.encoders().seed();
       }
       const engine::FiveBarParams params = five_bar_params(five_bar);

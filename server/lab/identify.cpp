@@ -27,6 +27,13 @@ bool negative_damping(const engine::AxisIdentification& fit) {
   return fit.damping.value + fit.damping.half_width_95 < 0.0;
 }
 
+/// Friction that may hold the axis still through part of each period: beyond its interval, a
+/// twentieth of the excitation's peak or more. The report then points to the fit in time, and the
+/// Z-width check presses the walls past it (ZWidthCheck).
+bool held_by_friction(const engine::AxisIdentification& fit, double amplitude_n) {
+  return fit.coulomb.value - fit.coulomb.half_width_95 > 0.05 * amplitude_n;
+}
+
 /// The damping a model takes from the fit: the estimate, or 0 where it is below 0 within its interval.
 double model_damping(const engine::AxisIdentification& fit) { return std::max(0.0, fit.damping.value); }
 
@@ -237,8 +244,7 @@ std::string identify_report(const IdentifyResult& r, const IdentifyParams& param
   // Much friction beside the excitation: it may hold the axis still through part of each period,
   // where the harmonics' equation does not hold (004's joystick: its mass −51 % at a residual of
   // 4 %), so the fit in time is worth comparing.
-  const double friction_share = (f.coulomb.value - f.coulomb.half_width_95) / params.signal.amplitude_n;
-  if (f.method == engine::FitMethod::kHarmonics && friction_share > 0.05) {
+  if (f.method == engine::FitMethod::kHarmonics && held_by_friction(f, params.signal.amplitude_n)) {
     out << "\n**The friction is " << 100.0 * f.coulomb.value / params.signal.amplitude_n
         << " % of the excitation's peak**: where it holds the axis still through part of each period, the fit at "
            "the harmonics is biased however small its residual; compare --fit moving (docs/identification.md, "
@@ -304,12 +310,11 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
   }
   // Held by friction (see ZWidthCheck): pressed past it, still is settled, and the prediction is
   // the identified model's own walls.
-  const engine::Estimate& coulomb = result.fit.coulomb;
-  const bool friction_held = coulomb.value - coulomb.half_width_95 > 0.05 * params.signal.amplitude_n;
+  const bool friction_held = held_by_friction(result.fit, params.signal.amplitude_n);
   std::optional<v1::ServerConfig> friction_model;
   DeviceWallParams model_wall = wall;
   if (friction_held) {
-    wall.min_push_n = 2.5 * coulomb.value;
+    wall.min_push_n = 2.5 * result.fit.coulomb.value;
     wall.still_settles = true;
     friction_model = identified_model_config(result, config.loop_rate_hz(), 2.0 * params.signal.amplitude_n + wall.min_push_n);
     model_wall = wall;

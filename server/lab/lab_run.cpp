@@ -133,12 +133,12 @@ RunSummary simulate_scene(const v1::ServerConfig& given, double duration_s, cons
   const auto ticks = static_cast<std::uint64_t>(std::llround(duration_s / period_s));
   bool go_on = true;
   const auto period_ns = static_cast<std::int64_t>(std::llround(period_s * 1e9));
-  constexpr std::int64_t kSpinNs = 200'000;  // hapticd's default spin (RealTimeConfig.spin_us)
+  const std::int64_t spin_ns = static_cast<std::int64_t>(config.real_time().spin_us()) * 1000;  // hapticd's
   const std::int64_t start_ns = device_time.real_time ? runtime::monotonic_now_ns() + period_ns : 0;
   for (std::uint64_t k = 1; k <= ticks && go_on; ++k) {
     if (device_time.real_time) {
       const std::int64_t deadline = start_ns + static_cast<std::int64_t>(k - 1) * period_ns;
-      if (runtime::sleep_then_spin_until(deadline, std::min(kSpinNs, period_ns / 5)) > deadline + period_ns / 2) {
+      if (runtime::sleep_then_spin_until(deadline, spin_ns) > deadline + period_ns / 2) {
         ++summary.late_ticks;
       }
     }

@@ -167,7 +167,7 @@ Trajectory integrate(const LinearOscillator& o, const StudyCase& c, Scheme schem
   engine::ForceGuard guard({1e9, 0.0});  // only its fault check matters here
   engine::StateVector<2> x{o.x0, o.v0};
   const std::array<std::array<double, 2>, 2> a{{{0.0, 1.0}, {-o.stiffness / o.mass, -o.damping / o.mass}}};
-  const ZohStep<2> zoh = exact_zoh<2>(a, {0.0, 1.0 / o.mass}, h);
+  const engine::ZohStep<2> zoh = engine::exact_zoh<2>(a, {0.0, 1.0 / o.mass}, h);
   std::uint64_t fault_ticks = 0;
   double t_now = 0.0;
   auto advance = [&](std::int64_t step) {
@@ -296,7 +296,7 @@ Trajectory sampled_wall(Scheme scheme, double period, const std::string& law, co
   engine::ImpedanceFilter filter(wall, discretization, period);
   const double x0 = -0.005;  // m: 5 mm in, at rest
   filter.reset(-x0, 0.0);
-  const ZohStep<2> device = exact_zoh<2>({{{0.0, 1.0}, {0.0, -kDeviceDamping / kDeviceMass}}},
+  const engine::ZohStep<2> device = engine::exact_zoh<2>({{{0.0, 1.0}, {0.0, -kDeviceDamping / kDeviceMass}}},
                                          {0.0, 1.0 / kDeviceMass}, period);
   double x = x0, v = 0.0;
   auto advance = [&](std::int64_t) {

@@ -130,7 +130,6 @@ void TickRunner::run_port(const engine::CompiledScene& scene, std::uint32_t inde
     // A failed or non-finite reading is a device fault: command zero at once (no ramp: nothing
     // justifies any force), and publish the last good state, never a NaN.
     counters_.device_errors.fetch_add(1, std::memory_order_relaxed);
-    sample.flags |= wire::kFlagDeviceFault;
     if (read_good) {
       port.last_good_reading = reading;  // a device holding its safe state still reports where it is
     } else {

@@ -7,6 +7,8 @@
 #include <limits>
 #include <numbers>
 
+#include "engine/core/exact_zoh.hpp"
+
 namespace haptic::engine {
 
 ImpedanceDiscretization discretization_of(ContactLaw law) {
@@ -264,65 +266,17 @@ bool schur_stable(const Polynomial& input) {
 
 namespace {
 
-using Matrix4 = std::array<std::array<double, 4>, 4>;
-
-Matrix4 multiply(const Matrix4& a, const Matrix4& b) {
-  Matrix4 out{};
-  for (std::size_t i = 0; i < 4; ++i) {
-    for (std::size_t k = 0; k < 4; ++k) {
-      for (std::size_t j = 0; j < 4; ++j) out[i][j] += a[i][k] * b[k][j];
-    }
-  }
-  return out;
-}
-
-/// e^M by scaling and squaring: M / 2^s with its largest row sum under 1/2, its Taylor series
-/// to 16 terms (below 1e-20 there), squared s times.
-Matrix4 exponential(Matrix4 m) {
-  double norm = 0.0;
-  for (const auto& row : m) {
-    double sum = 0.0;
-    for (const double v : row) sum += std::abs(v);
-    norm = std::max(norm, sum);
-  }
-  int squarings = 0;
-  while (norm > 0.5 && squarings < 60) {
-    norm /= 2.0;
-    ++squarings;
-  }
-  const double scale = std::ldexp(1.0, -squarings);
-  for (auto& row : m) {
-    for (double& v : row) v *= scale;
-  }
-  Matrix4 sum{}, term{};
-  for (std::size_t i = 0; i < 4; ++i) sum[i][i] = term[i][i] = 1.0;
-  for (int n = 1; n <= 16; ++n) {
-    term = multiply(term, m);
-    for (auto& row : term) {
-      for (double& v : row) v /= static_cast<double>(n);
-    }
-    for (std::size_t i = 0; i < 4; ++i) {
-      for (std::size_t j = 0; j < 4; ++j) sum[i][j] += term[i][j];
-    }
-  }
-  for (int s = 0; s < squarings; ++s) sum = multiply(sum, sum);
-  return sum;
-}
-
 /// X(z)/F(z) = N/D of the device with an actuator lag τ_a > 0, sampled with a ZOH over T: the
 /// states (x, v, f), A = [[0, 1, 0], [0, −b/m, 1/m], [0, 0, −1/τ_a]], B = (0, 0, 1/τ_a), C = (1,
 /// 0, 0); e^{[[A, B], [0, 0]] T} = [[Φ, Γ], [0, 1]]. With t = tr Φ and c the sum of Φ's principal
 /// 2×2 minors: D = z³ − t z² + c z − det Φ, and adj(zI − Φ) = z² I + z (Φ − t I) + Φ² − t Φ + c I.
 void lagged_device(const MassDamperDevice& device, double T, Polynomial& N, Polynomial& D) {
-  Matrix4 a{};
-  a[0][1] = T;
-  a[1][1] = -device.damping / device.mass * T;
-  a[1][2] = T / device.mass;
-  a[2][2] = -T / device.actuator_lag;
-  a[2][3] = T / device.actuator_lag;
-  const Matrix4 e = exponential(a);
-  const auto phi = [&](std::size_t i, std::size_t j) { return e[i][j]; };
-  const double gamma[3] = {e[0][3], e[1][3], e[2][3]};
+  const std::array<std::array<double, 3>, 3> a = {{{0.0, 1.0, 0.0},
+                                                   {0.0, -device.damping / device.mass, 1.0 / device.mass},
+                                                   {0.0, 0.0, -1.0 / device.actuator_lag}}};
+  const ZohStep<3> step = exact_zoh<3>(a, {0.0, 0.0, 1.0 / device.actuator_lag}, T);
+  const auto phi = [&](std::size_t i, std::size_t j) { return step.phi[i][j]; };
+  const std::array<double, 3>& gamma = step.gamma;
   const double trace = phi(0, 0) + phi(1, 1) + phi(2, 2);
   const auto minor = [&](std::size_t i, std::size_t j) { return phi(i, i) * phi(j, j) - phi(i, j) * phi(j, i); };
   const double minors = minor(0, 1) + minor(0, 2) + minor(1, 2);
@@ -368,9 +322,13 @@ Polynomial wall_characteristic_polynomial(const ImpedanceWeights& wall,
   }
   // x(k+1) = x(k) + T φ v(k) + (T²/m) g F(k), v(k+1) = e v(k) + (T/m) φ F(k), so
   // X(z)/F(z) = (T²/m)(g z + φ² − e g) / ((z − 1)(z − e)).
-  Polynomial N = make_polynomial({T * T / m * (phi * phi - e * g), T * T / m * g});
-  Polynomial D = make_polynomial({e, -(1.0 + e), 1.0});
-  if (device.actuator_lag > 0.0) lagged_device(device, T, N, D);
+  Polynomial N, D;
+  if (device.actuator_lag > 0.0) {
+    lagged_device(device, T, N, D);
+  } else {
+    N = make_polynomial({T * T / m * (phi * phi - e * g), T * T / m * g});
+    D = make_polynomial({e, -(1.0 + e), 1.0});
+  }
   Polynomial Nc, Dc;
   wall_transfer_function(wall, Nc, Dc);
   // The delay: z^d on the wall's denominator side (F(z) = −z^{−d} W(z) X(z)). A fractional one,

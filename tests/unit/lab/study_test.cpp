@@ -43,7 +43,7 @@ TEST(StudySchemes, NamesRoundTripAndUnknownNamesAreRefused) {
 TEST(StudyZoh, MatrixExponentialMatchesTheDampedOscillatorsClosedForm) {
   // m = 0.01, K = 1000, B = 1: σ = 50 1/s, ω_d = √(1e5 − 2500) rad/s; Φ(h)[0][0] = e^{−σh}(cos ω_d h + σ/ω_d sin ω_d h).
   const double m = 0.01, k = 1e3, b = 1.0, h = 1e-3;
-  const ZohStep<2> zoh = exact_zoh<2>({{{0.0, 1.0}, {-k / m, -b / m}}}, {0.0, 1.0 / m}, h);
+  const engine::ZohStep<2> zoh = engine::exact_zoh<2>({{{0.0, 1.0}, {-k / m, -b / m}}}, {0.0, 1.0 / m}, h);
   const double sigma = b / (2 * m), wd = std::sqrt(k / m - sigma * sigma);
   EXPECT_NEAR(zoh.phi[0][0], std::exp(-sigma * h) * (std::cos(wd * h) + sigma / wd * std::sin(wd * h)), 1e-14);
   EXPECT_NEAR(zoh.phi[0][1], std::exp(-sigma * h) * std::sin(wd * h) / wd, 1e-16);
