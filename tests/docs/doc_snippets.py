@@ -31,8 +31,8 @@ Attributes:
   before=CMD          a shell step the prose describes but shows no block for (copying a file
                       to the client, say); runs before the snippet.
   stream=SECONDS      sh only: run line by line (each line's exports carry on); a line still
-                      running after SECONDS is sent SIGINT and must then exit 0 having printed
-                      something (`--watch`, `events`).
+                      running SECONDS after its first output is sent SIGINT and must then exit 0
+                      (`--watch`, `events`). One that prints nothing in 60 s fails.
   expect=OUT          the snippet's output must match the `output` block OUT: each run of lines
                       between `...` lines appears in order, the first at the start and the last at
                       the end unless a `...` stands there. expect-lines=A-B compares the block's
@@ -66,6 +66,7 @@ from __future__ import annotations
 
 import os
 import re
+import select
 import shlex
 import shutil
 import signal
@@ -450,17 +451,23 @@ class Group:
             process = subprocess.Popen(["bash", "-c", script], cwd=self.work, env=self.env, text=True,
                                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                        start_new_session=True)
-            try:
-                out, _ = process.communicate(timeout=seconds)
+            # The window counts from the line's first output, not from its start: on a loaded
+            # machine a TLS connection alone may take longer than the window.
+            first_output, exited = read_until_quiet(process, seconds, FIRST_OUTPUT_WITHIN_S)
+            if exited:
+                out, _ = process.communicate()
+                out = first_output + out
                 interrupted = False
-            except subprocess.TimeoutExpired:
+            else:
                 os.killpg(process.pid, signal.SIGINT)
                 try:
                     out, _ = process.communicate(timeout=10)
                 except subprocess.TimeoutExpired:
                     os.killpg(process.pid, signal.SIGKILL)
                     out, _ = process.communicate()
-                    raise SnippetError(f"{s.where}: `{line}` did not stop on SIGINT within 10 s:\n{out}")
+                    raise SnippetError(f"{s.where}: `{line}` did not stop on SIGINT within 10 s:\n"
+                                       f"{first_output + out}")
+                out = first_output + out
                 interrupted = True
             if process.returncode != 0:
                 raise SnippetError(f"{s.where}: `{line}` exit status {process.returncode}"
@@ -468,7 +475,7 @@ class Group:
             if not interrupted:
                 Path(f"{self.state}.next").replace(self.state)
             if interrupted and not out.strip():
-                raise SnippetError(f"{s.where}: `{line}` printed nothing in {seconds:.0f} s")
+                raise SnippetError(f"{s.where}: `{line}` printed nothing in {FIRST_OUTPUT_WITHIN_S:.0f} s")
             output += out
         return output
 
@@ -496,7 +503,7 @@ class Group:
                 raise SnippetError(f"{s.where}: `{command}` exit status {done.returncode}, the doc says "
                                    f"{s.attrs['status']}; its output:\n{done.stdout}")
             compare("...\n" + s.code + "...\n", done.stdout, f"{s.where} against `{command}`")
-            print(f"ok   {s.where}\n{indent(done.stdout)}", flush=True)
+            print(f"ok   {s.where}\n{indent(head(done.stdout))}", flush=True)
             return
         output = ""
         if not s.run:
@@ -536,7 +543,7 @@ class Group:
                 first, _, last = s.attrs["expect-lines"].partition("-")
                 wanted = "...\n" + "".join(wanted.splitlines(True)[int(first) - 1:int(last)]) + "...\n"
             compare(wanted, output, f"{s.where} against {target.where}")
-        print(f"ok   {s.where}" + (f"\n{indent(output)}" if output.strip() else ""), flush=True)
+        print(f"ok   {s.where}" + (f"\n{indent(head(output))}" if output.strip() else ""), flush=True)
 
     def run(self) -> int:
         try:
@@ -555,6 +562,30 @@ class Group:
         return 0
 
 
+FIRST_OUTPUT_WITHIN_S = 60.0
+
+
+def read_until_quiet(process: subprocess.Popen, window_s: float, first_within_s: float) -> tuple[str, bool]:
+    """Reads `process`'s stdout until it exits or `window_s` has passed since its first output
+    (at most `first_within_s` waiting for that). Returns what was read and whether it exited."""
+    fd = process.stdout.fileno()
+    chunks: list[bytes] = []
+    deadline = time.monotonic() + first_within_s
+    while True:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            return b"".join(chunks).decode(errors="replace"), False
+        ready, _, _ = select.select([fd], [], [], left)
+        if not ready:
+            continue
+        data = os.read(fd, 65536)
+        if not data:
+            return b"".join(chunks).decode(errors="replace"), True
+        if not chunks:
+            deadline = time.monotonic() + window_s
+        chunks.append(data)
+
+
 def compare_lines(expected: list[str], output: str, where: str) -> None:
     got = [LOG_STAMP.sub("", ln).strip() for ln in output.splitlines()]
     position = 0
@@ -564,6 +595,18 @@ def compare_lines(expected: list[str], output: str, where: str) -> None:
         except ValueError:
             raise SnippetError(f"{where}: the doc shows the output line\n  {line}\nwhich it did not print "
                                f"(in order); it printed:\n{output}") from None
+
+
+PASSED_OUTPUT_LINES = 12
+
+
+def head(text: str, lines: int = PASSED_OUTPUT_LINES) -> str:
+    """The first lines of a passed snippet's output: a failure further on, printed whole, must
+    stay near the top of the test's log, where a log's excerpt looks."""
+    rows = text.rstrip("\n").split("\n")
+    if len(rows) <= lines:
+        return text
+    return "\n".join(rows[:lines]) + f"\n... ({len(rows) - lines} more lines)"
 
 
 def indent(text: str) -> str:

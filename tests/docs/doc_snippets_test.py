@@ -1,8 +1,12 @@
 #!/usr/bin/env python3
 """The snippet runner's own rules: what it refuses and how it compares output (no sandbox)."""
 
+import os
+import signal
+import subprocess
 import sys
 import tempfile
+import time
 import unittest
 from pathlib import Path
 
@@ -91,6 +95,47 @@ class Programs(unittest.TestCase):
         self.assertIn("int x = 1;", main.split("int main()")[1])
         fields = doc_snippets.cpp_program(snippets[1], snippets)
         self.assertIn("haptic::ClientConfig config{", fields)
+
+
+class Streams(unittest.TestCase):
+    def start(self, script: str) -> subprocess.Popen:
+        return subprocess.Popen(["bash", "-c", script], text=True, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, start_new_session=True)
+
+    def test_the_window_counts_from_the_first_output(self):
+        # A line that is slow to start (a TLS connection on a loaded machine) still gets its window.
+        process = self.start("sleep 0.6; echo first; sleep 0.1; echo second; sleep 30")
+        started = time.monotonic()
+        out, exited = doc_snippets.read_until_quiet(process, window_s=0.4, first_within_s=10)
+        waited = time.monotonic() - started
+        os.killpg(process.pid, signal.SIGKILL)
+        process.communicate()
+        self.assertFalse(exited)
+        self.assertEqual(out, "first\nsecond\n")
+        self.assertGreater(waited, 0.9)
+        self.assertLess(waited, 10)
+
+    def test_a_line_that_ends_is_read_to_its_end(self):
+        process = self.start("echo one; echo two")
+        out, exited = doc_snippets.read_until_quiet(process, window_s=5, first_within_s=10)
+        process.communicate()
+        self.assertTrue(exited)
+        self.assertEqual(out, "one\ntwo\n")
+
+    def test_a_silent_line_gives_up_after_the_first_output_wait(self):
+        process = self.start("sleep 30")
+        out, exited = doc_snippets.read_until_quiet(process, window_s=0.1, first_within_s=0.3)
+        os.killpg(process.pid, signal.SIGKILL)
+        process.communicate()
+        self.assertFalse(exited)
+        self.assertEqual(out, "")
+
+    def test_a_passed_snippets_long_output_is_cut_to_its_head(self):
+        text = "".join(f"line {i}\n" for i in range(30))
+        cut = doc_snippets.head(text, lines=5)
+        self.assertEqual(cut.splitlines()[:5], [f"line {i}" for i in range(5)])
+        self.assertIn("25 more lines", cut)
+        self.assertEqual(doc_snippets.head("a\nb\n", lines=5), "a\nb\n")
 
 
 if __name__ == "__main__":
