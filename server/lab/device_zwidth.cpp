@@ -116,15 +116,16 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
 double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallParams& params, double damping,
                               double guess, double tolerance) {
   if (!std::isfinite(guess) || guess <= 0.0) guess = 1000.0;
-  double lo = guess, hi = guess;
+  const double quarter_octave = std::pow(2.0, 0.25);
+  double lo = guess / 16.0;
   while (!device_wall_settles(config, params, lo, damping)) {
     lo /= 2.0;
     if (lo < guess * 1e-3) return 0.0;
   }
-  hi = std::max(hi, lo * 2.0);
+  double hi = lo * quarter_octave;
   while (device_wall_settles(config, params, hi, damping)) {
     lo = hi;
-    hi *= 2.0;
+    hi *= quarter_octave;
     if (hi > guess * 1e3) return std::numeric_limits<double>::infinity();
   }
   while (hi / lo > 1.0 + tolerance) {

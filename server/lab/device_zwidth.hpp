@@ -1,7 +1,7 @@
 #pragma once
 // The Z-width of a device itself (docs/identification.md): walls of increasing stiffness run on
 // the configuration's own device in lockstep, through the server's own loop (lab/lab_run), and
-// the largest stiffness whose run settles found by bisection, at a given damping. The ground
+// the first stiffness whose run does not settle, going up, found at a given damping. The ground
 // truth an identified model's prediction (engine::sampled_wall_margin) is checked against.
 //
 // Each run: a half-space wall through where the tool starts, its outward normal along the axis,
@@ -51,9 +51,16 @@ struct DeviceWallParams {
 bool device_wall_settles(const v1::ServerConfig& config, const DeviceWallParams& params, double stiffness,
                          double damping);
 
-/// The largest K that settles at damping B, to `tolerance` relative, by doubling or halving from
-/// `guess` to bracket it and then bisecting (in the logarithm); 0 when even guess / 1e3 does not
-/// settle, infinity when guess × 1e3 does.
+/// The first K that does not settle at damping B, going up: from guess / 16 (halved until a wall
+/// settles) up in quarter octaves (2^¼) to the first that does not, then bisecting between the
+/// two (in the logarithm) to `tolerance` relative; the last K that settled is returned. 0 when
+/// even guess / 1e3 does not settle, infinity when guess × 1e3 does. About 10 walls from a guess
+/// of three times the boundary.
+///
+/// The walk, not a doubling bracket: a device held by friction and read through counts may ring
+/// at a K and settle again at one above it (003's five-bar at B = 5 N·s/m rings at 37 and 44 kN/m
+/// and settles at 53), and a bisection between a settled K and a doubled one can land on such an
+/// island. What a user can count on is every wall under the figure settling: the first crossing.
 double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallParams& params, double damping,
                               double guess, double tolerance = 0.005);
 

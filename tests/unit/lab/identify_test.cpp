@@ -365,6 +365,34 @@ TEST(LabIdentify, TheJoysticksGimbalWithItsBrakesReleasedIsItsMassFrictionAndMot
   }
 }
 
+TEST(LabIdentify, TheFiveBarsZWidthIsTheFirstWallThatRingsGoingUpEveryWallUnderItSettles) {
+  // 003's five-bar through its counts and 50 µrad of noise, along x at B = 5 N·s/m, its walls as
+  // check_zwidth runs them on it (the identified noise's floor, friction 0.296 N pressed 2.5
+  // times). Its stability is no single step along K: it rings at some K and settles again above
+  // them, where a ring's few counts meet its friction. The figure is the first K that rings going
+  // up, so every wall under it settles; a doubling bracket's bisection (before) gave 53 kN/m,
+  // with walls at 37 and 44 kN/m ringing.
+  v1::ServerConfig config = config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/five_bar_003.json");
+  config.set_time_mode(v1::LOCKSTEP);
+  config.mutable_simulated_five_bar()->mutable_encoders()->add_noise(5e-5);
+  DeviceWallParams wall;
+  wall.noise_floor_m = 5.0 * std::sqrt(12.0) * 42.4e-6;
+  wall.penetration_m = 4.0 * wall.noise_floor_m;
+  wall.push_n = 8.0;
+  wall.min_push_n = 2.5 * 0.296;
+  wall.still_settles = true;
+  const double damping = 5.0;
+  const double boundary = device_zwidth_boundary(config, wall, damping, 1.0e5);
+  std::printf("five-bar along x, B = %g N·s/m: K_max %.0f N/m\n", damping, boundary);
+  ASSERT_GT(boundary, 1.0e4);
+  ASSERT_LT(boundary, 1.0e5);
+  for (int step = 1; step <= 8; ++step) {
+    const double stiffness = boundary * std::pow(2.0, -step / 4.0);
+    EXPECT_TRUE(device_wall_settles(config, wall, stiffness, damping)) << "K = " << stiffness << " N/m";
+  }
+  EXPECT_FALSE(device_wall_settles(config, wall, boundary * 1.01, damping));
+}
+
 TEST(LabIdentify, AWallOnADeviceThatFrictionHoldsIsPressedPastItsFrictionAndSettledWhereItStops) {
   // A 50 g point mass with 0.5 N of friction behind an 8 ms lag (simulated_point_mass.coulomb
   // and .actuator_lag), through a sensor.
