@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstddef>
 
+#include "engine/core/golden_section.hpp"
+
 namespace haptic::engine::identification {
 
 /// One fit of F(t − τ) / (1 + sτ_a) = m ẍ + b ẋ + c sgn(ẋ) + f0 (system_identification.hpp's (1)).
@@ -34,25 +36,9 @@ Parameters minimise(const At& at, double lo_limit, double hi_limit, std::size_t 
       best_v = v;
     }
   }
-  double lo = std::max(lo_limit, best_v - step), hi = std::min(hi_limit, best_v + step);
-  const double golden = (std::sqrt(5.0) - 1.0) / 2.0;
-  double a = hi - golden * (hi - lo), b = lo + golden * (hi - lo);
-  Parameters pa = at(a), pb = at(b);
-  for (int i = 0; i < refine; ++i) {
-    if (pa.residual < pb.residual) {
-      hi = b;
-      b = a;
-      pb = pa;
-      a = hi - golden * (hi - lo);
-      pa = at(a);
-    } else {
-      lo = a;
-      a = b;
-      pa = pb;
-      b = lo + golden * (hi - lo);
-      pb = at(b);
-    }
-  }
+  const auto [lo, hi] = golden_section_narrow([&](double v) { return at(v).residual; },
+                                               std::max(lo_limit, best_v - step), std::min(hi_limit, best_v + step),
+                                               0.0, refine);
   const Parameters middle = at(0.5 * (lo + hi));
   return middle.residual <= best.residual ? middle : best;
 }

@@ -4,6 +4,9 @@
 #include <cassert>
 #include <cmath>
 #include <numbers>
+#include <utility>
+
+#include "engine/core/golden_section.hpp"
 
 namespace haptic::engine {
 namespace {
@@ -18,27 +21,8 @@ Complex jw(double omega) { return {0.0, omega}; }
 /// The x in [a, b] minimising a unimodal f, to |b − a| <= tolerance (golden-section search).
 template <typename F>
 double golden_section_minimum(F&& f, double a, double b, double tolerance) {
-  const double r = (std::sqrt(5.0) - 1.0) / 2.0;  // 0.618…
-  double x1 = b - r * (b - a);
-  double x2 = a + r * (b - a);
-  double f1 = f(x1);
-  double f2 = f(x2);
-  while (b - a > tolerance) {
-    if (f1 < f2) {
-      b = x2;
-      x2 = x1;
-      f2 = f1;
-      x1 = b - r * (b - a);
-      f1 = f(x1);
-    } else {
-      a = x1;
-      x1 = x2;
-      f1 = f2;
-      x2 = a + r * (b - a);
-      f2 = f(x2);
-    }
-  }
-  return 0.5 * (a + b);
+  const auto [lo, hi] = golden_section_narrow(std::forward<F>(f), a, b, tolerance, 10000);
+  return 0.5 * (lo + hi);
 }
 
 void assert_valid(const WallDesignParams& p) {
