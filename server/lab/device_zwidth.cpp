@@ -117,7 +117,10 @@ double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallPa
                               double guess, double tolerance) {
   if (!std::isfinite(guess) || guess <= 0.0) guess = 1000.0;
   const double quarter_octave = std::pow(2.0, 0.25);
-  double lo = guess / 16.0;
+  // On the grid 2^(k/4) N/m, whatever the guess: the device's figure is the ground truth a
+  // prediction is checked against, and where its stability changes more than once the walls
+  // walked decide it, so they must not move with the prediction.
+  double lo = std::pow(2.0, std::floor(4.0 * std::log2(guess / 16.0)) / 4.0);
   while (!device_wall_settles(config, params, lo, damping)) {
     lo /= 2.0;
     if (lo < guess * 1e-3) return 0.0;

@@ -51,11 +51,11 @@ struct DeviceWallParams {
 bool device_wall_settles(const v1::ServerConfig& config, const DeviceWallParams& params, double stiffness,
                          double damping);
 
-/// The first K that does not settle at damping B, going up: from guess / 16 (halved until a wall
-/// settles) up in quarter octaves (2^¼) to the first that does not, then bisecting between the
-/// two (in the logarithm) to `tolerance` relative; the last K that settled is returned. 0 when
-/// even guess / 1e3 does not settle, infinity when guess × 1e3 does. About 10 walls from a guess
-/// of three times the boundary.
+/// The first K that does not settle at damping B, going up: from guess / 16 (rounded down to the
+/// grid 2^(k/4) N/m, halved until a wall settles) up that grid's quarter octaves to the first
+/// that does not, then bisecting between the two (in the logarithm) to `tolerance` relative;
+/// the last K that settled is returned. 0 when even guess / 1e3 does not settle, infinity when
+/// guess × 1e3 does. About 10 walls from a guess of three times the boundary.
 ///
 /// The walk, not a doubling bracket: a device held by friction and read through counts may ring
 /// at a K and settle again at one above it (003's five-bar at B = 5 N·s/m rings at 37 and 44 kN/m
