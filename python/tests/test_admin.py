@@ -1,13 +1,13 @@
 """Statistics, recordings and tokens through the Python SDK."""
 
 import json
-import os
 import time
 
 import pytest
 
 import hapticd
 from conftest import ServerProcess, lockstep_config
+from dds_domain import unique_dds_domain
 
 ADMIN = "admin-token-0123456789abcdef"
 OBSERVER = "observer-token-0123456789abcdef"
@@ -28,14 +28,14 @@ def test_stats_count_this_session_and_its_stream(client):
     assert client.stats().objects == 0
 
 
-def federation_section(site, domain_offset):
-    """A federation section on loopback DDS, in a domain of this test run's own (from its pid)."""
-    return {"site": site, "domain_id": 100 + (os.getpid() + domain_offset) % 120,
+def federation_section(site, domain):
+    """A federation section on loopback DDS, in `domain` (one of the test's own: dds_domain.py)."""
+    return {"site": site, "domain_id": domain,
             "peers": ["127.0.0.1"]}
 
 
 def test_a_site_alone_has_federation_stats_and_no_coupling():
-    server = ServerProcess(lockstep_config(federation=federation_section("py-alone", 7)))
+    server = ServerProcess(lockstep_config(federation=federation_section("py-alone", unique_dds_domain())))
     try:
         with hapticd.Client(server.config()) as client:
             client.step(10)
@@ -52,11 +52,13 @@ def test_two_sites_see_their_tools_coupling_and_its_books_balance():
     """Two real-time sites on loopback DDS, A's hand pushing its tool into B's: A holds B's tool
     as a coupling of its port 0, its user put energy into it, and its layer holds what its books
     say (injected − given + received − sent, to 1 mJ: the figures are read a tick apart)."""
+    domain = unique_dds_domain()
+
     def site(name, x):
         return ServerProcess(json.dumps({
             "udp_address": "127.0.0.1", "status_period_s": 0, "real_time": {"use_fifo": False},
             "simulated_point_mass": {"initial_position": {"x": x}},
-            "federation": federation_section(name, 37)}))
+            "federation": federation_section(name, domain)}))
 
     a = site("py-a", -0.02)
     try:

@@ -21,6 +21,7 @@
 #include "integration/raw_client.hpp"
 #include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
+#include "support/dds_domain.hpp"
 
 namespace haptic {
 namespace {
@@ -43,7 +44,7 @@ void take_poses(dds_entity_t reader, See see) {
 }
 
 TEST(Federation, ASitesToolIsOnRos2TopicsAsItsNewestTick) {
-  const std::uint32_t domain = 100 + static_cast<std::uint32_t>(getpid() % 120);
+  const std::uint32_t domain = test::unique_dds_domain();
   test::ServerProcess server(R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
       "real_time": {"use_fifo": false},
       "federation": {"site": "bench-a", "domain_id": )" + std::to_string(domain) + R"(, "peers": ["127.0.0.1"],
@@ -86,7 +87,7 @@ TEST(Federation, ASitesToolIsOnRos2TopicsAsItsNewestTick) {
 // hapticd's publishers, and header.stamp is this host's wall clock (the default stamp_clock), as
 // tf2, rviz and `ros2 topic delay` expect, not the seconds since the server started.
 TEST(Federation, ARos2NodeWithTheDefaultProfileGetsPosesStampedWithTheWallClock) {
-  const std::uint32_t domain = 100 + static_cast<std::uint32_t>((getpid() + 7) % 120);
+  const std::uint32_t domain = test::unique_dds_domain();
   test::ServerProcess server(R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
       "real_time": {"use_fifo": false},
       "federation": {"site": "bench-r", "domain_id": )" + std::to_string(domain) + R"(, "peers": ["127.0.0.1"],
@@ -128,7 +129,7 @@ TEST(Federation, ARos2NodeWithTheDefaultProfileGetsPosesStampedWithTheWallClock)
 // hand more energy than the hand put in (the layer); a NaN wrench never reaches it; once the node
 // stops, the force ramps out within stale_s and the ramp, never cut by the guard. Bounded waits.
 TEST(Federation, ARos2NodesWrenchIsFeltOnTheSteppedToolThroughThePassivityLayer) {
-  const std::uint32_t domain = 100 + static_cast<std::uint32_t>((getpid() + 90) % 120);
+  const std::uint32_t domain = test::unique_dds_domain();
   test::ServerProcess server(R"({"time_mode": "LOCKSTEP", "udp_address": "127.0.0.1", "status_period_s": 0,
       "real_time": {"use_fifo": false},
       "federation": {"site": "bench-w", "domain_id": )" + std::to_string(domain) + R"(, "peers": ["127.0.0.1"],
@@ -240,7 +241,7 @@ double push_past_each_other(Client& a, Client& b, double seconds) {
 // through the coupling's passivity layer); the hands' targets pass through each other, the tools
 // do not (behaviour, not timing: where A rests, not when).
 TEST(Federation, TwoSitesToolsTouchEachOtherOverDds) {
-  const std::uint32_t domain = 100 + static_cast<std::uint32_t>((getpid() + 60) % 120);
+  const std::uint32_t domain = test::unique_dds_domain();
   test::ServerProcess site_a(site_config("bench-a", domain, -0.02));
   auto site_b = std::make_unique<test::ServerProcess>(site_config("bench-b", domain, 0.02));
   Client a(config_for(site_a));
@@ -281,7 +282,7 @@ TEST(Federation, TwoSitesToolsTouchEachOtherOverDds) {
 // the coupling (the mass topic and both sites' network passivity layers); once the hand holds
 // still, the copies rest together (behaviour, not timing: where they rest, not when).
 TEST(Federation, TwoSitesShareOneMassThatOneSitesHandPushes) {
-  const std::uint32_t domain = 100 + static_cast<std::uint32_t>((getpid() + 30) % 120);
+  const std::uint32_t domain = test::unique_dds_domain();
   test::ServerProcess site_a(site_config("mass-a", domain, -0.08));
   test::ServerProcess site_b(site_config("mass-b", domain, 0.08));
   Client a(config_for(site_a));

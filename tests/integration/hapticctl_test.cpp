@@ -16,6 +16,7 @@
 #include "integration/run_program.hpp"
 #include "integration/sdk_harness.hpp"
 #include "integration/server_process.hpp"
+#include "support/dds_domain.hpp"
 
 namespace haptic {
 namespace {
@@ -66,7 +67,7 @@ TEST(Hapticctl, StatusSessionsAndStatsShowTheServer) {
 
 // A site of a federation (alone in its DDS domain): status adds the federation's block.
 TEST(Hapticctl, StatusShowsTheFederationOfASite) {
-  const std::uint32_t domain = 100 + static_cast<std::uint32_t>((getpid() + 15) % 120);
+  const std::uint32_t domain = test::unique_dds_domain();
   test::ServerProcess server(test::lockstep_config(R"("federation": {"site": "ctl-a", "domain_id": )" +
                                                    std::to_string(domain) + R"(, "peers": ["127.0.0.1"]})"));
   const Outcome status = hapticctl(server, {"status"});

@@ -1,5 +1,5 @@
-// What the federation's DDS tests on loopback share: a domain of the test process's own, and a
-// bounded wait.
+// What the federation's DDS tests on loopback share: a domain of the test process's own
+// (support/dds_domain.hpp), and a bounded wait.
 #pragma once
 
 #include <unistd.h>
@@ -9,14 +9,15 @@
 #include <thread>
 
 #include "federation/dds_participant.hpp"
+#include "support/dds_domain.hpp"
 
 namespace haptic::test {
 
-/// A DDS domain of this test process's own on loopback (ctest runs tests in parallel; loopback
-/// discovery would otherwise mix their samples), unicast to 127.0.0.1.
+/// This test process's DDS domain on loopback (ctest runs tests in parallel; loopback discovery
+/// would otherwise mix their samples), unicast to 127.0.0.1.
 inline federation::DomainOptions loopback_domain() {
   federation::DomainOptions options;
-  options.domain_id = 100 + static_cast<std::uint32_t>(getpid() % 120);
+  options.domain_id = process_dds_domain();
   options.interface = "lo";
   options.peers = {"127.0.0.1"};
   return options;

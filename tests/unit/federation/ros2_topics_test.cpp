@@ -17,13 +17,14 @@
 #include "federation/ros2_topics.hpp"
 #include "federation/sample_relay.hpp"
 #include "haptic/dds/ros2.h"
+#include "support/dds_domain.hpp"
 
 namespace haptic::federation {
 namespace {
 
 DomainOptions loopback_domain() {
   DomainOptions options;
-  options.domain_id = 100 + static_cast<std::uint32_t>(getpid() % 120);
+  options.domain_id = test::process_dds_domain();
   options.peers = {"127.0.0.1"};
   return options;
 }

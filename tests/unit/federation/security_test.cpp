@@ -24,6 +24,7 @@
 #include "federation/sample_relay.hpp"
 #include "federation/tool_topic.hpp"
 #include "haptic/dds/federation.h"
+#include "support/dds_domain.hpp"
 
 namespace haptic::federation {
 namespace {
@@ -87,7 +88,7 @@ class Certs {
 /// a Cyclone domain of its own in it (local_domain_id `local`).
 DomainOptions site_domain(std::uint32_t local, std::optional<SecurityFiles> security) {
   DomainOptions options;
-  options.domain_id = 100 + static_cast<std::uint32_t>(getpid() % 120);
+  options.domain_id = test::process_dds_domain();
   options.interface = "lo";
   options.peers = {"127.0.0.1"};
   options.local_domain_id = local;
