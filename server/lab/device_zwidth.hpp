@@ -55,7 +55,8 @@ bool device_wall_settles(const v1::ServerConfig& config, const DeviceWallParams&
 /// grid 2^(k/4) N/m, halved until a wall settles) up that grid's quarter octaves to the first
 /// that does not, then bisecting between the two (in the logarithm) to `tolerance` relative;
 /// the last K that settled is returned. 0 when even guess / 1e3 does not settle, infinity when
-/// guess × 1e3 does. About 10 walls from a guess of three times the boundary.
+/// guess × 1e3 does. About 17 walls from a guess of three times the boundary: one to start, ten
+/// up to it, six to bisect.
 ///
 /// The walk, not a doubling bracket: a device held by friction and read through counts may ring
 /// at a K and settle again at one above it (003's five-bar at B = 5 N·s/m rings at 37 and 44 kN/m

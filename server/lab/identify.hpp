@@ -101,7 +101,7 @@ struct ZWidthCheck {
 
 /// The check at each of `dampings` (the device's own boundary bisected from a guess of three
 /// times the prediction, so that its bracket is found rather than given). `progress` after each
-/// damping's boundary: paced in real time each takes a minute or so (a dozen walls of 3 s).
+/// damping's boundary: paced in real time each takes a minute or so (some 17 walls of 3 s).
 std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const IdentifyParams& params,
                                       const IdentifyResult& result, const std::vector<double>& dampings,
                                       const std::function<void(std::size_t done, std::size_t total)>& progress = {});
