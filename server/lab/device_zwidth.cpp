@@ -138,4 +138,15 @@ double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallPa
   return lo;
 }
 
+std::vector<double> device_settles_above(const v1::ServerConfig& config, const DeviceWallParams& params,
+                                         double damping, double boundary, int count) {
+  std::vector<double> settled;
+  if (!(boundary > 0.0) || !std::isfinite(boundary)) return settled;
+  for (int j = 1; j <= count; ++j) {
+    const double stiffness = boundary * std::pow(2.0, j / 4.0);
+    if (device_wall_settles(config, params, stiffness, damping)) settled.push_back(stiffness);
+  }
+  return settled;
+}
+
 }  // namespace haptic::lab

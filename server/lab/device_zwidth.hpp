@@ -15,6 +15,7 @@
 // flat).
 
 #include <cstdint>
+#include <vector>
 
 #include "engine/core/vec3.hpp"
 #include "haptic/v1/config.pb.h"
@@ -64,5 +65,13 @@ bool device_wall_settles(const v1::ServerConfig& config, const DeviceWallParams&
 /// island. What a user can count on is every wall under the figure settling: the first crossing.
 double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallParams& params, double damping,
                               double guess, double tolerance = 0.005);
+
+/// The walls above a boundary that settle again: K = boundary × 2^(j/4) for j = 1 … `count`,
+/// each run as device_wall_settles does. Empty for a device whose stability changes once along K
+/// (and for a boundary of 0 or infinity). One that friction holds and counts read may settle
+/// again above its first ring (003's five-bar); the report says so, since its figure is then a
+/// first crossing rather than a boundary.
+std::vector<double> device_settles_above(const v1::ServerConfig& config, const DeviceWallParams& params,
+                                         double damping, double boundary, int count = 4);
 
 }  // namespace haptic::lab

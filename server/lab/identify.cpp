@@ -335,6 +335,9 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
       check.predicted = device_zwidth_boundary(*friction_model, model_wall, damping, 3.0 * check.linear);
     }
     check.measured = device_zwidth_boundary(config, wall, damping, 3.0 * check.predicted);
+    if (wall.noise_floor_m > 0.0 || friction_held) {
+      check.settles_above = device_settles_above(config, wall, damping, check.measured);
+    }
     if (result.model_mass && result.model_damping && *result.model_mass > 0.0) {
       check.described = engine::sampled_wall_margin(law, discretization, {*result.model_mass, *result.model_damping},
                                                     result.period_s, 0.0)
@@ -371,6 +374,19 @@ std::string zwidth_report(const std::vector<ZWidthCheck>& checks) {
     } else {
       out << "- | - |\n";
     }
+  }
+  bool said = false;
+  for (const ZWidthCheck& c : checks) {
+    if (c.settles_above.empty()) continue;
+    if (!said) {
+      out << "\nNot one boundary: walls stiffer than the first that rings settle again, so the device's stability "
+             "changes more than once along K (as where friction and a sensor's counts set it, not a mass-damper). "
+             "The measured figure is the first wall that rings going up; every wall under it settled.\n\n";
+      said = true;
+    }
+    out << "- B = " << c.damping << " N·s/m: settled again at";
+    for (const double k : c.settles_above) out << " " << k;
+    out << " N/m.\n";
   }
   return out.str();
 }

@@ -97,11 +97,15 @@ struct ZWidthCheck {
   std::optional<double> described;
   bool friction_model = false;  // predicted by walls on the identified model with its friction
   double linear = 0.0;          // the sampled analysis's figure, without the friction. Unit: N/m.
+  /// Walls above the measured figure that settled again (device_settles_above), looked for on a
+  /// device read through noise or a step, or held by friction. Unit: N/m. Empty: none.
+  std::vector<double> settles_above;
 };
 
-/// The check at each of `dampings` (the device's own boundary bisected from a guess of three
-/// times the prediction, so that its bracket is found rather than given). `progress` after each
-/// damping's boundary: paced in real time each takes a minute or so (some 17 walls of 3 s).
+/// The check at each of `dampings` (the device's own first ringing wall, walked up to from a guess
+/// of three times the prediction: device_zwidth_boundary). `progress` after each damping's
+/// boundary: paced in real time each takes a minute or so (some 17 walls of 3 s, four more on a
+/// device with a sensor's noise or step, or friction).
 std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const IdentifyParams& params,
                                       const IdentifyResult& result, const std::vector<double>& dampings,
                                       const std::function<void(std::size_t done, std::size_t total)>& progress = {});
