@@ -65,6 +65,11 @@ def test_two_sites_see_their_tools_coupling_and_its_books_balance():
         b = site("py-b", 0.02)
         try:
             with hapticd.Client(a.config()) as client:
+                # The hand moves once A holds B's tool (discovery over DDS takes its time on a
+                # loaded machine; a hand that had already passed B would push nothing into it).
+                give_up = time.monotonic() + 10.0
+                while not client.stats().federation.couplings and time.monotonic() < give_up:
+                    time.sleep(0.05)
                 hand = hapticd.OperatorInput.follow_line((-0.02, 0, 0), (0.03, 0, 0), 1.0,
                                                          hapticd.OperatorInput.Grip.CUSTOM)
                 hand.stiffness = 200.0

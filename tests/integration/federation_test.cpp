@@ -220,6 +220,24 @@ std::string site_config(const std::string& site, std::uint32_t domain, double x0
          R"(, "peers": ["127.0.0.1"]}})";
 }
 
+/// The federation's couplings `site` holds, read through a session of its own.
+int couplings_held(const test::ServerProcess& site) {
+  test::RawClient raw(site.address());
+  v1::OpenSessionResponse session;
+  if (!raw.open(session, "stats").ok()) return 0;
+  return raw.stats(session).federation().couplings_size();
+}
+
+/// Polls until `site` holds `count` couplings or 10 s have passed (discovery over DDS takes its
+/// time on a loaded machine); whether it does.
+bool holds_couplings(const test::ServerProcess& site, int count) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (couplings_held(site) < count && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return couplings_held(site) >= count;
+}
+
 /// Two hands' targets pass through each other: A's from −2 cm to +1 cm, B's from +2 cm to −1 cm,
 /// over 1.5 s (200 N/m, 2 N·s/m). Returns A's position after `seconds` of real time.
 double push_past_each_other(Client& a, Client& b, double seconds) {
@@ -246,6 +264,10 @@ TEST(Federation, TwoSitesToolsTouchEachOtherOverDds) {
   auto site_b = std::make_unique<test::ServerProcess>(site_config("bench-b", domain, 0.02));
   Client a(config_for(site_a));
   auto b = std::make_unique<Client>(config_for(*site_b));
+  // The hands move once each site holds the other's tool: hands that met before discovery would
+  // have passed each other already.
+  ASSERT_TRUE(holds_couplings(site_a, 1)) << "A did not hear B's tool in 10 s";
+  ASSERT_TRUE(holds_couplings(*site_b, 1)) << "B did not hear A's tool in 10 s";
   const double x = push_past_each_other(a, *b, 4.0);
   std::printf("two sites over DDS: tool A rests at x = %.4f m (its hand's target: +0.0100 m)\n", x);
   State s;
@@ -272,8 +294,11 @@ TEST(Federation, TwoSitesToolsTouchEachOtherOverDds) {
   // takes the tool on to its target.
   b.reset();
   site_b.reset();
-  std::this_thread::sleep_for(std::chrono::seconds(2));
-  ASSERT_TRUE(a.poll_state(s, std::chrono::seconds(5)));
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  do {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    ASSERT_TRUE(a.poll_state(s, std::chrono::seconds(5)));
+  } while (std::abs(s.position.x - 0.01) > 1e-3 && std::chrono::steady_clock::now() < give_up);
   EXPECT_NEAR(s.position.x, 0.01, 1e-3) << "B's avatar stayed after B stopped";
 }
 
@@ -304,9 +329,17 @@ TEST(Federation, TwoSitesShareOneMassThatOneSitesHandPushes) {
   hand.stiffness = 200.0;
   hand.damping = 2.0;
   a.set_operator(hand);
-  std::this_thread::sleep_for(std::chrono::seconds(6));
-  const ObjectState at_a = copies(a).at(0);
-  const ObjectState at_b = copies(b).at(0);
+  // The hand's line takes 2 s; then the copies come to rest together (polled, at most 15 s more).
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  const auto rest_by = std::chrono::steady_clock::now() + std::chrono::seconds(15);
+  ObjectState at_a = copies(a).at(0), at_b = copies(b).at(0);
+  while (!(at_a.position.x > 0.01 && std::abs(at_b.position.x - at_a.position.x) < 1e-3 &&
+           std::abs(at_b.velocity.x) < 1e-3) &&
+         std::chrono::steady_clock::now() < rest_by) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    at_a = copies(a).at(0);
+    at_b = copies(b).at(0);
+  }
   std::printf("shared mass over DDS: A's copy at x = %.5f m, B's at x = %.5f m (%.1e m apart)\n", at_a.position.x, at_b.position.x, std::abs(at_a.position.x - at_b.position.x));
   EXPECT_GT(at_a.position.x, 0.01) << "A's hand did not push the mass";
   EXPECT_NEAR(at_b.position.x, at_a.position.x, 1e-3) << "B's copy did not follow A's";
