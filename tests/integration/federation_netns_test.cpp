@@ -119,7 +119,7 @@ class SiteClient {
     config.server_address = server.address();
     config.client_name = site.name;
     config.heartbeat_period = std::chrono::milliseconds(20);
-    config.rpc_timeout = std::chrono::milliseconds(1000);
+    config.rpc_timeout = std::chrono::seconds(5);
     config.reconnect = false;  // C is killed: its client ends with it
     return config;
   }
@@ -213,15 +213,16 @@ constexpr double kSphereB1 = -0.03;
 constexpr double kSphereC1 = -0.02;
 constexpr double kSphereC2 = -0.01;
 
-// The bounds. Discovery (a site's first contact with the others) is unicast SPDP to the peers
-// and its replies; once sites know each other an item crosses the bridge in the replicator's
-// period (10 ms) and a reliable write's round trip. A lost site: its writer's lease
-// (federation::kItemLease) and the relay's 0.5 s of silence, each with 1 s for the polls and the
-// removal ramp (50 ms).
+// The bounds: that each thing happens, not how soon (the times are printed; their figures are
+// tests/bench/federation_latency_netns.sh's). Discovery (a site's first contact with the others)
+// is unicast SPDP to the peers and its replies; once sites know each other an item crosses the
+// bridge in the replicator's period (10 ms) and a reliable write's round trip. A lost site: its
+// writer's lease (federation::kItemLease) and the relay's 0.5 s of silence. Each has 5 s more,
+// for the polls, the removal ramp (50 ms) and a loaded machine's RPCs.
 constexpr Seconds kDiscovery{10.0};
-constexpr Seconds kPropagation{1.0};
-constexpr Seconds kItemsLost{Seconds(federation::kItemLease).count() + 1.0};
-constexpr Seconds kAvatarLost{0.5 + 1.0};
+constexpr Seconds kPropagation{5.0};
+constexpr Seconds kItemsLost{Seconds(federation::kItemLease).count() + 5.0};
+constexpr Seconds kAvatarLost{0.5 + 5.0};
 
 TEST(FederationNetns, ThreeSitesShareItemsLoseAKilledSiteAndTakeItBack) {
   const std::vector<std::string> namespaces = words(std::getenv("HAPTIC_FEDERATION_NAMESPACES"));

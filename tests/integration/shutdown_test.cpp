@@ -82,7 +82,8 @@ TEST(Shutdown, SigtermRampsTheForceToZeroAtOnceWithAnIdleClientConnected) {
   ASSERT_GE(zero_s, 0.0) << "the stream ended before the force reached zero";
   std::printf("  SIGTERM -> ramp begins %.1f ms, -> zero force %.1f ms (ramp %.0f ms)\n",
               (ramp_begin_s - sigterm_s) * 1e3, (zero_s - sigterm_s) * 1e3, kRampS * 1e3);
-  EXPECT_LT(zero_s - sigterm_s, kRampS + 0.15);  // it was ≈ 1 s + the ramp
+  // A loaded machine may stall the signal's path for a while; the fault this catches took 1 s more.
+  EXPECT_LT(zero_s - sigterm_s, kRampS + 0.8);  // it was ≈ 1 s + the ramp
   EXPECT_GE(zero_s - ramp_begin_s, kRampS * 0.8 - 0.002);  // a ramp, not a cut
 }
 
