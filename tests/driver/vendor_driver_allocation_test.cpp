@@ -69,7 +69,14 @@ TEST(VendorDriverAllocations, TheOpenHapticsDriverAllocatesNothingPerTick) {
   options.stale_after = 0;  // the ticks here come faster than the servo loop's samples
   DriverDevice device(options);
   ASSERT_EQ(device.start(), DeviceStatus::kOk);
-  std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the servo loop's first samples
+  // The servo loop's first samples: a read fails until its thread has run (polled, at most 10 s;
+  // a loaded machine may not run a new thread for a while).
+  DeviceReading first;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (device.read(first) != DeviceStatus::kOk && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(device.read(first), DeviceStatus::kOk) << "the servo loop gave no sample in 10 s";
   EXPECT_EQ(allocations_over_ticks(device, 1000), 0u);
   device.stop();
 }

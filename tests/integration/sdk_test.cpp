@@ -270,9 +270,24 @@ TEST(SdkIntegrationRealTime, StatsShowEachClientsStreamFromBothEnds) {
   quiet.state_decimation = 0;
   Client no_stream(quiet);
 
-  // A second of streaming, then the figures: the clients' heartbeats (every 20 ms) have reported.
+  // A second or so of streaming, then the figures: the clients' heartbeats (every 20 ms) have
+  // reported. On a loaded machine the first second may not hold enough of them: polled until it
+  // does (at most 10 s), and the figures are checked on that one snapshot.
+  const auto reported_enough = [&](const Stats& s) {
+    if (s.clients.size() != 3u || s.lateness_samples <= 500u) return false;
+    for (const ClientStats& c : s.clients) {
+      if (c.heartbeats < 20u) return false;
+      if (c.decimation > 0 && (c.round_trip_samples < 10u || c.states_received == 0u)) return false;
+    }
+    return true;
+  };
   std::this_thread::sleep_for(std::chrono::milliseconds(1200));
-  const Stats stats = no_stream.stats();
+  Stats stats = no_stream.stats();
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!reported_enough(stats) && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    stats = no_stream.stats();
+  }
   ASSERT_EQ(stats.clients.size(), 3u);
   const auto find = [&](std::uint64_t id) -> const ClientStats& {
     for (const ClientStats& c : stats.clients) {
@@ -302,7 +317,7 @@ TEST(SdkIntegrationRealTime, StatsShowEachClientsStreamFromBothEnds) {
     SCOPED_TRACE(c->client_name);
     EXPECT_GE(c->heartbeats, 20u);  // 50 a second for over a second
     EXPECT_GE(c->last_heartbeat_age_s, 0.0);
-    EXPECT_LT(c->last_heartbeat_age_s, 1.0);
+    EXPECT_LT(c->last_heartbeat_age_s, 5.0);  // every 20 ms, idle; a loaded machine may stall it
     // What a heartbeat reported cannot exceed what had been numbered for it by then: sent, or
     // skipped by a sender that fell behind (a gap the client counts as lost).
     EXPECT_LE(c->states_received + c->states_lost, c->datagrams_sent + c->samples_unsent);
