@@ -198,14 +198,14 @@ def test_a_closed_client_refuses_calls_and_closing_twice_is_harmless(server):
 def test_leaving_a_with_block_does_not_raise_when_the_server_is_gone():
     server = ServerProcess(lockstep_config())
     try:
-        with hapticd.Client(server.config(rpc_timeout=0.5)) as client:
+        with hapticd.Client(server.config(rpc_timeout=2.0)) as client:
             client.step(1)
             server.process.kill()  # no goodbye: the session's CloseSession cannot reach it
             server.process.wait()
         # The block's own exception comes out as it is, not a CloseSession ConnectionError.
         server = ServerProcess(lockstep_config())
         with pytest.raises(KeyError, match="the block's own"):
-            with hapticd.Client(server.config(rpc_timeout=0.5)) as client:
+            with hapticd.Client(server.config(rpc_timeout=2.0)) as client:
                 server.process.kill()
                 server.process.wait()
                 raise KeyError("the block's own")
