@@ -17,12 +17,14 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <exception>
 #include <map>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <thread>
 #include <tuple>
 
@@ -522,6 +524,12 @@ struct HttpServer::Session : Connection, std::enable_shared_from_this<HttpServer
     response.keep_alive(keep_alive);
     // Said either way (Beast leaves out HTTP/1.1's default): a client need not know the default.
     response.set(http::field::connection, keep_alive ? "keep-alive" : "close");
+    // How long a kept connection waits for its next request (HttpLimits::timeout, whole seconds
+    // down): a client that kept it longer would send into a connection the server is closing,
+    // and see "other side closed" (Node's fetch keeps one 4 s unless told; told, it keeps it the
+    // hint less 2 s).
+    const auto idle_s = std::chrono::duration_cast<std::chrono::seconds>(limits().timeout).count();
+    if (keep_alive && idle_s >= 1) response.set("Keep-Alive", "timeout=" + std::to_string(idle_s));
     response.content_length(reply.body.size());
     if (!head_only) response.body() = std::move(reply.body);
     ++answered;

@@ -105,6 +105,9 @@ TEST(HttpServer, FramesEachReplyByItsContentLengthAndSaysWhatItIs) {
   EXPECT_EQ(got.header("Content-Length"), "13");
   EXPECT_EQ(got.header("X-Content-Type-Options"), "nosniff");
   EXPECT_EQ(got.header("Cache-Control"), "no-store");
+  EXPECT_EQ(got.header("Connection"), "keep-alive");
+  // The kept connection's idle time, so that no client sends into one the server is closing.
+  EXPECT_EQ(got.header("Keep-Alive"), "timeout=2");
   EXPECT_EQ(got.body, "no such page\n");
   // HEAD: the same head (the length of the body a GET would get), no body: the next reply on the
   // connection follows at once.
@@ -113,7 +116,10 @@ TEST(HttpServer, FramesEachReplyByItsContentLengthAndSaysWhatItIs) {
   EXPECT_EQ(head.status, 404);
   EXPECT_EQ(head.header("Content-Length"), "13");
   EXPECT_EQ(head.body, "");
-  EXPECT_EQ(connection.read_reply().body, "no such page\n");
+  const test::HttpReply last = connection.read_reply();
+  EXPECT_EQ(last.body, "no such page\n");
+  EXPECT_EQ(last.header("Connection"), "close");
+  EXPECT_EQ(last.header("Keep-Alive"), "");
   EXPECT_TRUE(connection.closed_by_server());
 }
 
