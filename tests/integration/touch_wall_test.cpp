@@ -110,7 +110,9 @@ TEST(TouchWall, AcrossAServerRestartItsTimeColumnNeverGoesBack) {
   const std::uint16_t grpc_port = first->grpc_port();
   const std::uint16_t udp_port = first->udp_port();
   const std::string address = first->address();
-  auto run = std::async(std::launch::async, [&] { return touch_wall({address, "--hand", "--seconds", "6"}); });
+  // 10 s: the restarted server's rows must come after its start and the client's reconnect, which a
+  // loaded machine may take seconds over.
+  auto run = std::async(std::launch::async, [&] { return touch_wall({address, "--hand", "--seconds", "10"}); });
   {
     Client admin(config_for(*first, "admin"));
     ASSERT_NE(touch_wall_session(admin), 0u);
