@@ -14,6 +14,9 @@
 namespace haptic::lab {
 namespace {
 
+/// The walk's step along K: 2^¼, a grid fine enough to find a device's stability changing twice.
+const double kQuarterOctave = std::pow(2.0, 0.25);
+
 /// Where the tool starts on `port`: the first tick's reading.
 engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port, const DeviceTime& device_time) {
   engine::Vec3 start{};
@@ -116,7 +119,6 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
 double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallParams& params, double damping,
                               double guess, double tolerance) {
   if (!std::isfinite(guess) || guess <= 0.0) guess = 1000.0;
-  const double quarter_octave = std::pow(2.0, 0.25);
   // On the grid 2^(k/4) N/m, whatever the guess: the device's figure is the ground truth a
   // prediction is checked against, and where its stability changes more than once the walls
   // walked decide it, so they must not move with the prediction.
@@ -125,10 +127,10 @@ double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallPa
     lo /= 2.0;
     if (lo < guess * 1e-3) return 0.0;
   }
-  double hi = lo * quarter_octave;
+  double hi = lo * kQuarterOctave;
   while (device_wall_settles(config, params, hi, damping)) {
     lo = hi;
-    hi *= quarter_octave;
+    hi *= kQuarterOctave;
     if (hi > guess * 1e3) return std::numeric_limits<double>::infinity();
   }
   while (hi / lo > 1.0 + tolerance) {
@@ -142,8 +144,9 @@ std::vector<double> device_settles_above(const v1::ServerConfig& config, const D
                                          double damping, double boundary, int count) {
   std::vector<double> settled;
   if (!(boundary > 0.0) || !std::isfinite(boundary)) return settled;
+  double stiffness = boundary;
   for (int j = 1; j <= count; ++j) {
-    const double stiffness = boundary * std::pow(2.0, j / 4.0);
+    stiffness *= kQuarterOctave;
     if (device_wall_settles(config, params, stiffness, damping)) settled.push_back(stiffness);
   }
   return settled;

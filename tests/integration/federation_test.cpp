@@ -220,22 +220,19 @@ std::string site_config(const std::string& site, std::uint32_t domain, double x0
          R"(, "peers": ["127.0.0.1"]}})";
 }
 
-/// The federation's couplings `site` holds, read through a session of its own.
-int couplings_held(const test::ServerProcess& site) {
+/// Polls until `site` holds `count` couplings or 10 s have passed (discovery over DDS takes its
+/// time on a loaded machine); whether it does. One session of its own for all the polls (a
+/// session a poll, never closed, would run into the server's max_sessions).
+bool holds_couplings(const test::ServerProcess& site, int count) {
   test::RawClient raw(site.address());
   v1::OpenSessionResponse session;
-  if (!raw.open(session, "stats").ok()) return 0;
-  return raw.stats(session).federation().couplings_size();
-}
-
-/// Polls until `site` holds `count` couplings or 10 s have passed (discovery over DDS takes its
-/// time on a loaded machine); whether it does.
-bool holds_couplings(const test::ServerProcess& site, int count) {
+  if (!raw.open(session, "couplings").ok()) return false;
+  const auto held = [&] { return raw.stats(session).federation().couplings_size(); };
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while (couplings_held(site) < count && std::chrono::steady_clock::now() < give_up) {
+  while (held() < count && std::chrono::steady_clock::now() < give_up) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  return couplings_held(site) >= count;
+  return held() >= count;
 }
 
 /// Two hands' targets pass through each other: A's from −2 cm to +1 cm, B's from +2 cm to −1 cm,
