@@ -32,10 +32,39 @@ engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port, 
   return start;
 }
 
-}  // namespace
+template <class Devices>
+bool redraw_noise(Devices& devices, int run) {
+  bool redrawn = false;
+  const auto redraw = [&](auto& sensor, bool noisy) {
+    if (!noisy) return;
+    sensor.set_seed(sensor.seed() + static_cast<std::uint64_t>(run));
+    redrawn = true;
+  };
+  const auto any_noise = [](const v1::SimulatedEncoderConfig& encoders) {
+    return std::any_of(encoders.noise().begin(), encoders.noise().end(), [](double n) { return n > 0.0; });
+  };
+  if (devices.has_simulated_point_mass() && devices.simulated_point_mass().has_sensor()) {
+    redraw(*devices.mutable_simulated_point_mass()->mutable_sensor(), devices.simulated_point_mass().sensor().noise_m() > 0.0);
+  }
+  if (devices.has_simulated_dc_motor() && devices.simulated_dc_motor().has_encoders()) {
+    redraw(*devices.mutable_simulated_dc_motor()->mutable_encoders(), any_noise(devices.simulated_dc_motor().encoders()));
+  }
+  if (devices.has_simulated_five_bar() && devices.simulated_five_bar().has_encoders()) {
+    redraw(*devices.mutable_simulated_five_bar()->mutable_encoders(), any_noise(devices.simulated_five_bar().encoders()));
+  }
+  if (devices.has_simulated_joystick() && devices.simulated_joystick().has_encoders()) {
+    redraw(*devices.mutable_simulated_joystick()->mutable_encoders(), any_noise(devices.simulated_joystick().encoders()));
+  }
+  if (devices.has_simulated_parallel_dob() && devices.simulated_parallel_dob().has_encoders()) {
+    redraw(*devices.mutable_simulated_parallel_dob()->mutable_encoders(),
+           any_noise(devices.simulated_parallel_dob().encoders()));
+  }
+  return redrawn;
+}
 
-bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& params, double stiffness,
-                         double damping) {
+/// One run of the wall (device_wall_settles).
+bool wall_run_settles(const v1::ServerConfig& given, const DeviceWallParams& params, double stiffness,
+                      double damping) {
   if (std::abs(engine::norm(params.direction) - 1.0) > 1e-9) throw std::invalid_argument("direction: must be a unit vector");
   if (!(params.push_n > 0.0) || !(params.seconds > 4.0 * params.window_s) || !(params.window_s > 0.0) ||
       !(params.noise_floor_m >= 0.0) || !(params.penetration_m >= 0.0) || !(params.min_push_n >= 0.0)) {
@@ -114,6 +143,26 @@ bool device_wall_settles(const v1::ServerConfig& given, const DeviceWallParams& 
     if (*high - *low <= params.noise_floor_m) return true;
   }
   return growth.rate_per_s < 0.0 && *last < *first;
+}
+
+}  // namespace
+
+bool device_wall_settles(const v1::ServerConfig& config, const DeviceWallParams& params, double stiffness,
+                         double damping) {
+  if (params.runs < 1) throw std::invalid_argument("runs: must be >= 1, got " + std::to_string(params.runs));
+  if (!wall_run_settles(config, params, stiffness, damping)) return false;
+  for (int run = 1; run < params.runs; ++run) {
+    v1::ServerConfig varied = config;
+    if (params.vary) params.vary(varied, run);
+    if (!wall_run_settles(varied, params, stiffness, damping)) return false;
+  }
+  return true;
+}
+
+bool redraw_sensor_noise(v1::ServerConfig& config, int run) {
+  bool redrawn = redraw_noise(config, run);
+  for (v1::DeviceConfig& extra : *config.mutable_extra_devices()) redrawn = redraw_noise(extra, run) || redrawn;
+  return redrawn;
 }
 
 double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallParams& params, double damping,

@@ -15,6 +15,7 @@
 // flat).
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "engine/core/vec3.hpp"
@@ -42,13 +43,21 @@ struct DeviceWallParams {
   /// A device that friction holds: a run that ends still (its last window's motion within the
   /// noise floor) has settled, wherever the friction stopped it (within c/K of the equilibrium).
   bool still_settles = false;
+  /// Each wall runs this many times, `vary` changing the configuration before every run but the
+  /// first (its argument the run, 1 …); the wall settles only where every run does. A device
+  /// that friction holds and counts read settles or rings by where in a count it rests and by
+  /// what its noise draws as it crosses one (003's five-bar along x at B = 1 N·s/m: its first
+  /// ringing wall 16 to 39 kN/m over 16 noise seeds), so one run per wall overstates what a user
+  /// can count on. >= 1.
+  int runs = 1;
+  std::function<void(v1::ServerConfig& config, int run)> vary;
   double seconds = 3.0;    // each run. Unit: s.
   double window_s = 0.1;   // the envelope's windows (the first, the fall in, left out). Unit: s.
   DeviceTime device_time;  // how the device's time passes (lab_run)
 };
 
-/// Whether a wall (K N/m, B N·s/m) on the device settles, as above. Throws std::invalid_argument
-/// for a configuration or parameters that cannot run.
+/// Whether a wall (K N/m, B N·s/m) on the device settles, as above, in each of `params.runs`.
+/// Throws std::invalid_argument for a configuration or parameters that cannot run.
 bool device_wall_settles(const v1::ServerConfig& config, const DeviceWallParams& params, double stiffness,
                          double damping);
 
@@ -73,5 +82,11 @@ double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallPa
 /// first crossing rather than a boundary.
 std::vector<double> device_settles_above(const v1::ServerConfig& config, const DeviceWallParams& params,
                                          double damping, double boundary, int count = 4);
+
+/// The configuration run again with its simulated sensors' noise drawn anew: each sensor's or
+/// encoders' seed plus `run`, as a wall run again on the bench meets other noise. Returns false,
+/// changing nothing, where no simulated device of `config` reads through noise (a driver's port:
+/// its runs are the same run).
+bool redraw_sensor_noise(v1::ServerConfig& config, int run);
 
 }  // namespace haptic::lab

@@ -37,6 +37,18 @@ bool held_by_friction(const engine::AxisIdentification& fit, double amplitude_n)
 /// The damping a model takes from the fit: the estimate, or 0 where it is below 0 within its interval.
 double model_damping(const engine::AxisIdentification& fit) { return std::max(0.0, fit.damping.value); }
 
+/// Walls on a device that friction holds and counts read run this many times (ZWidthCheck::runs):
+/// on the device with its noise drawn anew each time, on the identified model from as many places
+/// in a count, evenly spaced.
+constexpr int kRestPlaces = 16;
+
+/// The noise before the counts: what the identified noise holds beyond a step's own q/√12 (the
+/// reading's error, with the noise σ before a step q, has σ² + q²/12 of variance). Unit: m.
+double noise_before_counts(const engine::AxisIdentification& f) {
+  const double q = f.quantization_m.value_or(0.0);
+  return std::sqrt(std::max(0.0, f.noise_rms_m * f.noise_rms_m - q * q / 12.0));
+}
+
 /// The identified model as a device (in lockstep): a point mass with the identified mass,
 /// damping, friction and lag on every axis, its sensor the identified noise and step, 100
 /// sub-steps a tick (the lag's and the stops' error under 1 %), and a force limit of `max_force_n`.
@@ -51,8 +63,9 @@ v1::ServerConfig identified_model_config(const IdentifyResult& result, double lo
   mass.set_coulomb(std::max(0.0, f.coulomb.value));
   mass.set_actuator_lag(std::clamp(f.lag.value, 0.0, 0.1));
   mass.set_substeps(100);
+  *mass.mutable_initial_position() = schema::to_proto(engine::Vec3{0.0, 0.0, 0.02});  // the default, said: runs move it
   mass.set_max_force(std::max(max_force_n, 2.0 * std::max(0.0, f.coulomb.value)));
-  mass.mutable_sensor()->set_noise_m(std::min(0.01, f.noise_rms_m));
+  mass.mutable_sensor()->set_noise_m(std::min(0.01, f.quantization_m ? noise_before_counts(f) : f.noise_rms_m));
   mass.mutable_sensor()->set_quantization_m(std::min(0.01, f.quantization_m.value_or(0.0)));
   mass.mutable_sensor()->set_seed(1);
   return config;
@@ -137,6 +150,7 @@ IdentifyResult identify(const v1::ServerConfig& given, const IdentifyParams& par
       [&](std::vector<runtime::TickPort>& ports) {
         if (params.port >= ports.size()) return;
         ports[params.port].excitation = &stage;
+        result.max_force_n = ports[params.port].limits.max_force;
         port_found = true;
       },
       params.device_time);
@@ -316,15 +330,35 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
   if (friction_held) {
     wall.min_push_n = 2.5 * result.fit.coulomb.value;
     wall.still_settles = true;
-    friction_model = identified_model_config(result, config.loop_rate_hz(), 2.0 * params.signal.amplitude_n + wall.min_push_n);
+    friction_model = identified_model_config(
+        result, config.loop_rate_hz(),
+        result.max_force_n > 0.0 ? result.max_force_n : 2.0 * params.signal.amplitude_n + wall.min_push_n);
     model_wall = wall;
     model_wall.port = 0;
     model_wall.device_time = {};
+    // Read through a step as well: whether a wall settles turns on where in a count the tool
+    // rests and on what the noise draws as it crosses one, so each wall runs kRestPlaces times,
+    // on the device with its noise drawn anew (as on a bench, run again), on the model from
+    // evenly spaced places in a count; it settles where every run does.
+    v1::ServerConfig redrawn = config;
+    if (result.fit.quantization_m && redraw_sensor_noise(redrawn, 1)) {
+      wall.runs = kRestPlaces;
+      wall.vary = redraw_sensor_noise;
+      const engine::Vec3 across_a_count = result.direction * (*result.fit.quantization_m / kRestPlaces);
+      model_wall.runs = kRestPlaces;
+      model_wall.vary = [across_a_count](v1::ServerConfig& model, int run) {
+        v1::SimulatedPointMassConfig& mass = *model.mutable_simulated_point_mass();
+        *mass.mutable_initial_position() =
+            schema::to_proto(schema::to_engine(mass.initial_position()) + across_a_count * static_cast<double>(run));
+        redraw_sensor_noise(model, run);
+      };
+    }
   }
   std::vector<ZWidthCheck> checks;
   for (const double damping : dampings) {
     ZWidthCheck check;
     check.damping = damping;
+    check.runs = wall.runs;
     const engine::ImpedanceParams law{100.0, damping, 0.0};
     const auto discretization = engine::ImpedanceDiscretization::kBackwardDifference;
     check.linear =
@@ -359,6 +393,12 @@ std::string zwidth_report(const std::vector<ZWidthCheck>& checks) {
            "lag, simulated). Without the friction, the sampled analysis gives";
     for (const ZWidthCheck& c : checks) out << " " << c.linear;
     out << " N/m.\n\n";
+    if (checks.front().runs > 1) {
+      out << "Read through a step as well: each wall ran " << checks.front().runs
+          << " times, on the device with its noise drawn anew, on the model from as many places in a count, and "
+             "settled only where every run did. Where in a count the tool rests, and what the noise draws as it "
+             "crosses one, decide whether such a wall rings, so one run a wall can overstate what holds.\n\n";
+    }
   }
   out
       << "| B (N·s/m) | K_max measured (N/m) | predicted from the identified model | error | from the description | "

@@ -61,6 +61,8 @@ struct IdentifyResult {
   /// Paced in real time: the excitation's ticks that started more than half a period late (a
   /// late tick holds its force longer than the fit assumes).
   std::uint64_t late_ticks = 0;
+  /// The port's force limit, its guard's (the device's description). Unit: N.
+  double max_force_n = 0.0;
 };
 
 /// Runs the excitation on `config`'s device (`source` names the configuration in messages) and
@@ -89,8 +91,8 @@ v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const Identif
 /// large ones grow, so its boundary depends on how hard the wall is pressed. Its walls are pressed
 /// with 2.5 times the identified friction, a run that ends still has settled, and the prediction
 /// is the same walls run on the identified model itself: a simulated point mass with the
-/// identified mass, damping, friction and lag and a sensor of the identified noise and step
-/// (`friction_model`; the linear analysis's figure is kept in `linear`).
+/// identified mass, damping, friction and lag, a sensor of the identified noise and step, and the
+/// port's force limit (`friction_model`; the linear analysis's figure is kept in `linear`).
 struct ZWidthCheck {
   double damping = 0.0;  // B. Unit: N·s/m.
   double predicted = 0.0, measured = 0.0;
@@ -100,12 +102,18 @@ struct ZWidthCheck {
   /// Walls above the measured figure that settled again (device_settles_above), looked for on a
   /// device read through noise or a step, or held by friction. Unit: N/m. Empty: none.
   std::vector<double> settles_above;
+  /// Each wall's runs, on the device and on the model (DeviceWallParams::runs): more than one
+  /// where friction holds the device, a step was found and the device's noise can be drawn anew
+  /// (16: on the device with its noise drawn anew, on the model from 16 places in a count).
+  int runs = 1;
 };
 
 /// The check at each of `dampings` (the device's own first ringing wall, walked up to from a guess
 /// of three times the prediction: device_zwidth_boundary). `progress` after each damping's
 /// boundary: paced in real time each takes a minute or so (some 17 walls of 3 s, four more on a
-/// device with a sensor's noise or step, or friction).
+/// device with a sensor's noise or step, or friction). A simulated device that friction holds
+/// and whose readings lie on a lattice runs each wall 16 times (ZWidthCheck::runs), on itself
+/// and on the model: in lockstep, some 10 s a damping for 003's five-bar.
 std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const IdentifyParams& params,
                                       const IdentifyResult& result, const std::vector<double>& dampings,
                                       const std::function<void(std::size_t done, std::size_t total)>& progress = {});

@@ -367,6 +367,45 @@ std::optional<Multisine> design_multisine(const MultisineParams& params, std::st
   return m;
 }
 
+namespace {
+
+/// The step of distinct, sorted `values` that lie on a lattice whose step changes slowly along
+/// the axis (see lattice_step): the median of the gaps between clusters, or none.
+std::optional<double> slowly_varying_lattice_step(const std::vector<double>& sorted) {
+  std::vector<double> gaps;
+  for (std::size_t i = 1; i < sorted.size(); ++i) gaps.push_back(sorted[i] - sorted[i - 1]);
+  const double widest = *std::max_element(gaps.begin(), gaps.end());
+  // The step's candidate: the median of the gaps of a quarter of the widest or more (a skipped
+  // count makes one gap two steps).
+  std::vector<double> between;
+  for (const double g : gaps) {
+    if (g >= 0.25 * widest) between.push_back(g);
+  }
+  if (between.size() < 3) return std::nullopt;
+  std::nth_element(between.begin(), between.begin() + static_cast<std::ptrdiff_t>(between.size() / 2), between.end());
+  const double candidate = between[between.size() / 2];
+  // Every gap is another joint's count inside a cluster (under a fiftieth of a step, a cluster
+  // narrower than a twentieth), or whole steps within 5 %; the step is those steps' median.
+  std::vector<double> steps;
+  double cluster = 0.0;
+  for (const double g : gaps) {
+    if (g < 0.02 * candidate) {
+      cluster += g;
+      if (cluster > 0.05 * candidate) return std::nullopt;
+      continue;
+    }
+    const double counts = std::round(g / candidate);
+    if (counts < 1.0 || std::abs(g / counts - candidate) > 0.05 * candidate) return std::nullopt;
+    steps.push_back(g / counts);
+    cluster = 0.0;
+  }
+  if (steps.size() < 3) return std::nullopt;
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  return steps[steps.size() / 2];
+}
+
+}  // namespace
+
 std::optional<double> lattice_step(std::span<const double> values) {
   std::vector<double> sorted(values.begin(), values.end());
   std::sort(sorted.begin(), sorted.end());
@@ -374,12 +413,12 @@ std::optional<double> lattice_step(std::span<const double> values) {
   if (sorted.size() < 3) return std::nullopt;
   double step = std::numeric_limits<double>::infinity();
   for (std::size_t i = 1; i < sorted.size(); ++i) step = std::min(step, sorted[i] - sorted[i - 1]);
-  if (!(step > 0.0) || (sorted.back() - sorted.front()) / step > 1e7) return std::nullopt;
-  for (const double v : sorted) {
-    const double r = (v - sorted.front()) / step;
-    if (std::abs(r - std::round(r)) > 1e-6 * std::max(1.0, r) + 1e-6) return std::nullopt;
+  bool uniform = step > 0.0 && (sorted.back() - sorted.front()) / step <= 1e7;
+  for (std::size_t i = 0; uniform && i < sorted.size(); ++i) {
+    const double r = (sorted[i] - sorted.front()) / step;
+    uniform = std::abs(r - std::round(r)) <= 1e-6 * std::max(1.0, r) + 1e-6;
   }
-  return step;
+  return uniform ? std::optional<double>(step) : slowly_varying_lattice_step(sorted);
 }
 
 std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std::span<const double> force,

@@ -115,8 +115,9 @@ struct AxisIdentification {
   /// The measurement's noise: the rms of what consecutive periods disagree on, its smooth part
   /// (a transient, a drift) left out by a second difference in time. Unit: m.
   double noise_rms_m = 0.0;
-  /// The positions' quantization step where they lie on a lattice (an encoder along the axis);
-  /// none where they do not (a nonlinear map from quantized joints, or noise). Unit: m.
+  /// The positions' quantization step where they lie on a lattice (an encoder along the axis, or
+  /// a counted joint through a map whose slope changes slowly: lattice_step); none where they do
+  /// not (noise, or a map that mixes several joints' counts). Unit: m.
   std::optional<double> quantization_m;
   /// The rms of (1)'s residual over the averaged period, relative to the force's rms.
   double relative_residual = 0.0;
@@ -141,7 +142,12 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
                                                 FitMethod method = FitMethod::kHarmonics);
 
 /// The quantization step of `values` if they lie on a lattice q·n + offset (to 1e-6 of q), the
-/// smallest step seen; none otherwise or with fewer than three distinct values.
+/// smallest step seen. Failing that, on a lattice whose step changes slowly along the axis, as a
+/// nonlinear map of a counted joint reads (003's five-bar along x: 0.6 − 0.3 sin(n π/6000) m):
+/// neighbouring values whole steps apart within 5 %, or within a fiftieth of a step of each other
+/// (another joint's count moving the reading a little, clusters narrower than a twentieth), and at
+/// least three steps; the step is then the median of those seen. None otherwise (noise) or with
+/// fewer than three distinct values.
 std::optional<double> lattice_step(std::span<const double> values);
 
 }  // namespace haptic::engine

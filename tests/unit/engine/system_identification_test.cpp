@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <numbers>
 #include <optional>
 #include <random>
 #include <vector>
@@ -275,6 +276,35 @@ TEST(SystemIdentification, ALatticeIsFoundOnlyWherePositionsLieOnOne) {
   EXPECT_NEAR(*lattice_step(std::vector<double>{0.001, 0.004, 0.002, 0.007}), 0.001, 1e-15);
   EXPECT_FALSE(lattice_step(std::vector<double>{0.001, 0.0025, 0.0043}));
   EXPECT_FALSE(lattice_step(std::vector<double>{0.5, 0.5}));
+}
+
+TEST(SystemIdentification, ALatticeWhoseStepChangesSlowlyIsFoundAsANonlinearMapOfCountsReadsIt) {
+  // 003's five-bar along x: its axial joint's counts (π/6000 rad) through x = 0.6 − 0.3 sin q,
+  // the step 157 µm at home and 1.1 % less at q = 0.15; the other joints' counts move each
+  // reading by a few tenths of a micrometre.
+  const double count = std::numbers::pi / 6000.0;
+  std::vector<double> readings;
+  for (int n = -300; n <= 20; ++n) {
+    const double x = 0.6 - 0.3 * std::sin(n * count);
+    readings.push_back(x);
+    if (n % 3 == 0) readings.push_back(x + 3e-7);
+  }
+  const std::optional<double> step = lattice_step(readings);
+  ASSERT_TRUE(step);
+  EXPECT_NEAR(*step, 0.3 * count, 0.01 * 0.3 * count);
+  // A count skipped (the tool went past it) is two steps.
+  readings.erase(readings.begin() + 40);
+  EXPECT_NEAR(*lattice_step(readings), 0.3 * count, 0.01 * 0.3 * count);
+  // Noise is no lattice, nor are steps that change by more than 5 % from one to the next.
+  std::mt19937_64 random(3);
+  std::normal_distribution<double> noise(0.0, 1e-4);
+  std::vector<double> noisy;
+  for (int i = 0; i < 2000; ++i) noisy.push_back(noise(random));
+  EXPECT_FALSE(lattice_step(noisy));
+  EXPECT_FALSE(lattice_step(std::vector<double>{0.0, 1.0, 2.0, 3.2, 4.2, 5.5}));
+  // Readings a fiftieth of a step apart that chain wider than a twentieth are no one count.
+  EXPECT_FALSE(lattice_step(std::vector<double>{0.0, 0.015, 0.03, 0.045, 0.06, 1.06, 2.06, 3.06}));
+  EXPECT_TRUE(lattice_step(std::vector<double>{0.0, 0.015, 0.03, 1.03, 2.03, 3.03}));
 }
 
 TEST(SystemIdentification, AnAxisThatFrictionHoldsStillThroughPartOfEachPeriodIsFittedWhereItMoves) {
