@@ -281,18 +281,22 @@ v1::ServerConfig five_bar_bench(std::uint64_t seed) {
   return config;
 }
 
-/// Its excitation at the home pose: 4 N over 1 to 10 Hz (the tool's 2 kg barely moves at 40 Hz,
-/// and under 1 Hz it leaves a ±100 mm box), 12 harmonics.
-IdentifyParams five_bar_excitation(int axis) {
-  IdentifyParams params = light_excitation(4.0);
+/// A bench device's excitation along `axis`: `amplitude_n` over `f_min_hz` to `f_max_hz`, 12
+/// harmonics, stopped outside a ±100 mm box or faster than `max_speed_m_s`.
+IdentifyParams bench_excitation(int axis, double amplitude_n, double f_min_hz, double f_max_hz, double max_speed_m_s) {
+  IdentifyParams params = light_excitation(amplitude_n);
   params.axis = axis;
-  params.signal.f_min_hz = 1.0;
-  params.signal.f_max_hz = 10.0;
+  params.signal.f_min_hz = f_min_hz;
+  params.signal.f_max_hz = f_max_hz;
   params.signal.max_harmonics = 12;
   params.limits.box_half_width_m = 0.1;
-  params.limits.max_speed_m_s = 1.0;
+  params.limits.max_speed_m_s = max_speed_m_s;
   return params;
 }
+
+/// The five-bar's, at the home pose: 4 N over 1 to 10 Hz (the tool's 2 kg barely moves at 40 Hz,
+/// and under 1 Hz it leaves a ±100 mm box).
+IdentifyParams five_bar_excitation(int axis) { return bench_excitation(axis, 4.0, 1.0, 10.0, 1.0); }
 
 /// The walls check_zwidth runs on the five-bar along x (the identified noise's floor, its friction
 /// of 0.296 N pressed 2.5 times), one run each.
@@ -340,14 +344,9 @@ v1::ServerConfig joystick_bench() {
 }
 
 IdentifyParams joystick_excitation(int axis) {
-  IdentifyParams params = light_excitation(7.0);
-  params.axis = axis;
-  params.signal.f_min_hz = 10.0;
-  params.signal.f_max_hz = 40.0;
-  params.signal.max_harmonics = 12;
+  // At most 1.8 m/s: under the watchdog's 8 rad/s (1.92 m/s at the handle).
+  IdentifyParams params = bench_excitation(axis, 7.0, 10.0, 40.0, 1.8);
   params.max_lag_s = 0.02;
-  params.limits.box_half_width_m = 0.1;
-  params.limits.max_speed_m_s = 1.8;  // under the watchdog's 8 rad/s (1.92 m/s at the handle)
   params.centering = {100.0, 1.0};
   return params;
 }
