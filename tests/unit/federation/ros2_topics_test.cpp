@@ -17,17 +17,12 @@
 #include "federation/ros2_topics.hpp"
 #include "federation/sample_relay.hpp"
 #include "haptic/dds/ros2.h"
-#include "support/dds_domain.hpp"
+#include "support/loopback_dds.hpp"
 
 namespace haptic::federation {
 namespace {
 
-DomainOptions loopback_domain() {
-  DomainOptions options;
-  options.domain_id = test::process_dds_domain();
-  options.peers = {"127.0.0.1"};
-  return options;
-}
+using test::loopback_domain;
 
 /// A reader as a ROS 2 subscription's middleware makes it: the ROS 2 type on "rt/<topic>".
 class RosLikeReader {
