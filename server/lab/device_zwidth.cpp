@@ -32,34 +32,49 @@ engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port, 
   return start;
 }
 
+/// Whether `devices` (a ServerConfig's port 0, or a DeviceConfig) is a simulated device that
+/// reads through noise: its point mass's sensor, or its encoders, with a noise above 0. Where it
+/// is and `redraw`, that noise's seed is mixed with `run` (distinct runs, distinct seeds, and
+/// unlike another port's own).
 template <class Devices>
-bool redraw_noise(Devices& devices, int run) {
-  bool redrawn = false;
-  const auto redraw = [&](auto& sensor, bool noisy) {
-    if (!noisy) return;
-    sensor.set_seed(sensor.seed() + static_cast<std::uint64_t>(run));
-    redrawn = true;
+bool sensor_noise(Devices& devices, int run, bool redraw) {
+  const auto mix = [run](auto& sensor) {
+    sensor.set_seed(sensor.seed() ^ (static_cast<std::uint64_t>(run) * 0x9E3779B97F4A7C15ULL));
   };
-  const auto any_noise = [](const v1::SimulatedEncoderConfig& encoders) {
-    return std::any_of(encoders.noise().begin(), encoders.noise().end(), [](double n) { return n > 0.0; });
+  if (devices.has_driver()) return false;  // hardware: its noise is its own
+  const auto encoders = [&](const auto& device, auto mutable_device) {
+    const auto& noise = device.encoders().noise();
+    if (!std::any_of(noise.begin(), noise.end(), [](double n) { return n > 0.0; })) return false;
+    if (redraw) mix(*mutable_device()->mutable_encoders());
+    return true;
   };
-  if (devices.has_simulated_point_mass() && devices.simulated_point_mass().has_sensor()) {
-    redraw(*devices.mutable_simulated_point_mass()->mutable_sensor(), devices.simulated_point_mass().sensor().noise_m() > 0.0);
+  if (devices.has_simulated_dc_motor()) {
+    return encoders(devices.simulated_dc_motor(), [&] { return devices.mutable_simulated_dc_motor(); });
   }
-  if (devices.has_simulated_dc_motor() && devices.simulated_dc_motor().has_encoders()) {
-    redraw(*devices.mutable_simulated_dc_motor()->mutable_encoders(), any_noise(devices.simulated_dc_motor().encoders()));
+  if (devices.has_simulated_five_bar()) {
+    return encoders(devices.simulated_five_bar(), [&] { return devices.mutable_simulated_five_bar(); });
   }
-  if (devices.has_simulated_five_bar() && devices.simulated_five_bar().has_encoders()) {
-    redraw(*devices.mutable_simulated_five_bar()->mutable_encoders(), any_noise(devices.simulated_five_bar().encoders()));
+  if (devices.has_simulated_joystick()) {
+    return encoders(devices.simulated_joystick(), [&] { return devices.mutable_simulated_joystick(); });
   }
-  if (devices.has_simulated_joystick() && devices.simulated_joystick().has_encoders()) {
-    redraw(*devices.mutable_simulated_joystick()->mutable_encoders(), any_noise(devices.simulated_joystick().encoders()));
+  if (devices.has_simulated_parallel_dob()) {
+    return encoders(devices.simulated_parallel_dob(), [&] { return devices.mutable_simulated_parallel_dob(); });
   }
-  if (devices.has_simulated_parallel_dob() && devices.simulated_parallel_dob().has_encoders()) {
-    redraw(*devices.mutable_simulated_parallel_dob()->mutable_encoders(),
-           any_noise(devices.simulated_parallel_dob().encoders()));
+  // Last: port 0's point mass is the device where none of the above is (filled in by default
+  // beside them).
+  if (devices.has_simulated_point_mass() && devices.simulated_point_mass().sensor().noise_m() > 0.0) {
+    if (redraw) mix(*devices.mutable_simulated_point_mass()->mutable_sensor());
+    return true;
   }
-  return redrawn;
+  return false;
+}
+
+/// sensor_noise on port `port` of `config`: port 0 the configuration's own device, port i its
+/// extra device i − 1; false for a port it does not have.
+bool port_sensor_noise(v1::ServerConfig& config, std::uint32_t port, int run, bool redraw) {
+  if (port == 0) return sensor_noise(config, run, redraw);
+  if (port > static_cast<std::uint32_t>(config.extra_devices_size())) return false;
+  return sensor_noise(*config.mutable_extra_devices(static_cast<int>(port - 1)), run, redraw);
 }
 
 /// One run of the wall (device_wall_settles).
@@ -159,10 +174,13 @@ bool device_wall_settles(const v1::ServerConfig& config, const DeviceWallParams&
   return true;
 }
 
-bool redraw_sensor_noise(v1::ServerConfig& config, int run) {
-  bool redrawn = redraw_noise(config, run);
-  for (v1::DeviceConfig& extra : *config.mutable_extra_devices()) redrawn = redraw_noise(extra, run) || redrawn;
-  return redrawn;
+bool redraw_sensor_noise(v1::ServerConfig& config, std::uint32_t port, int run) {
+  return port_sensor_noise(config, port, run, true);
+}
+
+bool reads_through_noise(const v1::ServerConfig& config, std::uint32_t port) {
+  v1::ServerConfig copy = config;  // sensor_noise reaches the fields through their mutable accessors
+  return port_sensor_noise(copy, port, 0, false);
 }
 
 double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallParams& params, double damping,

@@ -83,10 +83,14 @@ double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallPa
 std::vector<double> device_settles_above(const v1::ServerConfig& config, const DeviceWallParams& params,
                                          double damping, double boundary, int count = 4);
 
-/// The configuration run again with its simulated sensors' noise drawn anew: each sensor's or
-/// encoders' seed plus `run`, as a wall run again on the bench meets other noise. Returns false,
-/// changing nothing, where no simulated device of `config` reads through noise (a driver's port:
-/// its runs are the same run).
-bool redraw_sensor_noise(v1::ServerConfig& config, int run);
+/// Port `port`'s device run again with its sensor's noise drawn anew: the seed of its point
+/// mass's sensor or of its encoders mixed with `run`, as a wall run again on the bench meets
+/// other noise. Port 0 is the configuration's own device, port i its extra device i − 1. Returns
+/// false, changing nothing, where that port's device reads without noise, is no simulated device
+/// (a driver's port: its runs would be the same run) or does not exist.
+bool redraw_sensor_noise(v1::ServerConfig& config, std::uint32_t port, int run);
+
+/// Whether redraw_sensor_noise has a noise to draw anew on port `port`.
+bool reads_through_noise(const v1::ServerConfig& config, std::uint32_t port);
 
 }  // namespace haptic::lab

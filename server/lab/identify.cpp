@@ -40,7 +40,7 @@ double model_damping(const engine::AxisIdentification& fit) { return std::max(0.
 /// Walls on a device that friction holds and counts read run this many times (ZWidthCheck::runs):
 /// on the device with its noise drawn anew each time, on the identified model from as many places
 /// in a count, evenly spaced.
-constexpr int kRestPlaces = 16;
+constexpr int kWallRuns = 16;
 
 /// The noise before the counts: what the identified noise holds beyond a step's own q/√12 (the
 /// reading's error, with the noise σ before a step q, has σ² + q²/12 of variance). Unit: m.
@@ -50,8 +50,10 @@ double noise_before_counts(const engine::AxisIdentification& f) {
 }
 
 /// The identified model as a device (in lockstep): a point mass with the identified mass,
-/// damping, friction and lag on every axis, its sensor the identified noise and step, 100
-/// sub-steps a tick (the lag's and the stops' error under 1 %), and a force limit of `max_force_n`.
+/// damping, friction and lag on every axis, 100 sub-steps a tick (the lag's and the stops' error
+/// under 1 %), and a force limit of `max_force_n`. Its sensor is the identified step with the
+/// noise beyond the step's own before it (noise_before_counts), or, where no step was found, the
+/// identified noise.
 v1::ServerConfig identified_model_config(const IdentifyResult& result, double loop_rate_hz, double max_force_n) {
   const engine::AxisIdentification& f = result.fit;
   v1::ServerConfig config;
@@ -337,20 +339,19 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
     model_wall.port = 0;
     model_wall.device_time = {};
     // Read through a step as well: whether a wall settles turns on where in a count the tool
-    // rests and on what the noise draws as it crosses one, so each wall runs kRestPlaces times,
+    // rests and on what the noise draws as it crosses one, so each wall runs kWallRuns times,
     // on the device with its noise drawn anew (as on a bench, run again), on the model from
     // evenly spaced places in a count; it settles where every run does.
-    v1::ServerConfig redrawn = config;
-    if (result.fit.quantization_m && redraw_sensor_noise(redrawn, 1)) {
-      wall.runs = kRestPlaces;
-      wall.vary = redraw_sensor_noise;
-      const engine::Vec3 across_a_count = result.direction * (*result.fit.quantization_m / kRestPlaces);
-      model_wall.runs = kRestPlaces;
+    if (result.fit.quantization_m && reads_through_noise(config, params.port)) {
+      wall.runs = kWallRuns;
+      wall.vary = [port = params.port](v1::ServerConfig& device, int run) { redraw_sensor_noise(device, port, run); };
+      const engine::Vec3 across_a_count = result.direction * (*result.fit.quantization_m / kWallRuns);
+      model_wall.runs = kWallRuns;
       model_wall.vary = [across_a_count](v1::ServerConfig& model, int run) {
         v1::SimulatedPointMassConfig& mass = *model.mutable_simulated_point_mass();
         *mass.mutable_initial_position() =
             schema::to_proto(schema::to_engine(mass.initial_position()) + across_a_count * static_cast<double>(run));
-        redraw_sensor_noise(model, run);
+        redraw_sensor_noise(model, 0, run);
       };
     }
   }

@@ -111,9 +111,10 @@ struct ZWidthCheck {
 /// The check at each of `dampings` (the device's own first ringing wall, walked up to from a guess
 /// of three times the prediction: device_zwidth_boundary). `progress` after each damping's
 /// boundary: paced in real time each takes a minute or so (some 17 walls of 3 s, four more on a
-/// device with a sensor's noise or step, or friction). A simulated device that friction holds
-/// and whose readings lie on a lattice runs each wall 16 times (ZWidthCheck::runs), on itself
-/// and on the model: in lockstep, some 10 s a damping for 003's five-bar.
+/// device with a sensor's noise or step, or friction). A simulated device that friction holds,
+/// whose readings lie on a lattice and whose sensor has noise to draw anew runs each wall 16
+/// times (ZWidthCheck::runs), on itself and on the model: in lockstep, some 10 s a damping for
+/// 003's five-bar.
 std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const IdentifyParams& params,
                                       const IdentifyResult& result, const std::vector<double>& dampings,
                                       const std::function<void(std::size_t done, std::size_t total)>& progress = {});

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <array>
+#include <deque>
+#include <functional>
 #include <cmath>
 #include <numbers>
 #include <limits>
@@ -370,38 +372,49 @@ std::optional<Multisine> design_multisine(const MultisineParams& params, std::st
 namespace {
 
 /// The step of distinct, sorted `values` that lie on a lattice whose step changes slowly along
-/// the axis (see lattice_step): the median of the gaps between clusters, or none.
+/// the axis (see lattice_step): the median of the steps between clusters, or none.
 std::optional<double> slowly_varying_lattice_step(const std::vector<double>& sorted) {
   std::vector<double> gaps;
   for (std::size_t i = 1; i < sorted.size(); ++i) gaps.push_back(sorted[i] - sorted[i - 1]);
-  const double widest = *std::max_element(gaps.begin(), gaps.end());
-  // The step's candidate: the median of the gaps of a quarter of the widest or more (a skipped
-  // count makes one gap two steps).
-  std::vector<double> between;
-  for (const double g : gaps) {
-    if (g >= 0.25 * widest) between.push_back(g);
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  // The steps' scale: the gap a twentieth of the gaps exceed, so that a few outliers or skipped
+  // counts do not set it. The walk starts from the median of the first eight gaps of a quarter
+  // of that or more (a skipped count makes one gap two steps).
+  std::vector<double> by_size = gaps;
+  const std::size_t rank = gaps.size() / 20;
+  std::nth_element(by_size.begin(), by_size.begin() + static_cast<std::ptrdiff_t>(rank), by_size.end(),
+                   std::greater<>());
+  const double scale = by_size[rank];
+  std::vector<double> first;
+  for (std::size_t i = 0; i < gaps.size() && first.size() < 8; ++i) {
+    if (gaps[i] >= 0.25 * scale) first.push_back(gaps[i]);
   }
-  if (between.size() < 3) return std::nullopt;
-  std::nth_element(between.begin(), between.begin() + static_cast<std::ptrdiff_t>(between.size() / 2), between.end());
-  const double candidate = between[between.size() / 2];
-  // Every gap is another joint's count inside a cluster (under a fiftieth of a step, a cluster
-  // narrower than a twentieth), or whole steps within 5 %; the step is those steps' median.
+  if (first.empty() || !(scale > 0.0)) return std::nullopt;
+  // Along the axis, every gap is another joint's count inside a cluster (under a fiftieth of the
+  // local step, the cluster narrower than a twentieth), or whole local steps within 5 %; the
+  // local step is the median of the last eight single steps, so the map's slope may change.
+  std::deque<double> recent{median(first)};
   std::vector<double> steps;
-  double cluster = 0.0;
+  double local = recent.front(), cluster = 0.0;
   for (const double g : gaps) {
-    if (g < 0.02 * candidate) {
+    if (g < 0.02 * local) {
       cluster += g;
-      if (cluster > 0.05 * candidate) return std::nullopt;
+      if (cluster > 0.05 * local) return std::nullopt;
       continue;
     }
-    const double counts = std::round(g / candidate);
-    if (counts < 1.0 || std::abs(g / counts - candidate) > 0.05 * candidate) return std::nullopt;
+    const double counts = std::round(g / local);
+    if (counts < 1.0 || std::abs(g / counts - local) > 0.05 * local) return std::nullopt;
     steps.push_back(g / counts);
+    recent.push_back(g / counts);
+    if (recent.size() > 8) recent.pop_front();
+    local = median(std::vector<double>(recent.begin(), recent.end()));
     cluster = 0.0;
   }
-  if (steps.size() < 3) return std::nullopt;
-  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
-  return steps[steps.size() / 2];
+  if (steps.size() < 8) return std::nullopt;
+  return median(steps);
 }
 
 }  // namespace
@@ -413,10 +426,12 @@ std::optional<double> lattice_step(std::span<const double> values) {
   if (sorted.size() < 3) return std::nullopt;
   double step = std::numeric_limits<double>::infinity();
   for (std::size_t i = 1; i < sorted.size(); ++i) step = std::min(step, sorted[i] - sorted[i - 1]);
+  // Whole steps to a hundredth of one at most: a tolerance that grew to half a step with the
+  // span took plain noise for a lattice of its smallest gap.
   bool uniform = step > 0.0 && (sorted.back() - sorted.front()) / step <= 1e7;
   for (std::size_t i = 0; uniform && i < sorted.size(); ++i) {
     const double r = (sorted[i] - sorted.front()) / step;
-    uniform = std::abs(r - std::round(r)) <= 1e-6 * std::max(1.0, r) + 1e-6;
+    uniform = std::abs(r - std::round(r)) <= 1e-9 * r + 1e-6;
   }
   return uniform ? std::optional<double>(step) : slowly_varying_lattice_step(sorted);
 }

@@ -5,6 +5,7 @@
 // fitted is refused saying why.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <deque>
@@ -280,31 +281,42 @@ TEST(SystemIdentification, ALatticeIsFoundOnlyWherePositionsLieOnOne) {
 
 TEST(SystemIdentification, ALatticeWhoseStepChangesSlowlyIsFoundAsANonlinearMapOfCountsReadsIt) {
   // 003's five-bar along x: its axial joint's counts (π/6000 rad) through x = 0.6 − 0.3 sin q,
-  // the step 157 µm at home and 1.1 % less at q = 0.15; the other joints' counts move each
-  // reading by a few tenths of a micrometre.
+  // the step 157 µm at home and 6 % less at q = ±0.35 rad (±0.1 m); the other joints' counts
+  // move each reading by a few tenths of a micrometre.
   const double count = std::numbers::pi / 6000.0;
   std::vector<double> readings;
-  for (int n = -300; n <= 20; ++n) {
+  for (int n = -670; n <= 670; ++n) {
     const double x = 0.6 - 0.3 * std::sin(n * count);
     readings.push_back(x);
     if (n % 3 == 0) readings.push_back(x + 3e-7);
   }
+  // The step found is the median of the steps seen: the one at |q| = 335 counts.
+  const double median_step = 0.3 * count * std::cos(335 * count);
   const std::optional<double> step = lattice_step(readings);
   ASSERT_TRUE(step);
-  EXPECT_NEAR(*step, 0.3 * count, 0.01 * 0.3 * count);
-  // A count skipped (the tool went past it) is two steps.
-  readings.erase(readings.begin() + 40);
-  EXPECT_NEAR(*lattice_step(readings), 0.3 * count, 0.01 * 0.3 * count);
-  // Noise is no lattice, nor are steps that change by more than 5 % from one to the next.
-  std::mt19937_64 random(3);
-  std::normal_distribution<double> noise(0.0, 1e-4);
-  std::vector<double> noisy;
-  for (int i = 0; i < 2000; ++i) noisy.push_back(noise(random));
-  EXPECT_FALSE(lattice_step(noisy));
-  EXPECT_FALSE(lattice_step(std::vector<double>{0.0, 1.0, 2.0, 3.2, 4.2, 5.5}));
+  EXPECT_NEAR(*step, median_step, 0.005 * median_step);
+  // Counts skipped (the tool went past them) are whole steps; a reading off the lattice is none.
+  std::sort(readings.begin(), readings.end());
+  for (int i = 0; i < 5; ++i) readings.erase(readings.begin() + 300);
+  EXPECT_NEAR(*lattice_step(readings), median_step, 0.005 * median_step);
+  readings.push_back(readings.back() + 0.5 * 0.3 * count);
+  EXPECT_FALSE(lattice_step(readings));
+  // Noise is no lattice, whatever its draw, nor are steps that change by more than 5 % from one
+  // to the next.
+  for (std::uint64_t seed = 1; seed <= 50; ++seed) {
+    std::mt19937_64 random(seed);
+    std::normal_distribution<double> noise(0.0, 1.0);
+    std::vector<double> noisy;
+    for (int i = 0; i < 2000; ++i) noisy.push_back(noise(random));
+    EXPECT_FALSE(lattice_step(noisy)) << "seed " << seed;
+  }
+  EXPECT_FALSE(lattice_step(std::vector<double>{0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.2, 10.2}));
   // Readings a fiftieth of a step apart that chain wider than a twentieth are no one count.
-  EXPECT_FALSE(lattice_step(std::vector<double>{0.0, 0.015, 0.03, 0.045, 0.06, 1.06, 2.06, 3.06}));
-  EXPECT_TRUE(lattice_step(std::vector<double>{0.0, 0.015, 0.03, 1.03, 2.03, 3.03}));
+  EXPECT_FALSE(lattice_step(std::vector<double>{0.0, 0.015, 0.03, 0.045, 0.06, 1.06, 2.06, 3.06, 4.06, 5.06, 6.06,
+                                                7.06, 8.06}));
+  EXPECT_TRUE(lattice_step(std::vector<double>{0.0, 0.015, 0.03, 1.03, 2.03, 3.03, 4.03, 5.03, 6.03, 7.03, 8.03}));
+  // Fewer than eight steps are too few to tell from chance.
+  EXPECT_FALSE(lattice_step(std::vector<double>{0.0, 0.015, 0.03, 1.03, 2.03, 3.03}));
 }
 
 TEST(SystemIdentification, AnAxisThatFrictionHoldsStillThroughPartOfEachPeriodIsFittedWhereItMoves) {
