@@ -271,13 +271,15 @@ TEST(LabIdentify, TheParallelDeviceWithItsObserverThroughEncodersIsItsNominalMas
   }
 }
 
-/// 003's five-bar (config/five_bar_003.json, in lockstep: its π/6000 encoders on, 157 µm at the
-/// tool; the estimator's velocity; the identified inertias), with 50 µrad of noise on each joint
-/// before its counts (a tenth of an axial count), drawn from `seed`.
+/// 003's five-bar on the bench (config/five_bar_bench_003.json, in lockstep: its π/6000 encoders,
+/// 157 µm at the tool; the estimator's velocity; the identified inertias; 50 µrad of noise on
+/// each joint before its counts, a tenth of an axial count), its noise drawn from `seed`.
 v1::ServerConfig five_bar_bench(std::uint64_t seed) {
-  v1::ServerConfig config = config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/five_bar_003.json");
+  v1::ServerConfig config =
+      config::load_config_file(std::string(HAPTIC_SOURCE_DIR) + "/config/five_bar_bench_003.json");
   config.set_time_mode(v1::LOCKSTEP);
-  config.mutable_simulated_five_bar()->mutable_encoders()->add_noise(5e-5);
+  EXPECT_EQ(config.simulated_five_bar().encoders().noise_size(), 1);
+  EXPECT_EQ(config.simulated_five_bar().encoders().noise(0), 5e-5);
   config.mutable_simulated_five_bar()->mutable_encoders()->set_seed(seed);
   return config;
 }
