@@ -91,8 +91,9 @@ v1::DeviceProfile identify_profile(const v1::ServerConfig& config, const Identif
 /// large ones grow, so its boundary depends on how hard the wall is pressed. Its walls are pressed
 /// with 2.5 times the identified friction, a run that ends still has settled, and the prediction
 /// is the same walls run on the identified model itself: a simulated point mass with the
-/// identified mass, damping, friction and lag, a sensor of the identified noise and step, and the
-/// port's force limit (`friction_model`; the linear analysis's figure is kept in `linear`).
+/// identified mass, damping, friction and lag, a sensor of the identified step with the noise
+/// beyond the step's own (or the identified noise, where no step was found), and the port's force
+/// limit (`friction_model`; the linear analysis's figure is kept in `linear`).
 struct ZWidthCheck {
   double damping = 0.0;  // B. Unit: N·s/m.
   double predicted = 0.0, measured = 0.0;

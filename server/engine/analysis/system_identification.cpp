@@ -380,11 +380,12 @@ std::optional<double> slowly_varying_lattice_step(const std::vector<double>& sor
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
     return v[v.size() / 2];
   };
-  // The steps' scale: the gap a twentieth of the gaps exceed, so that a few outliers or skipped
-  // counts do not set it. The walk starts from the median of the first eight gaps of a quarter
-  // of that or more (a skipped count makes one gap two steps).
+  // The steps' scale: the gap a twentieth of the gaps exceed (at least one), so that a few
+  // outliers or skipped counts do not set it. The walk starts from the first eight gaps of a
+  // quarter of that or more: the median of those within 1.5 times the smallest (a skipped count
+  // makes one gap two steps).
   std::vector<double> by_size = gaps;
-  const std::size_t rank = gaps.size() / 20;
+  const std::size_t rank = std::min(gaps.size() - 1, std::max<std::size_t>(1, gaps.size() / 20));
   std::nth_element(by_size.begin(), by_size.begin() + static_cast<std::ptrdiff_t>(rank), by_size.end(),
                    std::greater<>());
   const double scale = by_size[rank];
@@ -392,10 +393,13 @@ std::optional<double> slowly_varying_lattice_step(const std::vector<double>& sor
   for (std::size_t i = 0; i < gaps.size() && first.size() < 8; ++i) {
     if (gaps[i] >= 0.25 * scale) first.push_back(gaps[i]);
   }
-  if (first.empty() || !(scale > 0.0)) return std::nullopt;
+  if (first.empty()) return std::nullopt;
+  const double smallest = *std::min_element(first.begin(), first.end());
+  std::erase_if(first, [&](double g) { return g > 1.5 * smallest; });
   // Along the axis, every gap is another joint's count inside a cluster (under a fiftieth of the
-  // local step, the cluster narrower than a twentieth), or whole local steps within 5 %; the
-  // local step is the median of the last eight single steps, so the map's slope may change.
+  // local step, the cluster narrower than a twentieth), or whole local steps, at most 20, within
+  // a twentieth of a step; the local step is the median of the last eight single steps, so the
+  // map's slope may change.
   std::deque<double> recent{median(first)};
   std::vector<double> steps;
   double local = recent.front(), cluster = 0.0;
@@ -406,7 +410,7 @@ std::optional<double> slowly_varying_lattice_step(const std::vector<double>& sor
       continue;
     }
     const double counts = std::round(g / local);
-    if (counts < 1.0 || std::abs(g / counts - local) > 0.05 * local) return std::nullopt;
+    if (counts < 1.0 || counts > 20.0 || std::abs(g / local - counts) > 0.05) return std::nullopt;
     steps.push_back(g / counts);
     recent.push_back(g / counts);
     if (recent.size() > 8) recent.pop_front();

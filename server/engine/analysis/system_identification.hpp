@@ -144,11 +144,11 @@ std::optional<AxisIdentification> identify_axis(const Multisine& excitation, std
 /// The quantization step of `values` if they lie on a lattice q·n + offset (to 1e-6 of q, plus
 /// 1e-9 of q for each step from the lowest), the smallest step seen. Failing that, on a lattice
 /// whose step changes slowly along the axis, as a nonlinear map of a counted joint reads (003's
-/// five-bar along x: 0.6 − 0.3 sin(n π/6000) m): going up the values, each gap whole steps within
-/// 5 % of the local step (the median of the last eight), or under a fiftieth of it (another
-/// joint's count moving the reading a little; such clusters narrower than a twentieth), and at
-/// least eight steps; the step is then the median of those seen. None otherwise (noise) or with
-/// fewer than three distinct values.
+/// five-bar along x: 0.6 − 0.3 sin(n π/6000) m): going up the values, each gap whole local steps
+/// (at most 20) within a twentieth of a step, the local step the median of the last eight, or
+/// under a fiftieth of it (another joint's count moving the reading a little; such clusters
+/// narrower than a twentieth), and at least eight steps; the step is then the median of those
+/// seen. None otherwise (noise) or with fewer than three distinct values.
 std::optional<double> lattice_step(std::span<const double> values);
 
 }  // namespace haptic::engine

@@ -298,8 +298,10 @@ TEST(SystemIdentification, ALatticeWhoseStepChangesSlowlyIsFoundAsANonlinearMapO
   // Counts skipped (the tool went past them) are whole steps; a reading off the lattice is none.
   std::sort(readings.begin(), readings.end());
   for (int i = 0; i < 5; ++i) readings.erase(readings.begin() + 300);
-  EXPECT_NEAR(*lattice_step(readings), median_step, 0.005 * median_step);
+  EXPECT_NEAR(lattice_step(readings).value_or(0.0), median_step, 0.005 * median_step);
   readings.push_back(readings.back() + 0.5 * 0.3 * count);
+  EXPECT_FALSE(lattice_step(readings));
+  readings.back() = readings[readings.size() - 2] + 10.5 * 0.3 * count;  // far, and off it too
   EXPECT_FALSE(lattice_step(readings));
   // Noise is no lattice, whatever its draw, nor are steps that change by more than 5 % from one
   // to the next.
@@ -316,7 +318,14 @@ TEST(SystemIdentification, ALatticeWhoseStepChangesSlowlyIsFoundAsANonlinearMapO
                                                 7.06, 8.06}));
   EXPECT_TRUE(lattice_step(std::vector<double>{0.0, 0.015, 0.03, 1.03, 2.03, 3.03, 4.03, 5.03, 6.03, 7.03, 8.03}));
   // Fewer than eight steps are too few to tell from chance.
-  EXPECT_FALSE(lattice_step(std::vector<double>{0.0, 0.015, 0.03, 1.03, 2.03, 3.03}));
+  EXPECT_FALSE(lattice_step(std::vector<double>{0.0, 0.015, 0.03, 1.03, 2.03, 3.03, 4.03, 5.03, 6.03, 7.03}));
+  // Twenty gaps, one of them 15 steps: the scale is not the widest gap's.
+  std::vector<double> sparse{0.0, 0.015};
+  for (int n = 1; n <= 18; ++n) sparse.push_back(0.015 + n);
+  sparse.push_back(sparse.back() + 15.0);
+  const std::optional<double> sparse_step = lattice_step(sparse);
+  ASSERT_TRUE(sparse_step);
+  EXPECT_NEAR(*sparse_step, 1.0, 1e-9);
 }
 
 TEST(SystemIdentification, AnAxisThatFrictionHoldsStillThroughPartOfEachPeriodIsFittedWhereItMoves) {

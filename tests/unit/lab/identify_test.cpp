@@ -342,7 +342,7 @@ TEST(LabIdentify, TheFiveBarsDampingIsFoundInTimeOverLongSlowStrokesHeldInTheBox
   // Along x, 10 N over 1.5 to 3 Hz (3 harmonics): strokes of several centimetres at up to about
   // 0.5 m/s, where the damping's force is a tenth of the friction's rather than a hundredth. A
   // spring about the start (50 N/m, part of the command, so part of the fit's force) keeps
-  // stick and slip from walking the tool out of its box, and 80 periods (164 s on a bench) bring
+  // stick and slip from walking the tool out of its box, and 80 periods (167 s on a bench) bring
   // the interval under 5 %. Fitted in time, over where the tool moved. Over the encoders' seeds
   // 0, 1, 2, 3 and 7: +2.2, +0.5, −1.8, +0.6 and +2.9 %, intervals ±4.1 to ±4.9 %; the mass
   // within 0.07 %. A band of 2 to 4 Hz, whose strokes are a quarter as long, finds −73 %.
