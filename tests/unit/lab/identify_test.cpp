@@ -196,7 +196,7 @@ v1::ServerConfig lockstep_config(const std::string& file, const std::string& dev
 
 TEST(LabIdentify, TheDcMotorThroughItsEncoderAlongItsLinksTangentIsItsModelAndPredictsItsZWidth) {
   // 000's DC motor, its gearbox and link, read through a 2,000-line quadrature encoder on the
-  // motor (π/4000 rad a count, 7.9 µm at the tool) with 0.2 mrad of noise: the tool moves on a
+  // motor (π/4000 rad a count, 15.7 µm at the tool) with 0.2 mrad of noise: the tool moves on a
   // circle, so it is excited along the motion a push along y gives (the link's tangent).
   const v1::ServerConfig config = lockstep_config("dc_motor_000.json", "simulated_dc_motor",
                                                   R"({"quantization": [7.853981633974483e-4], "noise": [2e-4], "seed": 7})");
