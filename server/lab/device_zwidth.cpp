@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "config/devices.hpp"
 #include "config/server_config.hpp"
 #include "engine/analysis/growth.hpp"
 #include "lab/lab_run.hpp"
@@ -32,49 +33,38 @@ engine::Vec3 start_position(const v1::ServerConfig& config, std::uint32_t port, 
   return start;
 }
 
-/// Whether `devices` (a ServerConfig's port 0, or a DeviceConfig) is a simulated device that
-/// reads through noise: its point mass's sensor, or its encoders, with a noise above 0. Where it
-/// is and `redraw`, that noise's seed is mixed with `run` (distinct runs, distinct seeds, and
-/// unlike another port's own).
+/// Where the `kind` of device in `devices` (a ServerConfig, its port 0's kind from
+/// config::primary_device; or a DeviceConfig) is simulated and reads through noise (its point
+/// mass's sensor, or its encoders, with a noise above 0), that noise's seed mixed with `run`
+/// (distinct runs, distinct seeds, and unlike another port's own); whether it is. A driver's
+/// hardware has noise of its own.
 template <class Devices>
-bool sensor_noise(Devices& devices, int run, bool redraw) {
+bool redraw_noise(Devices& devices, v1::DeviceConfig::DeviceCase kind, int run) {
   const auto mix = [run](auto& sensor) {
     sensor.set_seed(sensor.seed() ^ (static_cast<std::uint64_t>(run) * 0x9E3779B97F4A7C15ULL));
   };
-  if (devices.has_driver()) return false;  // hardware: its noise is its own
   const auto encoders = [&](const auto& device, auto mutable_device) {
     const auto& noise = device.encoders().noise();
     if (!std::any_of(noise.begin(), noise.end(), [](double n) { return n > 0.0; })) return false;
-    if (redraw) mix(*mutable_device()->mutable_encoders());
+    mix(*mutable_device()->mutable_encoders());
     return true;
   };
-  if (devices.has_simulated_dc_motor()) {
-    return encoders(devices.simulated_dc_motor(), [&] { return devices.mutable_simulated_dc_motor(); });
+  switch (kind) {
+    case v1::DeviceConfig::kSimulatedDcMotor:
+      return encoders(devices.simulated_dc_motor(), [&] { return devices.mutable_simulated_dc_motor(); });
+    case v1::DeviceConfig::kSimulatedFiveBar:
+      return encoders(devices.simulated_five_bar(), [&] { return devices.mutable_simulated_five_bar(); });
+    case v1::DeviceConfig::kSimulatedJoystick:
+      return encoders(devices.simulated_joystick(), [&] { return devices.mutable_simulated_joystick(); });
+    case v1::DeviceConfig::kSimulatedParallelDob:
+      return encoders(devices.simulated_parallel_dob(), [&] { return devices.mutable_simulated_parallel_dob(); });
+    case v1::DeviceConfig::kSimulatedPointMass:
+      if (!(devices.simulated_point_mass().sensor().noise_m() > 0.0)) return false;
+      mix(*devices.mutable_simulated_point_mass()->mutable_sensor());
+      return true;
+    default:
+      return false;
   }
-  if (devices.has_simulated_five_bar()) {
-    return encoders(devices.simulated_five_bar(), [&] { return devices.mutable_simulated_five_bar(); });
-  }
-  if (devices.has_simulated_joystick()) {
-    return encoders(devices.simulated_joystick(), [&] { return devices.mutable_simulated_joystick(); });
-  }
-  if (devices.has_simulated_parallel_dob()) {
-    return encoders(devices.simulated_parallel_dob(), [&] { return devices.mutable_simulated_parallel_dob(); });
-  }
-  // Last: port 0's point mass is the device where none of the above is (filled in by default
-  // beside them).
-  if (devices.has_simulated_point_mass() && devices.simulated_point_mass().sensor().noise_m() > 0.0) {
-    if (redraw) mix(*devices.mutable_simulated_point_mass()->mutable_sensor());
-    return true;
-  }
-  return false;
-}
-
-/// sensor_noise on port `port` of `config`: port 0 the configuration's own device, port i its
-/// extra device i − 1; false for a port it does not have.
-bool port_sensor_noise(v1::ServerConfig& config, std::uint32_t port, int run, bool redraw) {
-  if (port == 0) return sensor_noise(config, run, redraw);
-  if (port > static_cast<std::uint32_t>(config.extra_devices_size())) return false;
-  return sensor_noise(*config.mutable_extra_devices(static_cast<int>(port - 1)), run, redraw);
 }
 
 /// One run of the wall (device_wall_settles).
@@ -175,12 +165,15 @@ bool device_wall_settles(const v1::ServerConfig& config, const DeviceWallParams&
 }
 
 bool redraw_sensor_noise(v1::ServerConfig& config, std::uint32_t port, int run) {
-  return port_sensor_noise(config, port, run, true);
+  if (port == 0) return redraw_noise(config, config::primary_device(config).device_case(), run);
+  if (port > static_cast<std::uint32_t>(config.extra_devices_size())) return false;
+  v1::DeviceConfig& extra = *config.mutable_extra_devices(static_cast<int>(port - 1));
+  return redraw_noise(extra, extra.device_case(), run);
 }
 
 bool reads_through_noise(const v1::ServerConfig& config, std::uint32_t port) {
-  v1::ServerConfig copy = config;  // sensor_noise reaches the fields through their mutable accessors
-  return port_sensor_noise(copy, port, 0, false);
+  v1::ServerConfig drawn = config;  // drawn anew on a copy: whether there was a noise to draw
+  return redraw_sensor_noise(drawn, port, 1);
 }
 
 double device_zwidth_boundary(const v1::ServerConfig& config, const DeviceWallParams& params, double damping,

@@ -65,7 +65,8 @@ v1::ServerConfig identified_model_config(const IdentifyResult& result, double lo
   mass.set_coulomb(std::max(0.0, f.coulomb.value));
   mass.set_actuator_lag(std::clamp(f.lag.value, 0.0, 0.1));
   mass.set_substeps(100);
-  *mass.mutable_initial_position() = schema::to_proto(engine::Vec3{0.0, 0.0, 0.02});  // the default, said: runs move it
+  // The default start, written out: a wall's runs move it across a count.
+  *mass.mutable_initial_position() = schema::to_proto(engine::Vec3{0.0, 0.0, 0.02});
   mass.set_max_force(std::max(max_force_n, 2.0 * std::max(0.0, f.coulomb.value)));
   mass.mutable_sensor()->set_noise_m(std::min(0.01, f.quantization_m ? noise_before_counts(f) : f.noise_rms_m));
   mass.mutable_sensor()->set_quantization_m(std::min(0.01, f.quantization_m.value_or(0.0)));
@@ -332,9 +333,7 @@ std::vector<ZWidthCheck> check_zwidth(const v1::ServerConfig& config, const Iden
   if (friction_held) {
     wall.min_push_n = 2.5 * result.fit.coulomb.value;
     wall.still_settles = true;
-    friction_model = identified_model_config(
-        result, config.loop_rate_hz(),
-        result.max_force_n > 0.0 ? result.max_force_n : 2.0 * params.signal.amplitude_n + wall.min_push_n);
+    friction_model = identified_model_config(result, config.loop_rate_hz(), result.max_force_n);
     model_wall = wall;
     model_wall.port = 0;
     model_wall.device_time = {};
